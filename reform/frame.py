@@ -1,0 +1,309 @@
+"""The data model: one instant of a social scene (`Frame`) and an ordered sequence of them (`Dataset`).
+
+One `Frame` type travels the whole pipeline: scenario script -> MuJoCo world -> ground truth ->
+robot's sensor model -> detector -> metrics -> report. Both records are frozen dataclasses whose
+arrays are read-only copies, validated at construction.
+
+Conventions (see the project README):
+  * positions are ground-plane ``(x, y)`` in metres;
+  * yaws are radians, counter-clockwise from +x, wrapped to ``[-pi, pi]``;
+  * groups are tuples of person ids; people named in no group are singletons.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+HUMAN = "human"
+ROBOT = "robot"
+KINDS = (HUMAN, ROBOT)
+
+# Tolerance on the wrapped-angle range, so that values written with a few decimals
+# (Babble's -3.142) are accepted as wrapped. Radians.
+_YAW_TOLERANCE_RAD = 2e-3
+
+Group = tuple[int, ...]
+
+
+def wrap_angle(theta: npt.ArrayLike) -> np.ndarray:
+    """Wraps angles (radians) to ``[-pi, pi)``, elementwise, as a float64 array."""
+    theta = np.asarray(theta, dtype=np.float64)
+    return (theta + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def _readonly(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, copy=True)
+    array.flags.writeable = False
+    return array
+
+
+def _float_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric with shape {shape}, got {value!r}") from exc
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+    return array
+
+
+def _check_yaw(name: str, yaw: np.ndarray) -> None:
+    finite = yaw[np.isfinite(yaw)]
+    if finite.size and np.max(np.abs(finite)) > math.pi + _YAW_TOLERANCE_RAD:
+        worst = float(finite[np.argmax(np.abs(finite))])
+        raise ValueError(
+            f"{name} must be radians wrapped to [-pi, pi], got {worst:.6g} "
+            "(wrap with reform.wrap_angle; values beyond 2*pi often mean degrees)"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One instant of a scene: who is where, facing where, and who is in which group.
+
+    Attributes:
+        ids: (n,) int64 person ids, unique within the frame.
+        kinds: n strings, each ``"human"`` or ``"robot"``.
+        position: (n, 2) float64 body (torso) ground-plane position, metres. Finite.
+        yaw: (n,) float64 body yaw, radians CCW from +x, within [-pi, pi]. Finite.
+        head_position: optional (n, 2) float64 head ground-plane position, metres. A row of
+            NaN means that person's head was not observed; a row is either all finite or NaN.
+        head_yaw: optional (n,) float64 head yaw, radians in [-pi, pi]; NaN exactly where
+            ``head_position`` is NaN. Given together with ``head_position`` or not at all.
+        groups: optional ground truth: disjoint groups (tuples of ids of this frame). People in
+            no group are singletons. ``None`` means the frame is not annotated.
+        time: time stamp, seconds from the start of its sequence.
+        sequence: name of the recording (session, episode) the frame belongs to.
+    """
+
+    ids: np.ndarray
+    position: np.ndarray
+    yaw: np.ndarray
+    kinds: tuple[str, ...] | None = None
+    head_position: np.ndarray | None = None
+    head_yaw: np.ndarray | None = None
+    groups: tuple[Group, ...] | None = None
+    time: float = 0.0
+    sequence: str = ""
+
+    def __post_init__(self) -> None:
+        ids = np.asarray(self.ids)
+        if ids.ndim != 1:
+            raise ValueError(f"ids must have shape (n_people,), got {ids.shape}")
+        if ids.size and not np.issubdtype(ids.dtype, np.integer):
+            if not (np.issubdtype(ids.dtype, np.floating) and np.all(ids == np.round(ids))):
+                raise ValueError(f"ids must be integers, got dtype {ids.dtype}")
+        ids = ids.astype(np.int64)
+        n = ids.size
+        unique, counts = np.unique(ids, return_counts=True)
+        if np.any(counts > 1):
+            raise ValueError(f"ids must be unique within a frame, got duplicates {unique[counts > 1].tolist()}")
+        position = _float_array("position", self.position, (n, 2))
+        if not np.all(np.isfinite(position)):
+            raise ValueError("position must be finite, got NaN or inf")
+        yaw = _float_array("yaw", self.yaw, (n,))
+        if not np.all(np.isfinite(yaw)):
+            raise ValueError("yaw must be finite, got NaN or inf")
+        _check_yaw("yaw", yaw)
+
+        kinds = tuple(HUMAN for _ in range(n)) if self.kinds is None else tuple(self.kinds)
+        if len(kinds) != n:
+            raise ValueError(f"kinds must have {n} entries, got {len(kinds)}")
+        unknown = sorted({k for k in kinds if k not in KINDS})
+        if unknown:
+            raise ValueError(f"kinds must be one of {KINDS}, got {unknown}")
+
+        if (self.head_position is None) != (self.head_yaw is None):
+            raise ValueError("head_position and head_yaw must be given together or not at all")
+        head_position = head_yaw = None
+        if self.head_position is not None:
+            head_position = _float_array("head_position", self.head_position, (n, 2))
+            head_yaw = _float_array("head_yaw", self.head_yaw, (n,))
+            if np.any(np.isinf(head_position)) or np.any(np.isinf(head_yaw)):
+                raise ValueError("head_position and head_yaw must be finite or NaN (missing), got inf")
+            missing_pos = np.isnan(head_position)
+            if np.any(missing_pos[:, 0] != missing_pos[:, 1]) or np.any(
+                missing_pos[:, 0] != np.isnan(head_yaw)
+            ):
+                raise ValueError("a head is either fully observed (x, y, yaw) or fully NaN")
+            _check_yaw("head_yaw", head_yaw)
+
+        groups = None
+        if self.groups is not None:
+            groups = _validate_groups(self.groups, ids)
+
+        object.__setattr__(self, "ids", _readonly(ids))
+        object.__setattr__(self, "position", _readonly(position))
+        object.__setattr__(self, "yaw", _readonly(yaw))
+        object.__setattr__(self, "kinds", kinds)
+        object.__setattr__(self, "head_position", None if head_position is None else _readonly(head_position))
+        object.__setattr__(self, "head_yaw", None if head_yaw is None else _readonly(head_yaw))
+        object.__setattr__(self, "groups", groups)
+        object.__setattr__(self, "time", float(self.time))
+        if not math.isfinite(self.time):
+            raise ValueError(f"time must be finite, got {self.time}")
+        object.__setattr__(self, "sequence", str(self.sequence))
+
+    @property
+    def n_people(self) -> int:
+        return int(self.ids.size)
+
+    @property
+    def annotated(self) -> bool:
+        """True when the frame carries ground-truth groups."""
+        return self.groups is not None
+
+    @property
+    def is_robot(self) -> np.ndarray:
+        """(n,) bool: which entries are robots."""
+        return np.array([k == ROBOT for k in self.kinds], dtype=bool)
+
+    def partition(self) -> tuple[Group, ...]:
+        """The ground truth as a full partition: the groups, then every other person alone.
+
+        Raises:
+            ValueError: if the frame is not annotated.
+        """
+        if self.groups is None:
+            raise ValueError("frame is not annotated: it has no ground-truth groups")
+        return complete_partition(self.groups, self.ids)
+
+    def fformations(self) -> tuple[Group, ...]:
+        """The ground-truth F-formations: groups of two or more people."""
+        if self.groups is None:
+            raise ValueError("frame is not annotated: it has no ground-truth groups")
+        return tuple(g for g in self.groups if len(g) >= 2)
+
+    def index_of(self, person_id: int) -> int:
+        """Row of ``person_id`` in this frame's arrays."""
+        hits = np.flatnonzero(self.ids == person_id)
+        if hits.size == 0:
+            raise KeyError(f"person {person_id} is not in this frame (ids {self.ids.tolist()})")
+        return int(hits[0])
+
+    def replace(self, **changes: Any) -> Frame:
+        """A copy with some fields changed (validated again)."""
+        fields = {
+            "ids": self.ids,
+            "position": self.position,
+            "yaw": self.yaw,
+            "kinds": self.kinds,
+            "head_position": self.head_position,
+            "head_yaw": self.head_yaw,
+            "groups": self.groups,
+            "time": self.time,
+            "sequence": self.sequence,
+        }
+        fields.update(changes)
+        return Frame(**fields)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Frame):
+            return NotImplemented
+        return (
+            np.array_equal(self.ids, other.ids)
+            and np.array_equal(self.position, other.position)
+            and np.array_equal(self.yaw, other.yaw)
+            and self.kinds == other.kinds
+            and _optional_equal(self.head_position, other.head_position)
+            and _optional_equal(self.head_yaw, other.head_yaw)
+            and self.groups == other.groups
+            and self.time == other.time
+            and self.sequence == other.sequence
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+def _optional_equal(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return np.array_equal(a, b, equal_nan=True)
+
+
+def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[Group, ...]:
+    known = set(ids.tolist())
+    seen: set[int] = set()
+    out = []
+    for g, group in enumerate(groups):
+        members = tuple(int(m) for m in group)
+        if not members:
+            raise ValueError(f"groups[{g}] is empty")
+        for m in members:
+            if m not in known:
+                raise ValueError(f"groups[{g}] names person {m}, who is not in the frame (ids {sorted(known)})")
+            if m in seen:
+                raise ValueError(f"groups must be disjoint, person {m} appears twice (groups[{g}])")
+            seen.add(m)
+        out.append(members)
+    return tuple(out)
+
+
+def complete_partition(groups: Iterable[Sequence[int]], ids: Iterable[int]) -> tuple[Group, ...]:
+    """``groups`` plus a singleton for every id in no group (in ``ids`` order)."""
+    groups = tuple(tuple(int(m) for m in g) for g in groups)
+    grouped = {m for g in groups for m in g}
+    return groups + tuple((int(i),) for i in ids if int(i) not in grouped)
+
+
+@dataclass(frozen=True, eq=False)
+class Dataset:
+    """An ordered sequence of frames with its provenance.
+
+    Attributes:
+        frames: the frames, in recording order (sequence by sequence, time increasing).
+        name: short name, e.g. ``"salsa"``.
+        source: where the data came from (a path or a generator description).
+        units: length unit of every position, always ``"m"`` once loaded.
+        metadata: free-form provenance (generator version, seed, parameters, loader report).
+    """
+
+    frames: tuple[Frame, ...]
+    name: str
+    source: str = ""
+    units: str = "m"
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        frames = tuple(self.frames)
+        for i, frame in enumerate(frames):
+            if not isinstance(frame, Frame):
+                raise TypeError(f"frames[{i}] must be a reform.Frame, got {type(frame).__name__}")
+        if self.units != "m":
+            raise ValueError(f"units must be 'm' (loaders convert to metres), got {self.units!r}")
+        object.__setattr__(self, "frames", frames)
+        object.__setattr__(self, "metadata", MappingProxyType(dict(self.metadata)))
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def __iter__(self) -> Iterator[Frame]:
+        return iter(self.frames)
+
+    def __getitem__(self, index: int) -> Frame:
+        return self.frames[index]
+
+    def annotated(self) -> tuple[Frame, ...]:
+        """The frames that carry ground truth."""
+        return tuple(f for f in self.frames if f.groups is not None)
+
+    def sequences(self) -> tuple[str, ...]:
+        """Names of the sequences, in order of first appearance."""
+        return tuple(dict.fromkeys(f.sequence for f in self.frames))
+
+    def subset(self, frames: Iterable[Frame], *, name: str | None = None) -> Dataset:
+        """A dataset with the same provenance holding ``frames``."""
+        return Dataset(
+            frames=tuple(frames),
+            name=self.name if name is None else name,
+            source=self.source,
+            units=self.units,
+            metadata=self.metadata,
+        )

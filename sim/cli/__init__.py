@@ -1,0 +1,42 @@
+"""The ``reform-sim`` command: thin subcommands that parse, call one library function, report."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from sim.cli import _data, _detect, _evaluate
+from sim.cli._common import CliError
+
+# Each module exposes ``register(subparsers)``, adding its subcommand(s) with a ``handler``.
+_COMMANDS = (_data, _evaluate, _detect)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="reform-sim",
+        description="Simulate social scenes, detect F-formations (REFORM, GCFF), evaluate, log to Rerun.",
+    )
+    from reform import __version__
+
+    parser.add_argument("--version", action="version", version=f"reform-sim {__version__}")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for module in _COMMANDS:
+        module.register(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.handler(args) or 0)
+    except (CliError, ValueError, FileNotFoundError, KeyError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"reform-sim {args.command}: error: {message}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,45 @@
+"""Shared fixtures. The real datasets are found through one helper: ``shared_datasets``."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DATASETS_ENV = "REFORM_SIM_DATASETS"
+
+
+def shared_datasets_dir() -> Path:
+    """The folder of real datasets: ``$REFORM_SIM_DATASETS``, else ``../shared/datasets``.
+
+    Under CI (``CI`` set) a missing folder is a failure, not a skip.
+    """
+    configured = os.environ.get(DATASETS_ENV)
+    candidates = [Path(configured)] if configured else [REPO_ROOT.parent / "shared" / "datasets"]
+    for candidate in candidates:
+        if (candidate / "salsa").is_dir():
+            return candidate
+    message = (
+        f"real datasets not found at {candidates[0]} (set {DATASETS_ENV} to the folder holding "
+        "salsa/ and babble/)"
+    )
+    if os.environ.get("CI"):
+        pytest.fail(message)
+    pytest.skip(message)
+
+
+@pytest.fixture(scope="session")
+def shared_datasets() -> Path:
+    return shared_datasets_dir()
+
+
+@pytest.fixture(scope="session")
+def salsa_dir(shared_datasets: Path) -> Path:
+    return shared_datasets / "salsa"
+
+
+@pytest.fixture(scope="session")
+def babble_dir(shared_datasets: Path) -> Path:
+    return shared_datasets / "babble"
