@@ -1,0 +1,16 @@
+"""Loaders for F-formation datasets; every one returns a :class:`reform.Dataset` in metres."""
+
+from __future__ import annotations
+
+from reform.datasets.detect import FORMATS, LENGTH_UNITS, detect_format, load_dataset
+from reform.datasets.errors import DataFormatError
+from reform.datasets.salsa import load_salsa
+
+__all__ = [
+    "FORMATS",
+    "LENGTH_UNITS",
+    "DataFormatError",
+    "detect_format",
+    "load_dataset",
+    "load_salsa",
+]

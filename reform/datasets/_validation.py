@@ -1,0 +1,90 @@
+"""Checks every loader shares: numbers, angles, files, and frame construction.
+
+Each check raises :class:`~reform.datasets.errors.DataFormatError` naming the file, where in it
+(line, frame, row), the field, what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from reform.datasets.errors import DataFormatError
+from reform.frame import Frame
+
+# Largest |angle| accepted from a file that stores wrapped radians (GCFF, Babble): pi plus the
+# rounding of values written with three decimals (Babble's -3.142). Radians.
+WRAPPED_ANGLE_LIMIT_RAD = math.pi + 2e-3
+
+# Largest |angle| accepted from a file that stores unwrapped radians (SALSA/DANTE). SALSA's
+# annotations drift up to 65.3 rad (about ten turns); angles in degrees reach 90-360 in every
+# realistic scene, so a value beyond this bound means degrees, not a long drift. Radians.
+UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
+
+
+def require_file(path: Path, *, what: str) -> Path:
+    """``path`` if it is an existing, non-empty file.
+
+    Raises:
+        DataFormatError: if it is missing, a folder, or empty.
+    """
+    if not path.exists():
+        raise DataFormatError(path, None, None, f"{what} (an existing file)", "no such file")
+    if not path.is_file():
+        raise DataFormatError(path, None, None, f"{what} (a file)", "a folder")
+    if path.stat().st_size == 0:
+        raise DataFormatError(path, None, None, f"{what} (a non-empty file)", "an empty file")
+    return path
+
+
+def parse_float(token: str, *, path: Path, where: str, field: str) -> float:
+    """A finite float from a text token."""
+    try:
+        value = float(token)
+    except ValueError:
+        raise DataFormatError(path, where, field, "a number", repr(token)) from None
+    if not math.isfinite(value):
+        raise DataFormatError(path, where, field, "a finite number", repr(token))
+    return value
+
+
+def check_finite(value: float, *, path: Path, where: str, field: str) -> float:
+    """``value`` if it is finite."""
+    if not math.isfinite(value):
+        raise DataFormatError(path, where, field, "a finite number", repr(value))
+    return value
+
+
+def check_angle(value: float, *, limit: float, path: Path, where: str, field: str) -> float:
+    """``value`` if it is finite and within ``[-limit, limit]`` radians."""
+    check_finite(value, path=path, where=where, field=field)
+    if abs(value) > limit:
+        raise DataFormatError(
+            path,
+            where,
+            field,
+            f"an angle in radians with |value| <= {limit:.4g} (larger values look like degrees)",
+            repr(value),
+        )
+    return value
+
+
+def check_unique_ids(ids: Iterable[int], *, path: Path, where: str, field: str = "ID") -> None:
+    """Raises when an id occurs twice."""
+    seen: set[int] = set()
+    for person in ids:
+        if person in seen:
+            raise DataFormatError(
+                path, where, field, "ids unique within the frame", f"id {person} twice"
+            )
+        seen.add(person)
+
+
+def make_frame(*, path: Path, where: str, **fields: Any) -> Frame:
+    """``Frame(**fields)``, with a validation error re-raised as a DataFormatError."""
+    try:
+        return Frame(**fields)
+    except ValueError as exc:
+        raise DataFormatError(path, where, "frame", "a valid frame", str(exc)) from exc

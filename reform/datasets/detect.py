@@ -1,0 +1,108 @@
+"""Which loader reads a path: format detection and the one entry point, :func:`load_dataset`."""
+
+from __future__ import annotations
+
+from os import PathLike
+from pathlib import Path
+
+from reform.datasets.errors import DataFormatError
+from reform.frame import Dataset
+
+__all__ = ["FORMATS", "LENGTH_UNITS", "detect_format", "load_dataset"]
+
+FORMATS = ("salsa", "babble", "gcff", "parquet")
+# Length units a GCFF folder may be written in, with their size in metres.
+LENGTH_UNITS = {"cm": 0.01, "m": 1.0}
+# Formats whose files have one fixed length unit.
+_FIXED_UNITS = {"salsa": "m", "babble": "m", "parquet": "m"}
+
+_DESCRIPTION = (
+    "salsa (a folder with features.txt and group_names.txt), "
+    "babble (a folder with Motion-capture-data.csv), "
+    "gcff (a folder with features.mat), "
+    "parquet (a .parquet file or a folder of them)"
+)
+
+
+def detect_format(path: str | PathLike[str]) -> str:
+    """The format of a dataset path: one of :data:`FORMATS`.
+
+    Raises:
+        DataFormatError: the path does not exist or matches no format (the message lists them).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataFormatError(
+            path, None, None, "an existing dataset file or folder", "no such file or folder"
+        )
+    if path.is_dir():
+        if (path / "features.txt").is_file() and (path / "group_names.txt").is_file():
+            return "salsa"
+        if (path / "Motion-capture-data.csv").is_file():
+            return "babble"
+        if (path / "features.mat").is_file():
+            return "gcff"
+        if next(iter(sorted(path.rglob("*.parquet"))), None) is not None:
+            return "parquet"
+    else:
+        if path.suffix == ".parquet":
+            return "parquet"
+        if path.name == "features.txt":
+            return "salsa"
+        if path.name == "Motion-capture-data.csv":
+            return "babble"
+        if path.name == "features.mat":
+            return "gcff"
+    raise DataFormatError(
+        path, None, None, f"a dataset in one of the formats: {_DESCRIPTION}", "none of them"
+    )
+
+
+def load_dataset(
+    path: str | PathLike[str], *, format: str | None = None, units: str | None = None
+) -> Dataset:
+    """Loads a dataset in any supported format; positions come back in metres.
+
+    Args:
+        path: a dataset file or folder.
+        format: one of :data:`FORMATS`; detected from ``path`` when None.
+        units: length unit of the file's positions, ``"cm"`` or ``"m"``. Only GCFF folders
+            have a choice (default ``"cm"``, as the public GCFF datasets use); the other formats
+            are always metres, and giving ``"cm"`` for them is an error.
+
+    Raises:
+        DataFormatError: the path is missing, matches no format, or a file is malformed.
+        ValueError: unknown ``format`` or ``units``, or units that contradict the format.
+    """
+    path = Path(path)
+    if format is None:
+        format = detect_format(path)
+    elif format not in FORMATS:
+        raise ValueError(f"format must be one of {FORMATS}, got {format!r}")
+    if units is not None and units not in LENGTH_UNITS:
+        raise ValueError(f"units must be one of {tuple(LENGTH_UNITS)}, got {units!r}")
+    fixed = _FIXED_UNITS.get(format)
+    if fixed is not None and units is not None and units != fixed:
+        raise ValueError(
+            f"units: the {format} format stores positions in {fixed!r}, got units={units!r}"
+        )
+    if not path.exists():
+        raise DataFormatError(
+            path, None, None, f"an existing {format} file or folder", "no such file or folder"
+        )
+
+    if format == "salsa":
+        from reform.datasets.salsa import load_salsa
+
+        return load_salsa(path)
+    if format == "babble":
+        from reform.datasets.babble import load_babble
+
+        return load_babble(path)
+    if format == "gcff":
+        from reform.datasets.gcff_mat import load_gcff
+
+        return load_gcff(path, units="cm" if units is None else units)
+    from reform.datasets.parquet import read_parquet
+
+    return read_parquet(path)

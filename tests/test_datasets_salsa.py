@@ -1,0 +1,270 @@
+"""The SALSA (DANTE text format) loader, on the real files and on malformed copies."""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reform import DataFormatError, wrap_angle
+from reform.datasets import load_dataset, load_salsa
+
+
+@pytest.fixture(scope="session")
+def salsa(salsa_dir: Path):
+    return load_salsa(salsa_dir)
+
+
+def _size_table(frames) -> dict[int, int]:
+    return dict(sorted(Counter(len(g) for f in frames for g in f.partition()).items()))
+
+
+# --- the real files (numbers from /work/shared/datasets/salsa/README.md, "verified") ------------
+
+
+def test_frame_and_session_counts(salsa):
+    assert len(salsa) == 1145
+    assert salsa.sequences() == ("session1", "session2")
+    per_session = Counter(f.sequence for f in salsa)
+    assert per_session == {"session1": 645, "session2": 500}
+    annotated = Counter(f.sequence for f in salsa.annotated())
+    assert annotated == {"session1": 644, "session2": 499}
+    # The last frame of each session has no ground truth.
+    last = [f for f in salsa if f.sequence == "session1"][-1]
+    assert last.groups is None and last.time == 1932.2
+    assert salsa[-1].groups is None and salsa[-1].time == 1497.2
+
+
+def test_every_frame_has_all_18_people_and_times_are_rounded(salsa):
+    for frame in salsa:
+        assert frame.ids.tolist() == list(range(1, 19))
+    times = [f.time for f in salsa if f.sequence == "session2"]
+    assert times[:3] == [0.2, 3.2, 6.2]
+    assert np.allclose(np.diff(times), 3.0)
+
+
+def test_canonical_group_size_table(salsa):
+    # README table "both, canonical".
+    assert _size_table(salsa.annotated()) == {
+        1: 1684, 2: 1554, 3: 1705, 4: 952, 5: 539, 6: 381, 7: 238, 8: 25, 12: 1,
+    }  # fmt: skip
+    s1 = [f for f in salsa.annotated() if f.sequence == "session1"]
+    s2 = [f for f in salsa.annotated() if f.sequence == "session2"]
+    assert sum(len(f.fformations()) for f in s1) == 2894
+    assert sum(len(f.fformations()) for f in s2) == 2501
+    assert _size_table(s2)[1] == 1505
+    # Frame.groups holds only the F-formations (groups of 2 or more).
+    assert all(len(g) >= 2 for f in salsa.annotated() for g in f.groups)
+
+
+def test_irregularities_are_reported(salsa):
+    report = salsa.metadata["report"]
+    assert report["missing_from_groundtruth"] == 129
+    assert report["groundtruth_lines_with_missing"] == 127
+    assert report["duplicate_singletons"] == 3
+    assert report["fake_blocks_skipped"] == 0
+    assert report["unannotated_feature_lines"] == [645, 1145]
+
+
+def test_angles_are_wrapped_and_head_is_column_five(salsa):
+    for frame in salsa:
+        assert np.all(frame.yaw >= -np.pi) and np.all(frame.yaw < np.pi)
+        assert np.all(np.abs(frame.head_yaw) <= np.pi)
+        np.testing.assert_array_equal(frame.head_position, frame.position)
+
+
+def test_first_frame_of_session_two_matches_the_readme(salsa):
+    # README "Example: one parsed frame (first frame of session 2)".
+    frame = next(f for f in salsa if f.sequence == "session2")
+    assert frame.time == 0.2
+    np.testing.assert_allclose(
+        frame.position[:3], [[8.7226, 5.3399], [12.192, 2.1269], [10.098, 1.4242]]
+    )
+    np.testing.assert_allclose(frame.yaw[:3], [1.92, -2.4, wrap_angle(3.24)])
+    np.testing.assert_allclose(frame.head_yaw[:3], [1.52, -2.08, wrap_angle(9.600000000000001)])
+    assert frame.yaw[2] == pytest.approx(-3.0432, abs=1e-4)
+    assert frame.head_yaw[2] == pytest.approx(-2.9664, abs=1e-4)
+    assert frame.groups == ((2, 4), (13, 1), (9, 12, 18, 14, 6), (16, 17), (8, 11, 7, 10, 5))
+    assert frame.partition()[-2:] == ((3,), (15,))
+
+
+def test_load_dataset_detects_salsa(salsa_dir, salsa):
+    assert load_dataset(salsa_dir).frames == salsa.frames
+    with pytest.raises(ValueError, match="salsa format stores positions in 'm'"):
+        load_dataset(salsa_dir, units="cm")
+
+
+def test_accepts_the_features_file_path(salsa_dir, salsa):
+    dataset = load_salsa(salsa_dir / "features.txt")
+    assert dataset.frames == salsa.frames
+
+
+# --- small synthetic and malformed files -------------------------------------------------------
+
+
+def _person(i: int, x: float = 1.0, y: float = 2.0, body: float = 0.5, head: float = 0.6) -> str:
+    return f"ID_00{i} {x} {y} {body} {head}"
+
+
+def _write(folder: Path, features: list[str], groups: list[str]) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "features.txt").write_text("".join(line + "\n" for line in features))
+    (folder / "group_names.txt").write_text("".join(line + "\n" for line in groups))
+    return folder
+
+
+def _copy_head(salsa_dir: Path, folder: Path, n: int = 3) -> tuple[list[str], list[str]]:
+    features = (salsa_dir / "features.txt").read_text().splitlines()[:n]
+    groups = (salsa_dir / "group_names.txt").read_text().splitlines()[:n]
+    return features, groups
+
+
+def test_fake_blocks_are_skipped(tmp_path):
+    features = [f"0.2 {_person(1)} {_person(2, x=3.0)} fake fake fake fake fake"]
+    folder = _write(tmp_path, features, ["0.2 < ID_001 ID_002 >"])
+    dataset = load_salsa(folder)
+    assert dataset[0].ids.tolist() == [1, 2]
+    assert dataset.metadata["report"]["fake_blocks_skipped"] == 1
+    assert dataset[0].groups == ((1, 2),)
+
+
+def test_new_session_on_time_decrease_and_gt_matched_by_string(tmp_path):
+    features = [f"0.2 {_person(1)}", f"3.2 {_person(1)}", f"0.20002 {_person(1)}"]
+    folder = _write(tmp_path, features, ["3.2 < ID_001 >", "0.20002 < ID_001 >"])
+    dataset = load_salsa(folder)
+    assert [f.sequence for f in dataset] == ["session1", "session1", "session2"]
+    assert [f.time for f in dataset] == [0.2, 3.2, 0.2]
+    assert [f.annotated for f in dataset] == [False, True, True]
+
+
+def test_truncated_feature_line(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    features[1] = features[1].rsplit(" ", 3)[0]
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(
+        DataFormatError, match=r"features.txt: line 2: field 'tokens'.*found 88 tokens"
+    ):
+        load_salsa(folder)
+
+
+def test_nan_and_inf_values(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    tokens = features[2].split(" ")
+    tokens[2] = "nan"
+    features[2] = " ".join(tokens)
+    folder = _write(tmp_path / "nan", features, groups)
+    with pytest.raises(
+        DataFormatError, match=r"line 3, person 1: field 'x': expected a finite number, found 'nan'"
+    ):
+        load_salsa(folder)
+    tokens[2] = "9.2"
+    tokens[9] = "inf"
+    features[2] = " ".join(tokens)
+    folder = _write(tmp_path / "inf", features, groups)
+    with pytest.raises(DataFormatError, match=r"line 3, person 2: field 'body': .*found 'inf'"):
+        load_salsa(folder)
+
+
+def test_non_numeric_token(tmp_path):
+    folder = _write(tmp_path, ["0.2 ID_001 1.0 abc 0.1 0.2"], ["0.2 < ID_001 >"])
+    with pytest.raises(
+        DataFormatError, match=r"line 1, person 1: field 'y': expected a number, found 'abc'"
+    ):
+        load_salsa(folder)
+
+
+def test_bad_id_token(tmp_path):
+    folder = _write(tmp_path, ["0.2 PERSON1 1.0 2.0 0.1 0.2"], ["0.2 < ID_001 >"])
+    with pytest.raises(
+        DataFormatError, match=r"line 1: field 'ID': expected a token ID_<number>, found 'PERSON1'"
+    ):
+        load_salsa(folder)
+
+
+def test_duplicate_ids_in_a_frame(tmp_path):
+    folder = _write(tmp_path, [f"0.2 {_person(1)} {_person(1)}"], ["0.2 < ID_001 >"])
+    with pytest.raises(
+        DataFormatError, match=r"features.txt: line 1: field 'ID': .*found id 1 twice"
+    ):
+        load_salsa(folder)
+
+
+def test_group_member_absent_from_frame(tmp_path):
+    folder = _write(tmp_path, [f"0.2 {_person(1)} {_person(2)}"], ["0.2 < ID_001 ID_007 >"])
+    with pytest.raises(
+        DataFormatError, match=r"group_names.txt: line 1 \(t=0.2\): field 'group 1': .*found ID 7"
+    ):
+        load_salsa(folder)
+
+
+def test_person_in_two_groups(tmp_path):
+    people = " ".join(_person(i) for i in (1, 2, 3))
+    folder = _write(tmp_path, [f"0.2 {people}"], ["0.2 < ID_001 ID_002 > < ID_002 ID_003 >"])
+    with pytest.raises(
+        DataFormatError, match=r"field 'group 2': expected disjoint groups, found ID 2"
+    ):
+        load_salsa(folder)
+
+
+def test_angles_in_degrees(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    tokens = features[0].split(" ")
+    tokens[4] = "135.0"  # person 1's body angle written in degrees
+    features[0] = " ".join(tokens)
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(
+        DataFormatError,
+        match=r"line 1, person 1: field 'body': expected an angle in radians.*degrees.*135",
+    ):
+        load_salsa(folder)
+
+
+def test_truncated_group_line(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    groups[1] = groups[1][: groups[1].rindex(">")].rstrip()
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(
+        DataFormatError, match=r"group_names.txt: line 2: field 'groups': expected '>' closing"
+    ):
+        load_salsa(folder)
+
+
+def test_group_time_matching_no_feature_line(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    groups[1] = "7.7" + groups[1][groups[1].index(" ") :]
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(
+        DataFormatError, match=r"group_names.txt: line 2: field 'time': .*found '7.7'"
+    ):
+        load_salsa(folder)
+
+
+def test_empty_and_missing_files(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    folder = _write(tmp_path / "empty", features, groups)
+    (folder / "features.txt").write_text("")
+    with pytest.raises(
+        DataFormatError,
+        match=r"features.txt: expected a DANTE features file \(a non-empty file\), found an empty",
+    ):
+        load_salsa(folder)
+    folder = _write(tmp_path / "missing", features, groups)
+    (folder / "group_names.txt").unlink()
+    with pytest.raises(
+        DataFormatError, match=r"group_names.txt: expected a DANTE group file.*found no such file"
+    ):
+        load_salsa(folder)
+    with pytest.raises(DataFormatError, match="no such file"):
+        load_dataset(tmp_path / "nowhere", format="salsa")
+
+
+def test_empty_line_in_features(salsa_dir, tmp_path):
+    features, groups = _copy_head(salsa_dir, tmp_path)
+    features.insert(1, "")
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(
+        DataFormatError, match=r"features.txt: line 2: expected .*found an empty line"
+    ):
+        load_salsa(folder)
