@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from reform.datasets.errors import DataFormatError
 from reform.frame import HUMAN, KINDS, ROBOT, Dataset, Frame, Group, complete_partition, wrap_angle
+from reform.majority import Majority
+from reform.metrics import T_ONE, T_TWO_THIRDS, THRESHOLDS, Evaluation, evaluate, pair_labels
 
 __version__ = "0.1.0"
 
@@ -15,11 +17,18 @@ __all__ = [
     "HUMAN",
     "KINDS",
     "ROBOT",
+    "THRESHOLDS",
+    "T_ONE",
+    "T_TWO_THIRDS",
     "DataFormatError",
     "Dataset",
+    "Evaluation",
     "Frame",
     "Group",
+    "Majority",
     "__version__",
     "complete_partition",
+    "evaluate",
+    "pair_labels",
     "wrap_angle",
 ]
