@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from reform.datasets.babble import load_babble
 from reform.datasets.detect import FORMATS, LENGTH_UNITS, detect_format, load_dataset
 from reform.datasets.errors import DataFormatError
 from reform.datasets.salsa import load_salsa
@@ -11,6 +12,7 @@ __all__ = [
     "LENGTH_UNITS",
     "DataFormatError",
     "detect_format",
+    "load_babble",
     "load_dataset",
     "load_salsa",
 ]

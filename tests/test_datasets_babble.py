@@ -1,0 +1,275 @@
+"""The Babble loader, on the real files and on malformed copies."""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reform import DataFormatError
+from reform.datasets import load_babble, load_dataset
+
+
+@pytest.fixture(scope="session")
+def babble(babble_dir: Path):
+    return load_babble(babble_dir)
+
+
+def _frame(dataset, number: int):
+    return dataset[dataset.metadata["frame_numbers"].index(number)]
+
+
+# --- the real files (numbers from /work/shared/datasets/babble/README.md, "verified") -----------
+
+
+def test_every_row_is_a_frame_and_99_are_annotated(babble):
+    assert len(babble) == 3481
+    assert babble.sequences() == ("babble",)
+    assert len(babble.annotated()) == 99
+    report = babble.metadata["report"]
+    assert report["rows"] == 3481
+    assert report["annotated_frames"] == 99
+    assert report["annotation_lines_duplicated"] == 1  # frame 2840, listed twice identically
+
+
+def test_time_comes_from_the_vicon_counter(babble):
+    # FrameNum runs 283148 -> 479627 at 100 Hz (README); the wall clock spans 1,965 s.
+    assert babble[0].time == 0.0
+    assert babble[-1].time == pytest.approx(1964.79)
+    assert np.all(np.diff([f.time for f in babble]) > 0)
+    assert babble.metadata["report"]["max_clock_gap_s"] < 1.5
+
+
+def test_group_sizes_of_the_annotated_frames(babble):
+    # README: over the 100 lines 7x23, 6x15, 5x20, 4x10, 3x19, 2x8, empty x5; one 3-group line is
+    # the duplicate of frame 2840.
+    sizes = Counter(len(g) for f in babble.annotated() for g in f.fformations())
+    assert sizes == {7: 23, 6: 15, 5: 20, 4: 10, 3: 18, 2: 8}
+    empty = [n for n in babble.metadata["frame_numbers"] if _frame(babble, n).groups == ()]
+    assert empty == [404, 570, 1125, 1481, 2752]
+    assert _frame(babble, 2840).groups == ((3, 4, 7),)
+
+
+def test_leavers(babble):
+    # README: participants leave in the order 1 (721/740), 6 (1448/1523), 2 (2002/2019),
+    # 5 (2401/2637), 3 (3081/3113): last annotated frame in the group / first without them.
+    for person, last, first_without in [
+        (1, 721, 740),
+        (6, 1448, 1523),
+        (2, 2002, 2019),
+        (5, 2401, 2637),
+        (3, 3081, 3113),
+    ]:
+        assert person in _frame(babble, last).groups[0]
+        assert all(person not in g for g in _frame(babble, first_without).groups)
+
+
+def test_untracked_torsos_and_heads(babble):
+    # Participant 7's torso is always tracked, participant 1's in 754 of 3,481 frames (README:
+    # 2,727 untracked).
+    present = Counter(int(i) for f in babble for i in f.ids)
+    assert present[7] == 3481
+    assert present[1] == 3481 - 2727
+    # Untracked head -> NaN head, never a (0, 0) head.
+    for frame in babble:
+        finite = ~np.isnan(frame.head_yaw)
+        assert not np.any(np.all(frame.head_position[finite] == 0.0, axis=1))
+
+
+def test_annotated_members_without_torso_use_their_head(babble):
+    assert babble.metadata["report"]["torso_from_head"] == [[79, 6], [520, 4], [721, 3]]
+    assert babble.metadata["report"]["members_dropped"] == []
+    frame = _frame(babble, 520)
+    i = frame.index_of(4)
+    np.testing.assert_array_equal(frame.position[i], frame.head_position[i])
+    assert 4 in frame.groups[0]
+    assert frame.groups[0] == (1, 2, 3, 4, 5, 6, 7)
+
+
+def test_swapped_heads_of_participants_3_and_4(babble):
+    report = babble.metadata["report"]
+    # README: full swaps in 107 frames; block 3 holds 4's head while 4's is missing in 53, and
+    # the reverse in 43 by the same rule (README's count of 44 includes one frame where block 4's
+    # head is not within 0.5 m of torso 3).
+    assert report["heads_swapped_back"] == 107
+    assert report["heads_moved"] == 53 + 43
+    assert report["misplaced_heads_by_owner"] == {"3->4": 160, "4->3": 150}
+    assert report["heads_dropped_duplicate"] == 1  # frame 1285: block 3 repeats 4's head
+    assert report["heads_dropped_far"] == 3  # 2 of participant 4, 1 of participant 6
+    # Frame 1 is a full swap: block 3's head (-1.711, -0.608) sits on torso 4, block 4's on torso 3.
+    frame = babble[0]
+    np.testing.assert_allclose(frame.head_position[frame.index_of(4)], [-1.711, -0.608])
+    np.testing.assert_allclose(frame.head_position[frame.index_of(3)], [-0.404, -0.686])
+    # After the repair every observed head is within 0.5 m of its body.
+    for frame in babble:
+        gap = np.hypot(*(frame.head_position - frame.position).T)
+        assert np.all(gap[~np.isnan(gap)] <= 0.5)
+
+
+def test_annotated_only(babble_dir, babble):
+    subset = load_babble(babble_dir, annotated_only=True)
+    assert len(subset) == 99
+    assert subset.frames == babble.annotated()
+    assert subset.metadata["frame_numbers"][:3] == [16, 73, 79]
+
+
+def test_load_dataset_detects_babble(babble_dir):
+    dataset = load_dataset(babble_dir, units="m")
+    assert dataset.name == "babble"
+    with pytest.raises(ValueError, match="babble format stores positions in 'm', got units='cm'"):
+        load_dataset(babble_dir, units="cm")
+
+
+# --- malformed copies --------------------------------------------------------------------------
+
+
+def _copy(babble_dir: Path, folder: Path, *, rows: int = 20, annotations: list[str] | None = None):
+    folder.mkdir(parents=True, exist_ok=True)
+    lines = (babble_dir / "Motion-capture-data.csv").read_text().splitlines()[: rows + 1]
+    if annotations is None:
+        annotations = ["16,{[1 2 3 4 5 6 7]}", "18,{[]}"]
+    return folder, lines, annotations
+
+
+def _write(folder: Path, lines: list[str], annotations: list[str]) -> Path:
+    (folder / "Motion-capture-data.csv").write_text("".join(line + "\n" for line in lines))
+    (folder / "annotated-frames.csv").write_text("".join(line + "\n" for line in annotations))
+    return folder
+
+
+def _set_field(lines: list[str], line: int, field: int, value: str) -> None:
+    fields = lines[line - 1].split(",")
+    fields[field] = value
+    lines[line - 1] = ",".join(fields)
+
+
+def test_small_copy_loads(babble_dir, tmp_path):
+    folder = _write(*_copy(babble_dir, tmp_path))
+    dataset = load_babble(folder)
+    assert len(dataset) == 20
+    assert [f.annotated for f in dataset].count(True) == 2
+
+
+def test_truncated_line(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    lines[5] = lines[5][: lines[5].index(",6,")]
+    _write(folder, lines, annotations)
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"Motion-capture-data.csv: line 6 \(frame 5\)"
+            r": field 'fields': expected 70 .*found 50 fields"
+        ),
+    ):
+        load_babble(folder)
+
+
+def test_nan_value(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    _set_field(lines, 4, 14, "NaN")  # participant 2, TorsoX
+    _write(folder, lines, annotations)
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"line 4 \(frame 3\), participant 2"
+            r": field 'TorsoX': expected a finite number, found 'NaN'"
+        ),
+    ):
+        load_babble(folder)
+
+
+def test_angle_in_degrees(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    _set_field(lines, 3, 6, "-5.0")  # participant 1, TorsoRotation written in degrees
+    _write(folder, lines, annotations)
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"line 3 \(frame 2\), participant 1"
+            r": field 'TorsoRotation': expected an angle in radians.*degrees.*-5.0"
+        ),
+    ):
+        load_babble(folder)
+
+
+def test_duplicate_participant(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    _set_field(lines, 2, 10, "1")  # block 2 named participant 1
+    _write(folder, lines, annotations)
+    with pytest.raises(
+        DataFormatError, match=r"line 2 \(frame 1\): field 'Name': .*found id 1 twice"
+    ):
+        load_babble(folder)
+
+
+def test_conflicting_duplicate_annotation(babble_dir, tmp_path):
+    folder, lines, _ = _copy(babble_dir, tmp_path)
+    _write(folder, lines, ["16,{[1 2 3]}", "16,{[1 2]}"])
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"annotated-frames.csv: line 2 \(frame 16\)"
+            r": field 'groups': expected the groups of line 1"
+        ),
+    ):
+        load_babble(folder)
+
+
+def test_identical_duplicate_annotation_is_counted(babble_dir, tmp_path):
+    folder, lines, _ = _copy(babble_dir, tmp_path)
+    _write(folder, lines, ["16,{[1 2 3]}", "16,{[1 2 3]}"])
+    assert load_babble(folder).metadata["report"]["annotation_lines_duplicated"] == 1
+
+
+def test_group_member_absent(babble_dir, tmp_path):
+    folder, lines, _ = _copy(babble_dir, tmp_path)
+    _write(folder, lines, ["16,{[1 2 9]}"])
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"line 1 \(frame 16\)"
+            r": field 'group 1': expected members present .*found participant 9"
+        ),
+    ):
+        load_babble(folder)
+
+
+def test_annotation_of_a_frame_beyond_the_recording(babble_dir, tmp_path):
+    folder, lines, _ = _copy(babble_dir, tmp_path)
+    _write(folder, lines, ["16,{[1 2]}", "999,{[1 2]}"])
+    with pytest.raises(
+        DataFormatError,
+        match=r"line 2 \(frame 999\): field 'frame': expected a frame number in 1..20",
+    ):
+        load_babble(folder)
+
+
+def test_malformed_annotation_line(babble_dir, tmp_path):
+    folder, lines, _ = _copy(babble_dir, tmp_path)
+    _write(folder, lines, ["16,{[1 2 3"])
+    with pytest.raises(
+        DataFormatError, match=r"annotated-frames.csv: line 1: expected N,\{\[id id"
+    ):
+        load_babble(folder)
+
+
+def test_empty_and_missing_files(babble_dir, tmp_path):
+    folder = _write(*_copy(babble_dir, tmp_path / "a"))
+    (folder / "annotated-frames.csv").write_text("")
+    with pytest.raises(
+        DataFormatError, match=r"annotated-frames.csv: expected .*found an empty file"
+    ):
+        load_babble(folder)
+    folder = _write(*_copy(babble_dir, tmp_path / "b"))
+    (folder / "annotated-frames.csv").unlink()
+    with pytest.raises(
+        DataFormatError, match=r"annotated-frames.csv: expected .*found no such file"
+    ):
+        load_babble(folder)
+    folder = _write(*_copy(babble_dir, tmp_path / "c", rows=0))
+    with pytest.raises(
+        DataFormatError, match=r"Motion-capture-data.csv: expected at least one data line"
+    ):
+        load_babble(folder)
