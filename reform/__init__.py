@@ -6,6 +6,7 @@ through optional imports of pyarrow and skops, which the project installs).
 
 from __future__ import annotations
 
+from reform.characterisation import GroupShapes, characterise, symmetry, tightness
 from reform.datasets.errors import DataFormatError
 from reform.frame import HUMAN, KINDS, ROBOT, Dataset, Frame, Group, complete_partition, wrap_angle
 from reform.majority import Majority
@@ -24,11 +25,15 @@ __all__ = [
     "Dataset",
     "Evaluation",
     "Frame",
+    "GroupShapes",
     "Group",
     "Majority",
     "__version__",
+    "characterise",
     "complete_partition",
     "evaluate",
     "pair_labels",
+    "symmetry",
+    "tightness",
     "wrap_angle",
 ]
