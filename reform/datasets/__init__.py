@@ -5,6 +5,7 @@ from __future__ import annotations
 from reform.datasets.babble import load_babble
 from reform.datasets.detect import FORMATS, LENGTH_UNITS, detect_format, load_dataset
 from reform.datasets.errors import DataFormatError
+from reform.datasets.gcff_mat import load_gcff
 from reform.datasets.salsa import load_salsa
 
 __all__ = [
@@ -14,5 +15,6 @@ __all__ = [
     "detect_format",
     "load_babble",
     "load_dataset",
+    "load_gcff",
     "load_salsa",
 ]

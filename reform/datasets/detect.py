@@ -11,8 +11,8 @@ from reform.frame import Dataset
 __all__ = ["FORMATS", "LENGTH_UNITS", "detect_format", "load_dataset"]
 
 FORMATS = ("salsa", "babble", "gcff", "parquet")
-# Length units a GCFF folder may be written in, with their size in metres.
-LENGTH_UNITS = {"cm": 0.01, "m": 1.0}
+# Length units a GCFF folder may be written in (the other formats are always metres).
+LENGTH_UNITS = ("cm", "m")
 # Formats whose files have one fixed length unit.
 _FIXED_UNITS = {"salsa": "m", "babble": "m", "parquet": "m"}
 
@@ -80,7 +80,7 @@ def load_dataset(
     elif format not in FORMATS:
         raise ValueError(f"format must be one of {FORMATS}, got {format!r}")
     if units is not None and units not in LENGTH_UNITS:
-        raise ValueError(f"units must be one of {tuple(LENGTH_UNITS)}, got {units!r}")
+        raise ValueError(f"units must be one of {LENGTH_UNITS}, got {units!r}")
     fixed = _FIXED_UNITS.get(format)
     if fixed is not None and units is not None and units != fixed:
         raise ValueError(

@@ -1,0 +1,383 @@
+"""The GCFF MATLAB format (Setti et al. 2015) used by CoffeeBreak, Cocktail Party, Synth, GDet.
+
+A GCFF folder holds:
+
+* ``features.mat``: ``features``, a 1×T cell array of N×4 matrices ``[ID, x, y, θ]`` (one per
+  frame; θ radians counter-clockwise from +x; x, y in the dataset's ground units) and
+  ``timestamp``, 1×T;
+* ``groundtruth.mat``: ``GTgroups``, a 1×G cell array, each a cell array of row vectors of IDs
+  (one per group), and ``GTtimestamp``, 1×G, a subset of ``timestamp``;
+* optionally ``settings_gc.mat``: ``stride`` (a length) and ``mdl`` (a squared length), the GCFF
+  parameters tuned for the dataset.
+
+The public sets write positions in centimetre-like units, so :func:`load_gcff` assumes
+centimetres unless told otherwise and converts to metres.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.datasets._validation import check_unique_ids, make_frame, require_file
+from reform.datasets.errors import DataFormatError
+from reform.frame import Dataset, Frame, Group, wrap_angle
+
+__all__ = ["FEATURES_FILE", "GROUNDTRUTH_FILE", "SETTINGS_FILE", "load_gcff"]
+
+FEATURES_FILE = "features.mat"
+GROUNDTRUTH_FILE = "groundtruth.mat"
+SETTINGS_FILE = "settings_gc.mat"
+
+# Units of the files' positions per metre (positions are divided by it).
+_UNITS_PER_M = {"cm": 100.0, "m": 1.0}
+# GCFF files store radians; some sets use [0, 2pi) rather than [-pi, pi], so anything up to one
+# full turn (plus rounding) is accepted and wrapped; beyond that the values look like degrees.
+_ANGLE_LIMIT_RAD = 2.0 * math.pi + 1e-3
+_TIMESTAMP_RTOL = 1e-9  # relative tolerance matching GTtimestamp to timestamp
+
+
+def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
+    """Loads a GCFF MATLAB folder.
+
+    Frames carry the body only (``head_position`` and ``head_yaw`` are None): GCFF's θ is one
+    orientation per person. ``time`` is the frame's ``timestamp`` as stored (its unit is the
+    dataset's; often a frame index). Ground truth is canonicalised as for the other formats:
+    groups of two or more as listed, everyone else a singleton; frames whose timestamp is not
+    in ``GTtimestamp`` have ``groups=None``.
+
+    Args:
+        path: the folder (or its ``features.mat``).
+        units: length unit of the files' positions, ``"cm"`` (default, as the public sets
+            use) or ``"m"``. Positions are converted to metres.
+
+    Returns:
+        The dataset, named and sequenced after the folder. ``metadata["settings_gc"]`` holds
+        ``stride`` and ``mdl`` as stored (file units) and converted (``stride_m``, ``mdl_m2``)
+        when ``settings_gc.mat`` exists.
+
+    Raises:
+        ValueError: ``units`` is not ``"cm"`` or ``"m"``.
+        DataFormatError: a file is missing, unreadable or malformed.
+    """
+    if units not in _UNITS_PER_M:
+        raise ValueError(f"units must be one of {tuple(_UNITS_PER_M)}, got {units!r}")
+    per_metre = _UNITS_PER_M[units]
+    path = Path(path)
+    folder = path.parent if path.is_file() else path
+    if not folder.is_dir():
+        raise DataFormatError(
+            folder, None, None, "a GCFF folder (features.mat, groundtruth.mat)", "no such folder"
+        )
+    features_path = require_file(folder / FEATURES_FILE, what="the GCFF features file")
+    groundtruth_path = require_file(folder / GROUNDTRUTH_FILE, what="the GCFF ground-truth file")
+
+    features_mat = _loadmat(features_path)
+    features = _cells(
+        _variable(features_mat, "features", features_path), path=features_path, field="features"
+    )
+    timestamps = _vector(
+        _variable(features_mat, "timestamp", features_path), path=features_path, field="timestamp"
+    )
+    if timestamps.size != len(features):
+        raise DataFormatError(
+            features_path,
+            None,
+            "timestamp",
+            f"{len(features)} values (one per features cell)",
+            f"{timestamps.size}",
+        )
+    order: dict[float, int] = {}
+    for t, value in enumerate(timestamps.tolist()):
+        if value in order:
+            raise DataFormatError(
+                features_path,
+                f"frame {t + 1}",
+                "timestamp",
+                "unique time stamps",
+                f"{value!r} again (frame {order[value] + 1})",
+            )
+        order[value] = t
+
+    gt_mat = _loadmat(groundtruth_path)
+    gt_cells = _cells(
+        _variable(gt_mat, "GTgroups", groundtruth_path), path=groundtruth_path, field="GTgroups"
+    )
+    gt_times = _vector(
+        _variable(gt_mat, "GTtimestamp", groundtruth_path),
+        path=groundtruth_path,
+        field="GTtimestamp",
+    )
+    if gt_times.size != len(gt_cells):
+        raise DataFormatError(
+            groundtruth_path,
+            None,
+            "GTtimestamp",
+            f"{len(gt_cells)} values (one per GTgroups cell)",
+            f"{gt_times.size}",
+        )
+
+    rows = [_frame_rows(cell, path=features_path, frame=t + 1) for t, cell in enumerate(features)]
+
+    listed_of_frame: dict[int, tuple[int, list[list[int]]]] = {}
+    for g, (cell, stamp) in enumerate(zip(gt_cells, gt_times.tolist(), strict=True)):
+        where = f"GT frame {g + 1} (GTtimestamp {stamp:g})"
+        t = _match_time(stamp, timestamps, order)
+        if t is None:
+            raise DataFormatError(
+                groundtruth_path,
+                where,
+                "GTtimestamp",
+                "a value of features.mat's timestamp",
+                f"{stamp!r}",
+            )
+        if t in listed_of_frame:
+            raise DataFormatError(
+                groundtruth_path,
+                where,
+                "GTtimestamp",
+                "one ground truth per frame",
+                f"frame {t + 1} annotated twice",
+            )
+        listed_of_frame[t] = (g, _groups(cell, path=groundtruth_path, where=where))
+
+    frames: list[Frame] = []
+    report: Counter[str] = Counter()
+    sequence = folder.name
+    for t, (ids, position, yaw) in enumerate(rows):
+        groups: tuple[Group, ...] | None = None
+        if t in listed_of_frame:
+            g, listed = listed_of_frame[t]
+            groups = _canonical(
+                listed,
+                ids,
+                path=groundtruth_path,
+                where=f"GT frame {g + 1} (GTtimestamp {gt_times[g]:g})",
+                report=report,
+            )
+        frames.append(
+            make_frame(
+                path=features_path,
+                where=f"frame {t + 1}",
+                ids=ids,
+                position=position / per_metre,
+                yaw=wrap_angle(yaw),
+                groups=groups,
+                time=float(timestamps[t]),
+                sequence=sequence,
+            )
+        )
+
+    metadata: dict[str, Any] = {
+        "format": "gcff",
+        "file_units": units,
+        "time": "timestamp as stored in features.mat",
+        "report": {
+            "frames": len(frames),
+            "annotated_frames": len(listed_of_frame),
+            "groundtruth_singletons_listed": report["singletons_listed"],
+            "duplicate_singletons": report["duplicate_singletons"],
+            "people_in_no_group": report["people_in_no_group"],
+        },
+    }
+    settings_path = folder / SETTINGS_FILE
+    if settings_path.exists():
+        metadata["settings_gc"] = _settings(settings_path, units=units, per_metre=per_metre)
+    return Dataset(
+        frames=tuple(frames), name=folder.name, source=str(folder), units="m", metadata=metadata
+    )
+
+
+def _loadmat(path: Path) -> dict[str, Any]:
+    from scipy.io import loadmat
+
+    try:
+        return loadmat(path, squeeze_me=False, struct_as_record=True)
+    except NotImplementedError as exc:  # MATLAB v7.3 (HDF5)
+        raise DataFormatError(
+            path, None, None, "a MATLAB file of version 7.2 or older", f"{exc}"
+        ) from exc
+    except Exception as exc:  # scipy raises ValueError, TypeError, OSError... on corrupt files
+        raise DataFormatError(
+            path, None, None, "a readable MATLAB .mat file", f"{type(exc).__name__}: {exc}"
+        ) from exc
+
+
+def _variable(mat: dict[str, Any], name: str, path: Path) -> Any:
+    if name not in mat:
+        present = sorted(k for k in mat if not k.startswith("__"))
+        raise DataFormatError(path, None, name, f"a variable {name!r}", f"variables {present}")
+    return mat[name]
+
+
+def _cells(value: Any, *, path: Path, field: str) -> list[Any]:
+    """The elements of a 1×K (or K×1) cell array, in order."""
+    array = np.asarray(value)
+    if array.dtype != object:
+        raise DataFormatError(
+            path, None, field, "a cell array", f"a {array.dtype} array of shape {array.shape}"
+        )
+    if array.ndim != 2 or (array.size and 1 not in array.shape):
+        raise DataFormatError(path, None, field, "a 1×K cell array", f"shape {array.shape}")
+    return list(array.ravel())
+
+
+def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
+    array = np.asarray(value)
+    if array.dtype == object or not np.issubdtype(array.dtype, np.number):
+        raise DataFormatError(path, None, field, "a numeric vector", f"a {array.dtype} array")
+    if array.ndim > 2 or (array.ndim == 2 and array.size and 1 not in array.shape):
+        raise DataFormatError(path, None, field, "a 1×K vector", f"shape {array.shape}")
+    vector = array.astype(np.float64).ravel()
+    bad = np.flatnonzero(~np.isfinite(vector))
+    if bad.size:
+        raise DataFormatError(
+            path, f"element {bad[0] + 1}", field, "a finite number", repr(float(vector[bad[0]]))
+        )
+    return vector
+
+
+def _frame_rows(cell: Any, *, path: Path, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(ids, (n, 2) positions in file units, (n,) θ) of one ``features`` cell."""
+    where = f"frame {frame}"
+    array = np.asarray(cell)
+    if array.dtype == object or not (array.size == 0 or np.issubdtype(array.dtype, np.number)):
+        raise DataFormatError(
+            path, where, "features", "an N×4 numeric matrix [ID, x, y, θ]", f"a {array.dtype} array"
+        )
+    if array.size == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros(0)
+    if array.ndim != 2 or array.shape[1] != 4:
+        raise DataFormatError(
+            path, where, "features", "an N×4 matrix [ID, x, y, θ]", f"shape {array.shape}"
+        )
+    array = array.astype(np.float64)
+    for column, name in enumerate(("ID", "x", "y", "θ")):
+        bad = np.flatnonzero(~np.isfinite(array[:, column]))
+        if bad.size:
+            raise DataFormatError(
+                path,
+                f"{where}, row {bad[0] + 1}",
+                name,
+                "a finite number",
+                repr(float(array[bad[0], column])),
+            )
+    ids = array[:, 0]
+    fractional = np.flatnonzero(ids != np.round(ids))
+    if fractional.size:
+        raise DataFormatError(
+            path,
+            f"{where}, row {fractional[0] + 1}",
+            "ID",
+            "an integer",
+            repr(float(ids[fractional[0]])),
+        )
+    ids = ids.astype(np.int64)
+    check_unique_ids(ids.tolist(), path=path, where=where)
+    theta = array[:, 3]
+    wild = np.flatnonzero(np.abs(theta) > _ANGLE_LIMIT_RAD)
+    if wild.size:
+        row = int(wild[0])
+        raise DataFormatError(
+            path,
+            f"{where}, row {row + 1} (ID {ids[row]})",
+            "θ",
+            "radians with |θ| <= 2π (values beyond look like degrees)",
+            repr(float(theta[row])),
+        )
+    return ids, array[:, 1:3], theta
+
+
+def _match_time(stamp: float, timestamps: np.ndarray, order: dict[float, int]) -> int | None:
+    if stamp in order:
+        return order[stamp]
+    close = np.flatnonzero(
+        np.isclose(timestamps, stamp, rtol=_TIMESTAMP_RTOL, atol=_TIMESTAMP_RTOL)
+    )
+    return int(close[0]) if close.size == 1 else None
+
+
+def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
+    """The groups of one ``GTgroups`` cell: a cell array of ID vectors (or one numeric vector)."""
+    array = np.asarray(cell)
+    if array.size == 0:
+        return []
+    members_list = list(array.ravel()) if array.dtype == object else [array]
+    groups = []
+    for k, members in enumerate(members_list, start=1):
+        vector = np.asarray(members)
+        if vector.size == 0:
+            continue
+        if vector.dtype == object or not np.issubdtype(vector.dtype, np.number):
+            raise DataFormatError(
+                path, where, f"group {k}", "a numeric vector of IDs", f"a {vector.dtype} array"
+            )
+        values = vector.astype(np.float64).ravel()
+        if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
+            raise DataFormatError(path, where, f"group {k}", "integer IDs", str(values.tolist()))
+        groups.append([int(v) for v in values])
+    return groups
+
+
+def _canonical(
+    listed: list[list[int]], ids: np.ndarray, *, path: Path, where: str, report: Counter[str]
+) -> tuple[Group, ...]:
+    present = set(ids.tolist())
+    grouped: set[int] = set()
+    groups: list[Group] = []
+    for k, members in enumerate(listed, start=1):
+        absent = [m for m in members if m not in present]
+        if absent:
+            raise DataFormatError(
+                path,
+                where,
+                f"group {k}",
+                f"members present in the frame (IDs {sorted(present)})",
+                f"ID {absent[0]}",
+            )
+        if len(set(members)) != len(members):
+            raise DataFormatError(path, where, f"group {k}", "distinct members", str(members))
+        if len(members) >= 2:
+            clash = grouped.intersection(members)
+            if clash:
+                raise DataFormatError(
+                    path, where, f"group {k}", "disjoint groups", f"ID {min(clash)} in two groups"
+                )
+            grouped.update(members)
+            groups.append(tuple(members))
+    singletons = [m[0] for m in listed if len(m) == 1]
+    report["singletons_listed"] += len(singletons)
+    report["duplicate_singletons"] += sum(1 for s in singletons if s in grouped)
+    report["people_in_no_group"] += len(present - grouped - set(singletons))
+    return tuple(groups)
+
+
+def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
+    mat = _loadmat(path)
+    out: dict[str, Any] = {"units": units}
+    for name in ("stride", "mdl"):
+        if name not in mat:
+            continue
+        array = np.asarray(mat[name])
+        if array.dtype == object or not np.issubdtype(array.dtype, np.number) or array.size != 1:
+            raise DataFormatError(
+                path,
+                None,
+                name,
+                "a numeric scalar",
+                f"a {array.dtype} array of shape {array.shape}",
+            )
+        value = float(array.ravel()[0])
+        if not math.isfinite(value):
+            raise DataFormatError(path, None, name, "a finite number", repr(value))
+        out[name] = value
+    if "stride" in out:
+        out["stride_m"] = out["stride"] / per_metre
+    if "mdl" in out:
+        out["mdl_m2"] = out["mdl"] / per_metre**2
+    return out

@@ -1,0 +1,280 @@
+"""The GCFF MATLAB loader, on folders written with scipy.io.savemat."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+
+from reform import DataFormatError
+from reform.datasets import detect_format, load_dataset, load_gcff
+
+
+def _cell(items) -> np.ndarray:
+    """A 1×K MATLAB cell array."""
+    array = np.empty((1, len(items)), dtype=object)
+    for k, item in enumerate(items):
+        array[0, k] = item
+    return array
+
+
+def _gt(*groups) -> np.ndarray:
+    return _cell([np.array([members], dtype=np.float64) for members in groups])
+
+
+# Three frames in centimetres: a pair plus a loner, one person alone, nobody.
+FEATURES = [
+    np.array([[1, 100.0, 200.0, 0.5], [2, 150.0, 200.0, 3.0], [7, 400.0, -50.0, -1.5]]),
+    np.array([[1, 110.0, 210.0, 6.0]]),  # θ in [0, 2π): wrapped on load
+    np.zeros((0, 4)),
+]
+TIMESTAMPS = [10, 20, 30]
+
+
+def _write(
+    folder: Path,
+    *,
+    features=None,
+    timestamps=None,
+    gt_groups=None,
+    gt_timestamps=None,
+    settings: dict | None = None,
+    features_vars: dict | None = None,
+    gt_vars: dict | None = None,
+) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    features = FEATURES if features is None else features
+    timestamps = TIMESTAMPS if timestamps is None else timestamps
+    if gt_groups is None:
+        # frame 10: the pair and a listed singleton; frame 20: one listed singleton; 30: none.
+        gt_groups = [_gt([1, 2], [7]), _gt([1]), _cell([])]
+        gt_timestamps = [10, 20, 30] if gt_timestamps is None else gt_timestamps
+    features_vars = features_vars or {
+        "features": _cell(features),
+        "timestamp": np.array([timestamps], dtype=np.float64),
+    }
+    gt_vars = gt_vars or {
+        "GTgroups": _cell(gt_groups),
+        "GTtimestamp": np.array([gt_timestamps], dtype=np.float64),
+    }
+    scipy.io.savemat(folder / "features.mat", features_vars)
+    scipy.io.savemat(folder / "groundtruth.mat", gt_vars)
+    if settings is not None:
+        scipy.io.savemat(folder / "settings_gc.mat", settings)
+    return folder
+
+
+def test_loads_and_converts_centimetres(tmp_path):
+    folder = _write(tmp_path / "CoffeeBreak", settings={"stride": 70.0, "mdl": 30000.0})
+    dataset = load_gcff(folder)
+    assert dataset.name == "CoffeeBreak"
+    assert [f.sequence for f in dataset] == ["CoffeeBreak"] * 3
+    assert [f.time for f in dataset] == [10.0, 20.0, 30.0]
+    first, second, empty = dataset
+    assert first.ids.tolist() == [1, 2, 7]
+    np.testing.assert_allclose(first.position, [[1.0, 2.0], [1.5, 2.0], [4.0, -0.5]])
+    np.testing.assert_allclose(first.yaw, [0.5, 3.0, -1.5])
+    assert first.head_position is None and first.head_yaw is None
+    assert first.groups == ((1, 2),)
+    assert first.partition() == ((1, 2), (7,))
+    assert second.yaw[0] == pytest.approx(6.0 - 2 * np.pi)
+    assert second.groups == ()
+    assert empty.n_people == 0 and empty.groups == ()
+    settings = dataset.metadata["settings_gc"]
+    assert settings == {
+        "units": "cm",
+        "stride": 70.0,
+        "mdl": 30000.0,
+        "stride_m": 0.7,
+        "mdl_m2": 3.0,
+    }
+    report = dataset.metadata["report"]
+    assert report["annotated_frames"] == 3
+    assert report["groundtruth_singletons_listed"] == 2
+
+
+def test_metres(tmp_path):
+    folder = _write(tmp_path / "synth", settings={"stride": 0.7})
+    dataset = load_dataset(folder, units="m")
+    np.testing.assert_allclose(dataset[0].position[0], [100.0, 200.0])
+    assert dataset.metadata["settings_gc"]["stride_m"] == 0.7
+
+
+def test_unannotated_frames_and_squeezed_shapes(tmp_path):
+    # GT for frame 20 only, its groups stored as one numeric row (no inner cell).
+    gt_vars = {"GTgroups": _cell([np.array([[1.0]])]), "GTtimestamp": np.array([[20.0]])}
+    features = [FEATURES[0], np.array([[1.0, 0.0, 0.0, 0.0]]), FEATURES[2]]
+    folder = _write(tmp_path / "one", features=features, gt_vars=gt_vars)
+    dataset = load_gcff(folder)
+    assert [f.annotated for f in dataset] == [False, True, False]
+    assert dataset[1].groups == ()
+
+
+def test_single_group_numeric_vector_and_timestamp_column(tmp_path):
+    gt_vars = {"GTgroups": _cell([np.array([[1.0, 2.0]])]), "GTtimestamp": np.array([[10.0]])}
+    features_vars = {"features": _cell(FEATURES), "timestamp": np.array([[10.0], [20.0], [30.0]])}
+    folder = _write(tmp_path / "col", features_vars=features_vars, gt_vars=gt_vars)
+    assert load_gcff(folder)[0].groups == ((1, 2),)
+
+
+def test_detection(tmp_path):
+    folder = _write(tmp_path / "cp")
+    assert detect_format(folder) == "gcff"
+    assert detect_format(folder / "features.mat") == "gcff"
+    assert load_dataset(folder / "features.mat").name == "cp"
+
+
+# --- bad input ---------------------------------------------------------------------------------
+
+
+def test_unknown_units(tmp_path):
+    folder = _write(tmp_path / "u")
+    with pytest.raises(ValueError, match=r"units must be one of \('cm', 'm'\), got 'mm'"):
+        load_gcff(folder, units="mm")
+    with pytest.raises(ValueError, match=r"units must be one of \('cm', 'm'\), got 'inch'"):
+        load_dataset(folder, units="inch")
+
+
+def test_missing_files(tmp_path):
+    folder = _write(tmp_path / "m1")
+    (folder / "groundtruth.mat").unlink()
+    with pytest.raises(
+        DataFormatError,
+        match=r"groundtruth.mat: expected the GCFF ground-truth file .*no such file",
+    ):
+        load_gcff(folder)
+    with pytest.raises(DataFormatError, match=r"nowhere: expected a GCFF folder"):
+        load_gcff(tmp_path / "nowhere")
+    with pytest.raises(
+        DataFormatError, match=r"nowhere: expected an existing dataset file or folder"
+    ):
+        load_dataset(tmp_path / "nowhere")
+
+
+def test_empty_and_corrupt_files(tmp_path):
+    folder = _write(tmp_path / "e")
+    (folder / "features.mat").write_bytes(b"")
+    with pytest.raises(
+        DataFormatError, match=r"features.mat: expected the GCFF features file \(a non-empty file\)"
+    ):
+        load_gcff(folder)
+    (folder / "features.mat").write_bytes(b"this is not a MATLAB file at all" * 10)
+    with pytest.raises(
+        DataFormatError, match=r"features.mat: expected a readable MATLAB .mat file"
+    ):
+        load_gcff(folder)
+
+
+def test_missing_variable(tmp_path):
+    folder = _write(tmp_path / "v", features_vars={"features": _cell(FEATURES)})
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"features.mat"
+            r": field 'timestamp': expected a variable 'timestamp', found variables \['features'\]"
+        ),
+    ):
+        load_gcff(folder)
+
+
+def test_wrong_column_count(tmp_path):
+    features = [FEATURES[0][:, :3], FEATURES[1], FEATURES[2]]
+    folder = _write(tmp_path / "c", features=features)
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"features.mat: frame 1"
+            r": field 'features': expected an N×4 matrix .*found shape \(3, 3\)"
+        ),
+    ):
+        load_gcff(folder)
+
+
+def test_nan_and_inf(tmp_path):
+    bad = FEATURES[0].copy()
+    bad[1, 2] = np.nan
+    folder = _write(tmp_path / "nan", features=[bad, FEATURES[1], FEATURES[2]])
+    with pytest.raises(
+        DataFormatError, match=r"frame 1, row 2: field 'y': expected a finite number, found nan"
+    ):
+        load_gcff(folder)
+    bad[1, 2] = 0.0
+    bad[2, 3] = np.inf
+    folder = _write(tmp_path / "inf", features=[bad, FEATURES[1], FEATURES[2]])
+    with pytest.raises(
+        DataFormatError, match=r"frame 1, row 3: field 'θ': expected a finite number, found inf"
+    ):
+        load_gcff(folder)
+
+
+def test_degrees(tmp_path):
+    bad = FEATURES[0].copy()
+    bad[0, 3] = 90.0
+    folder = _write(tmp_path / "deg", features=[bad, FEATURES[1], FEATURES[2]])
+    with pytest.raises(
+        DataFormatError,
+        match=r"frame 1, row 1 \(ID 1\): field 'θ': expected radians .*degrees.*found 90.0",
+    ):
+        load_gcff(folder)
+
+
+def test_duplicate_ids(tmp_path):
+    bad = FEATURES[0].copy()
+    bad[2, 0] = 2
+    folder = _write(tmp_path / "dup", features=[bad, FEATURES[1], FEATURES[2]])
+    with pytest.raises(
+        DataFormatError,
+        match=r"features.mat: frame 1: field 'ID': expected ids unique .*found id 2 twice",
+    ):
+        load_gcff(folder)
+
+
+def test_group_member_absent(tmp_path):
+    folder = _write(tmp_path / "absent", gt_groups=[_gt([1, 5])], gt_timestamps=[10])
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"groundtruth.mat: GT frame 1 \(GTtimestamp 10\)"
+            r": field 'group 1': expected members present .*found ID 5"
+        ),
+    ):
+        load_gcff(folder)
+
+
+def test_person_in_two_groups(tmp_path):
+    folder = _write(tmp_path / "twice", gt_groups=[_gt([1, 2], [2, 7])], gt_timestamps=[10])
+    with pytest.raises(
+        DataFormatError, match=r"field 'group 2': expected disjoint groups, found ID 2"
+    ):
+        load_gcff(folder)
+
+
+def test_gt_timestamp_not_in_features(tmp_path):
+    folder = _write(tmp_path / "ts", gt_groups=[_gt([1, 2])], gt_timestamps=[15])
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"GT frame 1 \(GTtimestamp 15\)"
+            r": field 'GTtimestamp': expected a value of features.mat's timestamp"
+        ),
+    ):
+        load_gcff(folder)
+
+
+def test_length_mismatch(tmp_path):
+    folder = _write(tmp_path / "len", timestamps=[10, 20])
+    with pytest.raises(
+        DataFormatError, match=r"features.mat: field 'timestamp': expected 3 values .*found 2"
+    ):
+        load_gcff(folder)
+
+
+def test_features_not_a_cell(tmp_path):
+    features_vars = {"features": np.zeros((3, 4)), "timestamp": np.array([[1.0]])}
+    folder = _write(tmp_path / "nocell", features_vars=features_vars)
+    with pytest.raises(
+        DataFormatError, match=r"field 'features': expected a cell array, found a float64 array"
+    ):
+        load_gcff(folder)
