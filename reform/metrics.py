@@ -57,6 +57,7 @@ __all__ = [
     "MicroScores",
     "SizeScores",
     "ThresholdScores",
+    "check_partition",
     "evaluate",
     "f1_score",
     "pair_labels",
@@ -138,6 +139,18 @@ def _labels(
             )
         labels[missing] = n_groups + np.arange(int(missing.sum()))
     return labels
+
+
+def check_partition(
+    partition: Iterable[Sequence[int]], frame: Frame, *, where: str = "partition"
+) -> None:
+    """Checks that ``partition`` covers every id of ``frame`` exactly once.
+
+    Raises:
+        ValueError: naming ``where`` and the first offending person (unknown, listed twice or
+            in no group) or an empty or malformed group.
+    """
+    _labels(partition, frame.ids, where=where, strict=True)
 
 
 def _pair_equal(labels: np.ndarray) -> np.ndarray:
@@ -476,6 +489,11 @@ class Evaluation:
             "pairwise_accuracy": _json_float(self.pairwise_accuracy),
             "thresholds": [str(t) for t in self.thresholds],
         }
+        names = list(dict.fromkeys(self.sequence))
+        if len(names) > 1:
+            result["by_sequence"] = {
+                name: self._summary(self.select(sequence=name)) for name in names
+            }
         scores = [self.at(t) for t in self.thresholds]
         for s in scores:
             result[str(s.threshold)] = {
@@ -525,6 +543,22 @@ class Evaluation:
                 for i in range(self.n_frames)
             ]
         return result
+
+    @staticmethod
+    def _summary(evaluation: Evaluation) -> dict[str, Any]:
+        """Frames, pairwise accuracy and frame-mean P/R/F1 per threshold, JSON-ready."""
+        summary: dict[str, Any] = {
+            "frames": evaluation.n_frames,
+            "pairwise_accuracy": _json_float(evaluation.pairwise_accuracy),
+        }
+        for t in evaluation.thresholds:
+            s = evaluation.at(t)
+            summary[str(t)] = {
+                "precision": _json_float(s.precision),
+                "recall": _json_float(s.recall),
+                "f1": _json_float(s.f1),
+            }
+        return summary
 
 
 def _count(items: Iterable[str]) -> dict[str, int]:
