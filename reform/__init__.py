@@ -9,6 +9,7 @@ from __future__ import annotations
 from reform.characterisation import GroupShapes, characterise, symmetry, tightness
 from reform.datasets.errors import DataFormatError
 from reform.frame import HUMAN, KINDS, ROBOT, Dataset, Frame, Group, complete_partition, wrap_angle
+from reform.gcff import Gcff
 from reform.majority import Majority
 from reform.metrics import T_ONE, T_TWO_THIRDS, THRESHOLDS, Evaluation, evaluate, pair_labels
 
@@ -25,6 +26,7 @@ __all__ = [
     "Dataset",
     "Evaluation",
     "Frame",
+    "Gcff",
     "GroupShapes",
     "Group",
     "Majority",

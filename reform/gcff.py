@@ -1,0 +1,641 @@
+"""GCFF: Graph-Cuts for F-formations (Setti et al., PLoS ONE 2015), the field's reference detector.
+
+A numpy re-implementation of the original MATLAB/C++ code (franzsetti/GCFF, ``gc.m`` with
+``graphopt/expand.cpp``) that reproduces its partitions frame by frame on SALSA. Each person
+votes for an o-space centre a ``stride`` in front of them (their *transactional-segment point*);
+people whose points cluster around a common centre, and who can see that centre, form a group.
+
+The energy of a labelling ``L`` (every person gets a candidate group) is::
+
+    E(L) = sum_i U[i, L_i] + mdl * (number of distinct labels)
+
+where ``U[i, k]`` is the squared distance from person ``i``'s segment point to the centre of
+group ``k`` plus a *visibility penalty*: for every person ``j`` of the group's neighbourhood who
+stands in front of ``i`` as seen from the centre (``cos > 0.75`` between their directions from
+the centre, ``r_i > r_j``), ``U[i, k] += 100 ** (cos * r_i / r_j)``. The energy is minimised by
+alpha-expansion with label costs; with no pairwise terms every expansion move has a closed form
+(no max-flow needed). Centres are refitted and the expansion re-run until the labels settle (at
+most 10 times).
+
+Units — read this before choosing parameters:
+    The visibility penalty ``100 ** (cos * r_i / r_j)`` is a pure number, but it is *added to
+    squared distances*, so the value it is compared with depends on the length unit: GCFF in
+    metres is not GCFF in centimetres. Every published parameter set (the original code's
+    ``settings_gc.mat`` files: stride 50-70, mdl 6,000-30,000) assumes centimetres. This module
+    therefore always computes in centimetres: positions (metres, as every ``Frame`` holds them)
+    are multiplied by :data:`CM_PER_M`, and the parameters carry their units explicitly —
+    :class:`Gcff` takes ``stride`` in metres and ``mdl`` in square metres (converted to cm and
+    cm² inside), and :func:`gcff_labels` takes ``units="m"`` or ``"cm"``. The same scene in
+    metres and in centimetres, with matching parameters, gives the same groups. The defaults,
+    ``stride = 0.7 m`` and ``mdl = 1.0 m²``, are the reference code's ``stride = 70`` (cm) and
+    ``mdl = 10000`` (cm²). The REFORM paper's "stride = 0.7, MDL = 30000" reads as 70 cm and
+    30,000 cm² = 3.0 m².
+
+Numerical fidelity:
+    * the exponent of the visibility penalty is capped at :data:`MAX_VISIBILITY_EXPONENT`
+      (``100 ** 100 = 1e200`` cm²). The original lets it overflow to infinity when someone stands
+      almost exactly on a group's centre; the cap keeps every cost finite and changes no answer
+      short of that degenerate case.
+    * the energy of a labelling is summed in the reference code's order (person by person, then
+      one ``mdl`` per used label). A move that swaps the two labels of a pair whose segment points
+      define both centres changes the energy by exactly zero in real arithmetic; whether rounding
+      calls it a decrease decides whether the sweep continues, and so, occasionally, the final
+      partition. Summing in the same order reproduces the reference on every SALSA frame.
+
+Example:
+    >>> detector = Gcff(stride=0.7, mdl=1.0)          # doctest: +SKIP
+    >>> detector.predict(dataset.annotated())[0]       # doctest: +SKIP
+    ((1, 15), (2, 3, 5, 6, 7, 13), ...)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from decimal import Decimal
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from sklearn.base import BaseEstimator
+from sklearn.exceptions import NotFittedError
+
+from reform.frame import Frame, Group
+
+__all__ = [
+    "CM_PER_M",
+    "MAX_REFITS",
+    "MAX_VISIBILITY_EXPONENT",
+    "MDL_GRID_M2",
+    "MDL_M2",
+    "ORIENTATIONS",
+    "STRIDE_GRID_M",
+    "STRIDE_M",
+    "UNITS",
+    "VISIBILITY_BASE",
+    "VISIBILITY_COSINE",
+    "Expansion",
+    "Gcff",
+    "GridSearch",
+    "alpha_expansion",
+    "energy",
+    "gcff_labels",
+    "grid_search",
+    "labels_to_partition",
+    "segment_points",
+    "unary_costs",
+]
+
+CM_PER_M = 100.0  # centimetres per metre: GCFF computes in centimetres
+UNITS = {"m": CM_PER_M, "cm": 1.0}  # centimetres per unit of length
+STRIDE_M = 0.7  # metres; the reference code's stride = 70 (cm)
+MDL_M2 = 1.0  # square metres; the reference code's mdl = 10000 (cm²)
+VISIBILITY_COSINE = 0.75  # cosine above which one person hides another from the centre
+VISIBILITY_BASE = 100.0  # the penalty is VISIBILITY_BASE ** (cos * r_i / r_j), in cm²
+MAX_VISIBILITY_EXPONENT = 100.0  # cap on cos * r_i / r_j: penalty <= 1e200 cm²
+MAX_REFITS = 10  # expansion + refit rounds, as the reference code's MAX_ITER
+ORIENTATIONS = ("body", "head")
+# Default tuning grid: the published settings (stride 50-70 cm, mdl 6,000-30,000 cm²) and around.
+STRIDE_GRID_M = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # metres
+MDL_GRID_M2 = (0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)  # square metres
+
+
+# --------------------------------------------------------------------------------------------
+# The algorithm, in any consistent length unit (the detector feeds it centimetres)
+# --------------------------------------------------------------------------------------------
+
+
+def segment_points(position: npt.ArrayLike, yaw: npt.ArrayLike, *, stride: float) -> np.ndarray:
+    """Transactional-segment points ``c_i = p_i + stride * (cos yaw_i, sin yaw_i)``.
+
+    Args:
+        position: (n, 2) ground-plane positions.
+        yaw: (n,) orientations, radians counter-clockwise from +x.
+        stride: distance in front of each person, same unit as ``position``.
+
+    Returns:
+        (n, 2) float64 points, same unit as ``position``.
+    """
+    position = np.asarray(position, dtype=np.float64)
+    yaw = np.asarray(yaw, dtype=np.float64)
+    points = np.empty_like(position)
+    points[:, 0] = position[:, 0] + np.cos(yaw) * stride
+    points[:, 1] = position[:, 1] + np.sin(yaw) * stride
+    return points
+
+
+def _renumber(labels: np.ndarray) -> np.ndarray:
+    """Labels renamed 0..K-1 in increasing order of the old label."""
+    _, inverse = np.unique(labels, return_inverse=True)
+    return inverse.astype(np.int64).reshape(-1)
+
+
+def unary_costs(
+    points: npt.ArrayLike, position: npt.ArrayLike, labels: npt.ArrayLike, *, mdl: float
+) -> np.ndarray:
+    """Cost of assigning each person to each current group: squared distance + visibility.
+
+    The centre of group ``k`` is the mean of its members' segment points. ``U[i, k]`` is the
+    squared distance of ``points[i]`` to that centre; for the people within ``mdl`` of the centre
+    (squared distance below ``mdl``), every person ``j`` of them who stands in front of ``i`` —
+    ``r_i > r_j`` and ``cos > 0.75``, where ``r`` and ``cos`` are the distances and the angle of
+    the *positions* seen from the centre — adds ``100 ** (cos * r_i / r_j)`` (exponent capped at
+    :data:`MAX_VISIBILITY_EXPONENT`), whatever ``j``'s own label. Vectorised over the
+    (group, person, person) triples inside the neighbourhoods, with the penalties of each cell
+    added in increasing ``j`` as the reference code does.
+
+    Args:
+        points: (n, 2) segment points.
+        position: (n, 2) positions, same unit.
+        labels: (n,) int labels, already numbered 0..K-1 with every label used.
+        mdl: squared length (the unit of ``points`` squared): neighbourhood radius squared.
+
+    Returns:
+        (n, K) float64 costs, in the squared unit.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    position = np.asarray(position, dtype=np.float64)
+    labels = np.asarray(labels, dtype=np.int64)
+    n_groups = int(labels.max()) + 1 if labels.size else 0
+    counts = np.bincount(labels, minlength=n_groups).astype(np.float64)
+    centre_x = np.bincount(labels, weights=points[:, 0], minlength=n_groups) / counts
+    centre_y = np.bincount(labels, weights=points[:, 1], minlength=n_groups) / counts
+    dx = points[:, 0, None] - centre_x[None, :]
+    dy = points[:, 1, None] - centre_y[None, :]
+    costs = dx * dx + dy * dy  # (n, K)
+
+    # Neighbourhood entries (k, i), ordered by group then person.
+    group, person = np.nonzero((costs < mdl).T)
+    if group.size == 0:
+        return costs
+    vx = position[person, 0] - centre_x[group]
+    vy = position[person, 1] - centre_y[group]
+    radius = np.sqrt(vx * vx + vy * vy)
+    # Every ordered pair (behind, front) of entries of the same group, behind-major, front
+    # ascending: the order in which the reference adds the penalties.
+    size = np.bincount(group, minlength=n_groups)
+    start = np.concatenate(([0], np.cumsum(size)[:-1]))
+    repeats = size[group]
+    behind = np.repeat(np.arange(group.size), repeats)
+    first = np.repeat(np.cumsum(repeats) - repeats, repeats)
+    front = start[group[behind]] + (np.arange(behind.size) - first)
+    r_behind = radius[behind]
+    r_front = radius[front]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cosine = (vx[behind] * vx[front] + vy[behind] * vy[front]) / (r_behind * r_front)
+        hidden = (r_behind > r_front) & (cosine > VISIBILITY_COSINE)
+        exponent = cosine[hidden] * r_behind[hidden] / r_front[hidden]
+    exponent = np.minimum(exponent, MAX_VISIBILITY_EXPONENT)
+    penalty = VISIBILITY_BASE**exponent
+    cell = person[behind[hidden]] * n_groups + group[behind[hidden]]
+    flat = costs.reshape(-1)
+    np.add.at(flat, cell, penalty)  # unbuffered and in order: sequential per cell
+    return costs
+
+
+def energy(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: float) -> float:
+    """``E(L) = sum_i U[i, L_i] + label_cost * #distinct labels``, summed as the reference does.
+
+    The reference code adds the costs person by person, then one ``label_cost`` per used label;
+    the same order is kept here so that exact ties round the same way.
+    """
+    unary = np.asarray(unary, dtype=np.float64)
+    labels = np.asarray(labels, dtype=np.int64)
+    terms = np.concatenate(
+        (
+            unary[np.arange(labels.size), labels],
+            np.full(np.unique(labels).size, float(label_cost)),
+        )
+    )
+    return float(np.cumsum(terms)[-1]) if terms.size else 0.0
+
+
+@dataclass(frozen=True)
+class Expansion:
+    """Result of :func:`alpha_expansion`.
+
+    Attributes:
+        labels: (n,) int64 final labels (columns of the unary matrix; not renumbered).
+        energies: energy before the first move, then after every accepted move (non-increasing).
+        moves: number of alpha-moves tried, accepted or not.
+    """
+
+    labels: np.ndarray
+    energies: tuple[float, ...]
+    moves: int
+
+
+def _all_moves(
+    unary: np.ndarray, labels: np.ndarray, label_cost: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every alpha-move from ``labels`` at once.
+
+    Returns:
+        new: (n, K) int64, column ``a`` the labels after the move of ``alpha = a``.
+        changed: (K,) bool, whether move ``a`` changes any label.
+        energies: (K,) float64 energy after move ``a`` (summed as :func:`energy` does).
+    """
+    n, k = unary.shape
+    rows = np.arange(n)
+    columns = np.arange(k)
+    current = unary[rows, labels]
+    delta = unary - current[:, None]  # d_i for every alpha, (n, K)
+    member = np.zeros((n, k))
+    member[rows, labels] = 1.0
+    # Per (label l, alpha): option B moves all of l (l closes, its cost saved): sum of d;
+    # option A moves the members with d <= 0 (l stays open): sum of the negative d, + cost.
+    move_all = member.T @ delta
+    move_some = member.T @ np.minimum(delta, 0.0) + label_cost
+    take_all = move_all <= move_some
+    moved = (take_all[labels, :] | (delta <= 0.0)) & (labels[:, None] != columns[None, :])
+    new = np.where(moved, columns[None, :], labels[:, None])
+    staying = member.T @ (~moved)  # members of l left in l by move alpha, (K, K)
+    size = member.sum(axis=0)
+    n_used = np.count_nonzero(staying > 0, axis=0) + (moved.any(axis=0) & (size == 0))
+    terms = np.concatenate(
+        (
+            np.take_along_axis(unary, new, axis=1).T,
+            np.where(columns[None, :] < n_used[:, None], label_cost, 0.0),
+        ),
+        axis=1,
+    )
+    return new, moved.any(axis=0), np.cumsum(terms, axis=1)[:, -1]
+
+
+def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: float) -> Expansion:
+    """Minimises ``sum_i U[i, L_i] + label_cost * #labels`` by alpha-expansion with label costs.
+
+    Sweeps ``alpha = 0, 1, ..., K-1`` cyclically. One alpha-move considers every used label
+    ``l != alpha`` with members ``S_l`` and ``d_i = U[i, alpha] - U[i, l]``: either the members
+    with ``d_i <= 0`` move to alpha (``l`` stays open; cost ``sum_{d_i<0} d_i + label_cost``) or
+    all of ``S_l`` moves (``l`` closes; cost ``sum d_i``), whichever is cheaper (all on a tie).
+    This is the exact minimiser of the graph-cut the reference builds: with no pairwise terms
+    the cut decomposes label by label. The move ignores alpha's own label cost; it is kept only
+    when the full energy did not increase. The sweep stops after K consecutive moves without a
+    strict decrease.
+
+    The moves of every alpha are evaluated at once (vectorised), so Python work is spent only
+    per *accepted* move; the result is identical to trying them one by one.
+
+    Args:
+        unary: (n, K) costs, finite.
+        labels: (n,) starting labels in 0..K-1.
+        label_cost: cost of each used label (``mdl``), same unit as ``unary``.
+
+    Returns:
+        The final labels, the energies along the way and the number of moves tried.
+    """
+    unary = np.asarray(unary, dtype=np.float64)
+    labels = np.array(labels, dtype=np.int64).reshape(-1)
+    n, k = unary.shape
+    if labels.shape != (n,):
+        raise ValueError(f"labels must have shape ({n},), got {labels.shape}")
+    if n and (labels.min() < 0 or labels.max() >= k):
+        raise ValueError(f"labels must lie in [0, {k - 1}], got {labels.min()}..{labels.max()}")
+    if not np.all(np.isfinite(unary)):
+        raise ValueError("unary must be finite, got NaN or inf")
+    current = energy(unary, labels, label_cost=label_cost)
+    energies = [current]
+    alpha = 0
+    stale = 0  # consecutive moves without a strict decrease
+    moves = 0
+    while stale < k:
+        new, changed, candidate = _all_moves(unary, labels, label_cost)
+        changed_list = changed.tolist()
+        candidate_list = candidate.tolist()
+        for _ in range(k):
+            a = alpha
+            alpha = (alpha + 1) % k
+            moves += 1
+            if changed_list[a] and candidate_list[a] <= current:
+                stale = 0 if candidate_list[a] < current else stale + 1
+                labels = new[:, a].copy()
+                current = candidate_list[a]
+                energies.append(current)
+                break
+            stale += 1  # no change, or rejected because the energy would rise
+            if stale >= k:
+                break
+    return Expansion(labels=labels, energies=tuple(energies), moves=moves)
+
+
+def gcff_labels(
+    position: npt.ArrayLike,
+    yaw: npt.ArrayLike,
+    *,
+    stride: float,
+    mdl: float,
+    units: str = "m",
+) -> np.ndarray:
+    """GCFF on one frame: a group label per person.
+
+    Args:
+        position: (n, 2) ground-plane positions, in ``units``.
+        yaw: (n,) orientations, radians counter-clockwise from +x (wrapped or not).
+        stride: distance of the o-space centre in front of each person, in ``units``.
+        mdl: cost of opening one more group, in ``units`` squared.
+        units: ``"m"`` or ``"cm"``; the computation runs in centimetres either way (see the
+            module docstring: the visibility penalty is not scale-free).
+
+    Returns:
+        (n,) int64 labels 0..K-1 (renumbered as the reference code does); people sharing a label
+        form a group, a label of its own is a singleton.
+    """
+    if units not in UNITS:
+        raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
+    scale = UNITS[units]
+    position = np.asarray(position, dtype=np.float64)
+    yaw = np.asarray(yaw, dtype=np.float64)
+    n = position.shape[0] if position.ndim == 2 else -1
+    if position.shape != (n, 2) or n < 0:
+        raise ValueError(f"position must have shape (n, 2), got {position.shape}")
+    if yaw.shape != (n,):
+        raise ValueError(f"yaw must have shape ({n},), got {yaw.shape}")
+    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(yaw))):
+        raise ValueError("position and yaw must be finite, got NaN or inf")
+    _check_positive("stride", stride, allow_zero=True)
+    _check_positive("mdl", mdl)
+    position_cm = position * scale if scale != 1.0 else position
+    stride_cm = _convert(stride, scale)
+    mdl_cm2 = _convert(mdl, scale * scale)
+    labels = np.arange(n, dtype=np.int64)
+    if n <= 1:
+        return labels
+    points = segment_points(position_cm, yaw, stride=stride_cm)
+    for _ in range(MAX_REFITS):
+        unary = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
+        expanded = _renumber(alpha_expansion(unary, labels, label_cost=mdl_cm2).labels)
+        if np.array_equal(expanded, labels):
+            break
+        labels = expanded
+    return labels
+
+
+def labels_to_partition(ids: npt.ArrayLike, labels: npt.ArrayLike) -> tuple[Group, ...]:
+    """A full partition from per-person labels: groups in order of their first member's row,
+    members in row order, singletons included."""
+    ids = np.asarray(ids).tolist()
+    groups: dict[int, list[int]] = {}
+    for person, label in zip(ids, np.asarray(labels).tolist(), strict=True):
+        groups.setdefault(label, []).append(int(person))
+    return tuple(tuple(members) for members in groups.values())
+
+
+def _convert(value: float, factor: float) -> float:
+    """``value * factor`` on the decimal the user wrote: 0.7 m -> 70 cm, not 70.00000000000001."""
+    if factor == 1.0:
+        return float(value)
+    return float(Decimal(repr(float(value))) * Decimal(repr(float(factor))))
+
+
+def _check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    bad = not np.isfinite(number) or number < 0 or (number == 0 and not allow_zero)
+    if bad:
+        expected = "a finite number >= 0" if allow_zero else "a finite number > 0"
+        raise ValueError(f"{name} must be {expected}, got {value!r}")
+    return number
+
+
+# --------------------------------------------------------------------------------------------
+# The detector
+# --------------------------------------------------------------------------------------------
+
+
+def _orientation(frame: Frame, orientation: str) -> np.ndarray:
+    if orientation == "body" or frame.head_yaw is None:
+        if orientation == "head":
+            raise ValueError(
+                f"orientation='head' needs head yaws, but the frame at time {frame.time:g} s"
+                f"{f' of {frame.sequence!r}' if frame.sequence else ''} has none"
+            )
+        return frame.yaw
+    return np.where(np.isfinite(frame.head_yaw), frame.head_yaw, frame.yaw)
+
+
+def _check_frames(frames: Sequence[Frame]) -> tuple[Frame, ...]:
+    frames = tuple(frames)
+    for i, frame in enumerate(frames):
+        if not isinstance(frame, Frame):
+            raise TypeError(f"frames[{i}] must be a reform.Frame, got {type(frame).__name__}")
+    return frames
+
+
+def _predict(
+    frames: Sequence[Frame], *, stride: float, mdl: float, orientation: str
+) -> list[tuple[Group, ...]]:
+    return [
+        labels_to_partition(
+            frame.ids,
+            gcff_labels(
+                frame.position,
+                _orientation(frame, orientation),
+                stride=stride,
+                mdl=mdl,
+                units="m",
+            ),
+        )
+        for frame in frames
+    ]
+
+
+@dataclass(frozen=True)
+class GridSearch:
+    """Scores of every (stride, mdl) setting tried by :func:`grid_search`.
+
+    Attributes:
+        stride: (n_settings,) float64 strides tried, metres.
+        mdl: (n_settings,) float64 mdl values tried, square metres.
+        f1: (n_settings,) float64 objective: F1 of the frame means at ``threshold``.
+        threshold: the matching threshold of the objective.
+        best: index of the chosen setting (highest F1; the first in grid order on a tie).
+        n_frames: annotated frames scored.
+    """
+
+    stride: np.ndarray
+    mdl: np.ndarray
+    f1: np.ndarray
+    threshold: Fraction
+    best: int
+    n_frames: int
+
+    @property
+    def best_stride(self) -> float:
+        """Chosen stride, metres."""
+        return float(self.stride[self.best])
+
+    @property
+    def best_mdl(self) -> float:
+        """Chosen mdl, square metres."""
+        return float(self.mdl[self.best])
+
+    @property
+    def best_f1(self) -> float:
+        """Objective at the chosen setting."""
+        return float(self.f1[self.best])
+
+
+def grid_search(
+    frames: Sequence[Frame],
+    *,
+    stride_grid: Sequence[float] = STRIDE_GRID_M,
+    mdl_grid: Sequence[float] = MDL_GRID_M2,
+    orientation: str = "body",
+    threshold: Any = Fraction(2, 3),
+) -> GridSearch:
+    """Picks ``stride`` and ``mdl`` maximising the protocol's F1 on annotated training frames.
+
+    The objective is :func:`reform.metrics.evaluate`'s F1 of the frame-mean precision and
+    recall at ``threshold``. Only ``frames`` are used; pass training frames only.
+
+    Args:
+        frames: training frames; frames without ground truth are ignored.
+        stride_grid: strides to try, metres.
+        mdl_grid: mdl values to try, square metres.
+        orientation: ``"body"`` or ``"head"``.
+        threshold: matching threshold of the objective (``Fraction``, ``"2/3"`` or 1).
+
+    Returns:
+        Every setting's score and the chosen one.
+    """
+    from reform.metrics import evaluate
+
+    annotated = [f for f in _check_frames(frames) if f.groups is not None]
+    if not annotated:
+        raise ValueError("frames must include annotated frames to tune on, got none")
+    strides = [_check_positive("stride_grid entry", s, allow_zero=True) for s in stride_grid]
+    mdls = [_check_positive("mdl_grid entry", m) for m in mdl_grid]
+    if not strides or not mdls:
+        raise ValueError("stride_grid and mdl_grid must each hold at least one value, got none")
+    grid = [(s, m) for s in strides for m in mdls]
+    scores = []
+    for stride, mdl in grid:
+        predictions = _predict(annotated, stride=stride, mdl=mdl, orientation=orientation)
+        scores.append(evaluate(annotated, predictions, thresholds=(threshold,)).at(threshold).f1)
+    f1 = np.asarray(scores, dtype=np.float64)
+    return GridSearch(
+        stride=np.array([s for s, _ in grid]),
+        mdl=np.array([m for _, m in grid]),
+        f1=f1,
+        threshold=Fraction(threshold) if not isinstance(threshold, str) else Fraction(threshold),
+        best=int(np.argmax(f1)),
+        n_frames=len(annotated),
+    )
+
+
+class Gcff(BaseEstimator):
+    """GCFF detector (Setti et al. 2015), faithful to the reference code, in metres.
+
+    Follows the detector protocol: ``fit(frames) -> self`` and ``predict(frames)`` -> one full
+    partition per frame (groups of person ids, singletons included). With ``tune=False`` there
+    is nothing to learn: ``fit`` only validates and ``predict`` works on a fresh instance. With
+    ``tune=True``, ``fit`` grid-searches ``stride`` and ``mdl`` on the training frames with the
+    evaluation protocol's F1 as the objective (:func:`grid_search`).
+
+    Units: ``stride`` is in metres and ``mdl`` in square metres; the computation runs in
+    centimetres (the visibility penalty is not scale-free; see the module docstring). The
+    defaults equal the reference code's ``stride = 70`` cm, ``mdl = 10000`` cm².
+
+    Args:
+        stride: distance of the o-space centre in front of each person, metres.
+        mdl: cost of opening one more group, square metres (10,000 cm² = 1 m²).
+        orientation: ``"body"`` (the reference's choice) or ``"head"`` (head yaw where
+            observed, body yaw for people whose head is not; positions are body positions).
+        tune: grid-search ``stride`` and ``mdl`` in ``fit`` instead of using the given ones.
+        stride_grid: strides tried when tuning, metres.
+        mdl_grid: mdl values tried when tuning, square metres.
+        threshold: matching threshold of the tuning objective, e.g. ``"2/3"`` or ``"1"``.
+
+    Attributes:
+        stride_: the stride used, metres (tuned or given).
+        mdl_: the mdl used, square metres (tuned or given).
+        grid_search_: the :class:`GridSearch` when tuned, else None.
+    """
+
+    def __init__(
+        self,
+        *,
+        stride: float = STRIDE_M,
+        mdl: float = MDL_M2,
+        orientation: str = "body",
+        tune: bool = False,
+        stride_grid: Sequence[float] = STRIDE_GRID_M,
+        mdl_grid: Sequence[float] = MDL_GRID_M2,
+        threshold: str = "2/3",
+    ) -> None:
+        self.stride = stride
+        self.mdl = mdl
+        self.orientation = orientation
+        self.tune = tune
+        self.stride_grid = stride_grid
+        self.mdl_grid = mdl_grid
+        self.threshold = threshold
+
+    @classmethod
+    def from_settings(cls, *, stride: float, mdl: float, units: str = "cm", **kwargs: Any) -> Gcff:
+        """A detector from settings in another unit, e.g. a ``settings_gc.mat`` in centimetres.
+
+        ``Gcff.from_settings(stride=70, mdl=10000, units="cm")`` equals
+        ``Gcff(stride=0.7, mdl=1.0)``.
+        """
+        if units not in UNITS:
+            raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
+        metres = UNITS[units] / CM_PER_M  # metres per unit
+        return cls(stride=_convert(stride, metres), mdl=_convert(mdl, metres * metres), **kwargs)
+
+    def _validate(self) -> None:
+        _check_positive("stride", self.stride, allow_zero=True)
+        _check_positive("mdl", self.mdl)
+        if self.orientation not in ORIENTATIONS:
+            raise ValueError(f"orientation must be one of {ORIENTATIONS}, got {self.orientation!r}")
+
+    def fit(self, frames: Sequence[Frame]) -> Gcff:
+        """Validates the parameters; with ``tune=True``, picks stride and mdl on ``frames``."""
+        self._validate()
+        frames = _check_frames(frames)
+        if self.tune:
+            search = grid_search(
+                frames,
+                stride_grid=self.stride_grid,
+                mdl_grid=self.mdl_grid,
+                orientation=self.orientation,
+                threshold=self.threshold,
+            )
+            self.stride_, self.mdl_, self.grid_search_ = (
+                search.best_stride,
+                search.best_mdl,
+                search,
+            )
+        else:
+            self.stride_, self.mdl_, self.grid_search_ = float(self.stride), float(self.mdl), None
+        return self
+
+    def _settings(self) -> tuple[float, float]:
+        if self.tune:
+            if not hasattr(self, "stride_"):
+                raise NotFittedError(
+                    "Gcff(tune=True) must be fitted on training frames before predict; "
+                    "call fit(frames) first, or use tune=False with explicit stride and mdl"
+                )
+            return self.stride_, self.mdl_
+        self._validate()
+        return float(self.stride), float(self.mdl)
+
+    def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
+        """One full partition per frame: groups in order of first member, singletons included."""
+        stride, mdl = self._settings()
+        return _predict(_check_frames(frames), stride=stride, mdl=mdl, orientation=self.orientation)
+
+    def predict_labels(self, frame: Frame) -> np.ndarray:
+        """(n,) int64 GCFF labels of one frame (row order of ``frame.ids``)."""
+        stride, mdl = self._settings()
+        return gcff_labels(
+            frame.position, _orientation(frame, self.orientation), stride=stride, mdl=mdl
+        )
+
+    def __sklearn_is_fitted__(self) -> bool:
+        return not self.tune or hasattr(self, "stride_")
