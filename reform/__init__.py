@@ -7,6 +7,7 @@ through optional imports of pyarrow and skops, which the project installs).
 from __future__ import annotations
 
 from reform.characterisation import GroupShapes, characterise, symmetry, tightness
+from reform.datasets import load_dataset, read_parquet, write_parquet
 from reform.datasets.errors import DataFormatError
 from reform.frame import HUMAN, KINDS, ROBOT, Dataset, Frame, Group, complete_partition, wrap_angle
 from reform.gcff import Gcff
@@ -34,8 +35,11 @@ __all__ = [
     "characterise",
     "complete_partition",
     "evaluate",
+    "load_dataset",
     "pair_labels",
+    "read_parquet",
     "symmetry",
     "tightness",
     "wrap_angle",
+    "write_parquet",
 ]

@@ -6,6 +6,7 @@ from reform.datasets.babble import load_babble
 from reform.datasets.detect import FORMATS, LENGTH_UNITS, detect_format, load_dataset
 from reform.datasets.errors import DataFormatError
 from reform.datasets.gcff_mat import load_gcff
+from reform.datasets.parquet import read_parquet, write_parquet
 from reform.datasets.salsa import load_salsa
 
 __all__ = [
@@ -17,4 +18,6 @@ __all__ = [
     "load_dataset",
     "load_gcff",
     "load_salsa",
+    "read_parquet",
+    "write_parquet",
 ]

@@ -183,7 +183,7 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
         "frames": len(frames),
         "annotated_frames": len(annotations),
         "annotation_lines_duplicated": duplicates,
-        "annotated_group_sizes": dict(sorted(group_sizes.items())),
+        "annotated_group_sizes": {str(k): v for k, v in sorted(group_sizes.items())},
         "max_clock_gap_s": round(clock_gap, 3),
         "heads_untracked": report["heads_untracked"],
         "heads_swapped_back": report["heads_swapped_back"],

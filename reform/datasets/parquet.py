@@ -1,0 +1,565 @@
+"""The project's own dataset format: Parquet, long layout (one row per frame × person).
+
+Every column is documented in :data:`COLUMNS` (and in the README). A frame with nobody in it is
+one row whose ``person_id`` is null, so empty frames survive the round trip. The dataset's
+name, source, units and metadata, the format version and the version of the code that wrote
+the file are JSON in the schema metadata under the key ``reform_sim``.
+
+The round trip is exact: ``read_parquet(p) `` gives frames equal to the ones written (float64
+values bit for bit, ``None`` heads distinct from unobserved NaN heads, group order and member
+order preserved). The metadata comes back as JSON gives it (lists for tuples, string keys).
+
+A folder of Parquet files (for instance hive-partitioned shards
+``DIR/scenario=.../episode=.../part.parquet``) reads as one dataset: the files in natural sorted
+order of their relative paths, their frames concatenated.
+
+pyarrow is imported only inside these functions.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.atomic import atomic_path
+from reform.datasets._validation import make_frame
+from reform.datasets.errors import DataFormatError
+from reform.frame import KINDS, Dataset, Frame, Group
+
+__all__ = ["COLUMNS", "FORMAT_VERSION", "METADATA_KEY", "read_parquet", "write_parquet"]
+
+FORMAT_VERSION = 1
+METADATA_KEY = b"reform_sim"
+_YAW_LIMIT_RAD = math.pi + 2e-3  # wrapped radians plus rounding; larger values look like degrees
+
+# name -> (arrow type name, nullable, unit, description). The README's column table is this.
+COLUMNS: dict[str, tuple[str, bool, str, str]] = {
+    "sequence": ("string", False, "", "recording (session, episode) the frame belongs to"),
+    "frame": ("int64", False, "", "frame index in the file, 0, 1, 2, ... in recording order"),
+    "time": (
+        "float64",
+        False,
+        "s",
+        "time stamp of the frame, seconds from the start of its sequence",
+    ),
+    "annotated": ("bool", False, "", "the frame carries ground-truth groups"),
+    "has_head": ("bool", False, "", "the frame carries head pose columns (else they are null)"),
+    "person_id": (
+        "int64",
+        True,
+        "",
+        "person id, unique within the frame; null on the one row of a frame with nobody",
+    ),
+    "kind": ("string", True, "", "'human' or 'robot'; null on an empty frame's row"),
+    "x": ("float64", True, "m", "body (torso) position, ground plane"),
+    "y": ("float64", True, "m", "body (torso) position, ground plane"),
+    "yaw": ("float64", True, "rad", "body yaw, counter-clockwise from +x, in [-pi, pi]"),
+    "head_x": (
+        "float64",
+        True,
+        "m",
+        "head position; NaN = head not observed; null when has_head is false",
+    ),
+    "head_y": (
+        "float64",
+        True,
+        "m",
+        "head position; NaN = head not observed; null when has_head is false",
+    ),
+    "head_yaw": (
+        "float64",
+        True,
+        "rad",
+        "head yaw in [-pi, pi]; NaN = not observed; null when has_head is false",
+    ),
+    "group": (
+        "int32",
+        True,
+        "",
+        "index of the person's ground-truth group in the frame (0, 1, ...); null = in no group",
+    ),
+    "group_member": (
+        "int32",
+        True,
+        "",
+        "position of the person inside that group (keeps the member order)",
+    ),
+}
+
+
+def _pyarrow():
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError as exc:  # pragma: no cover - pyarrow is a dependency of the project
+        raise ImportError("reading and writing Parquet needs pyarrow: pip install pyarrow") from exc
+    return pa, pq
+
+
+def _arrow_type(pa, type_name: str):
+    return {
+        "string": pa.string(),
+        "int64": pa.int64(),
+        "int32": pa.int32(),
+        "float64": pa.float64(),
+        "bool": pa.bool_(),
+    }[type_name]
+
+
+def write_parquet(
+    dataset: Dataset, path: str | PathLike[str], *, compression: str = "zstd"
+) -> Path:
+    """Writes ``dataset`` to one Parquet file, atomically (temporary file, then rename).
+
+    Args:
+        dataset: the frames and provenance. Its metadata must be JSON-serialisable.
+        path: the file to write (parent folders are created).
+        compression: Parquet codec (``"zstd"``, ``"snappy"``, ``"none"`` ...).
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: the metadata is not JSON-serialisable.
+    """
+    pa, pq = _pyarrow()
+    from reform import __version__
+
+    header = {
+        "format_version": FORMAT_VERSION,
+        "generator_version": f"reform-sim {__version__}",
+        "name": dataset.name,
+        "source": dataset.source,
+        "units": dataset.units,
+        "metadata": dict(dataset.metadata),
+    }
+    try:
+        header_json = json.dumps(header, allow_nan=False, sort_keys=False)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"dataset.metadata must be JSON-serialisable (finite numbers), got an error: {exc}"
+        ) from exc
+
+    columns = _columns(dataset.frames)
+    fields = []
+    arrays = []
+    for name, (type_name, nullable, unit, description) in COLUMNS.items():
+        values, mask = columns[name]
+        arrow_type = _arrow_type(pa, type_name)
+        arrays.append(pa.array(values, type=arrow_type, mask=mask if nullable else None))
+        meta = {b"description": description.encode()}
+        if unit:
+            meta[b"unit"] = unit.encode()
+        fields.append(pa.field(name, arrow_type, nullable=nullable, metadata=meta))
+    schema = pa.schema(fields, metadata={METADATA_KEY: header_json.encode()})
+    table = pa.Table.from_arrays(arrays, schema=schema)
+    target = Path(path)
+    with atomic_path(target) as tmp:
+        pq.write_table(table, tmp, compression=compression)
+    return target
+
+
+def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Column values and null masks (True = null) of the long table."""
+    counts = np.array([max(f.n_people, 1) for f in frames], dtype=np.int64)
+    n_rows = int(counts.sum())
+    frame_index = np.repeat(np.arange(len(frames), dtype=np.int64), counts)
+    sequence = np.repeat(np.array([f.sequence for f in frames], dtype=object), counts)
+    time = np.repeat(np.array([f.time for f in frames], dtype=np.float64), counts)
+    annotated = np.repeat(np.array([f.groups is not None for f in frames], dtype=bool), counts)
+    has_head = np.repeat(
+        np.array([f.head_position is not None for f in frames], dtype=bool), counts
+    )
+
+    person_id = np.zeros(n_rows, dtype=np.int64)
+    kind = np.empty(n_rows, dtype=object)
+    body = np.zeros((n_rows, 3))
+    head = np.zeros((n_rows, 3))
+    group = np.full(n_rows, -1, dtype=np.int32)
+    member = np.full(n_rows, -1, dtype=np.int32)
+    empty = np.zeros(n_rows, dtype=bool)
+    start = 0
+    for frame, count in zip(frames, counts.tolist(), strict=True):
+        n = frame.n_people
+        rows = slice(start, start + count)
+        if n == 0:
+            empty[start] = True
+            kind[start] = None
+        else:
+            person_id[rows] = frame.ids
+            kind[rows] = frame.kinds
+            body[rows, :2] = frame.position
+            body[rows, 2] = frame.yaw
+            if frame.head_position is not None:
+                head[rows, :2] = frame.head_position
+                head[rows, 2] = frame.head_yaw
+            if frame.groups:
+                row_of = {int(i): start + r for r, i in enumerate(frame.ids.tolist())}
+                for g, members in enumerate(frame.groups):
+                    for m, person in enumerate(members):
+                        group[row_of[person]] = g
+                        member[row_of[person]] = m
+        start += count
+    no_head = empty | ~has_head
+    no_group = group < 0
+    nothing = np.zeros(n_rows, dtype=bool)
+    return {
+        "sequence": (sequence, nothing),
+        "frame": (frame_index, nothing),
+        "time": (time, nothing),
+        "annotated": (annotated, nothing),
+        "has_head": (has_head, nothing),
+        "person_id": (person_id, empty),
+        "kind": (kind, empty),
+        "x": (body[:, 0], empty),
+        "y": (body[:, 1], empty),
+        "yaw": (body[:, 2], empty),
+        "head_x": (head[:, 0], no_head),
+        "head_y": (head[:, 1], no_head),
+        "head_yaw": (head[:, 2], no_head),
+        "group": (group, no_group),
+        "group_member": (member, no_group),
+    }
+
+
+def read_parquet(path: str | PathLike[str]) -> Dataset:
+    """Reads a Parquet file written by :func:`write_parquet`, or a folder of them.
+
+    A folder's files (``**/*.parquet``, hidden files and temporary files skipped) are read in
+    natural sorted order of their relative paths (``episode=2`` before ``episode=10``) and their
+    frames concatenated. The dataset's name is the files' common name (else the folder's); its
+    metadata holds one entry per file under ``"shards"``. A sequence name may not occur in two
+    files (it would merge two recordings).
+
+    Raises:
+        DataFormatError: a file is missing, empty, not written by this project, of a newer
+            format version, or malformed (the message names the file, frame, field).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataFormatError(
+            path, None, None, "a Parquet file or a folder of them", "no such file or folder"
+        )
+    if path.is_file():
+        frames, header = _read_file(path)
+        return Dataset(
+            frames=tuple(frames),
+            name=str(header.get("name", path.stem)),
+            source=str(header.get("source", "")),
+            units="m",
+            metadata=header.get("metadata", {}),
+        )
+    files = [
+        p
+        for p in path.rglob("*.parquet")
+        if p.is_file()
+        and not any(part.startswith((".", "_")) for part in p.relative_to(path).parts)
+    ]
+    if not files:
+        raise DataFormatError(path, None, None, "a folder holding .parquet files", "none")
+    files.sort(key=lambda p: _natural_key(p.relative_to(path)))
+    frames: list[Frame] = []
+    shards = []
+    names = []
+    sequence_file: dict[str, Path] = {}
+    for file in files:
+        shard_frames, header = _read_file(file)
+        relative = file.relative_to(path).as_posix()
+        for sequence in dict.fromkeys(f.sequence for f in shard_frames):
+            if sequence in sequence_file:
+                other = sequence_file[sequence].relative_to(path).as_posix()
+                raise DataFormatError(
+                    file,
+                    None,
+                    "sequence",
+                    f"sequence names not used by another file ({other})",
+                    repr(sequence),
+                )
+            sequence_file[sequence] = file
+        frames.extend(shard_frames)
+        names.append(header.get("name", ""))
+        shards.append(
+            {
+                "path": relative,
+                "name": header.get("name", ""),
+                "source": header.get("source", ""),
+                "frames": len(shard_frames),
+                "metadata": header.get("metadata", {}),
+            }
+        )
+    name = names[0] if len(set(names)) == 1 and names[0] else path.name
+    return Dataset(
+        frames=tuple(frames),
+        name=name,
+        source=str(path),
+        units="m",
+        metadata={"shards": shards},
+    )
+
+
+def _natural_key(relative: Path) -> tuple:
+    return tuple(
+        tuple((0, int(t), "") if t.isdigit() else (1, 0, t) for t in re.split(r"(\d+)", part) if t)
+        for part in relative.parts
+    )
+
+
+def _read_file(path: Path) -> tuple[list[Frame], dict[str, Any]]:
+    pa, pq = _pyarrow()
+    if path.stat().st_size == 0:
+        raise DataFormatError(path, None, None, "a Parquet file", "an empty file")
+    try:
+        table = pq.read_table(path, partitioning=None)
+    except Exception as exc:  # pyarrow raises ArrowInvalid, OSError... on corrupt files
+        raise DataFormatError(
+            path, None, None, "a readable Parquet file", f"{type(exc).__name__}: {exc}"
+        ) from exc
+    raw = (table.schema.metadata or {}).get(METADATA_KEY)
+    if raw is None:
+        raise DataFormatError(
+            path,
+            None,
+            "schema metadata",
+            f"a {METADATA_KEY.decode()!r} entry (a file written by reform-sim)",
+            "none",
+        )
+    try:
+        header = json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise DataFormatError(path, None, "schema metadata", "JSON", f"{exc}") from exc
+    version = header.get("format_version")
+    if not isinstance(version, int) or version > FORMAT_VERSION or version < 1:
+        raise DataFormatError(
+            path, None, "format_version", f"an integer from 1 to {FORMAT_VERSION}", repr(version)
+        )
+    if header.get("units", "m") != "m":
+        raise DataFormatError(path, None, "units", "'m'", repr(header.get("units")))
+
+    data: dict[str, np.ndarray] = {}
+    null: dict[str, np.ndarray] = {}
+    for name, (type_name, nullable, _, _) in COLUMNS.items():
+        if name not in table.column_names:
+            raise DataFormatError(
+                path, None, name, f"a column {name!r}", f"columns {table.column_names}"
+            )
+        column = table.column(name)
+        expected = _arrow_type(pa, type_name)
+        if column.type != expected and not (
+            type_name == "string" and column.type == pa.large_string()
+        ):
+            raise DataFormatError(path, None, name, f"type {expected}", f"{column.type}")
+        mask = column.is_null().to_numpy(zero_copy_only=False)
+        if not nullable and mask.any():
+            row = int(np.flatnonzero(mask)[0])
+            raise DataFormatError(path, f"row {row}", name, "a value", "null")
+        null[name] = mask
+        if type_name == "string":
+            data[name] = np.array(column.to_pylist(), dtype=object)
+        else:
+            filled = column.fill_null(False if type_name == "bool" else 0) if mask.any() else column
+            data[name] = filled.to_numpy()
+    return _frames(path, data, null), header
+
+
+def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]) -> list[Frame]:
+    n_rows = data["frame"].size
+    if n_rows == 0:
+        return []
+    order = np.argsort(data["frame"], kind="stable")
+    if not np.array_equal(order, np.arange(n_rows)):
+        data = {k: v[order] for k, v in data.items()}
+        null = {k: v[order] for k, v in null.items()}
+    index = data["frame"]
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(index)) + 1])
+    ends = np.concatenate([starts[1:], [n_rows]])
+    expected_index = np.arange(starts.size)
+    if not np.array_equal(index[starts], expected_index):
+        k = int(np.flatnonzero(index[starts] != expected_index)[0])
+        raise DataFormatError(
+            path,
+            f"row {int(order[starts[k]])}",
+            "frame",
+            f"frame index {k} (indices 0, 1, 2, ...)",
+            str(int(index[starts[k]])),
+        )
+
+    for name in ("x", "y", "yaw", "head_x", "head_y", "head_yaw"):
+        values = data[name]
+        bad = ~null[name] & np.isinf(values)
+        if name in ("x", "y", "yaw"):
+            bad |= ~null[name] & np.isnan(values)
+        if name in ("yaw", "head_yaw"):
+            bad |= ~null[name] & (np.abs(values) > _YAW_LIMIT_RAD)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            where = f"frame {int(index[row])} (row {int(order[row])})"
+            value = float(values[row])
+            if math.isfinite(value):
+                raise DataFormatError(
+                    path,
+                    where,
+                    name,
+                    "radians in [-pi, pi] (larger values look like degrees)",
+                    repr(value),
+                )
+            raise DataFormatError(
+                path,
+                where,
+                name,
+                "a finite number" + (" or NaN" if name.startswith("head") else ""),
+                repr(value),
+            )
+    if np.any(np.isnan(data["time"])) or np.any(np.isinf(data["time"])):
+        row = int(np.flatnonzero(~np.isfinite(data["time"]))[0])
+        raise DataFormatError(
+            path,
+            f"frame {int(index[row])}",
+            "time",
+            "a finite number",
+            repr(float(data["time"][row])),
+        )
+
+    frames = []
+    for k, (a, b) in enumerate(zip(starts.tolist(), ends.tolist(), strict=True)):
+        where = f"frame {k} (rows {int(order[a])}..{int(order[b - 1])})"
+        for name in ("sequence", "time", "annotated", "has_head"):
+            column = data[name][a:b]
+            if np.any(column != column[0]):
+                raise DataFormatError(
+                    path,
+                    where,
+                    name,
+                    "one value for all rows of the frame",
+                    str(sorted(set(column.tolist()))),
+                )
+        empty = null["person_id"][a:b]
+        if empty.any():
+            if b - a != 1:
+                raise DataFormatError(
+                    path, where, "person_id", "a value on every row of a frame with people", "null"
+                )
+            frames.append(
+                make_frame(
+                    path=path,
+                    where=where,
+                    ids=np.zeros(0, dtype=np.int64),
+                    position=np.zeros((0, 2)),
+                    yaw=np.zeros(0),
+                    kinds=(),
+                    head_position=np.zeros((0, 2)) if data["has_head"][a] else None,
+                    head_yaw=np.zeros(0) if data["has_head"][a] else None,
+                    groups=() if data["annotated"][a] else None,
+                    time=float(data["time"][a]),
+                    sequence=str(data["sequence"][a]),
+                )
+            )
+            continue
+        for name in ("kind", "x", "y", "yaw"):
+            if null[name][a:b].any():
+                raise DataFormatError(
+                    path, where, name, "a value on every row of a frame with people", "null"
+                )
+        kinds = tuple(data["kind"][a:b].tolist())
+        unknown = sorted({k for k in kinds if k not in KINDS})
+        if unknown:
+            raise DataFormatError(path, where, "kind", f"one of {KINDS}", str(unknown))
+        head_position = head_yaw = None
+        if data["has_head"][a]:
+            for name in ("head_x", "head_y", "head_yaw"):
+                if null[name][a:b].any():
+                    raise DataFormatError(
+                        path, where, name, "a number or NaN (has_head is true)", "null"
+                    )
+            head_position = np.column_stack([data["head_x"][a:b], data["head_y"][a:b]])
+            head_yaw = data["head_yaw"][a:b]
+        else:
+            for name in ("head_x", "head_y", "head_yaw"):
+                if not null[name][a:b].all():
+                    raise DataFormatError(path, where, name, "null (has_head is false)", "a value")
+        ids = data["person_id"][a:b]
+        groups = _groups(
+            path,
+            where,
+            ids,
+            data["group"][a:b],
+            data["group_member"][a:b],
+            null["group"][a:b],
+            null["group_member"][a:b],
+            annotated=bool(data["annotated"][a]),
+        )
+        frames.append(
+            make_frame(
+                path=path,
+                where=where,
+                ids=ids,
+                position=np.column_stack([data["x"][a:b], data["y"][a:b]]),
+                yaw=data["yaw"][a:b],
+                kinds=kinds,
+                head_position=head_position,
+                head_yaw=head_yaw,
+                groups=groups,
+                time=float(data["time"][a]),
+                sequence=str(data["sequence"][a]),
+            )
+        )
+    return frames
+
+
+def _groups(
+    path: Path,
+    where: str,
+    ids: np.ndarray,
+    group: np.ndarray,
+    member: np.ndarray,
+    group_null: np.ndarray,
+    member_null: np.ndarray,
+    *,
+    annotated: bool,
+) -> tuple[Group, ...] | None:
+    if np.any(group_null != member_null):
+        raise DataFormatError(
+            path, where, "group_member", "null exactly where group is null", "a mismatch"
+        )
+    listed = ~group_null
+    if not annotated:
+        if listed.any():
+            raise DataFormatError(
+                path,
+                where,
+                "group",
+                "null (the frame is not annotated)",
+                f"{int(group[listed][0])}",
+            )
+        return None
+    if not listed.any():
+        return ()
+    g, m, person = group[listed], member[listed], ids[listed]
+    n_groups = int(g.max()) + 1
+    if g.min() < 0 or set(g.tolist()) != set(range(n_groups)):
+        raise DataFormatError(
+            path,
+            where,
+            "group",
+            f"indices 0..{n_groups - 1}, each used",
+            str(sorted(set(g.tolist()))),
+        )
+    out = []
+    for k in range(n_groups):
+        in_group = g == k
+        positions = m[in_group]
+        if sorted(positions.tolist()) != list(range(int(in_group.sum()))):
+            raise DataFormatError(
+                path,
+                where,
+                "group_member",
+                f"positions 0..{int(in_group.sum()) - 1} in group {k}",
+                str(sorted(positions.tolist())),
+            )
+        out.append(tuple(int(p) for p in person[in_group][np.argsort(positions)]))
+    return tuple(out)

@@ -1,0 +1,362 @@
+"""The project's Parquet format: exact round trips, shard folders, malformed files."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from reform import DataFormatError, Dataset, Frame
+from reform.datasets import detect_format, load_babble, load_dataset, load_salsa
+from reform.datasets.parquet import (
+    COLUMNS,
+    FORMAT_VERSION,
+    METADATA_KEY,
+    read_parquet,
+    write_parquet,
+)
+
+
+def _same(a: Dataset, b: Dataset) -> None:
+    assert a.frames == b.frames
+    assert (a.name, a.source, a.units) == (b.name, b.source, b.units)
+    assert dict(a.metadata) == dict(b.metadata)
+
+
+def _mixed_dataset() -> Dataset:
+    """Every case the format must keep apart."""
+    nan = np.nan
+    frames = [
+        # heads, one unobserved; a robot; groups whose member order differs from the row order
+        Frame(
+            ids=[5, 2, 9, 1],
+            kinds=("human", "human", "robot", "human"),
+            position=[[0.1, 0.2], [1.0, -1.0], [2.5, 0.0], [1 / 3, 2 / 7]],
+            yaw=[0.0, -np.pi, 3.0, 1e-300],
+            head_position=[[0.1, 0.25], [nan, nan], [2.5, 0.1], [0.3, 0.3]],
+            head_yaw=[0.1, nan, 3.1, -0.2],
+            groups=((9, 5), (1,), (2,)),
+            time=0.0,
+            sequence="episode-a",
+        ),
+        # no heads at all (None, not NaN); annotated with no F-formation
+        Frame(
+            ids=[1, 2],
+            position=[[0, 0], [1, 1]],
+            yaw=[0.5, -0.5],
+            groups=(),
+            time=0.5,
+            sequence="episode-a",
+        ),
+        # not annotated
+        Frame(ids=[3], position=[[4, 4]], yaw=[1.0], time=1.0, sequence="episode-a"),
+        # nobody: annotated, with (empty) heads
+        Frame(
+            ids=[],
+            position=np.zeros((0, 2)),
+            yaw=[],
+            head_position=np.zeros((0, 2)),
+            head_yaw=[],
+            groups=(),
+            time=1.5,
+            sequence="episode-a",
+        ),
+        # nobody, not annotated, no heads
+        Frame(ids=[], position=np.zeros((0, 2)), yaw=[], time=2.0, sequence="episode-b"),
+        Frame(
+            ids=[7, 8],
+            position=[[0, 0], [0.7, 0]],
+            yaw=[0, np.pi],
+            groups=((8, 7),),
+            time=0.0,
+            sequence="episode-b",
+        ),
+    ]
+    return Dataset(
+        frames=tuple(frames),
+        name="mixed",
+        source="hand-written test frames",
+        metadata={"seed": 7, "parameters": {"stride_m": 0.7, "names": ["a", "b"]}},
+    )
+
+
+def test_round_trip_is_exact(tmp_path):
+    dataset = _mixed_dataset()
+    path = write_parquet(dataset, tmp_path / "mixed.parquet")
+    back = read_parquet(path)
+    _same(back, dataset)
+    assert back[0].groups == ((9, 5), (1,), (2,))
+    assert back[1].head_position is None
+    assert back[3].n_people == 0 and back[3].head_position is not None and back[3].groups == ()
+    assert back[4].n_people == 0 and back[4].head_position is None and back[4].groups is None
+    assert back[0].kinds == ("human", "human", "robot", "human")
+
+
+def test_schema_metadata_and_columns(tmp_path):
+    path = write_parquet(_mixed_dataset(), tmp_path / "mixed.parquet")
+    schema = pq.read_schema(path)
+    assert schema.names == list(COLUMNS)
+    header = json.loads(schema.metadata[METADATA_KEY])
+    assert header["format_version"] == FORMAT_VERSION
+    assert header["generator_version"].startswith("reform-sim ")
+    assert header["name"] == "mixed" and header["units"] == "m"
+    assert schema.field("x").metadata[b"unit"] == b"m"
+    table = pq.read_table(path)
+    assert table.num_rows == 4 + 2 + 1 + 1 + 1 + 2  # an empty frame keeps one row
+    assert table.column("person_id").null_count == 2
+
+
+def test_real_datasets_round_trip(tmp_path, salsa_dir, babble_dir):
+    for dataset in (load_salsa(salsa_dir), load_babble(babble_dir)):
+        path = write_parquet(dataset, tmp_path / f"{dataset.name}.parquet")
+        _same(read_parquet(path), dataset)
+        assert load_dataset(path).frames == dataset.frames
+
+
+_finite = st.floats(min_value=-50, max_value=50, allow_nan=False, allow_subnormal=True)
+_yaw = st.floats(min_value=-np.pi, max_value=np.pi, allow_nan=False)
+
+
+@st.composite
+def _frames(draw) -> Frame:
+    n = draw(st.integers(0, 5))
+    ids = draw(st.lists(st.integers(-5, 10**12), min_size=n, max_size=n, unique=True))
+    position = [[draw(_finite), draw(_finite)] for _ in range(n)]
+    yaw = [draw(_yaw) for _ in range(n)]
+    kinds = tuple(draw(st.sampled_from(["human", "robot"])) for _ in range(n))
+    head_position = head_yaw = None
+    if draw(st.booleans()):
+        observed = [draw(st.booleans()) for _ in range(n)]
+        head_position = [
+            [draw(_finite), draw(_finite)] if o else [np.nan, np.nan] for o in observed
+        ]
+        head_yaw = [draw(_yaw) if o else np.nan for o in observed]
+    groups = None
+    if draw(st.booleans()):
+        shuffled = draw(st.permutations(ids))
+        cuts = sorted(draw(st.lists(st.integers(0, n), max_size=3)))
+        bounds = [0, *cuts, n]
+        groups = tuple(
+            tuple(shuffled[a:b]) for a, b in zip(bounds, bounds[1:], strict=False) if b > a
+        )
+    return Frame(
+        ids=np.array(ids, dtype=np.int64),
+        position=np.array(position, dtype=np.float64).reshape(n, 2),
+        yaw=yaw,
+        kinds=kinds,
+        head_position=None if head_position is None else np.array(head_position).reshape(n, 2),
+        head_yaw=head_yaw,
+        groups=groups,
+        time=draw(st.floats(0, 1e6, allow_nan=False)),
+        sequence=draw(st.sampled_from(["s", "session 2", "épisode"])),
+    )
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(frames=st.lists(_frames(), min_size=0, max_size=6))
+def test_round_trip_property(tmp_path, frames):
+    dataset = Dataset(frames=tuple(frames), name="random", metadata={"n": len(frames)})
+    back = read_parquet(write_parquet(dataset, tmp_path / "random.parquet"))
+    _same(back, dataset)
+
+
+def test_shard_folder_reads_in_natural_order(tmp_path):
+    root = tmp_path / "runs"
+    for episode in (10, 2, 1):
+        frame = Frame(
+            ids=[episode], position=[[0, 0]], yaw=[0], groups=(), sequence=f"walk/{episode}"
+        )
+        shard = Dataset(frames=(frame,), name="walk", metadata={"episode": episode})
+        write_parquet(shard, root / "scenario=walk" / f"episode={episode}" / "part.parquet")
+    (root / "scenario=walk" / ".partial.parquet.tmp").write_text("ignored")
+    assert detect_format(root) == "parquet"
+    dataset = load_dataset(root)
+    assert [f.sequence for f in dataset] == ["walk/1", "walk/2", "walk/10"]
+    assert dataset.name == "walk"
+    shards = dataset.metadata["shards"]
+    assert [s["path"] for s in shards] == [
+        "scenario=walk/episode=1/part.parquet",
+        "scenario=walk/episode=2/part.parquet",
+        "scenario=walk/episode=10/part.parquet",
+    ]
+    assert shards[2]["metadata"] == {"episode": 10}
+
+
+def test_shards_may_not_share_a_sequence(tmp_path):
+    frame = Frame(ids=[1], position=[[0, 0]], yaw=[0], sequence="same")
+    for k in (1, 2):
+        write_parquet(
+            Dataset(frames=(frame,), name="d"), tmp_path / f"episode={k}" / "part.parquet"
+        )
+    with pytest.raises(
+        DataFormatError,
+        match=r"episode=2/part.parquet: field 'sequence': .*episode=1/part.parquet.*found 'same'",
+    ):
+        read_parquet(tmp_path)
+
+
+def test_write_is_atomic_and_rejects_non_json_metadata(tmp_path):
+    path = tmp_path / "d.parquet"
+    write_parquet(_mixed_dataset(), path)
+    before = path.read_bytes()
+    bad = Dataset(frames=(), name="bad", metadata={"rng": object()})
+    with pytest.raises(ValueError, match="metadata must be JSON-serialisable"):
+        write_parquet(bad, path)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.parquet"]
+
+
+# --- malformed files ---------------------------------------------------------------------------
+
+
+def _rewrite(tmp_path: Path, change) -> Path:
+    """A valid file, its table passed through ``change(table) -> table``, written back."""
+    path = write_parquet(_mixed_dataset(), tmp_path / "good.parquet")
+    table = pq.read_table(path)
+    bad = change(table)
+    out = tmp_path / "bad.parquet"
+    pq.write_table(bad, out)
+    return out
+
+
+def _set(table: pa.Table, name: str, row: int, value) -> pa.Table:
+    values = table.column(name).to_pylist()
+    values[row] = value
+    index = table.schema.get_field_index(name)
+    return table.set_column(
+        index, table.schema.field(name), pa.array(values, type=table.schema.field(name).type)
+    )
+
+
+def test_missing_column(tmp_path):
+    path = _rewrite(tmp_path, lambda t: t.drop_columns(["yaw"]))
+    with pytest.raises(DataFormatError, match=r"bad.parquet: field 'yaw': expected a column 'yaw'"):
+        read_parquet(path)
+
+
+def test_wrong_column_type(tmp_path):
+    def change(table):
+        index = table.schema.get_field_index("x")
+        return table.set_column(index, "x", table.column("x").cast(pa.string()))
+
+    with pytest.raises(DataFormatError, match=r"field 'x': expected type double, found string"):
+        read_parquet(_rewrite(tmp_path, change))
+
+
+def test_nan_and_inf_positions(tmp_path):
+    path = _rewrite(tmp_path / "nan", lambda t: _set(t, "x", 5, float("nan")))
+    with pytest.raises(
+        DataFormatError,
+        match=r"bad.parquet: frame 1 \(row 5\): field 'x': expected a finite number, found nan",
+    ):
+        read_parquet(path)
+    path = _rewrite(tmp_path / "inf", lambda t: _set(t, "head_y", 0, float("inf")))
+    with pytest.raises(
+        DataFormatError,
+        match=r"frame 0 \(row 0\): field 'head_y': expected a finite number or NaN, found inf",
+    ):
+        read_parquet(path)
+
+
+def test_yaw_in_degrees(tmp_path):
+    path = _rewrite(tmp_path, lambda t: _set(t, "yaw", 4, 90.0))
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"frame 1 \(row 4\)"
+            r": field 'yaw': expected radians in \[-pi, pi\].*degrees.*found 90.0"
+        ),
+    ):
+        read_parquet(path)
+
+
+def test_duplicate_ids_in_a_frame(tmp_path):
+    path = _rewrite(tmp_path, lambda t: _set(t, "person_id", 1, 5))
+    with pytest.raises(
+        DataFormatError,
+        match=(
+            r"bad.parquet: frame 0 \(rows 0..3\)"
+            r": field 'frame': .*ids must be unique within a frame"
+        ),
+    ):
+        read_parquet(path)
+
+
+def test_null_in_a_required_column(tmp_path):
+    path = _rewrite(tmp_path, lambda t: _set(t, "x", 0, None))
+    with pytest.raises(
+        DataFormatError, match=r"frame 0 \(rows 0..3\): field 'x': expected a value on every row"
+    ):
+        read_parquet(path)
+
+
+def test_group_indices_with_a_gap(tmp_path):
+    path = _rewrite(tmp_path, lambda t: _set(t, "group", 3, 5))
+    with pytest.raises(
+        DataFormatError,
+        match=r"frame 0 \(rows 0..3\): field 'group': expected indices 0..5, each used",
+    ):
+        read_parquet(path)
+
+
+def test_group_on_an_unannotated_frame(tmp_path):
+    def change(table):
+        table = _set(table, "group", 6, 0)
+        return _set(table, "group_member", 6, 0)
+
+    with pytest.raises(
+        DataFormatError,
+        match=r"frame 2 \(rows 6..6\): field 'group': expected null \(the frame is not annotated\)",
+    ):
+        read_parquet(_rewrite(tmp_path, change))
+
+
+def test_not_a_reform_file(tmp_path):
+    path = tmp_path / "other.parquet"
+    pq.write_table(pa.table({"a": [1, 2]}), path)
+    with pytest.raises(
+        DataFormatError,
+        match=r"other.parquet: field 'schema metadata': expected a 'reform_sim' entry",
+    ):
+        read_parquet(path)
+
+
+def test_newer_format_version(tmp_path):
+    def change(table):
+        header = json.loads(table.schema.metadata[METADATA_KEY])
+        header["format_version"] = FORMAT_VERSION + 1
+        return table.replace_schema_metadata({METADATA_KEY: json.dumps(header).encode()})
+
+    with pytest.raises(
+        DataFormatError, match=r"field 'format_version': expected an integer from 1 to 1, found 2"
+    ):
+        read_parquet(_rewrite(tmp_path, change))
+
+
+def test_empty_corrupt_and_missing(tmp_path):
+    (tmp_path / "empty.parquet").write_bytes(b"")
+    with pytest.raises(
+        DataFormatError, match=r"empty.parquet: expected a Parquet file, found an empty file"
+    ):
+        read_parquet(tmp_path / "empty.parquet")
+    (tmp_path / "junk.parquet").write_bytes(b"not parquet" * 20)
+    with pytest.raises(DataFormatError, match=r"junk.parquet: expected a readable Parquet file"):
+        read_parquet(tmp_path / "junk.parquet")
+    with pytest.raises(
+        DataFormatError,
+        match=r"nothing.parquet: expected a Parquet file or a folder of them, found no such file",
+    ):
+        read_parquet(tmp_path / "nothing.parquet")
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(
+        DataFormatError, match=r"folder: expected a folder holding .parquet files, found none"
+    ):
+        read_parquet(tmp_path / "folder")
