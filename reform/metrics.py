@@ -489,11 +489,6 @@ class Evaluation:
             "pairwise_accuracy": _json_float(self.pairwise_accuracy),
             "thresholds": [str(t) for t in self.thresholds],
         }
-        names = list(dict.fromkeys(self.sequence))
-        if len(names) > 1:
-            result["by_sequence"] = {
-                name: self._summary(self.select(sequence=name)) for name in names
-            }
         scores = [self.at(t) for t in self.thresholds]
         for s in scores:
             result[str(s.threshold)] = {
@@ -520,6 +515,11 @@ class Evaluation:
                     }
                     for b in s.by_size
                 ],
+            }
+        names = list(dict.fromkeys(self.sequence))
+        if len(names) > 1:
+            result["by_sequence"] = {
+                name: self._summary(self.select(sequence=name)) for name in names
             }
         if per_frame:
             result["per_frame"] = [
@@ -581,12 +581,89 @@ def _describe(frame: Frame, index: int) -> str:
     return f"{where} ({', '.join(details)})"
 
 
-def _match(
-    contingency: np.ndarray, true_size: np.ndarray, detected_size: np.ndarray, threshold: Fraction
-) -> np.ndarray:
-    """(n_true, n_detected) bool: ``|G∩D| / max(|G|,|D|) >= p/q``, as ``q·|G∩D| >= p·max``."""
-    largest = np.maximum(true_size[:, None], detected_size[None, :])
-    return threshold.denominator * contingency >= threshold.numerator * largest
+_INT_TYPES = (int, np.integer)
+_BOOL_TYPES = (bool, np.bool_)
+
+
+def _raise_first_error(partitions: Sequence[Any], frames: Sequence[Frame], *, strict: bool) -> None:
+    """Finds and raises the first malformed partition, with its frame in the message."""
+    for index, (partition, frame) in enumerate(zip(partitions, frames, strict=True)):
+        _labels(partition, frame.ids, where=_describe(frame, index), strict=strict)
+    raise ValueError("predictions are malformed (no single frame could be blamed)")
+
+
+def _group_ids(
+    partitions: Sequence[Any],
+    frames: Sequence[Frame],
+    *,
+    person_frame: np.ndarray,
+    person_code: np.ndarray,
+    vocabulary: np.ndarray,
+    strict: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Global group index of every person of every frame, vectorised over frames.
+
+    Args:
+        partitions: one sequence of groups per frame.
+        frames: the frames.
+        person_frame: (P,) frame of each person, all frames' people concatenated.
+        person_code: (P,) index of each person's id in ``vocabulary``.
+        vocabulary: sorted unique ids of all frames.
+        strict: demand full partitions; otherwise people in no group become singletons.
+
+    Returns:
+        ``gid`` (P,) group of each person (groups numbered across frames, in frame order) and
+        ``group_frame`` (n_groups,) the frame of each group.
+
+    Raises:
+        ValueError: for the first frame whose partition is malformed (see ``_labels``).
+    """
+    n_people = person_frame.size
+    try:
+        partitions = [tuple(partition) for partition in partitions]
+        groups = [tuple(group) for partition in partitions for group in partition]
+        members = [member for group in groups for member in group]
+        types = set(map(type, members))
+        if not all(issubclass(t, _INT_TYPES) and not issubclass(t, _BOOL_TYPES) for t in types):
+            raise TypeError("non-integer person id")
+        member_ids = np.array(members, dtype=np.int64)
+    except (TypeError, ValueError, OverflowError):
+        _raise_first_error(partitions, frames, strict=strict)
+    n_groups = np.array([len(partition) for partition in partitions], dtype=np.int64)
+    group_size = np.array([len(group) for group in groups], dtype=np.int64)
+    group_frame = np.repeat(np.arange(len(partitions), dtype=np.int64), n_groups)
+    member_group = np.repeat(np.arange(len(groups), dtype=np.int64), group_size)
+    member_frame = group_frame[member_group]
+
+    # Find each member among the people of its frame: keys (frame, id code), sorted.
+    code = np.searchsorted(vocabulary, member_ids).clip(max=max(vocabulary.size - 1, 0))
+    known = vocabulary[code] == member_ids if vocabulary.size else np.zeros(member_ids.size, bool)
+    width = max(vocabulary.size, 1)
+    person_key = person_frame * width + person_code
+    member_key = member_frame * width + code
+    order = np.argsort(person_key, kind="stable")
+    position = np.searchsorted(person_key[order], member_key).clip(max=max(n_people - 1, 0))
+    row = order[position] if n_people else position
+    found = known & (person_key[row] == member_key) if n_people else known
+    listed = np.bincount(row[found], minlength=n_people)
+    if (
+        not found.all()
+        or np.any(listed > 1)
+        or np.any(group_size == 0)
+        or (strict and np.any(listed == 0))
+    ):
+        _raise_first_error(partitions, frames, strict=strict)
+    gid = np.full(n_people, -1, dtype=np.int64)
+    gid[row] = member_group
+    if not strict:
+        alone = np.flatnonzero(gid < 0)
+        gid[alone] = len(groups) + np.arange(alone.size)
+        group_frame = np.concatenate([group_frame, person_frame[alone]])
+    return gid, group_frame
+
+
+def _pairs(size: np.ndarray) -> np.ndarray:
+    return size * (size - 1) // 2
 
 
 def evaluate(
@@ -622,76 +699,77 @@ def evaluate(
             f"predictions must hold one partition per frame: expected {len(frames)}, "
             f"found {len(predictions)}"
         )
-    frame_index: list[int] = []
-    sequences: list[str] = []
-    times: list[float] = []
-    pairs: list[int] = []
-    pairs_correct: list[int] = []
-    true_together: list[int] = []
-    predicted_together: list[int] = []
-    true_frame: list[np.ndarray] = []
-    true_size: list[np.ndarray] = []
-    true_matched: list[np.ndarray] = []
-    det_frame: list[np.ndarray] = []
-    det_size: list[np.ndarray] = []
-    det_matched: list[np.ndarray] = []
-    for index, (frame, prediction) in enumerate(zip(frames, predictions, strict=True)):
+    for index, frame in enumerate(frames):
         if not isinstance(frame, Frame):
             raise ValueError(f"frames[{index}] must be a reform.Frame, got {type(frame).__name__}")
-        predicted = _labels(prediction, frame.ids, where=_describe(frame, index), strict=True)
-        if frame.groups is None:
-            continue
-        truth = _labels(frame.groups, frame.ids, where=f"frames[{index}].groups", strict=False)
-        row = len(frame_index)
-        frame_index.append(index)
-        sequences.append(frame.sequence)
-        times.append(frame.time)
+    annotated = np.array([frame.groups is not None for frame in frames], dtype=bool)
 
-        same_true = _pair_equal(truth)
-        same_predicted = _pair_equal(predicted)
-        pairs.append(same_true.size)
-        pairs_correct.append(int(np.count_nonzero(same_true == same_predicted)))
-        true_together.append(int(np.count_nonzero(same_true)))
-        predicted_together.append(int(np.count_nonzero(same_predicted)))
-
-        # Contingency table of true groups x detected groups, then singletons dropped.
-        n_true_groups = int(truth.max()) + 1 if truth.size else 0
-        n_det_groups = int(predicted.max()) + 1 if predicted.size else 0
-        contingency = np.bincount(
-            truth * n_det_groups + predicted, minlength=n_true_groups * n_det_groups
-        ).reshape(n_true_groups, n_det_groups)
-        t_size = contingency.sum(axis=1)
-        d_size = contingency.sum(axis=0)
-        t_keep = t_size >= 2
-        d_keep = d_size >= 2
-        contingency = contingency[np.ix_(t_keep, d_keep)]
-        t_size = t_size[t_keep]
-        d_size = d_size[d_keep]
-        hits = np.stack([_match(contingency, t_size, d_size, t) for t in thresholds])
-        true_frame.append(np.full(t_size.size, row, dtype=np.int64))
-        true_size.append(t_size)
-        true_matched.append(hits.any(axis=2))
-        det_frame.append(np.full(d_size.size, row, dtype=np.int64))
-        det_size.append(d_size)
-        det_matched.append(hits.any(axis=1))
-    if not frame_index:
+    # Everyone of every frame, concatenated; ids coded into one sorted vocabulary.
+    n_people = np.array([frame.n_people for frame in frames], dtype=np.int64)
+    person_frame = np.repeat(np.arange(len(frames), dtype=np.int64), n_people)
+    all_ids = np.concatenate([frame.ids for frame in frames]) if frames else np.zeros(0, np.int64)
+    vocabulary, person_code = np.unique(all_ids, return_inverse=True)
+    coding = {
+        "person_frame": person_frame,
+        "person_code": person_code.reshape(-1),
+        "vocabulary": vocabulary,
+    }
+    pred_gid, pred_frame = _group_ids(predictions, frames, strict=True, **coding)
+    if not annotated.any():
         raise ValueError(
             f"frames must include annotated frames (with ground truth), found none of {len(frames)}"
         )
-    k = len(thresholds)
+    truth = [frame.groups if frame.groups is not None else () for frame in frames]
+    true_gid, true_frame = _group_ids(truth, frames, strict=False, **coding)
+
+    # Only the annotated frames' people count; groups of other frames end up of size 0.
+    keep = annotated[person_frame]
+    true_gid, pred_gid = true_gid[keep], pred_gid[keep]
+    true_size = np.bincount(true_gid, minlength=true_frame.size)
+    pred_size = np.bincount(pred_gid, minlength=pred_frame.size)
+    # Non-empty cells of the contingency table (true group x detected group): |G ∩ D|.
+    cell, overlap = np.unique(true_gid * max(pred_frame.size, 1) + pred_gid, return_counts=True)
+    cell_true, cell_pred = np.divmod(cell, max(pred_frame.size, 1))
+    largest = np.maximum(true_size[cell_true], pred_size[cell_pred])
+    # Singletons dropped: only cells between groups of two or more can match.
+    candidate = (true_size[cell_true] >= 2) & (pred_size[cell_pred] >= 2)
+    true_hit = np.zeros((len(thresholds), true_frame.size), dtype=bool)
+    pred_hit = np.zeros((len(thresholds), pred_frame.size), dtype=bool)
+    for k, t in enumerate(thresholds):
+        # |G∩D| / max(|G|, |D|) >= p/q, exactly: q·|G∩D| >= p·max.
+        hit = candidate & (t.denominator * overlap >= t.numerator * largest)
+        true_hit[k, cell_true[hit]] = True
+        pred_hit[k, cell_pred[hit]] = True
+
+    row_of_frame = np.cumsum(annotated) - 1
+    n_rows = int(annotated.sum())
+    true_ff = true_size >= 2
+    pred_ff = pred_size >= 2
+    pairs = _pairs(n_people[annotated])
+    true_in = annotated[true_frame]
+    pred_in = annotated[pred_frame]
+    true_together = np.bincount(
+        row_of_frame[true_frame[true_in]], weights=_pairs(true_size[true_in]), minlength=n_rows
+    ).astype(np.int64)
+    pred_together = np.bincount(
+        row_of_frame[pred_frame[pred_in]], weights=_pairs(pred_size[pred_in]), minlength=n_rows
+    ).astype(np.int64)
+    both_together = np.bincount(
+        row_of_frame[true_frame[cell_true]], weights=_pairs(overlap), minlength=n_rows
+    ).astype(np.int64)
     return Evaluation(
         thresholds=thresholds,
-        frame_index=np.asarray(frame_index, dtype=np.int64),
-        sequence=tuple(sequences),
-        time=np.asarray(times, dtype=np.float64),
-        pairs=np.asarray(pairs, dtype=np.int64),
-        pairs_correct=np.asarray(pairs_correct, dtype=np.int64),
-        pairs_true_together=np.asarray(true_together, dtype=np.int64),
-        pairs_predicted_together=np.asarray(predicted_together, dtype=np.int64),
-        true_frame=np.concatenate(true_frame).astype(np.int64),
-        true_size=np.concatenate(true_size).astype(np.int64),
-        true_matched=np.concatenate(true_matched, axis=1).reshape(k, -1),
-        detected_frame=np.concatenate(det_frame).astype(np.int64),
-        detected_size=np.concatenate(det_size).astype(np.int64),
-        detected_matched=np.concatenate(det_matched, axis=1).reshape(k, -1),
+        frame_index=np.flatnonzero(annotated),
+        sequence=tuple(frame.sequence for frame in frames if frame.groups is not None),
+        time=np.array([frame.time for frame in frames if frame.groups is not None], dtype=float),
+        pairs=pairs,
+        pairs_correct=pairs - true_together - pred_together + 2 * both_together,
+        pairs_true_together=true_together,
+        pairs_predicted_together=pred_together,
+        true_frame=row_of_frame[true_frame[true_ff]],
+        true_size=true_size[true_ff],
+        true_matched=true_hit[:, true_ff],
+        detected_frame=row_of_frame[pred_frame[pred_ff]],
+        detected_size=pred_size[pred_ff],
+        detected_matched=pred_hit[:, pred_ff],
     )

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from reform import T_ONE, T_TWO_THIRDS, Frame, evaluate
 from reform.datasets import load_salsa
@@ -378,3 +380,86 @@ def test_pairwise_accuracy_is_nan_without_pairs():
     ev = evaluate([frame([1], [])], [((1,),)])
     assert math.isnan(ev.pairwise_accuracy)
     assert ev.to_json(detector="d", dataset="x")["pairwise_accuracy"] is None
+
+
+def test_prediction_naming_a_person_of_another_frame():
+    frames = [frame([1, 2], [(1, 2)]), frame([3, 4], [(3, 4)], time=3.0)]
+    with pytest.raises(ValueError, match=r"predictions\[0\] .*person 3 \(group 0\) is not in"):
+        evaluate(frames, [((1, 3), (2,)), ((3, 4),)])
+
+
+def test_predictions_of_unannotated_frames_are_checked_too():
+    frames = [frame([1, 2], None), frame([1, 2], [(1, 2)], time=3.0)]
+    with pytest.raises(ValueError, match=r"predictions\[0\] .*person 2 is in no group"):
+        evaluate(frames, [((1,),), ((1, 2),)])
+
+
+def test_frames_of_different_sizes_and_odd_ids():
+    # hand-computed: frame A (ids -5, 1000000007, 3): truth {-5, 3}, predicted the same:
+    # TP 1, 3 of 3 pairs right. Frame B (one person): no pair, no group: P = R = 1.
+    frames = [frame([-5, 1_000_000_007, 3], [(-5, 3)]), frame([8], [], time=1.0)]
+    ev = evaluate(frames, [((3, -5), (1_000_000_007,)), ((8,),)])
+    assert ev.pairs.tolist() == [3, 0] and ev.pairs_correct.tolist() == [3, 0]
+    assert ev.at(T_ONE).frame_tp.tolist() == [1, 0]
+    assert (ev.at(T_ONE).precision, ev.at(T_ONE).recall) == (1.0, 1.0)
+
+
+def literal_ff_evalgroups(truth, detected, threshold):
+    """ff_evalgroups.m transcribed line by line (cardmode off), on singleton-free group lists."""
+    if not detected and not truth:
+        return 1.0, 1.0, 0
+    if not detected:
+        return 1.0, 0.0, 0
+    if not truth:
+        return 0.0, 1.0, 0
+    tp = 0
+    for g in truth:
+        for d in detected:
+            if Fraction(len(set(g) & set(d)), max(len(g), len(d))) >= threshold:
+                tp += 1
+                break
+    return tp / len(detected), tp / len(truth), tp
+
+
+@st.composite
+def frames_and_predictions(draw):
+    n_frames = draw(st.integers(1, 6))
+    frames, predictions = [], []
+    for index in range(n_frames):
+        n = draw(st.integers(0, 9))
+        ids = draw(st.lists(st.integers(-50, 50), min_size=n, max_size=n, unique=True))
+        true_labels = draw(st.lists(st.integers(0, 3), min_size=n, max_size=n))
+        pred_labels = draw(st.lists(st.integers(0, 3), min_size=n, max_size=n))
+        annotated = draw(st.booleans()) or index == 0
+
+        def groups(labels, ids=ids):
+            out = {}
+            for person, label in zip(ids, labels, strict=True):
+                out.setdefault(label, []).append(person)
+            return tuple(tuple(g) for g in out.values())
+
+        frames.append(frame(ids, groups(true_labels) if annotated else None, time=float(index)))
+        predictions.append(groups(pred_labels))
+    return frames, predictions
+
+
+@given(frames_and_predictions())
+@settings(max_examples=150, deadline=None)
+def test_vectorised_protocol_equals_the_literal_reference(case):
+    frames, predictions = case
+    ev = evaluate(frames, predictions, thresholds=[T_TWO_THIRDS, T_ONE, Fraction(3, 4)])
+    annotated = [(f, p) for f, p in zip(frames, predictions, strict=True) if f.groups is not None]
+    assert ev.n_frames == len(annotated)
+    for t in ev.thresholds:
+        s = ev.at(t)
+        for row, (f, p) in enumerate(annotated):
+            truth = [g for g in f.partition() if len(g) > 1]
+            detected = [g for g in p if len(g) > 1]
+            precision, recall, tp = literal_ff_evalgroups(truth, detected, t)
+            assert (s.frame_precision[row], s.frame_recall[row]) == (precision, recall)
+            assert s.frame_tp[row] == tp
+            assert s.frame_fp[row] == len(detected) - tp and s.frame_fn[row] == len(truth) - tp
+    for row, (f, p) in enumerate(annotated):
+        expected = pair_labels(f)
+        assert ev.pairs[row] == expected.size
+        assert ev.pairs_correct[row] == int(np.sum(expected == pair_labels(f, p)))

@@ -1,0 +1,116 @@
+"""Speed of reform.evaluate on every annotated SALSA frame, against a loop-by-loop baseline.
+
+The baseline transcribes GCFF's ff_evalgroups.m literally in Python (sets, a scan of the detected
+groups for every true group, float division) plus a double loop over pairs; it is run in the same
+process on the same predictions, and the two must agree. Prints medians and their ratio.
+
+    python benchmarks/bench_metrics.py [--datasets ../shared/datasets] [--repeats 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from reform import T_ONE, T_TWO_THIRDS, evaluate
+from reform.datasets import load_salsa
+
+REFERENCE = "reference/gcff-reference/salsa-body-stride70cm-mdl10000.txt"
+
+
+def loop_baseline(frames, predictions, threshold):
+    """Frame-mean P, R and pairwise accuracy, one Python loop per rule."""
+    precisions, recalls, correct, total = [], [], 0, 0
+    for frame, prediction in zip(frames, predictions, strict=True):
+        ids = frame.ids.tolist()
+        true_of = {m: g for g, group in enumerate(frame.partition()) for m in group}
+        pred_of = {m: g for g, group in enumerate(prediction) for m in group}
+        for a in range(len(ids)):
+            for b in range(a + 1, len(ids)):
+                same_true = true_of[ids[a]] == true_of[ids[b]]
+                same_pred = pred_of[ids[a]] == pred_of[ids[b]]
+                correct += same_true == same_pred
+                total += 1
+        truth = [set(g) for g in frame.partition() if len(g) > 1]
+        detected = [set(g) for g in prediction if len(g) > 1]
+        if not truth and not detected:
+            p, r = 1.0, 1.0
+        elif not detected:
+            p, r = 1.0, 0.0
+        elif not truth:
+            p, r = 0.0, 1.0
+        else:
+            tp = 0
+            for g in truth:
+                for d in detected:
+                    if len(g & d) / max(len(g), len(d)) >= threshold:
+                        tp += 1
+                        break
+            p, r = tp / len(detected), tp / len(truth)
+        precisions.append(p)
+        recalls.append(r)
+    return float(np.mean(precisions)), float(np.mean(recalls)), correct / total
+
+
+def read_partitions(path: Path):
+    out = []
+    for line in path.read_text().splitlines():
+        if line.startswith("#") or not line.strip():
+            continue
+        groups: dict[str, list[int]] = {}
+        for pair in line.split()[2:]:
+            person, label = pair.split(":")
+            groups.setdefault(label, []).append(int(person))
+        out.append(tuple(map(tuple, groups.values())))
+    return out
+
+
+def median_seconds(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    default = os.environ.get("REFORM_SIM_DATASETS", "../shared/datasets")
+    parser.add_argument("--datasets", default=default, help="folder holding salsa/")
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args()
+    datasets = Path(args.datasets)
+    frames = load_salsa(datasets / "salsa").annotated()
+    reference = datasets.parent / REFERENCE
+    predictions = read_partitions(reference) if reference.is_file() else None
+    if predictions is None:  # fall back to a deterministic synthetic detector: shifted truth
+        predictions = [f.partition()[1:] + f.partition()[:1] for f in frames]
+
+    ev = evaluate(frames, predictions)
+    for t in (T_TWO_THIRDS, T_ONE):
+        p, r, acc = loop_baseline(frames, predictions, float(t))
+        assert abs(p - ev.at(t).precision) < 1e-12 and abs(r - ev.at(t).recall) < 1e-12
+        assert abs(acc - ev.pairwise_accuracy) < 1e-12
+
+    fast = median_seconds(
+        lambda: evaluate(frames, predictions).to_json(detector="d", dataset="s"), args.repeats
+    )
+    slow = median_seconds(
+        lambda: [loop_baseline(frames, predictions, float(t)) for t in (T_TWO_THIRDS, T_ONE)],
+        args.repeats,
+    )
+    print(
+        f"evaluate, {len(frames)} SALSA frames, T=2/3 and T=1 + JSON: {fast * 1e3:.1f} ms "
+        f"(median of {args.repeats}); loop baseline {slow * 1e3:.1f} ms; "
+        f"ratio {slow / fast:.1f}x faster"
+    )
+
+
+if __name__ == "__main__":
+    main()
