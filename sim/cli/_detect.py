@@ -66,6 +66,15 @@ def detections_json(
     }
 
 
+def _dumps(result: dict[str, Any]) -> str:
+    """JSON with the header indented and one line per frame record (readable, diff-friendly)."""
+    header = {key: value for key, value in result.items() if key != "frames"}
+    text = json.dumps(header, indent=2, allow_nan=False)
+    records = ",\n".join("    " + json.dumps(r, allow_nan=False) for r in result["frames"])
+    frames = '  "frames": [\n' + records + "\n  ]" if records else '  "frames": []'
+    return text[: text.rindex("}")].rstrip() + ",\n" + frames + "\n}\n"
+
+
 def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
     from reform.metrics import check_partition
@@ -97,8 +106,7 @@ def run(args: argparse.Namespace) -> int:
         indices=indices,
     )
     with atomic_open(args.out) as handle:
-        json.dump(result, handle, indent=1, allow_nan=False)
-        handle.write("\n")
+        handle.write(_dumps(result))
     n_groups = sum(len(record["groups"]) for record in result["frames"])
     print(
         f"{args.detector} on {dataset.name}: {len(frames):,} frames, {n_groups:,} F-formations "
