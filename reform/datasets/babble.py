@@ -177,13 +177,11 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
         )
         frame_numbers.append(number)
 
-    group_sizes = Counter(len(g) for f in frames if f.groups is not None for g in f.partition())
     summary = {
         "rows": n_frames,
         "frames": len(frames),
         "annotated_frames": len(annotations),
         "annotation_lines_duplicated": duplicates,
-        "annotated_group_sizes": {str(k): v for k, v in sorted(group_sizes.items())},
         "max_clock_gap_s": round(clock_gap, 3),
         "heads_untracked": report["heads_untracked"],
         "heads_swapped_back": report["heads_swapped_back"],

@@ -1,7 +1,146 @@
-"""Placeholder: filled in by the subcommand's implementation."""
+"""``reform-sim data``: inspect a dataset (``info``) or convert it to the project's Parquet."""
 
 from __future__ import annotations
 
+import argparse
+import json
+import sys
+from typing import Any
 
-def register(subparsers) -> None:  # noqa: ARG001
-    return None
+from sim.cli._common import FORMATS
+
+_INFO_DESCRIPTION = """\
+Loads a dataset (SALSA / DANTE text, Babble, a GCFF MATLAB folder, or the project's Parquet)
+and prints what it holds: frames, sequences, people, annotated frames, the group-size
+histogram over the annotated frames (singletons included), units, and the loader's report
+(irregularities it found and how it handled them).
+"""
+
+_CONVERT_DESCRIPTION = """\
+Loads a dataset in any supported format and writes it in the project's Parquet format
+(positions in metres, every column documented in the README).
+"""
+
+
+def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("path", metavar="PATH", help="dataset file or folder")
+    parser.add_argument(
+        "--format",
+        choices=FORMATS,
+        default=None,
+        help="dataset format (default: detected from the path)",
+    )
+    parser.add_argument(
+        "--units",
+        choices=("cm", "m"),
+        default=None,
+        help="length unit of the file's positions (GCFF folders: default cm; others are metres)",
+    )
+
+
+def register(subparsers) -> None:
+    data = subparsers.add_parser(
+        "data",
+        help="inspect or convert a dataset",
+        description="Inspect a dataset (info) or convert it to Parquet (convert).",
+    )
+    actions = data.add_subparsers(dest="action", metavar="ACTION", required=True)
+
+    info = actions.add_parser(
+        "info",
+        help="print frames, people, annotation, group sizes, units and the loader's report",
+        description=_INFO_DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_source_arguments(info)
+    info.add_argument("--json", action="store_true", help="print the summary as JSON")
+    info.set_defaults(handler=run_info)
+
+    convert = actions.add_parser(
+        "convert",
+        help="write a dataset in the project's Parquet format",
+        description=_CONVERT_DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_source_arguments(convert)
+    convert.add_argument("--out", required=True, metavar="OUT", help="the .parquet file to write")
+    convert.set_defaults(handler=run_convert)
+
+
+def _load(args: argparse.Namespace):
+    from reform.datasets import detect_format, load_dataset
+
+    format = args.format or detect_format(args.path)
+    return format, load_dataset(args.path, format=format, units=args.units)
+
+
+def run_info(args: argparse.Namespace) -> int:
+    from reform.datasets.summary import summarise
+
+    format, dataset = _load(args)
+    summary = summarise(dataset)
+    summary["format"] = format
+    if args.json:
+        json.dump(summary, sys.stdout, indent=2, allow_nan=False)
+        sys.stdout.write("\n")
+    else:
+        print(format_info(summary, metadata=dict(dataset.metadata)), end="")
+    return 0
+
+
+def run_convert(args: argparse.Namespace) -> int:
+    from reform.datasets import write_parquet
+
+    _, dataset = _load(args)
+    write_parquet(dataset, args.out)
+    print(f"wrote {args.out}: {len(dataset)} frames", file=sys.stderr)
+    return 0
+
+
+def format_info(summary: dict[str, Any], *, metadata: dict[str, Any]) -> str:
+    """The summary as aligned text."""
+    lines = [
+        f"dataset          {summary['name']} (format {summary['format']})",
+        f"source           {summary['source']}",
+    ]
+    file_units = metadata.get("file_units")
+    units = summary["units"] + (f" (file in {file_units}, converted)" if file_units else "")
+    lines.append(f"units            {units}")
+    lines.append(f"frames           {summary['frames']}")
+    lines.append(f"annotated frames {summary['annotated_frames']}")
+    people = summary["people"]
+    lines.append(
+        f"people           {people['distinct_ids']} distinct ids; per frame "
+        f"min {people['min']}, median {people['median']:g}, max {people['max']}"
+    )
+    if summary["robots"]:
+        lines.append(f"robots           in {summary['robots']} frames")
+    heads = summary["heads"]
+    lines.append(
+        f"heads            {heads['observed']} observed, {heads['not_observed']} not observed, "
+        f"{heads['no_head_data']} without head data (person-frames)"
+    )
+    lines.append("sequences")
+    for name, entry in summary["sequences"].items():
+        lines.append(
+            f"  {name}: {entry['frames']} frames, {entry['annotated_frames']} annotated, "
+            f"{entry['duration_s']:g} s"
+        )
+    sizes = summary["group_sizes"]
+    lines.append("group sizes (annotated frames, singletons included)")
+    if sizes:
+        width = max(len(str(v)) for v in [*sizes.values(), *sizes.keys(), "size"])
+        lines.append("  size   " + " ".join(k.rjust(width) for k in sizes))
+        lines.append("  groups " + " ".join(str(v).rjust(width) for v in sizes.values()))
+    else:
+        lines.append("  (no annotated frames)")
+    lines.append(f"F-formations     {summary['fformations']} (groups of 2 or more)")
+    settings = metadata.get("settings_gc")
+    if settings:
+        lines.append(f"settings_gc      {json.dumps(settings)}")
+    report = summary.get("report")
+    if report:
+        lines.append("loader report")
+        for key, value in report.items():
+            lines.append(f"  {key}: {json.dumps(value)}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,131 @@
+"""``reform-sim data info`` and ``reform-sim data convert``."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import scipy.io
+
+from reform import Dataset, Frame
+from reform.datasets import load_salsa, read_parquet, write_parquet
+from sim.cli import main
+
+
+def test_info_salsa(salsa_dir, capsys):
+    assert main(["data", "info", str(salsa_dir)]) == 0
+    out = capsys.readouterr().out
+    assert "dataset          salsa (format salsa)" in out
+    assert "frames           1145" in out
+    assert "annotated frames 1143" in out
+    assert "units            m" in out
+    assert "18 distinct ids" in out
+    assert "session1: 645 frames, 644 annotated" in out
+    assert "session2: 500 frames, 499 annotated" in out
+    # The canonical group-size table of the SALSA README.
+    assert "  size      1    2    3    4    5    6    7    8   12" in out
+    assert "  groups 1684 1554 1705  952  539  381  238   25    1" in out
+    assert "F-formations     5395" in out
+    assert "missing_from_groundtruth: 129" in out
+    assert "duplicate_singletons: 3" in out
+
+
+def test_info_babble_json(babble_dir, capsys):
+    assert main(["data", "info", str(babble_dir), "--format", "babble", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["format"] == "babble"
+    assert summary["frames"] == 3481
+    assert summary["annotated_frames"] == 99
+    assert summary["group_sizes"] == {"1": 29, "2": 8, "3": 18, "4": 10, "5": 20, "6": 15, "7": 23}
+    assert summary["report"]["heads_swapped_back"] == 107
+    assert summary["report"]["torso_from_head"] == [[79, 6], [520, 4], [721, 3]]
+
+
+def _gcff_folder(folder):
+    folder.mkdir()
+    features = np.empty((1, 2), dtype=object)
+    features[0, 0] = np.array([[1, 0.0, 0.0, 0.0], [2, 70.0, 0.0, np.pi]])
+    features[0, 1] = np.array([[1, 0.0, 0.0, 0.0]])
+    groups = np.empty((1, 1), dtype=object)
+    inner = np.empty((1, 1), dtype=object)
+    inner[0, 0] = np.array([[1.0, 2.0]])
+    groups[0, 0] = inner
+    scipy.io.savemat(
+        folder / "features.mat", {"features": features, "timestamp": np.array([[1.0, 2.0]])}
+    )
+    scipy.io.savemat(
+        folder / "groundtruth.mat", {"GTgroups": groups, "GTtimestamp": np.array([[1.0]])}
+    )
+    scipy.io.savemat(folder / "settings_gc.mat", {"stride": 70.0, "mdl": 30000.0})
+    return folder
+
+
+def test_info_gcff_units(tmp_path, capsys):
+    folder = _gcff_folder(tmp_path / "tiny")
+    assert main(["data", "info", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "units            m (file in cm, converted)" in out
+    assert "frames           2" in out
+    assert "annotated frames 1" in out
+    assert '"stride_m": 0.7' in out
+    assert main(["data", "info", str(folder), "--units", "m", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["group_sizes"] == {"2": 1}
+
+
+def test_convert_then_info(tmp_path, salsa_dir, capsys):
+    out = tmp_path / "salsa.parquet"
+    assert main(["data", "convert", str(salsa_dir), "--out", str(out)]) == 0
+    assert read_parquet(out).frames == load_salsa(salsa_dir).frames
+    capsys.readouterr()
+    assert main(["data", "info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "(format parquet)" in text and "frames           1145" in text
+
+
+def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
+    frames = (
+        Frame(
+            ids=[1, 2],
+            kinds=("human", "robot"),
+            position=[[0, 0], [1, 0]],
+            yaw=[0, 3],
+            groups=((1, 2),),
+        ),
+        Frame(ids=[], position=np.zeros((0, 2)), yaw=[], time=1.0),
+    )
+    path = write_parquet(Dataset(frames=frames, name="tiny"), tmp_path / "tiny.parquet")
+    assert main(["data", "info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "robots           in 1 frames" in out
+    assert "per frame min 0, median 1, max 2" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["data", "info", "/nonexistent/place"], "expected an existing dataset file or folder"),
+        (["data", "info", "{salsa}", "--units", "cm"], "salsa format stores positions in 'm'"),
+        (["data", "info", "{tmp}"], "expected a dataset in one of the formats: salsa"),
+        (
+            ["data", "info", "{salsa}", "--format", "gcff"],
+            "features.mat: expected the GCFF features file",
+        ),
+    ],
+    ids=["missing-path", "units-contradict-format", "unknown-format", "wrong-format"],
+)
+def test_errors_are_one_line(argv, message, salsa_dir, tmp_path, capsys):
+    argv = [a.format(salsa=salsa_dir, tmp=tmp_path) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("reform-sim data: error: ")
+    assert message in err
+    assert err.count("\n") == 1
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["data", "info", "--help"])
+    assert exit_info.value.code == 0
+    assert "group-size" in capsys.readouterr().out
