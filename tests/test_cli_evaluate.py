@@ -10,7 +10,13 @@ import pytest
 from reform.datasets import load_dataset
 from reform.report import format_comparison, format_report
 from sim.cli import main
-from sim.cli._detectors import DETECTORS, add_detector_arguments, build_detector, detector_params
+from sim.cli._detectors import (
+    DETECTORS,
+    DetectorSpec,
+    add_detector_arguments,
+    build_detector,
+    detector_params,
+)
 
 
 def run(argv, capsys):
@@ -119,7 +125,7 @@ def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, cap
     monkeypatch.setitem(
         DETECTORS,
         "majority",
-        DETECTORS["majority"].__class__("majority", "test", lambda a: Oracle()),
+        DetectorSpec("majority", "test", lambda a: Oracle()),
     )
     out = tmp_path / "groups.json"
     status, _, err = run(
@@ -144,7 +150,7 @@ def test_detect_rejects_a_detector_that_returns_no_partition(
     monkeypatch.setitem(
         DETECTORS,
         "majority",
-        DETECTORS["majority"].__class__("majority", "test", lambda a: Broken()),
+        DetectorSpec("majority", "test", lambda a: Broken()),
     )
     out = tmp_path / "groups.json"
     status, _, err = run(
