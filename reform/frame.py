@@ -13,6 +13,7 @@ Conventions (see the project README):
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -146,7 +147,10 @@ class Frame:
         object.__setattr__(self, "head_position", None if head_position is None else _readonly(head_position))
         object.__setattr__(self, "head_yaw", None if head_yaw is None else _readonly(head_yaw))
         object.__setattr__(self, "groups", groups)
-        object.__setattr__(self, "time", float(self.time))
+        try:
+            object.__setattr__(self, "time", float(self.time))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"time must be a number of seconds, got {self.time!r}") from exc
         if not math.isfinite(self.time):
             raise ValueError(f"time must be finite, got {self.time}")
         object.__setattr__(self, "sequence", str(self.sequence))
@@ -233,7 +237,9 @@ def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[
     seen: set[int] = set()
     out = []
     for g, group in enumerate(groups):
-        members = tuple(int(m) for m in group)
+        if isinstance(group, (str, bytes)) or not isinstance(group, Iterable):
+            raise ValueError(f"groups[{g}] must be a sequence of person ids, got {group!r}")
+        members = tuple(_person_id(m, f"groups[{g}]") for m in group)
         if not members:
             raise ValueError(f"groups[{g}] is empty")
         for m in members:
@@ -244,6 +250,17 @@ def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[
             seen.add(m)
         out.append(members)
     return tuple(out)
+
+
+def _person_id(value: Any, where: str) -> int:
+    """``value`` as an int id; integral floats are accepted, anything else is an error."""
+    if not isinstance(value, (bool, np.bool_)):
+        try:
+            return operator.index(value)
+        except TypeError:
+            if isinstance(value, (float, np.floating)) and float(value).is_integer():
+                return int(value)
+    raise ValueError(f"{where} must hold integer person ids, got {value!r}")
 
 
 def complete_partition(groups: Iterable[Sequence[int]], ids: Iterable[int]) -> tuple[Group, ...]:

@@ -8,6 +8,7 @@ from reform.datasets.errors import DataFormatError
 from reform.datasets.gcff_mat import load_gcff
 from reform.datasets.parquet import read_parquet, write_parquet
 from reform.datasets.salsa import load_salsa
+from reform.datasets.summary import summarise
 
 __all__ = [
     "FORMATS",
@@ -19,5 +20,6 @@ __all__ = [
     "load_gcff",
     "load_salsa",
     "read_parquet",
+    "summarise",
     "write_parquet",
 ]
