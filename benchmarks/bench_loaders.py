@@ -1,0 +1,90 @@
+"""Speed of the dataset loaders, each against the bare parsing floor of its file.
+
+Baselines, run in the same process: SALSA and Babble - read the file and convert every numeric
+token with ``float()`` (no validation, no frames); Parquet - ``pyarrow.parquet.read_table`` of the
+same file (raw columnar read, no frames), and ``write_table`` of that table for writing. Prints medians and ratios (loader / baseline).
+
+    python benchmarks/bench_loaders.py [--datasets ../shared/datasets] [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from reform.datasets import load_babble, load_salsa, read_parquet, write_parquet
+
+
+def parse_floor_salsa(folder: Path) -> int:
+    n = 0
+    for line in (folder / "features.txt").read_text().splitlines():
+        tokens = line.split(" ")
+        n += len([float(t) for i, t in enumerate(tokens) if i == 0 or (i - 1) % 5])
+    for line in (folder / "group_names.txt").read_text().splitlines():
+        n += len(line.split(" "))
+    return n
+
+
+def parse_floor_babble(folder: Path) -> int:
+    n = 0
+    for line in (folder / "Motion-capture-data.csv").read_text().splitlines()[1:]:
+        fields = line.split(",")[:-1]
+        n += len([float(f) for i, f in enumerate(fields) if i % 10 not in (0, 9)])
+    return n + len((folder / "annotated-frames.csv").read_text().splitlines())
+
+
+def median_seconds(function, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    default = os.environ.get(
+        "REFORM_SIM_DATASETS", str(Path(__file__).resolve().parents[2] / "shared" / "datasets")
+    )
+    parser.add_argument("--datasets", default=default)
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    root = Path(args.datasets)
+    import pyarrow.parquet as pq
+
+    salsa = load_salsa(root / "salsa")
+    with tempfile.TemporaryDirectory() as tmp:
+        parquet = write_parquet(salsa, Path(tmp) / "salsa.parquet")
+        table = pq.read_table(parquet)
+        rows = [
+            (
+                "SALSA load_salsa",
+                lambda: load_salsa(root / "salsa"),
+                lambda: parse_floor_salsa(root / "salsa"),
+            ),
+            (
+                "Babble load_babble",
+                lambda: load_babble(root / "babble"),
+                lambda: parse_floor_babble(root / "babble"),
+            ),
+            ("SALSA read_parquet", lambda: read_parquet(parquet), lambda: pq.read_table(parquet)),
+            (
+                "SALSA write_parquet",
+                lambda: write_parquet(salsa, parquet),
+                lambda: pq.write_table(table, parquet),
+            ),
+        ]
+        print(f"{'task':<22} {'median s':>9} {'baseline s':>11} {'ratio':>7}")
+        for name, loader, baseline in rows:
+            measured = median_seconds(loader, args.repeats)
+            floor = median_seconds(baseline, args.repeats)
+            print(f"{name:<22} {measured:9.3f} {floor:11.3f} {measured / floor:7.1f}")
+
+
+if __name__ == "__main__":
+    main()
