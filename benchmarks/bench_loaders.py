@@ -2,7 +2,8 @@
 
 Baselines, run in the same process: SALSA and Babble - read the file and convert every numeric
 token with ``float()`` (no validation, no frames); Parquet - ``pyarrow.parquet.read_table`` of the
-same file (raw columnar read, no frames), and ``write_table`` of that table for writing. Prints medians and ratios (loader / baseline).
+same file (raw columnar read, no frames), and ``write_table`` of that table for writing.
+Prints medians and ratios (loader / baseline).
 
     python benchmarks/bench_loaders.py [--datasets ../shared/datasets] [--repeats 5]
 """
