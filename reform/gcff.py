@@ -95,6 +95,7 @@ VISIBILITY_COSINE = 0.75  # cosine above which one person hides another from the
 VISIBILITY_BASE = 100.0  # the penalty is VISIBILITY_BASE ** (cos * r_i / r_j), in cm²
 MAX_VISIBILITY_EXPONENT = 100.0  # cap on cos * r_i / r_j: penalty <= 1e200 cm²
 MAX_REFITS = 10  # expansion + refit rounds, as the reference code's MAX_ITER
+_WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
 ORIENTATIONS = ("body", "head")
 # Default tuning grid: the published settings (stride 50-70 cm, mdl 6,000-30,000 cm²) and around.
 STRIDE_GRID_M = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # metres
@@ -226,41 +227,50 @@ class Expansion:
     moves: int
 
 
-def _all_moves(
-    unary: np.ndarray, labels: np.ndarray, label_cost: float
+def _moves(
+    unary: np.ndarray,
+    labels: np.ndarray,
+    alphas: np.ndarray,
+    label_cost: float,
+    identity: np.ndarray,
+    label_costs: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every alpha-move from ``labels`` at once.
+    """The alpha-moves for several ``alphas`` at once, all from the same ``labels``.
+
+    Args:
+        unary: (n, K) costs.
+        labels: (n,) current labels.
+        alphas: (m,) the alphas to evaluate.
+        label_cost: cost of one used label.
+        identity: (K, K) float identity, to build one-hot rows.
+        label_costs: (K, K + 1) ``label_cost * (j < u)`` at ``[j, u]``: the label costs added
+            last for a labelling with ``u`` used labels.
 
     Returns:
-        new: (n, K) int64, column ``a`` the labels after the move of ``alpha = a``.
-        changed: (K,) bool, whether move ``a`` changes any label.
-        energies: (K,) float64 energy after move ``a`` (summed as :func:`energy` does).
+        moved: (n, m) bool, column ``j`` the people that the move of ``alphas[j]`` relabels.
+        changed: (m,) bool, whether that move changes any label.
+        energies: (m,) float64 energy after that move (summed as :func:`energy` does).
     """
-    n, k = unary.shape
-    rows = np.arange(n)
-    columns = np.arange(k)
-    current = unary[rows, labels]
-    delta = unary - current[:, None]  # d_i for every alpha, (n, K)
-    member = np.zeros((n, k))
-    member[rows, labels] = 1.0
-    # Per (label l, alpha): option B moves all of l (l closes, its cost saved): sum of d;
-    # option A moves the members with d <= 0 (l stays open): sum of the negative d, + cost.
-    move_all = member.T @ delta
-    move_some = member.T @ np.minimum(delta, 0.0) + label_cost
-    take_all = move_all <= move_some
-    moved = (take_all[labels, :] | (delta <= 0.0)) & (labels[:, None] != columns[None, :])
-    new = np.where(moved, columns[None, :], labels[:, None])
-    staying = member.T @ (~moved)  # members of l left in l by move alpha, (K, K)
-    size = member.sum(axis=0)
-    n_used = np.count_nonzero(staying > 0, axis=0) + (moved.any(axis=0) & (size == 0))
-    terms = np.concatenate(
-        (
-            np.take_along_axis(unary, new, axis=1).T,
-            np.where(columns[None, :] < n_used[:, None], label_cost, 0.0),
-        ),
-        axis=1,
-    )
-    return new, moved.any(axis=0), np.cumsum(terms, axis=1)[:, -1]
+    n = labels.size
+    weights = identity[:, labels]  # (K, n): one-hot of the current labels, by label
+    current = unary[np.arange(n), labels]
+    target = unary[:, alphas]
+    delta = target - current[:, None]  # d_i for every alpha, (n, m)
+    # Per (label l, alpha): option A moves the members with d <= 0 (l stays open, its cost
+    # paid), option B moves all of S_l (l closes, its cost saved). B is taken when it costs no
+    # more than A: when the positive d of the members sum to at most the label cost.
+    take_all = (weights @ np.maximum(delta, 0.0)) <= label_cost
+    moved = take_all[labels] | (delta <= 0.0)
+    moved &= labels[:, None] != alphas[None, :]  # people already labelled alpha stay
+    # Labels used after each move: l keeps a member, or alpha gains its first one.
+    changed = moved.any(axis=0)
+    unused = ~weights.any(axis=1)
+    n_used = np.count_nonzero(weights @ ~moved, axis=0) + (changed & unused[alphas])
+    # Energies summed in the reference order: person by person, then one cost per used label.
+    terms = np.empty((n + label_costs.shape[0], alphas.size))
+    terms[:n] = np.where(moved, target, current[:, None])
+    terms[n:] = label_costs[:, n_used]
+    return moved, changed, np.cumsum(terms, axis=0)[-1]
 
 
 def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: float) -> Expansion:
@@ -270,13 +280,14 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
     ``l != alpha`` with members ``S_l`` and ``d_i = U[i, alpha] - U[i, l]``: either the members
     with ``d_i <= 0`` move to alpha (``l`` stays open; cost ``sum_{d_i<0} d_i + label_cost``) or
     all of ``S_l`` moves (``l`` closes; cost ``sum d_i``), whichever is cheaper (all on a tie).
-    This is the exact minimiser of the graph-cut the reference builds: with no pairwise terms
+    This is the exact minimiser of the graph cut the reference builds: with no pairwise terms
     the cut decomposes label by label. The move ignores alpha's own label cost; it is kept only
     when the full energy did not increase. The sweep stops after K consecutive moves without a
     strict decrease.
 
-    The moves of every alpha are evaluated at once (vectorised), so Python work is spent only
-    per *accepted* move; the result is identical to trying them one by one.
+    The next :data:`_WINDOW` moves are evaluated at once (vectorised) from the current labels,
+    so Python work is spent per *accepted* move, not per move tried; the result is identical to
+    trying them one by one.
 
     Args:
         unary: (n, K) costs, finite.
@@ -295,23 +306,27 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
         raise ValueError(f"labels must lie in [0, {k - 1}], got {labels.min()}..{labels.max()}")
     if not np.all(np.isfinite(unary)):
         raise ValueError("unary must be finite, got NaN or inf")
+    label_cost = float(label_cost)
+    identity = np.eye(k)
+    label_costs = np.where(np.arange(k)[:, None] < np.arange(k + 1)[None, :], label_cost, 0.0)
+    window = np.arange(min(k, _WINDOW))
     current = energy(unary, labels, label_cost=label_cost)
     energies = [current]
     alpha = 0
     stale = 0  # consecutive moves without a strict decrease
     moves = 0
     while stale < k:
-        new, changed, candidate = _all_moves(unary, labels, label_cost)
-        changed_list = changed.tolist()
-        candidate_list = candidate.tolist()
-        for _ in range(k):
-            a = alpha
-            alpha = (alpha + 1) % k
+        alphas = (alpha + window) % k
+        moved, changed, candidate = _moves(unary, labels, alphas, label_cost, identity, label_costs)
+        for j, (a, is_change, e) in enumerate(
+            zip(alphas.tolist(), changed.tolist(), candidate.tolist(), strict=True)
+        ):
+            alpha = (a + 1) % k
             moves += 1
-            if changed_list[a] and candidate_list[a] <= current:
-                stale = 0 if candidate_list[a] < current else stale + 1
-                labels = new[:, a].copy()
-                current = candidate_list[a]
+            if is_change and e <= current:
+                stale = 0 if e < current else stale + 1
+                labels = np.where(moved[:, j], a, labels)
+                current = e
                 energies.append(current)
                 break
             stale += 1  # no change, or rejected because the energy would rise
