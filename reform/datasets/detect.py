@@ -16,12 +16,24 @@ LENGTH_UNITS = ("cm", "m")
 # Formats whose files have one fixed length unit.
 _FIXED_UNITS = {"salsa": "m", "babble": "m", "parquet": "m"}
 
+# How deep detection looks for shards (DIR/scenario=.../episode=.../part.parquet is 2 levels).
+_PARQUET_DEPTH = 4
+
 _DESCRIPTION = (
     "salsa (a folder with features.txt and group_names.txt), "
     "babble (a folder with Motion-capture-data.csv), "
     "gcff (a folder with features.mat), "
     "parquet (a .parquet file or a folder of them)"
 )
+
+
+def _holds_parquet(folder: Path) -> bool:
+    """True if ``folder`` holds a .parquet file at most :data:`_PARQUET_DEPTH` levels down."""
+    for depth in range(_PARQUET_DEPTH + 1):
+        pattern = "/".join(["*"] * depth + ["*.parquet"])
+        if next(folder.glob(pattern), None) is not None:
+            return True
+    return False
 
 
 def detect_format(path: str | PathLike[str]) -> str:
@@ -42,7 +54,7 @@ def detect_format(path: str | PathLike[str]) -> str:
             return "babble"
         if (path / "features.mat").is_file():
             return "gcff"
-        if next(iter(sorted(path.rglob("*.parquet"))), None) is not None:
+        if _holds_parquet(path):
             return "parquet"
     else:
         if path.suffix == ".parquet":
