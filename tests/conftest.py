@@ -43,3 +43,19 @@ def salsa_dir(shared_datasets: Path) -> Path:
 @pytest.fixture(scope="session")
 def babble_dir(shared_datasets: Path) -> Path:
     return shared_datasets / "babble"
+
+
+@pytest.fixture(scope="session")
+def salsa_dataset(salsa_dir: Path):
+    """SALSA, loaded once per test session (frames are immutable, so sharing is safe)."""
+    from reform.datasets import load_salsa
+
+    return load_salsa(salsa_dir)
+
+
+@pytest.fixture(scope="session")
+def babble_dataset(babble_dir: Path):
+    """Babble, loaded once per test session."""
+    from reform.datasets import load_babble
+
+    return load_babble(babble_dir)
