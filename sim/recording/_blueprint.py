@@ -1,0 +1,91 @@
+"""The default layout a recording opens with: the 3D scene, the plots and the event log."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import rerun.blueprint as rrb
+
+from sim.recording._dataset_views import DATASET_ROOT
+from sim.recording._frames import WORLD_ROOT
+from sim.recording._metrics import EVENTS_ENTITY, METRICS_ROOT
+
+__all__ = ["default_blueprint"]
+
+SCENE_SHARE = 3.0  # the 3D scene takes 3/5 of the width
+PLOTS_SHARE = 2.0
+
+
+def default_blueprint(
+    *,
+    scores: bool = True,
+    characterisation: Sequence[str] = (),
+    pairs: Sequence[str] = (),
+    stress: Sequence[str] = (),
+) -> rrb.Blueprint:
+    """The layout: scene on the left; running scores, group counts and events on the right.
+
+    Dataset views, when any are named, get a second tab.
+
+    Args:
+        scores: include the running precision / recall / F1 plots (runs with ground truth and
+            detectors).
+        characterisation: dataset names logged by ``log_characterisation``.
+        pairs: names logged by ``log_pair_scatter``.
+        stress: names logged by ``log_stress_curves``.
+    """
+    side: list[rrb.View] = []
+    if scores:
+        side.append(
+            rrb.TimeSeriesView(
+                origin=f"/{METRICS_ROOT}/f1",
+                name="Running F1 (T = 2/3)",
+                axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+            )
+        )
+        side.append(
+            rrb.TimeSeriesView(
+                origin=f"/{METRICS_ROOT}",
+                contents=["$origin/precision/**", "$origin/recall/**"],
+                name="Running precision and recall (T = 2/3)",
+                axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+            )
+        )
+    side.append(rrb.TimeSeriesView(origin=f"/{METRICS_ROOT}/groups", name="F-formations per frame"))
+    side.append(rrb.TextLogView(origin=f"/{EVENTS_ENTITY}", name="Events"))
+    run = rrb.Horizontal(
+        rrb.Spatial3DView(origin=f"/{WORLD_ROOT}", name="Scene"),
+        rrb.Vertical(*side),
+        column_shares=[SCENE_SHARE, PLOTS_SHARE],
+        name="Run",
+    )
+    dataset: list[rrb.View] = []
+    for name in characterisation:
+        root = f"/{DATASET_ROOT}/characterisation/{name}"
+        dataset.append(
+            rrb.BarChartView(origin=f"{root}/tightness", name=f"{name}: Tightness (m) by size")
+        )
+        dataset.append(
+            rrb.BarChartView(origin=f"{root}/symmetry", name=f"{name}: Symmetry (deg) by size")
+        )
+        dataset.append(
+            rrb.TextDocumentView(origin=f"{root}/table", name=f"{name}: characterisation")
+        )
+    for name in pairs:
+        dataset.append(
+            rrb.Spatial2DView(
+                origin=f"/{DATASET_ROOT}/pairs/{name}",
+                name=f"{name}: pairs, distance (m, right) x effort angle (rad, down)",
+            )
+        )
+    for name in stress:
+        root = f"/{DATASET_ROOT}/stress/{name}"
+        dataset.append(
+            rrb.BarChartView(origin=root, contents=["$origin/**", f"- {root}/table"], name=name)
+        )
+        dataset.append(rrb.TextDocumentView(origin=f"{root}/table", name=f"{name}: table"))
+    if not dataset:
+        return rrb.Blueprint(run, collapse_panels=False)
+    return rrb.Blueprint(
+        rrb.Tabs(run, rrb.Grid(*dataset, name="Dataset"), active_tab=0), collapse_panels=False
+    )

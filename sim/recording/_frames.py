@@ -1,0 +1,412 @@
+"""People and robots, frame by frame: shapes, facing arrows, trails, ids, the robot's view.
+
+Entity tree (all under ``world``, z up, metres):
+
+* ``world/people/bodies`` capsules standing at each person's body position (when no MuJoCo
+  geometry is logged for them); ``world/people/labels`` a point over each head, labelled with the
+  person's id; ``world/people/body_facing`` and ``world/people/head_facing`` arrows;
+  ``world/people/trails`` the last seconds of each person's path.
+* ``world/robot/...`` the same for the robot(s), plus ``world/robot/field_of_view``: the sensor's
+  horizontal field of view, drawn from the head along the head's yaw.
+* ``world/observed/people`` and ``world/observed/body_facing``: what the robot's sensor reports
+  (with its noise and dropouts), when an observed stream is given.
+
+Every entity has one row per frame on both timelines (empty where nobody is there), so nothing
+lingers from an earlier frame.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import rerun as rr
+
+from reform import Frame
+from sim.recording import _colours
+from sim.recording._columns import Flat, at_height, line_strips_column, unit
+from sim.recording._timeline import Clock
+
+__all__ = [
+    "OBSERVED_ROOT",
+    "PEOPLE_ROOT",
+    "ROBOT_ROOT",
+    "WORLD_ROOT",
+    "KINECT_FIELD_OF_VIEW",
+    "FieldOfView",
+    "PersonIndex",
+    "log_frames",
+    "log_world_setup",
+]
+
+WORLD_ROOT = "world"
+PEOPLE_ROOT = "world/people"
+ROBOT_ROOT = "world/robot"
+OBSERVED_ROOT = "world/observed"
+
+HUMAN_HEIGHT_M = 1.70  # metres, top of the capsule
+HUMAN_RADIUS_M = 0.20  # metres, shoulder half-width
+ROBOT_HEIGHT_M = 1.20  # metres: a small humanoid guide robot
+ROBOT_RADIUS_M = 0.25  # metres
+BODY_ARROW_Z_M = 1.10  # metres: chest height of a person, where the body arrow starts
+HEAD_ARROW_Z_M = 1.60  # metres: eye height of a person
+ROBOT_BODY_ARROW_Z_M = 0.80  # metres
+ROBOT_HEAD_Z_M = 1.10  # metres: the robot's head camera
+LABEL_CLEARANCE_M = 0.15  # metres above the head
+BODY_ARROW_M = 0.60  # metres, length of a body-facing arrow
+HEAD_ARROW_M = 0.40  # metres
+ARROW_RADIUS_M = 0.025  # metres
+OBSERVED_Z_M = 1.30  # metres: height of an observed person's marker
+OBSERVED_RADIUS_M = 0.09  # metres
+TRAIL_S = 2.0  # seconds of path shown behind each person
+TRAIL_POINTS = 12  # at most this many points per trail
+TRAIL_Z_M = 0.03  # metres above the floor
+TRAIL_RADIUS_M = 0.015  # metres
+FIELD_OF_VIEW_ARC_POINTS = 17  # points on each arc of the drawn field of view
+LABEL_RADIUS_M = 0.04  # metres
+
+
+@dataclass(frozen=True)
+class FieldOfView:
+    """The robot sensor's horizontal field of view, as drawn (defaults: a Kinect v1 camera).
+
+    Attributes:
+        horizontal_deg: full horizontal opening angle, degrees, in (0, 360].
+        min_range_m: nearest distance at which people are tracked, metres, >= 0.
+        max_range_m: farthest distance, metres, > min_range_m.
+    """
+
+    horizontal_deg: float = 57.0
+    min_range_m: float = 0.8
+    max_range_m: float = 4.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.horizontal_deg <= 360.0:
+            raise ValueError(f"horizontal_deg must be in (0, 360], got {self.horizontal_deg}")
+        if not 0.0 <= self.min_range_m < self.max_range_m:
+            raise ValueError(
+                "ranges must satisfy 0 <= min_range_m < max_range_m, "
+                f"got {self.min_range_m} and {self.max_range_m}"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class PersonIndex:
+    """Class ids for person ids: every id of the run gets one, in increasing id order.
+
+    Rerun's class ids are 16-bit, person ids are any integers; the annotation context logged
+    at ``world`` turns a class id back into the person's label.
+
+    Attributes:
+        ids: (k,) int64 sorted person ids.
+        robot: (k,) bool, True for ids that are robots.
+    """
+
+    ids: np.ndarray
+    robot: np.ndarray
+
+    @classmethod
+    def of(cls, *streams: Iterable[Frame]) -> PersonIndex:
+        kinds: dict[int, bool] = {}
+        for frames in streams:
+            for frame in frames:
+                for pid, robot in zip(frame.ids.tolist(), frame.is_robot.tolist(), strict=True):
+                    kinds[pid] = kinds.get(pid, False) or robot
+        ids = np.array(sorted(kinds), dtype=np.int64)
+        if ids.size >= 65535:
+            raise ValueError(f"a run may hold at most 65534 distinct person ids, got {ids.size}")
+        return cls(ids=ids, robot=np.array([kinds[i] for i in ids.tolist()], dtype=bool))
+
+    def class_ids(self, ids: np.ndarray) -> np.ndarray:
+        """(n,) uint16 class id (1 + rank) of each person id."""
+        return (np.searchsorted(self.ids, ids) + 1).astype(np.uint16)
+
+    def label(self, person_id: int, robot: bool) -> str:
+        return f"robot {person_id}" if robot else str(person_id)
+
+    def annotation_context(self) -> rr.AnnotationContext:
+        return rr.AnnotationContext(
+            [
+                rr.AnnotationInfo(
+                    id=k + 1,
+                    label=self.label(int(pid), bool(robot)),
+                    color=_colours.ROBOT if robot else _colours.HUMAN,
+                )
+                for k, (pid, robot) in enumerate(
+                    zip(self.ids.tolist(), self.robot.tolist(), strict=True)
+                )
+            ]
+        )
+
+
+KINECT_FIELD_OF_VIEW = FieldOfView()  # the Directions Robot's Kinect v1: 57 deg, 0.8-4 m
+
+
+def log_world_setup(rec: rr.RecordingStream) -> None:
+    """The world's axes: right-handed, z up, metres (static)."""
+    rec.log(WORLD_ROOT, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+
+
+def log_frames(
+    rec: rr.RecordingStream,
+    frames: Sequence[Frame],
+    *,
+    observed: Sequence[Frame] | None = None,
+    clock: Clock | None = None,
+    field_of_view: FieldOfView | None = KINECT_FIELD_OF_VIEW,
+    shapes: bool = True,
+    trail_s: float = TRAIL_S,
+) -> Clock:
+    """Logs people and robots of a finished run in bulk (one ``send_columns`` per entity).
+
+    Args:
+        rec: the recording stream.
+        frames: the run's (world) frames, in time order.
+        observed: what the robot's sensor reported, frames matched to ``frames`` by (sequence,
+            time); may miss people (dropouts) and hold noisy poses.
+        clock: the run's clock; default: ``Clock.from_frames(frames)``.
+        field_of_view: drawn from each robot's head, or None for none.
+        shapes: draw capsules for bodies; False when the MuJoCo geometry is logged instead.
+        trail_s: seconds of path behind each person; 0 for no trails.
+
+    Returns:
+        The clock used.
+
+    Raises:
+        ValueError: if an observed frame matches no frame of the run, or ``trail_s`` < 0.
+    """
+    frames = tuple(frames)
+    if trail_s < 0:
+        raise ValueError(f"trail_s must be >= 0 seconds, got {trail_s}")
+    clock = Clock.from_frames(frames) if clock is None else clock
+    rows = clock.rows_of(frames)
+    people = PersonIndex.of(frames, observed or ())
+    log_world_setup(rec)
+    rec.log(WORLD_ROOT, people.annotation_context(), static=True)
+
+    flat = Flat.of(frames)
+    for root, mask, robot in (
+        (PEOPLE_ROOT, ~flat.robot, False),
+        (ROBOT_ROOT, flat.robot, True),
+    ):
+        if robot and not np.any(mask):
+            continue
+        part = flat.select(mask)
+        _log_agents(rec, root, part, people, clock.columns(rows), robot=robot, shapes=shapes)
+        if trail_s > 0:
+            _log_trails(rec, f"{root}/trails", part, clock, rows, people, trail_s=trail_s)
+        if robot and field_of_view is not None:
+            _log_field_of_view(rec, part, clock.columns(rows), field_of_view)
+    if observed is not None:
+        observed = tuple(observed)
+        _log_observed(rec, observed, clock, people)
+    return clock
+
+
+def _log_agents(
+    rec: rr.RecordingStream,
+    root: str,
+    part: Flat,
+    people: PersonIndex,
+    times: list[rr.TimeColumn],
+    *,
+    robot: bool,
+    shapes: bool,
+) -> None:
+    height, radius = (ROBOT_HEIGHT_M, ROBOT_RADIUS_M) if robot else (HUMAN_HEIGHT_M, HUMAN_RADIUS_M)
+    body_z, head_z = (
+        (ROBOT_BODY_ARROW_Z_M, ROBOT_HEAD_Z_M) if robot else (BODY_ARROW_Z_M, HEAD_ARROW_Z_M)
+    )
+    n = part.ids.size
+    class_ids = people.class_ids(part.ids)
+    if shapes:
+        rec.log(f"{root}/bodies", rr.Capsules3D.from_fields(show_labels=False), static=True)
+        rec.send_columns(
+            f"{root}/bodies",
+            indexes=times,
+            columns=[
+                *rr.Capsules3D.columns(
+                    lengths=np.full(n, height - 2.0 * radius, dtype=np.float32),
+                    radii=np.full(n, radius, dtype=np.float32),
+                    translations=at_height(part.position, radius),
+                    class_ids=class_ids,
+                ).partition(part.counts),
+                *rr.AnyValues.columns(person_id=part.ids).partition(part.counts),
+            ],
+            strict=True,
+        )
+    rec.log(f"{root}/labels", rr.Points3D.from_fields(radii=[LABEL_RADIUS_M]), static=True)
+    rec.send_columns(
+        f"{root}/labels",
+        indexes=times,
+        columns=[
+            *rr.Points3D.columns(
+                positions=at_height(part.position, height + LABEL_CLEARANCE_M), class_ids=class_ids
+            ).partition(part.counts),
+            *rr.AnyValues.columns(person_id=part.ids).partition(part.counts),
+        ],
+        strict=True,
+    )
+    _log_arrows(
+        rec,
+        f"{root}/body_facing",
+        origins=at_height(part.position, body_z),
+        yaw=part.yaw,
+        length=BODY_ARROW_M,
+        counts=part.counts,
+        times=times,
+        colour=_colours.BODY_FACING,
+    )
+    has_head = np.isfinite(part.head_yaw)
+    head = part.select(has_head)
+    _log_arrows(
+        rec,
+        f"{root}/head_facing",
+        origins=at_height(part.head_position[has_head], head_z),
+        yaw=part.head_yaw[has_head],
+        length=HEAD_ARROW_M,
+        counts=head.counts,
+        times=times,
+        colour=_colours.HEAD_FACING,
+    )
+
+
+def _log_arrows(
+    rec: rr.RecordingStream,
+    entity: str,
+    *,
+    origins: np.ndarray,
+    yaw: np.ndarray,
+    length: float,
+    counts: np.ndarray,
+    times: list[rr.TimeColumn],
+    colour: tuple[int, int, int, int],
+) -> None:
+    rec.log(entity, rr.Arrows3D.from_fields(colors=[colour], radii=[ARROW_RADIUS_M]), static=True)
+    rec.send_columns(
+        entity,
+        indexes=times,
+        columns=rr.Arrows3D.columns(origins=origins, vectors=unit(yaw) * length).partition(counts),
+        strict=True,
+    )
+
+
+def _log_trails(
+    rec: rr.RecordingStream,
+    entity: str,
+    part: Flat,
+    clock: Clock,
+    rows: np.ndarray,
+    people: PersonIndex,
+    *,
+    trail_s: float,
+) -> None:
+    """Each person's path over the last ``trail_s`` seconds of their sequence, as a line strip."""
+    n_frames = part.counts.size
+    sim_time = clock.sim_time[rows]
+    # Dense (frame, person) table of positions, NaN where the person is absent.
+    slot = np.searchsorted(people.ids, part.ids)
+    dense = np.full((n_frames, people.ids.size, 2), np.nan)
+    dense[part.frame, slot] = part.position
+    # First frame of each frame's window: within trail_s and within the same sequence.
+    start = np.searchsorted(sim_time, sim_time - trail_s, side="left")
+    segment = np.searchsorted(rows, clock.segment_start[rows], side="left")
+    start = np.maximum(start, segment)
+    span = np.arange(n_frames) - start  # frames back to the window's start
+    stride = np.maximum(1, np.ceil((span + 1) / TRAIL_POINTS)).astype(np.int64)
+    # For each person-row: TRAIL_POINTS candidate frames, oldest first.
+    back = np.arange(TRAIL_POINTS - 1, -1, -1)
+    frame_of_row = part.frame
+    lag = back[None, :] * stride[frame_of_row][:, None]
+    candidate = frame_of_row[:, None] - lag
+    valid = candidate >= start[frame_of_row][:, None]
+    candidate = np.where(valid, candidate, frame_of_row[:, None])
+    points = dense[candidate, slot[:, None]]
+    valid &= np.isfinite(points[..., 0])
+    strip_lengths = valid.sum(axis=1)
+    flat_points = at_height(points[valid], TRAIL_Z_M)
+    rec.log(
+        entity,
+        rr.LineStrips3D.from_fields(radii=[TRAIL_RADIUS_M], colors=[_colours.TRAIL]),
+        static=True,
+    )
+    rec.send_columns(
+        entity,
+        indexes=clock.columns(rows),
+        columns=[
+            line_strips_column(flat_points, strip_lengths, part.counts),
+            *rr.AnyValues.columns(person_id=part.ids).partition(part.counts),
+        ],
+        strict=True,
+    )
+
+
+def _log_field_of_view(
+    rec: rr.RecordingStream, robots: Flat, times: list[rr.TimeColumn], fov: FieldOfView
+) -> None:
+    """A wedge (far arc, near arc) from each robot's head along its head yaw (else body yaw)."""
+    yaw = np.where(np.isfinite(robots.head_yaw), robots.head_yaw, robots.yaw)
+    apex = np.where(np.isfinite(robots.head_position), robots.head_position, robots.position)
+    half = math.radians(fov.horizontal_deg) / 2.0
+    sweep = np.linspace(-half, half, FIELD_OF_VIEW_ARC_POINTS)
+    angles = yaw[:, None] + np.concatenate([sweep, sweep[::-1], sweep[:1]])[None, :]
+    radii = np.concatenate(
+        [
+            np.full(FIELD_OF_VIEW_ARC_POINTS, fov.max_range_m),
+            np.full(FIELD_OF_VIEW_ARC_POINTS, fov.min_range_m),
+            [fov.max_range_m],
+        ]
+    )
+    x = apex[:, 0:1] + radii[None, :] * np.cos(angles)
+    y = apex[:, 1:2] + radii[None, :] * np.sin(angles)
+    points = np.stack([x, y, np.full_like(x, ROBOT_HEAD_Z_M)], axis=-1).reshape(-1, 3)
+    entity = f"{ROBOT_ROOT}/field_of_view"
+    rec.log(
+        entity,
+        rr.LineStrips3D.from_fields(colors=[_colours.FIELD_OF_VIEW], radii=[0.01]),
+        static=True,
+    )
+    rec.send_columns(
+        entity,
+        indexes=times,
+        columns=[line_strips_column(points, np.full(robots.ids.size, radii.size), robots.counts)],
+        strict=True,
+    )
+
+
+def _log_observed(
+    rec: rr.RecordingStream, observed: tuple[Frame, ...], clock: Clock, people: PersonIndex
+) -> None:
+    rows = clock.rows_of(observed, what="observed")
+    flat = Flat.of(observed)
+    humans = flat.select(~flat.robot)
+    times = clock.columns(rows)
+    rec.log(
+        f"{OBSERVED_ROOT}/people",
+        rr.Points3D.from_fields(radii=[OBSERVED_RADIUS_M], colors=[_colours.OBSERVED]),
+        static=True,
+    )
+    rec.send_columns(
+        f"{OBSERVED_ROOT}/people",
+        indexes=times,
+        columns=[
+            *rr.Points3D.columns(
+                positions=at_height(humans.position, OBSERVED_Z_M),
+                class_ids=people.class_ids(humans.ids),
+            ).partition(humans.counts),
+            *rr.AnyValues.columns(person_id=humans.ids).partition(humans.counts),
+        ],
+        strict=True,
+    )
+    _log_arrows(
+        rec,
+        f"{OBSERVED_ROOT}/body_facing",
+        origins=at_height(humans.position, OBSERVED_Z_M),
+        yaw=humans.yaw,
+        length=BODY_ARROW_M,
+        counts=humans.counts,
+        times=times,
+        colour=_colours.OBSERVED,
+    )

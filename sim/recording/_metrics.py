@@ -1,0 +1,230 @@
+"""Numbers over time: running precision / recall / F1 per detector, group counts, event log.
+
+Entity tree:
+
+* ``metrics/precision/<detector>``, ``metrics/recall/<detector>``, ``metrics/f1/<detector>``:
+  the running scores at T = 2/3 after each annotated frame: P̄ and R̄ are the means of the
+  per-frame precisions and recalls so far and F1 = 2·P̄·R̄/(P̄+R̄), the protocol of
+  ``reform.metrics`` (the last value equals the evaluation's score).
+* ``metrics/groups/truth`` and ``metrics/groups/<detector>``: F-formations per frame.
+* ``events``: a text log of scenario events (turn starts, shuffles, eliminations, ...) and of
+  the ground-truth groups forming and dissolving.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import rerun as rr
+
+from reform import T_TWO_THIRDS, Evaluation, Frame
+from sim.recording import _colours
+from sim.recording._groups import TRUTH, LoggedGroups
+from sim.recording._timeline import FRAME_TIMELINE, SIM_TIME_TIMELINE, Clock
+
+__all__ = [
+    "EVENTS_ENTITY",
+    "METRICS_ROOT",
+    "Event",
+    "group_events",
+    "log_events",
+    "log_group_counts",
+    "log_running_scores",
+]
+
+METRICS_ROOT = "metrics"
+EVENTS_ENTITY = "events"
+SCORES = ("precision", "recall", "f1")
+INFO = "INFO"
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something that happened in a run, for the text log.
+
+    Attributes:
+        time: seconds, on the clock of ``sequence``.
+        text: what happened, one line.
+        level: a log level shown by the viewer (``"INFO"``, ``"WARN"``, ``"DEBUG"``, ...).
+        sequence: the sequence (episode) it belongs to; None for the run's first.
+    """
+
+    time: float
+    text: str
+    level: str = INFO
+    sequence: str | None = None
+
+    @classmethod
+    def coerce(cls, event: object, *, index: int = 0) -> Event:
+        """An Event from an Event, a ``(time, text[, level])`` tuple, or any object with a
+        ``time`` and a ``text`` (or ``kind`` and optional ``detail``) attribute."""
+        if isinstance(event, Event):
+            return event
+        if isinstance(event, tuple) and len(event) in (2, 3):
+            return cls(float(event[0]), str(event[1]), *(str(e) for e in event[2:]))
+        time = getattr(event, "time", None)
+        text = getattr(event, "text", None)
+        if text is None and getattr(event, "kind", None) is not None:
+            detail = getattr(event, "detail", None)
+            text = f"{event.kind}: {detail}" if detail else str(event.kind)
+        if time is None or text is None:
+            raise ValueError(
+                f"events[{index}] must be an Event, a (time, text[, level]) tuple or have "
+                f"time and text (or kind) attributes, got {event!r}"
+            )
+        return cls(
+            float(time),
+            str(text),
+            str(getattr(event, "level", INFO) or INFO),
+            getattr(event, "sequence", None),
+        )
+
+
+def log_running_scores(
+    rec: rr.RecordingStream,
+    evaluations: Mapping[str, Evaluation],
+    frames_by_detector: Mapping[str, Sequence[Frame]],
+    *,
+    clock: Clock,
+) -> None:
+    """Running P̄, R̄ and F1 (T = 2/3) per detector, one row per annotated frame.
+
+    Args:
+        rec: the recording stream.
+        evaluations: detector name -> ``reform.evaluate(frames, predictions)``.
+        frames_by_detector: detector name -> the frames it was evaluated on (to place rows).
+        clock: the run's clock.
+    """
+    for index, (name, evaluation) in enumerate(evaluations.items()):
+        scores = evaluation.at(T_TWO_THIRDS)
+        count = np.arange(1, evaluation.n_frames + 1)
+        precision = np.cumsum(scores.frame_precision) / count
+        recall = np.cumsum(scores.frame_recall) / count
+        total = precision + recall
+        f1 = np.divide(2.0 * precision * recall, total, out=np.zeros_like(total), where=total > 0)
+        frames = frames_by_detector[name]
+        rows = clock.rows_of(
+            [frames[i] for i in evaluation.frame_index.tolist()], what=f"{name} frames"
+        )
+        colour = _colours.series_colour(index)
+        for score, values in zip(SCORES, (precision, recall, f1), strict=True):
+            entity = f"{METRICS_ROOT}/{score}/{name}"
+            label = {"precision": "P̄", "recall": "R̄", "f1": "F1"}[score]
+            rec.log(entity, rr.SeriesLines(colors=[colour], names=[f"{name} {label}"]), static=True)
+            rec.send_columns(
+                entity,
+                indexes=clock.columns(rows),
+                columns=rr.Scalars.columns(scalars=values),
+                strict=True,
+            )
+
+
+def log_group_counts(
+    rec: rr.RecordingStream, trees: Mapping[str, LoggedGroups], *, clock: Clock
+) -> None:
+    """F-formations per frame for each group tree (truth first)."""
+    for index, (name, tree) in enumerate(trees.items()):
+        layout = tree.layout
+        has_partition = layout.counts > 0
+        rows = tree.rows[has_partition]
+        colour = _colours.TRUTH_SERIES if name == TRUTH else _colours.series_colour(index - 1)
+        entity = f"{METRICS_ROOT}/groups/{name}"
+        rec.log(
+            entity, rr.SeriesLines(colors=[colour], names=[f"{name} F-formations"]), static=True
+        )
+        rec.send_columns(
+            entity,
+            indexes=clock.columns(rows),
+            columns=rr.Scalars.columns(
+                scalars=layout.group_counts[has_partition].astype(np.float64)
+            ),
+            strict=True,
+        )
+
+
+def group_events(frames: Sequence[Frame], truth: LoggedGroups) -> list[Event]:
+    """Ground-truth groups forming and dissolving, from the truth tree's tracks."""
+    layout, tracks = truth.layout, truth.tracks
+    starts = np.searchsorted(layout.group_frame, np.arange(len(frames) + 1))
+    events: list[Event] = []
+    alive: dict[int, tuple[int, ...]] = {}
+    sequence: str | None = None
+    for f, frame in enumerate(frames):
+        if frame.sequence != sequence:
+            alive, sequence = {}, frame.sequence
+        if layout.counts[f] == 0:
+            continue
+        now = {
+            int(tracks[r]): tuple(sorted(layout.group_members[r]))
+            for r in range(starts[f], starts[f + 1])
+        }
+        for track, members in now.items():
+            if track not in alive:
+                events.append(
+                    Event(
+                        frame.time,
+                        f"group {track} forms: {_names(members)}",
+                        sequence=frame.sequence,
+                    )
+                )
+            elif alive[track] != members:
+                events.append(
+                    Event(
+                        frame.time,
+                        f"group {track} changes: {_names(alive[track])} -> {_names(members)}",
+                        level="DEBUG",
+                        sequence=frame.sequence,
+                    )
+                )
+        for track, members in alive.items():
+            if track not in now:
+                events.append(
+                    Event(
+                        frame.time,
+                        f"group {track} dissolves: {_names(members)}",
+                        sequence=frame.sequence,
+                    )
+                )
+        alive = now
+    return events
+
+
+def _names(members: Iterable[int]) -> str:
+    return "{" + ", ".join(str(m) for m in members) + "}"
+
+
+def log_events(rec: rr.RecordingStream, events: Iterable[object], *, clock: Clock) -> int:
+    """Logs events as one text log, in time order; returns how many.
+
+    Args:
+        rec: the recording stream.
+        events: :class:`Event` objects, ``(time, text[, level])`` tuples, or objects with
+            ``time`` and ``text`` (or ``kind``/``detail``) attributes; time in seconds of their
+            sequence (default: the run's first), placed at the last frame at or before it.
+        clock: the run's clock.
+    """
+    rows_, sim_times, texts, levels = [], [], [], []
+    for i, raw in enumerate(events):
+        event = Event.coerce(raw, index=i)
+        rows_.append(clock.row_at(event.time, sequence=event.sequence))
+        sim_times.append(clock.sim_time_at(event.time, sequence=event.sequence))
+        texts.append(event.text)
+        levels.append(event.level)
+    if not texts:
+        return 0
+    order = np.argsort(np.asarray(sim_times), kind="stable")
+    rows = np.asarray(rows_, dtype=np.int64)[order]
+    rec.send_columns(
+        EVENTS_ENTITY,
+        indexes=[
+            rr.TimeColumn(FRAME_TIMELINE, sequence=rows),
+            rr.TimeColumn(SIM_TIME_TIMELINE, duration=np.asarray(sim_times)[order]),
+        ],
+        columns=rr.TextLog.columns(
+            text=[texts[k] for k in order.tolist()], level=[levels[k] for k in order.tolist()]
+        ),
+        strict=True,
+    )
+    return len(texts)

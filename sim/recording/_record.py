@@ -1,0 +1,243 @@
+"""One-call entry points: a whole episode, or a detector evaluation, into one recording."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import rerun as rr
+
+from reform import Evaluation, Frame, Group
+from sim.recording._blueprint import default_blueprint
+from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
+from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
+from sim.recording._groups import (
+    DETECTOR_STEP_M,
+    DETECTOR_Z_M,
+    TRUTH,
+    LoggedGroups,
+    evaluate_detector,
+    frame_key,
+    log_groups,
+)
+from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
+from sim.recording._scene import BodyPoses, log_body_poses, log_model, log_room, room_bounds
+from sim.recording._stream import RecordingTarget, open_recording, recording_id
+from sim.recording._timeline import Clock
+
+__all__ = ["Recorded", "record_episode", "record_evaluation"]
+
+Partition = Sequence[Group]
+
+
+@dataclass(frozen=True, eq=False)
+class Recorded:
+    """What a one-call recording wrote.
+
+    Attributes:
+        recording_id: the recording's id (deterministic in name and seed).
+        n_frames: frames on the ``frame`` timeline.
+        evaluations: detector name -> its evaluation (T = 2/3 and 1) where ground truth existed.
+    """
+
+    recording_id: str
+    n_frames: int
+    evaluations: Mapping[str, Evaluation] = field(default_factory=dict, repr=False)
+
+
+def _check_names(detections: Mapping[str, Any]) -> None:
+    for name in detections:
+        if not name or "/" in name or name == TRUTH:
+            raise ValueError(
+                f"detector names must be non-empty, without '/', and not {TRUTH!r}; got {name!r}"
+            )
+
+
+def _with_truth(observed: Sequence[Frame], world: Sequence[Frame]) -> tuple[Frame, ...]:
+    """Observed frames without ground truth get the world's, restricted to who was observed."""
+    world_by_key = {frame_key(f): f for f in world}
+    out = []
+    for frame in observed:
+        truth = world_by_key.get(frame_key(frame))
+        if frame.groups is None and truth is not None and truth.groups is not None:
+            seen = set(frame.ids.tolist())
+            groups = tuple(kept for g in truth.groups if (kept := tuple(m for m in g if m in seen)))
+            frame = frame.replace(groups=groups)
+        out.append(frame)
+    return tuple(out)
+
+
+def _log_detectors(
+    rec: rr.RecordingStream,
+    frames: Sequence[Frame],
+    detections: Mapping[str, Sequence[Partition]],
+    evaluations: Mapping[str, Evaluation] | None,
+    *,
+    clock: Clock,
+    truth: LoggedGroups | None,
+) -> tuple[dict[str, LoggedGroups], dict[str, Evaluation]]:
+    trees: dict[str, LoggedGroups] = {}
+    scored: dict[str, Evaluation] = {}
+    for index, (name, partitions) in enumerate(detections.items()):
+        partitions = list(partitions)
+        evaluation = (evaluations or {}).get(name)
+        if evaluation is None:
+            evaluation = evaluate_detector(frames, partitions)
+        trees[name] = log_groups(
+            rec,
+            frames,
+            partitions,
+            name=name,
+            clock=clock,
+            evaluation=evaluation,
+            truth=truth,
+            height_m=DETECTOR_Z_M + index * DETECTOR_STEP_M,
+        )
+        if evaluation is not None:
+            scored[name] = evaluation
+    return trees, scored
+
+
+def record_episode(
+    target: RecordingTarget | str | os.PathLike[str],
+    world_frames: Iterable[Frame],
+    *,
+    observed: Iterable[Frame] | None = None,
+    detections: Mapping[str, Sequence[Partition]] | None = None,
+    events: Iterable[object] | None = None,
+    model: Any = None,
+    body_poses: BodyPoses | None = None,
+    seed: int | None = None,
+    name: str | None = None,
+    field_of_view: FieldOfView | None = KINECT_FIELD_OF_VIEW,
+) -> Recorded:
+    """Records a finished episode: scene, people, robot, groups, detections, scores, events.
+
+    Args:
+        target: a ``.rrd`` path, or a :class:`RecordingTarget` (file, viewer, server).
+        world_frames: the episode's ground-truth frames, in time order (any iterable).
+        observed: the robot's observed frames (noise, dropouts), matched to the world frames by
+            (sequence, time). Observed frames without ground truth are scored against the
+            world's groups restricted to the people observed.
+        detections: detector name (``"reform"``, ``"gcff"``) -> one full partition per frame of
+            the stream the detector saw: ``observed`` when given, else ``world_frames``.
+        events: scenario events (:class:`Event`, ``(time, text[, level])`` tuples or objects
+            with ``time`` and ``text``/``kind``); ground-truth groups forming and dissolving
+            are added.
+        model: the compiled ``mujoco.MjModel`` of the scene: its geometry is drawn (static)
+            and, with ``body_poses``, moves per frame; people are then not drawn as capsules.
+        body_poses: the bodies' poses per frame (needs ``model``).
+        seed: the episode's seed (with ``name``, it fixes the recording id).
+        name: the run's name; default: the first frame's sequence, else ``"episode"``.
+        field_of_view: the robot sensor's field of view to draw, or None.
+
+    Returns:
+        The recording id, frame count and the detectors' evaluations.
+    """
+    world = tuple(world_frames)
+    if not world:
+        raise ValueError("world_frames must hold at least one frame, got none")
+    if body_poses is not None and model is None:
+        raise ValueError("body_poses needs the model they belong to: pass model=")
+    detections = dict(detections or {})
+    _check_names(detections)
+    seen = None if observed is None else _with_truth(tuple(observed), world)
+    detected_on = seen if seen is not None else world
+    name = name or world[0].sequence or "episode"
+    annotated = any(f.groups is not None for f in world)
+    blueprint = default_blueprint(scores=annotated and bool(detections))
+    with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
+        clock = log_frames(
+            rec,
+            world,
+            observed=seen,
+            field_of_view=field_of_view,
+            shapes=body_poses is None,
+        )
+        if model is not None:
+            log_model(rec, model, static_poses=body_poses is None)
+            if body_poses is not None:
+                log_body_poses(rec, model, body_poses, clock=clock)
+        else:
+            log_room(rec, room_bounds(world))
+        truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
+        trees, evaluations = _log_detectors(
+            rec, detected_on, detections, None, clock=clock, truth=truth
+        )
+        if truth is not None:
+            trees = {TRUTH: truth, **trees}
+        log_group_counts(rec, trees, clock=clock)
+        log_running_scores(rec, evaluations, {n: detected_on for n in evaluations}, clock=clock)
+        all_events = list(events or ())
+        if truth is not None:
+            all_events.extend(group_events(world, truth))
+        log_events(rec, all_events, clock=clock)
+    return Recorded(
+        recording_id=recording_id(name, seed=seed), n_frames=len(world), evaluations=evaluations
+    )
+
+
+def record_evaluation(
+    target: RecordingTarget | str | os.PathLike[str],
+    frames: Iterable[Frame],
+    predictions_by_detector: Mapping[str, Sequence[Partition]],
+    evaluations: Mapping[str, Evaluation] | None = None,
+    *,
+    name: str = "evaluation",
+    dataset: str | None = None,
+    seed: int | None = None,
+    classifier: Any = None,
+    dataset_views: bool = True,
+) -> Recorded:
+    """Records detectors run on a dataset: people, groups and mistakes, running scores, and the
+    dataset's characterisation and pair scatter.
+
+    Args:
+        target: a ``.rrd`` path, or a :class:`RecordingTarget`.
+        frames: the frames the detectors ran on, in time order (a Dataset works).
+        predictions_by_detector: detector name -> one full partition per frame.
+        evaluations: detector name -> ``reform.evaluate(frames, predictions)``, if already
+            computed; otherwise computed here where the frames carry ground truth.
+        name: the run's name (with ``seed``, it fixes the recording id).
+        dataset: the dataset's name for the dataset views; default: the first frame's sequence.
+        seed: the run's seed, if any.
+        classifier: a fitted pair classifier (``predict_proba`` on (distance, effort angle)) or
+            a callable giving P(together), for the decision regions; None for none.
+        dataset_views: log Tightness/Symmetry by group size and the pair scatter.
+
+    Returns:
+        The recording id, frame count and the detectors' evaluations.
+    """
+    frames = tuple(frames)
+    if not frames:
+        raise ValueError("frames must hold at least one frame, got none")
+    predictions = dict(predictions_by_detector)
+    _check_names(predictions)
+    annotated = any(f.groups is not None for f in frames)
+    dataset = dataset or frames[0].sequence or "dataset"
+    views = (dataset,) if dataset_views and annotated else ()
+    blueprint = default_blueprint(
+        scores=annotated and bool(predictions), characterisation=views, pairs=views
+    )
+    with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
+        clock = log_frames(rec, frames, field_of_view=None)
+        log_room(rec, room_bounds(frames))
+        truth = log_groups(rec, frames, name=TRUTH, clock=clock) if annotated else None
+        trees, scored = _log_detectors(
+            rec, frames, predictions, evaluations, clock=clock, truth=truth
+        )
+        if truth is not None:
+            trees = {TRUTH: truth, **trees}
+        log_group_counts(rec, trees, clock=clock)
+        log_running_scores(rec, scored, {n: frames for n in scored}, clock=clock)
+        if truth is not None:
+            log_events(rec, group_events(frames, truth), clock=clock)
+        if views:
+            log_characterisation(rec, frames, name=dataset)
+            distance, effort, label = pair_scatter_data(frames)
+            log_pair_scatter(rec, distance, effort, label, name=dataset, classifier=classifier)
+    return Recorded(
+        recording_id=recording_id(name, seed=seed), n_frames=len(frames), evaluations=scored
+    )
