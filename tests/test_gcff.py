@@ -14,7 +14,6 @@ from sklearn.exceptions import NotFittedError
 
 import reform.gcff as gcff_module
 from reform import T_ONE, T_TWO_THIRDS, Frame, Gcff, evaluate
-from reform.datasets import load_salsa
 from reform.gcff import (
     alpha_expansion,
     energy,
@@ -68,8 +67,8 @@ def read_reference(path: Path) -> list[tuple[tuple[str, float], frozenset[frozen
 
 
 @pytest.fixture(scope="module")
-def salsa_frames(salsa_dir):
-    return load_salsa(salsa_dir).annotated()
+def salsa_frames(salsa_dataset):
+    return salsa_dataset.annotated()
 
 
 @pytest.fixture(scope="module")
