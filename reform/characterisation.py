@@ -9,7 +9,8 @@ The paper's "Characterisation" section compares group sizes by two numbers:
   ``S = sum |theta_perfect - theta_ij|``. 0 is perfectly symmetric; defined as 0 for N = 2.
 
 :func:`characterise` applies both to every F-formation (two or more people) of the annotated
-frames of a dataset.
+frames of a dataset, vectorised over the groups of each size (:func:`batch_tightness`,
+:func:`batch_symmetry`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,14 @@ import numpy.typing as npt
 
 from reform.frame import Frame
 
-__all__ = ["GroupShapes", "characterise", "symmetry", "tightness"]
+__all__ = [
+    "GroupShapes",
+    "batch_symmetry",
+    "batch_tightness",
+    "characterise",
+    "symmetry",
+    "tightness",
+]
 
 FULL_TURN_DEG = 360.0  # degrees
 
@@ -124,6 +132,53 @@ class GroupShapes:
         }
 
 
+def _batch_positions(positions: npt.ArrayLike) -> np.ndarray:
+    array = np.asarray(positions, dtype=np.float64)
+    if array.ndim != 3 or array.shape[2] != 2:
+        raise ValueError(f"positions must have shape (n_groups, n_members, 2), got {array.shape}")
+    if array.shape[1] < 2:
+        raise ValueError(
+            f"positions must hold at least 2 members per group (an F-formation), "
+            f"got {array.shape[1]}"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ValueError("positions must be finite, got NaN or inf")
+    return array
+
+
+def batch_tightness(positions: npt.ArrayLike) -> np.ndarray:
+    """:func:`tightness` of many groups of the same size at once.
+
+    Args:
+        positions: (n_groups, n_members, 2) ground-plane positions, metres; n_members >= 2.
+
+    Returns:
+        (n_groups,) float64 Tightness, metres.
+    """
+    members = _batch_positions(positions)
+    offsets = members - members.mean(axis=1, keepdims=True)
+    return np.sqrt((offsets * offsets).sum(axis=2)).mean(axis=1)
+
+
+def batch_symmetry(positions: npt.ArrayLike) -> np.ndarray:
+    """:func:`symmetry` of many groups of the same size at once.
+
+    Args:
+        positions: (n_groups, n_members, 2) ground-plane positions, metres; n_members >= 2.
+
+    Returns:
+        (n_groups,) float64 Symmetry, degrees; zeros for pairs.
+    """
+    members = _batch_positions(positions)
+    n_groups, n = members.shape[:2]
+    if n == 2:
+        return np.zeros(n_groups, dtype=np.float64)
+    offsets = members - members.mean(axis=1, keepdims=True)
+    angles = np.sort(np.degrees(np.arctan2(offsets[..., 1], offsets[..., 0])), axis=1)
+    gaps = np.diff(angles, axis=1, append=angles[:, :1] + FULL_TURN_DEG)
+    return np.abs(FULL_TURN_DEG / n - gaps).sum(axis=1)
+
+
 def characterise(frames: Iterable[Frame]) -> GroupShapes:
     """Tightness and Symmetry of every ground-truth F-formation of the annotated frames.
 
@@ -135,19 +190,24 @@ def characterise(frames: Iterable[Frame]) -> GroupShapes:
         group order.
     """
     sizes: list[int] = []
-    tight: list[float] = []
-    sym: list[float] = []
+    # size -> (entry numbers, member positions (n, 2) of each entry)
+    by_size: dict[int, tuple[list[int], list[np.ndarray]]] = {}
     for frame in frames:
         if frame.groups is None:
             continue
-        for group in frame.fformations():
-            rows = [frame.index_of(member) for member in group]
-            members = frame.position[rows]
-            sizes.append(len(group))
-            tight.append(tightness(members))
-            sym.append(symmetry(members))
-    return GroupShapes(
-        size=np.asarray(sizes, dtype=np.int64),
-        tightness=np.asarray(tight, dtype=np.float64),
-        symmetry=np.asarray(sym, dtype=np.float64),
-    )
+        row_of = {person: row for row, person in enumerate(frame.ids.tolist())}
+        for group in frame.groups:
+            n = len(group)
+            if n < 2:
+                continue
+            entries, members = by_size.setdefault(n, ([], []))
+            entries.append(len(sizes))
+            members.append(frame.position[[row_of[person] for person in group]])
+            sizes.append(n)
+    tight = np.empty(len(sizes), dtype=np.float64)
+    sym = np.empty(len(sizes), dtype=np.float64)
+    for entries, members in by_size.values():
+        stacked = np.stack(members)
+        tight[entries] = batch_tightness(stacked)
+        sym[entries] = batch_symmetry(stacked)
+    return GroupShapes(size=np.asarray(sizes, dtype=np.int64), tightness=tight, symmetry=sym)

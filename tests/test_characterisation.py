@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from reform import Frame, GroupShapes, characterise, symmetry, tightness
+from reform.characterisation import batch_symmetry, batch_tightness
 
 
 def test_tightness_of_a_pair_is_half_their_distance():
@@ -90,3 +91,23 @@ def test_characterise_measures_every_fformation_of_annotated_frames():
 def test_characterise_of_no_groups_is_empty():
     shapes = characterise([Frame(ids=[1], position=[[0, 0]], yaw=[0.0], groups=())])
     assert shapes.size.shape == (0,) and shapes.sizes() == () and shapes.mean_by_size() == {}
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 7])
+def test_batch_functions_agree_with_the_one_group_functions(n):
+    rng = np.random.default_rng(n)
+    groups = rng.normal(scale=0.8, size=(25, n, 2)) + rng.uniform(-10, 10, size=(25, 1, 2))
+    np.testing.assert_allclose(batch_tightness(groups), [tightness(g) for g in groups], rtol=1e-12)
+    np.testing.assert_allclose(
+        batch_symmetry(groups), [symmetry(g) for g in groups], rtol=1e-12, atol=1e-9
+    )
+
+
+@pytest.mark.parametrize("function", [batch_tightness, batch_symmetry])
+def test_bad_batch_arrays_are_rejected(function):
+    with pytest.raises(ValueError, match=r"shape \(n_groups, n_members, 2\), got \(3, 2\)"):
+        function(np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="at least 2 members per group .* got 1"):
+        function(np.zeros((4, 1, 2)))
+    with pytest.raises(ValueError, match="must be finite"):
+        function(np.full((1, 3, 2), np.inf))
