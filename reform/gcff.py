@@ -50,10 +50,12 @@ Example:
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from decimal import Decimal
 from fractions import Fraction
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -601,6 +603,58 @@ class Gcff(BaseEstimator):
             raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
         metres = UNITS[units] / CM_PER_M  # metres per unit
         return cls(stride=_convert(stride, metres), mdl=_convert(mdl, metres * metres), **kwargs)
+
+    @classmethod
+    def from_settings_file(
+        cls, path: str | os.PathLike[str], *, units: str = "cm", **kwargs: Any
+    ) -> Gcff:
+        """A detector from a GCFF ``settings_gc.mat`` (variables ``stride`` and ``mdl``).
+
+        Args:
+            path: the ``.mat`` file.
+            units: length unit of the file's values: ``"cm"`` (as the published ones) or ``"m"``.
+            **kwargs: other parameters (``orientation``).
+
+        Raises:
+            DataFormatError: the file is unreadable or ``stride`` / ``mdl`` is missing or not a
+                finite numeric scalar.
+        """
+        from reform.datasets.errors import DataFormatError
+
+        path = Path(path)
+        try:
+            from scipy.io import loadmat
+
+            mat = loadmat(path, squeeze_me=False)
+        except FileNotFoundError:
+            raise DataFormatError(
+                path, None, None, "a settings_gc.mat file", "no such file"
+            ) from None
+        except Exception as exc:  # scipy raises ValueError, TypeError, OSError on bad files
+            raise DataFormatError(
+                path, None, None, "a readable MATLAB .mat file", f"{type(exc).__name__}: {exc}"
+            ) from exc
+        values = {}
+        for name in ("stride", "mdl"):
+            if name not in mat:
+                present = sorted(k for k in mat if not k.startswith("__"))
+                raise DataFormatError(
+                    path, None, name, f"a variable {name!r}", f"variables {present}"
+                )
+            array = np.asarray(mat[name])
+            if array.size != 1 or not np.issubdtype(array.dtype, np.number):
+                raise DataFormatError(
+                    path,
+                    None,
+                    name,
+                    "a numeric scalar",
+                    f"{array.dtype} array of shape {array.shape}",
+                )
+            value = float(array.ravel()[0])
+            if not np.isfinite(value) or value < 0:
+                raise DataFormatError(path, None, name, "a finite number >= 0", repr(value))
+            values[name] = value
+        return cls.from_settings(stride=values["stride"], mdl=values["mdl"], units=units, **kwargs)
 
     def _validate(self) -> None:
         _check_positive("stride", self.stride, allow_zero=True)

@@ -1,0 +1,144 @@
+"""``reform-sim evaluate|detect --detector gcff``: parameters, settings files, tuning."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+
+from sim.cli import main
+
+
+def _cell(items) -> np.ndarray:
+    array = np.empty((1, len(items)), dtype=object)
+    for i, item in enumerate(items):
+        array[0, i] = item
+    return array
+
+
+def write_gcff_folder(folder: Path, *, settings: dict | None) -> Path:
+    """Two frames in centimetres, each a face-to-face pair (120 cm apart) and a loner."""
+    frame = np.array(
+        [[1, 0.0, 0.0, 0.0], [2, 120.0, 0.0, math.pi], [3, 600.0, 600.0, 1.0]], dtype=float
+    )
+    folder.mkdir(parents=True, exist_ok=True)
+    scipy.io.savemat(
+        folder / "features.mat",
+        {"features": _cell([frame, frame + [0, 5, 5, 0]]), "timestamp": np.array([[1.0, 2.0]])},
+    )
+    groups = _cell([np.array([[1, 2]], dtype=float)])
+    scipy.io.savemat(
+        folder / "groundtruth.mat",
+        {"GTgroups": _cell([groups, groups]), "GTtimestamp": np.array([[1.0, 2.0]])},
+    )
+    if settings is not None:
+        scipy.io.savemat(folder / "settings_gc.mat", settings)
+    return folder
+
+
+def detect(tmp_path: Path, *args: str) -> tuple[list[list[list[int]]], dict]:
+    out = tmp_path / "detections.json"
+    assert main(["detect", "--detector", "gcff", *args, "--out", str(out)]) == 0
+    result = json.loads(out.read_text())
+    return [record["groups"] for record in result["frames"]], result
+
+
+# The pair costs 2 x 100 cm² together; together it saves one label cost (mdl). With mdl =
+# 10,000 cm² (the default) it is a group; with mdl = 100 cm² it is not worth it.
+PAIR = [[[1, 2]], [[1, 2]]]
+NONE = [[], []]
+
+
+def test_folder_settings_used_when_no_parameters_given(tmp_path, capsys):
+    folder = write_gcff_folder(tmp_path / "Scene", settings={"stride": 70.0, "mdl": 100.0})
+    groups, result = detect(tmp_path, "--data", str(folder))
+    assert groups == NONE
+    assert result["detector_params"]["mdl"] == pytest.approx(0.01)  # 100 cm² in m²
+    assert "settings_gc.mat: stride 0.7 m, mdl 0.01 m²" in capsys.readouterr().err
+
+
+def test_explicit_parameters_override_the_folder_settings(tmp_path):
+    folder = write_gcff_folder(tmp_path / "Scene", settings={"stride": 70.0, "mdl": 100.0})
+    groups, result = detect(tmp_path, "--data", str(folder), "--mdl", "1.0")
+    assert groups == PAIR
+    assert (result["detector_params"]["stride"], result["detector_params"]["mdl"]) == (0.7, 1.0)
+
+
+def test_defaults_without_settings(tmp_path):
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    groups, result = detect(tmp_path, "--data", str(folder))
+    assert groups == PAIR
+    assert (result["detector_params"]["stride"], result["detector_params"]["mdl"]) == (0.7, 1.0)
+
+
+def test_settings_file_in_centimetres(tmp_path):
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    settings = tmp_path / "settings_gc.mat"
+    scipy.io.savemat(settings, {"stride": 70.0, "mdl": 100.0})
+    groups, result = detect(tmp_path, "--data", str(folder), "--settings", str(settings))
+    assert groups == NONE
+    assert result["detector_params"]["mdl"] == pytest.approx(0.01)
+
+
+def test_tune_on_training_data(tmp_path, capsys):
+    train = write_gcff_folder(tmp_path / "Train", settings=None)
+    folder = write_gcff_folder(tmp_path / "Scene", settings={"stride": 70.0, "mdl": 100.0})
+    groups, _ = detect(tmp_path, "--data", str(folder), "--tune-on", str(train))
+    assert groups == PAIR
+    assert f"gcff: tuned on 2 frames of {train}" in capsys.readouterr().err
+
+
+def test_evaluate_writes_scores(tmp_path):
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    out = tmp_path / "evaluation.json"
+    assert main(["evaluate", "--detector", "gcff", "--data", str(folder), "--json", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert result["detector"] == "gcff"
+    assert result["2/3"]["f1"] == 1.0
+
+
+def test_conflicting_sources_are_an_error(tmp_path, capsys):
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    code = main(
+        [
+            "detect",
+            "--detector",
+            "gcff",
+            "--data",
+            str(folder),
+            "--stride",
+            "0.6",
+            "--tune-on",
+            str(folder),
+            "--out",
+            str(tmp_path / "x.json"),
+        ]
+    )
+    assert code == 2
+    assert "gcff takes one of --stride/--mdl, --settings, --tune-on" in capsys.readouterr().err
+
+
+def test_bad_settings_file_is_named(tmp_path, capsys):
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    settings = tmp_path / "broken.mat"
+    scipy.io.savemat(settings, {"stride": 70.0})
+    code = main(
+        [
+            "detect",
+            "--detector",
+            "gcff",
+            "--data",
+            str(folder),
+            "--settings",
+            str(settings),
+            "--out",
+            str(tmp_path / "x.json"),
+        ]
+    )
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "broken.mat" in err and "expected a variable 'mdl'" in err
