@@ -310,21 +310,25 @@ def _log_trails(
     slot = np.searchsorted(people.ids, part.ids)
     dense = np.full((n_frames, people.ids.size, 2), np.nan)
     dense[part.frame, slot] = part.position
-    # First frame of each frame's window: within trail_s and within the same sequence.
+    # Last frame before each frame at which each person was absent: trails do not jump gaps.
+    absent = np.isnan(dense[..., 0])
+    frame_index = np.arange(n_frames)[:, None]
+    last_absent = np.maximum.accumulate(np.where(absent, frame_index, -1), axis=0)
+    # First frame of each person-row's window: within trail_s, the same sequence, and after the
+    # person's last absence.
     start = np.searchsorted(sim_time, sim_time - trail_s, side="left")
     segment = np.searchsorted(rows, clock.segment_start[rows], side="left")
-    start = np.maximum(start, segment)
-    span = np.arange(n_frames) - start  # frames back to the window's start
+    frame_of_row = part.frame
+    start = np.maximum(start, segment)[frame_of_row]
+    start = np.maximum(start, last_absent[frame_of_row, slot] + 1)
+    span = frame_of_row - start  # frames back to the window's start
     stride = np.maximum(1, np.ceil((span + 1) / TRAIL_POINTS)).astype(np.int64)
     # For each person-row: TRAIL_POINTS candidate frames, oldest first.
     back = np.arange(TRAIL_POINTS - 1, -1, -1)
-    frame_of_row = part.frame
-    lag = back[None, :] * stride[frame_of_row][:, None]
-    candidate = frame_of_row[:, None] - lag
-    valid = candidate >= start[frame_of_row][:, None]
+    candidate = frame_of_row[:, None] - back[None, :] * stride[:, None]
+    valid = candidate >= start[:, None]
     candidate = np.where(valid, candidate, frame_of_row[:, None])
     points = dense[candidate, slot[:, None]]
-    valid &= np.isfinite(points[..., 0])
     strip_lengths = valid.sum(axis=1)
     flat_points = at_height(points[valid], TRAIL_Z_M)
     rec.log(

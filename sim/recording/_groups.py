@@ -191,12 +191,14 @@ class LoggedGroups:
         tracks: (n_fformations,) each F-formation's track (its colour class).
         frame_keys: (sequence, time in microseconds) of each frame.
         rows: (n_frames,) each frame's row on the run's clock.
+        evaluation: for a detector's tree on frames with ground truth, its evaluation.
     """
 
     layout: GroupLayout
     tracks: np.ndarray
     frame_keys: tuple[tuple[str, int], ...]
     rows: np.ndarray
+    evaluation: Evaluation | None = None
 
     def track_map(self) -> dict[tuple[str, int, frozenset[int]], int]:
         """(sequence, time in microseconds, members) -> track."""
@@ -374,9 +376,7 @@ def log_groups(
         static=True,
     )
     times = clock.columns(rows)
-    person_class = np.where(
-        layout.group_of_person >= 0, tracks[np.maximum(layout.group_of_person, 0)], 0
-    )
+    person_class = np.append(tracks, 0)[layout.group_of_person]  # -1 (alone) picks the 0
     rec.log(
         f"{root}/members",
         rr.Points3D.from_fields(radii=[MEMBER_RADIUS_M], show_labels=False),
@@ -430,7 +430,11 @@ def log_groups(
     if not is_truth and evaluation is not None:
         _log_mistakes(rec, root, frames, layout, truth_by_frame, detected_matched, times, z=z)
     return LoggedGroups(
-        layout=layout, tracks=tracks, frame_keys=tuple(frame_key(f) for f in frames), rows=rows
+        layout=layout,
+        tracks=tracks,
+        frame_keys=tuple(frame_key(f) for f in frames),
+        rows=rows,
+        evaluation=evaluation,
     )
 
 

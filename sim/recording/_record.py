@@ -18,7 +18,6 @@ from sim.recording._groups import (
     DETECTOR_Z_M,
     TRUTH,
     LoggedGroups,
-    evaluate_detector,
     frame_key,
     log_groups,
 )
@@ -82,21 +81,18 @@ def _log_detectors(
     scored: dict[str, Evaluation] = {}
     for index, (name, partitions) in enumerate(detections.items()):
         partitions = list(partitions)
-        evaluation = (evaluations or {}).get(name)
-        if evaluation is None:
-            evaluation = evaluate_detector(frames, partitions)
         trees[name] = log_groups(
             rec,
             frames,
             partitions,
             name=name,
             clock=clock,
-            evaluation=evaluation,
+            evaluation=(evaluations or {}).get(name),
             truth=truth,
             height_m=DETECTOR_Z_M + index * DETECTOR_STEP_M,
         )
-        if evaluation is not None:
-            scored[name] = evaluation
+        if trees[name].evaluation is not None:
+            scored[name] = trees[name].evaluation
     return trees, scored
 
 

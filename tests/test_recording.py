@@ -1,0 +1,869 @@
+"""Rerun recordings, read back from the .rrd files (rerun.chunk.RrdReader, pyarrow)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+from collections import defaultdict
+from fractions import Fraction
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+import rerun as rr
+from rerun.chunk import RrdReader
+
+from reform import Frame, Majority, evaluate
+from sim.recording import (
+    APPLICATION_ID,
+    BodyPoses,
+    Clock,
+    Event,
+    FieldOfView,
+    RecordingTarget,
+    add_recording_arguments,
+    body_entity,
+    default_blueprint,
+    log_body_poses,
+    log_characterisation,
+    log_frames,
+    log_groups,
+    log_model,
+    log_pair_scatter,
+    log_stress_curves,
+    open_recording,
+    pair_scatter_data,
+    record_episode,
+    record_evaluation,
+    recording_id,
+    target_from_args,
+)
+
+RERUN_CLI = Path(sys.executable).with_name("rerun")
+
+
+@pytest.fixture(autouse=True)
+def strict_rerun():
+    """Rerun only warns about bad data by default; in tests it must raise."""
+    before = rr.strict_mode()
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(before)
+
+
+# ----------------------------------------------------------------------------- reading back
+
+
+class Recording:
+    """An .rrd file decoded: static components, and per entity the rows of each timeline."""
+
+    def __init__(self, path: Path) -> None:
+        reader = RrdReader(path)
+        (store,) = reader.recordings()
+        self.application_id = store.application_id
+        self.recording_id = store.recording_id
+        self.static: dict[str, dict[str, object]] = defaultdict(dict)
+        rows: dict[str, dict[int, dict[str, object]]] = defaultdict(lambda: defaultdict(dict))
+        self.timelines: dict[str, set[str]] = defaultdict(set)
+        for chunk in reader.stream():
+            batch = chunk.to_record_batch().to_pydict()
+            data = {k: v for k, v in batch.items() if not k.startswith("rerun.controls")}
+            if chunk.is_static:
+                for key, values in data.items():
+                    self.static[chunk.entity_path][key] = values[-1]
+                continue
+            self.timelines[chunk.entity_path].update(chunk.timeline_names)
+            for i, frame in enumerate(data["frame"]):
+                row = rows[chunk.entity_path][frame]
+                for key, values in data.items():
+                    row[key] = values[i]
+        self.rows = {entity: dict(sorted(by_frame.items())) for entity, by_frame in rows.items()}
+
+    @property
+    def entities(self) -> set[str]:
+        return set(self.static) | set(self.rows)
+
+    def column(self, entity: str, component: str) -> list:
+        """The component's value at every frame, in frame order."""
+        return [row.get(component) for row in self.rows[entity].values()]
+
+    def frames(self, entity: str) -> list[int]:
+        return list(self.rows[entity])
+
+
+def content(path: Path) -> list[tuple]:
+    """Everything a recording holds, minus row and chunk ids, in a canonical order."""
+    out = []
+    for chunk in RrdReader(path).stream():
+        batch = chunk.to_record_batch()
+        keep = [name for name in batch.schema.names if not name.startswith("rerun.controls")]
+        out.append((chunk.entity_path, repr(batch.select(keep).to_pydict())))
+    return sorted(out)
+
+
+# ----------------------------------------------------------------------------- synthetic runs
+
+N_PEOPLE = 6
+ROBOT_ID = 100
+
+
+def make_frames(
+    n: int, *, seed: int = 0, step_s: float = 0.1, sequence: str = "episode"
+) -> list[Frame]:
+    """People on a slow random walk with a robot; groups change half way; every 4th frame has
+    no ground truth; person 5 leaves for frames 10-14 (people come and go)."""
+    rng = np.random.default_rng(seed)
+    home = np.array([[0, 0], [1.2, 0], [0.6, 1.0], [4, 4], [5, 4], [8, 0]], dtype=float)
+    frames = []
+    for t in range(n):
+        present = [k for k in range(N_PEOPLE) if not (k == 5 and 10 <= t < 15)]
+        position = home[present] + rng.normal(0, 0.05, (len(present), 2)) + 0.01 * t
+        yaw = rng.uniform(-math.pi, math.pi, len(present))
+        groups = (
+            ((0, 1, 2), (3, 4)) if t < n // 2 else ((0, 1), (3, 4, 5) if 5 in present else (3, 4))
+        )
+        head_yaw = yaw + 0.2
+        head_yaw[0] = np.nan  # person 0's head is never seen
+        head_position = position.copy()
+        head_position[0] = np.nan
+        frames.append(
+            Frame(
+                ids=[*present, ROBOT_ID],
+                position=np.vstack([position, [[2.0, -3.0 + 0.01 * t]]]),
+                yaw=np.append(yaw, 1.5),
+                kinds=["human"] * len(present) + ["robot"],
+                head_position=np.vstack([head_position, [[2.0, -3.0 + 0.01 * t]]]),
+                head_yaw=np.append((head_yaw + math.pi) % (2 * math.pi) - math.pi, 1.2),
+                groups=None if t % 4 == 3 else groups,
+                time=round(t * step_s, 6),
+                sequence=sequence,
+            )
+        )
+    return frames
+
+
+def alternating_detector(frames: list[Frame]) -> list[tuple[tuple[int, ...], ...]]:
+    """Even frames: perfect truth; odd frames: 0-1 together, 2 joins 3-4, the rest alone."""
+    out = []
+    for t, frame in enumerate(frames):
+        ids = frame.ids.tolist()
+        if t % 2 == 0 and frame.groups is not None:
+            out.append(frame.partition())
+        else:
+            groups = [(0, 1), tuple(i for i in (2, 3, 4) if i in ids)]
+            grouped = {m for g in groups for m in g}
+            out.append(tuple(groups) + tuple((i,) for i in ids if i not in grouped))
+    return out
+
+
+def observe(frames: list[Frame], *, seed: int = 1, truth: bool = True) -> list[Frame]:
+    """The robot's view: noisy positions, person 3 dropped every 5th frame; the ground truth
+    restricted to who was observed (or none)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for t, frame in enumerate(frames):
+        keep = np.array([not (pid == 3 and t % 5 == 0) for pid in frame.ids.tolist()])
+        out.append(
+            Frame(
+                ids=frame.ids[keep],
+                position=frame.position[keep] + rng.normal(0, 0.03, (int(keep.sum()), 2)),
+                yaw=frame.yaw[keep],
+                kinds=[k for k, m in zip(frame.kinds, keep, strict=True) if m],
+                groups=None
+                if frame.groups is None or not truth
+                else tuple(
+                    kept
+                    for g in frame.groups
+                    if (kept := tuple(m for m in g if m in set(frame.ids[keep].tolist())))
+                ),
+                time=frame.time,
+                sequence=frame.sequence,
+            )
+        )
+    return out
+
+
+@pytest.fixture(scope="module")
+def episode(tmp_path_factory):
+    frames = make_frames(24)
+    observed = observe(frames)
+    detections = {
+        "reform": alternating_detector(observed),
+        "majority": Majority().fit(observed).predict(observed),
+    }
+    path = tmp_path_factory.mktemp("episode") / "run.rrd"
+    events = [Event(0.5, "turn starts"), (1.25, "shuffle", "WARN")]
+    recorded = record_episode(
+        path, frames, observed=observed, detections=detections, events=events, seed=7
+    )
+    return {
+        "path": path,
+        "frames": frames,
+        "observed": observed,
+        "detections": detections,
+        "recorded": recorded,
+        "rec": Recording(path),
+    }
+
+
+# ----------------------------------------------------------------------------- the episode
+
+
+def test_episode_identity_entities_and_rows_per_timeline(episode):
+    rec = episode["rec"]
+    n = len(episode["frames"])
+    assert rec.application_id == APPLICATION_ID == "reform-sim"
+    assert rec.recording_id == recording_id("episode", seed=7) == episode["recorded"].recording_id
+    per_frame = {
+        "/world/people/bodies",
+        "/world/people/labels",
+        "/world/people/body_facing",
+        "/world/people/head_facing",
+        "/world/people/trails",
+        "/world/robot/bodies",
+        "/world/robot/labels",
+        "/world/robot/body_facing",
+        "/world/robot/head_facing",
+        "/world/robot/trails",
+        "/world/robot/field_of_view",
+        "/world/observed/people",
+        "/world/observed/body_facing",
+        *(
+            f"/world/groups/{tree}/{part}"
+            for tree in ("truth", "reform", "majority")
+            for part in ("members", "centres", "circles")
+        ),
+        *(
+            f"/world/groups/{d}/mistakes/{kind}"
+            for d in ("reform", "majority")
+            for kind in ("missed", "spurious", "wrong_members")
+        ),
+    }
+    assert per_frame <= rec.entities
+    assert {"/world", "/world/room/floor", "/world/room/outline", "/world/groups/truth"} <= set(
+        rec.static
+    )
+    clock = Clock.from_frames(episode["frames"])
+    for entity in per_frame:
+        assert rec.timelines[entity] == {"frame", "sim_time"}, entity
+        assert rec.frames(entity) == list(range(n)), entity
+        sim_time = [t.total_seconds() for t in rec.column(entity, "sim_time")]
+        np.testing.assert_allclose(sim_time, clock.sim_time, atol=1e-9)
+    annotated = [t for t, f in enumerate(episode["frames"]) if f.groups is not None]
+    for score in ("precision", "recall", "f1"):
+        assert rec.frames(f"/metrics/{score}/reform") == annotated
+    assert rec.frames("/metrics/groups/truth") == annotated
+    assert rec.frames("/metrics/groups/reform") == list(range(n))
+    assert "log_time" not in set().union(*rec.timelines.values())
+    assert "log_tick" not in set().union(*rec.timelines.values())
+
+
+def test_people_and_robot_positions_and_facings_equal_the_frames(episode):
+    rec = episode["rec"]
+    for t, frame in enumerate(episode["frames"]):
+        human = ~frame.is_robot
+        labels = np.array(rec.rows["/world/people/labels"][t]["Points3D:positions"])
+        np.testing.assert_allclose(labels[:, :2], frame.position[human], atol=1e-5)
+        assert rec.rows["/world/people/labels"][t]["person_id"] == frame.ids[human].tolist()
+        capsules = np.array(rec.rows["/world/people/bodies"][t]["Capsules3D:translations"])
+        np.testing.assert_allclose(capsules[:, :2], frame.position[human], atol=1e-5)
+        vectors = np.array(rec.rows["/world/people/body_facing"][t]["Arrows3D:vectors"])
+        np.testing.assert_allclose(
+            np.arctan2(vectors[:, 1], vectors[:, 0]), frame.yaw[human], atol=1e-5
+        )
+        seen = np.isfinite(frame.head_yaw) & human
+        heads = np.array(rec.rows["/world/people/head_facing"][t]["Arrows3D:origins"])
+        np.testing.assert_allclose(heads[:, :2], frame.head_position[seen], atol=1e-5)
+        robot = np.array(rec.rows["/world/robot/labels"][t]["Points3D:positions"])
+        np.testing.assert_allclose(robot[:, :2], frame.position[frame.is_robot], atol=1e-5)
+        trails = rec.rows["/world/people/trails"][t]["LineStrips3D:strips"]
+        assert len(trails) == int(human.sum())
+        for strip, pid in zip(trails, frame.ids[human].tolist(), strict=True):
+            np.testing.assert_allclose(
+                strip[-1][:2], frame.position[frame.index_of(pid)], atol=1e-5
+            )
+
+
+def test_trails_cover_the_last_seconds_of_each_path(episode):
+    rec = episode["rec"]
+    frames = episode["frames"]
+    t = 20  # 2 s trails at 10 Hz: frames 0.0-2.0 s back, at most 12 points, oldest first
+    strips = rec.rows["/world/people/trails"][t]["LineStrips3D:strips"]
+    first = np.array(strips[0])
+    assert 2 <= len(first) <= 12
+    oldest_time = min(f.time for f in frames if f.time >= frames[t].time - 2.0 - 1e-9)
+    oldest = next(f for f in frames if f.time == oldest_time)
+    np.testing.assert_allclose(first[0][:2], oldest.position[oldest.index_of(0)], atol=1e-5)
+    # Person 5 was away for frames 10-14: its trail at frame 16 starts at frame 15.
+    row = frames[16].ids.tolist().index(5)
+    strip = np.array(rec.rows["/world/people/trails"][16]["LineStrips3D:strips"][row])
+    back = np.array([f.position[f.index_of(5)] for f in frames[15:17]])
+    np.testing.assert_allclose(strip[:, :2], back, atol=1e-5)
+
+
+def test_observed_people_with_dropouts(episode):
+    rec = episode["rec"]
+    for t, frame in enumerate(episode["observed"]):
+        human = ~frame.is_robot
+        row = rec.rows["/world/observed/people"][t]
+        assert row["person_id"] == frame.ids[human].tolist()
+        np.testing.assert_allclose(
+            np.array(row["Points3D:positions"])[:, :2], frame.position[human], atol=1e-5
+        )
+    assert 3 not in rec.rows["/world/observed/people"][0]["person_id"]
+    fov = rec.rows["/world/robot/field_of_view"][0]["LineStrips3D:strips"]
+    (wedge,) = fov
+    apex = episode["frames"][0].head_position[-1]
+    far = np.linalg.norm(np.array(wedge)[:, :2] - apex, axis=1)
+    assert far.max() == pytest.approx(FieldOfView().max_range_m, rel=1e-5)
+    assert far.min() == pytest.approx(FieldOfView().min_range_m, rel=1e-5)
+
+
+def partitions_from(rec: Recording, entity: str) -> dict[int, set[frozenset[int]]]:
+    out = {}
+    for frame, row in rec.rows[entity].items():
+        groups: dict[int, set[int]] = defaultdict(set)
+        for pid, g in zip(row.get("person_id") or [], row.get("group_index") or [], strict=True):
+            groups[g].add(pid)
+        out[frame] = {frozenset(g) for g in groups.values()}
+    return out
+
+
+def test_logged_groups_equal_truth_and_detections(episode):
+    rec = episode["rec"]
+    truth = partitions_from(rec, "/world/groups/truth/members")
+    for t, frame in enumerate(episode["frames"]):
+        if frame.groups is None:
+            assert truth[t] == set()
+        else:
+            assert truth[t] == {frozenset(g) for g in frame.partition()}
+    for name, partitions in episode["detections"].items():
+        logged = partitions_from(rec, f"/world/groups/{name}/members")
+        for t, partition in enumerate(partitions):
+            assert logged[t] == {frozenset(g) for g in partition}, (name, t)
+        for t, frame in enumerate(episode["observed"]):
+            row = rec.rows[f"/world/groups/{name}/members"][t]
+            rows = [frame.index_of(pid) for pid in row["person_id"]]
+            np.testing.assert_allclose(
+                np.array(row["Points3D:positions"])[:, :2], frame.position[rows], atol=1e-5
+            )
+
+
+def test_group_colours_follow_groups_and_matches(episode):
+    rec = episode["rec"]
+    for tree in ("truth", "reform"):
+        for row in rec.rows[f"/world/groups/{tree}/members"].values():
+            by_group: dict[int, set[int]] = defaultdict(set)
+            sizes: dict[int, int] = defaultdict(int)
+            for g, c in zip(
+                row.get("group_index") or [], row.get("Points3D:class_ids") or [], strict=True
+            ):
+                by_group[g].add(c)
+                sizes[g] += 1
+            for g, classes in by_group.items():
+                assert len(classes) == 1
+                assert (classes == {0}) == (sizes[g] == 1)
+    # A true group keeps its colour while it keeps its members.
+    t0, t1 = 0, 1
+    truth_rows = rec.rows["/world/groups/truth/members"]
+    assert truth_rows[t0]["Points3D:class_ids"] == truth_rows[t1]["Points3D:class_ids"]
+    # Even frames of "reform" are perfect: each of its groups has its true group's colour.
+    reform_rows = rec.rows["/world/groups/reform/members"]
+    for t in (2, 4, 6):  # (person 3 is not observed at frame 0)
+        truth_colour = dict(
+            zip(truth_rows[t]["person_id"], truth_rows[t]["Points3D:class_ids"], strict=True)
+        )
+        reform_colour = dict(
+            zip(reform_rows[t]["person_id"], reform_rows[t]["Points3D:class_ids"], strict=True)
+        )
+        assert {p: c for p, c in reform_colour.items() if p in truth_colour} == truth_colour
+    labels = {info["label"] for info in _context(rec, "/world/groups/truth")}
+    assert {"alone", "group 1", "group 2"} <= labels
+
+
+def _context(rec: Recording, entity: str) -> list[dict]:
+    """The class descriptions of an annotation context."""
+    (context,) = rec.static[entity]["AnnotationContext:context"]
+    return [entry["class_description"]["info"] for entry in context]
+
+
+def test_mistakes_name_missed_spurious_and_wrong_members(tmp_path):
+    frame = Frame(
+        ids=[1, 2, 3, 4, 5, 6, 7, 8],
+        position=[[0, 0], [1, 0], [0.5, 1], [5, 5], [6, 5], [0.5, -1], [9, 0], [10, 0]],
+        yaw=np.zeros(8),
+        groups=((1, 2, 3), (4, 5)),
+        sequence="s",
+    )
+    # (1,2,3,6) matches (1,2,3) at T = 2/3 (3*3 >= 2*4) with 6 extra; (4,5) is missed; (7,8) is
+    # spurious.
+    prediction = ((1, 2, 3, 6), (4,), (5,), (7, 8))
+    path = tmp_path / "mistakes.rrd"
+    record_evaluation(path, [frame], {"reform": [prediction]}, dataset_views=False)
+    rec = Recording(path)
+    missed = rec.rows["/world/groups/reform/mistakes/missed"][0]
+    spurious = rec.rows["/world/groups/reform/mistakes/spurious"][0]
+    wrong = rec.rows["/world/groups/reform/mistakes/wrong_members"][0]
+    assert missed["LineStrips3D:labels"] == ["missed 4,5"]
+    assert spurious["LineStrips3D:labels"] == ["spurious 7,8"]
+    assert wrong["Points3D:labels"] == ["extra 6"]
+    np.testing.assert_allclose(np.array(wrong["Points3D:positions"])[0, :2], [0.5, -1])
+    ring = np.array(missed["LineStrips3D:strips"][0])
+    assert np.linalg.norm(ring[:, :2] - [5.5, 5.0], axis=1) == pytest.approx(
+        np.full(len(ring), 0.75)
+    )
+    centres = rec.rows["/world/groups/reform/centres"][0]["Points3D:positions"]
+    np.testing.assert_allclose(np.array(centres)[:, :2], [[0.5, 0.0], [9.5, 0.0]], atol=1e-6)
+
+
+def test_running_scores_end_at_the_evaluation(episode):
+    rec = episode["rec"]
+    for name in ("reform", "majority"):
+        evaluation = episode["recorded"].evaluations[name]
+        scores = evaluation.at(Fraction(2, 3))
+        final = {
+            s: rec.column(f"/metrics/{s}/{name}", "Scalars:scalars")[-1][0]
+            for s in ("precision", "recall", "f1")
+        }
+        assert final["precision"] == pytest.approx(scores.precision)
+        assert final["recall"] == pytest.approx(scores.recall)
+        assert final["f1"] == pytest.approx(scores.f1)
+        first = rec.column(f"/metrics/precision/{name}", "Scalars:scalars")[0][0]
+        assert first == pytest.approx(scores.frame_precision[0])
+    # the majority baseline detects nothing: precision 1 and recall 0 at every annotated frame
+    assert set(np.ravel(rec.column("/metrics/recall/majority", "Scalars:scalars"))) == {0.0}
+    counts = np.ravel(rec.column("/metrics/groups/truth", "Scalars:scalars"))
+    annotated = [f for f in episode["frames"] if f.groups is not None]
+    assert counts.tolist() == [len(f.fformations()) for f in annotated]
+
+
+def test_observed_frames_without_truth_are_scored_on_the_world_truth_of_who_was_seen(tmp_path):
+    frames = make_frames(12)
+    blind = observe(frames, truth=False)
+    detections = {"reform": alternating_detector(observe(frames))}
+    recorded = record_episode(tmp_path / "blind.rrd", frames, observed=blind, detections=detections)
+    expected = evaluate(observe(frames), detections["reform"]).at("2/3")
+    assert recorded.evaluations["reform"].at("2/3").f1 == pytest.approx(expected.f1)
+    assert recorded.evaluations["reform"].n_frames == sum(f.groups is not None for f in frames)
+
+
+def test_events_include_scenario_events_and_group_changes(episode):
+    entries = []  # several events may share a frame: read the chunks, not the merged rows
+    for chunk in RrdReader(episode["path"]).stream():
+        if chunk.entity_path == "/events":
+            data = chunk.to_record_batch().to_pydict()
+            entries += list(
+                zip(data["frame"], data["TextLog:text"], data["TextLog:level"], strict=True)
+            )
+    assert (5, ["turn starts"], ["INFO"]) in entries
+    assert (12, ["shuffle"], ["WARN"]) in entries
+    texts = [e[1][0] for e in entries]
+    assert "group 1 forms: {0, 1, 2}" in texts
+    assert any(t.startswith("group 2 changes: {3, 4} -> {3, 4, 5}") for t in texts)
+    assert [e[0] for e in entries] == sorted(e[0] for e in entries)
+
+
+def test_two_runs_with_one_seed_have_equal_content(tmp_path, episode):
+    frames, observed, detections = episode["frames"], episode["observed"], episode["detections"]
+    again = tmp_path / "again.rrd"
+    record_episode(
+        again,
+        frames,
+        observed=observed,
+        detections=detections,
+        events=[Event(0.5, "turn starts"), (1.25, "shuffle", "WARN")],
+        seed=7,
+    )
+    assert content(again) == content(episode["path"])
+    env = {**os.environ, "CI": "1"}  # keeps the CLI's usage analytics off
+    same = subprocess.run(
+        [RERUN_CLI, "rrd", "compare", "--unordered", again, episode["path"]],
+        capture_output=True,
+        env=env,
+    )
+    assert same.returncode == 0, same.stderr.decode()[-2000:]
+    other = tmp_path / "other.rrd"
+    record_episode(other, make_frames(24, seed=1), seed=7)
+    differ = subprocess.run(
+        [RERUN_CLI, "rrd", "compare", "--unordered", other, episode["path"]],
+        capture_output=True,
+        env=env,
+    )
+    assert differ.returncode != 0
+    assert RrdReader(other).recordings()[0].recording_id == recording_id("episode", seed=7)
+    assert recording_id("episode", seed=8) != recording_id("episode", seed=7)
+
+
+def test_sequences_follow_each_other_on_sim_time(tmp_path):
+    frames = make_frames(6, sequence="a") + make_frames(4, sequence="b", step_s=0.5)
+    clock = Clock.from_frames(frames)
+    np.testing.assert_allclose(clock.sim_time, [0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 1.1, 1.6, 2.1])
+    assert clock.row_at(0.7, sequence="b") == 7
+    assert clock.sim_time_at(0.7, sequence="b") == pytest.approx(1.3)
+    path = tmp_path / "two.rrd"
+    record_evaluation(path, frames, {"reform": alternating_detector(frames)}, dataset_views=False)
+    rec = Recording(path)
+    sim_time = [t.total_seconds() for t in rec.column("/world/people/labels", "sim_time")]
+    np.testing.assert_allclose(sim_time, clock.sim_time, atol=1e-9)
+    # trails do not reach back into the previous sequence
+    strips = rec.rows["/world/people/trails"][6]["LineStrips3D:strips"]
+    assert all(len(strip) == 1 for strip in strips)
+
+
+# ----------------------------------------------------------------------------- MuJoCo scene
+
+SCENE_XML = """
+<mujoco>
+  <asset><mesh name="tet" vertex="0 0 0  1 0 0  0 1 0  0 0 1"/></asset>
+  <worldbody>
+    <geom name="floor" type="plane" size="3 2 0.1" rgba="0.2 0.3 0.4 1"/>
+    <geom name="wall" type="box" pos="0 2 1" size="3 0.05 1"/>
+    <geom name="ghost" type="box" size="1 1 1" rgba="1 1 1 0"/>
+    <body name="person/1" pos="1 0 0" mocap="true">
+      <geom name="torso" type="capsule" fromto="0 0 0.3 0 0 1.4" size="0.2" rgba="1 0 0 1"/>
+      <geom name="head" type="sphere" pos="0 0 1.6" size="0.12"/>
+    </body>
+    <body name="robot" pos="-1 0 0">
+      <geom name="base" type="cylinder" pos="0 0 0.3" size="0.25 0.3"/>
+      <geom name="belly" type="ellipsoid" pos="0 0 0.8" size="0.2 0.15 0.25"/>
+      <geom name="arm" type="capsule" fromto="0 0 1 0.5 0 1" size="0.05"/>
+      <geom name="badge" type="mesh" mesh="tet" pos="0 0.2 1"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_model_geometry_is_logged_per_body_and_type(tmp_path):
+    model = mujoco.MjModel.from_xml_string(SCENE_XML)
+    path = tmp_path / "scene.rrd"
+    with open_recording(path, name="scene") as rec:
+        counts = log_model(rec, model)
+    assert counts == {
+        "capsules": 2,
+        "boxes": 1,
+        "spheres": 2,
+        "cylinders": 1,
+        "planes": 1,
+        "meshes": 1,
+        "skipped": 0,
+    }
+    rec = Recording(path)
+    person = "/" + body_entity(model, 1)
+    assert person == "/world/model/person_1"
+    assert {
+        "/world/model/world/planes",
+        "/world/model/world/boxes",
+        f"{person}/capsules",
+        f"{person}/spheres",
+        "/world/model/robot/cylinders",
+        "/world/model/robot/spheres",
+        "/world/model/robot/capsules",
+        "/world/model/robot/meshes/0",
+    } <= rec.entities
+    np.testing.assert_allclose(rec.static[person]["Transform3D:translation"], [[1, 0, 0]])
+    np.testing.assert_allclose(
+        rec.static["/world/model/world/planes"]["Boxes3D:half_sizes"], [[3, 2, 0]]
+    )
+    np.testing.assert_allclose(
+        rec.static["/world/model/world/boxes"]["Boxes3D:half_sizes"], [[3, 0.05, 1]]
+    )
+    # A capsule from fromto: its end-cap centres are the fromto points (in the body frame).
+    arm = rec.static["/world/model/robot/capsules"]
+    start = np.array(arm["Capsules3D:translations"][0])
+    axis = _rotate_xyzw(
+        arm["Capsules3D:quaternions"][0], np.array([0.0, 0.0, arm["Capsules3D:lengths"][0]])
+    )
+    ends = sorted([tuple(np.round(start, 6)), tuple(np.round(start + axis, 6))])
+    np.testing.assert_allclose(ends, [(0, 0, 1), (0.5, 0, 1)], atol=1e-6)
+    torso = rec.static[f"{person}/capsules"]
+    np.testing.assert_allclose(torso["Capsules3D:radii"], [0.2])
+    assert torso["Capsules3D:colors"] == [0xFF0000FF]
+    mesh = rec.static["/world/model/robot/meshes/0"]
+    np.testing.assert_allclose(
+        np.array(mesh["Mesh3D:vertex_positions"]).min(axis=0), [0, 0.2, 1], atol=1e-6
+    )
+
+
+def _rotate_xyzw(q, v):
+    x, y, z, w = q
+    u = np.array([x, y, z])
+    t = 2 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def test_body_poses_move_bodies_per_frame(tmp_path):
+    model = mujoco.MjModel.from_xml_string(SCENE_XML)
+    data = mujoco.MjData(model)
+    times, xpos, xquat = [], [], []
+    for t in range(5):
+        data.mocap_pos[0] = [1 + 0.1 * t, 0.2 * t, 0]
+        yaw = 0.3 * t
+        data.mocap_quat[0] = [math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+        mujoco.mj_kinematics(model, data)
+        times.append(0.1 * t)
+        xpos.append(data.xpos.copy())
+        xquat.append(data.xquat.copy())
+    poses = BodyPoses(time=times, position=np.array(xpos), quaternion=np.array(xquat))
+    path = tmp_path / "poses.rrd"
+    with open_recording(path, name="poses") as rec:
+        log_model(rec, model, static_poses=False)
+        moving = log_body_poses(rec, model, poses)
+    assert moving == 1
+    rec = Recording(path)
+    person = "/world/model/person_1"
+    assert rec.frames(person) == [0, 1, 2, 3, 4]
+    translations = np.array(rec.column(person, "Transform3D:translation"))[:, 0]
+    np.testing.assert_allclose(translations, np.array(xpos)[:, 1], atol=1e-6)
+    quats = np.array(rec.column(person, "Transform3D:quaternion"))[:, 0]
+    np.testing.assert_allclose(
+        quats, np.array(xquat)[:, 1][:, [1, 2, 3, 0]], atol=1e-6
+    )  # (x, y, z, w)
+    np.testing.assert_allclose(
+        rec.static["/world/model/robot"]["Transform3D:translation"], [[-1, 0, 0]]
+    )
+    with pytest.raises(ValueError, match=r"poses must hold the model's 3 bodies, got 2"):
+        log_body_poses(
+            None,
+            model,
+            BodyPoses(time=[0.0], position=np.zeros((1, 2, 3)), quaternion=np.zeros((1, 2, 4))),
+        )
+
+
+def test_episode_with_a_model_draws_its_geometry_instead_of_capsules(tmp_path):
+    model = mujoco.MjModel.from_xml_string(SCENE_XML)
+    frames = make_frames(3)
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    poses = BodyPoses(
+        time=[f.time for f in frames],
+        position=np.repeat(data.xpos[None], 3, axis=0) + np.arange(3)[:, None, None] * 0.1,
+        quaternion=np.repeat(data.xquat[None], 3, axis=0),
+        sequence="episode",
+    )
+    path = tmp_path / "model.rrd"
+    record_episode(path, frames, model=model, body_poses=poses, seed=1)
+    rec = Recording(path)
+    assert "/world/people/bodies" not in rec.entities
+    assert "/world/room/floor" not in rec.entities
+    assert rec.frames("/world/model/robot") == [0, 1, 2]
+    assert "/world/model/world/planes" in rec.static
+
+
+# ----------------------------------------------------------------------------- dataset views
+
+
+def test_dataset_views_characterisation_pairs_regions_and_stress(tmp_path):
+    from sklearn.linear_model import LogisticRegression
+
+    from reform import characterise
+
+    frames = [f for f in make_frames(40) if f.groups is not None]
+    distance, effort, label = pair_scatter_data(frames)
+    classifier = LogisticRegression().fit(np.column_stack([distance, effort]), label)
+    path = tmp_path / "dataset.rrd"
+    with open_recording(
+        path,
+        name="dataset",
+        blueprint=default_blueprint(characterisation=["toy"], pairs=["toy"], stress=["noise"]),
+    ) as rec:
+        shapes = log_characterisation(rec, frames, name="toy")
+        log_pair_scatter(rec, distance, effort, label, name="toy", classifier=classifier)
+        log_stress_curves(
+            rec,
+            [0.0, 0.1, 0.2],
+            {"reform F1": [0.9, 0.8, 0.6], "gcff F1": [0.7, 0.6, 0.5]},
+            x_label="noise (m)",
+            name="noise",
+        )
+    rec = Recording(path)
+    means = characterise(frames).mean_by_size()
+    assert shapes.mean_by_size() == means
+    tight = rec.static["/dataset/characterisation/toy/tightness"]
+    np.testing.assert_allclose(
+        _tensor(tight["BarChart:values"]), [means[s][0] for s in sorted(means)]
+    )
+    np.testing.assert_allclose(_tensor(tight["BarChart:abscissa"]), sorted(means))
+    sym = rec.static["/dataset/characterisation/toy/symmetry"]
+    np.testing.assert_allclose(
+        _tensor(sym["BarChart:values"]), [means[s][1] for s in sorted(means)]
+    )
+    assert "| 3 |" in rec.static["/dataset/characterisation/toy/table"]["TextDocument:text"][0]
+    points = rec.static["/dataset/pairs/toy/points"]
+    np.testing.assert_allclose(
+        np.array(points["Points2D:positions"]), np.column_stack([distance, effort]), atol=1e-5
+    )
+    assert points["Points2D:class_ids"] == label.tolist()
+    image = rec.static["/dataset/pairs/toy/regions"]
+    assert "Image:buffer" in image
+    stress = rec.static["/dataset/stress/noise/reform_F1"]
+    np.testing.assert_allclose(_tensor(stress["BarChart:values"]), [0.9, 0.8, 0.6])
+
+
+def _tensor(value) -> np.ndarray:
+    """A logged tensor (BarChart values) as a flat array."""
+    if isinstance(value, list) and len(value) == 1 and isinstance(value[0], dict):
+        value = value[0]
+    if isinstance(value, dict):
+        buffer = value["buffer"]
+        if isinstance(buffer, tuple):
+            buffer = buffer[1]
+        return np.asarray(buffer, dtype=np.float64).ravel()
+    return np.asarray(value, dtype=np.float64).ravel()
+
+
+def test_decision_regions_follow_the_classifier(tmp_path):
+    # P(together) = 1 below 1 m, else 0: the left of the image is "together", the right "apart".
+    path = tmp_path / "regions.rrd"
+    with open_recording(path, name="regions") as rec:
+        log_pair_scatter(
+            rec,
+            [0.5, 1.5, 2.0],
+            [0.1, 3.0, 6.0],
+            [1, 0, 0],
+            name="rule",
+            classifier=lambda x: (x[:, 0] < 1.0).astype(float),
+            max_distance_m=2.0,
+        )
+    reader = RrdReader(path)
+    chunk = next(
+        c
+        for c in reader.stream()
+        if c.entity_path == "/dataset/pairs/rule/regions"
+        and "Image:buffer" in c.to_record_batch().schema.names
+    )
+    data = chunk.to_record_batch().to_pydict()
+    pixels = np.frombuffer(bytes(data["Image:buffer"][0][0]), dtype=np.uint8).reshape(160, 160, 4)
+    assert tuple(pixels[0, 0, :3]) == (240, 140, 40)  # together
+    assert tuple(pixels[0, -1, :3]) == (80, 120, 200)  # apart
+    assert tuple(pixels[-1, 79, :3]) == (240, 140, 40) and tuple(pixels[-1, 80, :3]) == (
+        80,
+        120,
+        200,
+    )
+    transform = Recording(path).static["/dataset/pairs/rule/regions"]
+    np.testing.assert_allclose(
+        transform["Transform3D:scale"], [[2.0 / 160, 2 * math.pi / 160, 1.0]]
+    )
+
+
+# ----------------------------------------------------------------------------- real data
+
+
+def test_evaluation_recording_of_real_salsa_frames(tmp_path, salsa_dataset):
+    frames = salsa_dataset.annotated()[:12]
+    predictions = Majority().fit(frames).predict(frames)
+    evaluation = evaluate(frames, predictions)
+    path = tmp_path / "salsa.rrd"
+    record_evaluation(
+        path,
+        frames,
+        {"majority": predictions},
+        {"majority": evaluation},
+        name="salsa",
+        dataset="salsa",
+    )
+    rec = Recording(path)
+    assert rec.frames("/world/people/labels") == list(range(12))
+    for t, frame in enumerate(frames):
+        row = rec.rows["/world/groups/truth/members"][t]
+        assert sorted(row["person_id"]) == sorted(frame.ids.tolist())
+        np.testing.assert_allclose(
+            np.array(rec.rows["/world/people/labels"][t]["Points3D:positions"])[:, :2],
+            frame.position,
+            atol=1e-5,
+        )
+    final = rec.column("/metrics/f1/majority", "Scalars:scalars")[-1][0]
+    assert final == pytest.approx(evaluation.at("2/3").f1)
+    assert "/dataset/characterisation/salsa/tightness" in rec.static
+    assert len(rec.static["/dataset/pairs/salsa/points"]["Points2D:positions"]) == sum(
+        f.n_people * (f.n_people - 1) // 2 for f in frames
+    )
+
+
+# ----------------------------------------------------------------------------- targets and errors
+
+
+def test_command_line_flags_follow_rerun_conventions(tmp_path):
+    parser = argparse.ArgumentParser()
+    add_recording_arguments(parser)
+    assert target_from_args(parser.parse_args([])) is None
+    target = target_from_args(parser.parse_args(["--save", str(tmp_path / "x.rrd")]))
+    assert target == RecordingTarget(save=tmp_path / "x.rrd")
+    target = target_from_args(
+        parser.parse_args(["--connect", "--url", "rerun+http://127.0.0.1:9999/proxy"])
+    )
+    assert target.connect == "rerun+http://127.0.0.1:9999/proxy" and target.save is None
+    assert target_from_args(parser.parse_args(["--connect"])).connect == ""
+    assert target_from_args(parser.parse_args(["--serve"])).serve
+    with pytest.raises(ValueError, match="--url needs --connect"):
+        target_from_args(parser.parse_args(["--url", "rerun+http://127.0.0.1:9999/proxy"]))
+    with pytest.raises(ValueError, match=r"save must be a path ending in \.rrd, got '.*run\.txt'"):
+        RecordingTarget(save=tmp_path / "run.txt")
+    with pytest.raises(ValueError, match="needs save, connect or serve"):
+        RecordingTarget()
+
+
+def test_a_failed_run_leaves_no_file(tmp_path):
+    path = tmp_path / "broken.rrd"
+    with pytest.raises(RuntimeError, match="boom"), open_recording(path, name="broken") as rec:
+        rec.log("world/x", rr.Points3D([[0, 0, 0]]), static=True)
+        raise RuntimeError("boom")
+    assert not path.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_bad_inputs_are_named(tmp_path):
+    frames = make_frames(4)
+    bad = alternating_detector(frames)
+    bad[2] = ((0, 1), (2,))  # people 3, 4, 5 and the robot missing
+    with pytest.raises(
+        ValueError,
+        match=r"reform partitions\[2\] \(sequence 'episode', time 0\.2 s\): person 3 is in no ",
+    ):
+        record_evaluation(tmp_path / "a.rrd", frames, {"reform": bad})
+    bad[2] = ((0, 1, 1),)
+    with pytest.raises(ValueError, match=r"person 1 \(group 0\) appears twice"):
+        record_evaluation(tmp_path / "a.rrd", frames, {"reform": bad})
+    with pytest.raises(ValueError, match="must hold one partition per frame: expected 4, found 3"):
+        record_evaluation(tmp_path / "a.rrd", frames, {"reform": bad[:3]})
+    stray = [frames[0].replace(time=9.0)]
+    with pytest.raises(
+        ValueError,
+        match=r"observed\[0\] \(sequence 'episode', time 9 s\) matches no frame of the run",
+    ):
+        record_episode(tmp_path / "b.rrd", frames, observed=stray)
+    with pytest.raises(
+        ValueError,
+        match=r"frames\[1\] \(sequence 'episode'\) has time 0 s, before the previous frame's 0\.3",
+    ):
+        Clock.from_frames([frames[3], frames[0]])
+    with pytest.raises(ValueError, match="detector names must be .* not 'truth'; got 'truth'"):
+        record_episode(tmp_path / "c.rrd", frames, detections={"truth": bad})
+    with pytest.raises(ValueError, match=r"horizontal_deg must be in \(0, 360\], got 0"):
+        FieldOfView(horizontal_deg=0)
+    with pytest.raises(
+        ValueError, match=r"label must hold 0 \(apart\) or 1 \(together\), got \[0, 2\]"
+    ):
+        with open_recording(tmp_path / "d.rrd", name="d") as rec:
+            log_pair_scatter(rec, [1.0, 2.0], [0.0, 1.0], [0, 2], name="x")
+    assert not (tmp_path / "a.rrd").exists()
+
+
+def test_logging_functions_compose_on_one_stream(tmp_path):
+    frames = make_frames(5)
+    path = tmp_path / "pieces.rrd"
+    with open_recording(path, name="pieces", seed=3) as rec:
+        clock = log_frames(rec, frames, field_of_view=None, trail_s=0)
+        truth = log_groups(rec, frames, clock=clock)
+        log_groups(
+            rec, frames, alternating_detector(frames), name="reform", clock=clock, truth=truth
+        )
+    rec = Recording(path)
+    assert "/world/robot/field_of_view" not in rec.entities
+    assert "/world/people/trails" not in rec.entities
+    assert rec.frames("/world/groups/reform/members") == list(range(5))
+    assert rec.recording_id == recording_id("pieces", seed=3)
