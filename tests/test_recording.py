@@ -867,3 +867,36 @@ def test_logging_functions_compose_on_one_stream(tmp_path):
     assert "/world/people/trails" not in rec.entities
     assert rec.frames("/world/groups/reform/members") == list(range(5))
     assert rec.recording_id == recording_id("pieces", seed=3)
+
+
+# ----------------------------------------------------------------------------- the commands
+
+
+@pytest.mark.parametrize("command", ["evaluate", "detect"])
+def test_commands_save_a_recording(tmp_path, capsys, command):
+    from reform import Dataset
+    from reform.datasets import write_parquet
+    from sim.cli import main
+
+    frames = make_frames(8)
+    data = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=tuple(frames), name="toy"), data)
+    path = tmp_path / "out" / f"{command}.rrd"
+    extra = ["--out", tmp_path / "detections.json"] if command == "detect" else []
+    status = main(
+        [
+            str(a)
+            for a in [command, "--detector", "majority", "--data", data, *extra, "--save", path]
+        ]
+    )
+    assert status == 0
+    assert f"wrote {path}" in capsys.readouterr().err
+    rec = Recording(path)
+    assert rec.recording_id == recording_id(f"{command}-majority-toy")
+    n = 8 if command == "detect" else sum(f.groups is not None for f in frames)
+    assert rec.frames("/world/groups/majority/members") == list(range(n))
+    assert "/dataset/characterisation/toy/tightness" in rec.static
+    status = main(
+        [command, "--detector", "majority", "--data", str(data), *map(str, extra), "--url", "x"]
+    )
+    assert status == 2 and "--url needs --connect" in capsys.readouterr().err

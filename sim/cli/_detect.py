@@ -34,6 +34,9 @@ def register(subparsers) -> None:
         action="store_true",
         help="only the frames that carry ground truth (default: every frame)",
     )
+    from sim.recording import add_recording_arguments
+
+    add_recording_arguments(parser)
     parser.set_defaults(handler=run)
 
 
@@ -112,5 +115,14 @@ def run(args: argparse.Namespace) -> int:
         f"{args.detector} on {dataset.name}: {len(frames):,} frames, {n_groups:,} F-formations "
         f"detected; wrote {args.out}",
         file=sys.stderr,
+    )
+    from sim.recording import record_from_args
+
+    record_from_args(
+        args,
+        frames,
+        {args.detector: predictions},
+        name=f"detect-{args.detector}-{dataset.name}",
+        dataset=dataset.name,
     )
     return 0

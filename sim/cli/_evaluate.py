@@ -35,6 +35,9 @@ def register(subparsers) -> None:
         action="store_true",
         help="include every frame's scores in the JSON (for time-series plots)",
     )
+    from sim.recording import add_recording_arguments
+
+    add_recording_arguments(parser)
     parser.set_defaults(handler=run)
 
 
@@ -48,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
     if not frames:
         raise CliError(f"{args.data}: the dataset has no annotated frames, nothing to evaluate")
     detector = build_detector(args)
-    evaluation = evaluate(frames, detector.predict(frames))
+    predictions = detector.predict(frames)
+    evaluation = evaluate(frames, predictions)
     result = evaluation.to_json(
         detector=args.detector,
         dataset=dataset.name,
@@ -66,4 +70,14 @@ def run(args: argparse.Namespace) -> int:
         with atomic_open(args.markdown) as handle:
             handle.write(format_report(result, style="markdown"))
         print(f"wrote {args.markdown}", file=sys.stderr)
+    from sim.recording import record_from_args
+
+    record_from_args(
+        args,
+        frames,
+        {args.detector: predictions},
+        {args.detector: evaluation},
+        name=f"evaluate-{args.detector}-{dataset.name}",
+        dataset=dataset.name,
+    )
     return 0

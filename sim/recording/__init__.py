@@ -54,7 +54,7 @@ from sim.recording._metrics import (
     log_group_counts,
     log_running_scores,
 )
-from sim.recording._record import Recorded, record_episode, record_evaluation
+from sim.recording._record import Recorded, record_episode, record_evaluation, record_from_args
 from sim.recording._scene import (
     MODEL_ROOT,
     ROOM_ROOT,
@@ -120,6 +120,7 @@ __all__ = [
     "recording_id",
     "record_episode",
     "record_evaluation",
+    "record_from_args",
     "room_bounds",
     "target_from_args",
 ]

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import argparse
 import os
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -23,10 +25,10 @@ from sim.recording._groups import (
 )
 from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
 from sim.recording._scene import BodyPoses, log_body_poses, log_model, log_room, room_bounds
-from sim.recording._stream import RecordingTarget, open_recording, recording_id
+from sim.recording._stream import RecordingTarget, open_recording, recording_id, target_from_args
 from sim.recording._timeline import Clock
 
-__all__ = ["Recorded", "record_episode", "record_evaluation"]
+__all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
 
 Partition = Sequence[Group]
 
@@ -237,3 +239,34 @@ def record_evaluation(
     return Recorded(
         recording_id=recording_id(name, seed=seed), n_frames=len(frames), evaluations=scored
     )
+
+
+def record_from_args(
+    args: argparse.Namespace,
+    frames: Iterable[Frame],
+    predictions_by_detector: Mapping[str, Sequence[Partition]],
+    evaluations: Mapping[str, Evaluation] | None = None,
+    *,
+    name: str,
+    dataset: str | None = None,
+) -> Recorded | None:
+    """For a command with :func:`add_recording_arguments`: records the run where the flags say
+    (``--save``, ``--connect``, ``--serve``); does nothing when none is given.
+
+    Args:
+        args: the parsed command line.
+        frames, predictions_by_detector, evaluations, dataset: as for :func:`record_evaluation`.
+        name: the run's name, e.g. ``"evaluate-majority-salsa"``.
+
+    Returns:
+        What was recorded, or None.
+    """
+    target = target_from_args(args)
+    if target is None:
+        return None
+    recorded = record_evaluation(
+        target, frames, predictions_by_detector, evaluations, name=name, dataset=dataset
+    )
+    if target.save is not None:
+        print(f"wrote {target.save} (open it with `rerun {target.save}`)", file=sys.stderr)
+    return recorded
