@@ -1,0 +1,56 @@
+"""sim: MuJoCo scenes of people and the Directions Robot, moved by scripts, seen by the robot.
+
+Public surface (loaded on first use, so that the command line starts fast):
+
+* scenes: `SceneSpec`, `PersonSpec`, `RobotSpec`, `build_scene`;
+* the world: `World`, `Intent`, `RobotCommand`, `Script`, `Poses`, `MotionLimits`,
+  `PERSON_LIMITS`, `ROBOT_LIMITS`;
+* the robot's view: `Sensor`, `HeadCamera` (optional rendering);
+* assets: `asset_names`, `asset_path`, `asset_xml`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+from typing import Any
+
+# Offscreen rendering on a headless Linux machine needs EGL, chosen before mujoco is imported.
+if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+    os.environ.setdefault("MUJOCO_GL", "egl")
+
+_EXPORTS = {
+    "SceneSpec": "sim.scene",
+    "PersonSpec": "sim.scene",
+    "RobotSpec": "sim.scene",
+    "build_scene": "sim.scene",
+    "World": "sim.world",
+    "Intent": "sim.world",
+    "RobotCommand": "sim.world",
+    "Script": "sim.world",
+    "Poses": "sim.world",
+    "MotionLimits": "sim.motion",
+    "PERSON_LIMITS": "sim.motion",
+    "ROBOT_LIMITS": "sim.motion",
+    "Sensor": "sim.sensor",
+    "HeadCamera": "sim.camera",
+    "asset_names": "sim.assets",
+    "asset_path": "sim.assets",
+    "asset_xml": "sim.assets",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'sim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -90,7 +90,9 @@ def _pair(name: str, value: Any) -> tuple[float, float]:
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a pair of numbers (x, y) in metres, got {value!r}") from exc
+        raise ValueError(
+            f"{name} must be a pair of numbers (x, y) in metres, got {value!r}"
+        ) from exc
     if array.shape != (2,) or not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be a finite pair (x, y) in metres, got {value!r}")
     return (float(array[0]), float(array[1]))
@@ -165,7 +167,8 @@ class PersonSpec:
             color = tuple(float(c) for c in self.color)
             if len(color) not in (3, 4) or not all(0.0 <= c <= 1.0 for c in color):
                 raise ValueError(
-                    f"{label}: color must be RGB or RGBA with components in [0, 1], got {self.color!r}"
+                    f"{label}: color must be RGB or RGBA with components in [0, 1], "
+                    f"got {self.color!r}"
                 )
             object.__setattr__(self, "color", color if len(color) == 4 else (*color, 1.0))
         object.__setattr__(self, "present", bool(self.present))
@@ -270,7 +273,7 @@ class SceneSpec:
         room = _pair("room", self.room)
         if not (0.0 < room[0] <= ROOM_MAX_M and 0.0 < room[1] <= ROOM_MAX_M):
             raise ValueError(
-                f"room must be (x extent, y extent) with both within (0, {ROOM_MAX_M}] m, got {room}"
+                f"room must be (x extent, y extent), both within (0, {ROOM_MAX_M}] m, got {room}"
             )
         object.__setattr__(self, "room", room)
         wall_height = _finite("wall_height", self.wall_height)
