@@ -1,0 +1,280 @@
+"""The GCFF comparison: GCFF as the REFORM paper set it, GCFF tuned on SALSA's training split,
+and the reference code's own default, on the SALSA test split and on Babble, with one protocol.
+
+Every detector is scored by :func:`reform.metrics.evaluate` on the same frames: the SALSA test
+split of :func:`reform.time_split` (per session, the last ~40 % of annotated frames by time) and
+every annotated Babble frame. GCFF is tuned on the SALSA training split only; nothing is fitted on
+Babble. Evaluation results of other detectors (REFORM's classifiers) can be placed beside them.
+
+Units of the paper's setting: the REFORM paper states "stride = 0.7, MDL = 30000". GCFF's
+published settings are centimetres (stride 50-70, mdl 6,000-30,000), and 0.7 reads as metres, so
+the setting is taken as stride 70 cm = 0.7 m and mdl 30,000 cm² = 3.0 m² (see reform.gcff).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from reform.frame import Dataset, Frame
+from reform.gcff import MDL_GRID_M2, MDL_M2, STRIDE_GRID_M, STRIDE_M, Gcff, GridSearch
+from reform.majority import Majority
+
+__all__ = [
+    "PAPER_MDL_M2",
+    "PAPER_SCORES",
+    "PAPER_STRIDE_M",
+    "SALSA_TEST",
+    "BABBLE",
+    "GcffComparison",
+    "gcff_comparison",
+]
+
+PAPER_STRIDE_M = 0.7  # metres: the paper's "stride = 0.7"
+PAPER_MDL_M2 = 3.0  # square metres: the paper's "MDL = 30000", read as cm²
+SALSA_TEST = "salsa-test"  # dataset label of the SALSA test split
+BABBLE = "babble"  # dataset label of Babble (every annotated frame)
+SCHEMA_VERSION = 1  # of GcffComparison.to_json
+
+# The REFORM paper's own figures, T = 2/3, precision / recall / F1 in % (definitions.md).
+PAPER_SCORES = {
+    SALSA_TEST: {
+        "GCFF": (63.8, 64.2, 64.2),
+        "Weighted KNN": (78.1, 82.7, 80.3),
+        "Bagged Trees": (78.3, 84.3, 81.2),
+        "Logistic Regression": (71.3, 78.6, 74.8),
+    },
+    BABBLE: {
+        "GCFF": (65.0, 75.0, 69.6),
+        "Weighted KNN": (74.3, 87.5, 80.4),
+        "Bagged Trees": (75.6, 90.0, 82.1),
+        "Logistic Regression": (65.6, 80.0, 72.1),
+    },
+}
+
+
+@dataclass(frozen=True)
+class GcffComparison:
+    """The comparison's results.
+
+    Attributes:
+        results: one ``Evaluation.to_json`` dict per (detector, dataset), GCFF rows first, then
+            any added results; ``detector`` is the row's name, ``dataset`` one of
+            :data:`SALSA_TEST`, :data:`BABBLE`.
+        tuning: the grid search on the SALSA training split.
+        frames: annotated frames per part: ``salsa-train``, ``salsa-test``, ``babble``.
+        train_fraction: share of each SALSA session's annotated frames used for training.
+        notes: free-text remarks printed under the tables.
+    """
+
+    results: tuple[Mapping[str, Any], ...]
+    tuning: GridSearch
+    frames: Mapping[str, int]
+    train_fraction: float
+    notes: tuple[str, ...] = field(default=())
+
+    def with_results(self, results: Sequence[Mapping[str, Any]]) -> GcffComparison:
+        """A copy with more evaluation results (e.g. REFORM's), checked to be on the same frames.
+
+        Each result needs ``detector``, ``dataset`` (:data:`SALSA_TEST` or :data:`BABBLE`) and
+        ``frames`` equal to this comparison's count for that dataset.
+        """
+        added = []
+        for i, result in enumerate(results):
+            dataset = result.get("dataset")
+            if dataset not in (SALSA_TEST, BABBLE):
+                raise ValueError(
+                    f"results[{i}] dataset must be {SALSA_TEST!r} or {BABBLE!r}, got {dataset!r}"
+                )
+            if result.get("frames") != self.frames[dataset]:
+                raise ValueError(
+                    f"results[{i}] ({result.get('detector')!r} on {dataset}) must be scored on "
+                    f"the same {self.frames[dataset]} frames, got {result.get('frames')}"
+                )
+            added.append(result)
+        return GcffComparison(
+            results=self.results + tuple(added),
+            tuning=self.tuning,
+            frames=self.frames,
+            train_fraction=self.train_fraction,
+            notes=self.notes,
+        )
+
+    def to_json(self, *, command: str | None = None) -> dict[str, Any]:
+        """A JSON-ready dict: the command, the split, the tuning and every evaluation."""
+        from reform import __version__
+
+        search = self.tuning
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "kind": "reform-sim/gcff-comparison",
+            "reform_version": __version__,
+            "command": command,
+            "protocol": "ff_evalgroups: singletons dropped; frame-mean P and R; F1 of the means",
+            "split": {
+                "train_fraction": self.train_fraction,
+                "rule": "reform.time_split: per SALSA session, the first share of annotated "
+                "frames by time trains, the rest tests; Babble is test only",
+                "frames": dict(self.frames),
+            },
+            "units": {
+                "paper_setting": {
+                    "as_stated": "stride = 0.7, MDL = 30000",
+                    "read_as": "stride 70 cm = 0.7 m, mdl 30000 cm² = 3.0 m²",
+                },
+                "computation": "GCFF computes in centimetres; parameters given in m and m²",
+            },
+            "tuning": {
+                "on": "salsa-train",
+                "objective": f"F1 of the frame means at T = {search.threshold}",
+                "best": {
+                    "stride_m": search.best_stride,
+                    "mdl_m2": search.best_mdl,
+                    "f1": search.best_f1,
+                },
+                "grid": [
+                    {"stride_m": float(s), "mdl_m2": float(m), "f1": float(f)}
+                    for s, m, f in zip(search.stride, search.mdl, search.f1, strict=True)
+                ],
+            },
+            "paper_scores_t_two_thirds_percent": {
+                d: {k: list(v) for k, v in rows.items()} for d, rows in PAPER_SCORES.items()
+            },
+            "results": [dict(r) for r in self.results],
+            "notes": list(self.notes),
+        }
+
+    def to_markdown(self, *, command: str | None = None) -> str:
+        """The comparison as a Markdown page: command, tables per dataset, tuning, notes."""
+        from reform.report import format_comparison, render_table
+
+        search = self.tuning
+        lines = ["# GCFF beside REFORM: SALSA test split and Babble", ""]
+        if command:
+            lines += ["Produced by:", "", "```sh", command, "```", ""]
+        lines += [
+            f"Protocol: GCFF's `ff_evalgroups` (singletons dropped; P and R are means of the "
+            f"per-frame values; F1 of those means), as `reform.metrics.evaluate` implements it. "
+            f"Split: `reform.time_split` with train fraction {self.train_fraction:g} — per SALSA "
+            f"session, the first annotated frames by time train "
+            f"({self.frames['salsa-train']} frames), the rest test "
+            f"({self.frames['salsa-test']} frames). Babble ({self.frames['babble']} frames) is "
+            "never trained on. Scores in %.",
+            "",
+            'GCFF settings. *Paper*: the REFORM paper\'s "stride = 0.7, MDL = 30000", read as '
+            "stride 70 cm = 0.7 m and mdl 30,000 cm² = 3.0 m² (GCFF's published settings are "
+            "centimetres; GCFF computes in centimetres, see `reform.gcff`). *Reference default*: "
+            f"the original code's stride 70 cm, mdl 10,000 cm² ({STRIDE_M:g} m, {MDL_M2:g} m²). "
+            f"*Tuned*: grid search on the SALSA training split, objective F1 at "
+            f"T = {search.threshold}: stride {search.best_stride:g} m, mdl {search.best_mdl:g} m² "
+            f"(training F1 {100 * search.best_f1:.1f}).",
+            "",
+        ]
+        for dataset, title in ((SALSA_TEST, "SALSA test split"), (BABBLE, "Babble")):
+            rows = [r for r in self.results if r["dataset"] == dataset]
+            if not rows:
+                continue
+            lines += [f"## {title}", "", format_comparison(rows, style="markdown").rstrip(), ""]
+            paper = PAPER_SCORES[dataset]
+            lines += [
+                "The paper's figures on this data (T = 2/3, P / R / F1): "
+                + "; ".join(
+                    f"{name} {p:.1f} / {r:.1f} / {f:.1f}" for name, (p, r, f) in paper.items()
+                )
+                + ".",
+                "",
+            ]
+        lines += ["## Tuning grid (SALSA training split, F1 at T = 2/3, %)", ""]
+        strides = sorted({float(s) for s in search.stride})
+        mdls = sorted({float(m) for m in search.mdl})
+        score = {
+            (float(s), float(m)): float(f)
+            for s, m, f in zip(search.stride, search.mdl, search.f1, strict=True)
+        }
+        table = [
+            [f"{s:g}"] + [f"{100 * score[(s, m)]:.1f}" if (s, m) in score else "-" for m in mdls]
+            for s in strides
+        ]
+        headers = ["stride (m) \\ mdl (m²)"] + [f"{m:g}" for m in mdls]
+        lines += [render_table(headers, table, style="markdown"), ""]
+        if self.notes:
+            lines += ["## Notes", ""] + [f"- {note}" for note in self.notes] + [""]
+        return "\n".join(lines)
+
+
+def _evaluate(
+    name: str, detector: Any, frames: Sequence[Frame], dataset: str, source: str
+) -> dict[str, Any]:
+    from reform.metrics import evaluate
+
+    params = detector.get_params(deep=False) if hasattr(detector, "get_params") else {}
+    params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
+    return evaluate(frames, detector.predict(frames)).to_json(
+        detector=name, dataset=dataset, detector_params=params, source=source
+    )
+
+
+def gcff_comparison(
+    salsa: Dataset,
+    babble: Dataset,
+    *,
+    train_fraction: float = 0.6,
+    stride_grid: Sequence[float] = STRIDE_GRID_M,
+    mdl_grid: Sequence[float] = MDL_GRID_M2,
+    orientation: str = "body",
+) -> GcffComparison:
+    """Runs the GCFF rows of the comparison.
+
+    Rows: GCFF with the paper's setting (0.7 m, 3.0 m²), GCFF with the reference code's default
+    (0.7 m, 1.0 m²), GCFF tuned on the SALSA training split, and the majority baseline, each on
+    the SALSA test split and on Babble.
+
+    Args:
+        salsa: SALSA (both sessions), as :func:`reform.datasets.load_salsa` gives it.
+        babble: Babble, as :func:`reform.datasets.load_babble` gives it.
+        train_fraction: share of each SALSA session's annotated frames used for training.
+        stride_grid: strides tried when tuning, metres.
+        mdl_grid: mdl values tried when tuning, square metres.
+        orientation: orientation GCFF uses, ``"body"`` (the paper's) or ``"head"``.
+
+    Returns:
+        The evaluations, the tuning and the frame counts.
+    """
+    from reform import time_split
+
+    train, test = time_split(salsa.annotated(), train_fraction=train_fraction)
+    train, test = tuple(train), tuple(test)
+    babble_frames = babble.annotated()
+    if not train or not test or not babble_frames:
+        raise ValueError(
+            "the comparison needs annotated SALSA training and test frames and annotated Babble "
+            f"frames, got {len(train)} / {len(test)} / {len(babble_frames)}"
+        )
+    tuned = Gcff(
+        tune=True, stride_grid=stride_grid, mdl_grid=mdl_grid, orientation=orientation
+    ).fit(train)
+    detectors = [
+        ("GCFF, paper (70 cm, 30000 cm²)", Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)),
+        ("GCFF, reference default (70 cm, 10000 cm²)", Gcff(stride=STRIDE_M, mdl=MDL_M2)),
+        (
+            f"GCFF, tuned on SALSA train ({100 * tuned.stride_:g} cm, {1e4 * tuned.mdl_:g} cm²)",
+            Gcff(stride=tuned.stride_, mdl=tuned.mdl_, orientation=orientation),
+        ),
+        ("Majority", Majority()),
+    ]
+    results = []
+    for frames, dataset, source in (
+        (test, SALSA_TEST, salsa.source),
+        (babble_frames, BABBLE, babble.source),
+    ):
+        for name, detector in detectors:
+            if isinstance(detector, Gcff):
+                detector.set_params(orientation=orientation)
+            results.append(_evaluate(name, detector, frames, dataset, source))
+    return GcffComparison(
+        results=tuple(results),
+        tuning=tuned.grid_search_,
+        frames={"salsa-train": len(train), "salsa-test": len(test), "babble": len(babble_frames)},
+        train_fraction=train_fraction,
+    )

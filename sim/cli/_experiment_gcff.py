@@ -1,0 +1,145 @@
+"""``reform-sim experiment gcff``: GCFF (paper setting, tuned) beside REFORM on SALSA and Babble."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from pathlib import Path
+from typing import Any
+
+from sim.cli._common import CliError
+
+_DESCRIPTION = """\
+Scores GCFF with the REFORM paper's setting (stride 0.7 m, MDL 30000 read as 30000 cm² =
+3.0 m²), with the reference code's default (70 cm, 10000 cm²), and tuned by grid search on the
+SALSA training split (reform.time_split), plus the majority baseline, on the SALSA test split and
+on Babble, with the field's protocol. Evaluation JSON files of other detectors on the same frames
+(REFORM's classifiers; dataset "salsa-test" or "babble") are added with --with-results. Writes
+OUT.md and OUT.json and prints the Markdown.
+"""
+
+
+def _experiment_subparsers(subparsers) -> Any:
+    """The ``experiment`` command's own subparsers, creating the command if needed."""
+    parser = subparsers.choices.get("experiment")
+    if parser is None:
+        parser = subparsers.add_parser(
+            "experiment",
+            help="run a documented experiment and write its results (Markdown + JSON)",
+        )
+        return parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
+    for action in parser._actions:  # argparse keeps subparsers among the actions
+        if isinstance(action, argparse._SubParsersAction):
+            return action
+    raise CliError("the 'experiment' command exists but takes no sub-experiments")
+
+
+def register(subparsers) -> None:
+    parser = _experiment_subparsers(subparsers).add_parser(
+        "gcff",
+        help="GCFF (paper setting, tuned on SALSA train) beside REFORM, SALSA test and Babble",
+        description=_DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--salsa", required=True, metavar="PATH", help="SALSA (DANTE folder)")
+    parser.add_argument("--babble", required=True, metavar="PATH", help="Babble folder")
+    parser.add_argument(
+        "--out",
+        required=True,
+        metavar="OUT",
+        help="output path without extension: writes OUT.md and OUT.json",
+    )
+    parser.add_argument(
+        "--train-fraction",
+        type=float,
+        default=0.6,
+        metavar="F",
+        help="share of each SALSA session's annotated frames, by time, used to tune (default 0.6)",
+    )
+    parser.add_argument(
+        "--gcff-orientation",
+        choices=("body", "head"),
+        default="body",
+        help="orientation GCFF uses (default: body, as the paper)",
+    )
+    parser.add_argument(
+        "--with-results",
+        action="append",
+        default=[],
+        metavar="JSON",
+        help="evaluation JSON (reform-sim evaluate --json, or a file holding a 'results' list) "
+        "of another detector on the same frames; repeatable",
+    )
+    parser.set_defaults(handler=run)
+
+
+def _command(args: argparse.Namespace) -> str:
+    words = [
+        "reform-sim",
+        "experiment",
+        "gcff",
+        "--salsa",
+        args.salsa,
+        "--babble",
+        args.babble,
+        "--train-fraction",
+        f"{args.train_fraction:g}",
+    ]
+    if args.gcff_orientation != "body":
+        words += ["--gcff-orientation", args.gcff_orientation]
+    for path in args.with_results:
+        words += ["--with-results", path]
+    words += ["--out", args.out]
+    return shlex.join(words)
+
+
+def _read_results(path: str) -> list[dict[str, Any]]:
+    try:
+        data = json.loads(Path(path).read_text())
+    except FileNotFoundError:
+        raise CliError(f"--with-results {path}: no such file") from None
+    except json.JSONDecodeError as exc:
+        raise CliError(f"--with-results {path}: not JSON ({exc})") from None
+    if isinstance(data, dict) and "results" in data:
+        data = data["results"]
+    results = data if isinstance(data, list) else [data]
+    for i, result in enumerate(results):
+        if not isinstance(result, dict) or result.get("kind") != "reform-sim/evaluation":
+            raise CliError(
+                f"--with-results {path}: entry {i} must be an evaluation "
+                "(kind 'reform-sim/evaluation'), got "
+                f"{result.get('kind') if isinstance(result, dict) else type(result).__name__}"
+            )
+    return results
+
+
+def run(args: argparse.Namespace) -> int:
+    from reform.atomic import atomic_open
+    from reform.datasets import load_babble, load_salsa
+    from reform.experiment_gcff import gcff_comparison
+
+    if not 0.0 < args.train_fraction < 1.0:
+        raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
+    extra = [result for path in args.with_results for result in _read_results(path)]
+    print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
+    comparison = gcff_comparison(
+        load_salsa(args.salsa),
+        load_babble(args.babble),
+        train_fraction=args.train_fraction,
+        orientation=args.gcff_orientation,
+    )
+    if extra:
+        comparison = comparison.with_results(extra)
+    command = _command(args)
+    markdown = comparison.to_markdown(command=command)
+    out = Path(args.out)
+    with atomic_open(out.with_name(out.name + ".md")) as handle:
+        handle.write(markdown)
+    with atomic_open(out.with_name(out.name + ".json")) as handle:
+        json.dump(comparison.to_json(command=command), handle, indent=2, allow_nan=False)
+        handle.write("\n")
+    print(markdown, end="")
+    print(f"wrote {out}.md and {out}.json", file=sys.stderr)
+    return 0
