@@ -32,7 +32,9 @@ PERSON_REFERENCE_HEIGHT_M = 1.75  # metres, height of the shipped person model
 PERSON_REFERENCE_WIDTH_M = 0.44  # metres, between the shoulder joints of the shipped model
 PERSON_HEIGHT_RANGE_M = (1.0, 2.3)  # metres, accepted person heights
 PERSON_WIDTH_RANGE_M = (0.30, 0.70)  # metres, accepted shoulder widths
-ARM_CLEARANCE_M = 0.055  # metres, arm capsule beyond half the shoulder width (body radius)
+BODY_RADIUS_PER_WIDTH = 0.64  # body radius / shoulder width: the disc encloses arms and hands
+HEAD_REACH_PER_WIDTH = 0.07  # nose tip reach = this * width + HEAD_REACH_PER_HEIGHT * height
+HEAD_REACH_PER_HEIGHT = 0.098  # (the head is set forward by the width, sized by the height)
 ROBOT_REFERENCE_HEIGHT_M = 1.30  # metres, height of the shipped robot model
 ROBOT_HEIGHT_RANGE_M = (1.2, 1.5)  # metres, accepted robot heights
 ROBOT_RADIUS_M = 0.28  # metres, the robot's base disc with its bumper
@@ -180,8 +182,11 @@ class PersonSpec:
 
     @property
     def radius(self) -> float:
-        """Body radius, metres: half the shoulder width plus the arms."""
-        return 0.5 * self.width + ARM_CLEARANCE_M
+        """Body radius, metres: a disc enclosing the arms and hands (0.28 m by default)."""
+        return max(
+            BODY_RADIUS_PER_WIDTH * self.width,
+            HEAD_REACH_PER_WIDTH * self.width + HEAD_REACH_PER_HEIGHT * self.height,
+        )
 
     @property
     def prefix(self) -> str:
@@ -334,7 +339,7 @@ class SceneSpec:
     def _check_starts(self) -> None:
         placed: list[Agent] = []
         for agent in self._agents:
-            label = f"{agent.kind} {agent.id}"
+            label = _label(agent)
             x0, x1, y0, y1 = self.inner_bounds(agent.radius)
             x, y = agent.position
             if not (x0 <= x <= x1 and y0 <= y <= y1):
@@ -350,23 +355,40 @@ class SceneSpec:
                 need = agent.radius + other.radius + CLEARANCE_MARGIN_M
                 if gap < need:
                     raise ValueError(
-                        f"{label} and {other.kind} {other.id} overlap at the start: their "
+                        f"{label} and {_label(other)} overlap at the start: their "
                         f"positions are {gap:.3f} m apart, at least {need:.3f} m expected "
                         "(sum of body radii plus clearance)"
                     )
             placed.append(agent)
 
 
+def _label(agent: Agent) -> str:
+    return f"{'robot' if isinstance(agent, RobotSpec) else 'person'} {agent.id}"
+
+
 def _quat_yaw(yaw: float) -> list[float]:
     return [math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]
 
 
-def _scale(child: mujoco.MjSpec, *, horizontal: float, vertical: float) -> None:
-    """Scales a child model in place: x and y (and radii) by ``horizontal``, z by ``vertical``."""
-    scale = np.array([horizontal, horizontal, vertical])
+def _scale(
+    child: mujoco.MjSpec,
+    *,
+    horizontal: float,
+    vertical: float,
+    uniform_body: str | None = None,
+) -> None:
+    """Scales a child model in place: x and y (and radii) by ``horizontal``, z by ``vertical``.
+
+    The geoms of ``uniform_body`` (a person's head) keep their proportions: they are scaled by
+    ``vertical`` along every axis, so that the top of the head lands on the requested height.
+    """
+    body_scale = np.array([horizontal, horizontal, vertical])
     for body in child.bodies:
-        body.pos = np.asarray(body.pos) * scale
+        body.pos = np.asarray(body.pos) * body_scale
     for geom in child.geoms:
+        uniform = uniform_body is not None and geom.parent.name == uniform_body
+        scale = np.full(3, vertical) if uniform else body_scale
+        h = vertical if uniform else horizontal
         fromto = np.asarray(geom.fromto)
         if not np.isnan(fromto[0]):
             geom.fromto = fromto * np.tile(scale, 2)
@@ -374,17 +396,18 @@ def _scale(child: mujoco.MjSpec, *, horizontal: float, vertical: float) -> None:
             geom.pos = np.asarray(geom.pos) * scale
         size = np.array(geom.size, dtype=np.float64)
         if geom.type in (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_CYLINDER):
-            size[0] *= horizontal
+            size[0] *= h
             size[1] *= vertical
         elif geom.type == mujoco.mjtGeom.mjGEOM_SPHERE:
-            size[0] *= horizontal
+            size[0] *= h
         else:
             size *= scale
         geom.size = size
     for site in child.sites:
-        site.pos = np.asarray(site.pos) * scale
+        uniform = uniform_body is not None and site.parent.name == uniform_body
+        site.pos = np.asarray(site.pos) * (vertical if uniform else body_scale)
     for camera in child.cameras:
-        camera.pos = np.asarray(camera.pos) * scale
+        camera.pos = np.asarray(camera.pos) * body_scale
 
 
 def _load(asset: str, parts: dict[str, tuple[str, ...]]) -> mujoco.MjSpec:
@@ -496,6 +519,7 @@ def build_scene(scene: SceneSpec) -> mujoco.MjModel:
             child,
             horizontal=person.width / PERSON_REFERENCE_WIDTH_M,
             vertical=person.height / PERSON_REFERENCE_HEIGHT_M,
+            uniform_body="head",
         )
         shirt = child.material("shirt")
         if shirt is not None:
