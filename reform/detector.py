@@ -1,0 +1,355 @@
+"""REFORM (Hedayati et al., IROS 2020): split a frame into pairs, classify them, rebuild groups.
+
+:class:`Reform` is a scikit-learn estimator over frames: ``fit`` learns a pairwise classifier
+from the pairs of annotated frames, ``predict`` returns each frame's full partition of its
+people into F-formations and singletons.
+
+Within a frame, people are taken in order of their ids, so Greedy Reconstruction's tie-break
+("lowest pair first") refers to ids and a frame's prediction does not depend on the order its
+rows are stored in.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator, clone
+from sklearn.utils.validation import check_is_fitted
+
+from reform.classifiers import bagged_trees
+from reform.fast import PairClassifier, compile_classifier, sklearn_pair_labels
+from reform.features import (
+    DEFAULT_FEATURES,
+    batch_pair_features,
+    check_features,
+    frame_pair_features,
+    pair_indices,
+    pair_targets,
+)
+from reform.frame import Frame, Group
+from reform.reconstruction import (
+    UNION,
+    batch_greedy_labels,
+    check_reconstruction,
+    partition_from_labels,
+)
+
+CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
+
+Partition = tuple[Group, ...]
+
+__all__ = ["Reform"]
+
+
+class Reform(BaseEstimator):
+    """REFORM F-formation detector.
+
+    Args:
+        classifier: an unfitted scikit-learn classifier for pairs (cloned at ``fit``); None for
+            the ready-made bagged trees (:func:`reform.classifiers.bagged_trees`).
+        features: pair features, names from :data:`reform.features.FEATURES`; the paper's are
+            Distance and Effort Angle (the default).
+        reconstruction: ``"union"`` (the paper's Greedy Reconstruction) or ``"intersection"``.
+        threshold: None to take the classifier's own decision; else a probability in (0, 1): a
+            pair is together when ``predict_proba`` gives it at least this. Needs a classifier
+            with ``predict_proba``.
+        fast: classify with the compiled classifier of :mod:`reform.fast` (same labels, much
+            faster); False calls the scikit-learn classifier once per batch.
+
+    Attributes:
+        classifier_: the fitted pair classifier.
+        features_: the features it was fitted on.
+        training_summary_: what it was trained on: frames, pairs, together pairs, sequences,
+            people per frame.
+    """
+
+    def __init__(
+        self,
+        classifier: Any = None,
+        *,
+        features: Sequence[str] = DEFAULT_FEATURES,
+        reconstruction: str = UNION,
+        threshold: float | None = None,
+        fast: bool = True,
+    ) -> None:
+        self.classifier = classifier
+        self.features = features
+        self.reconstruction = reconstruction
+        self.threshold = threshold
+        self.fast = fast
+
+    # ----------------------------------------------------------------------------------------
+    # scikit-learn protocol
+
+    def fit(self, frames: Iterable[Frame], y: None = None) -> Reform:  # noqa: ARG002 (sklearn API)
+        """Learns the pair classifier from the pairs of annotated frames.
+
+        Args:
+            frames: annotated frames (a :class:`reform.Dataset` works too).
+            y: ignored; the labels come from the frames' ground truth.
+
+        Returns:
+            self.
+
+        Raises:
+            ValueError: no frames, a frame without ground truth, no pairs, pairs of one label
+                only, a bad parameter.
+            TypeError: an entry that is not a Frame.
+        """
+        frames = _as_frames(frames, "fit")
+        features = check_features(self.features)
+        check_reconstruction(self.reconstruction)
+        classifier = bagged_trees() if self.classifier is None else clone(self.classifier)
+        _check_threshold(self.threshold, classifier)
+        if not frames:
+            raise ValueError("fit needs annotated frames, got none")
+        missing = [k for k, frame in enumerate(frames) if frame.groups is None]
+        if missing:
+            first = frames[missing[0]]
+            raise ValueError(
+                f"fit needs ground truth in every frame: {len(missing)} of {len(frames)} frames "
+                f"have none (first: frames[{missing[0]}], sequence {first.sequence!r}, "
+                f"time {first.time:g} s); "
+                "pass only annotated frames, e.g. dataset.annotated()"
+            )
+        x_parts, y_parts = [], []
+        for frame in frames:
+            order = _id_order(frame)
+            ordered = frame if order is None else _reordered(frame, order)
+            x_parts.append(frame_pair_features(ordered, features=features))
+            y_parts.append(pair_targets(ordered))
+        x = np.concatenate(x_parts) if x_parts else np.zeros((0, len(features)))
+        y_all = np.concatenate(y_parts) if y_parts else np.zeros(0, dtype=np.int64)
+        if y_all.size == 0:
+            raise ValueError(
+                f"fit needs frames with at least 2 people, got {len(frames)} frames of 0 or 1"
+            )
+        together = int(y_all.sum())
+        if together in (0, y_all.size):
+            kind = "apart (the ground truth holds no F-formation)" if together == 0 else "together"
+            raise ValueError(f"fit needs pairs of both kinds, got {y_all.size} pairs, all {kind}")
+        classifier.fit(x, y_all)
+        classes = np.asarray(classifier.classes_)
+        if classes.tolist() != [0, 1]:
+            raise ValueError(f"classifier must learn classes [0, 1], got {classes.tolist()}")
+        self.classifier_ = classifier
+        self.features_ = features
+        self.training_summary_ = _summary(frames, y_all)
+        self._compiled = None
+        if self.fast:
+            self._pair_classifier()
+        return self
+
+    def predict(self, frames: Iterable[Frame]) -> list[Partition]:
+        """Each frame's F-formations as a full partition of its people.
+
+        Args:
+            frames: frames (annotated or not), any number of people each.
+
+        Returns:
+            One partition per frame: tuples of person ids, groups ordered by their smallest id,
+            members ascending, singletons included.
+        """
+        check_is_fitted(self, "classifier_")
+        frames = _as_frames(frames, "predict")
+        out: list[Partition | None] = [None] * len(frames)
+        for n, positions in _by_size(frames).items():
+            if n < 2:
+                for k in positions:
+                    out[k] = tuple((int(person),) for person in np.sort(frames[k].ids))
+                continue
+            n_pairs = n * (n - 1) // 2
+            step = max(1, CHUNK_PAIRS // n_pairs)
+            for start in range(0, len(positions), step):
+                chunk = positions[start : start + step]
+                ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
+                labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
+                for k, partition in zip(chunk, _partitions(labels, ids), strict=True):
+                    out[k] = partition
+        return out  # type: ignore[return-value]
+
+    def predict_pairs(self, frames: Iterable[Frame]) -> list[np.ndarray]:
+        """The classifier's pair labels, before reconstruction.
+
+        Args:
+            frames: frames.
+
+        Returns:
+            Per frame, (n(n-1)/2,) bool labels over the frame's rows in
+            :func:`reform.features.pair_indices` order (the order of
+            :func:`reform.features.pair_targets`).
+        """
+        check_is_fitted(self, "classifier_")
+        frames = _as_frames(frames, "predict_pairs")
+        out: list[np.ndarray] = []
+        for frame in frames:
+            n = frame.n_people
+            if n < 2:
+                out.append(np.zeros(0, dtype=bool))
+                continue
+            order = np.argsort(frame.ids, kind="stable")
+            _, labels = self._classify_chunk([frame], n)
+            matrix = np.zeros((n, n), dtype=bool)
+            i, j = pair_indices(n)
+            matrix[order[i], order[j]] = labels[0]
+            matrix |= matrix.T
+            out.append(matrix[i, j])
+        return out
+
+    def predict_relation_matrix(self, frame: Frame) -> np.ndarray:
+        """The Relation Matrix of one frame, rows and columns in the frame's row order.
+
+        Returns:
+            (n, n) bool, symmetric, diagonal True.
+        """
+        n = frame.n_people
+        labels = self.predict_pairs([frame])[0]
+        matrix = np.eye(n, dtype=bool)
+        i, j = pair_indices(n)
+        matrix[i, j] = labels
+        matrix[j, i] = labels
+        return matrix
+
+    # ----------------------------------------------------------------------------------------
+    # internals
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = super().__getstate__()
+        state.pop("_compiled", None)  # derived from classifier_, rebuilt on demand
+        return state
+
+    def _pair_classifier(self) -> PairClassifier | None:
+        compiled = getattr(self, "_compiled", None)
+        if compiled is None and self.fast:
+            compiled = compile_classifier(self.classifier_, threshold=self.threshold)
+            self._compiled = compiled
+        return compiled
+
+    def _classify_chunk(self, frames: list[Frame], n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(F, n) ids in id order and (F, n(n-1)/2) bool pair labels of frames of n people."""
+        ids = np.stack([frame.ids for frame in frames])
+        position = np.stack([frame.position for frame in frames])
+        yaw = np.stack([frame.yaw for frame in frames])
+        head_position = head_yaw = is_robot = None
+        features = self.features_
+        if any(name.startswith("head_") for name in features):
+            head_position = np.stack(
+                [
+                    np.full((n, 2), np.nan) if f.head_position is None else f.head_position
+                    for f in frames
+                ]
+            )
+            head_yaw = np.stack(
+                [np.full(n, np.nan) if f.head_yaw is None else f.head_yaw for f in frames]
+            )
+        if "involves_robot" in features:
+            is_robot = np.stack([frame.is_robot for frame in frames])
+        if not np.all(ids[:, 1:] > ids[:, :-1]):
+            order = np.argsort(ids, axis=1, kind="stable")
+            ids = np.take_along_axis(ids, order, axis=1)
+            position = np.take_along_axis(position, order[..., None], axis=1)
+            yaw = np.take_along_axis(yaw, order, axis=1)
+            if head_position is not None:
+                head_position = np.take_along_axis(head_position, order[..., None], axis=1)
+                head_yaw = np.take_along_axis(head_yaw, order, axis=1)
+            if is_robot is not None:
+                is_robot = np.take_along_axis(is_robot, order, axis=1)
+        x = batch_pair_features(
+            position,
+            yaw,
+            features=features,
+            head_position=head_position,
+            head_yaw=head_yaw,
+            is_robot=is_robot,
+        )
+        flat = x.reshape(-1, x.shape[-1])
+        compiled = self._pair_classifier()
+        if compiled is None:
+            labels = sklearn_pair_labels(self.classifier_, flat, threshold=self.threshold)
+        else:
+            labels = compiled.predict(flat)
+        return ids, labels.reshape(len(frames), -1)
+
+
+def _as_frames(frames: Iterable[Frame], method: str) -> list[Frame]:
+    frames = list(frames)
+    for k, frame in enumerate(frames):
+        if not isinstance(frame, Frame):
+            raise TypeError(
+                f"{method} takes reform.Frame objects, got {type(frame).__name__} at frames[{k}]"
+            )
+    return frames
+
+
+def _check_threshold(threshold: float | None, classifier: Any) -> None:
+    if threshold is None:
+        return
+    if (
+        isinstance(threshold, bool)
+        or not isinstance(threshold, (int, float))
+        or not 0 < threshold < 1
+    ):
+        raise ValueError(f"threshold must be None or a probability in (0, 1), got {threshold!r}")
+    if not math.isfinite(threshold):
+        raise ValueError(f"threshold must be finite, got {threshold!r}")
+    if not hasattr(classifier, "predict_proba"):
+        raise ValueError(
+            f"threshold={threshold} needs a classifier with predict_proba, "
+            f"got {type(classifier).__name__}, which has none"
+        )
+
+
+def _id_order(frame: Frame) -> np.ndarray | None:
+    ids = frame.ids
+    if ids.size < 2 or np.all(ids[1:] > ids[:-1]):
+        return None
+    return np.argsort(ids, kind="stable")
+
+
+def _reordered(frame: Frame, order: np.ndarray) -> Frame:
+    return frame.replace(
+        ids=frame.ids[order],
+        position=frame.position[order],
+        yaw=frame.yaw[order],
+        kinds=tuple(frame.kinds[k] for k in order),
+        head_position=None if frame.head_position is None else frame.head_position[order],
+        head_yaw=None if frame.head_yaw is None else frame.head_yaw[order],
+    )
+
+
+def _by_size(frames: list[Frame]) -> dict[int, list[int]]:
+    groups: dict[int, list[int]] = {}
+    for k, frame in enumerate(frames):
+        groups.setdefault(frame.n_people, []).append(k)
+    return groups
+
+
+def _partitions(labels: np.ndarray, ids: np.ndarray) -> list[Partition]:
+    """Partitions from (F, n) group labels and (F, n) ids, each built once per distinct row."""
+    rows = np.ascontiguousarray(
+        np.concatenate([labels.astype(np.int64), ids.astype(np.int64)], axis=1)
+    )
+    keys = rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel()
+    unique, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    built = [partition_from_labels(labels[k], ids[k].tolist()) for k in first.tolist()]
+    return [built[k] for k in inverse.ravel().tolist()]
+
+
+def _summary(frames: list[Frame], targets: np.ndarray) -> dict[str, Any]:
+    people = [frame.n_people for frame in frames]
+    sequences = sorted({frame.sequence for frame in frames})
+    spans = {}
+    for name in sequences:
+        times = [frame.time for frame in frames if frame.sequence == name]
+        spans[name] = [float(min(times)), float(max(times))]
+    return {
+        "frames": len(frames),
+        "pairs": int(targets.size),
+        "together_pairs": int(targets.sum()),
+        "people_per_frame": [int(min(people)), int(max(people))],
+        "sequences": sequences,
+        "time_span_s": spans,
+    }

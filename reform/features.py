@@ -1,0 +1,300 @@
+"""Deconstruction: a frame of n people becomes n(n-1)/2 unordered pairs, each with features.
+
+The paper's two features (see the project's reference definitions):
+
+* **Distance** ``d_ij = ||p_i - p_j||`` in metres, on the ground plane.
+* **Effort Angle** ``EA_ij = a_i + a_j`` in radians, ``[0, 2*pi]``, where
+  ``phi_ij = atan2(y_j - y_i, x_j - x_i)``, ``a_i = |wrap(phi_ij - theta_i)|`` and
+  ``a_j = |wrap(phi_ji - theta_j)|``: how far both would have to turn to face each other.
+  0 means face to face, ``2*pi`` back to back, and ``EA_ij = EA_ji``.
+
+Optional extras, off by default: the same two computed from the head (falling back to the body
+for a person whose head was not observed) and a flag for pairs that involve a robot.
+
+Pairs are always listed in the order of :func:`pair_indices`: ``(0, 1), (0, 2), ..., (n-2, n-1)``
+over the rows of the frame's arrays. Every function here is vectorised over pairs and, for the
+batch functions, over frames too.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from reform.frame import Frame
+
+DISTANCE = "distance"  # metres
+EFFORT_ANGLE = "effort_angle"  # radians, [0, 2*pi]
+HEAD_DISTANCE = "head_distance"  # metres, head positions (body where the head is unknown)
+HEAD_EFFORT_ANGLE = "head_effort_angle"  # radians, head yaws (body where the head is unknown)
+INVOLVES_ROBOT = "involves_robot"  # 1.0 when either member of the pair is a robot, else 0.0
+
+FEATURES = (DISTANCE, EFFORT_ANGLE, HEAD_DISTANCE, HEAD_EFFORT_ANGLE, INVOLVES_ROBOT)
+DEFAULT_FEATURES = (DISTANCE, EFFORT_ANGLE)
+
+__all__ = [
+    "DEFAULT_FEATURES",
+    "DISTANCE",
+    "EFFORT_ANGLE",
+    "FEATURES",
+    "HEAD_DISTANCE",
+    "HEAD_EFFORT_ANGLE",
+    "INVOLVES_ROBOT",
+    "batch_pair_features",
+    "check_features",
+    "effort_angle",
+    "frame_pair_features",
+    "pair_indices",
+    "pair_targets",
+]
+
+
+def check_features(features: Sequence[str]) -> tuple[str, ...]:
+    """Validates a feature list: known names, no repeats, at least one.
+
+    Returns:
+        The features as a tuple.
+
+    Raises:
+        ValueError: naming the unknown or repeated feature.
+    """
+    if isinstance(features, str):
+        raise ValueError(
+            f"features must be a sequence of feature names, got the string {features!r}"
+        )
+    features = tuple(features)
+    if not features:
+        raise ValueError(f"features must name at least one of {FEATURES}, got ()")
+    for name in features:
+        if name not in FEATURES:
+            raise ValueError(f"features must be among {FEATURES}, got {name!r}")
+    repeated = sorted({name for name in features if features.count(name) > 1})
+    if repeated:
+        raise ValueError(f"features must not repeat, got {repeated} more than once")
+    return features
+
+
+@functools.lru_cache(maxsize=256)
+def _pair_indices(n: int) -> tuple[np.ndarray, np.ndarray]:
+    i, j = np.triu_indices(n, k=1)
+    i = i.astype(np.intp)
+    j = j.astype(np.intp)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
+
+
+def pair_indices(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row indices ``(i, j)``, ``i < j``, of the n(n-1)/2 pairs of n people, in row-major order.
+
+    Args:
+        n: number of people, >= 0.
+
+    Returns:
+        Two read-only (n(n-1)/2,) intp arrays.
+    """
+    n = int(n)
+    if n < 0:
+        raise ValueError(f"n must be >= 0, got {n}")
+    return _pair_indices(n)
+
+
+def _abs_wrapped(delta: np.ndarray) -> np.ndarray:
+    """``|wrap(delta)|`` for ``|delta| <= 2*pi`` (plus a small tolerance), in ``[0, pi]``.
+
+    ``pi - |pi - |delta||`` folds ``[0, 2*pi]`` onto ``[0, pi]`` without a modulo; the outer
+    ``abs`` handles the few hundredths of a radian beyond ``2*pi`` that wrapped yaws allow.
+    """
+    out = np.abs(delta)
+    np.subtract(np.pi, out, out=out)
+    np.abs(out, out=out)
+    np.subtract(np.pi, out, out=out)
+    return np.abs(out, out=out)
+
+
+def effort_angle(
+    position_i: npt.ArrayLike,
+    yaw_i: npt.ArrayLike,
+    position_j: npt.ArrayLike,
+    yaw_j: npt.ArrayLike,
+) -> np.ndarray:
+    """Effort Angle of pairs: how much both must turn to face each other directly.
+
+    Args:
+        position_i: (..., 2) positions of the first members, metres.
+        yaw_i: (...) their yaws, radians in ``[-pi, pi]``.
+        position_j: (..., 2) positions of the second members, metres.
+        yaw_j: (...) their yaws, radians in ``[-pi, pi]``.
+
+    Returns:
+        (...) float64 Effort Angles in ``[0, 2*pi]`` radians. Two people at the same spot have
+        no direction between them; their ``phi`` is taken as 0 (``atan2(0, 0)``).
+    """
+    position_i = np.asarray(position_i, dtype=np.float64)
+    position_j = np.asarray(position_j, dtype=np.float64)
+    delta = position_j - position_i
+    phi = np.arctan2(delta[..., 1], delta[..., 0])
+    return _effort_from_phi(
+        phi, np.asarray(yaw_i, dtype=np.float64), np.asarray(yaw_j, dtype=np.float64)
+    )
+
+
+def _effort_from_phi(phi: np.ndarray, yaw_i: np.ndarray, yaw_j: np.ndarray) -> np.ndarray:
+    # a_i = |wrap(phi_ij - theta_i)|; as phi_ji = phi_ij + pi and |wrap(x + pi)| = pi - |wrap(x)|,
+    # a_j = pi - |wrap(phi_ij - theta_j)|. Both differences lie within 2*pi (plus tolerance) of 0.
+    a_i = _abs_wrapped(phi - yaw_i)
+    a_j = _abs_wrapped(phi - yaw_j)
+    np.subtract(np.pi, a_j, out=a_j)
+    return np.add(a_i, a_j, out=a_i)
+
+
+def _distance_and_effort(
+    position: np.ndarray, yaw: np.ndarray, i: np.ndarray, j: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Distance and Effort Angle of the pairs ``(i, j)`` along the people axis (axis -2 / -1)."""
+    delta = position[..., j, :] - position[..., i, :]
+    dx = delta[..., 0]
+    dy = delta[..., 1]
+    distance = np.sqrt(dx * dx + dy * dy)
+    phi = np.arctan2(dy, dx)
+    return distance, _effort_from_phi(phi, yaw[..., i], yaw[..., j])
+
+
+def batch_pair_features(
+    position: np.ndarray,
+    yaw: np.ndarray,
+    *,
+    features: Sequence[str] = DEFAULT_FEATURES,
+    head_position: np.ndarray | None = None,
+    head_yaw: np.ndarray | None = None,
+    is_robot: np.ndarray | None = None,
+) -> np.ndarray:
+    """Pair features of many frames with the same number of people, vectorised over both.
+
+    Args:
+        position: (F, n, 2) body positions, metres.
+        yaw: (F, n) body yaws, radians.
+        features: feature names, from :data:`FEATURES`.
+        head_position: optional (F, n, 2) head positions, metres; NaN rows = unknown head.
+        head_yaw: optional (F, n) head yaws, radians; NaN = unknown head.
+        is_robot: optional (F, n) bool, which people are robots.
+
+    Returns:
+        (F, n(n-1)/2, k) float64 features, pairs in :func:`pair_indices` order, columns in the
+        order of ``features``.
+    """
+    features = check_features(features)
+    position = np.asarray(position, dtype=np.float64)
+    yaw = np.asarray(yaw, dtype=np.float64)
+    if position.ndim != 3 or position.shape[2] != 2:
+        raise ValueError(f"position must have shape (frames, people, 2), got {position.shape}")
+    if yaw.shape != position.shape[:2]:
+        raise ValueError(f"yaw must have shape {position.shape[:2]}, got {yaw.shape}")
+    n_frames, n = yaw.shape
+    i, j = pair_indices(n)
+    out = np.empty((n_frames, i.size, len(features)), dtype=np.float64)
+    if i.size == 0:
+        return out
+    body = None
+    head = None
+    for column, name in enumerate(features):
+        if name in (DISTANCE, EFFORT_ANGLE):
+            if body is None:
+                body = _distance_and_effort(position, yaw, i, j)
+            out[..., column] = body[0] if name == DISTANCE else body[1]
+        elif name in (HEAD_DISTANCE, HEAD_EFFORT_ANGLE):
+            if head is None:
+                head_pos, head_th = _head_or_body(position, yaw, head_position, head_yaw)
+                head = _distance_and_effort(head_pos, head_th, i, j)
+            out[..., column] = head[0] if name == HEAD_DISTANCE else head[1]
+        else:  # INVOLVES_ROBOT
+            if is_robot is None:
+                out[..., column] = 0.0
+            else:
+                robot = np.asarray(is_robot, dtype=bool)
+                out[..., column] = robot[..., i] | robot[..., j]
+    return out
+
+
+def _head_or_body(
+    position: np.ndarray,
+    yaw: np.ndarray,
+    head_position: np.ndarray | None,
+    head_yaw: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    if head_position is None or head_yaw is None:
+        return position, yaw
+    head_position = np.asarray(head_position, dtype=np.float64)
+    head_yaw = np.asarray(head_yaw, dtype=np.float64)
+    missing = np.isnan(head_yaw)
+    if not missing.any():
+        return head_position, head_yaw
+    return (
+        np.where(missing[..., None], position, head_position),
+        np.where(missing, yaw, head_yaw),
+    )
+
+
+def frame_arrays(frame: Frame, order: np.ndarray | None = None) -> dict[str, np.ndarray | None]:
+    """The arrays of one frame that features need, rows in ``order`` (default: as stored)."""
+    rows = slice(None) if order is None else order
+    return {
+        "position": frame.position[rows],
+        "yaw": frame.yaw[rows],
+        "head_position": None if frame.head_position is None else frame.head_position[rows],
+        "head_yaw": None if frame.head_yaw is None else frame.head_yaw[rows],
+        "is_robot": frame.is_robot[rows],
+    }
+
+
+def frame_pair_features(frame: Frame, *, features: Sequence[str] = DEFAULT_FEATURES) -> np.ndarray:
+    """Pair features of one frame, pairs over its rows in :func:`pair_indices` order.
+
+    Args:
+        frame: the frame.
+        features: feature names, from :data:`FEATURES`.
+
+    Returns:
+        (n(n-1)/2, k) float64 features.
+    """
+    arrays = frame_arrays(frame)
+    head_position = arrays["head_position"]
+    head_yaw = arrays["head_yaw"]
+    return batch_pair_features(
+        arrays["position"][None],
+        arrays["yaw"][None],
+        features=features,
+        head_position=None if head_position is None else head_position[None],
+        head_yaw=None if head_yaw is None else head_yaw[None],
+        is_robot=arrays["is_robot"][None],
+    )[0]
+
+
+def pair_targets(frame: Frame) -> np.ndarray:
+    """Ground-truth pair labels: 1 where both are in the same F-formation (group of >= 2).
+
+    Args:
+        frame: an annotated frame.
+
+    Returns:
+        (n(n-1)/2,) int64 labels, pairs over the frame's rows in :func:`pair_indices` order.
+
+    Raises:
+        ValueError: if the frame has no ground truth.
+    """
+    if frame.groups is None:
+        raise ValueError(
+            f"frame (sequence {frame.sequence!r}, time {frame.time:g} s) has no ground-truth groups"
+        )
+    n = frame.n_people
+    group_of = np.arange(-1, -n - 1, -1, dtype=np.int64)  # distinct negatives: singletons
+    row_of = {int(person): row for row, person in enumerate(frame.ids.tolist())}
+    for g, group in enumerate(frame.groups):
+        if len(group) >= 2:
+            for person in group:
+                group_of[row_of[int(person)]] = g
+    i, j = pair_indices(n)
+    return (group_of[i] == group_of[j]).astype(np.int64)

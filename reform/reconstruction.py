@@ -1,0 +1,356 @@
+"""Reconstruction: from pairwise predictions (the Relation Matrix) back to F-formations.
+
+**Greedy Reconstruction** (the paper's Algorithm 1, read as its prose says): ``B_i`` is the set
+of people that row ``i`` of the Relation Matrix marks 1. While at least two of the remaining
+people are predicted together, take the pair ``(i, j)`` with ``M[i, j] = 1`` whose beliefs agree
+most, the largest ``|B_i ∩ B_j|`` (both sets restricted to the remaining people; ties go to the
+lowest ``(i, j)``), emit ``B_i ∪ B_j`` (remaining people only) as an F-formation and remove its
+members. Everyone left over is a singleton. The ``"intersection"`` variant emits
+``(B_i ∩ B_j) ∪ {i, j}`` instead.
+
+Two implementations give the same partitions:
+
+* :func:`greedy_reconstruction` follows the definition step by step on one matrix; it is the
+  reference, and it accepts any square boolean matrix (rows are read as the beliefs, so the
+  paper's worked example, whose belief sets are not symmetric, can be written down as given).
+* :func:`batch_greedy_labels` reconstructs many frames at once from their pair labels, with the
+  beliefs as bitsets. Two facts make it fast: a connected component of the predicted graph in
+  which every member holds the same beliefs is a clique and comes out as one group, whatever the
+  order; and the greedy loop never mixes components, so only the people of inconsistent
+  components go through the loop, all frames in lock-step.
+
+Partitions are canonical: groups ordered by their first member, members in row order,
+singletons included.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from reform.features import pair_indices
+
+UNION = "union"
+INTERSECTION = "intersection"
+RECONSTRUCTIONS = (UNION, INTERSECTION)
+
+__all__ = [
+    "INTERSECTION",
+    "RECONSTRUCTIONS",
+    "UNION",
+    "batch_greedy_labels",
+    "check_reconstruction",
+    "greedy_reconstruction",
+    "partition_from_labels",
+    "relation_matrix",
+]
+
+
+def check_reconstruction(variant: str) -> str:
+    """Validates a reconstruction variant name."""
+    if variant not in RECONSTRUCTIONS:
+        raise ValueError(f"reconstruction must be one of {RECONSTRUCTIONS}, got {variant!r}")
+    return variant
+
+
+def relation_matrix(pair_labels: npt.ArrayLike, n: int) -> np.ndarray:
+    """The Relation Matrix ``M_R`` of one frame from its pair labels.
+
+    Args:
+        pair_labels: (n(n-1)/2,) predicted labels (truthy = together), pairs in
+            :func:`reform.features.pair_indices` order.
+        n: number of people.
+
+    Returns:
+        (n, n) bool, symmetric, diagonal True.
+    """
+    labels = np.asarray(pair_labels).astype(bool, copy=False)
+    i, j = pair_indices(n)
+    if labels.shape != i.shape:
+        raise ValueError(f"pair_labels must have shape ({i.size},) for n={n}, got {labels.shape}")
+    matrix = np.eye(n, dtype=bool)
+    matrix[i, j] = labels
+    matrix[j, i] = labels
+    return matrix
+
+
+def greedy_reconstruction(
+    relation: npt.ArrayLike, *, variant: str = UNION
+) -> tuple[tuple[int, ...], ...]:
+    """Greedy Reconstruction of one Relation Matrix (the reference implementation).
+
+    Args:
+        relation: (n, n) boolean matrix; row ``i`` is the belief set ``B_i``. A pair ``(i, j)``
+            is a candidate when ``relation[i, j]`` or ``relation[j, i]`` is set. Relation
+            Matrices from a classifier are symmetric with a True diagonal.
+        variant: ``"union"`` (the paper's prose, default) or ``"intersection"``.
+
+    Returns:
+        The partition of the rows ``0..n-1``: groups ordered by their first member, members
+        ascending, singletons included.
+    """
+    check_reconstruction(variant)
+    matrix = np.asarray(relation)
+    if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1]:
+        raise ValueError(f"relation must be a square (n, n) matrix, got shape {matrix.shape}")
+    matrix = matrix.astype(bool)
+    n = matrix.shape[0]
+    candidate = np.triu(matrix | matrix.T, k=1)
+    remaining = np.ones(n, dtype=bool)
+    group_of = np.arange(n)
+    while True:
+        live = candidate & remaining[:, None] & remaining[None, :]
+        if not live.any():
+            break
+        beliefs = (matrix & remaining[None, :]).astype(np.int64)
+        agreement = beliefs @ beliefs.T  # |B_i ∩ B_j| over the remaining people
+        score = np.where(live, agreement, -1)
+        i, j = divmod(int(np.argmax(score)), n)  # first maximum in row-major order: lowest (i, j)
+        if variant == UNION:
+            members = (matrix[i] | matrix[j]) & remaining
+        else:
+            members = matrix[i] & matrix[j] & remaining
+            members[[i, j]] = True
+        rows = np.flatnonzero(members)
+        group_of[rows] = rows[0]
+        remaining &= ~members
+    return partition_from_labels(group_of, range(n))
+
+
+def partition_from_labels(
+    labels: npt.ArrayLike, ids: Sequence[int] | np.ndarray
+) -> tuple[tuple[int, ...], ...]:
+    """A partition from group labels: people with the same label form a group.
+
+    Args:
+        labels: (n,) labels; the canonical label of a group is its first member's row.
+        ids: (n,) the people's ids.
+
+    Returns:
+        Groups of ids in order of first appearance, members in row order, singletons included.
+    """
+    groups: dict[int, list[int]] = {}
+    for label, person in zip(np.asarray(labels).tolist(), list(ids), strict=True):
+        groups.setdefault(label, []).append(int(person))
+    return tuple(tuple(members) for members in groups.values())
+
+
+def _pack(mask: np.ndarray) -> np.ndarray:
+    """(..., n) bool -> (..., W) uint64 bitsets, W = ceil(n / 64), element k = bit k overall."""
+    n = mask.shape[-1]
+    words = max(1, -(-n // 64))
+    packed = np.packbits(mask, axis=-1, bitorder="little")
+    padding = words * 8 - packed.shape[-1]
+    if padding:
+        pad = np.zeros(packed.shape[:-1] + (padding,), dtype=np.uint8)
+        packed = np.concatenate([packed, pad], axis=-1)
+    return np.ascontiguousarray(packed).view("<u8")
+
+
+def _unpack(bits: np.ndarray, n: int) -> np.ndarray:
+    """Inverse of :func:`_pack`: (..., W) uint64 -> (..., n) bool."""
+    as_bytes = np.ascontiguousarray(bits).view(np.uint8)
+    return np.unpackbits(as_bytes, axis=-1, count=n, bitorder="little").view(bool)
+
+
+_EXACT_FLOAT_BITS = 52  # beliefs of up to 52 people are built with one float matmul, exactly
+_SMALL_BATCH = 4  # frames: below this, plain Python integers beat array operations
+
+
+def _incidence(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(P, n) float64: ``2**j`` at ``[p, i_p]``, ``2**i`` at ``[p, j_p]``; (P, n) pair incidence."""
+    i, j = pair_indices(n)
+    pairs = np.arange(i.size)
+    powers = np.zeros((i.size, n))
+    powers[pairs, i] = np.ldexp(1.0, j)
+    powers[pairs, j] = np.ldexp(1.0, i)
+    incidence = np.zeros((i.size, n), dtype=np.float32)
+    incidence[pairs, i] = 1.0
+    incidence[pairs, j] = 1.0
+    return powers, incidence
+
+
+def _beliefs(pair_labels: np.ndarray, n: int) -> np.ndarray:
+    """(F, P) bool pair labels -> (F, n, W) uint64 belief bitsets, each including its own bit."""
+    n_frames = pair_labels.shape[0]
+    if n <= _EXACT_FLOAT_BITS:
+        powers, _ = _incidence(n)
+        others = pair_labels.astype(np.float64) @ powers  # sums of distinct powers of two: exact
+        own = np.left_shift(np.uint64(1), np.arange(n, dtype=np.uint64))
+        return (others.astype(np.uint64) | own)[..., None]
+    i, j = pair_indices(n)
+    matrix = np.zeros((n_frames, n, n), dtype=bool)
+    matrix[:, i, j] = pair_labels
+    matrix[:, j, i] = pair_labels
+    diagonal = np.arange(n)
+    matrix[:, diagonal, diagonal] = True
+    return _pack(matrix)
+
+
+def _lowest_bit(bits: np.ndarray) -> np.ndarray:
+    """(..., W) uint64 bitsets (none empty) -> (...) index of their lowest set bit."""
+    words = bits.shape[-1]
+    first_word = (
+        np.argmax(bits != 0, axis=-1) if words > 1 else np.zeros(bits.shape[:-1], dtype=np.intp)
+    )
+    word = np.take_along_axis(bits, first_word[..., None], axis=-1)[..., 0]
+    low = word & (~word + np.uint64(1))
+    return (np.bitwise_count(low - np.uint64(1)).astype(np.intp) + 64 * first_word).astype(np.intp)
+
+
+def batch_greedy_labels(pair_labels: npt.ArrayLike, n: int, *, variant: str = UNION) -> np.ndarray:
+    """Greedy Reconstruction of many frames of ``n`` people at once.
+
+    Args:
+        pair_labels: (F, n(n-1)/2) predicted pair labels (truthy = together), pairs in
+            :func:`reform.features.pair_indices` order.
+        n: number of people in every frame.
+        variant: ``"union"`` or ``"intersection"``.
+
+    Returns:
+        (F, n) intp group labels: each person's label is the row of the first member of their
+        group (their own row for a singleton). Same partitions as :func:`greedy_reconstruction`
+        on each frame's Relation Matrix.
+    """
+    check_reconstruction(variant)
+    labels_in = np.asarray(pair_labels).astype(bool, copy=False)
+    i, j = pair_indices(n)
+    if labels_in.ndim != 2 or labels_in.shape[1] != i.size:
+        raise ValueError(
+            f"pair_labels must have shape (frames, {i.size}) for n={n}, got {labels_in.shape}"
+        )
+    n_frames = labels_in.shape[0]
+    if n < 2 or n_frames == 0:
+        return np.broadcast_to(np.arange(n, dtype=np.intp), (n_frames, n)).copy()
+    if n_frames < _SMALL_BATCH and n <= 64:
+        return np.array([_greedy_python(row, n, variant) for row in labels_in], dtype=np.intp)
+
+    beliefs = _beliefs(labels_in, n)  # (F, n, W)
+    # A consistent person's group is their belief set; its first member is the label.
+    out = _lowest_bit(beliefs)
+    b_i = beliefs[:, i]
+    b_j = beliefs[:, j]
+    differ = b_i != b_j
+    differ = differ[..., 0] if differ.shape[-1] == 1 else differ.any(axis=-1)
+    conflict = labels_in & differ
+    if not conflict.any():
+        return out
+    _, incidence = _incidence(n)
+    loose = (conflict.astype(np.float32) @ incidence) > 0  # people in inconsistent components
+    frames = np.flatnonzero(loose.any(axis=1))
+    out[frames] = _greedy_loop(
+        labels_in[frames],
+        beliefs[frames],
+        b_i[frames] & b_j[frames],
+        loose[frames],
+        out[frames],
+        n,
+        variant,
+    )
+    return out
+
+
+def _greedy_loop(
+    pair_labels: np.ndarray,
+    beliefs: np.ndarray,
+    common: np.ndarray,
+    remaining: np.ndarray,
+    out: np.ndarray,
+    n: int,
+    variant: str,
+) -> np.ndarray:
+    """The greedy loop over the ``remaining`` people of each frame, all frames in lock-step.
+
+    ``common`` holds ``B_i ∩ B_j`` of every pair, (F, P, W).
+    """
+    i, j = pair_indices(n)
+    out = out.copy()
+    rows = np.arange(n, dtype=np.intp)
+    out[remaining] = np.broadcast_to(rows, remaining.shape)[remaining]
+    remaining = remaining.copy()
+    active_frames = np.arange(pair_labels.shape[0])
+    while active_frames.size:
+        rem = remaining[active_frames]
+        live = pair_labels[active_frames] & rem[:, i] & rem[:, j]
+        has_pair = live.any(axis=1)
+        if not has_pair.all():
+            active_frames = active_frames[has_pair]
+            rem = rem[has_pair]
+            live = live[has_pair]
+            if active_frames.size == 0:
+                break
+        rem_bits = _pack(rem)  # (F', W)
+        agreement = np.bitwise_count(common[active_frames] & rem_bits[:, None, :])
+        if agreement.shape[-1] == 1:
+            agreement = agreement[..., 0].astype(np.int16)
+        else:
+            agreement = agreement.sum(axis=-1, dtype=np.int16)
+        score = np.where(live, agreement, np.int16(-1))
+        best = np.argmax(score, axis=1)  # first maximum: lowest (i, j)
+        first, second = i[best], j[best]
+        b_first = beliefs[active_frames, first]
+        b_second = beliefs[active_frames, second]
+        if variant == UNION:
+            members = _unpack((b_first | b_second) & rem_bits, n)
+        else:
+            members = _unpack(b_first & b_second & rem_bits, n)
+            local = np.arange(active_frames.size)
+            members[local, first] = True
+            members[local, second] = True
+        leader = np.argmax(members, axis=1)
+        out[active_frames] = np.where(members, leader[:, None], out[active_frames])
+        remaining[active_frames] = rem & ~members
+    return out
+
+
+def _greedy_python(pair_labels: np.ndarray, n: int, variant: str) -> list[int]:
+    """One frame with Python integers as bitsets: fastest for a single small frame."""
+    i, j = pair_indices(n)
+    hits = np.flatnonzero(pair_labels).tolist()
+    first = i.tolist()
+    second = j.tolist()
+    beliefs = [1 << k for k in range(n)]
+    pairs = []
+    for p in hits:
+        a, b = first[p], second[p]
+        beliefs[a] |= 1 << b
+        beliefs[b] |= 1 << a
+        pairs.append((a, b))
+    labels = [(bits & -bits).bit_length() - 1 for bits in beliefs]
+    loose = 0
+    for a, b in pairs:
+        if beliefs[a] != beliefs[b]:
+            loose |= (1 << a) | (1 << b)
+    if not loose:
+        return labels
+    # People of inconsistent components: their components are entirely loose.
+    for k in range(n):
+        if loose >> k & 1:
+            labels[k] = k
+    remaining = loose
+    candidates = [(a, b) for a, b in pairs if loose >> a & 1]
+    while True:
+        best = -1
+        pick = (0, 0)
+        for a, b in candidates:  # in (i, j) order: the first maximum is the lowest pair
+            if remaining >> a & 1 and remaining >> b & 1:
+                agreement = (beliefs[a] & beliefs[b] & remaining).bit_count()
+                if agreement > best:
+                    best = agreement
+                    pick = (a, b)
+        if best < 0:
+            return labels
+        a, b = pick
+        if variant == UNION:
+            members = (beliefs[a] | beliefs[b]) & remaining
+        else:
+            members = (beliefs[a] & beliefs[b] & remaining) | (1 << a) | (1 << b)
+        leader = (members & -members).bit_length() - 1
+        bits = members
+        while bits:
+            low = bits & -bits
+            labels[low.bit_length() - 1] = leader
+            bits ^= low
+        remaining &= ~members
