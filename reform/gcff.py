@@ -232,20 +232,20 @@ class Expansion:
 def _moves(
     unary: np.ndarray,
     labels: np.ndarray,
-    alphas: np.ndarray,
+    alphas: np.ndarray | None,
     label_cost: float,
     identity: np.ndarray,
     label_costs: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The alpha-moves for several ``alphas`` at once, all from the same ``labels``.
+    """The alpha-moves for several alphas at once, all from the same ``labels``.
 
     Args:
         unary: (n, K) costs.
         labels: (n,) current labels.
-        alphas: (m,) the alphas to evaluate.
+        alphas: (m,) the alphas to evaluate, or None for all K in order.
         label_cost: cost of one used label.
         identity: (K, K) float identity, to build one-hot rows.
-        label_costs: (K, K + 1) ``label_cost * (j < u)`` at ``[j, u]``: the label costs added
+        label_costs: (K + 1, K) ``label_cost * (j < u)`` at ``[u, j]``: the label costs added
             last for a labelling with ``u`` used labels.
 
     Returns:
@@ -254,25 +254,34 @@ def _moves(
         energies: (m,) float64 energy after that move (summed as :func:`energy` does).
     """
     n = labels.size
-    weights = identity[:, labels]  # (K, n): one-hot of the current labels, by label
-    current = unary[np.arange(n), labels]
-    target = unary[:, alphas]
+    rows = np.arange(n)
+    weights = identity[labels]  # (n, K): one-hot of the current labels
+    current = unary[rows, labels]
+    target = unary if alphas is None else unary[:, alphas]
     delta = target - current[:, None]  # d_i for every alpha, (n, m)
     # Per (label l, alpha): option A moves the members with d <= 0 (l stays open, its cost
     # paid), option B moves all of S_l (l closes, its cost saved). B is taken when it costs no
     # more than A: when the positive d of the members sum to at most the label cost.
-    take_all = (weights @ np.maximum(delta, 0.0)) <= label_cost
-    moved = take_all[labels] | (delta <= 0.0)
-    moved &= labels[:, None] != alphas[None, :]  # people already labelled alpha stay
-    # Labels used after each move: l keeps a member, or alpha gains its first one.
+    take_all = (weights.T @ np.maximum(delta, 0.0)) <= label_cost  # (K, m)
+    moved = take_all[labels]
+    moved |= delta <= 0.0
+    if alphas is None:
+        moved[rows, labels] = False  # people already labelled alpha stay
+    else:
+        moved &= labels[:, None] != alphas[None, :]
     changed = moved.any(axis=0)
-    unused = ~weights.any(axis=1)
-    n_used = np.count_nonzero(weights @ ~moved, axis=0) + (changed & unused[alphas])
+    # Labels used after each move: the used labels that B closes go (alpha's own column is
+    # all zeros, so it counts as "closed" when used and is added back), and alpha opens when
+    # unused and gaining members.
+    used = weights.any(axis=0)
+    closed = used.astype(np.float64) @ take_all
+    alpha_used = used if alphas is None else used[alphas]
+    n_used = (np.count_nonzero(used) - closed).astype(np.int64) + (alpha_used | changed)
     # Energies summed in the reference order: person by person, then one cost per used label.
-    terms = np.empty((n + label_costs.shape[0], alphas.size))
-    terms[:n] = np.where(moved, target, current[:, None])
-    terms[n:] = label_costs[:, n_used]
-    return moved, changed, np.cumsum(terms, axis=0)[-1]
+    terms = np.empty((moved.shape[1], n + label_costs.shape[1]))
+    np.copyto(terms[:, :n], np.where(moved, target, current[:, None]).T)
+    terms[:, n:] = label_costs[n_used]
+    return moved, changed, np.add.accumulate(terms, axis=1)[:, -1]
 
 
 def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: float) -> Expansion:
@@ -310,7 +319,8 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
         raise ValueError("unary must be finite, got NaN or inf")
     label_cost = float(label_cost)
     identity = np.eye(k)
-    label_costs = np.where(np.arange(k)[:, None] < np.arange(k + 1)[None, :], label_cost, 0.0)
+    label_costs = np.tri(k + 1, k, -1) * label_cost  # [u, j] = label_cost if j < u
+    whole = k <= _WINDOW  # evaluate every alpha in column order; scan from the current one
     window = np.arange(min(k, _WINDOW))
     current = energy(unary, labels, label_cost=label_cost)
     energies = [current]
@@ -318,14 +328,26 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
     stale = 0  # consecutive moves without a strict decrease
     moves = 0
     while stale < k:
-        alphas = (alpha + window) % k
-        moved, changed, candidate = _moves(unary, labels, alphas, label_cost, identity, label_costs)
-        for j, (a, is_change, e) in enumerate(
-            zip(alphas.tolist(), changed.tolist(), candidate.tolist(), strict=True)
-        ):
+        if whole:
+            moved, changed, candidate = _moves(
+                unary, labels, None, label_cost, identity, label_costs
+            )
+            order = list(range(alpha, k)) + list(range(alpha))
+            columns = order
+        else:
+            alphas = (alpha + window) % k
+            moved, changed, candidate = _moves(
+                unary, labels, alphas, label_cost, identity, label_costs
+            )
+            order = alphas.tolist()
+            columns = range(len(order))
+        changed_list = changed.tolist()
+        candidate_list = candidate.tolist()
+        for a, j in zip(order, columns, strict=True):
             alpha = (a + 1) % k
             moves += 1
-            if is_change and e <= current:
+            if changed_list[j] and candidate_list[j] <= current:
+                e = candidate_list[j]
                 stale = 0 if e < current else stale + 1
                 labels = np.where(moved[:, j], a, labels)
                 current = e
