@@ -27,9 +27,9 @@ from reform.features import (
     check_features,
     frame_pair_features,
     pair_indices,
-    pair_targets,
 )
 from reform.frame import Frame, Group
+from reform.metrics import pair_labels
 from reform.reconstruction import (
     UNION,
     batch_greedy_labels,
@@ -120,7 +120,7 @@ class Reform(BaseEstimator):
             order = _id_order(frame)
             ordered = frame if order is None else _reordered(frame, order)
             x_parts.append(frame_pair_features(ordered, features=features))
-            y_parts.append(pair_targets(ordered))
+            y_parts.append(pair_labels(ordered))
         x = np.concatenate(x_parts) if x_parts else np.zeros((0, len(features)))
         y_all = np.concatenate(y_parts) if y_parts else np.zeros(0, dtype=np.int64)
         if y_all.size == 0:
@@ -180,7 +180,7 @@ class Reform(BaseEstimator):
         Returns:
             Per frame, (n(n-1)/2,) bool labels over the frame's rows in
             :func:`reform.features.pair_indices` order (the order of
-            :func:`reform.features.pair_targets`).
+            :func:`reform.metrics.pair_labels`).
         """
         check_is_fitted(self, "classifier_")
         frames = _as_frames(frames, "predict_pairs")

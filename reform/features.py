@@ -48,7 +48,6 @@ __all__ = [
     "effort_angle",
     "frame_pair_features",
     "pair_indices",
-    "pair_targets",
 ]
 
 
@@ -271,30 +270,3 @@ def frame_pair_features(frame: Frame, *, features: Sequence[str] = DEFAULT_FEATU
         head_yaw=None if head_yaw is None else head_yaw[None],
         is_robot=arrays["is_robot"][None],
     )[0]
-
-
-def pair_targets(frame: Frame) -> np.ndarray:
-    """Ground-truth pair labels: 1 where both are in the same F-formation (group of >= 2).
-
-    Args:
-        frame: an annotated frame.
-
-    Returns:
-        (n(n-1)/2,) int64 labels, pairs over the frame's rows in :func:`pair_indices` order.
-
-    Raises:
-        ValueError: if the frame has no ground truth.
-    """
-    if frame.groups is None:
-        raise ValueError(
-            f"frame (sequence {frame.sequence!r}, time {frame.time:g} s) has no ground-truth groups"
-        )
-    n = frame.n_people
-    group_of = np.arange(-1, -n - 1, -1, dtype=np.int64)  # distinct negatives: singletons
-    row_of = {int(person): row for row, person in enumerate(frame.ids.tolist())}
-    for g, group in enumerate(frame.groups):
-        if len(group) >= 2:
-            for person in group:
-                group_of[row_of[int(person)]] = g
-    i, j = pair_indices(n)
-    return (group_of[i] == group_of[j]).astype(np.int64)
