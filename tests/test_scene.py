@@ -46,7 +46,9 @@ def _top(model: mujoco.MjModel, data: mujoco.MjData, prefix: str) -> float:
             extent = size[2]
         elif kind in (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_CYLINDER):
             axis = data.geom_xmat[g].reshape(3, 3)[:, 2]
-            extent = abs(axis[2]) * size[1] + (size[0] if kind == mujoco.mjtGeom.mjGEOM_CAPSULE else 0)
+            extent = abs(axis[2]) * size[1] + (
+                size[0] if kind == mujoco.mjtGeom.mjGEOM_CAPSULE else 0
+            )
         else:
             extent = size[0] if kind == mujoco.mjtGeom.mjGEOM_SPHERE else size[2]
         tops.append(data.geom_xpos[g, 2] + extent)
@@ -162,7 +164,10 @@ def test_robot_radius_covers_its_base() -> None:
 @pytest.mark.parametrize(
     ("make", "message"),
     [
-        (lambda: PersonSpec(id=1, position=(0, 0), height=-1.7), r"person 1: height must be within"),
+        (
+            lambda: PersonSpec(id=1, position=(0, 0), height=-1.7),
+            r"person 1: height must be within",
+        ),
         (lambda: PersonSpec(id=1, position=(0, 0), width=0.0), r"person 1: width must be within"),
         (lambda: PersonSpec(id=1, position=(0, float("nan"))), r"position must be a finite pair"),
         (lambda: PersonSpec(id=1, position=(0, 0), asset="android"), r"unknown asset 'android'"),
@@ -197,7 +202,9 @@ def test_robot_overlapping_a_person_fails() -> None:
 
 
 def test_start_outside_the_walls_fails() -> None:
-    with pytest.raises(ValueError, match=r"person 1: start position \(2.4, 0\) is outside the walls"):
+    with pytest.raises(
+        ValueError, match=r"person 1: start position \(2.4, 0\) is outside the walls"
+    ):
         SceneSpec(people=[PersonSpec(id=1, position=(2.4, 0.0))], room=(5.0, 5.0))
 
 
