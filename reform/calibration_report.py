@@ -112,13 +112,22 @@ def _p(value: float | None) -> str:
     return f"{value:.1e}" if value < 1e-3 else f"{value:.3f}"
 
 
-def _marks(p: float | None) -> str:
+def _marks(p: float | None, style: str) -> str:
+    """Significance stars; escaped in Markdown, where a bare ``*`` may open emphasis."""
     if p is None:
         return ""
     for bound, mark in _SIGNIFICANCE:
         if p < bound:
-            return mark
+            return mark.replace("*", "\\*") if style == "markdown" else mark
     return ""
+
+
+def _legend(style: str) -> str:
+    """``* p < .05, ** p < .01, *** p < .001`` (escaped in Markdown)."""
+    return ", ".join(
+        f"{_marks(bound / 2, style)} p < {f'{bound:g}'.lstrip('0')}"
+        for bound, _ in reversed(_SIGNIFICANCE)
+    )
 
 
 def _sizes(sizes: list[int]) -> str:
@@ -223,7 +232,7 @@ def _tukey_table(entry: Mapping[str, Any], style: str) -> str:
             row.append(
                 ""
                 if pair is None
-                else _number(pair["difference"], digits, signed=True) + _marks(pair["p"])
+                else _number(pair["difference"], digits, signed=True) + _marks(pair["p"], style)
             )
         rows.append(row)
     return render_table(headers, rows, style=style)
@@ -292,7 +301,7 @@ def format_characterisation(
         parts += [
             _wrap(
                 f"Tukey's HSD, {measure}: mean of the row size minus mean of the column size "
-                f"({UNITS[measure]}); * p < .05, ** p < .01, *** p < .001."
+                f"({UNITS[measure]}); {_legend(style)}."
             ),
             "",
             _tukey_table(entry, style),

@@ -73,6 +73,7 @@ def test_characterize_salsa_and_babble_beside_the_paper(salsa_dir, babble_dir, t
     assert markdown.startswith("# Characterisation of F-formations")
     assert result["command"] in markdown
     assert "| size | groups | Tightness (m) |" in markdown
+    assert "+0.404\\*\\*\\*" in markdown  # Babble 7 vs 2: stars escaped, not emphasis
     assert markdown.rstrip().endswith("## Discussion\n\nOur numbers differ because of X.")
     # The tables rebuild from the saved JSON alone.
     assert format_characterisation(babble, style="text") in out
