@@ -6,6 +6,13 @@ through optional imports of pyarrow and skops, which the project installs).
 
 from __future__ import annotations
 
+from reform.calibration import (
+    PAPER_CHARACTERISATION,
+    Characterisation,
+    Comparison,
+    characterise_dataset,
+    compare,
+)
 from reform.characterisation import GroupShapes, characterise, symmetry, tightness
 from reform.datasets import load_dataset, read_parquet, write_parquet
 from reform.datasets.errors import DataFormatError
@@ -38,11 +45,14 @@ __all__ = [
     "FEATURES",
     "HUMAN",
     "KINDS",
+    "PAPER_CHARACTERISATION",
     "RECONSTRUCTIONS",
     "ROBOT",
     "THRESHOLDS",
     "T_ONE",
     "T_TWO_THIRDS",
+    "Characterisation",
+    "Comparison",
     "DataFormatError",
     "Dataset",
     "Evaluation",
@@ -56,6 +66,8 @@ __all__ = [
     "batch_greedy_labels",
     "batch_pair_features",
     "characterise",
+    "characterise_dataset",
+    "compare",
     "complete_partition",
     "effort_angle",
     "evaluate",
