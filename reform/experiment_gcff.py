@@ -18,7 +18,16 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from reform.frame import Dataset, Frame
-from reform.gcff import MDL_GRID_M2, MDL_M2, STRIDE_GRID_M, STRIDE_M, Gcff, GridSearch
+from reform.gcff import (
+    MDL_GRID_M2,
+    MDL_M2,
+    STRIDE_GRID_M,
+    STRIDE_M,
+    Gcff,
+    GridSearch,
+    gcff_labels,
+    labels_to_partition,
+)
 from reform.majority import Majority
 
 __all__ = [
@@ -203,6 +212,30 @@ class GcffComparison:
         return "\n".join(lines)
 
 
+class _UnitsIgnored:
+    """GCFF fed metre positions with the paper's numbers as if they were centimetres.
+
+    What "stride = 0.7, MDL = 30000" computes when the units are ignored: the length unit of
+    the visibility penalty silently becomes the metre. Shown only to make the units question
+    visible; it is not a setting anyone should use.
+    """
+
+    def __init__(self, *, stride: float, mdl: float) -> None:
+        self.stride = stride
+        self.mdl = mdl
+
+    def get_params(self, deep: bool = False) -> dict[str, Any]:  # noqa: ARG002
+        return {"stride": self.stride, "mdl": self.mdl, "units": "ignored (metre data as cm)"}
+
+    def predict(self, frames: Sequence[Frame]) -> list[tuple[tuple[int, ...], ...]]:
+        return [
+            labels_to_partition(
+                f.ids, gcff_labels(f.position, f.yaw, stride=self.stride, mdl=self.mdl, units="cm")
+            )
+            for f in frames
+        ]
+
+
 def _evaluate(
     name: str, detector: Any, frames: Sequence[Frame], dataset: str, source: str
 ) -> dict[str, Any]:
@@ -227,8 +260,9 @@ def gcff_comparison(
     """Runs the GCFF rows of the comparison.
 
     Rows: GCFF with the paper's setting (0.7 m, 3.0 m²), GCFF with the reference code's default
-    (0.7 m, 1.0 m²), GCFF tuned on the SALSA training split, and the majority baseline, each on
-    the SALSA test split and on Babble.
+    (0.7 m, 1.0 m²), GCFF tuned on the SALSA training split, GCFF with the paper's numbers
+    applied to metre data as if they were centimetres (the units question made visible), and the
+    majority baseline, each on the SALSA test split and on Babble.
 
     Args:
         salsa: SALSA (both sessions), as :func:`reform.datasets.load_salsa` gives it.
@@ -260,6 +294,10 @@ def gcff_comparison(
         (
             f"GCFF, tuned on SALSA train ({100 * tuned.stride_:g} cm, {1e4 * tuned.mdl_:g} cm²)",
             Gcff(stride=tuned.stride_, mdl=tuned.mdl_, orientation=orientation),
+        ),
+        (
+            "GCFF, paper numbers with units ignored (0.7, 30000 on metres)",
+            _UnitsIgnored(stride=PAPER_STRIDE_M, mdl=30000.0),
         ),
         ("Majority", Majority()),
     ]

@@ -28,10 +28,12 @@ def test_rows_datasets_and_split(comparison, salsa_dataset, babble_dataset):
         ("GCFF, paper", SALSA_TEST),
         ("GCFF, reference default", SALSA_TEST),
         ("GCFF, tuned on SALSA train", SALSA_TEST),
+        ("GCFF, paper numbers with units ignored", SALSA_TEST),
         ("Majority", SALSA_TEST),
         ("GCFF, paper", BABBLE),
         ("GCFF, reference default", BABBLE),
         ("GCFF, tuned on SALSA train", BABBLE),
+        ("GCFF, paper numbers with units ignored", BABBLE),
         ("Majority", BABBLE),
     ]
     paper = comparison.results[0]
@@ -72,4 +74,4 @@ def test_markdown_and_json(comparison):
     assert data["kind"] == "reform-sim/gcff-comparison"
     assert data["command"] == command
     assert len(data["tuning"]["grid"]) == 4
-    assert len(data["results"]) == 8
+    assert len(data["results"]) == 10
