@@ -31,9 +31,8 @@ import numpy as np
 from scipy import stats
 
 from reform.characterisation import GroupShapes, characterise
-from reform.features import DISTANCE, EFFORT_ANGLE, batch_pair_features
+from reform.features import DISTANCE, EFFORT_ANGLE, batch_pair_features, pair_indices
 from reform.frame import Dataset, Frame
-from reform.metrics import pair_labels
 
 __all__ = [
     "CONFIDENCE_LEVEL",
@@ -127,11 +126,22 @@ class PairSamples(NamedTuple):
         return values[self.label == (1 if kind == IN_GROUP else 0)]
 
 
+def _group_of(frame: Frame) -> np.ndarray:
+    """(n,) int64: the index of each row's F-formation, a distinct negative number if alone."""
+    n = frame.n_people
+    group_of = np.arange(-1, -n - 1, -1, dtype=np.int64)
+    row_of = {person: row for row, person in enumerate(frame.ids.tolist())}
+    for g, group in enumerate(frame.groups or ()):
+        if len(group) >= 2:
+            group_of[[row_of[person] for person in group]] = g
+    return group_of
+
+
 def pair_feature_samples(frames: Iterable[Frame]) -> PairSamples:
     """Distance, Effort Angle and label of every pair of the annotated frames.
 
-    Features from :func:`reform.features.batch_pair_features` (body positions and yaws),
-    labels from :func:`reform.metrics.pair_labels`; vectorised over the frames that have the
+    Features from :func:`reform.features.batch_pair_features` (body positions and yaws); labels
+    as :func:`reform.metrics.pair_labels` gives them. Vectorised over the frames that have the
     same number of people.
 
     Args:
@@ -151,15 +161,16 @@ def pair_feature_samples(frames: Iterable[Frame]) -> PairSamples:
     by_people: dict[int, list[int]] = {}
     for k, frame in enumerate(annotated):
         by_people.setdefault(frame.n_people, []).append(k)
-        label[starts[k] : starts[k + 1]] = pair_labels(frame)
     for n, members in by_people.items():
         position = np.stack([annotated[k].position for k in members])
         yaw = np.stack([annotated[k].yaw for k in members])
+        group_of = np.stack([_group_of(annotated[k]) for k in members])
         values = batch_pair_features(position, yaw, features=PAIR_FEATURES)
-        m = n * (n - 1) // 2
-        rows = (starts[members][:, None] + np.arange(m)[None, :]).ravel()
+        i, j = pair_indices(n)
+        rows = (starts[members][:, None] + np.arange(i.size)[None, :]).ravel()
         distance[rows] = values[..., 0].ravel()
         effort[rows] = values[..., 1].ravel()
+        label[rows] = (group_of[:, i] == group_of[:, j]).ravel()
     return PairSamples(_readonly(distance), _readonly(effort), _readonly(label))
 
 

@@ -332,3 +332,17 @@ def test_salsa_groups_are_tighter_than_babbles(salsa, babble):
     assert not result.within_tolerance()
     assert len(result.failures()) == 6  # every Babble size
     assert result.ks_result(DISTANCE, IN_GROUP).statistic > 0.3
+
+
+def test_pair_labels_agree_with_the_metrics_definition(salsa_dataset):
+    from reform.metrics import pair_labels
+
+    listed_alone = Frame(
+        ids=[4, 9, 2, 7],
+        position=[[0, 0], [1, 0], [2, 0], [3, 0]],
+        yaw=np.zeros(4),
+        groups=((9,), (2, 4, 7)),
+    )
+    frames = [listed_alone, *salsa_dataset.annotated()[:200]]
+    expected = np.concatenate([pair_labels(f) for f in frames])
+    np.testing.assert_array_equal(pair_feature_samples(frames).label, expected)
