@@ -329,6 +329,9 @@ def characterise_dataset(
 ) -> Characterisation:
     """Tightness and Symmetry by group size and the pair features of a dataset's annotated frames.
 
+    Robots count as people: a robot in an F-formation is one of its members, and its pairs are
+    measured like any other.
+
     Args:
         frames: a :class:`reform.Dataset` or frames; frames without ground truth are skipped.
         name: name for reports; default the dataset's name (or ``""`` for bare frames).
