@@ -291,10 +291,10 @@ def test_people_and_robot_positions_and_facings_equal_the_frames(episode):
 def test_trails_cover_the_last_seconds_of_each_path(episode):
     rec = episode["rec"]
     frames = episode["frames"]
-    t = 20  # 2 s trails at 10 Hz: frames 0.0-2.0 s back, at most 12 points, oldest first
+    t = 20  # 2 s trails at 10 Hz: frames 0.0-2.0 s back, at most 8 points, oldest first
     strips = rec.rows["/world/people/trails"][t]["LineStrips3D:strips"]
     first = np.array(strips[0])
-    assert 2 <= len(first) <= 12
+    assert 2 <= len(first) <= 8
     oldest_time = min(f.time for f in frames if f.time >= frames[t].time - 2.0 - 1e-9)
     oldest = next(f for f in frames if f.time == oldest_time)
     np.testing.assert_allclose(first[0][:2], oldest.position[oldest.index_of(0)], atol=1e-5)
@@ -408,16 +408,21 @@ def test_mistakes_name_missed_spurious_and_wrong_members(tmp_path):
     missed = rec.rows["/world/groups/reform/mistakes/missed"][0]
     spurious = rec.rows["/world/groups/reform/mistakes/spurious"][0]
     wrong = rec.rows["/world/groups/reform/mistakes/wrong_members"][0]
-    assert missed["LineStrips3D:labels"] == ["missed 4,5"]
-    assert spurious["LineStrips3D:labels"] == ["spurious 7,8"]
+    assert missed["Cylinders3D:labels"] == ["missed 4,5"]
+    assert spurious["Cylinders3D:labels"] == ["spurious 7,8"]
     assert wrong["Points3D:labels"] == ["extra 6"]
     np.testing.assert_allclose(np.array(wrong["Points3D:positions"])[0, :2], [0.5, -1])
-    ring = np.array(missed["LineStrips3D:strips"][0])
-    assert np.linalg.norm(ring[:, :2] - [5.5, 5.0], axis=1) == pytest.approx(
-        np.full(len(ring), 0.75)
-    )
+    # the missed ring: centre (5.5, 5), Tightness 0.5 m plus the 0.25 m mistake margin
+    np.testing.assert_allclose(np.array(missed["Cylinders3D:centers"])[:, :2], [[5.5, 5.0]])
+    np.testing.assert_allclose(missed["Cylinders3D:radii"], [0.75])
     centres = rec.rows["/world/groups/reform/centres"][0]["Points3D:positions"]
     np.testing.assert_allclose(np.array(centres)[:, :2], [[0.5, 0.0], [9.5, 0.0]], atol=1e-6)
+    circles = rec.rows["/world/groups/reform/circles"][0]
+    np.testing.assert_allclose(
+        np.array(circles["Cylinders3D:centers"])[:, :2], centres_xy := np.array(centres)[:, :2]
+    )
+    tightness_123_6 = np.linalg.norm(frame.position[[0, 1, 2, 5]] - centres_xy[0], axis=1).mean()
+    np.testing.assert_allclose(circles["Cylinders3D:radii"], [tightness_123_6, 0.5], rtol=1e-6)
 
 
 def test_running_scores_end_at_the_evaluation(episode):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -55,20 +56,19 @@ class Flat:
                 head_position=np.zeros((0, 2)),
                 head_yaw=empty,
             )
-        head_position = np.concatenate(
-            [
-                f.head_position if f.head_position is not None else np.full((f.n_people, 2), np.nan)
-                for f in frames
-            ]
-        )
-        head_yaw = np.concatenate(
-            [f.head_yaw if f.head_yaw is not None else np.full(f.n_people, np.nan) for f in frames]
-        )
+        offsets = np.concatenate([[0], np.cumsum(counts)])
+        head_position = np.full((n, 2), np.nan)
+        head_yaw = np.full(n, np.nan)
+        for k, frame in enumerate(frames):
+            if frame.head_position is not None:
+                head_position[offsets[k] : offsets[k + 1]] = frame.head_position
+                head_yaw[offsets[k] : offsets[k + 1]] = frame.head_yaw
+        kinds = np.array(list(itertools.chain.from_iterable(f.kinds for f in frames)))
         return cls(
             counts=counts,
             frame=np.repeat(np.arange(len(frames)), counts),
             ids=np.concatenate([f.ids for f in frames]),
-            robot=np.array([k == ROBOT for f in frames for k in f.kinds], dtype=bool),
+            robot=kinds == ROBOT,
             position=np.concatenate([f.position for f in frames]),
             yaw=np.concatenate([f.yaw for f in frames]),
             head_position=head_position,
@@ -99,6 +99,29 @@ class _ArrowBatch:
         return self._array
 
 
+def value_columns(counts: np.ndarray, **values: np.ndarray) -> list[rr.ComponentColumn]:
+    """Plain (archetype-less) components, e.g. ``person_id``, one value per instance.
+
+    Args:
+        counts: (n_frames,) instances per frame.
+        values: component name -> (sum(counts),) integer array.
+    """
+    return [
+        rr.ComponentColumn(name, _ArrowBatch(pa.array(_compact(np.asarray(array)))), lengths=counts)
+        for name, array in values.items()
+    ]
+
+
+def _compact(array: np.ndarray) -> np.ndarray:
+    """Integers as int32 when they fit (half the bytes of int64)."""
+    info = np.iinfo(np.int32)
+    if array.dtype.kind in "iu" and (
+        array.size == 0 or (array.min() >= info.min and array.max() <= info.max)
+    ):
+        return array.astype(np.int32)
+    return array
+
+
 def line_strips_column(
     points: np.ndarray, strip_lengths: np.ndarray, frame_lengths: np.ndarray
 ) -> rr.ComponentColumn:
@@ -120,14 +143,6 @@ def line_strips_column(
     return rr.ComponentColumn(
         rr.LineStrips3D.descriptor_strips(), _ArrowBatch(strips), lengths=frame_lengths
     )
-
-
-def circle_points(centres: np.ndarray, radii: np.ndarray, *, z: float, n_points: int) -> np.ndarray:
-    """(len(centres) * n_points, 3): closed circles at height ``z``, one after another."""
-    angles = np.linspace(0.0, 2.0 * np.pi, n_points)
-    x = centres[:, 0:1] + radii[:, None] * np.cos(angles)[None, :]
-    y = centres[:, 1:2] + radii[:, None] * np.sin(angles)[None, :]
-    return np.stack([x, y, np.full_like(x, z)], axis=-1).reshape(-1, 3)
 
 
 def at_height(position: np.ndarray, z: float | np.ndarray) -> np.ndarray:

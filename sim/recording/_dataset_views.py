@@ -24,7 +24,7 @@ import numpy as np
 import numpy.typing as npt
 import rerun as rr
 
-from reform import Frame, GroupShapes, characterise
+from reform import Frame, GroupShapes, characterise, pair_labels
 from sim.recording import _colours
 
 __all__ = [
@@ -95,14 +95,14 @@ def log_characterisation(
 
 def pair_scatter_data(frames: Iterable[Frame]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Distance (m), Effort Angle (rad) and label of every pair of the annotated frames."""
-    from reform.features import DISTANCE, EFFORT_ANGLE, frame_pair_features, pair_targets
+    from reform.features import DISTANCE, EFFORT_ANGLE, frame_pair_features
 
     features, labels = [], []
     for frame in frames:
         if frame.groups is None or frame.n_people < 2:
             continue
         features.append(frame_pair_features(frame, features=(DISTANCE, EFFORT_ANGLE)))
-        labels.append(pair_targets(frame))
+        labels.append(pair_labels(frame))
     if not features:
         return np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.int64)
     stacked = np.concatenate(features)

@@ -18,7 +18,7 @@ lingers from an earlier frame.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +26,7 @@ import rerun as rr
 
 from reform import Frame
 from sim.recording import _colours
-from sim.recording._columns import Flat, at_height, line_strips_column, unit
+from sim.recording._columns import Flat, at_height, line_strips_column, unit, value_columns
 from sim.recording._timeline import Clock
 
 __all__ = [
@@ -61,10 +61,10 @@ ARROW_RADIUS_M = 0.025  # metres
 OBSERVED_Z_M = 1.30  # metres: height of an observed person's marker
 OBSERVED_RADIUS_M = 0.09  # metres
 TRAIL_S = 2.0  # seconds of path shown behind each person
-TRAIL_POINTS = 12  # at most this many points per trail
+TRAIL_POINTS = 8  # at most this many points per trail
 TRAIL_Z_M = 0.03  # metres above the floor
 TRAIL_RADIUS_M = 0.015  # metres
-FIELD_OF_VIEW_ARC_POINTS = 17  # points on each arc of the drawn field of view
+FIELD_OF_VIEW_ARC_POINTS = 9  # points on each arc of the drawn field of view
 LABEL_RADIUS_M = 0.04  # metres
 
 
@@ -108,16 +108,15 @@ class PersonIndex:
     robot: np.ndarray
 
     @classmethod
-    def of(cls, *streams: Iterable[Frame]) -> PersonIndex:
-        kinds: dict[int, bool] = {}
-        for frames in streams:
-            for frame in frames:
-                for pid, robot in zip(frame.ids.tolist(), frame.is_robot.tolist(), strict=True):
-                    kinds[pid] = kinds.get(pid, False) or robot
-        ids = np.array(sorted(kinds), dtype=np.int64)
+    def of(cls, *streams: Flat) -> PersonIndex:
+        """Every id of the given (flattened) streams; an id is a robot if any row says so."""
+        all_ids = np.concatenate([s.ids for s in streams]) if streams else np.zeros(0, np.int64)
+        all_robot = np.concatenate([s.robot for s in streams]) if streams else np.zeros(0, bool)
+        ids, inverse = np.unique(all_ids, return_inverse=True)
         if ids.size >= 65535:
             raise ValueError(f"a run may hold at most 65534 distinct person ids, got {ids.size}")
-        return cls(ids=ids, robot=np.array([kinds[i] for i in ids.tolist()], dtype=bool))
+        robot = np.bincount(inverse, weights=all_robot, minlength=ids.size) > 0
+        return cls(ids=ids.astype(np.int64), robot=robot)
 
     def class_ids(self, ids: np.ndarray) -> np.ndarray:
         """(n,) uint16 class id (1 + rank) of each person id."""
@@ -182,11 +181,13 @@ def log_frames(
         raise ValueError(f"trail_s must be >= 0 seconds, got {trail_s}")
     clock = Clock.from_frames(frames) if clock is None else clock
     rows = clock.rows_of(frames)
-    people = PersonIndex.of(frames, observed or ())
+    flat = Flat.of(frames)
+    seen = None if observed is None else tuple(observed)
+    seen_flat = None if seen is None else Flat.of(seen)
+    people = PersonIndex.of(flat, *(() if seen_flat is None else (seen_flat,)))
     log_world_setup(rec)
     rec.log(WORLD_ROOT, people.annotation_context(), static=True)
 
-    flat = Flat.of(frames)
     for root, mask, robot in (
         (PEOPLE_ROOT, ~flat.robot, False),
         (ROBOT_ROOT, flat.robot, True),
@@ -199,9 +200,8 @@ def log_frames(
             _log_trails(rec, f"{root}/trails", part, clock, rows, people, trail_s=trail_s)
         if robot and field_of_view is not None:
             _log_field_of_view(rec, part, clock.columns(rows), field_of_view)
-    if observed is not None:
-        observed = tuple(observed)
-        _log_observed(rec, observed, clock, people)
+    if seen is not None:
+        _log_observed(rec, seen, seen_flat, clock, people)
     return clock
 
 
@@ -233,7 +233,7 @@ def _log_agents(
                     translations=at_height(part.position, radius),
                     class_ids=class_ids,
                 ).partition(part.counts),
-                *rr.AnyValues.columns(person_id=part.ids).partition(part.counts),
+                *value_columns(part.counts, person_id=part.ids),
             ],
             strict=True,
         )
@@ -245,7 +245,7 @@ def _log_agents(
             *rr.Points3D.columns(
                 positions=at_height(part.position, height + LABEL_CLEARANCE_M), class_ids=class_ids
             ).partition(part.counts),
-            *rr.AnyValues.columns(person_id=part.ids).partition(part.counts),
+            *value_columns(part.counts, person_id=part.ids),
         ],
         strict=True,
     )
@@ -322,12 +322,12 @@ def _log_trails(
     start = np.maximum(start, segment)[frame_of_row]
     start = np.maximum(start, last_absent[frame_of_row, slot] + 1)
     span = frame_of_row - start  # frames back to the window's start
-    stride = np.maximum(1, np.ceil((span + 1) / TRAIL_POINTS)).astype(np.int64)
-    # For each person-row: TRAIL_POINTS candidate frames, oldest first.
-    back = np.arange(TRAIL_POINTS - 1, -1, -1)
-    candidate = frame_of_row[:, None] - back[None, :] * stride[:, None]
-    valid = candidate >= start[:, None]
-    candidate = np.where(valid, candidate, frame_of_row[:, None])
+    # Up to TRAIL_POINTS frames evenly spread from the window's start to now, both included.
+    n_points = np.minimum(TRAIL_POINTS, span + 1)
+    j = np.arange(TRAIL_POINTS)[None, :]
+    valid = j < n_points[:, None]
+    offset = np.rint(j * span[:, None] / np.maximum(n_points - 1, 1)[:, None]).astype(np.int64)
+    candidate = np.where(valid, start[:, None] + offset, frame_of_row[:, None])
     points = dense[candidate, slot[:, None]]
     strip_lengths = valid.sum(axis=1)
     flat_points = at_height(points[valid], TRAIL_Z_M)
@@ -341,7 +341,7 @@ def _log_trails(
         indexes=clock.columns(rows),
         columns=[
             line_strips_column(flat_points, strip_lengths, part.counts),
-            *rr.AnyValues.columns(person_id=part.ids).partition(part.counts),
+            *value_columns(part.counts, person_id=part.ids),
         ],
         strict=True,
     )
@@ -381,10 +381,13 @@ def _log_field_of_view(
 
 
 def _log_observed(
-    rec: rr.RecordingStream, observed: tuple[Frame, ...], clock: Clock, people: PersonIndex
+    rec: rr.RecordingStream,
+    observed: tuple[Frame, ...],
+    flat: Flat,
+    clock: Clock,
+    people: PersonIndex,
 ) -> None:
     rows = clock.rows_of(observed, what="observed")
-    flat = Flat.of(observed)
     humans = flat.select(~flat.robot)
     times = clock.columns(rows)
     rec.log(
@@ -400,7 +403,7 @@ def _log_observed(
                 positions=at_height(humans.position, OBSERVED_Z_M),
                 class_ids=people.class_ids(humans.ids),
             ).partition(humans.counts),
-            *rr.AnyValues.columns(person_id=humans.ids).partition(humans.counts),
+            *value_columns(humans.counts, person_id=humans.ids),
         ],
         strict=True,
     )

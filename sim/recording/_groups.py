@@ -6,15 +6,16 @@
   person id and the index of their group in the partition as extra components;
 * ``centres``: each F-formation's o-space centre (the mean of its members' positions, as in
   Characterisation), labelled by its group;
-* ``circles``: a circle around each centre whose radius is the group's Tightness.
+* ``circles``: a ring around each centre whose radius is the group's Tightness (a flat open
+  cylinder, one instance per group).
 
 Groups are coloured through an annotation context (one class per group track): a group keeps its
 colour from frame to frame while it keeps a majority of its members, and a detected group that
 matches a true group (T = 2/3, ``reform.metrics``) takes that group's colour.
 
 For detectors, on annotated frames, mistakes are drawn under ``world/groups/<name>/mistakes``:
-``missed`` (true F-formations no detected group matches, red circles), ``spurious`` (detected
-F-formations that match no true group, magenta circles) and ``wrong_members`` (in a matched pair,
+``missed`` (true F-formations no detected group matches, red rings), ``spurious`` (detected
+F-formations that match no true group, magenta rings) and ``wrong_members`` (in a matched pair,
 people the detected group added, ``extra``, or left out, ``missing``).
 """
 
@@ -28,8 +29,8 @@ import rerun as rr
 
 from reform import T_TWO_THIRDS, Evaluation, Frame, Group, evaluate
 from sim.recording import _colours
-from sim.recording._columns import at_height, circle_points, line_strips_column
-from sim.recording._timeline import Clock
+from sim.recording._columns import at_height, value_columns
+from sim.recording._timeline import Clock, frame_keys
 
 __all__ = [
     "GROUPS_ROOT",
@@ -37,7 +38,6 @@ __all__ = [
     "GroupLayout",
     "LoggedGroups",
     "evaluate_detector",
-    "frame_key",
     "group_tracks",
     "log_groups",
 ]
@@ -46,8 +46,8 @@ GROUPS_ROOT = "world/groups"
 TRUTH = "truth"
 MEMBER_RADIUS_M = 0.28  # metres: the disc under a person
 CENTRE_RADIUS_M = 0.06  # metres
-CIRCLE_POINTS = 48
-CIRCLE_RADIUS_M = 0.012  # metres, line thickness
+RING_HEIGHT_M = 0.02  # metres: circles are drawn as flat open cylinders (two rings)
+RING_LINE_M = 0.01  # metres, line thickness
 MIN_CIRCLE_M = 0.15  # metres: smallest circle drawn
 MISTAKE_MARGIN_M = 0.25  # metres: mistake circles ring the group's circle
 WRONG_MEMBER_Z_M = 0.35  # metres
@@ -94,49 +94,38 @@ class GroupLayout:
                 f"{what} must hold one partition per frame: expected {len(frames)}, "
                 f"found {len(partitions)}"
             )
-        counts = np.zeros(len(frames), dtype=np.int64)
-        p_frame: list[int] = []
-        p_id: list[int] = []
-        p_group: list[int] = []
-        p_pos: list[np.ndarray] = []
-        p_ff: list[int] = []
+        m_frame: list[int] = []  # one entry per member, in partition order
+        m_id: list[int] = []
+        m_group: list[int] = []
+        m_ff: list[int] = []
         g_frame: list[int] = []
         g_members: list[Group] = []
-        for f, (frame, partition) in enumerate(zip(frames, partitions, strict=True)):
+        has_partition = np.zeros(len(frames), dtype=bool)
+        for f, partition in enumerate(partitions):
             if partition is None:
                 continue
-            row_of = {pid: k for k, pid in enumerate(frame.ids.tolist())}
-            order: list[int] = []
+            has_partition[f] = True
             for gi, group in enumerate(partition):
-                members = tuple(int(m) for m in group)
-                if not members:
-                    raise ValueError(f"{_where(what, f, frame)}: group {gi} is empty")
-                ff = len(g_frame) if len(members) >= 2 else -1
-                if ff >= 0:
+                members = tuple(map(int, group))
+                size = len(members)
+                if not size:
+                    raise ValueError(f"{_where(what, f, frames[f])}: group {gi} is empty")
+                ff = -1
+                if size >= 2:
+                    ff = len(g_frame)
                     g_frame.append(f)
                     g_members.append(members)
-                for m in members:
-                    k = row_of.pop(m, None)
-                    if k is None:
-                        problem = "appears twice" if m in frame.ids else "is not in the frame"
-                        raise ValueError(
-                            f"{_where(what, f, frame)}: person {m} (group {gi}) {problem}; "
-                            f"expected a full partition of ids {frame.ids.tolist()}"
-                        )
-                    order.append(k)
-                    p_group.append(gi)
-                    p_ff.append(ff)
-            if row_of:
-                raise ValueError(
-                    f"{_where(what, f, frame)}: person {next(iter(row_of))} is in no group; "
-                    "expected a full partition of the frame's ids, singletons included"
-                )
-            counts[f] = len(order)
-            p_frame.extend([f] * len(order))
-            p_id.extend(frame.ids[order].tolist())
-            p_pos.append(frame.position[order])
-        person_position = np.concatenate(p_pos) if p_pos else np.zeros((0, 2))
-        group_of_person = np.asarray(p_ff, dtype=np.int64)
+                m_id.extend(members)
+                m_frame.extend([f] * size)
+                m_group.extend([gi] * size)
+                m_ff.extend([ff] * size)
+        person_frame = np.asarray(m_frame, dtype=np.int64)
+        person_id = np.asarray(m_id, dtype=np.int64)
+        rows, flat_position = _locate(frames, person_frame, person_id)
+        _check_partitions(frames, partitions, what, has_partition, person_frame, person_id, rows)
+        counts = np.bincount(person_frame, minlength=len(frames)).astype(np.int64)
+        person_position = flat_position[rows]
+        group_of_person = np.asarray(m_ff, dtype=np.int64)
         n_groups = len(g_frame)
         member = group_of_person >= 0
         size = np.bincount(group_of_person[member], minlength=n_groups).astype(np.float64)
@@ -160,9 +149,9 @@ class GroupLayout:
             )
         return cls(
             counts=counts,
-            person_frame=np.asarray(p_frame, dtype=np.int64),
-            person_id=np.asarray(p_id, dtype=np.int64),
-            person_group=np.asarray(p_group, dtype=np.int64),
+            person_frame=person_frame,
+            person_id=person_id,
+            person_group=np.asarray(m_group, dtype=np.int64),
             person_position=person_position,
             group_frame=np.asarray(g_frame, dtype=np.int64),
             group_members=tuple(g_members),
@@ -175,11 +164,6 @@ class GroupLayout:
     def group_counts(self) -> np.ndarray:
         """(n_frames,) F-formations per frame."""
         return np.bincount(self.group_frame, minlength=self.counts.size).astype(np.int64)
-
-
-def frame_key(frame: Frame) -> tuple[str, int]:
-    """(sequence, time in microseconds): how frames of different streams are matched."""
-    return (frame.sequence, round(frame.time * 1_000_000))
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,6 +195,74 @@ class LoggedGroups:
                 strict=True,
             )
         }
+
+
+def _locate(
+    frames: Sequence[Frame], member_frame: np.ndarray, member_id: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Row of each (frame, person id) in the frames' concatenated arrays (-1 when absent), and
+    those concatenated positions."""
+    if not frames:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+    counts = np.fromiter((f.n_people for f in frames), dtype=np.int64, count=len(frames))
+    flat_id = np.concatenate([f.ids for f in frames])
+    flat_position = (
+        np.concatenate([f.position for f in frames]) if counts.sum() else np.zeros((0, 2))
+    )
+    flat_frame = np.repeat(np.arange(len(frames)), counts)
+    known = np.unique(flat_id)
+    rank = np.searchsorted(known, member_id)
+    found = (rank < known.size) & (known[np.minimum(rank, max(known.size - 1, 0))] == member_id)
+    table = flat_frame * known.size + np.searchsorted(known, flat_id)
+    order = np.argsort(table, kind="stable")
+    wanted = member_frame * known.size + rank
+    at = np.minimum(np.searchsorted(table[order], wanted), max(table.size - 1, 0))
+    found &= table.size > 0
+    found[found] &= table[order][at[found]] == wanted[found]
+    rows = np.where(found, order[at] if table.size else -1, -1)
+    return rows.astype(np.int64), flat_position
+
+
+def _check_partitions(
+    frames: Sequence[Frame],
+    partitions: Sequence[Sequence[Group] | None],
+    what: str,
+    has_partition: np.ndarray,
+    member_frame: np.ndarray,
+    member_id: np.ndarray,
+    rows: np.ndarray,
+) -> None:
+    """Raises for the first frame whose partition names a stranger, someone twice, or misses
+    someone."""
+    counts = np.fromiter((f.n_people for f in frames), dtype=np.int64, count=len(frames))
+    expected = np.where(has_partition, counts, 0)
+    covered = np.bincount(rows[rows >= 0], minlength=int(counts.sum()))
+    per_frame = np.bincount(member_frame, minlength=len(frames))
+    strangers = member_frame[rows < 0]
+    twice = np.zeros(len(frames), dtype=bool)
+    np.logical_or.at(twice, np.repeat(np.arange(len(frames)), counts), covered > 1)
+    bad = np.zeros(len(frames), dtype=bool)
+    bad[strangers] = True
+    bad |= twice | (per_frame != expected)
+    if not np.any(bad):
+        return
+    f = int(np.flatnonzero(bad)[0])
+    frame = frames[f]
+    seen: set[int] = set()
+    for gi, group in enumerate(partitions[f]):
+        for m in (int(x) for x in group):
+            if m not in set(frame.ids.tolist()) or m in seen:
+                problem = "appears twice" if m in seen else "is not in the frame"
+                raise ValueError(
+                    f"{_where(what, f, frame)}: person {m} (group {gi}) {problem}; "
+                    f"expected a full partition of ids {frame.ids.tolist()}"
+                )
+            seen.add(m)
+    missing = next(i for i in frame.ids.tolist() if i not in seen)
+    raise ValueError(
+        f"{_where(what, f, frame)}: person {missing} is in no group; "
+        "expected a full partition of the frame's ids, singletons included"
+    )
 
 
 def _where(what: str, index: int, frame: Frame) -> str:
@@ -390,9 +442,9 @@ def log_groups(
                 positions=at_height(layout.person_position, z),
                 class_ids=person_class.astype(np.uint16),
             ).partition(layout.counts),
-            *rr.AnyValues.columns(
-                person_id=layout.person_id, group_index=layout.person_group
-            ).partition(layout.counts),
+            *value_columns(
+                layout.counts, person_id=layout.person_id, group_index=layout.person_group
+            ),
         ],
         strict=True,
     )
@@ -406,25 +458,24 @@ def log_groups(
         ).partition(group_counts),
         strict=True,
     )
-    circle_radius = np.maximum(layout.group_radius, MIN_CIRCLE_M)
     rec.log(
         f"{root}/circles",
-        rr.LineStrips3D.from_fields(radii=[CIRCLE_RADIUS_M], show_labels=False),
+        rr.Cylinders3D.from_fields(
+            lengths=[RING_HEIGHT_M],
+            line_radii=[RING_LINE_M],
+            fill_mode=rr.components.FillMode.MajorWireframe,
+            show_labels=False,
+        ),
         static=True,
     )
     rec.send_columns(
         f"{root}/circles",
         indexes=times,
-        columns=[
-            line_strips_column(
-                circle_points(
-                    layout.group_centre, circle_radius, z=z + 0.005, n_points=CIRCLE_POINTS
-                ),
-                np.full(len(layout.group_members), CIRCLE_POINTS),
-                group_counts,
-            ),
-            *rr.LineStrips3D.columns(class_ids=tracks.astype(np.uint16)).partition(group_counts),
-        ],
+        columns=rr.Cylinders3D.columns(
+            centers=at_height(layout.group_centre, z + RING_HEIGHT_M / 2),
+            radii=np.maximum(layout.group_radius, MIN_CIRCLE_M).astype(np.float32),
+            class_ids=tracks.astype(np.uint16),
+        ).partition(group_counts),
         strict=True,
     )
     if not is_truth and evaluation is not None:
@@ -432,7 +483,7 @@ def log_groups(
     return LoggedGroups(
         layout=layout,
         tracks=tracks,
-        frame_keys=tuple(frame_key(f) for f in frames),
+        frame_keys=frame_keys(frames),
         rows=rows,
         evaluation=evaluation,
     )
@@ -447,6 +498,7 @@ def _inherit_tracks(
 ) -> dict[int, int]:
     """Detected F-formation row -> track of the true F-formation it matches (T = 2/3)."""
     track_of = truth.track_map()
+    keys = frame_keys(frames)
     fixed: dict[int, int] = {}
     for r in np.flatnonzero(detected_matched).tolist():
         f = int(layout.group_frame[r])
@@ -455,7 +507,7 @@ def _inherit_tracks(
             if matched and 3 * len(members & set(true_group)) >= 2 * max(
                 len(members), len(true_group)
             ):
-                key = (*frame_key(frames[f]), frozenset(true_group))
+                key = (*keys[f], frozenset(true_group))
                 if key in track_of:
                     fixed[r] = track_of[key]
                 break
@@ -485,11 +537,14 @@ def _log_mistakes(
     det_start = np.searchsorted(layout.group_frame, np.arange(n + 1))
     for f, truth in truth_by_frame.items():
         frame = frames[f]
+        row_of = {pid: k for k, pid in enumerate(frame.ids.tolist())}
         detected = [
             frozenset(layout.group_members[r]) for r in range(det_start[f], det_start[f + 1])
         ]
         for true_group, matched in truth:
-            members = frame.position[[frame.index_of(m) for m in true_group]]
+            if matched and frozenset(true_group) in detected:
+                continue  # found exactly: nothing to show
+            members = frame.position[[row_of[m] for m in true_group]]
             centre = members.mean(axis=0)
             if not matched:
                 missed_centre.append(centre)
@@ -503,7 +558,7 @@ def _log_mistakes(
                 *((p, "extra", _colours.EXTRA_MEMBER) for p in sorted(partner - true_set)),
                 *((p, "missing", _colours.MISSING_MEMBER) for p in sorted(true_set - partner)),
             ]:
-                wrong_position.append(frame.position[frame.index_of(person)])
+                wrong_position.append(frame.position[row_of[person]])
                 wrong_label.append(f"{kind} {person}")
                 wrong_colour.append(colour)
                 wrong_counts[f] += 1
@@ -564,19 +619,21 @@ def _log_rings(
     rings = np.maximum(radii, MIN_CIRCLE_M) + MISTAKE_MARGIN_M
     rec.log(
         entity,
-        rr.LineStrips3D.from_fields(radii=[CIRCLE_RADIUS_M * 2], colors=[colour]),
+        rr.Cylinders3D.from_fields(
+            lengths=[RING_HEIGHT_M],
+            line_radii=[2 * RING_LINE_M],
+            colors=[colour],
+            fill_mode=rr.components.FillMode.MajorWireframe,
+        ),
         static=True,
     )
     rec.send_columns(
         entity,
         indexes=times,
-        columns=[
-            line_strips_column(
-                circle_points(centres, rings, z=z + 0.01, n_points=CIRCLE_POINTS),
-                np.full(centres.shape[0], CIRCLE_POINTS),
-                counts,
-            ),
-            *rr.LineStrips3D.columns(labels=labels).partition(counts),
-        ],
+        columns=rr.Cylinders3D.columns(
+            centers=at_height(centres, z + RING_HEIGHT_M),
+            radii=rings.astype(np.float32),
+            labels=labels,
+        ).partition(counts),
         strict=True,
     )

@@ -20,13 +20,12 @@ from sim.recording._groups import (
     DETECTOR_Z_M,
     TRUTH,
     LoggedGroups,
-    frame_key,
     log_groups,
 )
 from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
 from sim.recording._scene import BodyPoses, log_body_poses, log_model, log_room, room_bounds
 from sim.recording._stream import RecordingTarget, open_recording, recording_id, target_from_args
-from sim.recording._timeline import Clock
+from sim.recording._timeline import Clock, frame_keys
 
 __all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
 
@@ -58,10 +57,10 @@ def _check_names(detections: Mapping[str, Any]) -> None:
 
 def _with_truth(observed: Sequence[Frame], world: Sequence[Frame]) -> tuple[Frame, ...]:
     """Observed frames without ground truth get the world's, restricted to who was observed."""
-    world_by_key = {frame_key(f): f for f in world}
+    world_by_key = dict(zip(frame_keys(world), world, strict=True))
     out = []
-    for frame in observed:
-        truth = world_by_key.get(frame_key(frame))
+    for frame, key in zip(observed, frame_keys(observed), strict=True):
+        truth = world_by_key.get(key)
         if frame.groups is None and truth is not None and truth.groups is not None:
             seen = set(frame.ids.tolist())
             groups = tuple(kept for g in truth.groups if (kept := tuple(m for m in g if m in seen)))

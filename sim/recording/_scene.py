@@ -349,15 +349,12 @@ def room_bounds(
     frames: Iterable[Frame], *, margin_m: float = ROOM_MARGIN_M
 ) -> tuple[float, float, float, float]:
     """``(x_min, x_max, y_min, y_max)`` metres: everyone's extent over the run plus a margin."""
-    lows, highs = [], []
-    for frame in frames:
-        if frame.n_people:
-            lows.append(frame.position.min(axis=0))
-            highs.append(frame.position.max(axis=0))
-    if not lows:
+    frames = [f for f in frames if f.n_people]
+    if not frames:
         return (-margin_m, margin_m, -margin_m, margin_m)
-    low = np.min(lows, axis=0) - margin_m
-    high = np.max(highs, axis=0) + margin_m
+    positions = np.concatenate([f.position for f in frames])
+    low = positions.min(axis=0) - margin_m
+    high = positions.max(axis=0) + margin_m
     return (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
 
 

@@ -12,23 +12,31 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import rerun as rr
 
 from reform import Frame
 
-__all__ = ["FRAME_TIMELINE", "SIM_TIME_TIMELINE", "Clock"]
+__all__ = ["FRAME_TIMELINE", "SIM_TIME_TIMELINE", "Clock", "frame_keys", "time_keys"]
 
 FRAME_TIMELINE = "frame"  # sequence timeline: index of the frame in the run
 SIM_TIME_TIMELINE = "sim_time"  # duration timeline: simulated seconds since the run started
 
 # Frame times are matched to the microsecond: observed frames and detections find their world
 # frame by (sequence, time) even after a round trip through float32 or Parquet.
-_TIME_KEY_SCALE = 1_000_000  # keys per second
+TIME_KEY_SCALE = 1_000_000  # keys per second
 _DEFAULT_STEP_S = 1.0  # seconds: gap after a one-frame sequence
 
 
-def _key(sequence: str, time: float) -> tuple[str, int]:
-    return (sequence, round(time * _TIME_KEY_SCALE))
+def time_keys(times: npt.ArrayLike) -> np.ndarray:
+    """(n,) int64 time stamps in microseconds (rounded half to even)."""
+    return np.rint(np.asarray(times, dtype=np.float64) * TIME_KEY_SCALE).astype(np.int64)
+
+
+def frame_keys(frames: Sequence[Frame]) -> tuple[tuple[str, int], ...]:
+    """(sequence, time in microseconds) of each frame: how streams of one run are matched."""
+    keys = time_keys([f.time for f in frames]).tolist()
+    return tuple(zip((f.sequence for f in frames), keys, strict=True))
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,7 +58,8 @@ class Clock:
     time: np.ndarray
     sim_time: np.ndarray
     segment_start: np.ndarray
-    _rows: dict[tuple[str, int], int]
+    # sequence -> (sorted time keys, their rows)
+    _tables: dict[str, tuple[np.ndarray, np.ndarray]]
 
     @classmethod
     def from_frames(cls, frames: Iterable[Frame]) -> Clock:
@@ -69,41 +78,56 @@ class Clock:
         return cls.from_times(sequences, times)
 
     @classmethod
-    def from_times(cls, sequences: Sequence[str], times: Sequence[float]) -> Clock:
+    def from_times(cls, sequences: Sequence[str], times: npt.ArrayLike) -> Clock:
         """The clock of frames given by their sequence names and time stamps (seconds)."""
         time = np.asarray(times, dtype=np.float64)
+        sequences = tuple(sequences)
         if time.shape != (len(sequences),):
             raise ValueError(f"times must have shape ({len(sequences)},), got {time.shape}")
         n = time.size
-        sim_time = np.zeros(n)
-        segment_start = np.zeros(n, dtype=np.int64)
-        rows: dict[tuple[str, int], int] = {}
+        new = np.ones(n, dtype=bool)
+        if n > 1:
+            new[1:] = np.array(sequences[1:], dtype=object) != np.array(
+                sequences[:-1], dtype=object
+            )
+        backwards = np.flatnonzero(~new[1:] & (np.diff(time) < 0)) + 1
+        if backwards.size:
+            i = int(backwards[0])
+            raise ValueError(
+                f"frames[{i}] (sequence {sequences[i]!r}) has time {time[i]:g} s, before the "
+                f"previous frame's {time[i - 1]:g} s: frames must be in time order"
+            )
+        starts = np.flatnonzero(new)
+        segment_start = starts[np.searchsorted(starts, np.arange(n), side="right") - 1]
+        sim_time = time.copy()
+        ends = np.append(starts[1:], n)
         offset = 0.0
-        start = 0
-        for i in range(n):
-            if i > 0 and sequences[i] != sequences[i - 1]:
-                offset = sim_time[i - 1] + _step(time[start:i]) - time[i]
-                start = i
-            elif i > 0 and time[i] < time[i - 1]:
+        for k, (a, b) in enumerate(zip(starts.tolist(), ends.tolist(), strict=True)):
+            if k:
+                previous = sim_time[starts[k - 1] : a]
+                offset = previous[-1] + _step(time[starts[k - 1] : a]) - time[a]
+            sim_time[a:b] = time[a:b] + offset
+        keys = time_keys(time)
+        tables: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        names = np.array(sequences, dtype=object)
+        for name in dict.fromkeys(sequences):
+            rows = np.flatnonzero(names == name)
+            order = np.argsort(keys[rows], kind="stable")
+            sorted_keys, sorted_rows = keys[rows][order], rows[order]
+            repeats = np.flatnonzero(np.diff(sorted_keys) == 0)
+            if repeats.size:
+                first, again = sorted(sorted_rows[[repeats[0], repeats[0] + 1]].tolist())
                 raise ValueError(
-                    f"frames[{i}] (sequence {sequences[i]!r}) has time {time[i]:g} s, before the "
-                    f"previous frame's {time[i - 1]:g} s: frames must be in time order"
+                    f"frames[{again}] repeats sequence {name!r} time {time[again]:g} s "
+                    f"(frames[{first}]): each frame needs its own time stamp"
                 )
-            key = _key(sequences[i], float(time[i]))
-            if key in rows:
-                raise ValueError(
-                    f"frames[{i}] repeats sequence {sequences[i]!r} time {time[i]:g} s "
-                    f"(frames[{rows[key]}]): each frame needs its own time stamp"
-                )
-            rows[key] = i
-            sim_time[i] = time[i] + offset
-            segment_start[i] = start
+            tables[name] = (sorted_keys, sorted_rows)
         return cls(
-            sequence=tuple(sequences),
+            sequence=sequences,
             time=_readonly(time),
             sim_time=_readonly(sim_time),
-            segment_start=_readonly(segment_start),
-            _rows=rows,
+            segment_start=_readonly(segment_start.astype(np.int64)),
+            _tables=tables,
         )
 
     def __len__(self) -> int:
@@ -119,22 +143,35 @@ class Clock:
         return self.rows_at([f.sequence for f in frames], [f.time for f in frames], what=what)
 
     def rows_at(
-        self, sequences: Sequence[str], times: Sequence[float], *, what: str = "times"
+        self, sequences: Sequence[str], times: npt.ArrayLike, *, what: str = "times"
     ) -> np.ndarray:
         """(n,) int64 row of the frame with each (sequence, time stamp in seconds).
 
         Raises:
             ValueError: naming the first (sequence, time) that is not a frame of the run.
         """
-        rows = np.empty(len(times), dtype=np.int64)
-        for i, (sequence, time) in enumerate(zip(sequences, times, strict=True)):
-            row = self._rows.get(_key(sequence, float(time)))
-            if row is None:
-                raise ValueError(
-                    f"{what}[{i}] (sequence {sequence!r}, time {float(time):g} s) matches no "
-                    "frame of the run: expected the (sequence, time) of one of its frames"
-                )
-            rows[i] = row
+        sequences = list(sequences)
+        time = np.asarray(times, dtype=np.float64).reshape(-1)
+        keys = time_keys(time)
+        rows = np.full(keys.size, -1, dtype=np.int64)
+        names = np.array(sequences, dtype=object)
+        for name in dict.fromkeys(sequences):
+            query = np.flatnonzero(names == name)
+            table_keys, table_rows = self._tables.get(
+                name, (np.zeros(0, np.int64), np.zeros(0, np.int64))
+            )
+            if table_keys.size == 0:
+                continue
+            at = np.minimum(np.searchsorted(table_keys, keys[query]), table_keys.size - 1)
+            hit = table_keys[at] == keys[query]
+            rows[query[hit]] = table_rows[at[hit]]
+        missing = np.flatnonzero(rows < 0)
+        if missing.size:
+            i = int(missing[0])
+            raise ValueError(
+                f"{what}[{i}] (sequence {sequences[i]!r}, time {time[i]:g} s) matches no "
+                "frame of the run: expected the (sequence, time) of one of its frames"
+            )
         return rows
 
     def row_at(self, time: float, *, sequence: str | None = None) -> int:
@@ -142,13 +179,13 @@ class Clock:
         if not len(self):
             raise ValueError("the run has no frames")
         name = self.sequence[0] if sequence is None else sequence
-        members = np.flatnonzero(np.asarray(self.sequence, dtype=object) == name)
-        if members.size == 0:
+        if name not in self._tables:
             raise ValueError(
-                f"sequence {name!r} is not in the run (sequences {sorted(set(self.sequence))})"
+                f"sequence {name!r} is not in the run (sequences {sorted(self._tables)})"
             )
-        k = int(np.searchsorted(self.time[members], time, side="right")) - 1
-        return int(members[max(k, 0)])
+        keys, rows = self._tables[name]
+        k = int(np.searchsorted(keys, time_keys([time])[0], side="right")) - 1
+        return int(rows[max(k, 0)])
 
     def sim_time_at(self, time: float, *, sequence: str | None = None) -> float:
         """Position of ``time`` (seconds, in ``sequence``) on the ``sim_time`` timeline."""
