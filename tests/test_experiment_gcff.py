@@ -75,3 +75,28 @@ def test_markdown_and_json(comparison):
     assert data["command"] == command
     assert len(data["tuning"]["grid"]) == 4
     assert len(data["results"]) == 10
+
+
+def test_command_writes_markdown_and_json(tmp_path, salsa_dir, babble_dir, capsys):
+    from sim.cli import main
+
+    reform_json = tmp_path / "reform.json"
+    out = tmp_path / "results" / "gcff-comparison"
+    args = ["--salsa", str(salsa_dir), "--babble", str(babble_dir)]
+    args += ["--stride-grid", "0.7", "--mdl-grid", "1"]
+    assert main(["experiment", "gcff", *args, "--out", str(out)]) == 0
+    first = json.loads(out.with_suffix(".json").read_text())
+    assert "--stride-grid 0.7 --mdl-grid 1" in first["command"]
+    assert any("REFORM's classifiers are not in this run" in n for n in first["notes"])
+    # Another detector's evaluation on the same frames joins the tables.
+    other = dict(first["results"][0], detector="Other detector")
+    reform_json.write_text(json.dumps(other))
+    assert (
+        main(["experiment", "gcff", *args, "--with-results", str(reform_json), "--out", str(out)])
+        == 0
+    )
+    second = json.loads(out.with_suffix(".json").read_text())
+    assert second["results"][-1]["detector"] == "Other detector"
+    assert second["notes"] == []
+    assert "| Other detector" in out.with_suffix(".md").read_text()
+    assert "wrote" in capsys.readouterr().err

@@ -66,6 +66,20 @@ def register(subparsers) -> None:
         help="orientation GCFF uses (default: body, as the paper)",
     )
     parser.add_argument(
+        "--stride-grid",
+        type=_floats,
+        default=None,
+        metavar="S1,S2,...",
+        help="strides tried when tuning, metres (default: 0.4 to 1.0 by 0.1)",
+    )
+    parser.add_argument(
+        "--mdl-grid",
+        type=_floats,
+        default=None,
+        metavar="M1,M2,...",
+        help="mdl values tried when tuning, square metres (default: 0.5 0.75 1 1.5 2 3 4)",
+    )
+    parser.add_argument(
         "--with-results",
         action="append",
         default=[],
@@ -74,6 +88,16 @@ def register(subparsers) -> None:
         "of another detector on the same frames; repeatable",
     )
     parser.set_defaults(handler=run)
+
+
+def _floats(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers, e.g. 0.5,0.7, got {text!r}"
+        ) from None
+    return values
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -88,6 +112,9 @@ def _command(args: argparse.Namespace) -> str:
         "--train-fraction",
         f"{args.train_fraction:g}",
     ]
+    for flag, grid in (("--stride-grid", args.stride_grid), ("--mdl-grid", args.mdl_grid)):
+        if grid is not None:
+            words += [flag, ",".join(f"{v:g}" for v in grid)]
     if args.gcff_orientation != "body":
         words += ["--gcff-orientation", args.gcff_orientation]
     for path in args.with_results:
@@ -125,11 +152,17 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
     extra = [result for path in args.with_results for result in _read_results(path)]
     print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
+    grids = {
+        name: value
+        for name, value in (("stride_grid", args.stride_grid), ("mdl_grid", args.mdl_grid))
+        if value is not None
+    }
     comparison = gcff_comparison(
         load_salsa(args.salsa),
         load_babble(args.babble),
         train_fraction=args.train_fraction,
         orientation=args.gcff_orientation,
+        **grids,
     )
     if extra:
         comparison = comparison.with_results(extra)
@@ -146,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
     command = _command(args)
     markdown = comparison.to_markdown(command=command)
     out = Path(args.out)
+    if out.suffix in (".md", ".json"):
+        out = out.with_suffix("")
     with atomic_open(out.with_name(out.name + ".md")) as handle:
         handle.write(markdown)
     with atomic_open(out.with_name(out.name + ".json")) as handle:
