@@ -135,10 +135,11 @@ def effort_angle(
     position_i = np.asarray(position_i, dtype=np.float64)
     position_j = np.asarray(position_j, dtype=np.float64)
     delta = position_j - position_i
-    phi = np.arctan2(delta[..., 1], delta[..., 0])
-    return _effort_from_phi(
-        phi, np.asarray(yaw_i, dtype=np.float64), np.asarray(yaw_j, dtype=np.float64)
-    )
+    phi = np.atleast_1d(np.arctan2(delta[..., 1], delta[..., 0]))
+    shape = np.broadcast_shapes(delta.shape[:-1], np.shape(yaw_i), np.shape(yaw_j))
+    yaw_i = np.atleast_1d(np.asarray(yaw_i, dtype=np.float64))
+    yaw_j = np.atleast_1d(np.asarray(yaw_j, dtype=np.float64))
+    return _effort_from_phi(phi, yaw_i, yaw_j).reshape(shape)
 
 
 def _effort_from_phi(phi: np.ndarray, yaw_i: np.ndarray, yaw_j: np.ndarray) -> np.ndarray:

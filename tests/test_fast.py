@@ -1,0 +1,106 @@
+"""Compiled pair classifiers give exactly the scikit-learn classifier's labels."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
+from sklearn.linear_model import LogisticRegression
+from sklearn.naive_bayes import GaussianNB
+from sklearn.neighbors import KNeighborsClassifier
+from sklearn.tree import DecisionTreeClassifier
+
+from reform.classifiers import bagged_trees, logistic_regression, weighted_knn
+from reform.fast import compile_classifier, sklearn_pair_labels
+
+
+def pair_data(seed: int, n: int = 4000) -> tuple[np.ndarray, np.ndarray]:
+    """Distance-and-angle-like features with a noisy 'close and facing' rule."""
+    rng = np.random.default_rng(seed)
+    x = np.column_stack([rng.gamma(2.0, 1.5, n), rng.uniform(0, 2 * np.pi, n)])
+    y = ((x[:, 0] < 2.0) & (x[:, 1] < 2.5)) ^ (rng.random(n) < 0.08)
+    return x, y.astype(int)
+
+
+def queries(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    x, _ = pair_data(seed + 1, 10000)
+    wide = np.column_stack([rng.uniform(-1, 30, 5000), rng.uniform(-1, 7, 5000)])
+    return np.concatenate([x, wide, [[0.0, 0.0], [-0.0, -0.0], [1e30, 1e30]]])
+
+
+CLASSIFIERS = {
+    "bagged-trees": lambda: bagged_trees(min_samples_leaf=5),
+    "bagged-trees-pure": lambda: bagged_trees(n_estimators=8, min_samples_leaf=1),
+    "bagged-feature-subsets": lambda: BaggingClassifier(
+        DecisionTreeClassifier(), n_estimators=10, max_features=1, random_state=1
+    ),
+    "random-forest": lambda: RandomForestClassifier(
+        n_estimators=12, min_samples_leaf=3, random_state=0
+    ),
+    "extra-trees": lambda: ExtraTreesClassifier(n_estimators=4, min_samples_leaf=4, random_state=0),
+    "one-tree": lambda: DecisionTreeClassifier(min_samples_leaf=2, random_state=0),
+    "weighted-knn": lambda: weighted_knn(n_neighbors=15),
+    "uniform-knn": lambda: KNeighborsClassifier(n_neighbors=4),
+    "logistic-regression": logistic_regression,
+    "bare-logistic": lambda: LogisticRegression(C=0.3),
+    "naive-bayes": GaussianNB,
+}
+
+
+@pytest.mark.parametrize("name", list(CLASSIFIERS))
+@pytest.mark.parametrize("threshold", [None, 0.25, 0.5])
+def test_compiled_labels_equal_scikit_learn(name, threshold):
+    x, y = pair_data(0)
+    classifier = CLASSIFIERS[name]().fit(x, y)
+    compiled = compile_classifier(classifier, threshold=threshold)
+    assert compiled.exact
+    q = queries(1)
+    expected = sklearn_pair_labels(classifier, q, threshold=threshold)
+    assert np.array_equal(compiled.predict(q), expected)
+    assert compiled.predict(q[:0]).shape == (0,)
+
+
+def test_tree_ensembles_compile_to_a_table_or_fall_back_to_apply():
+    x, y = pair_data(2)
+    classifier = bagged_trees(min_samples_leaf=20).fit(x, y)
+    table = compile_classifier(classifier)
+    assert table.kind == "tree-table"
+    fallback = compile_classifier(classifier, max_cells=100)
+    assert fallback.kind == "tree-apply"
+    q = queries(3)
+    assert np.array_equal(table.predict(q), fallback.predict(q))
+    assert np.array_equal(table.predict(q), classifier.predict(q) == 1)
+
+
+def test_three_features_use_apply():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(3000, 3))
+    y = (x.sum(axis=1) > 0).astype(int)
+    classifier = bagged_trees(n_estimators=5, min_samples_leaf=5).fit(x, y)
+    compiled = compile_classifier(classifier)
+    assert compiled.kind == "tree-apply"
+    q = rng.normal(size=(5000, 3))
+    assert np.array_equal(compiled.predict(q), classifier.predict(q) == 1)
+
+
+def test_kinds():
+    x, y = pair_data(4, 2000)
+    assert compile_classifier(weighted_knn().fit(x, y)).kind == "neighbors"
+    assert compile_classifier(logistic_regression().fit(x, y)).kind == "linear"
+    assert compile_classifier(GaussianNB().fit(x, y)).kind == "sklearn"
+
+
+def test_ties_are_settled_as_scikit_learn_settles_them():
+    # Two pure trees that disagree on half the plane: a 1-1 vote, which argmax gives to class 0.
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]] * 10)
+    y = np.array([0, 1, 1, 1] * 10)
+    classifier = BaggingClassifier(
+        DecisionTreeClassifier(), n_estimators=2, max_features=1, bootstrap=False, random_state=0
+    ).fit(x, y)
+    grid = np.array([[a, b] for a in (-1, 0, 0.5, 1, 2) for b in (-1, 0, 0.5, 1, 2)], dtype=float)
+    for threshold in (None, 0.5, 0.75):
+        expected = sklearn_pair_labels(classifier, grid, threshold=threshold)
+        assert np.array_equal(
+            compile_classifier(classifier, threshold=threshold).predict(grid), expected
+        )
