@@ -15,7 +15,8 @@ Primitives, per control step ``dt`` (seconds):
   drops while the heading is wrong; closer than that people side-step at low speed without
   turning.
 * **Avoid** other agents while walking: a short-range repulsion with a bias to pass on the right.
-* **Keep personal space**, strictly: after each step, overlapping discs (body radius plus
+* **Keep personal space**, strictly: nobody moves toward an agent they touch (the velocity
+  component toward them is dropped); after each step, overlapping discs (body radius plus
   ``margin``) are pushed apart (walkers yield more than people standing), clamped inside the
   walls, and any agent still in conflict is put back where it was, where no conflict existed.
   So no two present agents are ever closer than the sum of their radii plus ``margin``.
@@ -116,6 +117,7 @@ AVOID_GAIN_M_S = 0.9  # m/s, repulsion at contact
 AVOID_DECAY_M = 0.3  # metres, decay length of the repulsion with the gap
 AVOID_TANGENT = 0.6  # share of the repulsion turned into passing on the right
 AVOID_FRONT_COS = -0.2  # agents further behind than this cosine are ignored
+CONTACT_GAP_M = 0.03  # metres, closer than this (beyond radii and margin) agents are in touch
 STANDING_WEIGHT = 0.25  # a standing agent yields this much relative to a walker (1.0)
 PROJECTION_ITERATIONS = 12  # passes of the pairwise push-apart per step
 SWAY_FADE_SPEED_M_S = 0.3  # m/s, sway is gone at this walking speed
@@ -453,6 +455,21 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
             if dv > max_accel * dt:
                 dvx, dvy = dvx * max_accel * dt / dv, dvy * max_accel * dt / dv
             vx, vy = state[i, S_VX] + dvx, state[i, S_VY] + dvy
+            if vx != 0.0 or vy != 0.0:
+                # Nobody walks into someone they touch: drop the velocity toward them.
+                for j in range(n):
+                    if j == i or state[j, S_PRESENT] < 0.5:
+                        continue
+                    rx, ry = state[j, S_X] - x, state[j, S_Y] - y
+                    reach = params[i, P_RADIUS] + params[j, P_RADIUS] + margin + CONTACT_GAP_M
+                    d2 = rx * rx + ry * ry
+                    if d2 >= reach * reach or d2 < 1e-18:
+                        continue
+                    d = math.sqrt(d2)
+                    approach = (vx * rx + vy * ry) / d
+                    if approach > 0.0:
+                        vx -= approach * rx / d
+                        vy -= approach * ry / d
             state[i, S_VX], state[i, S_VY] = vx, vy
             new_x[i] = x + vx * dt
             new_y[i] = y + vy * dt

@@ -422,6 +422,8 @@ class World:
         self._step_index = 0
         self._intent_tick = -1
         self._groups_cache: dict[int, tuple[Group, ...] | None] = {}
+        self._last_raw_groups: Any = None
+        self._last_groups: tuple[Group, ...] | None = None
         self._manual_groups: tuple[Group, ...] | None = None
         self._present = state[:, motion.S_PRESENT] > 0.5
         self._buffers: dict[int, tuple[np.ndarray, ...]] = {}
@@ -597,6 +599,7 @@ class World:
         *,
         rate: float = 1.0 / DEFAULT_DT_S,
         block_rows: int = DEFAULT_BLOCK_ROWS,
+        threads: int = 1,
     ) -> Iterator[Poses]:
         """Advances by ``duration`` seconds, yielding poses every ``1 / rate`` s in blocks.
 
@@ -604,13 +607,16 @@ class World:
         motion kernel, then MuJoCo computes the kinematics of all its rows in one call
         (`mujoco.batch`). After each block the world (and `data`) is at the block's last time.
         Only one block is held at a time, so hour-long runs stream in constant memory.
+        ``threads`` > 1 computes a block's kinematics on that many threads (identical results).
         """
         if isinstance(block_rows, bool) or not isinstance(block_rows, (int, np.integer)):
             raise ValueError(f"block_rows must be a positive int, got {block_rows!r}")
         if block_rows < 1:
             raise ValueError(f"block_rows must be a positive int, got {block_rows}")
+        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+            raise ValueError(f"threads must be a positive int, got {threads!r}")
         every, count = self._output_plan(duration, rate)
-        batch = self._batch_of(int(block_rows))
+        batch = self._batch_of(int(block_rows), int(threads))
         b_mpos, b_mquat, b_qpos = batch.mocap_pos, batch.mocap_quat, batch.qpos
         b_xpos, b_xquat = batch.xpos, batch.xquat
         bodies = np.concatenate([self._torso_body, self._head_body])
@@ -705,10 +711,11 @@ class World:
             )
         return self._buffers[rows]
 
-    def _batch_of(self, rows: int) -> mj_batch.Batch:
-        if self._batch is None or self._batch.nsim != rows:
-            self._batch = mj_batch.Batch(self._model, nsim=rows, nthread=1)
-        return self._batch
+    def _batch_of(self, rows: int, threads: int) -> mj_batch.Batch:
+        batch = self._batch
+        if batch is None or batch.nsim != rows or batch.nthread != threads:
+            batch = self._batch = mj_batch.Batch(self._model, nsim=rows, nthread=threads)
+        return batch
 
     def _write_initial_pose(self) -> None:
         mpos, mquat, qpos, present = self._buffer(1)
@@ -796,7 +803,11 @@ class World:
         cache = self._groups_cache
         if tick not in cache:
             t = tick * self._steps_per_decision * self._dt
-            groups = self._validate_groups(self._script.groups(t), t)
+            raw = self._script.groups(t)
+            if raw is not self._last_raw_groups or raw is None:
+                self._last_groups = self._validate_groups(raw, t)
+                self._last_raw_groups = raw
+            groups = self._last_groups
             if len(cache) >= 4:
                 cache.pop(min(cache))
             cache[tick] = groups

@@ -1,0 +1,217 @@
+"""Simulation speed: simulated seconds per wall-clock second, beside a bare MuJoCo loop.
+
+For 7, 18 and 50 people (and the robot) wandering a room at 100 Hz pose output, measured in the
+same run on the same compiled model:
+
+* **bare**: ``mujoco.mj_kinematics(model, data)`` in a Python loop, once per 100 Hz step, and
+  nothing else (no motion, no output): the floor a Python-driven kinematic world stands on;
+* **rollout**: ``World.rollout(..., rate=100)``: the script sampled at 10 Hz, the compiled motion
+  kernel (walking, avoidance, personal space, head, sway) at 100 Hz, MuJoCo's kinematics for
+  every step (one batched call per block), body and head poses read back as `Poses` arrays;
+* **frames**: ``World.run(..., rate=100)``: the same, one `reform.Frame` per step (validated
+  records; this path is meant for annotation rates of a few hertz);
+* with ``--threads 2``, the rollout again with the block's kinematics on two threads.
+
+Then a one-hour run of 50 people streams 360,000 rows of poses through ``World.rollout`` and
+reports the peak memory it traced (numpy allocations) next to the size of the whole run.
+
+Prints medians over ``--repeats`` runs and the ratio harness / bare (lower is better).
+Target (issue 5): 18 people at >= 1,000x real time, harness <= 3x the bare loop.
+
+Run: ``python benchmarks/bench_sim.py [--quick] [--repeats 5] [--threads 2] [--no-hour]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+import tracemalloc
+from collections.abc import Mapping
+
+import mujoco
+import numpy as np
+
+from sim import Intent, PersonSpec, RobotSpec, SceneSpec, World
+
+SIZES = (7, 18, 50)  # people per scene (plus the robot)
+ROOMS_M = {7: 5.0, 18: 7.0, 50: 11.0}  # metres, side of the square room per size
+SEED = 20200915
+SIM_SECONDS = 60.0  # simulated seconds per timed run
+RATE_HZ = 100.0  # pose output rate
+HOUR_S = 3600.0  # seconds
+TARGET_SPEED_18 = 1000.0  # x real time
+TARGET_RATIO = 3.0  # harness / bare loop
+GOAL_PERIOD_S = (4.0, 10.0)  # seconds between new goals, per person (uniform)
+
+
+class Wander:
+    """Each person walks to a new random spot every few seconds, looking at someone else.
+
+    Pure function of time: the schedule is drawn once from the generator. The mapping returned
+    only changes when someone's goal changes (the world skips unchanged intents).
+    """
+
+    def __init__(self, spec: SceneSpec, rng: np.random.Generator) -> None:
+        people = spec.people
+        self.ids = np.array([p.id for p in people])
+        half = 0.5 * spec.room[0] - 0.6
+        self.period = rng.uniform(*GOAL_PERIOD_S, size=len(people))
+        self.offset = rng.uniform(0.0, 1.0, size=len(people)) * self.period
+        self.goals = rng.uniform(-half, half, size=(2000, len(people), 2))
+        self.gaze = rng.integers(0, len(people), size=(2000, len(people)))
+        self.speed = rng.uniform(1.0, 1.4, size=(2000, len(people)))
+        self.key: tuple[int, ...] | None = None
+        self.mapping: dict[int, Intent] = {}
+        self.cache: dict[tuple[int, int], Intent] = {}
+        self.group_list = tuple(
+            (int(a), int(b)) for a, b in zip(self.ids[0::2], self.ids[1::2], strict=False)
+        )
+
+    def _intent(self, i: int, k: int) -> Intent:
+        if (i, k) not in self.cache:
+            j = int(self.gaze[k, i])
+            self.cache[(i, k)] = Intent(
+                goal=(float(self.goals[k, i, 0]), float(self.goals[k, i, 1])),
+                speed=float(self.speed[k, i]),
+                gaze_agent=int(self.ids[j]) if j != i else None,
+            )
+        return self.cache[(i, k)]
+
+    def intents(self, t: float) -> Mapping[int, Intent]:
+        k = np.floor((t + self.offset) / self.period).astype(int) % self.goals.shape[0]
+        key = tuple(k.tolist())
+        if key != self.key:
+            self.key = key
+            self.mapping = {int(pid): self._intent(i, key[i]) for i, pid in enumerate(self.ids)}
+        return self.mapping
+
+    def groups(self, t: float) -> tuple[tuple[int, ...], ...]:
+        return self.group_list
+
+
+def scene(n: int) -> SceneSpec:
+    """``n`` people on a grid in a square room, the robot in a corner."""
+    side = ROOMS_M[n]
+    cols = math.ceil(math.sqrt(n))
+    spacing = (side - 2.0) / cols
+    people = [
+        PersonSpec(
+            id=i + 1,
+            position=(
+                -side / 2 + 1.0 + spacing * (i % cols),
+                -side / 2 + 1.0 + spacing * (i // cols),
+            ),
+            yaw=0.3 * i,
+        )
+        for i in range(n)
+    ]
+    robot = RobotSpec(id=0, position=(side / 2 - 0.5, side / 2 - 0.5), yaw=-2.3)
+    return SceneSpec(people=people, robot=robot, room=(side, side))
+
+
+def world_for(n: int) -> World:
+    spec = scene(n)
+    return World(spec, seed=SEED, script=Wander(spec, np.random.default_rng(SEED + n)))
+
+
+def time_bare(model: mujoco.MjModel, steps: int) -> float:
+    data = mujoco.MjData(model)
+    kinematics = mujoco.mj_kinematics
+    start = time.perf_counter()
+    for _ in range(steps):
+        kinematics(model, data)
+    return time.perf_counter() - start
+
+
+def time_rollout(n: int, seconds: float, threads: int = 1) -> float:
+    world = world_for(n)
+    start = time.perf_counter()
+    rows = 0
+    for block in world.rollout(seconds, rate=RATE_HZ, threads=threads):
+        rows += len(block)
+    elapsed = time.perf_counter() - start
+    assert rows == round(seconds * RATE_HZ)
+    return elapsed
+
+
+def time_frames(n: int, seconds: float) -> float:
+    world = world_for(n)
+    start = time.perf_counter()
+    count = sum(1 for _ in world.run(seconds, rate=RATE_HZ))
+    elapsed = time.perf_counter() - start
+    assert count == round(seconds * RATE_HZ)
+    return elapsed
+
+
+def hour_run(n: int) -> None:
+    world = world_for(n)
+    rows = 0
+    tracemalloc.start()
+    start = time.perf_counter()
+    for block in world.rollout(HOUR_S, rate=RATE_HZ):
+        rows += len(block)
+    elapsed = time.perf_counter() - start
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    agents = n + 1
+    whole = rows * agents * (2 + 1 + 2 + 1) * 8 + rows * agents  # float64 poses + presence
+    print(
+        f"\none hour, {n} people, {RATE_HZ:g} Hz: {rows} rows streamed in {elapsed:.1f} s "
+        f"({HOUR_S / elapsed:,.0f}x real time); peak traced memory {peak / 2**20:.1f} MiB, "
+        f"while the whole run's poses are {whole / 2**20:.0f} MiB"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="shorter runs, no hour run")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--threads", type=int, default=1, help="also time the rollout on N threads")
+    parser.add_argument("--no-hour", action="store_true", help="skip the one-hour 50-person run")
+    args = parser.parse_args()
+    seconds = 10.0 if args.quick else SIM_SECONDS
+    repeats = 2 if args.quick else args.repeats
+    steps = round(seconds * RATE_HZ)
+
+    start = time.perf_counter()
+    time_rollout(7, 0.1)  # compile or load the motion kernel
+    print(f"motion kernel ready in {time.perf_counter() - start:.2f} s (numba; cached on disk)")
+    print(
+        f"simulated seconds per wall-clock second, {RATE_HZ:g} Hz poses, {seconds:g} s runs, "
+        f"median of {repeats}"
+    )
+    header = f"{'people':>6} {'bare':>10} {'rollout':>10} {'ratio':>6} {'frames':>9} {'ratio':>6}"
+    if args.threads > 1:
+        header += f" {f'rollout x{args.threads}':>12} {'ratio':>6}"
+    print(header)
+    results = {}
+    for n in SIZES:
+        model = world_for(n).model
+        bare = statistics.median(time_bare(model, steps) for _ in range(repeats))
+        roll = statistics.median(time_rollout(n, seconds) for _ in range(repeats))
+        frames = statistics.median(time_frames(n, seconds) for _ in range(max(1, repeats // 2)))
+        line = (
+            f"{n:>6} {seconds / bare:>9,.0f}x {seconds / roll:>9,.0f}x {roll / bare:>6.2f} "
+            f"{seconds / frames:>8,.0f}x {frames / bare:>6.2f}"
+        )
+        if args.threads > 1:
+            threaded = statistics.median(
+                time_rollout(n, seconds, args.threads) for _ in range(repeats)
+            )
+            line += f" {seconds / threaded:>11,.0f}x {threaded / bare:>6.2f}"
+        print(line)
+        results[n] = (seconds / roll, roll / bare)
+    speed, ratio = results[18]
+    print(
+        f"\n18 people: {speed:,.0f}x real time (target >= {TARGET_SPEED_18:,.0f}x), harness "
+        f"{ratio:.2f}x the bare loop (target <= {TARGET_RATIO:g}x); a 35-minute session takes "
+        f"{35 * 60 / speed:.2f} s"
+    )
+    if not (args.quick or args.no_hour):
+        hour_run(50)
+
+
+if __name__ == "__main__":
+    main()
