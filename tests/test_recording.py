@@ -21,6 +21,7 @@ from reform import Frame, Majority, evaluate
 from sim.recording import (
     APPLICATION_ID,
     BodyPoses,
+    CameraImages,
     Clock,
     Event,
     FieldOfView,
@@ -657,6 +658,30 @@ def test_episode_with_a_model_draws_its_geometry_instead_of_capsules(tmp_path):
     assert "/world/room/floor" not in rec.entities
     assert rec.frames("/world/model/robot") == [0, 1, 2]
     assert "/world/model/world/planes" in rec.static
+
+
+def test_head_camera_images_are_logged_as_jpeg_per_frame(tmp_path):
+    from io import BytesIO
+
+    from PIL import Image
+
+    frames = make_frames(4)
+    y, x = np.mgrid[0:48, 0:64]
+    images = np.stack(
+        [np.stack([x * 4, y * 5, np.full_like(x, 40 * k)], axis=-1) for k in range(3)]
+    ).astype(np.uint8)
+    camera = CameraImages(time=[f.time for f in frames[1:]], images=images, sequence="episode")
+    path = tmp_path / "camera.rrd"
+    record_episode(path, frames, cameras=[camera])
+    rec = Recording(path)
+    assert rec.frames("/camera/head") == [1, 2, 3]
+    assert rec.static["/camera/head"]["EncodedImage:media_type"] == ["image/jpeg"]
+    for k, blob in enumerate(rec.column("/camera/head", "EncodedImage:blob")):
+        decoded = np.asarray(Image.open(BytesIO(bytes(blob[0]))))
+        assert decoded.shape == (48, 64, 3)
+        assert np.abs(decoded.astype(int) - images[k]).mean() < 3.0  # JPEG, quality 85
+    with pytest.raises(ValueError, match=r"images\[0\] must be an \(height, width, 3\) uint8"):
+        CameraImages(time=[0.0], images=np.zeros((1, 4, 4), dtype=np.uint8))
 
 
 # ----------------------------------------------------------------------------- dataset views

@@ -20,8 +20,8 @@ or, piece by piece, open a stream and pass it to the ``log_*`` functions::
         log_groups(rec, frames, predictions, name="reform", clock=clock, truth=truth)
 
 Entity tree: ``world/`` (room, MuJoCo model, people, robot, observed people, groups per source
-with mistakes), ``metrics/`` (running scores, group counts), ``events``, ``dataset/``
-(characterisation, pair scatter, stress curves).
+with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, group counts),
+``events``, ``dataset/`` (characterisation, pair scatter, stress curves).
 """
 
 from __future__ import annotations
@@ -56,11 +56,14 @@ from sim.recording._metrics import (
 )
 from sim.recording._record import Recorded, record_episode, record_evaluation, record_from_args
 from sim.recording._scene import (
+    CAMERA_ROOT,
     MODEL_ROOT,
     ROOM_ROOT,
     BodyPoses,
+    CameraImages,
     body_entity,
     log_body_poses,
+    log_camera_images,
     log_model,
     log_room,
     room_bounds,
@@ -77,6 +80,7 @@ from sim.recording._timeline import FRAME_TIMELINE, SIM_TIME_TIMELINE, Clock
 
 __all__ = [
     "APPLICATION_ID",
+    "CAMERA_ROOT",
     "DATASET_ROOT",
     "EVENTS_ENTITY",
     "FRAME_TIMELINE",
@@ -92,6 +96,7 @@ __all__ = [
     "TRUTH",
     "WORLD_ROOT",
     "BodyPoses",
+    "CameraImages",
     "Clock",
     "Event",
     "FieldOfView",
@@ -104,6 +109,7 @@ __all__ = [
     "evaluate_detector",
     "group_events",
     "log_body_poses",
+    "log_camera_images",
     "log_characterisation",
     "log_events",
     "log_frames",

@@ -9,6 +9,7 @@ import rerun.blueprint as rrb
 from sim.recording._dataset_views import DATASET_ROOT
 from sim.recording._frames import WORLD_ROOT
 from sim.recording._metrics import EVENTS_ENTITY, METRICS_ROOT
+from sim.recording._scene import CAMERA_ROOT
 
 __all__ = ["default_blueprint"]
 
@@ -19,6 +20,7 @@ PLOTS_SHARE = 2.0
 def default_blueprint(
     *,
     scores: bool = True,
+    cameras: Sequence[str] = (),
     characterisation: Sequence[str] = (),
     pairs: Sequence[str] = (),
     stress: Sequence[str] = (),
@@ -30,6 +32,7 @@ def default_blueprint(
     Args:
         scores: include the running precision / recall / F1 plots (runs with ground truth and
             detectors).
+        cameras: camera names logged by ``log_camera_images`` (shown under the scene).
         characterisation: dataset names logged by ``log_characterisation``.
         pairs: names logged by ``log_pair_scatter``.
         stress: names logged by ``log_stress_curves``.
@@ -53,8 +56,20 @@ def default_blueprint(
         )
     side.append(rrb.TimeSeriesView(origin=f"/{METRICS_ROOT}/groups", name="F-formations per frame"))
     side.append(rrb.TextLogView(origin=f"/{EVENTS_ENTITY}", name="Events"))
+    scene: rrb.Container | rrb.View = rrb.Spatial3DView(origin=f"/{WORLD_ROOT}", name="Scene")
+    if cameras:
+        scene = rrb.Vertical(
+            scene,
+            rrb.Horizontal(
+                *(
+                    rrb.Spatial2DView(origin=f"/{CAMERA_ROOT}/{c}", name=f"{c} camera")
+                    for c in cameras
+                )
+            ),
+            row_shares=[3.0, 1.0],
+        )
     run = rrb.Horizontal(
-        rrb.Spatial3DView(origin=f"/{WORLD_ROOT}", name="Scene"),
+        scene,
         rrb.Vertical(*side),
         column_shares=[SCENE_SHARE, PLOTS_SHARE],
         name="Run",

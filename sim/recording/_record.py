@@ -23,7 +23,15 @@ from sim.recording._groups import (
     log_groups,
 )
 from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
-from sim.recording._scene import BodyPoses, log_body_poses, log_model, log_room, room_bounds
+from sim.recording._scene import (
+    BodyPoses,
+    CameraImages,
+    log_body_poses,
+    log_camera_images,
+    log_model,
+    log_room,
+    room_bounds,
+)
 from sim.recording._stream import RecordingTarget, open_recording, recording_id, target_from_args
 from sim.recording._timeline import Clock, frame_keys
 
@@ -106,6 +114,7 @@ def record_episode(
     events: Iterable[object] | None = None,
     model: Any = None,
     body_poses: BodyPoses | None = None,
+    cameras: Iterable[CameraImages] = (),
     seed: int | None = None,
     name: str | None = None,
     field_of_view: FieldOfView | None = KINECT_FIELD_OF_VIEW,
@@ -126,6 +135,7 @@ def record_episode(
         model: the compiled ``mujoco.MjModel`` of the scene: its geometry is drawn (static)
             and, with ``body_poses``, moves per frame; people are then not drawn as capsules.
         body_poses: the bodies' poses per frame (needs ``model``).
+        cameras: rendered camera images (the robot's head camera), when rendering is on.
         seed: the episode's seed (with ``name``, it fixes the recording id).
         name: the run's name; default: the first frame's sequence, else ``"episode"``.
         field_of_view: the robot sensor's field of view to draw, or None.
@@ -144,7 +154,10 @@ def record_episode(
     detected_on = seen if seen is not None else world
     name = name or world[0].sequence or "episode"
     annotated = any(f.groups is not None for f in world)
-    blueprint = default_blueprint(scores=annotated and bool(detections))
+    cameras = tuple(cameras)
+    blueprint = default_blueprint(
+        scores=annotated and bool(detections), cameras=tuple(c.name for c in cameras)
+    )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         clock = log_frames(
             rec,
@@ -159,6 +172,8 @@ def record_episode(
                 log_body_poses(rec, model, body_poses, clock=clock)
         else:
             log_room(rec, room_bounds(world))
+        for camera in cameras:
+            log_camera_images(rec, camera, clock=clock)
         truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
         trees, evaluations = _log_detectors(
             rec, detected_on, detections, None, clock=clock, truth=truth

@@ -3,6 +3,7 @@
 Entity tree:
 
 * ``world/room``: the floor (a flat box) and its outline, static.
+* ``camera/<name>``: images rendered by a camera (the robot's head camera), as JPEG.
 * ``world/model/<body>``: one entity per MuJoCo body, carrying the body's pose (a static
   transform, or one per frame from :func:`log_body_poses`); under it ``capsules``, ``boxes``,
   ``spheres`` (and ellipsoids), ``cylinders``, ``planes`` and ``meshes`` hold that body's geoms
@@ -24,11 +25,14 @@ from sim.recording import _colours
 from sim.recording._timeline import Clock
 
 __all__ = [
+    "CAMERA_ROOT",
     "MODEL_ROOT",
     "ROOM_ROOT",
     "BodyPoses",
+    "CameraImages",
     "body_entity",
     "log_body_poses",
+    "log_camera_images",
     "log_model",
     "log_room",
     "room_bounds",
@@ -389,3 +393,86 @@ def log_room(rec: rr.RecordingStream, bounds: Sequence[float]) -> None:
         ),
         static=True,
     )
+
+
+CAMERA_ROOT = "camera"
+JPEG_QUALITY = 85  # 0-100: head-camera frames are stored as JPEG
+
+
+@dataclass(frozen=True, eq=False)
+class CameraImages:
+    """Frames rendered by a camera during a run (e.g. the robot's head camera).
+
+    Attributes:
+        time: (n,) float64 seconds, each image's frame time stamp.
+        images: (n, height, width, 3) uint8 RGB images, or a sequence of such arrays.
+        sequence: the sequence (episode) the images belong to.
+        name: the camera's name; the images go to ``camera/<name>``.
+    """
+
+    time: np.ndarray
+    images: Sequence[np.ndarray] | np.ndarray
+    sequence: str = ""
+    name: str = "head"
+
+    def __post_init__(self) -> None:
+        time = np.asarray(self.time, dtype=np.float64)
+        if time.ndim != 1 or len(self.images) != time.size:
+            raise ValueError(
+                f"time must have shape (n,) with one image each: got {time.shape} and "
+                f"{len(self.images)} images"
+            )
+        for k, image in enumerate(self.images):
+            image = np.asarray(image)
+            if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+                raise ValueError(
+                    f"images[{k}] must be an (height, width, 3) uint8 RGB array, "
+                    f"got shape {image.shape} dtype {image.dtype}"
+                )
+        if not self.name or "/" in self.name:
+            raise ValueError(f"name must be non-empty without '/', got {self.name!r}")
+        object.__setattr__(self, "time", time)
+
+
+def log_camera_images(
+    rec: rr.RecordingStream,
+    camera: CameraImages,
+    *,
+    clock: Clock | None = None,
+    jpeg_quality: int = JPEG_QUALITY,
+) -> int:
+    """Logs a camera's images as JPEG, one row per image, on the run's timelines.
+
+    Args:
+        rec: the recording stream.
+        camera: the images and their time stamps.
+        clock: the run's clock (images are placed by (sequence, time)); default: row ``i`` is
+            image ``i`` and ``sim_time`` is its time.
+        jpeg_quality: 1-100.
+
+    Returns:
+        Bytes of JPEG logged.
+    """
+    from io import BytesIO
+
+    from PIL import Image
+
+    if not 1 <= jpeg_quality <= 100:
+        raise ValueError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
+    if clock is None:
+        clock = Clock.from_times([camera.sequence] * camera.time.size, camera.time)
+    rows = clock.rows_at([camera.sequence] * camera.time.size, camera.time, what="camera.time")
+    blobs = []
+    for image in camera.images:
+        buffer = BytesIO()
+        Image.fromarray(np.asarray(image)).save(buffer, format="JPEG", quality=jpeg_quality)
+        blobs.append(buffer.getvalue())
+    entity = f"{CAMERA_ROOT}/{camera.name}"
+    rec.log(entity, rr.EncodedImage.from_fields(media_type="image/jpeg"), static=True)
+    rec.send_columns(
+        entity,
+        indexes=clock.columns(rows),
+        columns=rr.EncodedImage.columns(blob=blobs),
+        strict=True,
+    )
+    return sum(len(b) for b in blobs)
