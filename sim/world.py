@@ -1,6 +1,7 @@
 """The world: people and the Directions Robot moved kinematically in MuJoCo, read back as Frames.
 
-What the script wants and what the world does meet in two small types:
+What the script wants and what the world does meet in two small types (defined in
+`scenarios.script`, the vocabulary of the scenario layer, and re-exported here):
 
 * `Intent` (frozen, per agent): where to walk (``goal``, at ``speed``), which way to face once
   there or while standing (``face_yaw``, ``face_point`` or ``face_agent``), where to look
@@ -36,13 +37,14 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 import mujoco
 import numpy as np
 from mujoco import batch as mj_batch
 
 from reform.frame import ROBOT, Frame, Group, wrap_angle
+from scenarios.script import Intent, Point, Script
 from sim import motion
 from sim.motion import (
     PERSON_LIMITS,
@@ -66,83 +68,6 @@ MAX_DT_S = 0.1  # seconds, the largest accepted control step
 PARK_GAP_M = 0.7  # metres between parked (absent) agents outside the room
 PARK_DISTANCE_M = 2.0  # metres from the east wall to the first parking spot
 _RATE_TOLERANCE = 1e-6  # relative tolerance when checking that rates divide each other
-
-Point = tuple[float, float]
-
-
-def _point(name: str, value: Any) -> Point | None:
-    if value is None:
-        return None
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"Intent.{name} must be (x, y) in metres or None, got {value!r}") from exc
-    if array.shape != (2,) or not np.all(np.isfinite(array)):
-        raise ValueError(f"Intent.{name} must be a finite (x, y) in metres or None, got {value!r}")
-    return (float(array[0]), float(array[1]))
-
-
-def _agent_id(name: str, value: Any) -> int | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"Intent.{name} must be an agent id (int) or None, got {value!r}")
-    return int(value)
-
-
-@dataclass(frozen=True)
-class Intent:
-    """What one agent wants at one time.
-
-    Attributes:
-        goal: (x, y) to walk to, metres; ``None`` to stay where it is.
-        speed: preferred walking speed, m/s (capped by the agent's limits).
-        face_yaw: body yaw to take when standing (or on arrival), radians.
-        face_point: (x, y) to face when standing, metres.
-        face_agent: id of an agent to face when standing. At most one ``face_*`` is given;
-            with none, the agent keeps its facing.
-        gaze_point: (x, y) to look at, metres.
-        gaze_agent: id of an agent to look at. At most one ``gaze_*`` is given; with none, the
-            head looks straight ahead. A target beyond the head's limit turns the standing body.
-        present: whether the agent is in the room (the robot always is).
-        appear_at: (x, y) where the agent enters when it becomes present; ``None`` means where
-            it left (or its start position). It enters as soon as that spot is free.
-    """
-
-    goal: Point | None = None
-    speed: float = WALK_SPEED_M_S
-    face_yaw: float | None = None
-    face_point: Point | None = None
-    face_agent: int | None = None
-    gaze_point: Point | None = None
-    gaze_agent: int | None = None
-    present: bool = True
-    appear_at: Point | None = None
-
-    def __post_init__(self) -> None:
-        for name in ("goal", "face_point", "gaze_point", "appear_at"):
-            object.__setattr__(self, name, _point(name, getattr(self, name)))
-        for name in ("face_agent", "gaze_agent"):
-            object.__setattr__(self, name, _agent_id(name, getattr(self, name)))
-        speed = float(self.speed)
-        if not (math.isfinite(speed) and speed > 0.0):
-            raise ValueError(f"Intent.speed must be positive and finite (m/s), got {self.speed!r}")
-        object.__setattr__(self, "speed", speed)
-        if self.face_yaw is not None:
-            face_yaw = float(self.face_yaw)
-            if not math.isfinite(face_yaw):
-                raise ValueError(f"Intent.face_yaw must be finite (radians), got {self.face_yaw!r}")
-            object.__setattr__(self, "face_yaw", face_yaw)
-        faces = [
-            n for n in ("face_yaw", "face_point", "face_agent") if getattr(self, n) is not None
-        ]
-        if len(faces) > 1:
-            raise ValueError(
-                f"Intent takes at most one of face_yaw, face_point, face_agent, got {faces}"
-            )
-        if self.gaze_point is not None and self.gaze_agent is not None:
-            raise ValueError("Intent takes at most one of gaze_point, gaze_agent, got both")
-        object.__setattr__(self, "present", bool(self.present))
 
 
 @dataclass(frozen=True)
@@ -169,19 +94,6 @@ class RobotCommand:
             if not math.isfinite(value):
                 raise ValueError(f"RobotCommand.{name} must be finite, got {getattr(self, name)!r}")
             object.__setattr__(self, name, value)
-
-
-@runtime_checkable
-class Script(Protocol):
-    """Scripted behaviour: pure functions of time (seconds from the start of the run)."""
-
-    def intents(self, t: float) -> Mapping[int, Intent]:
-        """New intents by agent id; agents left out keep their last intent."""
-        ...
-
-    def groups(self, t: float) -> Sequence[Sequence[int]] | None:
-        """The F-formations the script declares at ``t`` (disjoint groups of agent ids)."""
-        ...
 
 
 def yaw_from_quat(quat: np.ndarray) -> np.ndarray:
