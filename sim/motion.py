@@ -24,8 +24,9 @@ Primitives, per control step ``dt`` (seconds):
 * **Turn the head** toward a gaze target (a point or an agent) within ``±head_limit`` of the
   body (people: 70 degrees); beyond that the standing body turns just enough to follow.
 * **Idle sway**: standing people sway a little (position within ``P_SWAY_POS`` metres, yaw
-  within ``P_SWAY_YAW`` radians, two slow sines each with per-person phases); the sway fades
-  out with walking speed. Sway is added to the rendered pose only, inside the clearance margin.
+  within ``P_SWAY_YAW`` radians; two slow sines of 0.17 and 0.41 Hz with per-person phases); the
+  sway fades out with walking speed. Sway is added to the rendered pose only, inside the
+  clearance margin.
 * **Robot velocity commands**: with ``I_CMD`` set, the robot's base follows a forward speed and
   a turn rate (unicycle), and its head pan and tilt follow rates, all within its limits.
 * **Leave and enter**: an absent agent is parked below the floor outside the room; it enters at
@@ -92,16 +93,20 @@ GAZE_NONE, GAZE_POINT, GAZE_AGENT = 0, 1, 2
     P_PARK_Y,
     P_SWAY_POS,
     P_SWAY_YAW,
-    P_SWAY_F1,
-    P_SWAY_F2,
-    P_SWAY_PX1,
-    P_SWAY_PX2,
-    P_SWAY_PY1,
-    P_SWAY_PY2,
-    P_SWAY_PW1,
-    P_SWAY_PW2,
-) = range(24)
-N_PARAM = 24
+    P_SWAY_X1C,
+    P_SWAY_X1S,
+    P_SWAY_X2C,
+    P_SWAY_X2S,
+    P_SWAY_Y1C,
+    P_SWAY_Y1S,
+    P_SWAY_Y2C,
+    P_SWAY_Y2S,
+    P_SWAY_W1C,
+    P_SWAY_W1S,
+    P_SWAY_W2C,
+    P_SWAY_W2S,
+) = range(28)
+N_PARAM = 28
 
 WALK_SPEED_M_S = 1.2  # m/s, default preferred walking speed
 ARRIVE_TOLERANCE_M = 0.03  # metres, a goal closer than this is reached
@@ -123,7 +128,8 @@ PROJECTION_ITERATIONS = 12  # passes of the pairwise push-apart per step
 SWAY_FADE_SPEED_M_S = 0.3  # m/s, sway is gone at this walking speed
 SWAY_POS_M = 0.01  # metres, idle sway amplitude of the position (each axis)
 SWAY_YAW_RAD = 0.03  # radians, idle sway amplitude of the body yaw
-SWAY_FREQ_RANGE_HZ = (0.12, 0.45)  # Hz, frequencies of the two sway sines
+SWAY_FREQ_1_HZ = 0.17  # Hz, the slower of the two sway sines (phases differ per person)
+SWAY_FREQ_2_HZ = 0.41  # Hz, the faster one
 PARK_Z_M = -10.0  # metres, absent agents are parked this far below the floor
 
 
@@ -264,30 +270,35 @@ def write_pose(
 
     Present agents get their position and yaw plus idle sway; absent ones are parked.
     """
+    w1 = 2.0 * math.pi * SWAY_FREQ_1_HZ * time
+    w2 = 2.0 * math.pi * SWAY_FREQ_2_HZ * time
+    s1, c1, s2, c2 = math.sin(w1), math.cos(w1), math.sin(w2), math.cos(w2)
     for i in range(state.shape[0]):
         m = mocap_of[i]
         if state[i, S_PRESENT] > 0.5:
             speed = math.hypot(state[i, S_VX], state[i, S_VY])
             fade = _clip(1.0 - speed / SWAY_FADE_SPEED_M_S, 0.0, 1.0)
-            w1 = params[i, P_SWAY_F1] * time
-            w2 = params[i, P_SWAY_F2] * time
-            amp = fade * params[i, P_SWAY_POS]
-            sx = amp * (
-                0.6 * math.sin(w1 + params[i, P_SWAY_PX1])
-                + 0.4 * math.sin(w2 + params[i, P_SWAY_PX2])
-            )
-            sy = amp * (
-                0.6 * math.sin(w1 + params[i, P_SWAY_PY1])
-                + 0.4 * math.sin(w2 + params[i, P_SWAY_PY2])
-            )
-            syaw = (
-                fade
-                * params[i, P_SWAY_YAW]
-                * (
-                    0.6 * math.sin(w1 + params[i, P_SWAY_PW1])
-                    + 0.4 * math.sin(w2 + params[i, P_SWAY_PW2])
+            sx, sy, syaw = 0.0, 0.0, 0.0
+            if fade > 0.0:
+                p = params[i]
+                # sin(w + phase) = sin(w) cos(phase) + cos(w) sin(phase)
+                amp = fade * p[P_SWAY_POS]
+                sx = amp * (
+                    0.6 * (s1 * p[P_SWAY_X1C] + c1 * p[P_SWAY_X1S])
+                    + 0.4 * (s2 * p[P_SWAY_X2C] + c2 * p[P_SWAY_X2S])
                 )
-            )
+                sy = amp * (
+                    0.6 * (s1 * p[P_SWAY_Y1C] + c1 * p[P_SWAY_Y1S])
+                    + 0.4 * (s2 * p[P_SWAY_Y2C] + c2 * p[P_SWAY_Y2S])
+                )
+                syaw = (
+                    fade
+                    * p[P_SWAY_YAW]
+                    * (
+                        0.6 * (s1 * p[P_SWAY_W1C] + c1 * p[P_SWAY_W1S])
+                        + 0.4 * (s2 * p[P_SWAY_W2C] + c2 * p[P_SWAY_W2S])
+                    )
+                )
             half = 0.5 * (state[i, S_YAW] + syaw)
             rec_mpos[row, m, 0] = state[i, S_X] + sx
             rec_mpos[row, m, 1] = state[i, S_Y] + sy
@@ -612,17 +623,16 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
 
 
 def sway_parameters(rng: np.random.Generator, *, standing: bool) -> np.ndarray:
-    """(10,) idle sway parameters of one agent: amplitudes, two angular frequencies, phases.
+    """(14,) idle sway parameters of one agent: two amplitudes, then (cos, sin) of six phases.
 
     Args:
         rng: the agent's own generator.
         standing: False for agents that do not sway (the robot): amplitudes are zero.
 
     Returns:
-        ``[pos_amp_m, yaw_amp_rad, w1, w2, px1, px2, py1, py2, pw1, pw2]``, frequencies in rad/s.
+        ``[pos_amp_m, yaw_amp_rad, cos/sin of the phases of x1, x2, y1, y2, yaw1, yaw2]``.
     """
-    low, high = SWAY_FREQ_RANGE_HZ
-    freqs = 2.0 * math.pi * rng.uniform(low, high, size=2)
     phases = rng.uniform(0.0, 2.0 * math.pi, size=6)
     amps = [SWAY_POS_M, SWAY_YAW_RAD] if standing else [0.0, 0.0]
-    return np.concatenate([amps, freqs, phases])
+    pairs = np.stack([np.cos(phases), np.sin(phases)], axis=1).ravel()
+    return np.concatenate([amps, pairs])
