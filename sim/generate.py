@@ -1,0 +1,988 @@
+"""Synthetic datasets at scale: many seeded episodes of one scenario, as hive-partitioned Parquet.
+
+A generated folder::
+
+    DIR/
+      dataset.json                                the dataset card: every parameter, the seed of
+                                                  every episode, frame counts, group sizes
+      README.md                                   the same card, for people
+      scenario=<name>/episode=<k>/part.parquet    one shard per episode, the project's format
+      recordings/episode=<k>.rrd                  with ``save_recordings``: one Rerun recording
+                                                  per episode
+
+Every shard is an ordinary file of the project's Parquet format (`reform.datasets.write_parquet`)
+whose frames belong to the sequence ``"<name>-<k>"``, so the folder reads as one dataset with
+``reform.datasets.read_parquet(DIR)`` (or ``load_dataset``, ``reform-sim train --data DIR``).
+
+**Seeds.** Episode ``k`` is simulated with its own seed, drawn from the master seed by
+``numpy.random.SeedSequence(seed, spawn_key=(k,))`` (the ``k``-th child of
+``SeedSequence(seed).spawn``): it depends on the master seed and ``k`` alone, never on the
+backend, the number of workers, the order in which episodes finish or how many episodes the
+dataset has. The same parameters therefore give byte-identical shards and cards.
+
+**Resuming.** A shard is written to a temporary file and renamed into place
+(`reform.atomic.atomic_path`), so it is either complete or absent: a run that is killed leaves no
+half-written shard, and the next run with the same parameters skips the episodes already
+written and simulates the rest. Asking for more episodes than a folder holds extends it. A folder
+holding another dataset (a card with other parameters) or other files is refused before any work
+starts, and so is a folder another run is writing.
+
+**Parallelism.** Episodes run in batches (tiny tasks are slower in parallel) on local processes
+(joblib's loky backend, every core by default), or as Ray remote tasks on an existing cluster
+(``backend="ray"``, ``address=...``). Ray workers send each shard back as bytes and this process
+writes it, so the cluster needs no shared file system, only reform-sim installed on every node.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import json
+import math
+import os
+import shlex
+import sys
+import tempfile
+import time
+from collections import Counter
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from reform.atomic import atomic_open, atomic_path
+from reform.frame import Dataset
+
+__all__ = [
+    "BACKENDS",
+    "CARD_JSON",
+    "CARD_MARKDOWN",
+    "VIEWS",
+    "GenerationReport",
+    "GenerationSpec",
+    "ShardSummary",
+    "episode_seed",
+    "generate_dataset",
+    "read_card",
+    "shard_path",
+]
+
+VIEWS = ("truth", "robot")  # ground truth, or what the robot's head sensor observes
+BACKENDS = ("local", "ray")
+CARD_JSON = "dataset.json"  # the dataset card, machine-readable
+CARD_MARKDOWN = "README.md"  # the dataset card, for people
+CARD_VERSION = 1
+SHARD_FILE = "part.parquet"
+RECORDINGS_DIR = "recordings"
+LOCK_FILE = ".generate.lock"
+TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
+MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
+SEED_BITS = 63  # bits of an episode seed (a non-negative int64)
+
+
+def episode_seed(seed: int, episode: int) -> int:
+    """The seed of episode ``episode`` of a dataset with master seed ``seed``.
+
+    The first 63 bits drawn from ``SeedSequence(seed, spawn_key=(episode,))``, the
+    ``episode``-th child of ``SeedSequence(seed).spawn(...)``.
+    """
+    child = np.random.SeedSequence(int(seed), spawn_key=(int(episode),))
+    return int(child.generate_state(1, dtype=np.uint64)[0] >> np.uint64(64 - SEED_BITS))
+
+
+def shard_path(out_dir: str | os.PathLike[str], scenario: str, episode: int) -> Path:
+    """Where episode ``episode`` of ``scenario`` lives in a generated folder."""
+    return Path(out_dir) / f"scenario={scenario}" / f"episode={int(episode)}" / SHARD_FILE
+
+
+def _recording_path(out_dir: Path, episode: int) -> Path:
+    return out_dir / RECORDINGS_DIR / f"episode={int(episode)}.rrd"
+
+
+def _json_value(name: str, value: Any) -> Any:
+    """``value`` as JSON gives it back (tuples become lists), or a ValueError naming it."""
+    try:
+        return json.loads(json.dumps(value, allow_nan=False, sort_keys=True))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be JSON values (numbers, strings, booleans, lists), got {value!r}"
+        ) from exc
+
+
+def _check_int(name: str, value: Any, *, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an int >= {minimum}, got {value!r}")
+    if value < minimum:
+        raise ValueError(f"{name} must be an int >= {minimum}, got {value}")
+    return int(value)
+
+
+def _check_positive(name: str, value: Any, unit: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a positive number ({unit}), got {value!r}") from exc
+    if not (math.isfinite(number) and number > 0.0):
+        raise ValueError(f"{name} must be a positive number ({unit}), got {value!r}")
+    return number
+
+
+@dataclass(frozen=True, eq=False)
+class GenerationSpec:
+    """Everything that fixes a generated dataset's data (not how or where it is computed).
+
+    Attributes:
+        scenario: registered scenario name.
+        options: the scenario's option overrides (JSON values), as given to ``scenarios.make``.
+        seed: master seed, a non-negative int.
+        view: ``"truth"`` (ground truth) or ``"robot"`` (the robot's head sensor view).
+        sensor: the sensor model of the robot view (``None`` for the truth view).
+        rate: output (annotation) rate, Hz; ``None`` for the scenario's own.
+        duration: episode length, seconds; ``None`` for the scenario's own.
+    """
+
+    scenario: str
+    options: Mapping[str, Any] = field(default_factory=dict)
+    seed: int = 0
+    view: str = "truth"
+    sensor: Any = None
+    rate: float | None = None
+    duration: float | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scenario, str) or not self.scenario:
+            raise ValueError(f"scenario must be a scenario name, got {self.scenario!r}")
+        if not isinstance(self.options, Mapping):
+            raise ValueError(
+                f"options must be a mapping of option name to value, got {self.options!r}"
+            )
+        options = _json_value("options", dict(self.options))
+        object.__setattr__(self, "options", MappingProxyType(options))
+        object.__setattr__(self, "seed", _check_int("seed", self.seed, minimum=0))
+        if self.view not in VIEWS:
+            raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
+        object.__setattr__(self, "sensor", _sensor(self.view, self.sensor))
+        if self.rate is not None:
+            object.__setattr__(self, "rate", _check_positive("rate", self.rate, "Hz"))
+        if self.duration is not None:
+            duration = _check_positive("duration", self.duration, "seconds")
+            object.__setattr__(self, "duration", duration)
+
+    def parameters(self) -> dict[str, Any]:
+        """The parameters as the card records them (JSON values); two runs with equal
+        parameters (and package version) write the same data."""
+        from reform import __version__
+        from reform.datasets.parquet import FORMAT_VERSION
+
+        return {
+            "scenario": self.scenario,
+            "options": dict(self.options),
+            "seed": self.seed,
+            "view": self.view,
+            "sensor": None
+            if self.sensor is None
+            else _json_value("sensor", dataclasses.asdict(self.sensor)),
+            "rate_hz": self.rate,
+            "duration_s": self.duration,
+            "package_version": f"reform-sim {__version__}",
+            "format_version": FORMAT_VERSION,
+            "seed_rule": (
+                "episode k: the first 63 bits of numpy SeedSequence(seed, spawn_key=(k,))"
+            ),
+        }
+
+
+def _sensor(view: str, sensor: Any) -> Any:
+    """The Sensor of the robot view (defaults when ``None``); an error for the truth view."""
+    if view == "truth":
+        if sensor is not None:
+            raise ValueError(
+                "sensor options apply to view='robot' only, got sensor options with view='truth'"
+            )
+        return None
+    from sim.sensor import Sensor
+
+    if sensor is None:
+        return Sensor()
+    if isinstance(sensor, Sensor):
+        return sensor
+    if isinstance(sensor, Mapping):
+        known = {f.name for f in dataclasses.fields(Sensor)}
+        unknown = sorted(set(sensor) - known)
+        if unknown:
+            raise ValueError(f"sensor options must be among {sorted(known)}, got {unknown}")
+        return Sensor(**sensor)
+    raise ValueError(
+        f"sensor must be a sim.Sensor, a mapping of its fields or None, got {sensor!r}"
+    )
+
+
+@dataclass(frozen=True)
+class ShardSummary:
+    """What one shard holds.
+
+    Attributes:
+        episode: episode index ``k``.
+        seed: the episode's seed (see `episode_seed`).
+        path: the shard's path relative to the dataset folder.
+        sequence: the sequence name of its frames.
+        frames: frames in the shard.
+        annotated_frames: frames with ground-truth groups.
+        rows: people (and robot) entries over all frames.
+        group_sizes: size -> number of groups of that size over the annotated frames, counting
+            everyone (people alone are groups of size 1; the robot counts as a member).
+    """
+
+    episode: int
+    seed: int
+    path: str
+    sequence: str
+    frames: int
+    annotated_frames: int
+    rows: int
+    group_sizes: Mapping[int, int]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "episode": self.episode,
+            "seed": self.seed,
+            "path": self.path,
+            "sequence": self.sequence,
+            "frames": self.frames,
+            "annotated_frames": self.annotated_frames,
+            "rows": self.rows,
+            "group_sizes": {str(k): v for k, v in sorted(self.group_sizes.items())},
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ShardSummary:
+        return cls(
+            episode=int(data["episode"]),
+            seed=int(data["seed"]),
+            path=str(data["path"]),
+            sequence=str(data["sequence"]),
+            frames=int(data["frames"]),
+            annotated_frames=int(data["annotated_frames"]),
+            rows=int(data["rows"]),
+            group_sizes={int(k): int(v) for k, v in dict(data["group_sizes"]).items()},
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class GenerationReport:
+    """What a call of `generate_dataset` did.
+
+    Attributes:
+        out_dir: the dataset folder.
+        spec: the parameters.
+        episodes: episodes in the dataset.
+        generated: episodes simulated by this call.
+        skipped: episodes found finished and left alone.
+        shards: every shard of the dataset, by episode.
+        seconds: wall-clock time of this call, seconds.
+        backend: ``"local"`` or ``"ray"``.
+        n_jobs: worker processes used (local), or the cluster's CPUs (Ray).
+        card: path of the JSON card; ``card_markdown`` of the Markdown one.
+    """
+
+    out_dir: Path
+    spec: GenerationSpec
+    episodes: int
+    generated: tuple[int, ...]
+    skipped: tuple[int, ...]
+    shards: tuple[ShardSummary, ...]
+    seconds: float
+    backend: str
+    n_jobs: int
+    card: Path
+    card_markdown: Path
+
+    @property
+    def frames(self) -> int:
+        return sum(s.frames for s in self.shards)
+
+    @property
+    def annotated_frames(self) -> int:
+        return sum(s.annotated_frames for s in self.shards)
+
+    @property
+    def generated_annotated_frames(self) -> int:
+        """Annotated frames in the shards this call wrote."""
+        done = set(self.generated)
+        return sum(s.annotated_frames for s in self.shards if s.episode in done)
+
+
+# ------------------------------------------------------------------------------------------
+# One episode (runs in the workers)
+
+
+def _sequence_name(scenario: str, episode: int) -> str:
+    return f"{scenario}-{int(episode)}"
+
+
+def _simulate(spec: GenerationSpec, episode: int) -> Dataset:
+    """Episode ``episode`` of ``spec`` as a Dataset of sequence ``"<scenario>-<k>"``."""
+    from sim.episode import simulate_episode
+
+    kwargs: dict[str, Any] = {
+        "seed": episode_seed(spec.seed, episode),
+        "view": spec.view,
+        "sequence": _sequence_name(spec.scenario, episode),
+    }
+    if spec.sensor is not None:
+        kwargs["sensor"] = spec.sensor
+    if spec.rate is not None:
+        kwargs["rate"] = spec.rate
+    if spec.duration is not None:
+        kwargs["duration"] = spec.duration
+    return simulate_episode(spec.scenario, options=dict(spec.options), **kwargs)
+
+
+def _summarise(spec: GenerationSpec, episode: int, dataset: Dataset) -> ShardSummary:
+    sizes: Counter[int] = Counter()
+    annotated = 0
+    rows = 0
+    for frame in dataset.frames:
+        n = frame.n_people
+        rows += n
+        if frame.groups is None:
+            continue
+        annotated += 1
+        grouped = 0
+        for group in frame.groups:
+            sizes[len(group)] += 1
+            grouped += len(group)
+        if n > grouped:
+            sizes[1] += n - grouped
+    relative = shard_path(".", spec.scenario, episode).as_posix().removeprefix("./")
+    return ShardSummary(
+        episode=int(episode),
+        seed=episode_seed(spec.seed, episode),
+        path=relative,
+        sequence=_sequence_name(spec.scenario, episode),
+        frames=len(dataset.frames),
+        annotated_frames=annotated,
+        rows=rows,
+        group_sizes=dict(sorted(sizes.items())),
+    )
+
+
+def _shard_dataset(spec: GenerationSpec, summary: ShardSummary, dataset: Dataset) -> Dataset:
+    """The episode with the metadata its shard carries (the parameters and its own counts)."""
+    metadata = {
+        "generator": "reform-sim generate",
+        "parameters": spec.parameters(),
+        "episode": summary.to_json(),
+        "episode_metadata": _json_value("episode metadata", dict(dataset.metadata)),
+    }
+    return Dataset(
+        frames=dataset.frames,
+        name=spec.scenario,
+        source=f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}",
+        metadata=metadata,
+    )
+
+
+def _write_episode(
+    spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
+) -> ShardSummary:
+    """Simulates one episode and writes its recording (if asked) and then its shard."""
+    from reform.datasets.parquet import write_parquet
+
+    dataset = _simulate(spec, episode)
+    summary = _summarise(spec, episode, dataset)
+    if save_recordings:
+        _record(spec, episode, dataset, _recording_path(out_dir, episode))
+    write_parquet(_shard_dataset(spec, summary, dataset), out_dir / summary.path)
+    return summary
+
+
+def _record(spec: GenerationSpec, episode: int, dataset: Dataset, path: Path) -> None:
+    from sim.recording import record_episode
+
+    with atomic_path(path) as tmp:
+        record_episode(
+            tmp,
+            dataset.frames,
+            seed=episode_seed(spec.seed, episode),
+            name=_sequence_name(spec.scenario, episode),
+        )
+
+
+def _run_batch(
+    spec: GenerationSpec, out_dir: str, episodes: Sequence[int], save_recordings: bool
+) -> list[ShardSummary]:
+    """A batch of episodes, written straight into ``out_dir`` (local workers)."""
+    folder = Path(out_dir)
+    return [_write_episode(spec, folder, k, save_recordings=save_recordings) for k in episodes]
+
+
+def _run_batch_bytes(
+    spec: GenerationSpec, episodes: Sequence[int], save_recordings: bool
+) -> list[tuple[ShardSummary, bytes, bytes | None]]:
+    """A batch of episodes, sent back as file contents (Ray workers, maybe on other machines)."""
+    out = []
+    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
+        folder = Path(scratch)
+        for k in episodes:
+            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
+            shard = (folder / summary.path).read_bytes()
+            recording = None
+            if save_recordings:
+                recording = _recording_path(folder, k).read_bytes()
+            out.append((summary, shard, recording))
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# The folder: card, lock, finished shards
+
+
+def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
+    """The JSON card of a generated folder, or ``None`` when it has none.
+
+    Raises:
+        ValueError: the card exists but is not a reform-sim dataset card.
+    """
+    path = Path(out_dir) / CARD_JSON
+    if not path.is_file():
+        return None
+    try:
+        card = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: expected a reform-sim dataset card (JSON), got {exc}") from exc
+    if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
+        raise ValueError(
+            f"{path}: expected a reform-sim dataset card with a 'parameters' object, "
+            f"got {type(card).__name__}"
+        )
+    return card
+
+
+def _is_ours(name: str) -> bool:
+    """Entries a generated folder may hold besides its shards."""
+    return name in (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR) or name.startswith(
+        ("scenario=", ".")
+    )
+
+
+def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -> None:
+    """Refuses a folder that holds anything but a dataset with these parameters."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ValueError(f"out_dir must be a folder, got a file: {out_dir}")
+    if not out_dir.exists():
+        return
+    card = read_card(out_dir)
+    if card is None:
+        foreign = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+        if foreign:
+            shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
+            raise ValueError(
+                f"out_dir {out_dir} holds files but no dataset card ({CARD_JSON}): expected an "
+                f"empty or new folder, or one made by reform-sim generate, found {shown}"
+            )
+        return
+    theirs = card["parameters"]
+    differing = sorted(
+        k for k in set(theirs) | set(parameters) if theirs.get(k) != parameters.get(k)
+    )
+    if differing:
+        details = "; ".join(
+            f"{k}: folder has {json.dumps(theirs.get(k))}, "
+            f"asked for {json.dumps(parameters.get(k))}"
+            for k in differing
+        )
+        raise ValueError(
+            f"out_dir {out_dir} holds another dataset (its {CARD_JSON} differs in "
+            f"{', '.join(differing)}): {details}. Use another folder, or the same parameters "
+            "to resume it"
+        )
+    held = int(card.get("episodes", 0))
+    if episodes < held:
+        raise ValueError(
+            f"episodes: out_dir {out_dir} holds a dataset of {held} episodes, asked for "
+            f"{episodes}; ask for at least {held} (more extends it) or use another folder"
+        )
+    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+    if extra:
+        raise ValueError(
+            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"{', '.join(extra[:5])}"
+        )
+
+
+@contextlib.contextmanager
+def _folder_lock(out_dir: Path) -> Iterator[None]:
+    """Holds an exclusive lock on the folder (POSIX), refusing a second concurrent run."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no lock
+        yield
+        return
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with open(out_dir / LOCK_FILE, "a+", encoding="utf-8") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ValueError(
+                f"out_dir {out_dir} is being written by another reform-sim generate run; wait "
+                "for it to finish or use another folder"
+            ) from None
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _remove_stale_temporaries(out_dir: Path) -> None:
+    """Temporary files of a killed run (``.part.parquet.*.tmp`` and the like)."""
+    for pattern in ("scenario=*/episode=*/.*.tmp", f"{RECORDINGS_DIR}/.*.tmp", ".*.tmp"):
+        for path in out_dir.glob(pattern):
+            path.unlink(missing_ok=True)
+
+
+def _finished(out_dir: Path, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:
+    if not shard_path(out_dir, spec.scenario, episode).is_file():
+        return False
+    return not save_recordings or _recording_path(out_dir, episode).is_file()
+
+
+def _shard_summary_from_file(path: Path) -> ShardSummary:
+    """The summary a finished shard carries in its metadata (its schema, not its rows)."""
+    import pyarrow.parquet as pq
+
+    from reform.datasets.errors import DataFormatError
+    from reform.datasets.parquet import METADATA_KEY
+
+    try:
+        raw = (pq.read_schema(path).metadata or {})[METADATA_KEY]
+        return ShardSummary.from_json(json.loads(raw)["metadata"]["episode"])
+    except Exception as exc:
+        raise DataFormatError(
+            path,
+            None,
+            "schema metadata",
+            "a shard written by reform-sim generate (metadata.episode)",
+            f"{type(exc).__name__}: {exc}",
+        ) from exc
+
+
+# ------------------------------------------------------------------------------------------
+# The card
+
+
+def _card(
+    spec: GenerationSpec,
+    episodes: int,
+    shards: Sequence[ShardSummary],
+    *,
+    complete: bool,
+    resolved_options: Mapping[str, Any] | None,
+) -> dict[str, Any]:
+    sizes: Counter[int] = Counter()
+    for shard in shards:
+        sizes.update(shard.group_sizes)
+    return {
+        "card_version": CARD_VERSION,
+        "kind": "reform-sim synthetic dataset",
+        "complete": complete,
+        "parameters": spec.parameters(),
+        "scenario_options_resolved": resolved_options,
+        "episodes": episodes,
+        "layout": f"scenario={spec.scenario}/episode=<k>/{SHARD_FILE}, sequence "
+        f"'{spec.scenario}-<k>'",
+        "command": _command(spec, episodes),
+        "totals": {
+            "shards": len(shards),
+            "frames": sum(s.frames for s in shards),
+            "annotated_frames": sum(s.annotated_frames for s in shards),
+            "rows": sum(s.rows for s in shards),
+            "group_sizes": {str(k): v for k, v in sorted(sizes.items())},
+        },
+        "shards": [s.to_json() for s in sorted(shards, key=lambda s: s.episode)],
+    }
+
+
+def _command(spec: GenerationSpec, episodes: int) -> str:
+    words = [
+        "reform-sim",
+        "generate",
+        "--scenario",
+        spec.scenario,
+        "--episodes",
+        str(episodes),
+        "--seed",
+        str(spec.seed),
+        "--out",
+        "DIR",
+    ]
+    for key, value in spec.options.items():
+        words += ["--set", f"{key}={json.dumps(value)}"]
+    if spec.duration is not None:
+        words += ["--duration", f"{spec.duration:g}"]
+    if spec.rate is not None:
+        words += ["--rate", f"{spec.rate:g}"]
+    words += ["--view", spec.view]
+    if spec.sensor is not None:
+        from sim.sensor import Sensor
+
+        default = Sensor()
+        for f in dataclasses.fields(spec.sensor):
+            value = getattr(spec.sensor, f.name)
+            if value != getattr(default, f.name):
+                flag = "--" + f.name.replace("_", "-")
+                if isinstance(value, bool):
+                    words.append(flag if value else "--no-" + f.name.replace("_", "-"))
+                else:
+                    words += [flag, f"{value:g}"]
+    return shlex.join(words)
+
+
+def _markdown(card: Mapping[str, Any]) -> str:
+    p = card["parameters"]
+    totals = card["totals"]
+    lines = [
+        f"# Synthetic dataset: {p['scenario']}",
+        "",
+        f"Generated by {p['package_version']} ({card['kind']}); "
+        + ("complete." if card["complete"] else "**incomplete**: resume with the command below."),
+        "",
+        "Reproduce (byte for byte) or resume:",
+        "",
+        "```",
+        card["command"],
+        "```",
+        "",
+        "Load it:",
+        "",
+        "```python",
+        "from reform.datasets import read_parquet",
+        "dataset = read_parquet('DIR')",
+        "```",
+        "",
+        "## Parameters",
+        "",
+        "| parameter | value |",
+        "| --- | --- |",
+        f"| scenario | `{p['scenario']}` |",
+        f"| scenario options (given) | `{json.dumps(p['options'], sort_keys=True)}` |",
+        f"| master seed | {p['seed']} |",
+        f"| episode seeds | {p['seed_rule']} (listed per shard in {CARD_JSON}) |",
+        f"| view | {p['view']} |",
+        f"| sensor | {_sensor_text(p['sensor'])} |",
+        f"| rate | {_or_default(p['rate_hz'], 'Hz')} |",
+        f"| episode duration | {_or_default(p['duration_s'], 's')} |",
+        f"| package version | {p['package_version']} |",
+        f"| Parquet format version | {p['format_version']} |",
+        f"| episodes | {card['episodes']} |",
+        f"| layout | `{card['layout']}` |",
+        "",
+    ]
+    resolved = card.get("scenario_options_resolved")
+    if resolved:
+        lines += ["Scenario options in force (defaults filled in):", "", "| option | value |"]
+        lines += ["| --- | --- |"]
+        lines += [f"| {k} | `{json.dumps(v)}` |" for k, v in resolved.items()]
+        lines.append("")
+    lines += [
+        "## Contents",
+        "",
+        "| | count |",
+        "| --- | ---: |",
+        f"| shards written | {totals['shards']} of {card['episodes']} |",
+        f"| frames | {totals['frames']:,} |",
+        f"| annotated frames | {totals['annotated_frames']:,} |",
+        f"| person entries (rows) | {totals['rows']:,} |",
+        "",
+        "Group sizes over the annotated frames (everyone counted: a person alone is a group of "
+        "size 1, the robot counts as a member):",
+        "",
+        "| size | groups |",
+        "| ---: | ---: |",
+    ]
+    lines += [f"| {k} | {v:,} |" for k, v in totals["group_sizes"].items()]
+    lines.append("")
+    return "\n".join(lines)
+
+
+def _or_default(value: float | None, unit: str) -> str:
+    return "scenario default" if value is None else f"{value:g} {unit}"
+
+
+def _sensor_text(sensor: Mapping[str, Any] | None) -> str:
+    if sensor is None:
+        return "none (ground truth)"
+    return ", ".join(f"{k}={v}" for k, v in sensor.items())
+
+
+def _write_cards(out_dir: Path, card: Mapping[str, Any]) -> None:
+    with atomic_open(out_dir / CARD_JSON, "w", encoding="utf-8") as handle:
+        json.dump(card, handle, indent=2, allow_nan=False)
+        handle.write("\n")
+    with atomic_open(out_dir / CARD_MARKDOWN, "w", encoding="utf-8") as handle:
+        handle.write(_markdown(card))
+
+
+# ------------------------------------------------------------------------------------------
+# Checks before any work
+
+
+def _check_scenario(spec: GenerationSpec) -> dict[str, Any] | None:
+    """Builds episode 0's scenario: unknown names and impossible options fail here.
+
+    Returns the scenario's options with defaults filled in, when the scenario tells them.
+    """
+    import scenarios
+
+    known = tuple(scenarios.names())
+    if spec.scenario not in known:
+        raise ValueError(f"scenario must be one of {', '.join(known)}; got {spec.scenario!r}")
+    scenario = scenarios.make(spec.scenario, seed=episode_seed(spec.seed, 0), **spec.options)
+    return _resolved_options(scenario)
+
+
+def _resolved_options(scenario: Any) -> dict[str, Any] | None:
+    options = getattr(scenario, "options", None)
+    if dataclasses.is_dataclass(options) and not isinstance(options, type):
+        options = dataclasses.asdict(options)
+    if isinstance(options, Mapping):
+        try:
+            return _json_value("scenario options", dict(options))
+        except ValueError:
+            return {k: repr(v) for k, v in options.items()}
+    return None
+
+
+def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
+    """Contiguous batches: about ``TASKS_PER_WORKER`` per worker, at most
+    ``MAX_EPISODES_PER_TASK`` episodes each."""
+    if not episodes:
+        return []
+    tasks = max(1, min(len(episodes), workers * TASKS_PER_WORKER))
+    size = max(1, min(MAX_EPISODES_PER_TASK, math.ceil(len(episodes) / tasks)))
+    return [list(episodes[i : i + size]) for i in range(0, len(episodes), size)]
+
+
+# ------------------------------------------------------------------------------------------
+# Backends
+
+
+def _local(
+    spec: GenerationSpec,
+    out_dir: Path,
+    batches: list[list[int]],
+    n_jobs: int,
+    save_recordings: bool,
+) -> Iterator[list[ShardSummary]]:
+    if n_jobs == 1 or len(batches) == 1:
+        for batch in batches:
+            yield _run_batch(spec, str(out_dir), batch, save_recordings)
+        return
+    from joblib import Parallel, delayed
+
+    parallel = Parallel(
+        n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
+    )
+    yield from parallel(
+        delayed(_run_batch)(spec, str(out_dir), batch, save_recordings) for batch in batches
+    )
+
+
+def _import_ray():
+    try:
+        import ray
+    except ImportError as exc:
+        raise ImportError(
+            "backend='ray' needs Ray: pip install 'reform-sim[ray]' (or pip install ray)"
+        ) from exc
+    return ray
+
+
+def _ray_cpus(address: str | None) -> tuple[Any, bool, int]:
+    """Connects to Ray (``address``, or the instance already running in this process)."""
+    ray = _import_ray()
+    owned = False
+    if not ray.is_initialized():
+        ray.init(address=address, log_to_driver=False, include_dashboard=False)
+        owned = True
+    cpus = int(ray.cluster_resources().get("CPU", 1)) or 1
+    return ray, owned, cpus
+
+
+def _ray(
+    ray: Any,
+    spec: GenerationSpec,
+    out_dir: Path,
+    batches: list[list[int]],
+    save_recordings: bool,
+) -> Iterator[list[ShardSummary]]:
+    task = ray.remote(num_cpus=1, max_retries=2)(_run_batch_bytes)
+    pending = [task.remote(spec, batch, save_recordings) for batch in batches]
+    while pending:
+        done, pending = ray.wait(pending, num_returns=1)
+        summaries = []
+        for summary, shard, recording in ray.get(done[0]):
+            if recording is not None:
+                with atomic_path(_recording_path(out_dir, summary.episode)) as tmp:
+                    tmp.write_bytes(recording)
+            with atomic_path(out_dir / summary.path) as tmp:
+                tmp.write_bytes(shard)
+            summaries.append(summary)
+        yield summaries
+
+
+# ------------------------------------------------------------------------------------------
+# The entry point
+
+
+def generate_dataset(
+    scenario: str,
+    *,
+    episodes: int,
+    seed: int,
+    out_dir: str | os.PathLike[str],
+    options: Mapping[str, Any] | None = None,
+    view: str = "truth",
+    sensor: Any = None,
+    rate: float | None = None,
+    duration: float | None = None,
+    backend: str = "local",
+    address: str | None = None,
+    n_jobs: int | None = None,
+    save_recordings: bool = False,
+    progress: bool = True,
+) -> GenerationReport:
+    """Generates (or resumes, or extends) a synthetic dataset of ``episodes`` episodes.
+
+    Args:
+        scenario: a registered scenario name (``scenarios.names()``).
+        episodes: number of episodes (shards), >= 1.
+        seed: master seed, >= 0; episode ``k`` gets `episode_seed`\\ ``(seed, k)``.
+        out_dir: the dataset folder: new, empty, or holding this same dataset (resume/extend).
+        options: scenario option overrides (JSON values), as for ``scenarios.make``.
+        view: ``"truth"`` or ``"robot"`` (observed by the robot's head sensor).
+        sensor: the robot view's sensor model: a ``sim.Sensor`` or a mapping of its fields;
+            ``None`` for its defaults (robot view) or no sensor (truth view).
+        rate: output (annotation) rate, Hz; ``None`` for the scenario's.
+        duration: episode length, seconds; ``None`` for the scenario's.
+        backend: ``"local"`` (processes on this machine) or ``"ray"`` (remote tasks).
+        address: the Ray cluster's address (``"auto"``, ``"ray://host:10001"``, ``host:6379``);
+            ``None`` joins the Ray instance already running in this process, else starts one.
+        n_jobs: local worker processes (default: every core); ignored by Ray.
+        save_recordings: also write one Rerun ``.rrd`` per episode under ``recordings/``.
+        progress: show a progress bar on stderr.
+
+    Returns:
+        A `GenerationReport`.
+
+    Raises:
+        ValueError: bad parameters, an unknown scenario (the known ones are listed), impossible
+            scenario options, or an ``out_dir`` holding something else: before any work.
+        ImportError: ``backend="ray"`` without Ray installed.
+    """
+    started = time.perf_counter()
+    episodes = _check_int("episodes", episodes, minimum=1)
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if address is not None and backend != "ray":
+        raise ValueError(f"address is for backend='ray', got address={address!r} with {backend!r}")
+    if n_jobs is not None:
+        n_jobs = _check_int("n_jobs", n_jobs, minimum=1)
+    spec = GenerationSpec(
+        scenario=scenario,
+        options=dict(options or {}),
+        seed=seed,
+        view=view,
+        sensor=sensor,
+        rate=rate,
+        duration=duration,
+    )
+    out_dir = Path(out_dir)
+    resolved = _check_scenario(spec)
+    parameters = spec.parameters()
+    _check_folder(out_dir, parameters, episodes)
+    if backend == "ray":
+        _import_ray()
+
+    with _folder_lock(out_dir):
+        _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
+        _remove_stale_temporaries(out_dir)
+        done = [k for k in range(episodes) if _finished(out_dir, spec, k, save_recordings)]
+        shards = {k: _shard_summary_from_file(shard_path(out_dir, scenario, k)) for k in done}
+        todo = [k for k in range(episodes) if k not in shards]
+        _write_cards(
+            out_dir,
+            _card(spec, episodes, list(shards.values()), complete=False, resolved_options=resolved),
+        )
+        ray = None
+        owned = False
+        if backend == "ray":
+            ray, owned, workers = _ray_cpus(address)
+        else:
+            workers = n_jobs or _cpu_count()
+        try:
+            batches = _batches(todo, workers)
+            if backend == "ray":
+                results = _ray(ray, spec, out_dir, batches, save_recordings)
+            else:
+                results = _local(
+                    spec, out_dir, batches, min(workers, len(batches) or 1), save_recordings
+                )
+            _drain(results, shards, episodes, spec.scenario, progress)
+        finally:
+            if owned:
+                ray.shutdown()
+        summaries = [shards[k] for k in range(episodes)]
+        card_path = out_dir / CARD_JSON
+        _write_cards(
+            out_dir, _card(spec, episodes, summaries, complete=True, resolved_options=resolved)
+        )
+    return GenerationReport(
+        out_dir=out_dir,
+        spec=spec,
+        episodes=episodes,
+        generated=tuple(todo),
+        skipped=tuple(done),
+        shards=tuple(summaries),
+        seconds=time.perf_counter() - started,
+        backend=backend,
+        n_jobs=workers,
+        card=card_path,
+        card_markdown=out_dir / CARD_MARKDOWN,
+    )
+
+
+def _cpu_count() -> int:
+    from joblib import cpu_count
+
+    return max(1, int(cpu_count()))
+
+
+def _drain(
+    results: Iterable[list[ShardSummary]],
+    shards: dict[int, ShardSummary],
+    episodes: int,
+    scenario: str,
+    progress: bool,
+) -> None:
+    from tqdm import tqdm
+
+    with tqdm(
+        total=episodes,
+        initial=len(shards),
+        desc=f"generate {scenario}",
+        unit="episode",
+        file=sys.stderr,
+        disable=not progress,
+        dynamic_ncols=True,
+    ) as bar:
+        frames = 0
+        for batch in results:
+            for summary in batch:
+                shards[summary.episode] = summary
+                frames += summary.annotated_frames
+            bar.update(len(batch))
+            bar.set_postfix(annotated_frames=frames, refresh=False)
