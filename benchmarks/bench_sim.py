@@ -64,6 +64,7 @@ class Wander:
         self.speed = rng.uniform(1.0, 1.4, size=(2000, len(people)))
         self.key: tuple[int, ...] | None = None
         self.mapping: dict[int, Intent] = {}
+        self.valid_until = -math.inf  # seconds: the mapping holds until someone's goal changes
         self.cache: dict[tuple[int, int], Intent] = {}
         self.group_list = tuple(
             (int(a), int(b)) for a, b in zip(self.ids[0::2], self.ids[1::2], strict=False)
@@ -80,7 +81,11 @@ class Wander:
         return self.cache[(i, k)]
 
     def intents(self, t: float) -> Mapping[int, Intent]:
-        k = np.floor((t + self.offset) / self.period).astype(int) % self.goals.shape[0]
+        if self.key is not None and t < self.valid_until:
+            return self.mapping
+        phase = (t + self.offset) / self.period
+        k = np.floor(phase).astype(int) % self.goals.shape[0]
+        self.valid_until = float(np.min((np.floor(phase) + 1.0) * self.period - self.offset))
         key = tuple(k.tolist())
         if key != self.key:
             self.key = key

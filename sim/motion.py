@@ -192,6 +192,11 @@ def _wrap(angle: float) -> float:
 
 
 @numba.njit(cache=True, inline="always")
+def _norm(x: float, y: float) -> float:
+    return math.sqrt(x * x + y * y)
+
+
+@numba.njit(cache=True, inline="always")
 def _clip(value: float, low: float, high: float) -> float:
     return min(max(value, low), high)
 
@@ -276,7 +281,7 @@ def write_pose(
     for i in range(state.shape[0]):
         m = mocap_of[i]
         if state[i, S_PRESENT] > 0.5:
-            speed = math.hypot(state[i, S_VX], state[i, S_VY])
+            speed = _norm(state[i, S_VX], state[i, S_VY])
             fade = _clip(1.0 - speed / SWAY_FADE_SPEED_M_S, 0.0, 1.0)
             sx, sy, syaw = 0.0, 0.0, 0.0
             if fade > 0.0:
@@ -421,7 +426,7 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
             cap = 0.0
             if intent[i, I_HAS_GOAL] > 0.5:
                 ex, ey = intent[i, I_GOAL_X] - x, intent[i, I_GOAL_Y] - y
-                dist_goal = math.hypot(ex, ey)
+                dist_goal = _norm(ex, ey)
                 if dist_goal > ARRIVE_TOLERANCE_M:
                     ux, uy = ex / dist_goal, ey / dist_goal
                     cap = min(intent[i, I_SPEED], max_speed)
@@ -456,13 +461,13 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
                     side = push * AVOID_TANGENT * max(ahead, 0.0)
                     vdx += push * nx + side * uy
                     vdy += push * ny - side * ux
-                norm = math.hypot(vdx, vdy)
+                norm = _norm(vdx, vdy)
                 if norm > cap:
                     vdx, vdy = vdx * cap / norm, vdy * cap / norm
 
             # Bounded acceleration.
             dvx, dvy = vdx - state[i, S_VX], vdy - state[i, S_VY]
-            dv = math.hypot(dvx, dvy)
+            dv = _norm(dvx, dvy)
             if dv > max_accel * dt:
                 dvx, dvy = dvx * max_accel * dt / dv, dvy * max_accel * dt / dv
             vx, vy = state[i, S_VX] + dvx, state[i, S_VY] + dvy
@@ -487,9 +492,7 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
 
             # Body yaw: the walking direction, else the facing target, turned to follow the gaze.
             has_gaze, gaze = _gaze_yaw(state, intent, i)
-            walking = (
-                moving and dist_goal > SIDESTEP_M and math.hypot(vx, vy) > WALK_TURN_MIN_SPEED_M_S
-            )
+            walking = moving and dist_goal > SIDESTEP_M and _norm(vx, vy) > WALK_TURN_MIN_SPEED_M_S
             if walking:
                 target = math.atan2(vy, vx)
             else:
@@ -542,7 +545,7 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
                     if d < 1e-9:
                         # Coincident: separate along the line between the old positions.
                         dx, dy = state[j, S_X] - state[i, S_X], state[j, S_Y] - state[i, S_Y]
-                        d = math.hypot(dx, dy)
+                        d = _norm(dx, dy)
                         if d < 1e-9:
                             dx, dy, d = 1.0, 0.0, 1.0
                         dx, dy = dx / d, dy / d
@@ -568,7 +571,7 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
             if state[i, S_PRESENT] < 0.5:
                 continue
             dx, dy = new_x[i] - state[i, S_X], new_y[i] - state[i, S_Y]
-            d = math.hypot(dx, dy)
+            d = _norm(dx, dy)
             reach = params[i, P_MAX_SPEED] * dt
             if d > reach:
                 new_x[i] = state[i, S_X] + dx * reach / d

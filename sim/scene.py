@@ -489,7 +489,13 @@ def _add_room(spec: mujoco.MjSpec, scene: SceneSpec) -> None:
     camera.alt.xyaxes = [1.0, 0.0, 0.0, 0.0, up / norm, back / norm]
 
 
-def build_scene(scene: SceneSpec) -> mujoco.MjModel:
+def _keep_one_geom_per_body(child: mujoco.MjSpec) -> None:
+    for body in child.bodies:
+        for geom in body.geoms[1:]:
+            child.delete(geom)
+
+
+def build_scene(scene: SceneSpec, *, geometry: bool = True) -> mujoco.MjModel:
     """Composes ``scene`` on an `mujoco.MjSpec` and compiles it.
 
     People and the robot are mocap bodies placed at their start poses; absent people are placed
@@ -497,6 +503,9 @@ def build_scene(scene: SceneSpec) -> mujoco.MjModel:
 
     Args:
         scene: the validated scene.
+        geometry: False builds the kinematic twin: the same bodies, joints, sites and cameras
+            (so the same body poses for the same state) with one geom per body and no walls,
+            for computing poses fast. Rendering and ray casts need the full model.
 
     Returns:
         The compiled model: lengths in metres, angles in radians, contacts disabled (the world
@@ -513,8 +522,13 @@ def build_scene(scene: SceneSpec) -> mujoco.MjModel:
     spec.stat.center = [0.0, 0.0, 0.8]
     spec.stat.extent = max(scene.room)
     _add_room(spec, scene)
+    if not geometry:
+        for name in ("wall_east", "wall_west", "wall_north", "wall_south"):
+            spec.delete(spec.geom(name))
     for index, person in enumerate(scene.people):
         child = _load(person.asset, _PERSON_PARTS)
+        if not geometry:
+            _keep_one_geom_per_body(child)
         _scale(
             child,
             horizontal=person.width / PERSON_REFERENCE_WIDTH_M,
@@ -532,6 +546,8 @@ def build_scene(scene: SceneSpec) -> mujoco.MjModel:
     if scene.robot is not None:
         robot = scene.robot
         child = _load(robot.asset, _ROBOT_PARTS)
+        if not geometry:
+            _keep_one_geom_per_body(child)
         _scale(child, horizontal=1.0, vertical=robot.height / ROBOT_REFERENCE_HEIGHT_M)
         base = child.body("base")
         base.pos = [robot.position[0], robot.position[1], 0.0]

@@ -270,6 +270,8 @@ class World:
         self._sequence = str(sequence)
         self._model = build_scene(spec) if model is None else model
         self._data = mujoco.MjData(self._model)
+        # Rollouts compute body poses on the kinematic twin: same bodies and joints, few geoms.
+        self._twin = build_scene(spec, geometry=False)
         self._batch: mj_batch.Batch | None = None
 
         agents = spec.agents
@@ -280,6 +282,12 @@ class World:
         self._index = {int(a.id): i for i, a in enumerate(agents)}
         self._robot = n - 1 if spec.robot is not None else -1
         self._bind_model(agents)
+        for size in ("nbody", "nmocap", "nq"):
+            if getattr(self._twin, size) != getattr(self._model, size):
+                raise ValueError(
+                    f"model does not match the spec: {size} is {getattr(self._model, size)}, the "
+                    f"spec builds {getattr(self._twin, size)}"
+                )
 
         # Per-agent parameters.
         rngs = np.random.default_rng(seed).spawn(n)
@@ -517,7 +525,9 @@ class World:
 
         The fast path: each block of up to ``block_rows`` output times is moved by the compiled
         motion kernel, then MuJoCo computes the kinematics of all its rows in one call
-        (`mujoco.batch`). After each block the world (and `data`) is at the block's last time.
+        (`mujoco.batch`), on the scene's kinematic twin (``build_scene(spec, geometry=False)``:
+        the same bodies and joints, hence the same body poses, without the geoms no pose
+        depends on). After each block the world (and `data`) is at the block's last time.
         Only one block is held at a time, so hour-long runs stream in constant memory.
         ``threads`` > 1 computes a block's kinematics on that many threads (identical results).
         """
@@ -626,7 +636,7 @@ class World:
     def _batch_of(self, rows: int, threads: int) -> mj_batch.Batch:
         batch = self._batch
         if batch is None or batch.nsim != rows or batch.nthread != threads:
-            batch = self._batch = mj_batch.Batch(self._model, nsim=rows, nthread=threads)
+            batch = self._batch = mj_batch.Batch(self._twin, nsim=rows, nthread=threads)
         return batch
 
     def _write_initial_pose(self) -> None:

@@ -219,3 +219,23 @@ def test_absent_people_may_share_a_start() -> None:
         PersonSpec(id=2, position=(0.0, 0.0), present=False),
     ]
     assert len(SceneSpec(people=people).agents) == 2
+
+
+def test_the_kinematic_twin_has_the_same_bodies_and_poses() -> None:
+    spec = _scene()
+    full, twin = build_scene(spec), build_scene(spec, geometry=False)
+    assert twin.ngeom < full.ngeom / 3
+    for size in ("nbody", "njnt", "nq", "nmocap", "nsite", "ncam"):
+        assert getattr(twin, size) == getattr(full, size)
+    assert [full.body(i).name for i in range(full.nbody)] == [
+        twin.body(i).name for i in range(twin.nbody)
+    ]
+    datas = [mujoco.MjData(m) for m in (full, twin)]
+    for data in datas:
+        data.mocap_pos[:] = [1.0, -0.5, 0.0]
+        data.mocap_quat[:] = [math.cos(0.3), 0.0, 0.0, math.sin(0.3)]
+        data.qpos[:] = 0.4
+    for model, data in zip((full, twin), datas, strict=True):
+        mujoco.mj_kinematics(model, data)
+    np.testing.assert_array_equal(datas[0].xpos, datas[1].xpos)
+    np.testing.assert_array_equal(datas[0].xquat, datas[1].xquat)
