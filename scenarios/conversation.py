@@ -1,0 +1,102 @@
+"""Talk in a group: who speaks when, and heads turning to whoever speaks."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from scenarios.script import Intent
+from scenarios.timeline import TimelineBuilder
+
+__all__ = ["MEAN_UTTERANCE_S", "converse", "standing"]
+
+MEAN_UTTERANCE_S = 4.0  # seconds, mean length of one person's turn to speak
+MIN_UTTERANCE_S = 1.0  # seconds
+MAX_UTTERANCE_FACTOR = 3.0  # an utterance lasts at most this many times the mean
+
+
+def standing(
+    place: np.ndarray,
+    facing: float,
+    *,
+    gaze_agent: int | None = None,
+    gaze_point: tuple[float, float] | None = None,
+    speed: float | None = None,
+) -> Intent:
+    """Stand at (walk to) ``place`` facing ``facing``, looking at someone or somewhere."""
+    kwargs = {} if speed is None else {"speed": speed}
+    return Intent(
+        goal=(float(place[0]), float(place[1])),
+        face_yaw=float(facing),
+        gaze_agent=gaze_agent,
+        gaze_point=gaze_point,
+        **kwargs,
+    )
+
+
+def _gaze(
+    looker: int,
+    target: int,
+    spots: dict[int, np.ndarray],
+    rng: np.random.Generator,
+    head_noise: float,
+) -> dict[str, object]:
+    """Look at ``target``; with head noise, at a point off it by a random angle."""
+    if head_noise <= 0.0:
+        rng.normal()  # keep the stream the same whatever the noise
+        return {"gaze_agent": target}
+    here, there = spots[looker], spots[target]
+    delta = there - here
+    angle = math.atan2(delta[1], delta[0]) + rng.normal() * head_noise
+    reach = max(float(np.hypot(*delta)), 0.5)
+    point = here + reach * np.array([math.cos(angle), math.sin(angle)])
+    return {"gaze_point": (float(point[0]), float(point[1]))}
+
+
+def converse(
+    builder: TimelineBuilder,
+    members: Sequence[int],
+    places: np.ndarray,
+    facings: np.ndarray,
+    *,
+    start: float,
+    end: float,
+    rng: np.random.Generator,
+    mean_utterance: float = MEAN_UTTERANCE_S,
+    speakers: Sequence[int] | None = None,
+    head_noise: float = 0.0,
+    speed: float | None = None,
+) -> list[tuple[float, int]]:
+    """Members stand at their places and talk from ``start`` to ``end``, turn by turn.
+
+    Each utterance lasts an exponential time (mean ``mean_utterance`` s, within
+    [`MIN_UTTERANCE_S`, `MAX_UTTERANCE_FACTOR` x mean]); the next speaker is drawn among the
+    others (``speakers`` restricts who may speak). Listeners look at the speaker; the speaker
+    looks at one listener. ``head_noise`` (radians, standard deviation) turns each gaze off its
+    target.
+
+    Returns:
+        ``(time, speaker)`` of every utterance.
+    """
+    members = [int(m) for m in members]
+    spots = {m: np.asarray(places[k], dtype=np.float64) for k, m in enumerate(members)}
+    facing = {m: float(facings[k]) for k, m in enumerate(members)}
+    allowed = members if speakers is None else [int(s) for s in speakers]
+    t = float(start)
+    speaker = allowed[int(rng.integers(len(allowed)))]
+    turns = []
+    while t < end:
+        turns.append((t, speaker))
+        listeners = [m for m in members if m != speaker]
+        addressee = listeners[int(rng.integers(len(listeners)))]
+        for m in members:
+            target = addressee if m == speaker else speaker
+            gaze = _gaze(m, target, spots, rng, head_noise)
+            builder.set(t, m, standing(spots[m], facing[m], speed=speed, **gaze))
+        length = rng.exponential(mean_utterance)
+        t += min(max(length, MIN_UTTERANCE_S), MAX_UTTERANCE_FACTOR * mean_utterance)
+        others = [s for s in allowed if s != speaker] or allowed
+        speaker = others[int(rng.integers(len(others)))]
+    return turns

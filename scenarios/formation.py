@@ -1,0 +1,98 @@
+"""Geometry of an F-formation: members on an o-space circle, facing its centre.
+
+Tightness (the mean distance of the members to their mean position) of people spread evenly on
+a circle is the circle's radius, so a scenario's radius law by group size is what sets the
+Tightness by size it produces. `RadiusLaw` is linear in the number of members,
+``radius(n) = base + per_member * (n - 2)``, never tighter than people's bodies allow
+(`min_radius`: neighbours on the circle at least `scenarios.stage.SPACING_M` apart).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from scenarios.stage import SPACING_M
+
+__all__ = ["RadiusLaw", "circle_places", "facing_centre", "min_radius", "spread_angles"]
+
+
+def min_radius(n: int, *, spacing: float = SPACING_M) -> float:
+    """Smallest o-space radius with ``n`` members evenly spread ``spacing`` metres apart."""
+    if n < 2:
+        raise ValueError(f"n must be >= 2 members, got {n}")
+    return spacing / (2.0 * math.sin(math.pi / n))
+
+
+@dataclass(frozen=True)
+class RadiusLaw:
+    """O-space radius by group size: ``base + per_member * (n - 2)`` metres, at least
+    `min_radius` (n).
+
+    Attributes:
+        base: radius of a pair, metres (half the distance between the two).
+        per_member: growth per extra member, metres.
+    """
+
+    base: float
+    per_member: float
+
+    def __post_init__(self) -> None:
+        for name in ("base", "per_member"):
+            value = float(getattr(self, name))
+            if not math.isfinite(value) or value < 0.0:
+                raise ValueError(f"RadiusLaw.{name} must be >= 0 metres, got {value}")
+            object.__setattr__(self, name, value)
+
+    def __call__(self, n: int) -> float:
+        return max(self.base + self.per_member * (n - 2), min_radius(n))
+
+
+def spread_angles(n: int, rng: np.random.Generator, *, jitter: float = 0.0) -> np.ndarray:
+    """(n,) angles (radians, increasing) of ``n`` members evenly around a circle, rotated at
+    random, each moved by uniform noise of up to ``jitter`` of the even gap."""
+    start = rng.uniform(-math.pi, math.pi)
+    gap = 2.0 * math.pi / n
+    noise = rng.uniform(-jitter, jitter, size=n) * gap if jitter > 0.0 else np.zeros(n)
+    return start + gap * np.arange(n) + noise
+
+
+def facing_centre(places: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """(k,) yaws (radians) from each place toward ``centre``."""
+    d = np.asarray(centre, dtype=np.float64) - np.asarray(places, dtype=np.float64)
+    return np.arctan2(d[:, 1], d[:, 0])
+
+
+def circle_places(
+    centre: np.ndarray,
+    radius: float,
+    angles: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    position_noise: float = 0.0,
+    orientation_noise: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Places on an o-space circle and the way each member faces.
+
+    Args:
+        centre: (2,) metres.
+        radius: metres.
+        angles: (k,) angle of each member around the centre, radians.
+        rng: draws the noise.
+        position_noise: standard deviation of a place's offset per axis, metres.
+        orientation_noise: standard deviation of a facing's deviation from the centre, radians.
+
+    Returns:
+        (places (k, 2) metres, facings (k,) radians).
+    """
+    angles = np.asarray(angles, dtype=np.float64)
+    k = angles.size
+    places = np.asarray(centre, dtype=np.float64) + radius * np.stack(
+        [np.cos(angles), np.sin(angles)], axis=1
+    )
+    places = places + rng.normal(0.0, 1.0, size=(k, 2)) * position_noise
+    facings = facing_centre(places, centre) + rng.normal(0.0, 1.0, size=k) * orientation_noise
+    facings = np.angle(np.exp(1j * facings))
+    return places, facings

@@ -1,0 +1,371 @@
+"""The REFORM paper's proof-of-concept scenes with the Directions Robot.
+
+* ``hri-conversation``: two people walk up to the robot and talk with it: one F-formation of
+  three, the robot included, from the moment both have arrived until they leave.
+* ``hri-robot-excluded``: two people stand in front of the robot and talk to each other: an
+  F-formation of two; the robot watches and is left out.
+* ``hri-passing``: people walk past each other and the robot, again and again: no F-formation.
+
+The robot stands near the west wall facing east (+x); its sensor looks into the room. Timing,
+positions, paths and gaze vary with the seed.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+
+from scenarios.casting import cast
+from scenarios.conversation import MEAN_UTTERANCE_S, converse, standing
+from scenarios.formation import circle_places, facing_centre
+from scenarios.registry import register
+from scenarios.scenario import Scenario, check_option
+from scenarios.script import Intent
+from scenarios.stage import RobotPlace, Stage
+from scenarios.timeline import TimelineBuilder
+
+__all__ = ["hri_conversation", "hri_passing", "hri_robot_excluded"]
+
+ROOM_M = (6.0, 5.0)  # metres, the HRI room
+PASSING_ROOM_M = (8.0, 6.0)  # metres, room of hri-passing
+ROBOT_ID = 0
+ROBOT_WALL_GAP_M = 1.0  # metres from the west wall to the robot
+WALK_SPEED_RANGE_M_S = (1.0, 1.3)  # m/s, people's walking speeds
+SETTLE_S = 2.5  # seconds allowed beyond distance / speed to stop and turn
+EXIT_GAP_M = 0.45  # metres from a wall where people leave the room
+START_DELAY_S = (0.0, 1.0)  # seconds, when each person sets off
+TRIANGLE_JITTER_RAD = 0.15  # radians, spread of the people's places around the even triangle
+
+
+def _robot(room: tuple[float, float]) -> RobotPlace:
+    return RobotPlace(id=ROBOT_ID, position=(-0.5 * room[0] + ROBOT_WALL_GAP_M, 0.0), yaw=0.0)
+
+
+def _walk_time(a: np.ndarray, b: np.ndarray, speed: float) -> float:
+    return float(np.hypot(*(np.asarray(b) - np.asarray(a)))) / speed + SETTLE_S
+
+
+def _approach_starts(
+    rng: np.random.Generator, side: str, room: tuple[float, float], robot_x: float
+) -> np.ndarray:
+    """(2, 2) start positions of two people walking in side by side."""
+    hx, hy = 0.5 * room[0] - 0.5, 0.5 * room[1] - 0.5
+    if side == "random":
+        side = ("front", "left", "right")[int(rng.integers(3))]
+    if side == "front":
+        x = rng.uniform(hx - 0.6, hx)
+        y = rng.uniform(-0.6, 0.6)
+        return np.array([[x, y + 0.4], [x, y - 0.4]])
+    sign = 1.0 if side == "left" else -1.0
+    x = robot_x + rng.uniform(1.2, 2.4)
+    return np.array([[x - 0.4, sign * hy], [x + 0.4, sign * hy]])
+
+
+def _match(
+    starts: np.ndarray, places: np.ndarray, facings: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Places (and facings) reordered so that two walkers' paths do not cross."""
+    straight = np.hypot(*(starts[0] - places[0])) + np.hypot(*(starts[1] - places[1]))
+    swapped = np.hypot(*(starts[0] - places[1])) + np.hypot(*(starts[1] - places[0]))
+    if swapped < straight:
+        return places[::-1].copy(), facings[::-1].copy()
+    return places, facings
+
+
+def _leave(
+    builder: TimelineBuilder,
+    people: list[int],
+    places: np.ndarray,
+    room: tuple[float, float],
+    t: float,
+    rng: np.random.Generator,
+) -> float:
+    """People walk to the east wall and out; returns when the last is gone."""
+    gone = t
+    hx = 0.5 * room[0] - EXIT_GAP_M
+    for k, person in enumerate(people):
+        exit_at = np.array([hx, float(np.clip(places[k, 1] + rng.uniform(-0.8, 0.8), -1.5, 1.5))])
+        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
+        builder.set(t, person, Intent(goal=(float(exit_at[0]), float(exit_at[1])), speed=speed))
+        out = t + _walk_time(places[k], exit_at, speed)
+        builder.set(out, person, Intent(present=False))
+        gone = max(gone, out)
+    return gone
+
+
+@register("hri-conversation")
+def hri_conversation(
+    *,
+    seed: int,
+    radius: float = 0.6,
+    talk_duration: float = 40.0,
+    approach: Literal["front", "left", "right", "random"] = "random",
+    leave: bool = True,
+    position_noise: float = 0.03,
+    orientation_noise: float = 0.1,
+    mean_utterance: float = MEAN_UTTERANCE_S,
+) -> Scenario:
+    """Two people walk up to the Directions Robot and converse with it (an F-formation of 3).
+
+    Args:
+        seed: seeds every draw.
+        radius: o-space radius of the group of three, metres (0.3-1.5).
+        talk_duration: seconds of conversation once both have arrived (> 0).
+        approach: where the two come from (the robot faces east, "front").
+        leave: whether they walk out at the end (the group ends when they set off).
+        position_noise: standard deviation of each person's place, metres (0-0.3).
+        orientation_noise: standard deviation of each person's facing, radians (0-0.5).
+        mean_utterance: mean length of one speaker's turn, seconds (0.5-30).
+    """
+    name = "hri-conversation"
+    check_option(name, "radius", radius, low=0.3, high=1.5, unit="m")
+    check_option(name, "talk_duration", talk_duration, low=0.0, above=True, unit="s")
+    check_option(name, "position_noise", position_noise, low=0.0, high=0.3, unit="m")
+    check_option(name, "orientation_noise", orientation_noise, low=0.0, high=0.5, unit="rad")
+    check_option(name, "mean_utterance", mean_utterance, low=0.5, high=30.0, unit="s")
+    rng = np.random.default_rng(seed)
+    robot = _robot(ROOM_M)
+    robot_xy = np.array(robot.position)
+    centre = robot_xy + radius * np.array([math.cos(robot.yaw), math.sin(robot.yaw)])
+    gap = 2.0 * math.pi / 3.0 + rng.uniform(-TRIANGLE_JITTER_RAD, TRIANGLE_JITTER_RAD, size=2)
+    angles = np.array([math.pi - gap[0], math.pi + gap[1]])  # left of the robot, then right
+    places, facings = circle_places(
+        centre,
+        radius,
+        angles,
+        rng,
+        position_noise=position_noise,
+        orientation_noise=orientation_noise,
+    )
+    starts = _approach_starts(rng, approach, ROOM_M, robot_xy[0])
+    places, facings = _match(starts, places, facings)
+    people = [1, 2]
+    start_yaws = facing_centre(starts, centre)
+    roles = cast(rng, people, starts, start_yaws, parts="guest")
+    builder = TimelineBuilder([*people, ROBOT_ID])
+    arrive = 0.0
+    for k, person in enumerate(people):
+        delay = float(rng.uniform(*START_DELAY_S))
+        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
+        builder.set(0.0, person, Intent())
+        builder.set(delay, person, standing(places[k], facings[k], speed=speed))
+        arrive = max(arrive, delay + _walk_time(starts[k], places[k], speed))
+    members = [ROBOT_ID, *people]
+    all_places = np.vstack([robot_xy, places])
+    all_facings = np.concatenate([[robot.yaw], facings])
+    talk_end = arrive + talk_duration
+    end = talk_end if leave else math.inf
+    builder.group(members, all_places, all_facings, centre, start=0.0, end=end)
+    builder.event(0.0, "approach", f"people {people} walk up to the robot")
+    converse(
+        builder,
+        members,
+        all_places,
+        all_facings,
+        start=arrive,
+        end=talk_end,
+        rng=rng,
+        mean_utterance=mean_utterance,
+    )
+    builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=people[0]))
+    duration = talk_end
+    if leave:
+        builder.event(talk_end, "leave", f"people {people} walk away")
+        builder.set(talk_end, ROBOT_ID, standing(robot_xy, robot.yaw))
+        duration = _leave(builder, people, places, ROOM_M, talk_end, rng) + 1.0
+    return Scenario(
+        name=name,
+        seed=seed,
+        options={
+            "radius": radius,
+            "talk_duration": talk_duration,
+            "approach": approach,
+            "leave": leave,
+            "position_noise": position_noise,
+            "orientation_noise": orientation_noise,
+            "mean_utterance": mean_utterance,
+        },
+        stage=Stage(room=ROOM_M, people=roles, robot=robot),
+        timeline=builder.build(),
+        duration=duration,
+        description="two people and the robot converse: one F-formation of three",
+    )
+
+
+@register("hri-robot-excluded")
+def hri_robot_excluded(
+    *,
+    seed: int,
+    distance: float = 1.8,
+    radius: float = 0.42,
+    talk_duration: float = 40.0,
+    walk_in: bool = True,
+    leave: bool = True,
+    position_noise: float = 0.03,
+    orientation_noise: float = 0.1,
+    mean_utterance: float = MEAN_UTTERANCE_S,
+) -> Scenario:
+    """Two people stand in front of the robot and talk to each other; the robot is left out.
+
+    Args:
+        seed: seeds every draw.
+        distance: from the robot to the pair's o-space centre, metres (1.0-4.0).
+        radius: half the distance between the two, metres (0.3-1.0).
+        talk_duration: seconds of conversation once both stand at their places (> 0).
+        walk_in: whether they walk in first (else they stand there from the start).
+        leave: whether they walk out at the end (the group ends when they set off).
+        position_noise: standard deviation of each person's place, metres (0-0.3).
+        orientation_noise: standard deviation of each person's facing, radians (0-0.5).
+        mean_utterance: mean length of one speaker's turn, seconds (0.5-30).
+    """
+    name = "hri-robot-excluded"
+    check_option(name, "distance", distance, low=1.0, high=4.0, unit="m")
+    check_option(name, "radius", radius, low=0.3, high=1.0, unit="m")
+    check_option(name, "talk_duration", talk_duration, low=0.0, above=True, unit="s")
+    check_option(name, "position_noise", position_noise, low=0.0, high=0.3, unit="m")
+    check_option(name, "orientation_noise", orientation_noise, low=0.0, high=0.5, unit="rad")
+    check_option(name, "mean_utterance", mean_utterance, low=0.5, high=30.0, unit="s")
+    rng = np.random.default_rng(seed)
+    robot = _robot(ROOM_M)
+    robot_xy = np.array(robot.position)
+    bearing = rng.uniform(-0.3, 0.3)
+    centre = robot_xy + distance * np.array([math.cos(bearing), math.sin(bearing)])
+    axis = bearing + math.pi / 2.0 + rng.uniform(-0.5, 0.5)
+    places, facings = circle_places(
+        centre,
+        radius,
+        np.array([axis, axis + math.pi]),
+        rng,
+        position_noise=position_noise,
+        orientation_noise=orientation_noise,
+    )
+    people = [1, 2]
+    if walk_in:
+        starts = _approach_starts(rng, "random", ROOM_M, robot_xy[0])
+        places, facings = _match(starts, places, facings)
+        start_yaws = facing_centre(starts, centre)
+    else:
+        starts = places.copy()
+        start_yaws = facings.copy()
+    roles = cast(rng, people, starts, start_yaws, parts="guest")
+    builder = TimelineBuilder([*people, ROBOT_ID])
+    arrive = 0.0
+    for k, person in enumerate(people):
+        delay = float(rng.uniform(*START_DELAY_S)) if walk_in else 0.0
+        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
+        builder.set(0.0, person, Intent())
+        builder.set(delay, person, standing(places[k], facings[k], speed=speed))
+        if walk_in:
+            arrive = max(arrive, delay + _walk_time(starts[k], places[k], speed))
+    talk_end = arrive + talk_duration
+    end = talk_end if leave else math.inf
+    builder.group(people, places, facings, centre, start=0.0, end=end)
+    turns = converse(
+        builder,
+        people,
+        places,
+        facings,
+        start=arrive,
+        end=talk_end,
+        rng=rng,
+        mean_utterance=mean_utterance,
+    )
+    builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_point=tuple(centre)))
+    for t, speaker in turns:
+        builder.set(t, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=speaker))
+    duration = talk_end
+    if leave:
+        builder.event(talk_end, "leave", f"people {people} walk away")
+        builder.set(talk_end, ROBOT_ID, standing(robot_xy, robot.yaw))
+        duration = _leave(builder, people, places, ROOM_M, talk_end, rng) + 1.0
+    return Scenario(
+        name=name,
+        seed=seed,
+        options={
+            "distance": distance,
+            "radius": radius,
+            "talk_duration": talk_duration,
+            "walk_in": walk_in,
+            "leave": leave,
+            "position_noise": position_noise,
+            "orientation_noise": orientation_noise,
+            "mean_utterance": mean_utterance,
+        },
+        stage=Stage(room=ROOM_M, people=roles, robot=robot),
+        timeline=builder.build(),
+        duration=duration,
+        description="two people converse in front of the robot: one F-formation of two",
+    )
+
+
+@register("hri-passing")
+def hri_passing(
+    *,
+    seed: int,
+    people: int = 2,
+    passes: int = 4,
+    look_at_robot: float = 0.3,
+) -> Scenario:
+    """People walk past each other and the robot, again and again: no F-formation.
+
+    Args:
+        seed: seeds every draw.
+        people: how many walk (1-6).
+        passes: how many times each crosses the robot's view (1-50).
+        look_at_robot: probability that a walker looks at the robot on a pass (0-1).
+    """
+    name = "hri-passing"
+    check_option(name, "people", people, low=1, high=6)
+    check_option(name, "passes", passes, low=1, high=50)
+    check_option(name, "look_at_robot", look_at_robot, low=0.0, high=1.0)
+    rng = np.random.default_rng(seed)
+    room = PASSING_ROOM_M
+    robot = _robot(room)
+    ids = list(range(1, people + 1))
+    hy = 0.5 * room[1] - 0.5
+    lanes_x = (robot.position[0] + 1.0, 0.5 * room[0] - 0.6)
+    # Start spread along both side walls, alternating, so that walkers meet head on.
+    sides = np.array([1.0 if k % 2 == 0 else -1.0 for k in range(people)])
+    starts = np.stack([np.linspace(lanes_x[0] + 0.3, lanes_x[1] - 0.3, people), sides * hy], axis=1)
+    roles = cast(rng, ids, starts, -sides * math.pi / 2.0, parts="walker")
+    builder = TimelineBuilder([*ids, ROBOT_ID])
+    builder.set(0.0, ROBOT_ID, standing(np.array(robot.position), robot.yaw))
+    finish = 0.0
+    for k, person in enumerate(ids):
+        here = starts[k]
+        side = sides[k]
+        t = float(rng.uniform(0.0, 2.0))
+        for n in range(passes):
+            side = -side
+            goal = np.array([rng.uniform(*lanes_x), side * hy])
+            speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
+            draw = rng.random()
+            if draw < look_at_robot:
+                gaze = {"gaze_agent": ROBOT_ID}
+            elif draw < look_at_robot + 0.2 and people > 1:
+                other = ids[(k + 1 + int(rng.integers(people - 1))) % people]
+                gaze = {"gaze_agent": other}
+            else:
+                gaze = {}
+            builder.set(
+                t,
+                person,
+                Intent(goal=(float(goal[0]), float(goal[1])), speed=speed, **gaze),
+            )
+            builder.event(t, "pass", f"person {person} crosses (pass {n + 1} of {passes})")
+            t += _walk_time(here, goal, speed)
+            builder.set(t, person, Intent(face_yaw=float(-side * math.pi / 2.0)))
+            here = goal
+            t += float(rng.uniform(0.5, 3.0))
+        finish = max(finish, t)
+    return Scenario(
+        name=name,
+        seed=seed,
+        options={"people": people, "passes": passes, "look_at_robot": look_at_robot},
+        stage=Stage(room=room, people=roles, robot=robot),
+        timeline=builder.build(),
+        duration=finish,
+        description="people walk past each other and the robot: no F-formation",
+    )

@@ -1,0 +1,101 @@
+"""Who is on stage and where they start: the scene a scenario asks for, as plain data.
+
+A `Stage` names the room, the people (`Role`: id, start pose, height, shoulder width, whether
+present at the start, what part they play) and, optionally, where the Directions Robot stands
+(`RobotPlace`). It holds no MuJoCo and checks nothing physical: the simulator turns it into its
+own scene description (`sim.episode.scene_spec`), which validates sizes, overlaps and room
+capacity in one place.
+
+Scenarios plan with `PLANNING_RADIUS_M`, the largest body radius any person they cast can have
+(a person's body disc encloses the arms: 0.64 x shoulder width), so that the places they pick
+for people standing side by side never overlap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = [
+    "PERSON_HEIGHT_M",
+    "PERSON_WIDTH_M",
+    "PLANNING_RADIUS_M",
+    "ROBOT_RADIUS_M",
+    "SPACING_M",
+    "RobotPlace",
+    "Role",
+    "Stage",
+]
+
+PERSON_HEIGHT_M = (1.55, 1.92)  # metres, range of heights scenarios cast
+PERSON_WIDTH_M = (0.40, 0.46)  # metres, range of shoulder widths scenarios cast
+PLANNING_RADIUS_M = 0.30  # metres, >= 0.64 x the widest shoulders cast (a body disc)
+ROBOT_RADIUS_M = 0.28  # metres, the robot's base disc (planning only)
+SPACING_M = 2 * PLANNING_RADIUS_M + 0.05  # metres, closest two people's places may be
+
+
+@dataclass(frozen=True)
+class Role:
+    """One person of a scenario.
+
+    Attributes:
+        id: the person's id in every Frame.
+        position: (x, y) start position, metres.
+        yaw: start body yaw, radians.
+        height: metres.
+        width: shoulder width, metres.
+        present: whether the person is in the room at the start.
+        part: what the person plays (``"player"``, ``"moderator"``, ``"guest"``, ...).
+    """
+
+    id: int
+    position: tuple[float, float]
+    yaw: float = 0.0
+    height: float = 1.75
+    width: float = 0.44
+    present: bool = True
+    part: str = "person"
+
+
+@dataclass(frozen=True)
+class RobotPlace:
+    """Where the Directions Robot starts.
+
+    Attributes:
+        id: the robot's id in every Frame.
+        position: (x, y), metres.
+        yaw: radians.
+    """
+
+    id: int = 0
+    position: tuple[float, float] = (0.0, 0.0)
+    yaw: float = 0.0
+
+
+@dataclass(frozen=True)
+class Stage:
+    """The room, the people and the robot of a scenario.
+
+    Attributes:
+        room: (x extent, y extent) of the floor, metres, centred on the origin.
+        people: the people, in the order they appear in every Frame.
+        robot: where the robot starts, or ``None`` for people only.
+    """
+
+    room: tuple[float, float]
+    people: tuple[Role, ...]
+    robot: RobotPlace | None = None
+
+    @property
+    def ids(self) -> tuple[int, ...]:
+        """Every agent id: people in order, then the robot."""
+        robot = () if self.robot is None else (self.robot.id,)
+        return tuple(p.id for p in self.people) + robot
+
+    def part_of(self, agent_id: int) -> str:
+        """What agent ``agent_id`` plays (``"robot"`` for the robot)."""
+        if self.robot is not None and agent_id == self.robot.id:
+            return "robot"
+        for person in self.people:
+            if person.id == agent_id:
+                return person.part
+        raise KeyError(f"no agent with id {agent_id} on the stage (ids {list(self.ids)})")

@@ -1,0 +1,203 @@
+"""A scenario's whole script, drawn once: intents by time, planned groups, events.
+
+A scenario draws everything random when it is made (from its generator) and writes it into a
+`TimelineBuilder`: new intents for agents at given times, the groups it means to form
+(`PlannedGroup`: members, their places on the o-space circle and the way each faces), and
+`ScenarioEvent`s for the logs. `TimelineBuilder.build` freezes this into a `Timeline`, the
+`scenarios.script.Script` the world samples: ``intents(t)`` is a binary search into the
+precomputed snapshots (the same mapping object is returned until something changes, so the
+world skips unchanged intents), ``groups(t)`` lists the planned groups whose window holds ``t``.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from scenarios.script import Intent
+
+__all__ = ["PlannedGroup", "ScenarioEvent", "Timeline", "TimelineBuilder"]
+
+_TIME_SLACK_S = 1e-9  # seconds: a change at t applies to samples at t despite rounding
+
+
+@dataclass(frozen=True)
+class ScenarioEvent:
+    """Something the script makes happen, for the logs.
+
+    Attributes:
+        time: seconds from the start.
+        kind: short name, e.g. ``"turn"``, ``"shuffle"``, ``"elimination"``, ``"join"``.
+        detail: one line of detail.
+    """
+
+    time: float
+    kind: str
+    detail: str = ""
+
+    @property
+    def text(self) -> str:
+        return f"{self.kind}: {self.detail}" if self.detail else self.kind
+
+
+@dataclass(frozen=True, eq=False)
+class PlannedGroup:
+    """An F-formation the script means to form.
+
+    Attributes:
+        members: agent ids, in order around the circle.
+        places: (k, 2) where each member is to stand, metres.
+        facings: (k,) the body yaw each member is to take there, radians.
+        centre: (2,) the o-space centre, metres.
+        start: when the members are sent to their places, seconds.
+        end: when the first member is sent away, seconds (``inf``: never).
+    """
+
+    members: tuple[int, ...]
+    places: np.ndarray
+    facings: np.ndarray
+    centre: np.ndarray
+    start: float
+    end: float = math.inf
+
+    def __post_init__(self) -> None:
+        members = tuple(int(m) for m in self.members)
+        k = len(members)
+        if k < 2 or len(set(members)) != k:
+            raise ValueError(f"PlannedGroup.members must be >= 2 distinct ids, got {members}")
+        for name, shape in (("places", (k, 2)), ("facings", (k,)), ("centre", (2,))):
+            array = np.array(getattr(self, name), dtype=np.float64)
+            if array.shape != shape or not np.all(np.isfinite(array)):
+                raise ValueError(f"PlannedGroup.{name} must be finite with shape {shape}")
+            array.flags.writeable = False
+            object.__setattr__(self, name, array)
+        if not self.end > self.start:
+            raise ValueError(
+                f"PlannedGroup {members}: end must come after start, got {self.start} -> {self.end}"
+            )
+        object.__setattr__(self, "members", members)
+        object.__setattr__(self, "start", float(self.start))
+        object.__setattr__(self, "end", float(self.end))
+
+
+class Timeline:
+    """A precomputed script: intents by time, planned groups, events (see the module doc).
+
+    Args:
+        times: increasing change times, seconds.
+        snapshots: the full intent of every agent from each change time on (same length).
+        plan: the planned groups, by start time.
+        events: the scenario's events, by time.
+    """
+
+    def __init__(
+        self,
+        times: Sequence[float],
+        snapshots: Sequence[Mapping[int, Intent]],
+        plan: Sequence[PlannedGroup],
+        events: Sequence[ScenarioEvent],
+    ) -> None:
+        if len(times) != len(snapshots):
+            raise ValueError(
+                f"times and snapshots must have the same length, got {len(times)} and "
+                f"{len(snapshots)}"
+            )
+        self._times = [float(t) for t in times]
+        self._snapshots = tuple(snapshots)
+        self._empty: Mapping[int, Intent] = MappingProxyType({})
+        self.plan = tuple(sorted(plan, key=lambda g: g.start))
+        self.events = tuple(sorted(events, key=lambda e: e.time))
+        self._starts = [g.start for g in self.plan]
+
+    def intents(self, t: float) -> Mapping[int, Intent]:
+        """Every agent's intent at ``t`` (the same object until the next change)."""
+        k = bisect.bisect_right(self._times, t + _TIME_SLACK_S) - 1
+        return self._snapshots[k] if k >= 0 else self._empty
+
+    def groups(self, t: float) -> tuple[tuple[int, ...], ...]:
+        """The planned groups whose window ``[start, end)`` holds ``t`` (walking up included;
+        the episode's ground truth applies the arrival rule, see `scenarios.truth`)."""
+        stop = bisect.bisect_right(self._starts, t + _TIME_SLACK_S)
+        return tuple(g.members for g in self.plan[:stop] if t < g.end)
+
+    @property
+    def change_times(self) -> tuple[float, ...]:
+        """When some agent's intent changes, seconds."""
+        return tuple(self._times)
+
+
+class TimelineBuilder:
+    """Collects a scenario's intents, planned groups and events, in any order.
+
+    Args:
+        agents: every agent id of the stage (people and robot).
+    """
+
+    def __init__(self, agents: Iterable[int]) -> None:
+        self._agents = tuple(int(a) for a in agents)
+        self._known = set(self._agents)
+        self._changes: list[tuple[float, int, int, Intent]] = []
+        self._groups: list[dict] = []
+        self._events: list[ScenarioEvent] = []
+
+    def set(self, t: float, agent: int, intent: Intent) -> None:
+        """From ``t`` on, ``agent`` wants ``intent`` (a later call for the same time wins)."""
+        if agent not in self._known:
+            raise ValueError(f"agent {agent} is not on the stage (ids {list(self._agents)})")
+        if not math.isfinite(t) or t < 0.0:
+            raise ValueError(f"intent time must be a finite time >= 0 s, got {t}")
+        self._changes.append((float(t), len(self._changes), int(agent), intent))
+
+    def group(
+        self,
+        members: Sequence[int],
+        places: np.ndarray,
+        facings: np.ndarray,
+        centre: np.ndarray,
+        *,
+        start: float,
+        end: float = math.inf,
+    ) -> int:
+        """Plans an F-formation; returns its handle for `end_group`."""
+        self._groups.append(
+            {
+                "members": tuple(int(m) for m in members),
+                "places": np.asarray(places, dtype=np.float64),
+                "facings": np.asarray(facings, dtype=np.float64),
+                "centre": np.asarray(centre, dtype=np.float64),
+                "start": float(start),
+                "end": float(end),
+            }
+        )
+        return len(self._groups) - 1
+
+    def end_group(self, handle: int, t: float) -> None:
+        """The planned group ``handle`` ends at ``t`` (its first member is sent away)."""
+        entry = self._groups[handle]
+        entry["end"] = min(entry["end"], float(t))
+
+    def event(self, t: float, kind: str, detail: str = "") -> None:
+        self._events.append(ScenarioEvent(float(t), kind, detail))
+
+    def build(self) -> Timeline:
+        """The frozen `Timeline`."""
+        self._changes.sort(key=lambda c: (c[0], c[1]))
+        times: list[float] = []
+        snapshots: list[Mapping[int, Intent]] = []
+        current: dict[int, Intent] = {}
+        k = 0
+        n = len(self._changes)
+        while k < n:
+            t = self._changes[k][0]
+            while k < n and self._changes[k][0] == t:
+                current[self._changes[k][2]] = self._changes[k][3]
+                k += 1
+            times.append(t)
+            snapshots.append(MappingProxyType(dict(current)))
+        plan = [PlannedGroup(**g) for g in self._groups if g["end"] > g["start"]]
+        return Timeline(times, snapshots, plan, self._events)
