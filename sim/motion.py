@@ -212,6 +212,32 @@ def _approach(value: float, target: float, gain: float, rate: float, dt: float) 
 
 
 @numba.njit(cache=True)
+def _insertion_sort(order, keys):  # pragma: no cover - compiled
+    """Sorts ``order`` (indices) by ``keys`` in place; linear when nearly sorted already."""
+    for a in range(1, order.shape[0]):
+        item = order[a]
+        key = keys[item]
+        b = a - 1
+        while b >= 0 and keys[order[b]] > key:
+            order[b + 1] = order[b]
+            b -= 1
+        order[b + 1] = item
+
+
+@numba.njit(cache=True)
+def _window(order, keys, at, half):  # pragma: no cover - compiled
+    """Ranks [lo, hi) of the entries of ``order`` whose key is within ``half`` of rank ``at``'s."""
+    centre = keys[order[at]]
+    lo = at
+    while lo > 0 and centre - keys[order[lo - 1]] < half:
+        lo -= 1
+    hi = at + 1
+    while hi < order.shape[0] and keys[order[hi]] - centre < half:
+        hi += 1
+    return lo, hi
+
+
+@numba.njit(cache=True)
 def _is_free(state, params, i, x, y, margin):  # pragma: no cover - compiled
     """Whether agent ``i`` could stand at (x, y) without overlapping a present agent."""
     for j in range(state.shape[0]):
@@ -368,6 +394,14 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
     new_y = np.empty(n)
     weight = np.empty(n)
     revert = np.zeros(n, dtype=np.bool_)
+    # Pair loops visit neighbours along x only: agents sorted by x (kept nearly sorted).
+    xs = np.empty(n)
+    order = np.argsort(state[:, S_X])
+    moved_order = order.copy()
+    rank = np.empty(n, dtype=np.int64)
+    widest = 0.0
+    for i in range(n):
+        widest = max(widest, params[i, P_RADIUS])
     for s in range(record_at.shape[0]):
         # Leaving and entering.
         for i in range(n):
@@ -387,6 +421,12 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
                     state[i, S_VX] = 0.0
                     state[i, S_VY] = 0.0
                     state[i, S_PRESENT] = 1.0
+
+        for i in range(n):
+            xs[i] = state[i, S_X]
+        _insertion_sort(order, xs)
+        for a in range(n):
+            rank[order[a]] = a
 
         # Desired motion, per agent.
         for i in range(n):
@@ -444,7 +484,9 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
                     moving = True
             if moving:
                 weight[i] = 1.0
-                for j in range(n):
+                lo, hi = _window(order, xs, rank[i], AVOID_RANGE_M)
+                for b in range(lo, hi):
+                    j = order[b]
                     if j == i or state[j, S_PRESENT] < 0.5:
                         continue
                     rx, ry = x - state[j, S_X], y - state[j, S_Y]
@@ -473,7 +515,10 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
             vx, vy = state[i, S_VX] + dvx, state[i, S_VY] + dvy
             if vx != 0.0 or vy != 0.0:
                 # Nobody walks into someone they touch: drop the velocity toward them.
-                for j in range(n):
+                touch = params[i, P_RADIUS] + widest + margin + CONTACT_GAP_M
+                lo, hi = _window(order, xs, rank[i], touch)
+                for b in range(lo, hi):
+                    j = order[b]
                     if j == i or state[j, S_PRESENT] < 0.5:
                         continue
                     rx, ry = state[j, S_X] - x, state[j, S_Y] - y
@@ -526,13 +571,25 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
             )
             state[i, S_HEAD] = _clip(head, -head_limit, head_limit)
 
-        # Personal space: push overlapping discs apart, keep inside the walls.
+        # Personal space: push overlapping discs apart, keep inside the walls. A pass that finds
+        # no overlap moves nobody, so its verdict is exact.
+        for i in range(n):
+            if state[i, S_PRESENT] > 0.5:
+                new_x[i] = _clip(new_x[i], params[i, P_X_MIN], params[i, P_X_MAX])
+                new_y[i] = _clip(new_y[i], params[i, P_Y_MIN], params[i, P_Y_MAX])
+        farthest = 2.0 * widest + margin
+        overlap_found = False
         for _ in range(PROJECTION_ITERATIONS):
             overlap_found = False
-            for i in range(n):
+            _insertion_sort(moved_order, new_x)
+            for a in range(n):
+                i = moved_order[a]
                 if state[i, S_PRESENT] < 0.5:
                     continue
-                for j in range(i + 1, n):
+                for b in range(a + 1, n):
+                    j = moved_order[b]
+                    if new_x[j] - new_x[i] >= farthest:
+                        break
                     if state[j, S_PRESENT] < 0.5:
                         continue
                     dx, dy = new_x[j] - new_x[i], new_y[j] - new_y[i]
