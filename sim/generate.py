@@ -55,6 +55,7 @@ import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
 from reform.frame import Dataset
+from sim.episode import DEFAULT_RATE_HZ
 
 __all__ = [
     "BACKENDS",
@@ -140,8 +141,8 @@ class GenerationSpec:
         seed: master seed, a non-negative int.
         view: ``"truth"`` (ground truth) or ``"robot"`` (the robot's head sensor view).
         sensor: the sensor model of the robot view (``None`` for the truth view).
-        rate: output (annotation) rate, Hz; ``None`` for the scenario's own.
-        duration: episode length, seconds; ``None`` for the scenario's own.
+        rate: output (annotation) rate, Hz.
+        duration: episode length, seconds; ``None`` for each episode's natural length.
     """
 
     scenario: str
@@ -149,7 +150,7 @@ class GenerationSpec:
     seed: int = 0
     view: str = "truth"
     sensor: Any = None
-    rate: float | None = None
+    rate: float = DEFAULT_RATE_HZ
     duration: float | None = None
 
     def __post_init__(self) -> None:
@@ -165,10 +166,15 @@ class GenerationSpec:
         if self.view not in VIEWS:
             raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
         object.__setattr__(self, "sensor", _sensor(self.view, self.sensor))
-        if self.rate is not None:
-            object.__setattr__(self, "rate", _check_positive("rate", self.rate, "Hz"))
+        rate = _check_positive("rate", self.rate, "Hz")
+        object.__setattr__(self, "rate", rate)
         if self.duration is not None:
             duration = _check_positive("duration", self.duration, "seconds")
+            if duration * rate < 1.0 - 1e-9:
+                raise ValueError(
+                    f"duration {duration:g} s holds no frame at {rate:g} Hz: it must be >= "
+                    f"{1.0 / rate:g} s"
+                )
             object.__setattr__(self, "duration", duration)
 
     def parameters(self) -> dict[str, Any]:
@@ -232,6 +238,7 @@ class ShardSummary:
         frames: frames in the shard.
         annotated_frames: frames with ground-truth groups.
         rows: people (and robot) entries over all frames.
+        duration: the episode's simulated length, seconds.
         group_sizes: size -> number of groups of that size over the annotated frames, counting
             everyone (people alone are groups of size 1; the robot counts as a member).
     """
@@ -243,6 +250,7 @@ class ShardSummary:
     frames: int
     annotated_frames: int
     rows: int
+    duration: float
     group_sizes: Mapping[int, int]
 
     def to_json(self) -> dict[str, Any]:
@@ -254,6 +262,7 @@ class ShardSummary:
             "frames": self.frames,
             "annotated_frames": self.annotated_frames,
             "rows": self.rows,
+            "duration_s": self.duration,
             "group_sizes": {str(k): v for k, v in sorted(self.group_sizes.items())},
         }
 
@@ -267,6 +276,7 @@ class ShardSummary:
             frames=int(data["frames"]),
             annotated_frames=int(data["annotated_frames"]),
             rows=int(data["rows"]),
+            duration=float(data["duration_s"]),
             group_sizes={int(k): int(v) for k, v in dict(data["group_sizes"]).items()},
         )
 
@@ -323,22 +333,20 @@ def _sequence_name(scenario: str, episode: int) -> str:
     return f"{scenario}-{int(episode)}"
 
 
-def _simulate(spec: GenerationSpec, episode: int) -> Dataset:
-    """Episode ``episode`` of ``spec`` as a Dataset of sequence ``"<scenario>-<k>"``."""
+def _simulate(spec: GenerationSpec, episode: int) -> Any:
+    """Episode ``episode`` of ``spec`` (a `sim.episode.Episode`), sequence ``"<scenario>-<k>"``."""
     from sim.episode import simulate_episode
 
-    kwargs: dict[str, Any] = {
-        "seed": episode_seed(spec.seed, episode),
-        "view": spec.view,
-        "sequence": _sequence_name(spec.scenario, episode),
-    }
-    if spec.sensor is not None:
-        kwargs["sensor"] = spec.sensor
-    if spec.rate is not None:
-        kwargs["rate"] = spec.rate
-    if spec.duration is not None:
-        kwargs["duration"] = spec.duration
-    return simulate_episode(spec.scenario, options=dict(spec.options), **kwargs)
+    return simulate_episode(
+        spec.scenario,
+        seed=episode_seed(spec.seed, episode),
+        options=dict(spec.options),
+        duration=spec.duration,
+        rate=spec.rate,
+        view=spec.view,
+        sensor=spec.sensor,
+        sequence=_sequence_name(spec.scenario, episode),
+    )
 
 
 def _summarise(spec: GenerationSpec, episode: int, dataset: Dataset) -> ShardSummary:
@@ -366,6 +374,7 @@ def _summarise(spec: GenerationSpec, episode: int, dataset: Dataset) -> ShardSum
         frames=len(dataset.frames),
         annotated_frames=annotated,
         rows=rows,
+        duration=float(dataset.metadata.get("duration_s", len(dataset.frames) / spec.rate)),
         group_sizes=dict(sorted(sizes.items())),
     )
 
@@ -392,21 +401,25 @@ def _write_episode(
     """Simulates one episode and writes its recording (if asked) and then its shard."""
     from reform.datasets.parquet import write_parquet
 
-    dataset = _simulate(spec, episode)
-    summary = _summarise(spec, episode, dataset)
+    result = _simulate(spec, episode)
+    summary = _summarise(spec, episode, result.dataset)
     if save_recordings:
-        _record(spec, episode, dataset, _recording_path(out_dir, episode))
-    write_parquet(_shard_dataset(spec, summary, dataset), out_dir / summary.path)
+        _record(spec, episode, result, _recording_path(out_dir, episode))
+    write_parquet(_shard_dataset(spec, summary, result.dataset), out_dir / summary.path)
     return summary
 
 
-def _record(spec: GenerationSpec, episode: int, dataset: Dataset, path: Path) -> None:
+def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None:
+    """One Rerun recording of the episode: the scene, everyone, the groups, the robot's view."""
     from sim.recording import record_episode
 
     with atomic_path(path) as tmp:
         record_episode(
             tmp,
-            dataset.frames,
+            result.truth,
+            observed=result.dataset.frames if spec.view == "robot" else None,
+            events=result.events,
+            model=result.model,
             seed=episode_seed(spec.seed, episode),
             name=_sequence_name(spec.scenario, episode),
         )
@@ -600,6 +613,7 @@ def _card(
             "frames": sum(s.frames for s in shards),
             "annotated_frames": sum(s.annotated_frames for s in shards),
             "rows": sum(s.rows for s in shards),
+            "simulated_seconds": sum(s.duration for s in shards),
             "group_sizes": {str(k): v for k, v in sorted(sizes.items())},
         },
         "shards": [s.to_json() for s in sorted(shards, key=lambda s: s.episode)],
@@ -623,8 +637,7 @@ def _command(spec: GenerationSpec, episodes: int) -> str:
         words += ["--set", f"{key}={json.dumps(value)}"]
     if spec.duration is not None:
         words += ["--duration", f"{spec.duration:g}"]
-    if spec.rate is not None:
-        words += ["--rate", f"{spec.rate:g}"]
+    words += ["--rate", f"{spec.rate:g}"]
     words += ["--view", spec.view]
     if spec.sensor is not None:
         from sim.sensor import Sensor
@@ -673,8 +686,8 @@ def _markdown(card: Mapping[str, Any]) -> str:
         f"| episode seeds | {p['seed_rule']} (listed per shard in {CARD_JSON}) |",
         f"| view | {p['view']} |",
         f"| sensor | {_sensor_text(p['sensor'])} |",
-        f"| rate | {_or_default(p['rate_hz'], 'Hz')} |",
-        f"| episode duration | {_or_default(p['duration_s'], 's')} |",
+        f"| rate | {p['rate_hz']:g} Hz |",
+        f"| episode duration | {_duration_text(p['duration_s'])} |",
         f"| package version | {p['package_version']} |",
         f"| Parquet format version | {p['format_version']} |",
         f"| episodes | {card['episodes']} |",
@@ -696,6 +709,7 @@ def _markdown(card: Mapping[str, Any]) -> str:
         f"| frames | {totals['frames']:,} |",
         f"| annotated frames | {totals['annotated_frames']:,} |",
         f"| person entries (rows) | {totals['rows']:,} |",
+        f"| simulated time | {totals['simulated_seconds']:,.1f} s |",
         "",
         "Group sizes over the annotated frames (everyone counted: a person alone is a group of "
         "size 1, the robot counts as a member):",
@@ -708,8 +722,8 @@ def _markdown(card: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _or_default(value: float | None, unit: str) -> str:
-    return "scenario default" if value is None else f"{value:g} {unit}"
+def _duration_text(value: float | None) -> str:
+    return "each episode's natural length" if value is None else f"{value:g} s"
 
 
 def _sensor_text(sensor: Mapping[str, Any] | None) -> str:
@@ -730,30 +744,27 @@ def _write_cards(out_dir: Path, card: Mapping[str, Any]) -> None:
 # Checks before any work
 
 
-def _check_scenario(spec: GenerationSpec) -> dict[str, Any] | None:
-    """Builds episode 0's scenario: unknown names and impossible options fail here.
+def _check_scenario(spec: GenerationSpec) -> dict[str, Any]:
+    """Makes episode 0's scenario and its scene: an unknown name (the known ones are listed),
+    unknown or impossible options, a robot view without a robot fail here, before any work.
 
-    Returns the scenario's options with defaults filled in, when the scenario tells them.
+    Returns:
+        The scenario's options with its defaults filled in.
     """
     import scenarios
+    from sim.episode import prepare, scene_spec
 
-    known = tuple(scenarios.names())
+    known = scenarios.names()
     if spec.scenario not in known:
         raise ValueError(f"scenario must be one of {', '.join(known)}; got {spec.scenario!r}")
-    scenario = scenarios.make(spec.scenario, seed=episode_seed(spec.seed, 0), **spec.options)
-    return _resolved_options(scenario)
-
-
-def _resolved_options(scenario: Any) -> dict[str, Any] | None:
-    options = getattr(scenario, "options", None)
-    if dataclasses.is_dataclass(options) and not isinstance(options, type):
-        options = dataclasses.asdict(options)
-    if isinstance(options, Mapping):
-        try:
-            return _json_value("scenario options", dict(options))
-        except ValueError:
-            return {k: repr(v) for k, v in options.items()}
-    return None
+    made = prepare(spec.scenario, seed=episode_seed(spec.seed, 0), options=spec.options)
+    scene_spec(made.stage, name=made.name)
+    if spec.view == "robot" and made.stage.robot is None:
+        raise ValueError(
+            f"view='robot' needs a robot, and scenario {spec.scenario} has none with these "
+            "options (see its robot option)"
+        )
+    return _json_value("scenario options", dict(made.options))
 
 
 def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
@@ -847,7 +858,7 @@ def generate_dataset(
     options: Mapping[str, Any] | None = None,
     view: str = "truth",
     sensor: Any = None,
-    rate: float | None = None,
+    rate: float = DEFAULT_RATE_HZ,
     duration: float | None = None,
     backend: str = "local",
     address: str | None = None,
@@ -866,8 +877,8 @@ def generate_dataset(
         view: ``"truth"`` or ``"robot"`` (observed by the robot's head sensor).
         sensor: the robot view's sensor model: a ``sim.Sensor`` or a mapping of its fields;
             ``None`` for its defaults (robot view) or no sensor (truth view).
-        rate: output (annotation) rate, Hz; ``None`` for the scenario's.
-        duration: episode length, seconds; ``None`` for the scenario's.
+        rate: output (annotation) rate, Hz (2 Hz, SALSA's, by default).
+        duration: episode length, seconds; ``None`` for each episode's natural length.
         backend: ``"local"`` (processes on this machine) or ``"ray"`` (remote tasks).
         address: the Ray cluster's address (``"auto"``, ``"ray://host:10001"``, ``host:6379``);
             ``None`` joins the Ray instance already running in this process, else starts one.

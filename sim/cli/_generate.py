@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import Any
 
@@ -45,13 +44,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=[],
         metavar="KEY=VALUE",
         dest="overrides",
-        help="scenario option (VALUE read as JSON, else as text); repeatable",
+        help="scenario option (reform-sim scenarios lists them); repeatable",
     )
     parser.add_argument(
         "--duration", type=float, default=None, metavar="SECONDS", help="episode length"
     )
     parser.add_argument(
-        "--rate", type=float, default=None, metavar="HZ", help="output (annotation) rate"
+        "--rate", type=float, default=None, metavar="HZ", help="output (annotation) rate (2 Hz)"
     )
     parser.add_argument(
         "--view",
@@ -86,21 +85,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=_run)
 
 
-def parse_overrides(items: list[str]) -> dict[str, Any]:
-    """``["people=18", "robot=true", "name=ann"]`` -> ``{"people": 18, "robot": True, ...}``."""
-    out: dict[str, Any] = {}
+def parse_overrides(scenario: str, items: list[str]) -> dict[str, Any]:
+    """``--set`` items (``["people=18", "robot=true"]``) as typed options of ``scenario``."""
+    import scenarios
+
+    pairs: dict[str, str] = {}
     for item in items:
         key, sep, text = item.partition("=")
         key = key.strip()
-        if not sep or not key.isidentifier():
-            raise CliError(f"--set must be KEY=VALUE with KEY an option name, got {item!r}")
-        if key in out:
+        if not sep or not key:
+            raise CliError(f"--set must be KEY=VALUE, got {item!r}")
+        if key in pairs:
             raise CliError(f"--set {key} given twice")
-        try:
-            out[key] = json.loads(text)
-        except json.JSONDecodeError:
-            out[key] = text
-    return out
+        pairs[key] = text
+    if not pairs:
+        return {}
+    return scenarios.parse_options(scenario, pairs)
 
 
 def _sensor(args: argparse.Namespace) -> dict[str, Any] | None:
@@ -127,10 +127,10 @@ def _run(args: argparse.Namespace) -> int:
         episodes=args.episodes,
         seed=args.seed,
         out_dir=args.out,
-        options=parse_overrides(args.overrides),
+        options=parse_overrides(args.scenario, args.overrides),
         view=args.view,
         sensor=_sensor(args),
-        rate=args.rate,
+        **({} if args.rate is None else {"rate": args.rate}),
         duration=args.duration,
         backend=args.backend,
         address=args.address,
