@@ -350,7 +350,7 @@ def test_logged_groups_equal_truth_and_detections(episode):
             row = rec.rows[f"/world/groups/{name}/members"][t]
             rows = [frame.index_of(pid) for pid in row["person_id"]]
             np.testing.assert_allclose(
-                np.array(row["Points3D:positions"])[:, :2], frame.position[rows], atol=1e-5
+                np.array(row["Cylinders3D:centers"])[:, :2], frame.position[rows], atol=1e-5
             )
 
 
@@ -361,7 +361,7 @@ def test_group_colours_follow_groups_and_matches(episode):
             by_group: dict[int, set[int]] = defaultdict(set)
             sizes: dict[int, int] = defaultdict(int)
             for g, c in zip(
-                row.get("group_index") or [], row.get("Points3D:class_ids") or [], strict=True
+                row.get("group_index") or [], row.get("Cylinders3D:class_ids") or [], strict=True
             ):
                 by_group[g].add(c)
                 sizes[g] += 1
@@ -371,15 +371,15 @@ def test_group_colours_follow_groups_and_matches(episode):
     # A true group keeps its colour while it keeps its members.
     t0, t1 = 0, 1
     truth_rows = rec.rows["/world/groups/truth/members"]
-    assert truth_rows[t0]["Points3D:class_ids"] == truth_rows[t1]["Points3D:class_ids"]
+    assert truth_rows[t0]["Cylinders3D:class_ids"] == truth_rows[t1]["Cylinders3D:class_ids"]
     # Even frames of "reform" are perfect: each of its groups has its true group's colour.
     reform_rows = rec.rows["/world/groups/reform/members"]
     for t in (2, 4, 6):  # (person 3 is not observed at frame 0)
         truth_colour = dict(
-            zip(truth_rows[t]["person_id"], truth_rows[t]["Points3D:class_ids"], strict=True)
+            zip(truth_rows[t]["person_id"], truth_rows[t]["Cylinders3D:class_ids"], strict=True)
         )
         reform_colour = dict(
-            zip(reform_rows[t]["person_id"], reform_rows[t]["Points3D:class_ids"], strict=True)
+            zip(reform_rows[t]["person_id"], reform_rows[t]["Cylinders3D:class_ids"], strict=True)
         )
         assert {p: c for p, c in reform_colour.items() if p in truth_colour} == truth_colour
     labels = {info["label"] for info in _context(rec, "/world/groups/truth")}
@@ -732,6 +732,11 @@ def test_dataset_views_characterisation_pairs_regions_and_stress(tmp_path):
     assert "Image:buffer" in image
     stress = rec.static["/dataset/stress/noise/reform_F1"]
     np.testing.assert_allclose(_tensor(stress["BarChart:values"]), [0.9, 0.8, 0.6])
+    # two curves side by side: bars 0.04 wide (80% of the 0.1 gap, halved), either side of x
+    np.testing.assert_allclose(_tensor(stress["BarChart:abscissa"]), [-0.02, 0.08, 0.18])
+    gcff = rec.static["/dataset/stress/noise/gcff_F1"]
+    np.testing.assert_allclose(_tensor(gcff["BarChart:abscissa"]), [0.02, 0.12, 0.22])
+    np.testing.assert_allclose(gcff["BarChart:widths"], [0.04] * 3)
 
 
 def _tensor(value) -> np.ndarray:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
 import rerun.blueprint as rrb
 
 from sim.recording._dataset_views import DATASET_ROOT
@@ -17,9 +18,23 @@ SCENE_SHARE = 3.0  # the 3D scene takes 3/5 of the width
 PLOTS_SHARE = 2.0
 
 
+def _eye(bounds: Sequence[float] | None) -> rrb.EyeControls3D | None:
+    """An orbit camera over the room's near corner, looking at its middle."""
+    if bounds is None:
+        return None
+    x0, x1, y0, y1 = (float(b) for b in bounds)
+    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])
+    size = max(x1 - x0, y1 - y0)
+    position = centre + np.array([-0.45, -0.75, 0.75]) * size
+    return rrb.EyeControls3D(
+        kind=rrb.Eye3DKind.Orbital, position=position, look_target=centre, eye_up=[0.0, 0.0, 1.0]
+    )
+
+
 def default_blueprint(
     *,
     scores: bool = True,
+    bounds: Sequence[float] | None = None,
     cameras: Sequence[str] = (),
     characterisation: Sequence[str] = (),
     pairs: Sequence[str] = (),
@@ -32,6 +47,8 @@ def default_blueprint(
     Args:
         scores: include the running precision / recall / F1 plots (runs with ground truth and
             detectors).
+        bounds: ``(x_min, x_max, y_min, y_max)`` metres of the room, to aim the 3D camera from
+            a raised corner; None lets the viewer choose.
         cameras: camera names logged by ``log_camera_images`` (shown under the scene).
         characterisation: dataset names logged by ``log_characterisation``.
         pairs: names logged by ``log_pair_scatter``.
@@ -56,7 +73,9 @@ def default_blueprint(
         )
     side.append(rrb.TimeSeriesView(origin=f"/{METRICS_ROOT}/groups", name="F-formations per frame"))
     side.append(rrb.TextLogView(origin=f"/{EVENTS_ENTITY}", name="Events"))
-    scene: rrb.Container | rrb.View = rrb.Spatial3DView(origin=f"/{WORLD_ROOT}", name="Scene")
+    scene: rrb.Container | rrb.View = rrb.Spatial3DView(
+        origin=f"/{WORLD_ROOT}", name="Scene", eye_controls=_eye(bounds)
+    )
     if cameras:
         scene = rrb.Vertical(
             scene,

@@ -11,7 +11,8 @@ Entity tree under ``dataset``:
   probability of "together" on a grid, as an image shaded from the ``apart`` to the
   ``together`` colour (the decision boundary is where the shades meet).
 * ``dataset/stress/<name>/<curve>``: stress-test curves as bar charts over the stressed
-  parameter (abscissa = its values), and ``dataset/stress/<name>/table``.
+  parameter (abscissa = its values, the curves' bars side by side around each value), and
+  ``dataset/stress/<name>/table``.
 """
 
 from __future__ import annotations
@@ -231,14 +232,22 @@ def log_stress_curves(
     root = f"{DATASET_ROOT}/stress/{_name(name)}"
     header = ["| " + x_label + " | " + " | ".join(curves) + " |", "|---:|" + "---:|" * len(curves)]
     columns = []
+    # Curves side by side: each level's group of bars spans 80% of the smallest gap.
+    gap = float(np.min(np.diff(np.unique(xs)))) if np.unique(xs).size > 1 else 1.0
+    width = 0.8 * gap / max(len(curves), 1)
     for index, (curve, values) in enumerate(curves.items()):
         ys = np.asarray(values, dtype=np.float64)
         if ys.shape != xs.shape:
             raise ValueError(f"curves[{curve!r}] must have shape {xs.shape} like x, got {ys.shape}")
-        widths = np.full(xs.size, 0.8 * float(np.min(np.diff(np.sort(xs)))) if xs.size > 1 else 1.0)
+        shift = (index - (len(curves) - 1) / 2.0) * width
         rec.log(
             f"{root}/{_name(curve.replace(' ', '_'))}",
-            rr.BarChart(ys, abscissa=xs, widths=widths, color=_colours.series_colour(index)),
+            rr.BarChart(
+                ys,
+                abscissa=xs + shift,
+                widths=np.full(xs.size, width),
+                color=_colours.series_colour(index),
+            ),
             static=True,
         )
         columns.append(ys)

@@ -2,8 +2,9 @@
 
 ``world/groups/<name>`` (``truth``, ``reform``, ``gcff``, ...), each toggleable on its own:
 
-* ``members``: a disc under every person, coloured by their group (grey when alone), with the
-  person id and the index of their group in the partition as extra components;
+* ``members``: a flat disc under every person (a solid cylinder), coloured by their group
+  (grey when alone), with the person id and the index of their group in the partition as extra
+  components;
 * ``centres``: each F-formation's o-space centre (the mean of its members' positions, as in
   Characterisation), labelled by its group;
 * ``circles``: a ring around each centre whose radius is the group's Tightness (a flat open
@@ -44,7 +45,10 @@ __all__ = [
 
 GROUPS_ROOT = "world/groups"
 TRUTH = "truth"
-MEMBER_RADIUS_M = 0.28  # metres: the disc under a person
+MEMBER_RADIUS_M = 0.30  # metres: the truth's disc under a person
+DISC_HEIGHT_M = 0.01  # metres: discs are flat solid cylinders
+MEMBER_RADIUS_STEP_M = 0.07  # metres: each next tree's discs are smaller, so all stay visible
+MIN_MEMBER_RADIUS_M = 0.08  # metres
 CENTRE_RADIUS_M = 0.06  # metres
 RING_HEIGHT_M = 0.02  # metres: circles are drawn as flat open cylinders (two rings)
 RING_LINE_M = 0.01  # metres, line thickness
@@ -52,9 +56,8 @@ MIN_CIRCLE_M = 0.15  # metres: smallest circle drawn
 MISTAKE_MARGIN_M = 0.25  # metres: mistake circles ring the group's circle
 WRONG_MEMBER_Z_M = 0.35  # metres
 WRONG_MEMBER_RADIUS_M = 0.12  # metres
-TRUTH_Z_M = 0.01  # metres: height of the truth tree's drawings
-DETECTOR_Z_M = 0.03  # metres: first detector's height; each next one is DETECTOR_STEP_M higher
-DETECTOR_STEP_M = 0.02  # metres
+TRUTH_Z_M = 0.01  # metres: height of the truth tree's drawings (layer 0)
+LAYER_STEP_M = 0.02  # metres: each next tree (layer) is drawn this much higher
 
 
 @dataclass(frozen=True, eq=False)
@@ -367,7 +370,7 @@ def log_groups(
     clock: Clock | None = None,
     evaluation: Evaluation | None = None,
     truth: LoggedGroups | None = None,
-    height_m: float | None = None,
+    layer: int | None = None,
 ) -> LoggedGroups:
     """Logs one entity tree of groups, ``world/groups/<name>``, for a finished run.
 
@@ -382,7 +385,9 @@ def log_groups(
             of matched groups; computed here when None and the frames carry ground truth.
         truth: the truth tree's :func:`log_groups` result, so that detected groups that
             match a true group share its colour.
-        height_m: height of the drawings; default: truth lowest, detectors above.
+        layer: stacking order of the tree: 0 (truth, default for it) is drawn lowest with the
+            largest discs, each next layer higher with smaller discs (default for detectors: 1;
+            give the k-th detector k + 1).
 
     Returns:
         What was drawn (pass the truth tree's as ``truth`` to the detectors' calls).
@@ -398,7 +403,11 @@ def log_groups(
     if is_truth:
         partitions = [f.partition() if f.groups is not None else None for f in frames]
     layout = GroupLayout.of(frames, partitions, what=f"{name} partitions")
-    z = (TRUTH_Z_M if is_truth else DETECTOR_Z_M) if height_m is None else height_m
+    layer = (0 if is_truth else 1) if layer is None else int(layer)
+    if layer < 0:
+        raise ValueError(f"layer must be >= 0, got {layer}")
+    z = TRUTH_Z_M + layer * LAYER_STEP_M
+    disc = max(MEMBER_RADIUS_M - layer * MEMBER_RADIUS_STEP_M, MIN_MEMBER_RADIUS_M)
     root = f"{GROUPS_ROOT}/{name}"
 
     fixed: dict[int, int] = {}
@@ -431,15 +440,20 @@ def log_groups(
     person_class = np.append(tracks, 0)[layout.group_of_person]  # -1 (alone) picks the 0
     rec.log(
         f"{root}/members",
-        rr.Points3D.from_fields(radii=[MEMBER_RADIUS_M], show_labels=False),
+        rr.Cylinders3D.from_fields(
+            lengths=[DISC_HEIGHT_M],
+            radii=[disc],
+            fill_mode=rr.components.FillMode.Solid,
+            show_labels=False,
+        ),
         static=True,
     )
     rec.send_columns(
         f"{root}/members",
         indexes=times,
         columns=[
-            *rr.Points3D.columns(
-                positions=at_height(layout.person_position, z),
+            *rr.Cylinders3D.columns(
+                centers=at_height(layout.person_position, z),
                 class_ids=person_class.astype(np.uint16),
             ).partition(layout.counts),
             *value_columns(
@@ -449,7 +463,11 @@ def log_groups(
         strict=True,
     )
     group_counts = layout.group_counts
-    rec.log(f"{root}/centres", rr.Points3D.from_fields(radii=[CENTRE_RADIUS_M]), static=True)
+    rec.log(
+        f"{root}/centres",
+        rr.Points3D.from_fields(radii=[CENTRE_RADIUS_M], show_labels=False),
+        static=True,
+    )
     rec.send_columns(
         f"{root}/centres",
         indexes=times,

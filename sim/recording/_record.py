@@ -16,8 +16,6 @@ from sim.recording._blueprint import default_blueprint
 from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
 from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
 from sim.recording._groups import (
-    DETECTOR_STEP_M,
-    DETECTOR_Z_M,
     TRUTH,
     LoggedGroups,
     log_groups,
@@ -98,7 +96,7 @@ def _log_detectors(
             clock=clock,
             evaluation=(evaluations or {}).get(name),
             truth=truth,
-            height_m=DETECTOR_Z_M + index * DETECTOR_STEP_M,
+            layer=index + 1,
         )
         if trees[name].evaluation is not None:
             scored[name] = trees[name].evaluation
@@ -155,8 +153,11 @@ def record_episode(
     name = name or world[0].sequence or "episode"
     annotated = any(f.groups is not None for f in world)
     cameras = tuple(cameras)
+    bounds = room_bounds(world)
     blueprint = default_blueprint(
-        scores=annotated and bool(detections), cameras=tuple(c.name for c in cameras)
+        scores=annotated and bool(detections),
+        bounds=bounds,
+        cameras=tuple(c.name for c in cameras),
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         clock = log_frames(
@@ -171,7 +172,7 @@ def record_episode(
             if body_poses is not None:
                 log_body_poses(rec, model, body_poses, clock=clock)
         else:
-            log_room(rec, room_bounds(world))
+            log_room(rec, bounds)
         for camera in cameras:
             log_camera_images(rec, camera, clock=clock)
         truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
@@ -230,12 +231,16 @@ def record_evaluation(
     annotated = any(f.groups is not None for f in frames)
     dataset = dataset or frames[0].sequence or "dataset"
     views = (dataset,) if dataset_views and annotated else ()
+    bounds = room_bounds(frames)
     blueprint = default_blueprint(
-        scores=annotated and bool(predictions), characterisation=views, pairs=views
+        scores=annotated and bool(predictions),
+        bounds=bounds,
+        characterisation=views,
+        pairs=views,
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         clock = log_frames(rec, frames, field_of_view=None)
-        log_room(rec, room_bounds(frames))
+        log_room(rec, bounds)
         truth = log_groups(rec, frames, name=TRUTH, clock=clock) if annotated else None
         trees, scored = _log_detectors(
             rec, frames, predictions, evaluations, clock=clock, truth=truth

@@ -17,6 +17,7 @@ import contextlib
 import os
 import sys
 import time
+import urllib.parse
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -139,9 +140,10 @@ def open_recording(
 
 def _serve_until_interrupted(uri: str) -> None:
     rr.serve_web_viewer(web_port=SERVE_WEB_PORT, open_browser=False, connect_to=uri)
+    web = f"http://{SERVE_BIND_IP}:{SERVE_WEB_PORT}/?url={urllib.parse.quote(uri, safe='')}"
     print(
         f"serving the recording at {uri}: open it with `rerun {uri}` or in a browser at "
-        f"http://{SERVE_BIND_IP}:{SERVE_WEB_PORT}/?url={uri}; Ctrl-C stops",
+        f"{web}; Ctrl-C stops",
         file=sys.stderr,
     )
     try:
