@@ -39,7 +39,7 @@ class Shuffle:
         self.spots = rng.uniform(-1.8, 1.8, size=(100, len(self.ids), 2))
 
     def intents(self, t: float) -> Mapping[int, Intent]:
-        k = int(t // 3.0)
+        k = int(t // 3.0) % len(self.spots)
         return {
             pid: Intent(goal=tuple(self.spots[k, i]), gaze_agent=self.ids[i - 1])
             for i, pid in enumerate(self.ids)
@@ -254,3 +254,20 @@ def test_data_is_current_while_a_frame_is_handled() -> None:
         np.testing.assert_array_equal(world.data.xpos[torso, :2], frame.position[0])
         assert world.data.time == pytest.approx(frame.time)
     assert isinstance(world.model, mujoco.MjModel)
+
+
+def test_long_rollouts_stream_in_constant_memory() -> None:
+    import tracemalloc
+
+    def peak(seconds: float) -> int:
+        world = World(_circle(6), seed=0, script=Shuffle(_circle(6), 0))
+        tracemalloc.start()
+        rows = sum(len(block) for block in world.rollout(seconds, rate=100.0, block_rows=250))
+        _, top = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        assert rows == round(seconds * 100)
+        return top
+
+    short, long = peak(30.0), peak(300.0)
+    # 10x the rows (30,000 rows x 7 agents of poses would be ~10 MiB), about the same peak.
+    assert long < 1.5 * short + 2**20
