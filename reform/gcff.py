@@ -102,6 +102,7 @@ VISIBILITY_BASE = 100.0  # the penalty is VISIBILITY_BASE ** (cos * r_i / r_j), 
 MAX_VISIBILITY_EXPONENT = 100.0  # cap on cos * r_i / r_j: penalty <= 1e200 cm²
 MAX_REFITS = 10  # expansion + refit rounds, as the reference code's MAX_ITER
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
+_MATMUL_MAX_PEOPLE = 64  # up to this many people, per-label sums by a (small) matrix product
 ORIENTATIONS = ("body", "head")
 # Default tuning grid: the published settings (stride 50-70 cm, mdl 6,000-30,000 cm²) and around.
 STRIDE_GRID_M = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # metres
@@ -238,19 +239,23 @@ def _moves(
     labels: np.ndarray,
     alphas: np.ndarray | None,
     label_cost: float,
-    identity: np.ndarray,
     label_costs: np.ndarray,
+    identity: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The alpha-moves for several alphas at once, all from the same ``labels``.
+
+    Per-label sums: a one-hot matrix product for few people; for many, a sort and
+    ``np.add.reduceat`` (O(n·m) work, and no large BLAS call, whose threads thrash on a busy
+    machine).
 
     Args:
         unary: (n, K) costs.
         labels: (n,) current labels.
         alphas: (m,) the alphas to evaluate, or None for all K in order.
         label_cost: cost of one used label.
-        identity: (K, K) float identity, to build one-hot rows.
         label_costs: (K + 1, K) ``label_cost * (j < u)`` at ``[u, j]``: the label costs added
             last for a labelling with ``u`` used labels.
+        identity: (K, K) float identity (one-hot rows).
 
     Returns:
         moved: (n, m) bool, column ``j`` the people that the move of ``alphas[j]`` relabels.
@@ -259,28 +264,48 @@ def _moves(
     """
     n = labels.size
     rows = np.arange(n)
-    weights = identity[labels]  # (n, K): one-hot of the current labels
+    few = n <= _MATMUL_MAX_PEOPLE
+    if few:
+        # Few people: sums through a one-hot matrix product (BLAS, single-threaded at this size).
+        # Rows of unused labels sum to 0, so they always "close": counted out below.
+        one_hot = identity[labels]  # (n, K)
+        used = one_hot.any(axis=0)
+        group = labels
+    else:
+        order = np.argsort(labels, kind="stable")
+        ordered = labels[order]
+        first = np.empty(n, dtype=bool)
+        first[0] = True
+        np.not_equal(ordered[1:], ordered[:-1], out=first[1:])
+        starts = np.flatnonzero(first)  # where each used label's members begin in ``order``
+        group = np.empty(n, dtype=np.int64)  # each person's used label, numbered 0..u-1
+        group[order] = np.cumsum(first) - 1
+        used = np.zeros(unary.shape[1], dtype=bool)
+        used[ordered[starts]] = True
     current = unary[rows, labels]
     target = unary if alphas is None else unary[:, alphas]
     delta = target - current[:, None]  # d_i for every alpha, (n, m)
-    # Per (label l, alpha): option A moves the members with d <= 0 (l stays open, its cost
-    # paid), option B moves all of S_l (l closes, its cost saved). B is taken when it costs no
-    # more than A: when the positive d of the members sum to at most the label cost.
-    take_all = (weights.T @ np.maximum(delta, 0.0)) <= label_cost  # (K, m)
-    moved = take_all[labels]
+    # Per (used label l, alpha): option A moves the members with d <= 0 (l stays open, its
+    # cost paid), option B moves all of S_l (l closes, its cost saved). B is taken when it
+    # costs no more than A: when the positive d of the members sum to at most the label cost.
+    positive = np.maximum(delta, 0.0)
+    if few:
+        sums = one_hot.T @ positive
+    else:
+        sums = np.add.reduceat(positive[order], starts, axis=0)
+    take_all = sums <= label_cost  # (K or u, m), by label
+    moved = take_all[group]
     moved |= delta <= 0.0
     if alphas is None:
         moved[rows, labels] = False  # people already labelled alpha stay
     else:
         moved &= labels[:, None] != alphas[None, :]
     changed = moved.any(axis=0)
-    # Labels used after each move: the used labels that B closes go (alpha's own column is
-    # all zeros, so it counts as "closed" when used and is added back), and alpha opens when
-    # unused and gaining members.
-    used = weights.any(axis=0)
-    closed = used.astype(np.float64) @ take_all
+    # Labels used after each move: the labels that B closes go (alpha's own d are all 0, so it
+    # counts as closed when used, and is added back; unused rows count as closed and cancel
+    # out), and alpha opens when unused and gaining members.
     alpha_used = used if alphas is None else used[alphas]
-    n_used = (np.count_nonzero(used) - closed).astype(np.int64) + (alpha_used | changed)
+    n_used = (take_all.shape[0] - np.count_nonzero(take_all, axis=0)) + (alpha_used | changed)
     # Energies summed in the reference order: person by person, then one cost per used label.
     terms = np.empty((moved.shape[1], n + label_costs.shape[1]))
     np.copyto(terms[:, :n], np.where(moved, target, current[:, None]).T)
@@ -322,7 +347,9 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
     if not np.all(np.isfinite(unary)):
         raise ValueError("unary must be finite, got NaN or inf")
     label_cost = float(label_cost)
-    identity = np.eye(k)
+    if not (np.isfinite(label_cost) and label_cost >= 0.0):
+        raise ValueError(f"label_cost must be a finite number >= 0, got {label_cost!r}")
+    identity = np.eye(k) if n <= _MATMUL_MAX_PEOPLE else np.empty((0, 0))
     label_costs = np.tri(k + 1, k, -1) * label_cost  # [u, j] = label_cost if j < u
     whole = k <= _WINDOW  # evaluate every alpha in column order; scan from the current one
     window = np.arange(min(k, _WINDOW))
@@ -334,14 +361,14 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
     while stale < k:
         if whole:
             moved, changed, candidate = _moves(
-                unary, labels, None, label_cost, identity, label_costs
+                unary, labels, None, label_cost, label_costs, identity
             )
             order = list(range(alpha, k)) + list(range(alpha))
             columns = order
         else:
             alphas = (alpha + window) % k
             moved, changed, candidate = _moves(
-                unary, labels, alphas, label_cost, identity, label_costs
+                unary, labels, alphas, label_cost, label_costs, identity
             )
             order = alphas.tolist()
             columns = range(len(order))

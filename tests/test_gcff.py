@@ -257,40 +257,56 @@ def test_energy_never_increases_on_salsa(salsa_frames):
         assert np.all(np.diff(result.energies) <= 0)
 
 
+def sequential_expansion(costs, labels, cost):
+    """Spec, step 4, one alpha-move at a time with a loop over labels."""
+    n, k = costs.shape
+    current = energy(costs, labels, label_cost=cost)
+    alpha, stale = 0, 0
+    while stale < k:
+        d = costs[:, alpha] - costs[np.arange(n), labels]
+        new = labels.copy()
+        for label in np.unique(labels):
+            if label == alpha:
+                continue
+            members = labels == label
+            option_a = d[members & (d < 0)].sum() + cost
+            option_b = d[members].sum()
+            new[members & ((option_b <= option_a) | (d <= 0))] = alpha
+        candidate = energy(costs, new, label_cost=cost)
+        if candidate < current:
+            labels, current, stale = new, candidate, 0
+        else:
+            if candidate == current:
+                labels = new
+            stale += 1
+        alpha = (alpha + 1) % k
+    return labels
+
+
 def test_alpha_expansion_matches_one_move_at_a_time(salsa_frames):
     """The windowed, vectorised sweep equals the plain sequential one (spec, step 4)."""
-
-    def sequential(costs, labels, cost):
-        n, k = costs.shape
-        current = energy(costs, labels, label_cost=cost)
-        alpha, stale = 0, 0
-        while stale < k:
-            d = costs[:, alpha] - costs[np.arange(n), labels]
-            new = labels.copy()
-            for label in np.unique(labels):
-                if label == alpha:
-                    continue
-                members = labels == label
-                option_a = d[members & (d < 0)].sum() + cost
-                option_b = d[members].sum()
-                new[members & ((option_b <= option_a) | (d <= 0))] = alpha
-            candidate = energy(costs, new, label_cost=cost)
-            if candidate < current:
-                labels, current, stale = new, candidate, 0
-            else:
-                if candidate == current:
-                    labels = new
-                stale += 1
-            alpha = (alpha + 1) % k
-        return labels
-
     for frame in salsa_frames[::40]:
         position_cm = frame.position * 100
         points = segment_points(position_cm, frame.yaw, stride=50.0)
         labels = np.arange(frame.n_people)
         costs = unary_costs(points, position_cm, labels, mdl=20_000.0)
         fast = alpha_expansion(costs, labels, label_cost=20_000.0).labels
-        np.testing.assert_array_equal(fast, sequential(costs, labels, 20_000.0))
+        np.testing.assert_array_equal(fast, sequential_expansion(costs, labels, 20_000.0))
+
+
+@pytest.mark.parametrize("n", [40, 90])
+def test_alpha_expansion_matches_one_move_at_a_time_in_crowds(n):
+    """Crowds take the windowed path (K > 32) and, beyond 64 people, sorted per-label sums."""
+    rng = np.random.default_rng(n)
+    position_cm = rng.uniform(0.0, 100.0 * math.sqrt(n), size=(n, 2))
+    yaw = rng.uniform(-math.pi, math.pi, n)
+    points = segment_points(position_cm, yaw, stride=70.0)
+    labels = np.arange(n)
+    for _ in range(3):  # the first expansions of a run: from singletons, then refitted
+        costs = unary_costs(points, position_cm, labels, mdl=10_000.0)
+        fast = alpha_expansion(costs, labels, label_cost=10_000.0).labels
+        np.testing.assert_array_equal(fast, sequential_expansion(costs, labels, 10_000.0))
+        _, labels = np.unique(fast, return_inverse=True)
 
 
 def test_relabelling_ids_renames_the_groups(salsa_frames):
@@ -454,6 +470,8 @@ def test_bad_inputs_are_named():
         gcff_labels([[0.0, 0.0], [1.0, 0.0]], [0.0, 1.0, 2.0], stride=0.7, mdl=1.0)
     with pytest.raises(ValueError, match="unary must be finite"):
         alpha_expansion([[0.0, np.inf]], [0], label_cost=1.0)
+    with pytest.raises(ValueError, match="label_cost must be a finite number >= 0, got -1.0"):
+        alpha_expansion([[0.0, 1.0]], [0], label_cost=-1.0)
     with pytest.raises(TypeError, match=r"frames\[0\] must be a reform.Frame"):
         Gcff().predict([object()])
     with pytest.raises(ValueError, match="annotated frames to tune on"):
