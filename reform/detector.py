@@ -30,12 +30,7 @@ from reform.features import (
 )
 from reform.frame import Frame, Group
 from reform.metrics import pair_labels
-from reform.reconstruction import (
-    UNION,
-    batch_greedy_labels,
-    check_reconstruction,
-    partition_from_labels,
-)
+from reform.reconstruction import UNION, batch_greedy_labels, check_reconstruction
 
 CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
 
@@ -163,11 +158,12 @@ class Reform(BaseEstimator):
                 continue
             n_pairs = n * (n - 1) // 2
             step = max(1, CHUNK_PAIRS // n_pairs)
+            spans: dict[bytes, tuple[slice, ...]] = {}
             for start in range(0, len(positions), step):
                 chunk = positions[start : start + step]
                 ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
                 labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
-                for k, partition in zip(chunk, _partitions(labels, ids), strict=True):
+                for k, partition in zip(chunk, _partitions(labels, ids, spans), strict=True):
                     out[k] = partition
         return out  # type: ignore[return-value]
 
@@ -230,9 +226,10 @@ class Reform(BaseEstimator):
 
     def _classify_chunk(self, frames: list[Frame], n: int) -> tuple[np.ndarray, np.ndarray]:
         """(F, n) ids in id order and (F, n(n-1)/2) bool pair labels of frames of n people."""
-        ids = np.stack([frame.ids for frame in frames])
-        position = np.stack([frame.position for frame in frames])
-        yaw = np.stack([frame.yaw for frame in frames])
+        count = len(frames)
+        ids = np.concatenate([frame.ids for frame in frames]).reshape(count, n)
+        position = np.concatenate([frame.position for frame in frames]).reshape(count, n, 2)
+        yaw = np.concatenate([frame.yaw for frame in frames]).reshape(count, n)
         head_position = head_yaw = is_robot = None
         features = self.features_
         if any(name.startswith("head_") for name in features):
@@ -327,15 +324,35 @@ def _by_size(frames: list[Frame]) -> dict[int, list[int]]:
     return groups
 
 
-def _partitions(labels: np.ndarray, ids: np.ndarray) -> list[Partition]:
-    """Partitions from (F, n) group labels and (F, n) ids, each built once per distinct row."""
-    rows = np.ascontiguousarray(
-        np.concatenate([labels.astype(np.int64), ids.astype(np.int64)], axis=1)
-    )
-    keys = rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel()
-    unique, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    built = [partition_from_labels(labels[k], ids[k].tolist()) for k in first.tolist()]
-    return [built[k] for k in inverse.ravel().tolist()]
+def _partitions(
+    labels: np.ndarray, ids: np.ndarray, spans: dict[bytes, tuple[slice, ...]] | None = None
+) -> list[Partition]:
+    """Partitions from (F, n) group labels and (F, n) ids, in id order.
+
+    Sorting each frame's people by label lines its groups up (a group's label is its first
+    member, so groups come ordered by their smallest id); the frame's partition is then its id
+    tuple cut where the label changes. The cuts of each pattern are kept in ``spans``, a cache
+    the caller may share across calls.
+    """
+    n_frames, n = labels.shape
+    spans = {} if spans is None else spans
+    order = np.argsort(labels, axis=1, kind="stable")
+    sorted_labels = np.take_along_axis(labels, order, axis=1)
+    sorted_ids = np.take_along_axis(ids, order, axis=1)
+    cuts = sorted_labels[:, 1:] != sorted_labels[:, :-1]
+    packed = np.packbits(cuts, axis=1)
+    width = packed.shape[1]
+    flat = packed.tobytes()
+    patterns = [flat[k : k + width] for k in range(0, n_frames * width, width)]
+    out: list[Partition] = []
+    for f, (pattern, row) in enumerate(zip(patterns, map(tuple, sorted_ids.tolist()), strict=True)):
+        pieces = spans.get(pattern)
+        if pieces is None:
+            edges = [0, *(k + 1 for k, cut in enumerate(cuts[f].tolist()) if cut), n]
+            pieces = tuple(slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True))
+            spans[pattern] = pieces
+        out.append(tuple(map(row.__getitem__, pieces)))
+    return out
 
 
 def _summary(frames: list[Frame], targets: np.ndarray) -> dict[str, Any]:

@@ -36,7 +36,7 @@ MAX_GRID_CELLS = 1 << 26  # cells of a compiled tree-ensemble table (one byte ea
 _BAND_CELLS = 1 << 21  # cells accumulated at once while compiling a table
 _TIE_MARGIN = 1e-7  # vote margins closer to a tie than this are settled by the classifier
 _MAX_BUCKETS = 1 << 22  # rank look-up buckets per feature
-_BUCKET_TARGET = 2  # aim for at most this many thresholds per bucket
+_BUCKET_TARGET = 3  # aim for at most this many thresholds per bucket
 
 __all__ = [
     "MAX_GRID_CELLS",
@@ -350,6 +350,25 @@ def _step_float32(thresholds: np.ndarray) -> np.ndarray:
     return rounded
 
 
+def _bucket(key: np.ndarray, low: int, high: int, shift: int) -> np.ndarray:
+    """``(clip(key, low, high) - low) >> shift``, in int32 when the span allows."""
+    if high - low < 2**31:  # thresholds of one sign: the span fits in int32
+        bucket = np.clip(key, np.int32(low), np.int32(high))
+        bucket -= np.int32(low)
+    else:
+        bucket = np.clip(key.astype(np.int64), low, high)
+        bucket -= low
+    bucket >>= shift
+    return bucket
+
+
+def _step_keys(thresholds: np.ndarray) -> np.ndarray:
+    """Sorted int64 keys of the first float32 above each threshold: rank(x) = #keys <= key(x)."""
+    return np.sort(
+        _float32_key(_step_float32(np.asarray(thresholds, dtype=np.float64))).astype(np.int64)
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class _RankIndex:
     """Exact rank of float32 values among sorted thresholds: the number of thresholds below.
@@ -367,9 +386,7 @@ class _RankIndex:
 
     @classmethod
     def build(cls, thresholds: np.ndarray) -> _RankIndex:
-        steps = np.sort(
-            _float32_key(_step_float32(np.asarray(thresholds, dtype=np.float64))).astype(np.int64)
-        )
+        steps = _step_keys(thresholds)
         if steps.size == 0:
             empty = np.zeros((0, 1), dtype=np.int32)
             return cls(0, 0, 0, 0, np.zeros(1, dtype=np.int32), empty)
@@ -392,35 +409,104 @@ class _RankIndex:
 
     def rank(self, values: np.ndarray) -> np.ndarray:
         """(m,) float32 values -> (m,) int32 ranks in ``[0, n_thresholds]``."""
+        return self.rank_keys(_float32_key(values))
+
+    def rank_keys(self, key: np.ndarray) -> np.ndarray:
+        """(m,) int32 keys (:func:`_float32_key`) -> (m,) int32 ranks."""
         if self.n_thresholds == 0:
-            return np.zeros(values.shape, dtype=np.int32)
-        key = _float32_key(values)
-        bucket = key.astype(np.int64)
-        bucket -= self.low_key
-        np.clip(bucket, 0, self.high_key - self.low_key, out=bucket)
-        bucket >>= self.shift
+            return np.zeros(key.shape, dtype=np.int32)
+        bucket = _bucket(key, self.low_key, self.high_key, self.shift)
         rank = self.base[bucket]
         for column in self.inside:
             rank += column[bucket] <= key
         return rank
 
 
+_COARSE_BUCKETS = 1 << 10  # coarse cells per feature in front of a tree table
+_MIXED = 2  # coarse code: the coarse cell holds both decisions, look the fine cell up
+
+
+@dataclass(frozen=True, eq=False)
+class _Coarse:
+    """Coarse buckets of one feature's float32 keys, with the rank range each one spans."""
+
+    low_key: int
+    high_key: int
+    shift: int
+    count: int
+    first_rank: np.ndarray  # (count,) rank of the bucket's first key
+    last_rank: np.ndarray  # (count,) rank of its last key
+
+    @classmethod
+    def build(cls, thresholds: np.ndarray) -> _Coarse:
+        steps = _step_keys(thresholds)
+        if steps.size == 0:
+            zero = np.zeros(1, dtype=np.intp)
+            return cls(0, 0, 0, 1, zero, zero)
+        low, high = int(steps[0]), int(steps[-1])
+        span = high - low
+        shift = max(0, span.bit_length() - (_COARSE_BUCKETS.bit_length() - 1))
+        count = (span >> shift) + 1
+        starts = low + (np.arange(count, dtype=np.int64) << shift)
+        ends = np.minimum(starts + (1 << shift) - 1, high)
+        first_rank = np.searchsorted(steps, starts, side="right")
+        last_rank = np.searchsorted(steps, ends, side="right")
+        first_rank[0] = 0  # keys below the lowest step fall in bucket 0
+        last_rank[-1] = steps.size  # keys above the highest fall in the last
+        return cls(low, high, shift, count, first_rank, last_rank)
+
+    def bucket(self, key: np.ndarray) -> np.ndarray:
+        return _bucket(key, self.low_key, self.high_key, self.shift)
+
+
+def _range_reduce(
+    ufunc: np.ufunc, array: np.ndarray, first: np.ndarray, last: np.ndarray, axis: int
+) -> np.ndarray:
+    """``ufunc`` over the inclusive index ranges ``[first[c], last[c]]`` along ``axis``."""
+    pad_shape = list(array.shape)
+    pad_shape[axis] = 1
+    padded = np.concatenate([array, np.zeros(pad_shape, dtype=array.dtype)], axis=axis)
+    bounds = np.empty(2 * first.size, dtype=np.intp)
+    bounds[0::2] = first
+    bounds[1::2] = last + 1
+    return np.take(
+        ufunc.reduceat(padded, bounds, axis=axis), np.arange(0, bounds.size, 2), axis=axis
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class _TreeTable:
-    """A two-feature tree ensemble compiled into one decision table over its threshold grid."""
+    """A two-feature tree ensemble compiled into one decision table over its threshold grid.
+
+    In front of it sits a coarse table over buckets of the features' float32 keys: where a
+    coarse cell covers fine cells of one decision only (most of the plane), that decision is
+    read directly; the rest look up their exact fine cell.
+    """
 
     ranks: tuple[_RankIndex, _RankIndex]
     table: np.ndarray  # (cells_0 * cells_1,) uint8 decisions, row-major over (rank_0, rank_1)
     width: int  # cells along feature 1
+    coarse: tuple[_Coarse, _Coarse]
+    coarse_table: np.ndarray  # (count_0 * count_1,) uint8: 0, 1 or _MIXED
     kind: str = "tree-table"
     exact: bool = True
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         features = np.asarray(features, dtype=np.float64)
-        as_float32 = features.astype(np.float32)
-        row = self.ranks[0].rank(as_float32[:, 0])
-        column = self.ranks[1].rank(as_float32[:, 1])
-        return self.table[row * self.width + column].view(bool)
+        key_0 = _float32_key(features[:, 0].astype(np.float32))
+        key_1 = _float32_key(features[:, 1].astype(np.float32))
+        cell = self.coarse[0].bucket(key_0).astype(np.intp)
+        cell *= self.coarse[1].count
+        cell += self.coarse[1].bucket(key_1)
+        code = self.coarse_table[cell]
+        together = code == 1
+        mixed = np.flatnonzero(code == _MIXED)
+        if mixed.size:
+            row = self.ranks[0].rank_keys(key_0[mixed]).astype(np.intp)
+            row *= self.width
+            row += self.ranks[1].rank_keys(key_1[mixed])
+            together[mixed] = self.table[row].view(bool)
+        return together
 
     @classmethod
     def build(
@@ -440,10 +526,21 @@ class _TreeTable:
         leaves = _leaf_rectangles(ensemble, axes)
         table = _accumulate(leaves, shape, ensemble.n_trees, threshold)
         _settle_ties(classifier, table, axes, threshold)
+        coarse = (_Coarse.build(axes[0]), _Coarse.build(axes[1]))
+        lowest = table
+        highest = table
+        for axis, buckets in ((1, coarse[1]), (0, coarse[0])):
+            lowest = _range_reduce(np.minimum, lowest, buckets.first_rank, buckets.last_rank, axis)
+            highest = _range_reduce(
+                np.maximum, highest, buckets.first_rank, buckets.last_rank, axis
+            )
+        coarse_table = np.where(lowest == highest, lowest, _MIXED).astype(np.uint8)
         return cls(
             ranks=(_RankIndex.build(axes[0]), _RankIndex.build(axes[1])),
             table=table.ravel().astype(np.uint8),
             width=shape[1],
+            coarse=coarse,
+            coarse_table=coarse_table.ravel(),
         )
 
 

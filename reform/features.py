@@ -101,17 +101,17 @@ def pair_indices(n: int) -> tuple[np.ndarray, np.ndarray]:
     return _pair_indices(n)
 
 
-def _abs_wrapped(delta: np.ndarray) -> np.ndarray:
-    """``|wrap(delta)|`` for ``|delta| <= 2*pi`` (plus a small tolerance), in ``[0, pi]``.
+def _fold(delta: np.ndarray) -> np.ndarray:
+    """In place: ``delta`` -> ``|wrap(delta)|`` in ``[0, pi]``, for ``|delta| <= 2*pi`` (+ tol).
 
     ``pi - |pi - |delta||`` folds ``[0, 2*pi]`` onto ``[0, pi]`` without a modulo; the outer
-    ``abs`` handles the few hundredths of a radian beyond ``2*pi`` that wrapped yaws allow.
+    ``abs`` handles the few thousandths of a radian beyond ``2*pi`` that wrapped yaws allow.
     """
-    out = np.abs(delta)
-    np.subtract(np.pi, out, out=out)
-    np.abs(out, out=out)
-    np.subtract(np.pi, out, out=out)
-    return np.abs(out, out=out)
+    np.abs(delta, out=delta)
+    np.subtract(np.pi, delta, out=delta)
+    np.abs(delta, out=delta)
+    np.subtract(np.pi, delta, out=delta)
+    return np.abs(delta, out=delta)
 
 
 def effort_angle(
@@ -145,8 +145,8 @@ def effort_angle(
 def _effort_from_phi(phi: np.ndarray, yaw_i: np.ndarray, yaw_j: np.ndarray) -> np.ndarray:
     # a_i = |wrap(phi_ij - theta_i)|; as phi_ji = phi_ij + pi and |wrap(x + pi)| = pi - |wrap(x)|,
     # a_j = pi - |wrap(phi_ij - theta_j)|. Both differences lie within 2*pi (plus tolerance) of 0.
-    a_i = _abs_wrapped(phi - yaw_i)
-    a_j = _abs_wrapped(phi - yaw_j)
+    a_i = _fold(np.subtract(phi, yaw_i))
+    a_j = _fold(np.subtract(phi, yaw_j))
     np.subtract(np.pi, a_j, out=a_j)
     return np.add(a_i, a_j, out=a_i)
 
@@ -154,13 +154,19 @@ def _effort_from_phi(phi: np.ndarray, yaw_i: np.ndarray, yaw_j: np.ndarray) -> n
 def _distance_and_effort(
     position: np.ndarray, yaw: np.ndarray, i: np.ndarray, j: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Distance and Effort Angle of the pairs ``(i, j)`` along the people axis (axis -2 / -1)."""
-    delta = position[..., j, :] - position[..., i, :]
-    dx = delta[..., 0]
-    dy = delta[..., 1]
-    distance = np.sqrt(dx * dx + dy * dy)
+    """Distance and Effort Angle of the pairs ``(i, j)`` of (F, n, 2) positions, (F, n) yaws."""
+    x = position[..., 0]
+    y = position[..., 1]
+    dx = np.take(x, j, axis=-1)
+    dx -= np.take(x, i, axis=-1)
+    dy = np.take(y, j, axis=-1)
+    dy -= np.take(y, i, axis=-1)
     phi = np.arctan2(dy, dx)
-    return distance, _effort_from_phi(phi, yaw[..., i], yaw[..., j])
+    np.multiply(dx, dx, out=dx)
+    np.multiply(dy, dy, out=dy)
+    np.add(dx, dy, out=dx)
+    distance = np.sqrt(dx, out=dx)
+    return distance, _effort_from_phi(phi, np.take(yaw, i, axis=-1), np.take(yaw, j, axis=-1))
 
 
 def batch_pair_features(

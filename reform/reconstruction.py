@@ -155,38 +155,17 @@ def _unpack(bits: np.ndarray, n: int) -> np.ndarray:
     return np.unpackbits(as_bytes, axis=-1, count=n, bitorder="little").view(bool)
 
 
-_EXACT_FLOAT_BITS = 52  # beliefs of up to 52 people are built with one float matmul, exactly
 _SMALL_BATCH = 4  # frames: below this, plain Python integers beat array operations
-
-
-def _incidence(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(P, n) float64: ``2**j`` at ``[p, i_p]``, ``2**i`` at ``[p, j_p]``; (P, n) pair incidence."""
-    i, j = pair_indices(n)
-    pairs = np.arange(i.size)
-    powers = np.zeros((i.size, n))
-    powers[pairs, i] = np.ldexp(1.0, j)
-    powers[pairs, j] = np.ldexp(1.0, i)
-    incidence = np.zeros((i.size, n), dtype=np.float32)
-    incidence[pairs, i] = 1.0
-    incidence[pairs, j] = 1.0
-    return powers, incidence
 
 
 def _beliefs(pair_labels: np.ndarray, n: int) -> np.ndarray:
     """(F, P) bool pair labels -> (F, n, W) uint64 belief bitsets, each including its own bit."""
-    n_frames = pair_labels.shape[0]
-    if n <= _EXACT_FLOAT_BITS:
-        powers, _ = _incidence(n)
-        others = pair_labels.astype(np.float64) @ powers  # sums of distinct powers of two: exact
-        own = np.left_shift(np.uint64(1), np.arange(n, dtype=np.uint64))
-        return (others.astype(np.uint64) | own)[..., None]
     i, j = pair_indices(n)
-    matrix = np.zeros((n_frames, n, n), dtype=bool)
-    matrix[:, i, j] = pair_labels
-    matrix[:, j, i] = pair_labels
-    diagonal = np.arange(n)
-    matrix[:, diagonal, diagonal] = True
-    return _pack(matrix)
+    matrix = np.zeros((pair_labels.shape[0], n * n), dtype=bool)
+    matrix[:, i * n + j] = pair_labels
+    matrix[:, j * n + i] = pair_labels
+    matrix[:, np.arange(n) * (n + 1)] = True
+    return _pack(matrix.reshape(-1, n, n))
 
 
 def _lowest_bit(bits: np.ndarray) -> np.ndarray:
@@ -230,26 +209,111 @@ def batch_greedy_labels(pair_labels: npt.ArrayLike, n: int, *, variant: str = UN
     beliefs = _beliefs(labels_in, n)  # (F, n, W)
     # A consistent person's group is their belief set; its first member is the label.
     out = _lowest_bit(beliefs)
-    b_i = beliefs[:, i]
-    b_j = beliefs[:, j]
-    differ = b_i != b_j
-    differ = differ[..., 0] if differ.shape[-1] == 1 else differ.any(axis=-1)
-    conflict = labels_in & differ
+    if beliefs.shape[-1] == 1:
+        word = beliefs[..., 0]
+        conflict = labels_in & (np.take(word, i, axis=1) != np.take(word, j, axis=1))
+    else:
+        b_i = beliefs[:, i]
+        b_j = beliefs[:, j]
+        conflict = labels_in & (b_i != b_j).any(axis=-1)
     if not conflict.any():
         return out
-    _, incidence = _incidence(n)
-    loose = (conflict.astype(np.float32) @ incidence) > 0  # people in inconsistent components
+    frame_of, pair = np.nonzero(conflict)
+    loose = np.zeros((n_frames, n), dtype=bool)  # people of inconsistent components
+    loose[frame_of, i[pair]] = True
+    loose[frame_of, j[pair]] = True
     frames = np.flatnonzero(loose.any(axis=1))
+    if beliefs.shape[-1] == 1:
+        _greedy_loop_word(
+            labels_in[frames],
+            beliefs[frames, :, 0],
+            loose[frames],
+            out,
+            frames,
+            n,
+            variant,
+        )
+        return out
     out[frames] = _greedy_loop(
         labels_in[frames],
         beliefs[frames],
-        b_i[frames] & b_j[frames],
+        beliefs[frames][:, i] & beliefs[frames][:, j],
         loose[frames],
         out[frames],
         n,
         variant,
     )
     return out
+
+
+def _greedy_loop_word(
+    pair_labels: np.ndarray,
+    beliefs: np.ndarray,
+    loose: np.ndarray,
+    out: np.ndarray,
+    frames: np.ndarray,
+    n: int,
+    variant: str,
+) -> None:
+    """The greedy loop for up to 64 people, beliefs as one uint64 word, writing into ``out``.
+
+    Only candidate pairs (predicted together, both in an inconsistent component) are kept, packed
+    to the left of a (frames, C) array in pair order, so the first maximum is still the lowest
+    pair; the groups are collected as bitsets and written out once at the end.
+    """
+    i, j = pair_indices(n)
+    one = np.uint64(1)
+    local = np.arange(frames.size)
+    out[frames] = np.where(loose, np.arange(n, dtype=np.intp), out[frames])
+    candidate = pair_labels & loose[:, i] & loose[:, j]
+    counts = candidate.sum(axis=1)
+    width = int(counts.max())
+    rows, pairs = np.nonzero(candidate)  # row-major: each frame's candidates in pair order
+    row_start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    slot = np.arange(rows.size) - row_start[rows]
+    first = np.zeros((frames.size, width), dtype=np.uint64)
+    second = np.zeros((frames.size, width), dtype=np.uint64)
+    first[rows, slot] = i[pairs]
+    second[rows, slot] = j[pairs]
+    valid = np.arange(width) < counts[:, None]
+    flat = beliefs.ravel()
+    row_base = (local * n)[:, None]
+    common = flat[row_base + first.astype(np.intp)] & flat[row_base + second.astype(np.intp)]
+    remaining = _pack(loose)[:, 0]
+    bit_first = one << first
+    bit_second = one << second
+    emitted_frames, emitted_bits = [], []
+    active = local
+    while active.size:
+        rem = remaining[active][:, None]
+        live = valid[active] & ((rem & bit_first[active]) != 0) & ((rem & bit_second[active]) != 0)
+        agreement = np.bitwise_count(common[active] & rem).astype(np.int8)
+        score = np.where(live, agreement, np.int8(-1))
+        best = np.argmax(score, axis=1)  # first maximum: lowest (i, j)
+        keep = np.take_along_axis(score, best[:, None], axis=1)[:, 0] >= 0
+        if not keep.all():
+            active, best, rem = active[keep], best[keep], rem[keep]
+            if active.size == 0:
+                break
+        a = np.take_along_axis(first[active], best[:, None], axis=1)[:, 0]
+        b = np.take_along_axis(second[active], best[:, None], axis=1)[:, 0]
+        belief_a = flat[active * n + a.astype(np.intp)]
+        belief_b = flat[active * n + b.astype(np.intp)]
+        if variant == UNION:
+            members = (belief_a | belief_b) & rem[:, 0]
+        else:
+            members = (belief_a & belief_b & rem[:, 0]) | (one << a) | (one << b)
+        emitted_frames.append(active)
+        emitted_bits.append(members)
+        remaining[active] = rem[:, 0] & ~members
+    if not emitted_frames:
+        return
+    group_frames = np.concatenate(emitted_frames)
+    group_bits = np.concatenate(emitted_bits)
+    leader = _lowest_bit(group_bits[:, None])
+    members = _unpack(group_bits[:, None], n)
+    g, person = np.nonzero(members)
+    out[frames[group_frames[g]], person] = leader[g]
 
 
 def _greedy_loop(
