@@ -1,0 +1,87 @@
+"""Gymnasium environments: the Directions Robot as the agent in scripted social scenes.
+
+Importing this package (``import sim`` does) registers one environment per scenario for the
+joining task and one for observing::
+
+    ReformSim/HRIConversation-v0    ReformSim/HRIConversationObserve-v0
+    ReformSim/HRIRobotExcluded-v0   ReformSim/HRIRobotExcludedObserve-v0
+    ReformSim/HRIPassing-v0         ReformSim/HRIPassingObserve-v0
+    ReformSim/WordImprov-v0         ReformSim/WordImprovObserve-v0
+    ReformSim/Mingle-v0             ReformSim/MingleObserve-v0
+
+``gymnasium.make(id, **kwargs)`` passes keyword arguments on to `SocialEnv` (``detector=``,
+``model=``, ``sensor=``, ``render_mode="rgb_array"``, ``record_dir=``, ...). Registration
+imports only gymnasium: the environment's module (MuJoCo, the detectors) loads on first make.
+
+Public surface (loaded on first use): `SocialEnv`, the task (`JoinTask`, `OSpace`,
+`estimate_o_space`, `joining_place`, `REWARD_TERMS`), the scripted baseline (`JoinPolicy`,
+`evaluate_policy`, `PolicyEvaluation`), `ENV_IDS`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+import gymnasium as gym
+
+NAMESPACE = "ReformSim"
+ENTRY_POINT = "sim.envs.social:SocialEnv"
+
+# Environment name -> scenario name (and its options for the environment).
+_SCENES: dict[str, tuple[str, dict[str, Any]]] = {
+    "HRIConversation": ("hri-conversation", {}),
+    "HRIRobotExcluded": ("hri-robot-excluded", {}),
+    "HRIPassing": ("hri-passing", {}),
+    "WordImprov": ("word-improv", {}),
+    "Mingle": ("mingle", {}),
+}
+
+ENV_IDS: tuple[str, ...] = tuple(
+    f"{NAMESPACE}/{name}{suffix}-v0" for name in _SCENES for suffix in ("", "Observe")
+)
+
+
+def register_envs() -> None:
+    """Registers every environment of `ENV_IDS` (again: registering twice is harmless)."""
+    for name, (scenario, options) in _SCENES.items():
+        for suffix, task in (("", "join"), ("Observe", "observe")):
+            env_id = f"{NAMESPACE}/{name}{suffix}-v0"
+            if env_id in gym.registry:
+                continue
+            gym.register(
+                id=env_id,
+                entry_point=ENTRY_POINT,
+                kwargs={"scenario": scenario, "task": task, "scenario_options": dict(options)},
+                disable_env_checker=False,
+            )
+
+
+register_envs()
+
+_EXPORTS = {
+    "SocialEnv": "sim.envs.social",
+    "JoinTask": "sim.envs.reward",
+    "OSpace": "sim.envs.reward",
+    "REWARD_TERMS": "sim.envs.reward",
+    "estimate_o_space": "sim.envs.reward",
+    "joining_place": "sim.envs.reward",
+    "JoinPolicy": "sim.envs.policy",
+    "PolicyEvaluation": "sim.envs.policy",
+    "evaluate_policy": "sim.envs.policy",
+}
+
+__all__ = sorted([*_EXPORTS, "ENV_IDS", "NAMESPACE", "register_envs"])
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'sim.envs' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,754 @@
+"""`SocialEnv`: the Directions Robot as the agent in a scripted social scene.
+
+The people follow a registered scenario's script (`scenarios.make`); the robot follows the
+agent's velocity commands. Each control step (10 Hz by default) the world moves by ten of its
+own 10 ms steps, the robot's head sensor looks (field of view, range, MuJoCo ray occlusion,
+dropouts, noise: `sim.Sensor`), the ground truth is settled by the scenario's rule
+(`scenarios.GroundTruth`), and, every ``1 / detect_rate`` seconds (2 Hz by default), the
+F-formation detector runs on what the robot sees. The detected groups are held until the next
+detection.
+
+Spaces (``max_people`` slots, one per person of the scene in scene order):
+
+* **action** ``Box(-1, 1, (3,))``, float32: forward speed of the base, turn rate of the base,
+  head-pan rate, as fractions of the robot's limits (`sim.ROBOT_LIMITS`: 0.8 m/s, 1.5 rad/s,
+  2.0 rad/s; `SocialEnv.action_scale`); negative speeds back up, positive turns go left. An
+  action outside the box raises `gymnasium.error.InvalidAction`.
+* **observation** ``Dict``:
+
+  - ``robot_pose`` (3,): x, y (metres, the room's frame) and yaw (radians) of the robot's base;
+  - ``head_pan`` (1,): the head's pan from the base, radians;
+  - ``people_position`` (max_people, 2): each person seen, in the robot's frame (x forward, y
+    left), metres; 0 where not seen;
+  - ``people_yaw``, ``people_head_yaw`` (max_people,): body and head yaw relative to the robot's
+    base, radians; 0 where not seen;
+  - ``people_seen``, ``people_head_seen`` (max_people,): 1 where the sensor reports the person
+    (their head);
+  - ``people_group`` (max_people,): the last detection's F-formation number of each person
+    (1, 2, ... in slot order; 0: not seen then, or alone), when ``observe_groups``;
+  - ``people_target`` (max_people,): 1 for the people of the group the robot is to join (task
+    ``"join"`` only).
+
+* **info**: ``time`` (s), ``groups`` (ground-truth F-formations now), ``detected_groups`` (the
+  last detection's full partition of the observed agents) and ``detected_at`` (its time),
+  ``metrics`` (that detection's precision, recall and F1 at T = 2/3 and pairwise accuracy
+  against the ground truth of what the robot saw), ``target``, ``target_formed``,
+  ``reward_terms``, ``is_success``, ``intruded``, ``distance_to_circle``; on the last step
+  also ``episode`` (the scenario and its seed, the steps, the detector's scores over the
+  episode's detections, the recording's path).
+
+Tasks: ``"join"`` (`sim.envs.reward`: join the target group's circle; terminated on joining
+or when the target group is gone for good, truncated at the time limit) and ``"observe"`` (zero
+reward, never terminated, truncated at the time limit; a testbed for detectors).
+
+Options of `reset`: ``scenario_options`` (the scenario's options for this episode, over those
+given at construction), ``scenario_seed`` (the scenario's seed; by default drawn from the
+env's generator), ``robot_start`` (``"random"``: a free spot 1.5-3.5 m outside the target's
+circle, turned toward it within 45 degrees; ``"scenario"``: where the scenario puts the robot).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.error import InvalidAction, ResetNeeded
+
+import scenarios
+from reform.frame import Frame, Group
+from reform.metrics import T_TWO_THIRDS, evaluate
+from scenarios import PlannedGroup, Scenario
+from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
+from sim.envs.target import Target, choose_target
+from sim.envs.view import Eyes, Truth, View
+from sim.episode import scene_spec
+from sim.motion import ROBOT_LIMITS
+from sim.scene import ROBOT_RADIUS_M
+from sim.sensor import Sensor
+from sim.world import DEFAULT_DT_S, RobotCommand, World
+
+__all__ = [
+    "CONTROL_RATE_HZ",
+    "DETECT_RATE_HZ",
+    "JOIN_EPISODE_S",
+    "RESET_OPTIONS",
+    "ROBOT_STARTS",
+    "TASKS",
+    "SocialEnv",
+]
+
+CONTROL_RATE_HZ = 10.0  # Hz, agent decisions (the world moves at 100 Hz in between)
+DETECT_RATE_HZ = 2.0  # Hz, detector runs on the robot's view
+JOIN_EPISODE_S = 40.0  # seconds, time limit of a joining episode
+VIEW_MARGIN_M = 1.0  # metres beyond the sensor's range that observed positions may reach
+ROOM_MARGIN_M = 0.5  # metres beyond the walls in the bounds of the robot's position
+START_DISTANCE_M = (1.5, 3.5)  # metres outside the target's circle where the robot may start
+START_CLEARANCE_M = 0.9  # metres from anyone's start (centre to centre) the robot starts
+START_WALL_GAP_M = 0.1  # metres between the robot's body and the walls at the start
+START_TURN_RAD = math.pi / 4.0  # radians, the robot starts turned this much at most off the group
+START_TRIES = 200  # random start spots tried before falling back to the scenario's
+RENDER_SIZE_PX = (480, 360)  # pixels, width x height of rendered frames
+TASKS = ("join", "observe")
+ROBOT_STARTS = ("random", "scenario")
+RESET_OPTIONS = ("robot_start", "scenario_options", "scenario_seed")
+_SEED_HIGH = 2**31 - 1  # scenario seeds drawn from the env's generator are below this
+_TWO_PI = 2.0 * math.pi
+_ACTION_NAMES = ("speed", "turn rate", "head-pan rate")
+
+ScenarioFactory = Callable[..., Scenario]
+
+
+class _Intents:
+    """The scenario's intents for the world; the ground truth is settled from the poses."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self._timeline = scenario.timeline
+
+    def intents(self, t: float) -> Mapping[int, Any]:
+        return self._timeline.intents(t)
+
+    def groups(self, t: float) -> None:
+        return None
+
+
+def _rate(name: str, value: Any) -> float:
+    try:
+        rate = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a positive number (Hz), got {value!r}") from None
+    if not (math.isfinite(rate) and rate > 0.0):
+        raise ValueError(f"{name} must be a positive number (Hz), got {value!r}")
+    return rate
+
+
+def _steps(period: float, step: float, *, name: str) -> int:
+    count = round(period / step)
+    if count < 1 or abs(count * step - period) > 1e-9 * max(1.0, period):
+        raise ValueError(
+            f"{name}: 1 / rate = {period:g} s must be a whole number of {step:g} s steps"
+        )
+    return int(count)
+
+
+class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
+    """The robot as the agent in a scripted social scene (see the module doc).
+
+    Args:
+        scenario: a registered scenario name (`scenarios.names`) or a factory
+            ``factory(*, seed, **options) -> scenarios.Scenario``.
+        task: ``"join"``, ``"observe"`` or a `JoinTask` (joining with other parameters).
+        scenario_options: the scenario's options for every episode.
+        max_people: observation slots; default: the people of the scenario made with seed 0.
+        episode_seconds: time limit, seconds; default: 40 s for joining, the scenario's own
+            length for observing (never beyond the scenario's length).
+        control_rate: agent decisions per second (a divisor of the world's 100 Hz).
+        detect_rate: detector runs per second (a divisor of ``control_rate``).
+        sensor: the robot's head sensor (default: `sim.Sensor()`, a Kinect's view).
+        detector: an F-formation detector with ``predict(frames)`` (fitted); default GCFF.
+        model: path to a REFORM model file (`reform.persistence.save_model`) to detect with.
+        observe_groups: whether the observation holds ``people_group``.
+        robot_start: default start of the robot, ``"random"`` or ``"scenario"``; default:
+            random for joining, the scenario's for observing.
+        render_mode: None or ``"rgb_array"`` (an overview of the room from above).
+        render_size: (width, height) of rendered frames, pixels.
+        record_dir: a folder to save each episode's Rerun recording in (``<scenario>-<seed>
+            -<episode>.rrd``), or None.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_RATE_HZ)}
+
+    def __init__(
+        self,
+        scenario: str | ScenarioFactory,
+        *,
+        task: str | JoinTask = "join",
+        scenario_options: Mapping[str, Any] | None = None,
+        max_people: int | None = None,
+        episode_seconds: float | None = None,
+        control_rate: float = CONTROL_RATE_HZ,
+        detect_rate: float = DETECT_RATE_HZ,
+        sensor: Sensor | None = None,
+        detector: Any = None,
+        model: str | os.PathLike[str] | None = None,
+        observe_groups: bool = True,
+        robot_start: str | None = None,
+        render_mode: str | None = None,
+        render_size: tuple[int, int] = RENDER_SIZE_PX,
+        record_dir: str | os.PathLike[str] | None = None,
+    ) -> None:
+        if isinstance(scenario, str):
+            if scenario not in scenarios.names():
+                raise ValueError(
+                    f"scenario must be one of {list(scenarios.names())} or a factory, "
+                    f"got {scenario!r}"
+                )
+            self._factory: ScenarioFactory | None = None
+            self._scenario_name = scenario
+        elif callable(scenario):
+            self._factory = scenario
+            self._scenario_name = getattr(scenario, "__name__", "scenario")
+        else:
+            raise ValueError(
+                f"scenario must be a registered name or a factory, got {type(scenario).__name__}"
+            )
+        if isinstance(task, JoinTask):
+            self._task: JoinTask | None = task
+        elif task == "join":
+            self._task = JoinTask()
+        elif task == "observe":
+            self._task = None
+        else:
+            raise ValueError(f"task must be one of {TASKS} or a JoinTask, got {task!r}")
+        self._scenario_options = dict(scenario_options or {})
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        size = tuple(render_size)
+        if len(size) != 2 or not all(isinstance(v, int) and v > 0 for v in size):
+            raise ValueError(f"render_size must be (width, height) in pixels, got {render_size!r}")
+        self._render_size = (int(size[0]), int(size[1]))
+        self._robot_start = _robot_start(
+            robot_start if robot_start is not None else ("random" if self._task else "scenario")
+        )
+        self._control_dt = 1.0 / _rate("control_rate", control_rate)
+        self._world_steps = _steps(self._control_dt, DEFAULT_DT_S, name="control_rate")
+        self._detect_every = _steps(
+            1.0 / _rate("detect_rate", detect_rate), self._control_dt, name="detect_rate"
+        )
+        if episode_seconds is not None:
+            episode_seconds = float(episode_seconds)
+            if not (math.isfinite(episode_seconds) and episode_seconds > 0.0):
+                raise ValueError(
+                    f"episode_seconds must be a positive number of seconds, got {episode_seconds}"
+                )
+        self._episode_seconds = episode_seconds
+        self._sensor = Sensor() if sensor is None else sensor
+        if not isinstance(self._sensor, Sensor):
+            raise ValueError(f"sensor must be a sim.Sensor, got {type(self._sensor).__name__}")
+        self._detector, self.detector_name = _detector(detector, model)
+        self._observe_groups = bool(observe_groups)
+        self._record_dir = None if record_dir is None else Path(record_dir)
+
+        probe = self._make(0, self._scenario_options)
+        if probe.stage.robot is None:
+            raise ValueError(
+                f"scenario {self._scenario_name!r} has no robot with options "
+                f"{self._scenario_options}: an environment needs the robot (see its options)"
+            )
+        people = len(probe.stage.people)
+        if max_people is None:
+            max_people = people
+        if isinstance(max_people, bool) or not isinstance(max_people, int) or max_people < 1:
+            raise ValueError(f"max_people must be a positive int, got {max_people!r}")
+        if max_people < people:
+            raise ValueError(
+                f"max_people must be at least the scenario's {people} people, got {max_people}"
+            )
+        self.max_people = max_people
+        self._room = probe.stage.room
+        self.action_scale = np.array(
+            [ROBOT_LIMITS.max_speed, ROBOT_LIMITS.max_turn_rate, ROBOT_LIMITS.head_rate]
+        )
+        self.action_space = spaces.Box(low=-1.0, high=1.0, shape=(3,), dtype=np.float32)
+        self.observation_space = self._observation_space()
+        self._reach = float(self._sensor.max_range + VIEW_MARGIN_M)
+        self._half_room = (
+            0.5 * self._room[0] + ROOM_MARGIN_M,
+            0.5 * self._room[1] + ROOM_MARGIN_M,
+        )
+        self._world: World | None = None
+        self._renderer: Any = None
+        self._episodes = 0
+        self._done = True
+
+    # ---------------------------------------------------------------------------------------
+    # Gymnasium API
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        super().reset(seed=seed)
+        self._done = True  # until this reset succeeds
+        options = dict(options or {})
+        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        if unknown:
+            raise ValueError(
+                f"reset: unknown options {unknown}; expected some of {list(RESET_OPTIONS)}"
+            )
+        scenario_seed = options.get("scenario_seed")
+        if scenario_seed is None:
+            scenario_seed = int(self.np_random.integers(_SEED_HIGH))
+        elif isinstance(scenario_seed, bool) or not isinstance(scenario_seed, (int, np.integer)):
+            raise ValueError(f"reset: scenario_seed must be an int, got {scenario_seed!r}")
+        start = _robot_start(options.get("robot_start", self._robot_start))
+        extra = options.get("scenario_options") or {}
+        if not isinstance(extra, Mapping):
+            raise ValueError(
+                f"reset: scenario_options must be a mapping of option names to values, got "
+                f"{type(extra).__name__}"
+            )
+        scenario = self._make(int(scenario_seed), {**self._scenario_options, **extra})
+        stage = scenario.stage
+        if stage.robot is None:
+            raise ValueError(f"reset: scenario {scenario.name!r} has no robot with these options")
+        if len(stage.people) > self.max_people:
+            raise ValueError(
+                f"reset: the scenario has {len(stage.people)} people, more than max_people = "
+                f"{self.max_people} observation slots"
+            )
+        if stage.room[0] > self._room[0] or stage.room[1] > self._room[1]:
+            raise ValueError(
+                f"reset: the room {stage.room} is larger than the {self._room} the observation "
+                "bounds were made for; give such options at construction (scenario_options)"
+            )
+        self._scenario = scenario
+        robot_id = stage.robot.id
+        first: PlannedGroup | None = None
+        if self._task is not None:
+            first = choose_target(scenario.plan, robot_id, self._task, self.np_random)
+        spec = scene_spec(stage, name=scenario.name)
+        if start == "random" and first is not None:
+            spec = self._place_robot(spec, first, robot_id)
+        world_seed = int(self.np_random.integers(_SEED_HIGH))
+        self._world = world = World(
+            spec,
+            seed=world_seed,
+            script=_Intents(scenario),
+            sequence=f"{scenario.name}-{scenario.seed}",
+        )
+        world.command_robot(RobotCommand())
+        self._eyes = Eyes(world, self._sensor)
+        self._robot_index = self._eyes.robot
+        self._people_rows = np.flatnonzero(~np.isin(np.arange(world.ids.size), [self._robot_index]))
+        self._truth_rule = scenario.ground_truth(world.ids.tolist())
+        self._target = None if first is None else Target(scenario.plan, first, world.ids, robot_id)
+        limit = scenario.duration
+        if self._episode_seconds is not None:
+            limit = min(limit, self._episode_seconds)
+        elif self._task is not None:
+            limit = min(limit, JOIN_EPISODE_S)
+        self._limit_steps = max(1, math.floor(limit / self._control_dt + 1e-9))
+        self._steps_taken = 0
+        self._held = 0
+        self._hold_steps = (
+            0
+            if self._task is None
+            else max(1, math.ceil(self._task.hold / self._control_dt - 1e-9))
+        )
+        self._assessment = None
+        self._mask_of: tuple[int, ...] | None = None
+        self._target_mask = np.zeros(len(stage.people), dtype=np.int8)
+        self._detections: list[tuple[Frame, tuple[Group, ...]]] = []
+        self._recorded: list[Frame] = []
+        self._episodes += 1
+        self._done = False
+        observation, info = self._advance(first_step=True)
+        return observation, info
+
+    def step(
+        self, action: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        if self._world is None:
+            raise ResetNeeded("Cannot call env.step() before calling env.reset()")
+        if self._done:
+            raise ResetNeeded(
+                "Cannot call env.step() after the episode ended (terminated or truncated): call "
+                "env.reset() first"
+            )
+        speed, turn, pan = self._check_action(action)
+        self._world.command_robot(RobotCommand(speed=speed, turn_rate=turn, pan_rate=pan))
+        self._world.step(self._world_steps)
+        self._steps_taken += 1
+        observation, info = self._advance(first_step=False)
+        terms = info["reward_terms"]
+        reward = float(sum(terms.values()))
+        terminated = bool(info["is_success"] or self._target_gone)
+        truncated = not terminated and self._steps_taken >= self._limit_steps
+        if terminated or truncated:
+            self._done = True
+            info["episode"] = self._finish()
+        return observation, reward, terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() was called without a render_mode; make the env with "
+                "render_mode='rgb_array'"
+            )
+            return None
+        if self._world is None:
+            raise ResetNeeded("Cannot call env.render() before calling env.reset()")
+        import mujoco
+
+        world = self._world
+        width, height = self._render_size
+        if self._renderer is None or self._renderer_model is not world.model:
+            self._close_renderer()
+            world.model.vis.global_.offwidth = max(world.model.vis.global_.offwidth, width)
+            world.model.vis.global_.offheight = max(world.model.vis.global_.offheight, height)
+            self._renderer = mujoco.Renderer(world.model, height=height, width=width)
+            self._renderer_model = world.model
+        camera = mujoco.MjvCamera()
+        camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+        camera.lookat[:] = (0.0, 0.0, 0.4)
+        camera.distance = 1.15 * max(self._room)
+        camera.elevation = -65.0
+        camera.azimuth = 90.0
+        self._renderer.update_scene(world.data, camera=camera)
+        return self._renderer.render().copy()
+
+    def close(self) -> None:
+        self._close_renderer()
+        super().close()
+
+    # ---------------------------------------------------------------------------------------
+    # Internals
+
+    def _make(self, seed: int, options: Mapping[str, Any]) -> Scenario:
+        if self._factory is None:
+            return scenarios.make(self._scenario_name, seed=seed, **dict(options))
+        scenario = self._factory(seed=seed, **dict(options))
+        if not isinstance(scenario, Scenario):
+            raise ValueError(
+                f"the scenario factory must return a scenarios.Scenario, got "
+                f"{type(scenario).__name__}"
+            )
+        return scenario
+
+    def _observation_space(self) -> spaces.Dict:
+        m = self.max_people
+        hx, hy = 0.5 * self._room[0] + ROOM_MARGIN_M, 0.5 * self._room[1] + ROOM_MARGIN_M
+        reach = float(self._sensor.max_range + VIEW_MARGIN_M)
+        head = ROBOT_LIMITS.head_limit
+        pi = np.float32(math.pi)
+        entries: dict[str, spaces.Space[Any]] = {
+            "robot_pose": spaces.Box(
+                low=np.array([-hx, -hy, -pi], dtype=np.float32),
+                high=np.array([hx, hy, pi], dtype=np.float32),
+                dtype=np.float32,
+            ),
+            "head_pan": spaces.Box(low=-head, high=head, shape=(1,), dtype=np.float32),
+            "people_position": spaces.Box(low=-reach, high=reach, shape=(m, 2), dtype=np.float32),
+            "people_yaw": spaces.Box(low=-pi, high=pi, shape=(m,), dtype=np.float32),
+            "people_head_yaw": spaces.Box(low=-pi, high=pi, shape=(m,), dtype=np.float32),
+            "people_seen": spaces.MultiBinary(m),
+            "people_head_seen": spaces.MultiBinary(m),
+        }
+        if self._observe_groups:
+            entries["people_group"] = spaces.MultiDiscrete(np.full(m, m + 1, dtype=np.int64))
+        if self._task is not None:
+            entries["people_target"] = spaces.MultiBinary(m)
+        return spaces.Dict(entries)
+
+    def _check_action(self, action: Any) -> tuple[float, float, float]:
+        try:
+            values = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidAction(
+                f"action must be an array of shape (3,) (speed, turn rate, head-pan rate, each "
+                f"within [-1, 1]), got {action!r}"
+            ) from None
+        if values.shape != (3,):
+            raise InvalidAction(
+                f"action must have shape (3,) (speed, turn rate, head-pan rate, each within "
+                f"[-1, 1]), got shape {values.shape}"
+            )
+        bad = ~np.isfinite(values) | (np.abs(values) > 1.0)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise InvalidAction(
+                f"action[{k}] ({_ACTION_NAMES[k]}) must be within [-1, 1], got {values[k]!r} "
+                f"(action {values.tolist()} is outside {self.action_space})"
+            )
+        speed, turn, pan = values * self.action_scale
+        return float(speed), float(turn), float(pan)
+
+    def _place_robot(self, spec: Any, group: PlannedGroup, robot_id: int) -> Any:
+        """The spec with the robot at a random free spot outside the target's circle."""
+        from dataclasses import replace
+
+        from sim.envs.target import circle_of
+
+        circle = circle_of(group, robot_id)
+        x0, x1, y0, y1 = spec.inner_bounds(ROBOT_RADIUS_M + START_WALL_GAP_M)
+        others = np.array([p.position for p in spec.people if p.present]).reshape(-1, 2)
+        places = group.places
+        rng = self.np_random
+        for _ in range(START_TRIES):
+            angle = rng.uniform(-math.pi, math.pi)
+            distance = circle.radius + rng.uniform(*START_DISTANCE_M)
+            turn = rng.uniform(-START_TURN_RAD, START_TURN_RAD)
+            spot = circle.centre + distance * np.array([math.cos(angle), math.sin(angle)])
+            if not (x0 <= spot[0] <= x1 and y0 <= spot[1] <= y1):
+                continue
+            if len(others) and np.min(np.hypot(*(others - spot).T)) < START_CLEARANCE_M:
+                continue
+            if np.min(np.hypot(*(places - spot).T)) < START_CLEARANCE_M:
+                continue
+            yaw = math.atan2(*(circle.centre - spot)[::-1]) + turn
+            yaw = math.atan2(math.sin(yaw), math.cos(yaw))
+            robot = replace(spec.robot, position=(float(spot[0]), float(spot[1])), yaw=yaw)
+            return replace(spec, robot=robot)
+        return spec
+
+    def _advance(self, *, first_step: bool) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Observation and info of the state the world is in now."""
+        eyes = self._eyes
+        truth = eyes.truth()
+        groups = self._truth_rule.update(
+            np.array([truth.time]), truth.present[None], truth.position[None], truth.yaw[None]
+        )[0]
+        view = eyes.look(truth, self.np_random)
+        if self._steps_taken % self._detect_every == 0:
+            self._detect(truth, view, groups)
+        if self._record_dir is not None:
+            self._recorded.append(eyes.truth_frame(truth, groups, sequence=self._sequence))
+        info = self._task_info(truth, first_step=first_step)
+        observation = self._observation(truth, view)
+        info.update(
+            time=truth.time,
+            groups=groups,
+            detected_groups=self._detected,
+            detected_at=self._detected_at,
+            metrics=dict(self._metrics),
+        )
+        return observation, info
+
+    @property
+    def _sequence(self) -> str:
+        return f"{self._scenario.name}-{self._scenario.seed}"
+
+    def _detect(self, truth: Truth, view: View, groups: tuple[Group, ...]) -> None:
+        frame = self._eyes.observed_frame(truth, view, groups, sequence=self._sequence)
+        partition = tuple(self._detector.predict([frame])[0])
+        self._detections.append((frame, partition))
+        self._detected = partition
+        self._detected_at = truth.time
+        number = np.zeros(self.max_people, dtype=np.int64)
+        slot = {int(i): k for k, i in enumerate(self._eyes.ids[self._people_rows])}
+        label = 0
+        for group in partition:
+            if len(group) < 2:
+                continue
+            label += 1
+            for member in group:
+                k = slot.get(int(member))
+                if k is not None:
+                    number[k] = label
+        self._group_number = number
+        self._metrics = _frame_scores(frame, partition)
+
+    def _observation(self, truth: Truth, view: View) -> dict[str, np.ndarray]:
+        m = self.max_people
+        r = self._robot_index
+        rows = self._people_rows
+        k = rows.size
+        x, y, yaw = float(truth.position[r, 0]), float(truth.position[r, 1]), float(truth.yaw[r])
+        c, s = math.cos(yaw), math.sin(yaw)
+        seen = view.seen[rows]
+        head_seen = view.head_seen[rows]
+        position = np.zeros((m, 2), dtype=np.float32)
+        body = np.zeros(m, dtype=np.float32)
+        head = np.zeros(m, dtype=np.float32)
+        if seen.any():
+            slots = np.flatnonzero(seen)
+            delta = view.position[rows[slots]] - (x, y)
+            local = delta @ np.array([[c, -s], [s, c]])
+            position[slots] = np.clip(local, -self._reach, self._reach)
+            body[slots] = (view.yaw[rows[slots]] - yaw + math.pi) % _TWO_PI - math.pi
+            heads = np.flatnonzero(head_seen)
+            head[heads] = (view.head_yaw[rows[heads]] - yaw + math.pi) % _TWO_PI - math.pi
+        seen_out = np.zeros(m, dtype=np.int8)
+        seen_out[:k] = seen
+        head_out = np.zeros(m, dtype=np.int8)
+        head_out[:k] = head_seen
+        hx, hy = self._half_room
+        obs = {
+            "robot_pose": np.array(
+                [min(max(x, -hx), hx), min(max(y, -hy), hy), (yaw + math.pi) % _TWO_PI - math.pi],
+                dtype=np.float32,
+            ),
+            "head_pan": np.array([self._eyes.head_pan], dtype=np.float32),
+            "people_position": position,
+            "people_yaw": body,
+            "people_head_yaw": head,
+            "people_seen": seen_out,
+            "people_head_seen": head_out,
+        }
+        if self._observe_groups:
+            obs["people_group"] = self._group_number * seen_out
+        if self._task is not None:
+            target = np.zeros(m, dtype=np.int8)
+            if self._target is not None and not self._target.gone:
+                target[:k] = self._target_mask
+            obs["people_target"] = target
+        return obs
+
+    def _task_info(self, truth: Truth, *, first_step: bool) -> dict[str, Any]:
+        task = self._task
+        self._target_gone = False
+        if task is None:
+            return {
+                "reward_terms": {},
+                "is_success": False,
+                "target": (),
+                "target_formed": False,
+                "intruded": (),
+                "distance_to_circle": None,
+            }
+        target = self._target
+        circle: OSpace | None = None
+        if target is not None:
+            formed = target.update(truth.time, truth.present, truth.position, truth.yaw)
+            if formed:
+                circle = target.circle
+            self._target_gone = target.gone
+            if target.members is not self._mask_of:
+                members = set(target.members)
+                ids = self._eyes.ids[self._people_rows]
+                self._target_mask = np.array([int(i) in members for i in ids], dtype=np.int8)
+                self._mask_of = target.members
+        r = self._robot_index
+        rows = self._people_rows[truth.present[self._people_rows]]
+        current = assess(
+            task,
+            robot_position=truth.position[r],
+            robot_yaw=float(truth.yaw[r]),
+            people_ids=self._eyes.ids[rows],
+            people_position=truth.position[rows],
+            o_space=circle,
+        )
+        previous = None if first_step else self._assessment
+        self._assessment = current
+        self._held = self._held + 1 if current.placed else 0
+        joined = not first_step and self._held >= self._hold_steps
+        terms = reward_terms(task, previous, current, joined=joined)
+        if first_step:
+            terms = dict.fromkeys(terms, 0.0)
+        return {
+            "reward_terms": terms,
+            "is_success": bool(joined),
+            "target": () if target is None or target.gone else target.members,
+            "target_formed": circle is not None,
+            "intruded": current.intruded,
+            "distance_to_circle": current.distance_to_circle if current.formed else None,
+        }
+
+    def _finish(self) -> dict[str, Any]:
+        """The episode's summary (and its recording, if asked)."""
+        frames = [f for f, _ in self._detections]
+        partitions = [p for _, p in self._detections]
+        scores = evaluate(frames, partitions)
+        at = scores.at(T_TWO_THIRDS)
+        summary: dict[str, Any] = {
+            "scenario": self._scenario.name,
+            "scenario_seed": int(self._scenario.seed),
+            "steps": self._steps_taken,
+            "time": self._steps_taken * self._control_dt,
+            "detector": self.detector_name,
+            "detections": len(frames),
+            "precision": float(at.precision),
+            "recall": float(at.recall),
+            "f1": float(at.f1),
+            "pairwise_accuracy": _finite_or_none(scores.pairwise_accuracy),
+            "recording": None,
+        }
+        if self._record_dir is not None:
+            summary["recording"] = str(self._record(frames, partitions))
+        return summary
+
+    def _record(self, observed: list[Frame], partitions: list[tuple[Group, ...]]) -> Path:
+        from reform.atomic import atomic_path
+        from sim.recording import record_episode
+
+        scenario = self._scenario
+        path = self._record_dir / f"{scenario.name}-{scenario.seed}-{self._episodes}.rrd"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp:
+            record_episode(
+                tmp,
+                self._recorded,
+                observed=observed,
+                detections={self.detector_name: partitions},
+                events=scenario.events,
+                seed=int(scenario.seed),
+                name=self._sequence,
+            )
+        return path
+
+    def _close_renderer(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+@functools.lru_cache(maxsize=256)
+def _scores(
+    ids: tuple[int, ...], truth: tuple[Group, ...], partition: tuple[Group, ...]
+) -> dict[str, float | None]:
+    frame = Frame(
+        ids=np.array(ids, dtype=np.int64),
+        position=np.zeros((len(ids), 2)),
+        yaw=np.zeros(len(ids)),
+        groups=truth,
+    )
+    scores = evaluate([frame], [partition])
+    at = scores.at(T_TWO_THIRDS)
+    pairwise = float(scores.pairwise_accuracy)
+    return {
+        "precision": float(at.precision),
+        "recall": float(at.recall),
+        "f1": float(at.f1),
+        "pairwise_accuracy": pairwise if math.isfinite(pairwise) else None,
+    }
+
+
+def _frame_scores(frame: Frame, partition: tuple[Group, ...]) -> dict[str, float | None]:
+    """The evaluation protocol's scores of one detection (T = 2/3; None where undefined).
+
+    They depend only on the ids, the true groups and the partition, so repeated detections of
+    an unchanged scene are looked up, not scored again.
+    """
+    truth = tuple(tuple(int(m) for m in g) for g in frame.groups or ())
+    partition = tuple(tuple(int(m) for m in g) for g in partition)
+    return dict(_scores(tuple(frame.ids.tolist()), truth, partition))
+
+
+def _finite_or_none(value: float) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _robot_start(value: Any) -> str:
+    if value not in ROBOT_STARTS:
+        raise ValueError(f"robot_start must be one of {ROBOT_STARTS}, got {value!r}")
+    return str(value)
+
+
+def _detector(detector: Any, model: str | os.PathLike[str] | None) -> tuple[Any, str]:
+    if detector is not None and model is not None:
+        raise ValueError("give a detector or a model file, not both")
+    if model is not None:
+        from reform.persistence import load_model
+
+        return load_model(model), "reform"
+    if detector is None:
+        from reform.gcff import Gcff
+
+        return Gcff(), "gcff"
+    if not callable(getattr(detector, "predict", None)):
+        raise ValueError(
+            f"detector must have predict(frames) (a fitted reform.Reform, reform.Gcff, ...), "
+            f"got {type(detector).__name__}"
+        )
+    return detector, type(detector).__name__.lower()
