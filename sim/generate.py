@@ -41,6 +41,7 @@ import json
 import math
 import os
 import shlex
+import shutil
 import sys
 import tempfile
 import time
@@ -413,9 +414,12 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
     """One Rerun recording of the episode: the scene, everyone, the groups, the robot's view."""
     from sim.recording import record_episode
 
-    with atomic_path(path) as tmp:
+    # Rerun writes to a path ending in .rrd: a hidden scratch folder beside it, then a rename.
+    path.parent.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
+    try:
         record_episode(
-            tmp,
+            scratch / path.name,
             result.truth,
             observed=result.dataset.frames if spec.view == "robot" else None,
             events=result.events,
@@ -423,6 +427,9 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
             seed=episode_seed(spec.seed, episode),
             name=_sequence_name(spec.scenario, episode),
         )
+        os.replace(scratch / path.name, path)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def _run_batch(
@@ -554,7 +561,10 @@ def _remove_stale_temporaries(out_dir: Path) -> None:
     """Temporary files of a killed run (``.part.parquet.*.tmp`` and the like)."""
     for pattern in ("scenario=*/episode=*/.*.tmp", f"{RECORDINGS_DIR}/.*.tmp", ".*.tmp"):
         for path in out_dir.glob(pattern):
-            path.unlink(missing_ok=True)
+            if path.is_dir():
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink(missing_ok=True)
 
 
 def _finished(out_dir: Path, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:

@@ -1,0 +1,378 @@
+"""Datasets at scale: shards, card, determinism across workers and backends, resume, bad input."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reform.datasets import load_dataset, read_parquet
+from sim.cli import main
+from sim.generate import (
+    CARD_JSON,
+    CARD_MARKDOWN,
+    episode_seed,
+    generate_dataset,
+    read_card,
+    shard_path,
+)
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = "hri-conversation"  # two people and the robot: a cheap scene with groups and a robot
+EPISODES = 4
+SEED = 11
+DURATION_S = 300.0  # seconds per episode (600 frames at 2 Hz)
+SENSOR = {"position_noise": 0.02, "yaw_noise": 0.05, "dropout": 0.1}
+# The same dataset as command-line arguments.
+ARGS = [
+    "--scenario",
+    SCENARIO,
+    "--episodes",
+    str(EPISODES),
+    "--seed",
+    str(SEED),
+    "--duration",
+    "300",
+    "--view",
+    "robot",
+    "--position-noise",
+    "0.02",
+    "--yaw-noise",
+    "0.05",
+    "--dropout",
+    "0.1",
+]
+RUN_TIMEOUT_S = 300.0  # seconds, generous: the machine is shared
+CLI = [sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())"]
+
+
+def generate(out_dir: Path, **overrides):
+    kwargs = dict(
+        episodes=EPISODES,
+        seed=SEED,
+        out_dir=out_dir,
+        duration=DURATION_S,
+        view="robot",
+        sensor=SENSOR,
+        n_jobs=1,
+        progress=False,
+    )
+    kwargs.update(overrides)
+    return generate_dataset(SCENARIO, **kwargs)
+
+
+def contents(folder: Path) -> dict[str, bytes]:
+    """Every visible file of a generated folder (shards and cards), by relative path."""
+    return {
+        p.relative_to(folder).as_posix(): p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(folder).parts)
+    }
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    """The dataset made serially, in one uninterrupted run."""
+    out = tmp_path_factory.mktemp("reference") / "data"
+    report = generate(out)
+    assert report.generated == tuple(range(EPISODES)) and report.skipped == ()
+    return out
+
+
+def test_episode_seeds_are_the_spawned_children_of_the_master_seed():
+    children = np.random.SeedSequence(SEED).spawn(5)
+    for k, child in enumerate(children):
+        expected = int(child.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+        assert episode_seed(SEED, k) == expected
+    assert len({episode_seed(SEED, k) for k in range(1000)}) == 1000
+    assert episode_seed(SEED, 3) != episode_seed(SEED + 1, 3)
+
+
+def test_shards_load_one_by_one_and_as_one_dataset(reference):
+    whole = read_parquet(reference)
+    assert load_dataset(reference).sequences() == whole.sequences()
+    assert whole.sequences() == tuple(f"{SCENARIO}-{k}" for k in range(EPISODES))
+    assert whole.name == SCENARIO
+    offset = 0
+    for k in range(EPISODES):
+        path = shard_path(reference, SCENARIO, k)
+        assert path.relative_to(reference).as_posix() == (
+            f"scenario={SCENARIO}/episode={k}/part.parquet"
+        )
+        shard = read_parquet(path)
+        assert len(shard) == DURATION_S * 2  # 2 Hz
+        assert {f.sequence for f in shard} == {f"{SCENARIO}-{k}"}
+        assert all(a == b for a, b in zip(shard, whole.frames[offset:], strict=False))
+        assert shard.metadata["episode"]["seed"] == episode_seed(SEED, k)
+        offset += len(shard)
+    assert offset == len(whole)
+    # The robot's view: the robot is in every frame, people come and go from its sight.
+    assert all("robot" in f.kinds for f in whole)
+    assert min(f.n_people for f in whole) < max(f.n_people for f in whole)
+
+
+def test_card_records_every_parameter_and_the_counts(reference):
+    card = read_card(reference)
+    p = card["parameters"]
+    assert p["scenario"] == SCENARIO and p["seed"] == SEED and p["view"] == "robot"
+    assert p["rate_hz"] == 2.0 and p["duration_s"] == DURATION_S and p["options"] == {}
+    assert p["sensor"]["dropout"] == 0.1 and p["sensor"]["fov_deg"] == 57.0
+    assert p["package_version"].startswith("reform-sim ")
+    assert card["complete"] is True and card["episodes"] == EPISODES
+    assert card["scenario_options_resolved"]["radius"] == 0.6  # the scenario's default
+    dataset = read_parquet(reference)
+    sizes: Counter[int] = Counter()
+    for frame in dataset.annotated():
+        sizes.update(len(g) for g in frame.partition())
+    totals = card["totals"]
+    assert totals["frames"] == len(dataset)
+    assert totals["annotated_frames"] == len(dataset.annotated())
+    assert totals["rows"] == sum(f.n_people for f in dataset)
+    assert totals["group_sizes"] == {str(k): v for k, v in sorted(sizes.items())}
+    assert sizes[2] > 0  # the robot and the one person it sees of its conversation
+    assert [s["seed"] for s in card["shards"]] == [episode_seed(SEED, k) for k in range(EPISODES)]
+    markdown = (reference / CARD_MARKDOWN).read_text()
+    counts = f"| 2 | {sizes[2]:,} |"
+    for text in (SCENARIO, "master seed | 11", "2 Hz", "300 s", "dropout=0.1", counts):
+        assert text in markdown
+    assert "reform-sim generate --scenario hri-conversation --episodes 4 --seed 11" in markdown
+
+
+def test_same_seed_same_bytes_with_two_workers_and_another_seed_differs(reference, tmp_path):
+    report = generate(tmp_path / "two", n_jobs=2)
+    assert report.n_jobs == 2
+    assert contents(tmp_path / "two") == contents(reference)
+    other = generate(tmp_path / "other", seed=SEED + 1, episodes=1)
+    first = read_parquet(shard_path(tmp_path / "other", SCENARIO, 0))
+    assert first.frames != read_parquet(shard_path(reference, SCENARIO, 0)).frames
+    assert other.episodes == 1
+
+
+def test_extending_keeps_finished_shards_and_matches_one_run(reference, tmp_path):
+    out = tmp_path / "data"
+    generate(out, episodes=2)
+    first = shard_path(out, SCENARIO, 0).stat()
+    report = generate(out)
+    assert report.skipped == (0, 1) and report.generated == (2, 3)
+    again = shard_path(out, SCENARIO, 0).stat()
+    assert (again.st_ino, again.st_mtime_ns) == (first.st_ino, first.st_mtime_ns)
+    assert contents(out) == contents(reference)
+    assert generate(out).generated == ()  # idempotent
+
+
+def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference, tmp_path):
+    out = tmp_path / "data"
+    command = [*CLI, "generate", *ARGS, "--out", str(out)]
+    process = subprocess.Popen(
+        [*command, "--jobs", "1", "--no-progress"],
+        cwd=REPO_ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    first = shard_path(out, SCENARIO, 0)
+    deadline = time.monotonic() + RUN_TIMEOUT_S
+    try:
+        while not first.exists() and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.005)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+        process.wait(timeout=RUN_TIMEOUT_S)
+    assert process.returncode == -signal.SIGKILL, process.stderr.read().decode()[-2000:]
+    written = sorted(out.glob("scenario=*/episode=*/part.parquet"))
+    assert 1 <= len(written) < EPISODES, "the run was not killed mid-way"
+    for path in written:  # every shard on disk is whole
+        assert len(read_parquet(path)) == DURATION_S * 2
+    assert read_card(out)["complete"] is False
+
+    resumed = subprocess.run(
+        [*command, "--jobs", "2", "--no-progress"],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        timeout=RUN_TIMEOUT_S,
+        text=True,
+    )
+    assert resumed.returncode == 0, resumed.stderr[-2000:]
+    assert f"{len(written)} already there" in resumed.stdout
+    assert not list(out.rglob("*.tmp"))
+    assert contents(out) == contents(reference)
+
+
+def test_ray_backend_gives_the_local_data(reference, tmp_path):
+    ray = pytest.importorskip("ray")
+    ray.init(
+        num_cpus=2,
+        object_store_memory=100 * 2**20,
+        include_dashboard=False,
+        log_to_driver=False,
+    )
+    try:
+        report = generate(tmp_path / "ray", backend="ray")
+        assert report.backend == "ray" and report.n_jobs == 2
+        assert contents(tmp_path / "ray") == contents(reference)
+        # The command line joins the running cluster by its address.
+        address = ray.get_runtime_context().gcs_address
+        run = subprocess.run(
+            [*CLI, "generate", *ARGS, "--out", str(tmp_path / "cli")]
+            + ["--backend", "ray", "--address", address, "--no-progress"],
+            cwd=REPO_ROOT,
+            capture_output=True,
+            timeout=RUN_TIMEOUT_S,
+            text=True,
+        )
+        assert run.returncode == 0, run.stderr[-3000:]
+        assert "CPUs (Ray)" in run.stdout
+        assert contents(tmp_path / "cli") == contents(reference)
+    finally:
+        ray.shutdown()
+
+
+def test_command_line_writes_the_dataset_and_train_reads_it(tmp_path, capsys):
+    out = tmp_path / "data"
+    code = main(
+        ["generate", "--scenario", "hri-robot-excluded", "--episodes", "2", "--seed", "3"]
+        + ["--out", str(out), "--duration", "30", "--set", "radius=0.5", "--no-progress"]
+    )
+    assert code == 0
+    assert "2 generated, 0 already there" in capsys.readouterr().out
+    card = read_card(out)
+    assert card["parameters"]["options"] == {"radius": 0.5}
+    assert card["scenario_options_resolved"]["radius"] == 0.5
+    assert "--set radius=0.5" in card["command"]
+    dataset = load_dataset(out)
+    assert len(dataset) == 2 * 60
+    assert all("robot" in f.kinds and len(f.kinds) == 3 for f in dataset)  # the truth view
+
+
+def test_recordings_hold_each_episode(tmp_path):
+    rrd = pytest.importorskip("rerun.chunk")
+    out = tmp_path / "data"
+    generate(out, episodes=1, duration=5.0, save_recordings=True)
+    path = out / "recordings" / "episode=0.rrd"
+    (store,) = rrd.RrdReader(path).recordings()
+    assert store.application_id == "reform-sim"
+    entities = {chunk.entity_path for chunk in rrd.RrdReader(path).stream()}
+    assert any(e.startswith("/world/people") for e in entities), sorted(entities)[:20]
+    assert any(e.startswith("/world/observed") for e in entities), sorted(entities)[:20]
+    # Asking for recordings later re-makes the episodes that lack one, with the same shard.
+    plain = tmp_path / "plain"
+    generate(plain, episodes=1, duration=5.0)
+    shard = shard_path(plain, SCENARIO, 0).read_bytes()
+    report = generate(plain, episodes=1, duration=5.0, save_recordings=True)
+    assert report.generated == (0,)
+    assert (plain / "recordings" / "episode=0.rrd").is_file()
+    assert shard_path(plain, SCENARIO, 0).read_bytes() == shard
+
+
+@pytest.mark.parametrize(
+    ("scenario", "overrides", "match"),
+    [
+        ("mingle-party", {}, r"scenario must be one of .*hri-conversation.*got 'mingle-party'"),
+        ("word-improv", {"options": {"players": 1}}, r"players"),
+        ("hri-passing", {"options": {"people": 300}}, r"option people must be within"),
+        ("hri-passing", {"options": {"crowd": 3}}, r"unknown option 'crowd'"),
+        (SCENARIO, {"duration": -5.0}, r"duration must be a positive number \(seconds\)"),
+        (SCENARIO, {"duration": 0.2}, r"holds no frame at 2 Hz"),
+        (SCENARIO, {"rate": 0.0}, r"rate must be a positive number \(Hz\)"),
+        (SCENARIO, {"episodes": 0}, r"episodes must be an int >= 1, got 0"),
+        (SCENARIO, {"episodes": -2}, r"episodes must be an int >= 1, got -2"),
+        (SCENARIO, {"seed": -1}, r"seed must be an int >= 0"),
+        (SCENARIO, {"view": "truth", "sensor": {"dropout": 0.2}}, r"view='robot' only"),
+        (SCENARIO, {"sensor": {"dropout": 2.0}}, r"dropout must be a probability"),
+        (SCENARIO, {"sensor": {"zoom": 2.0}}, r"sensor options must be among"),
+        ("word-improv", {"options": {"robot": "none"}}, r"view='robot' needs a robot"),
+        (SCENARIO, {"backend": "dask"}, r"backend must be one of \('local', 'ray'\)"),
+        (SCENARIO, {"address": "auto"}, r"address is for backend='ray'"),
+        (SCENARIO, {"n_jobs": 0}, r"n_jobs must be an int >= 1"),
+    ],
+    ids=lambda value: str(value)[:40],
+)
+def test_bad_input_fails_before_any_work(tmp_path, scenario, overrides, match):
+    kwargs = dict(
+        episodes=2, seed=1, out_dir=tmp_path / "data", view="robot", n_jobs=1, progress=False
+    )
+    kwargs.update(overrides)
+    with pytest.raises(ValueError, match=match):
+        generate_dataset(scenario, **kwargs)
+    assert not (tmp_path / "data").exists()
+
+
+def test_a_folder_holding_another_dataset_is_refused_before_any_work(reference, tmp_path):
+    before = contents(reference)
+    with pytest.raises(ValueError, match=r"holds another dataset .*differs in seed.*seed: folder"):
+        generate(reference, seed=SEED + 1)
+    with pytest.raises(ValueError, match=r"differs in duration_s, options"):
+        generate(reference, duration=60.0, options={"radius": 0.7})
+    with pytest.raises(ValueError, match=r"holds a dataset of 4 episodes, asked for 2"):
+        generate(reference, episodes=2)
+    assert contents(reference) == before
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match=r"holds files but no dataset card .*notes.txt"):
+        generate(foreign)
+    assert sorted(p.name for p in foreign.iterdir()) == ["notes.txt"]
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match=r"out_dir must be a folder"):
+        generate(tmp_path / "file")
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / CARD_JSON).write_text("[1, 2]")
+    with pytest.raises(ValueError, match=r"expected a reform-sim dataset card"):
+        generate(broken)
+
+
+def test_a_folder_being_written_by_another_run_is_refused(tmp_path):
+    fcntl = pytest.importorskip("fcntl")
+    out = tmp_path / "data"
+    out.mkdir()
+    with open(out / ".generate.lock", "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        with pytest.raises(ValueError, match=r"being written by another reform-sim generate run"):
+            generate(out, episodes=1, duration=5.0)
+    assert not list(out.glob("scenario=*"))
+
+
+def test_command_line_errors_are_one_line(tmp_path, capsys):
+    code = main(
+        ["generate", *ARGS, "--out", str(tmp_path / "x"), "--backend", "local"]
+        + [
+            "--address",
+            "auto",
+        ]
+    )
+    assert code == 2
+    assert "--address needs --backend ray" in capsys.readouterr().err
+    code = main(
+        ["generate", "--scenario", "hri-passing", "--episodes", "1", "--seed", "1"]
+        + ["--out", str(tmp_path / "y"), "--dropout", "0.3"]
+    )
+    assert code == 2
+    assert "sensor options need --view robot, got --dropout" in capsys.readouterr().err
+    code = main(
+        ["generate", "--scenario", "hri-passing", "--episodes", "1", "--seed", "1"]
+        + ["--out", str(tmp_path / "y"), "--set", "people"]
+    )
+    assert code == 2
+    assert "--set must be KEY=VALUE" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
+
+
+def test_shard_metadata_says_where_it_came_from(reference):
+    shard = read_parquet(shard_path(reference, SCENARIO, 2))
+    meta = shard.metadata
+    assert meta["generator"] == "reform-sim generate"
+    assert meta["parameters"] == read_card(reference)["parameters"]
+    assert meta["episode"]["episode"] == 2
+    assert meta["episode_metadata"]["seed"] == episode_seed(SEED, 2)
+    assert json.loads(json.dumps(dict(meta))) == dict(meta)
