@@ -15,7 +15,8 @@ same run on the same compiled model:
 Then a one-hour run of 50 people streams 360,000 rows of poses through ``World.rollout`` and
 reports the peak memory it traced (numpy allocations) next to the size of the whole run.
 
-Prints medians over ``--repeats`` runs and the ratio harness / bare (lower is better).
+Prints medians over ``--repeats`` runs; the ratio harness / bare (lower is better) is the median
+of the ratios of runs made one after the other, so that a change of load hits both alike.
 Target (issue 5): 18 people at >= 1,000x real time, harness <= 3x the bare loop.
 
 Run: ``python benchmarks/bench_sim.py [--quick] [--repeats 5] [--threads 2] [--no-hour]``.
@@ -194,20 +195,29 @@ def main() -> None:
     results = {}
     for n in SIZES:
         model = world_for(n).model
-        bare = statistics.median(time_bare(model, steps) for _ in range(repeats))
-        roll = statistics.median(time_rollout(n, seconds) for _ in range(repeats))
-        frames = statistics.median(time_frames(n, seconds) for _ in range(max(1, repeats // 2)))
+        bare, roll, frames, threaded = [], [], [], []
+        for r in range(repeats):  # interleaved, so that load changes hit both sides alike
+            bare.append(time_bare(model, steps))
+            roll.append(time_rollout(n, seconds))
+            if r < max(1, repeats // 2):
+                frames.append(time_frames(n, seconds))
+            if args.threads > 1:
+                threaded.append(time_rollout(n, seconds, args.threads))
+
+        def ratio(times: list[float], bare: list[float] = bare) -> float:
+            return statistics.median(t / b for t, b in zip(times, bare, strict=False))
+
+        def speed(times: list[float]) -> float:
+            return seconds / statistics.median(times)
+
         line = (
-            f"{n:>6} {seconds / bare:>9,.0f}x {seconds / roll:>9,.0f}x {roll / bare:>6.2f} "
-            f"{seconds / frames:>8,.0f}x {frames / bare:>6.2f}"
+            f"{n:>6} {speed(bare):>9,.0f}x {speed(roll):>9,.0f}x {ratio(roll):>6.2f} "
+            f"{speed(frames):>8,.0f}x {ratio(frames):>6.2f}"
         )
         if args.threads > 1:
-            threaded = statistics.median(
-                time_rollout(n, seconds, args.threads) for _ in range(repeats)
-            )
-            line += f" {seconds / threaded:>11,.0f}x {threaded / bare:>6.2f}"
+            line += f" {speed(threaded):>11,.0f}x {ratio(threaded):>6.2f}"
         print(line)
-        results[n] = (seconds / roll, roll / bare)
+        results[n] = (speed(roll), ratio(roll))
     speed, ratio = results[18]
     print(
         f"\n18 people: {speed:,.0f}x real time (target >= {TARGET_SPEED_18:,.0f}x), harness "
