@@ -14,7 +14,8 @@ Primitives, per control step ``dt`` (seconds):
   the body turns to the walking direction (turn rate bounded by ``max_turn_rate``) and the speed
   drops while the heading is wrong; closer than that people side-step at low speed without
   turning.
-* **Avoid** other agents while walking: a short-range repulsion with a bias to pass on the right.
+* **Avoid** other agents while walking: a short-range repulsion with a bias to pass on the right
+  (not in the last side step into place, so that people can close up a tight circle).
 * **Keep personal space**, strictly: nobody moves toward an agent they touch (the velocity
   component toward them is dropped); after each step, overlapping discs (body radius plus
   ``margin``) are pushed apart (walkers yield more than people standing), clamped inside the
@@ -484,6 +485,9 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
                     moving = True
             if moving:
                 weight[i] = 1.0
+            if moving and dist_goal > SIDESTEP_M:
+                # Walkers avoid others; the last side step into place does not (personal space
+                # and contact still hold), or people could not close up a tight circle.
                 lo, hi = _window(order, xs, rank[i], AVOID_RANGE_M)
                 for b in range(lo, hi):
                     j = order[b]
