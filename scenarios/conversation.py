@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -67,7 +67,7 @@ def converse(
     mean_utterance: float = MEAN_UTTERANCE_S,
     speakers: Sequence[int] | None = None,
     head_noise: float = 0.0,
-    speed: float | None = None,
+    speed: float | Mapping[int, float] | None = None,
 ) -> list[tuple[float, int]]:
     """Members stand at their places and talk from ``start`` to ``end``, turn by turn.
 
@@ -75,7 +75,8 @@ def converse(
     [`MIN_UTTERANCE_S`, `MAX_UTTERANCE_FACTOR` x mean]); the next speaker is drawn among the
     others (``speakers`` restricts who may speak). Listeners look at the speaker; the speaker
     looks at one listener. ``head_noise`` (radians, standard deviation) turns each gaze off its
-    target.
+    target. ``speed`` (m/s, one for all or by member) is how fast members still on their way
+    walk to their places.
 
     Returns:
         ``(time, speaker)`` of every utterance.
@@ -94,7 +95,8 @@ def converse(
         for m in members:
             target = addressee if m == speaker else speaker
             gaze = _gaze(m, target, spots, rng, head_noise)
-            builder.set(t, m, standing(spots[m], facing[m], speed=speed, **gaze))
+            pace = speed.get(m) if isinstance(speed, Mapping) else speed
+            builder.set(t, m, standing(spots[m], facing[m], speed=pace, **gaze))
         length = rng.exponential(mean_utterance)
         t += min(max(length, MIN_UTTERANCE_S), MAX_UTTERANCE_FACTOR * mean_utterance)
         others = [s for s in allowed if s != speaker] or allowed

@@ -16,7 +16,14 @@ import numpy as np
 
 from scenarios.stage import SPACING_M
 
-__all__ = ["RadiusLaw", "circle_places", "facing_centre", "min_radius", "spread_angles"]
+__all__ = [
+    "RadiusLaw",
+    "circle_places",
+    "facing_centre",
+    "min_radius",
+    "separate",
+    "spread_angles",
+]
 
 
 def min_radius(n: int, *, spacing: float = SPACING_M) -> float:
@@ -92,7 +99,30 @@ def circle_places(
     places = np.asarray(centre, dtype=np.float64) + radius * np.stack(
         [np.cos(angles), np.sin(angles)], axis=1
     )
-    places = places + rng.normal(0.0, 1.0, size=(k, 2)) * position_noise
+    places = separate(places + rng.normal(0.0, 1.0, size=(k, 2)) * position_noise)
     facings = facing_centre(places, centre) + rng.normal(0.0, 1.0, size=k) * orientation_noise
     facings = np.angle(np.exp(1j * facings))
     return places, facings
+
+
+def separate(places: np.ndarray, *, spacing: float = SPACING_M, iterations: int = 20) -> np.ndarray:
+    """``places`` (k, 2) moved apart, symmetrically, until no two are closer than ``spacing``
+    metres (or ``iterations`` passes are done); places far enough apart do not move."""
+    out = np.array(places, dtype=np.float64)
+    k = out.shape[0]
+    for _ in range(iterations):
+        moved = False
+        for i in range(k):
+            for j in range(i + 1, k):
+                d = out[j] - out[i]
+                dist = float(np.hypot(*d))
+                if dist >= spacing:
+                    continue
+                unit = d / dist if dist > 1e-9 else np.array([1.0, 0.0])
+                push = 0.5 * (spacing - dist) + 1e-6
+                out[i] -= unit * push
+                out[j] += unit * push
+                moved = True
+        if not moved:
+            break
+    return out

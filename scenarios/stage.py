@@ -30,7 +30,7 @@ PERSON_HEIGHT_M = (1.55, 1.92)  # metres, range of heights scenarios cast
 PERSON_WIDTH_M = (0.40, 0.46)  # metres, range of shoulder widths scenarios cast
 PLANNING_RADIUS_M = 0.30  # metres, >= 0.64 x the widest shoulders cast (a body disc)
 ROBOT_RADIUS_M = 0.28  # metres, the robot's base disc (planning only)
-SPACING_M = 2 * PLANNING_RADIUS_M + 0.05  # metres, closest two people's places may be
+SPACING_M = 2 * PLANNING_RADIUS_M + 0.03  # metres, closest two people's places may be
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,818 @@
+"""``mingle``: a SALSA-like party of people forming and leaving conversational groups.
+
+18 people by default (2-100) in a square room (SALSA-like density, 0.4 people per m^2, unless a
+side is given). Groups of 2 to ``max_group_size`` form, grow when someone joins, shrink when
+someone leaves, merge and split; people stand alone for a while, then join a group or pair up
+with someone; optional passers-by cross the room, and the robot may watch from a wall.
+Members stand on an o-space circle whose radius grows with the group's size, with noise on
+places, facings and gaze; listeners look at whoever speaks.
+
+The radius law ``0.444 + 0.067 * (n - 2)`` metres is a least-squares fit to this project's
+SALSA mean Tightness by group size 2-8 (0.417, 0.530, 0.574, 0.682, 0.727, 0.755, 0.869 m,
+both sessions; ``docs/results/characterisation.md``) of the mean radius the scenario draws:
+the law times ``1 + 0.10 Z`` (Z standard normal), never below the radius at which neighbours
+stand `scenarios.stage.SPACING_M` apart (0.726 m for 7, 0.823 m for 8); the fit's residuals
+are -0.035 to +0.036 m. SALSA holds 25 groups of 8, so
+``max_group_size`` defaults to 8. The spread of radii and the place, facing and gaze noise
+follow SALSA's wider spread of Tightness (sd 0.08-0.18 m) and in-group Effort Angles (median
+1.62 rad).
+
+Everything is drawn when the scenario is made: an event-driven planner (`_Party`) walks
+through the party's timeline (joins, leaves, merges, splits, pairings, passers-by), reserving
+floor space for every group so that groups never overlap, then the conversations and glances
+are written for every group and every person standing alone.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from scenarios.casting import cast
+from scenarios.conversation import converse, standing
+from scenarios.formation import RadiusLaw, circle_places, min_radius
+from scenarios.registry import register
+from scenarios.scenario import Scenario, check_option
+from scenarios.script import Intent
+from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
+from scenarios.timeline import TimelineBuilder
+
+__all__ = ["SALSA_RADIUS", "MingleParams", "build_mingle", "mingle"]
+
+SALSA_RADIUS = RadiusLaw(base=0.444, per_member=0.067)  # metres, fit to SALSA (module doc)
+DENSITY_PER_M2 = 0.4  # people per m^2 of a room picked for them (SALSA: ~18 in ~45 m^2)
+MAX_DENSITY_PER_M2 = 1.0  # people per m^2: beyond this groups cannot find room
+MIN_ROOM_M = 4.0  # metres, smallest room side picked
+# Share of groups of each size 2..8 at the start: SALSA's groups per frame by size.
+SALSA_GROUP_SHARE = (1.36, 1.49, 0.83, 0.47, 0.33, 0.21, 0.02)
+GROUP_MARGIN_M = 0.15  # metres kept free around a group's outer ring
+ALONE_CLAIM_M = 0.5  # metres, floor reserved around someone standing alone
+WALL_GAP_M = 0.35  # metres, places keep this far from the walls (plus a body)
+WALL_MARGIN_M = 0.05  # metres, no place (noise included) comes closer to a wall (plus a body)
+SETTLE_S = 2.5  # seconds allowed beyond distance / speed to stop and turn
+MAKE_ROOM_S = 1.0  # seconds before a newcomer arrives that the members make room
+WALK_SPEED_M_S = (0.9, 1.3)  # m/s, party walking speeds
+GLANCE_MEAN_S = 5.0  # seconds, mean time between glances of someone alone
+JOIN_SHARE = 0.7  # chance that someone alone who decides to act joins a group
+PAIR_SHARE = 0.25  # ... or pairs up with someone else alone (else wanders)
+LEAVE_TO_GROUP_SHARE = 0.5  # chance that a leaver walks straight to another group
+MEAN_SPLIT_S = 400.0  # seconds, mean time before a group of >= 4 splits
+MEAN_MERGE_S = 600.0  # seconds, mean time before a group merges with a neighbour
+MERGE_REACH_M = 3.5  # metres, groups further apart than this do not merge
+JOIN_REACH_M = 5.0  # metres, people prefer groups nearer than this
+PASS_GAP_S = (10.0, 60.0)  # seconds, a passer-by waits this long between crossings
+PLACE_TRIES = 60  # random draws when looking for free floor
+ROBOT_ID = 0
+ANGLE_JITTER = 0.4  # share of the even gap a member's angle may deviate by
+
+
+@dataclass(frozen=True)
+class MingleParams:
+    """Every number that shapes a party (the options of ``mingle``)."""
+
+    people: int = 18
+    duration: float = 600.0
+    room_side: float = 0.0
+    max_group_size: int = 8
+    robot: bool = False
+    passers_by: int = 0
+    radius_base: float = SALSA_RADIUS.base
+    radius_per_member: float = SALSA_RADIUS.per_member
+    radius_spread: float = 0.10
+    position_noise: float = 0.05
+    orientation_noise: float = 0.55
+    head_noise: float = 0.2
+    mean_stay: float = 300.0
+    mean_alone: float = 10.0
+    alone_share: float = 0.08
+    mean_utterance: float = 4.0
+
+    def check(self, name: str) -> None:
+        """`ValueError` naming the option for impossible values."""
+        check_option(name, "people", self.people, low=2, high=100)
+        check_option(name, "duration", self.duration, low=0.0, above=True, unit="s")
+        check_option(name, "room_side", self.room_side, low=0.0, high=100.0, unit="m")
+        check_option(name, "max_group_size", self.max_group_size, low=2, high=12)
+        check_option(name, "passers_by", self.passers_by, low=0, high=20)
+        check_option(name, "radius_base", self.radius_base, low=0.3, high=2.0, unit="m")
+        check_option(name, "radius_per_member", self.radius_per_member, low=0.0, high=0.5)
+        check_option(name, "radius_spread", self.radius_spread, low=0.0, high=0.5)
+        check_option(name, "position_noise", self.position_noise, low=0.0, high=0.3, unit="m")
+        check_option(name, "orientation_noise", self.orientation_noise, low=0.0, high=1.0)
+        check_option(name, "head_noise", self.head_noise, low=0.0, high=1.0, unit="rad")
+        check_option(name, "mean_stay", self.mean_stay, low=1.0, unit="s")
+        check_option(name, "mean_alone", self.mean_alone, low=1.0, unit="s")
+        check_option(name, "alone_share", self.alone_share, low=0.0, high=1.0)
+        check_option(name, "mean_utterance", self.mean_utterance, low=0.5, high=60.0, unit="s")
+        if self.room_side > 0.0:
+            if self.room_side < MIN_ROOM_M:
+                raise ValueError(
+                    f"{name}: option room_side must be 0 (picked from the number of people) or "
+                    f">= {MIN_ROOM_M:g} m, got {self.room_side:g}"
+                )
+            density = (self.people + self.passers_by) / self.room_side**2
+            if density > MAX_DENSITY_PER_M2:
+                most = int(MAX_DENSITY_PER_M2 * self.room_side**2)
+                raise ValueError(
+                    f"{name}: {self.people + self.passers_by} people do not fit a "
+                    f"{self.room_side:g} m x {self.room_side:g} m room with room to mingle "
+                    f"(at most {MAX_DENSITY_PER_M2:g} per m^2, i.e. {most} people); "
+                    "give a larger room_side or 0"
+                )
+
+    def side(self) -> float:
+        """The room's side, metres."""
+        if self.room_side > 0.0:
+            return self.room_side
+        return max(MIN_ROOM_M, math.sqrt((self.people + self.passers_by) / DENSITY_PER_M2))
+
+
+@dataclass
+class _Group:
+    members: list[int]
+    centre: np.ndarray
+    radius: float
+    angles: dict[int, float]
+    record: int = -1  # index of its current record
+    version: int = 0
+
+
+@dataclass
+class _Record:
+    members: tuple[int, ...]
+    places: np.ndarray
+    facings: np.ndarray
+    centre: np.ndarray
+    start: float
+    end: float = math.inf
+    talk_end: float = math.inf
+    speeds: dict[int, float] = field(default_factory=dict)
+
+
+@dataclass
+class _Alone:
+    person: int
+    spot: np.ndarray
+    facing: float
+    start: float
+    end: float = math.inf
+
+
+class _Party:
+    """Plans the party: who is where, in which group, from when to when."""
+
+    def __init__(self, params: MingleParams, rng: np.random.Generator, side: float) -> None:
+        self.p = params
+        self.rng = rng
+        self.half = 0.5 * side
+        self.law = RadiusLaw(params.radius_base, params.radius_per_member)
+        self.ids = list(range(1, params.people + 1))
+        self.records: list[_Record] = []
+        self.alone: list[_Alone] = []
+        self.walks: list[tuple[float, int, Intent]] = []
+        self.events: list[tuple[float, str, str]] = []
+        self.groups: dict[int, _Group] = {}
+        self.group_of: dict[int, int] = {}
+        self.alone_at: dict[int, _Alone] = {}
+        self.busy_until: dict[int, float] = {}
+        self.position: dict[int, np.ndarray] = {}
+        self.version: dict[int, int] = dict.fromkeys(self.ids, 0)
+        self.queue: list[tuple[float, int, str, tuple]] = []
+        self.count = 0
+        self.next_gid = 0
+
+    # -- floor space ------------------------------------------------------------------------
+
+    def reach(self, radius: float) -> float:
+        """Radius of the floor a group of o-space ``radius`` occupies."""
+        return radius + PLANNING_RADIUS_M + GROUP_MARGIN_M
+
+    def fits(
+        self,
+        centre: np.ndarray,
+        claim: float,
+        *,
+        ignore_groups: tuple[int, ...] = (),
+        ignore_people: tuple[int, ...] = (),
+    ) -> bool:
+        limit = self.half - WALL_GAP_M - PLANNING_RADIUS_M
+        inner = claim - PLANNING_RADIUS_M - GROUP_MARGIN_M
+        if np.any(np.abs(centre) > limit - max(inner, 0.0)):
+            return False
+        for gid, g in self.groups.items():
+            if gid in ignore_groups:
+                continue
+            if np.hypot(*(centre - g.centre)) < claim + self.reach(g.radius):
+                return False
+        for pid, a in self.alone_at.items():
+            if pid in ignore_people:
+                continue
+            if np.hypot(*(centre - a.spot)) < claim + ALONE_CLAIM_M:
+                return False
+        return True
+
+    def free_spot(
+        self, claim: float, *, near: np.ndarray | None = None, within: float = 0.0, **ignore
+    ) -> np.ndarray | None:
+        limit = self.half - WALL_GAP_M - PLANNING_RADIUS_M
+        for _ in range(PLACE_TRIES):
+            if near is None:
+                spot = self.rng.uniform(-limit, limit, size=2)
+            else:
+                angle = self.rng.uniform(-math.pi, math.pi)
+                reach = self.rng.uniform(0.5, within)
+                spot = near + reach * np.array([math.cos(angle), math.sin(angle)])
+            if self.fits(spot, claim, **ignore):
+                return spot
+        return None
+
+    # -- groups -----------------------------------------------------------------------------
+
+    def draw_radius(self, n: int) -> float:
+        spread = max(1.0 + self.rng.normal() * self.p.radius_spread, 0.6)
+        return max(self.law(n) * spread, min_radius(n))
+
+    def spread(
+        self, members: list[int], angles: dict[int, float], radius: float
+    ) -> dict[int, float]:
+        """Even angles in the members' order around the circle, rotated to move them least,
+        each moved at random by up to `ANGLE_JITTER` of the gap, or less where neighbours
+        would come closer than `SPACING_M`."""
+        order = sorted(members, key=lambda m: angles[m] % (2.0 * math.pi))
+        n = len(order)
+        gap = 2.0 * math.pi / n
+        offsets = np.array([angles[m] - k * gap for k, m in enumerate(order)])
+        base = float(np.angle(np.exp(1j * offsets).mean()))
+        chord = 2.0 * radius * math.sin(min(gap, math.pi) / 2.0)
+        room = max(0.0, 1.0 - SPACING_M / chord) if n > 2 else ANGLE_JITTER
+        share = min(ANGLE_JITTER, room)
+        jitter = self.rng.uniform(-share, share, size=n) * gap
+        return {m: base + k * gap + float(jitter[k]) for k, m in enumerate(order)}
+
+    def record(self, gid: int, t: float, speeds: dict[int, float] | None = None) -> None:
+        """A new planned record of group ``gid``'s current shape from ``t``."""
+        g = self.groups[gid]
+        members = list(g.angles)
+        angles = np.array([g.angles[m] for m in members])
+        places, facings = circle_places(
+            g.centre,
+            g.radius,
+            angles,
+            self.rng,
+            position_noise=self.p.position_noise,
+            orientation_noise=self.p.orientation_noise,
+        )
+        edge = self.half - PLANNING_RADIUS_M - WALL_MARGIN_M
+        places = np.clip(places, -edge, edge)
+        self.records.append(
+            _Record(tuple(members), places, facings, g.centre.copy(), t, speeds=speeds or {})
+        )
+        g.record = len(self.records) - 1
+        g.version += 1
+        for k, m in enumerate(members):
+            self.position[m] = places[k]
+
+    def close_all(self, gid: int, t: float, *, but: int | None = None) -> None:
+        """Every open record holding a member of ``gid`` (``but`` one) ends at ``t``."""
+        members = set(self.groups[gid].members) - {but}
+        for rec in self.records:
+            if rec.end > t and not members.isdisjoint(rec.members):
+                rec.end = t
+                rec.talk_end = min(rec.talk_end, t)
+
+    def new_group(self, members: list[int], centre: np.ndarray, radius: float, t: float) -> int:
+        gid = self.next_gid
+        self.next_gid += 1
+        angles = {}
+        for m in members:
+            d = self.position[m] - centre
+            angles[m] = math.atan2(d[1], d[0]) if np.hypot(*d) > 1e-6 else self.rng.uniform(-3, 3)
+        g = _Group(list(members), centre.copy(), radius, {})
+        g.angles = self.spread(members, angles, radius)
+        self.groups[gid] = g
+        for m in members:
+            self.group_of[m] = gid
+            self.end_alone(m, t)
+        return gid
+
+    def schedule_group(self, gid: int, t: float) -> None:
+        g = self.groups[gid]
+        if len(g.members) >= 4:
+            self.push(t + self.rng.exponential(MEAN_SPLIT_S), "split", (gid, g.version))
+        self.push(t + self.rng.exponential(MEAN_MERGE_S), "merge", (gid, g.version))
+
+    def schedule_member(self, m: int, t: float) -> None:
+        self.version[m] += 1
+        self.push(t + self.rng.exponential(self.p.mean_stay), "leave", (m, self.version[m]))
+
+    # -- people alone -----------------------------------------------------------------------
+
+    def start_alone(self, m: int, spot: np.ndarray, t: float) -> None:
+        facing = float(self.rng.uniform(-math.pi, math.pi))
+        entry = _Alone(m, spot.copy(), facing, t)
+        self.alone.append(entry)
+        self.alone_at[m] = entry
+        self.position[m] = spot.copy()
+        self.version[m] += 1
+        self.push(t + self.rng.exponential(self.p.mean_alone), "decide", (m, self.version[m]))
+
+    def end_alone(self, m: int, t: float) -> None:
+        entry = self.alone_at.pop(m, None)
+        if entry is not None:
+            entry.end = min(entry.end, t)
+
+    def walk(self, m: int, goal: np.ndarray, t: float) -> tuple[float, float]:
+        """``m`` walks to ``goal`` from ``t``: (speed, arrival time)."""
+        speed = float(self.rng.uniform(*WALK_SPEED_M_S))
+        arrive = t + float(np.hypot(*(goal - self.position[m]))) / speed + SETTLE_S
+        self.busy_until[m] = arrive
+        return speed, arrive
+
+    # -- the timeline -----------------------------------------------------------------------
+
+    def push(self, t: float, kind: str, payload: tuple) -> None:
+        if t < self.p.duration:
+            self.count += 1
+            heapq.heappush(self.queue, (t, self.count, kind, payload))
+
+    def start(self) -> None:
+        """The party at t = 0: groups drawn with SALSA's size shares, the rest alone."""
+        rng = self.rng
+        sizes = np.arange(2, 2 + len(SALSA_GROUP_SHARE))
+        share = np.array(SALSA_GROUP_SHARE)
+        share = np.where(sizes <= self.p.max_group_size, share, 0.0)
+        share = share / share.sum()
+        unplaced = [self.ids[k] for k in rng.permutation(len(self.ids))]
+        n_alone = int(round(self.p.alone_share * len(unplaced)))
+        alone = unplaced[:n_alone]
+        unplaced = unplaced[n_alone:]
+        while len(unplaced) >= 2:
+            n = int(min(rng.choice(sizes, p=share), len(unplaced)))
+            if len(unplaced) - n == 1:
+                n = n + 1 if n < self.p.max_group_size else n - 1
+            radius = self.draw_radius(n)
+            centre = self.free_spot(self.reach(radius))
+            if centre is None:
+                if n > 2:
+                    continue
+                break
+            members, unplaced = unplaced[:n], unplaced[n:]
+            for k, m in enumerate(members):
+                angle = 2.0 * math.pi * k / n
+                self.position[m] = centre + radius * np.array([math.cos(angle), math.sin(angle)])
+            gid = self.new_group(members, centre, radius, 0.0)
+            self.record(gid, 0.0)
+            self.schedule_group(gid, 0.0)
+            for m in members:
+                self.schedule_member(m, 0.0)
+        alone += unplaced
+        self.start_yaw = {}
+        for rec in self.records:
+            for k, m in enumerate(rec.members):
+                self.start_yaw[m] = float(rec.facings[k])
+        for m in alone:
+            spot = self.free_spot(ALONE_CLAIM_M)
+            if spot is None:
+                raise ValueError(
+                    f"mingle: no free floor for {len(self.ids)} people in a "
+                    f"{2 * self.half:g} m room; give a larger room_side"
+                )
+            self.position[m] = spot
+            self.start_alone(m, spot, 0.0)
+            self.start_yaw[m] = self.alone_at[m].facing
+        self.start_position = dict(self.position)
+
+    def run(self) -> None:
+        self.start()
+        while self.queue:
+            t, _, kind, payload = heapq.heappop(self.queue)
+            getattr(self, "on_" + kind)(t, *payload)
+
+    def on_leave(self, t: float, m: int, version: int) -> None:
+        if version != self.version[m] or m not in self.group_of:
+            return
+        if self.busy_until.get(m, 0.0) > t:
+            self.push(self.busy_until[m] + 1.0, "leave", (m, version))
+            return
+        gid = self.group_of.pop(m)
+        g = self.groups[gid]
+        self.close_all(gid, t)
+        g.members.remove(m)
+        del g.angles[m]
+        self.events.append((t, "leave", f"person {m} leaves group {sorted([*g.members, m])}"))
+        self.shrink(gid, t)
+        target = None
+        if self.rng.random() < LEAVE_TO_GROUP_SHARE:
+            target = self.pick_group(m, exclude=gid)
+        if target is not None and self.join(m, target, t):
+            return
+        spot = self.free_spot(ALONE_CLAIM_M, near=self.position[m], within=3.0)
+        if spot is None:
+            spot = self.position[m]
+        speed, arrive = self.walk(m, spot, t)
+        self.walks.append((t, m, Intent(goal=(float(spot[0]), float(spot[1])), speed=speed)))
+        self.position[m] = spot
+        self.start_alone(m, spot, arrive)
+
+    def shrink(self, gid: int, t: float) -> None:
+        """After someone left: the rest re-form (or the last one stands alone)."""
+        g = self.groups[gid]
+        if len(g.members) >= 2:
+            g.radius = self.draw_radius(len(g.members))
+            g.angles = self.spread(g.members, g.angles, g.radius)
+            self.record(gid, t)
+            self.schedule_group(gid, t)
+            return
+        (last,) = g.members
+        del self.groups[gid]
+        self.group_of.pop(last, None)
+        self.version[last] += 1
+        self.start_alone(last, self.position[last], t)
+
+    def pick_group(self, m: int, *, exclude: int = -1) -> int | None:
+        here = self.position[m]
+        options, weights = [], []
+        for gid, g in self.groups.items():
+            if gid == exclude or len(g.members) >= self.p.max_group_size:
+                continue
+            d = float(np.hypot(*(g.centre - here)))
+            options.append(gid)
+            weights.append(math.exp(-d / JOIN_REACH_M) / (1.0 + 0.3 * len(g.members)))
+        if not options:
+            return None
+        w = np.array(weights) / sum(weights)
+        return options[int(self.rng.choice(len(options), p=w))]
+
+    def join(self, m: int, gid: int, t: float) -> bool:
+        """``m`` walks up to group ``gid``; the members make room just before ``m`` arrives
+        (the group, as it was, ends then) and the larger group forms once all stand."""
+        g = self.groups[gid]
+        n = len(g.members) + 1
+        radius = self.draw_radius(n)
+        centre = g.centre
+        if not self.fits(centre, self.reach(radius), ignore_groups=(gid,), ignore_people=(m,)):
+            return False
+        self.end_alone(m, t)
+        d = self.position[m] - centre
+        angles = dict(g.angles)
+        angles[m] = math.atan2(d[1], d[0])
+        g.members.append(m)
+        g.radius = radius
+        g.angles = self.spread(g.members, angles, radius)
+        self.group_of[m] = gid
+        target = centre + radius * np.array([math.cos(g.angles[m]), math.sin(g.angles[m])])
+        speed, arrive = self.walk(m, target, t)
+        shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
+        self.close_all(gid, shift, but=m)
+        self.record(gid, shift, speeds={m: speed})
+        rec = self.records[g.record]
+        k = rec.members.index(m)
+        self.walks.append((t, m, standing(rec.places[k], rec.facings[k], speed=speed)))
+        self.schedule_group(gid, t)
+        self.schedule_member(m, t)
+        self.events.append((t, "join", f"person {m} joins group {sorted(g.members)}"))
+        return True
+
+    def on_decide(self, t: float, m: int, version: int) -> None:
+        if version != self.version[m] or m not in self.alone_at:
+            return
+        draw = self.rng.random()
+        if draw < JOIN_SHARE:
+            target = self.pick_group(m)
+            if target is not None and self.join(m, target, t):
+                return
+        elif draw < JOIN_SHARE + PAIR_SHARE:
+            others = [o for o in self.alone_at if o != m and self.busy_until.get(o, 0.0) <= t]
+            if others:
+                o = others[int(self.rng.integers(len(others)))]
+                if self.pair(m, o, t):
+                    return
+        spot = self.free_spot(ALONE_CLAIM_M, near=self.position[m], within=4.0, ignore_people=(m,))
+        if spot is None:
+            self.version[m] += 1
+            self.push(t + self.rng.exponential(self.p.mean_alone), "decide", (m, self.version[m]))
+            return
+        self.end_alone(m, t)
+        speed, arrive = self.walk(m, spot, t)
+        self.walks.append((t, m, Intent(goal=(float(spot[0]), float(spot[1])), speed=speed)))
+        self.position[m] = spot
+        self.start_alone(m, spot, arrive)
+
+    def pair(self, a: int, b: int, t: float) -> bool:
+        radius = self.draw_radius(2)
+        centre = 0.5 * (self.position[a] + self.position[b])
+        claim = self.reach(radius)
+        if not self.fits(centre, claim, ignore_people=(a, b)):
+            spot = self.free_spot(claim, near=centre, within=2.0, ignore_people=(a, b))
+            if spot is None:
+                return False
+            centre = spot
+        gid = self.new_group([a, b], centre, radius, t)
+        speeds = {}
+        g = self.groups[gid]
+        for m in (a, b):
+            target = centre + radius * np.array([math.cos(g.angles[m]), math.sin(g.angles[m])])
+            speeds[m], _ = self.walk(m, target, t)
+        self.record(gid, t, speeds=speeds)
+        self.schedule_group(gid, t)
+        for m in (a, b):
+            self.schedule_member(m, t)
+        self.events.append((t, "pair", f"people {a} and {b} start talking"))
+        return True
+
+    def on_split(self, t: float, gid: int, version: int) -> None:
+        g = self.groups.get(gid)
+        if g is None or g.version != version or len(g.members) < 4:
+            return
+        if any(self.busy_until.get(m, 0.0) > t for m in g.members):
+            self.schedule_group(gid, t)
+            return
+        order = sorted(g.members, key=lambda m: g.angles[m] % (2.0 * math.pi))
+        n = len(order)
+        k = int(self.rng.integers(2, n - 1))
+        first = int(self.rng.integers(n))
+        moving = [order[(first + j) % n] for j in range(k)]
+        staying = [m for m in order if m not in moving]
+        radius = self.draw_radius(len(moving))
+        claim = self.reach(radius)
+        stay_radius = self.draw_radius(len(staying))
+        # The moving part settles beside the group, on the side it stood.
+        side = np.mean([self.position[m] for m in moving], axis=0) - g.centre
+        side = side / max(float(np.hypot(*side)), 1e-9)
+        centre = None
+        for extra in (0.2, 0.6, 1.2):
+            guess = g.centre + side * (self.reach(stay_radius) + claim + extra)
+            if self.fits(
+                guess, claim, ignore_groups=(gid,), ignore_people=tuple(g.members)
+            ) and self.fits_pair(guess, claim, g.centre, self.reach(stay_radius)):
+                centre = guess
+                break
+        if centre is None:
+            return
+        self.close_all(gid, t)
+        self.events.append((t, "split", f"group {sorted(g.members)} splits off {sorted(moving)}"))
+        g.members = staying
+        g.radius = stay_radius
+        g.angles = self.spread(staying, {m: g.angles[m] for m in staying}, stay_radius)
+        for m in moving:
+            self.group_of.pop(m)
+        new = self.new_group(moving, centre, radius, t)
+        self.record(gid, t)
+        self.schedule_group(gid, t)
+        speeds = {}
+        h = self.groups[new]
+        for m in moving:
+            target = centre + radius * np.array([math.cos(h.angles[m]), math.sin(h.angles[m])])
+            speeds[m], _ = self.walk(m, target, t)
+        self.record(new, t, speeds=speeds)
+        self.schedule_group(new, t)
+
+    def fits_pair(self, a: np.ndarray, ra: float, b: np.ndarray, rb: float) -> bool:
+        return float(np.hypot(*(a - b))) >= ra + rb
+
+    def on_merge(self, t: float, gid: int, version: int) -> None:
+        g = self.groups.get(gid)
+        if g is None or g.version != version:
+            return
+        best, best_d = None, MERGE_REACH_M
+        for hid, h in self.groups.items():
+            if hid == gid or len(g.members) + len(h.members) > self.p.max_group_size:
+                continue
+            d = float(np.hypot(*(h.centre - g.centre))) - g.radius - h.radius
+            if d < best_d:
+                best, best_d = hid, d
+        if best is None:
+            self.schedule_group(gid, t)
+            return
+        h = self.groups[best]
+        members = g.members + h.members
+        if any(self.busy_until.get(m, 0.0) > t for m in members):
+            self.schedule_group(gid, t)
+            return
+        radius = self.draw_radius(len(members))
+        ng, nh = len(g.members), len(h.members)
+        centre = (ng * g.centre + nh * h.centre) / (ng + nh)
+        claim = self.reach(radius)
+        if not self.fits(centre, claim, ignore_groups=(gid, best), ignore_people=tuple(members)):
+            self.schedule_group(gid, t)
+            return
+        self.close_all(gid, t)
+        self.close_all(best, t)
+        detail = f"groups {sorted(g.members)} and {sorted(h.members)} merge"
+        self.events.append((t, "merge", detail))
+        del self.groups[gid]
+        del self.groups[best]
+        for m in members:
+            self.group_of.pop(m, None)
+        new = self.new_group(members, centre, radius, t)
+        speeds = {}
+        k = self.groups[new]
+        for m in members:
+            target = centre + radius * np.array([math.cos(k.angles[m]), math.sin(k.angles[m])])
+            speeds[m], _ = self.walk(m, target, t)
+        self.record(new, t, speeds=speeds)
+        self.schedule_group(new, t)
+
+
+def _glances(
+    builder: TimelineBuilder,
+    entry: _Alone,
+    end: float,
+    rng: np.random.Generator,
+    targets: list[int],
+) -> None:
+    """Someone alone stands at their spot and looks around: a point or a person now and then."""
+    t = entry.start
+    targets = [o for o in targets if o != entry.person]
+    while t < min(entry.end, end):
+        if targets and rng.random() < 0.5:
+            gaze = {"gaze_agent": targets[int(rng.integers(len(targets)))]}
+        else:
+            angle = entry.facing + rng.uniform(-1.0, 1.0)
+            point = entry.spot + 2.0 * np.array([math.cos(angle), math.sin(angle)])
+            gaze = {"gaze_point": (float(point[0]), float(point[1]))}
+        builder.set(t, entry.person, standing(entry.spot, entry.facing, **gaze))
+        t += max(rng.exponential(GLANCE_MEAN_S), 1.0)
+
+
+def _passers(
+    builder: TimelineBuilder,
+    ids: list[int],
+    half: float,
+    duration: float,
+    rng: np.random.Generator,
+) -> list[tuple[float, str, str]]:
+    """Passers-by cross the room from one wall to another, again and again."""
+    events = []
+    edge = half - WALL_GAP_M - PLANNING_RADIUS_M
+    for pid in ids:
+        builder.set(0.0, pid, Intent(present=False))
+        t = float(rng.uniform(*PASS_GAP_S))
+        while t < duration:
+            side = int(rng.integers(4))
+            along = rng.uniform(-edge, edge, size=2)
+            start = _on_wall(side, along[0], edge)
+            finish = _on_wall((side + 2) % 4, along[1], edge)
+            speed = float(rng.uniform(*WALK_SPEED_M_S))
+            builder.set(
+                t,
+                pid,
+                Intent(
+                    present=True,
+                    appear_at=(float(start[0]), float(start[1])),
+                    goal=(float(finish[0]), float(finish[1])),
+                    speed=speed,
+                ),
+            )
+            events.append((t, "pass", f"passer-by {pid} crosses the room"))
+            t += float(np.hypot(*(finish - start))) / speed + SETTLE_S
+            builder.set(t, pid, Intent(present=False))
+            t += float(rng.uniform(*PASS_GAP_S))
+    return events
+
+
+def _on_wall(side: int, along: float, edge: float) -> np.ndarray:
+    return [
+        np.array([edge, along]),
+        np.array([along, edge]),
+        np.array([-edge, along]),
+        np.array([along, -edge]),
+    ][side]
+
+
+def build_mingle(params: MingleParams, *, seed: int, name: str, options: dict) -> Scenario:
+    """The party of ``params`` drawn with ``seed`` (options recorded as ``options``)."""
+    params.check(name)
+    rng = np.random.default_rng(seed)
+    side = params.side()
+    party = _Party(params, rng, side)
+    party.run()
+    people = party.ids
+    passers = list(range(params.people + 1, params.people + params.passers_by + 1))
+    agents = [*people, *passers] + ([ROBOT_ID] if params.robot else [])
+    builder = TimelineBuilder(agents)
+    for t, m, intent in party.walks:
+        builder.set(t, m, intent)
+    for rec in party.records:
+        if rec.end <= rec.start:
+            continue
+        builder.group(
+            rec.members, rec.places, rec.facings, rec.centre, start=rec.start, end=rec.end
+        )
+        converse(
+            builder,
+            rec.members,
+            rec.places,
+            rec.facings,
+            start=rec.start,
+            end=min(rec.talk_end, rec.end, params.duration),
+            rng=rng,
+            mean_utterance=params.mean_utterance,
+            head_noise=params.head_noise,
+            speed=rec.speeds,
+        )
+    for entry in party.alone:
+        if entry.end > entry.start:
+            _glances(builder, entry, params.duration, rng, people)
+    for t, kind, detail in party.events:
+        builder.event(t, kind, detail)
+    for t, kind, detail in _passers(builder, passers, 0.5 * side, params.duration, rng):
+        builder.event(t, kind, detail)
+    robot = None
+    if params.robot:
+        edge = 0.5 * side - 0.6
+        robot = RobotPlace(id=ROBOT_ID, position=(-edge, 0.0), yaw=0.0)
+        t = 0.0
+        while t < params.duration:
+            builder.set(
+                t,
+                ROBOT_ID,
+                standing(
+                    np.array(robot.position),
+                    0.0,
+                    gaze_agent=people[int(rng.integers(len(people)))],
+                ),
+            )
+            t += max(rng.exponential(GLANCE_MEAN_S), 1.0)
+    starts = np.array([party.start_position[m] for m in people])
+    yaws = [party.start_yaw[m] for m in people]
+    roles = cast(rng, people, starts, yaws, parts="guest")
+    if passers:
+        edge = 0.5 * side - WALL_GAP_M - PLANNING_RADIUS_M
+        spots = np.array([[edge, -edge + 0.7 * k] for k in range(len(passers))])
+        roles += cast(rng, passers, spots, [0.0] * len(passers), parts="passer-by", present=False)
+    return Scenario(
+        name=name,
+        seed=seed,
+        options=options,
+        stage=Stage(room=(side, side), people=tuple(roles), robot=robot),
+        timeline=builder.build(),
+        duration=params.duration,
+        description="a SALSA-like party: groups forming, merging, splitting; people alone",
+    )
+
+
+@register("mingle")
+def mingle(
+    *,
+    seed: int,
+    people: int = 18,
+    duration: float = 600.0,
+    room_side: float = 0.0,
+    max_group_size: int = 8,
+    robot: bool = False,
+    passers_by: int = 0,
+    radius_base: float = SALSA_RADIUS.base,
+    radius_per_member: float = SALSA_RADIUS.per_member,
+    radius_spread: float = 0.10,
+    position_noise: float = 0.05,
+    orientation_noise: float = 0.55,
+    head_noise: float = 0.2,
+    mean_stay: float = 300.0,
+    mean_alone: float = 10.0,
+    alone_share: float = 0.08,
+    mean_utterance: float = 4.0,
+) -> Scenario:
+    """A SALSA-like party: groups of 2-8 forming, merging, splitting; people alone.
+
+    Args:
+        seed: seeds every draw.
+        people: guests (2-100).
+        duration: length of the party, seconds (> 0).
+        room_side: side of the square room, metres (0: 0.4 people per m^2, at least 4 m).
+        max_group_size: largest group (2-12; SALSA holds groups of 8).
+        robot: whether the robot stands by the west wall, watching.
+        passers_by: extra people crossing the room now and then (0-20).
+        radius_base: o-space radius of a pair, metres (0.3-2).
+        radius_per_member: growth of the radius per extra member, metres (0-0.5).
+        radius_spread: relative standard deviation of a group's radius (0-0.5).
+        position_noise: standard deviation of a place, metres (0-0.3).
+        orientation_noise: standard deviation of a facing, radians (0-1).
+        head_noise: standard deviation of a gaze off its target, radians (0-1).
+        mean_stay: mean time a member stays in a group, seconds (>= 1).
+        mean_alone: mean time someone stays alone before acting, seconds (>= 1).
+        alone_share: share of the guests alone at the start (0-1).
+        mean_utterance: mean length of one speaker's turn, seconds (0.5-60).
+    """
+    options = dict(
+        people=people,
+        duration=duration,
+        room_side=room_side,
+        max_group_size=max_group_size,
+        robot=robot,
+        passers_by=passers_by,
+        radius_base=radius_base,
+        radius_per_member=radius_per_member,
+        radius_spread=radius_spread,
+        position_noise=position_noise,
+        orientation_noise=orientation_noise,
+        head_noise=head_noise,
+        mean_stay=mean_stay,
+        mean_alone=mean_alone,
+        alone_share=alone_share,
+        mean_utterance=mean_utterance,
+    )
+    return build_mingle(MingleParams(**options), seed=seed, name="mingle", options=options)

@@ -1,0 +1,269 @@
+"""``word-improv``: the Word Improv Game of the Babble dataset.
+
+A moderator and 2-7 players stand in a circle in a 5 m x 5 m area. A turn lasts about
+``turn_duration`` seconds (drawn within +-40 %): the moderator reads a word and picks a player,
+the two speak in turn, and everyone's head turns to whoever speaks. After each turn the players
+shuffle, walking to new places at random, and the circle re-forms (a little tighter when it has
+lost someone). A player who fails (with probability ``fail_probability`` per turn, seeded)
+leaves the circle and the area; the rest shuffle. The game ends with one player left.
+
+Ground truth (see `scenarios.truth`): the standing circle is an F-formation from the frame in
+which everyone stands at their place facing the centre; shuffling frames hold none, as in
+Babble's annotations. The robot may stay out (``none``), watch from a corner (``watch``) or be
+the moderator (``moderate``).
+
+Defaults follow this project's measurements of Babble (``docs/results/characterisation.md``):
+the o-space radius law ``0.674 + 0.086 * (n - 2)`` metres is the least-squares line through
+Babble's mean Tightness by group size 2-7 (0.703, 0.715, 0.860, 0.926, 1.025, 1.107 m), and
+the small place and facing noise matches its near-regular circles (Symmetry 20-37 degrees,
+torsos facing the group's centre within 5 degrees in the median).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+
+from scenarios.casting import cast
+from scenarios.conversation import converse, standing
+from scenarios.formation import RadiusLaw, circle_places
+from scenarios.registry import register
+from scenarios.scenario import Scenario, check_option
+from scenarios.script import Intent
+from scenarios.stage import RobotPlace, Stage
+from scenarios.timeline import TimelineBuilder
+
+__all__ = ["BABBLE_RADIUS", "word_improv"]
+
+AREA_M = (5.0, 5.0)  # metres, Babble's play area (the room)
+BABBLE_RADIUS = RadiusLaw(base=0.674, per_member=0.086)  # metres, fit to Babble (module doc)
+TURN_SPREAD = 0.4  # a turn lasts turn_duration x U(1 - spread, 1 + spread)
+SHUFFLE_SPEED_M_S = (0.8, 1.2)  # m/s, walking speed while shuffling
+SHUFFLE_DELAY_S = (0.0, 1.0)  # seconds, when each player sets off after the turn
+SETTLE_S = 2.5  # seconds allowed beyond the longest walk for the circle to re-form
+CENTRE_JITTER_M = 0.15  # metres, the re-formed circle's centre moves by up to this
+ANGLE_JITTER = 0.2  # share of the even gap a member's angle may deviate by
+EXIT_GAP_M = 0.4  # metres from the wall where a failing player leaves the area
+ROBOT_ID = 0
+ROBOT_CORNER_M = 0.6  # metres from the walls, where a watching robot stands
+MAX_TURNS = 10_000  # turns after which the game stops even without a winner
+
+
+@register("word-improv")
+def word_improv(
+    *,
+    seed: int,
+    players: int = 6,
+    turn_duration: float = 30.0,
+    fail_probability: float = 0.12,
+    robot: Literal["none", "watch", "moderate"] = "none",
+    radius_base: float = BABBLE_RADIUS.base,
+    radius_per_member: float = BABBLE_RADIUS.per_member,
+    radius_spread: float = 0.03,
+    position_noise: float = 0.03,
+    orientation_noise: float = 0.08,
+    head_noise: float = 0.0,
+    mean_utterance: float = 5.0,
+) -> Scenario:
+    """The Babble Word Improv Game: a circle that shuffles and loses a player at a time.
+
+    Args:
+        seed: seeds every draw.
+        players: players at the start, besides the moderator (2-7; Babble: 6 and a moderator).
+        turn_duration: mean length of a turn, seconds (5-300).
+        fail_probability: chance that the turn's player fails and leaves, per turn (0.01-1).
+        robot: none, watch (from a corner) or moderate (the robot is the moderator).
+        radius_base: o-space radius of a pair, metres (0.3-2).
+        radius_per_member: growth of the radius per extra member, metres (0-0.5).
+        radius_spread: relative standard deviation of a circle's radius (0-0.5).
+        position_noise: standard deviation of a place, metres (0-0.3).
+        orientation_noise: standard deviation of a facing, radians (0-0.8).
+        head_noise: standard deviation of a gaze off its target, radians (0-0.8).
+        mean_utterance: mean length of one speaker's turn to speak, seconds (0.5-60).
+    """
+    name = "word-improv"
+    check_option(name, "players", players, low=2, high=7)
+    check_option(name, "turn_duration", turn_duration, low=5.0, high=300.0, unit="s")
+    check_option(name, "fail_probability", fail_probability, low=0.01, high=1.0)
+    check_option(name, "radius_base", radius_base, low=0.3, high=2.0, unit="m")
+    check_option(name, "radius_per_member", radius_per_member, low=0.0, high=0.5, unit="m")
+    check_option(name, "radius_spread", radius_spread, low=0.0, high=0.5)
+    check_option(name, "position_noise", position_noise, low=0.0, high=0.3, unit="m")
+    check_option(name, "orientation_noise", orientation_noise, low=0.0, high=0.8, unit="rad")
+    check_option(name, "head_noise", head_noise, low=0.0, high=0.8, unit="rad")
+    check_option(name, "mean_utterance", mean_utterance, low=0.5, high=60.0, unit="s")
+    law = RadiusLaw(radius_base, radius_per_member)
+    largest = law(players + 1) * (1.0 + 3.0 * radius_spread) + CENTRE_JITTER_M + 0.35
+    if largest > 0.5 * min(AREA_M):
+        raise ValueError(
+            f"{name}: a circle of {players + 1} with radius_base {radius_base:g} m and "
+            f"radius_per_member {radius_per_member:g} m does not fit the "
+            f"{AREA_M[0]:g} m x {AREA_M[1]:g} m area"
+        )
+    rng = np.random.default_rng(seed)
+    moderated_by_robot = robot == "moderate"
+    first_person = 1
+    moderator = ROBOT_ID if moderated_by_robot else first_person
+    player_ids = [first_person + k + (0 if moderated_by_robot else 1) for k in range(players)]
+    people = player_ids if moderated_by_robot else [moderator, *player_ids]
+    agents = [*people] + ([ROBOT_ID] if robot != "none" else [])
+    builder = TimelineBuilder(agents)
+
+    def formation(members: list[int], angles_of: dict[int, float]) -> tuple:
+        n = len(members)
+        centre = rng.uniform(-CENTRE_JITTER_M, CENTRE_JITTER_M, size=2)
+        radius = law(n) * max(1.0 + rng.normal() * radius_spread, 0.5)
+        angles = np.array([angles_of[m] for m in members])
+        places, facings = circle_places(
+            centre,
+            radius,
+            angles,
+            rng,
+            position_noise=position_noise,
+            orientation_noise=orientation_noise,
+        )
+        return centre, places, facings
+
+    def slots(members_in_order: list[int], moderator_angle: float) -> dict[int, float]:
+        """Even angles around the circle, the moderator's first."""
+        n = len(members_in_order)
+        gap = 2.0 * math.pi / n
+        jitter = rng.uniform(-ANGLE_JITTER, ANGLE_JITTER, size=n) * gap
+        jitter[0] = 0.0
+        return {
+            m: moderator_angle + gap * k + float(jitter[k]) for k, m in enumerate(members_in_order)
+        }
+
+    moderator_angle = float(rng.uniform(-math.pi, math.pi))
+    remaining = list(player_ids)
+    order = [moderator, *[remaining[k] for k in rng.permutation(len(remaining))]]
+    angles_of = slots(order, moderator_angle)
+    members = [moderator, *remaining]
+    centre, places, facings = formation(members, angles_of)
+    place_of = {m: places[k] for k, m in enumerate(members)}
+    facing_of = {m: float(facings[k]) for k, m in enumerate(members)}
+    robot_place = None
+    if robot == "watch":
+        hx, hy = 0.5 * AREA_M[0] - ROBOT_CORNER_M, 0.5 * AREA_M[1] - ROBOT_CORNER_M
+        corner = np.array([-hx, -hy])
+        robot_place = RobotPlace(
+            id=ROBOT_ID,
+            position=(float(corner[0]), float(corner[1])),
+            yaw=float(math.atan2(-corner[1], -corner[0])),
+        )
+    elif moderated_by_robot:
+        robot_place = RobotPlace(
+            id=ROBOT_ID,
+            position=(float(place_of[ROBOT_ID][0]), float(place_of[ROBOT_ID][1])),
+            yaw=facing_of[ROBOT_ID],
+        )
+    starts = np.array([place_of[p] for p in people])
+    roles = cast(
+        rng,
+        people,
+        starts,
+        [facing_of[p] for p in people],
+        parts=["moderator" if p == moderator else "player" for p in people],
+    )
+    handle = builder.group(members, places, facings, centre, start=0.0)
+    builder.event(0.0, "game", f"moderator {moderator}, players {remaining}")
+    t = 0.0
+    turn = 0
+    while len(remaining) >= 1 and turn < MAX_TURNS:
+        turn += 1
+        picked = remaining[int(rng.integers(len(remaining)))]
+        length = turn_duration * rng.uniform(1.0 - TURN_SPREAD, 1.0 + TURN_SPREAD)
+        final = len(remaining) == 1
+        builder.event(
+            t,
+            "turn",
+            f"turn {turn}: the moderator reads a word, player {picked} improvises"
+            + (" (the winner)" if final else ""),
+        )
+        spots = np.array([place_of[m] for m in members])
+        turn_facings = np.array([facing_of[m] for m in members])
+        converse(
+            builder,
+            members,
+            spots,
+            turn_facings,
+            start=t,
+            end=t + length,
+            rng=rng,
+            mean_utterance=mean_utterance,
+            speakers=[moderator, picked],
+            head_noise=head_noise,
+        )
+        if robot == "watch":
+            assert robot_place is not None
+            builder.set(
+                t,
+                ROBOT_ID,
+                standing(np.array(robot_place.position), robot_place.yaw, gaze_agent=picked),
+            )
+        t += length
+        if final:
+            builder.end_group(handle, t)
+            builder.event(t, "end", f"player {picked} wins")
+            break
+        builder.end_group(handle, t)
+        if rng.random() < fail_probability:
+            remaining.remove(picked)
+            out = _exit_point(place_of[picked])
+            speed = float(rng.uniform(*SHUFFLE_SPEED_M_S))
+            builder.set(t, picked, Intent(goal=out, speed=speed))
+            gone = t + float(np.hypot(*(np.array(out) - place_of[picked]))) / speed + SETTLE_S
+            builder.set(gone, picked, Intent(present=False))
+            builder.event(t, "elimination", f"player {picked} fails and leaves the circle")
+        builder.event(t, "shuffle", f"players {remaining} shuffle")
+        order = [moderator, *[remaining[k] for k in rng.permutation(len(remaining))]]
+        angles_of = slots(order, moderator_angle)
+        members = [moderator, *remaining]
+        centre, places, facings = formation(members, angles_of)
+        walk = 0.0
+        for k, m in enumerate(members):
+            delay = 0.0 if m == moderator else float(rng.uniform(*SHUFFLE_DELAY_S))
+            speed = float(rng.uniform(*SHUFFLE_SPEED_M_S))
+            builder.set(
+                t + delay,
+                m,
+                standing(places[k], facings[k], speed=speed, gaze_point=tuple(centre)),
+            )
+            distance = float(np.hypot(*(places[k] - place_of[m])))
+            walk = max(walk, delay + distance / speed)
+        handle = builder.group(members, places, facings, centre, start=t)
+        place_of = {m: places[k] for k, m in enumerate(members)}
+        facing_of = {m: float(facings[k]) for k, m in enumerate(members)}
+        t += walk + SETTLE_S
+    return Scenario(
+        name=name,
+        seed=seed,
+        options={
+            "players": players,
+            "turn_duration": turn_duration,
+            "fail_probability": fail_probability,
+            "robot": robot,
+            "radius_base": radius_base,
+            "radius_per_member": radius_per_member,
+            "radius_spread": radius_spread,
+            "position_noise": position_noise,
+            "orientation_noise": orientation_noise,
+            "head_noise": head_noise,
+            "mean_utterance": mean_utterance,
+        },
+        stage=Stage(room=AREA_M, people=roles, robot=robot_place),
+        timeline=builder.build(),
+        duration=t,
+        description="the Babble Word Improv Game: a shuffling circle that loses a player a turn",
+    )
+
+
+def _exit_point(place: np.ndarray) -> tuple[float, float]:
+    """The nearest point just inside the area's wall, outward from ``place``."""
+    hx, hy = 0.5 * AREA_M[0] - EXIT_GAP_M, 0.5 * AREA_M[1] - EXIT_GAP_M
+    x, y = float(place[0]), float(place[1])
+    if hx - abs(x) < hy - abs(y):
+        return (math.copysign(hx, x), float(np.clip(y, -hy, hy)))
+    return (float(np.clip(x, -hx, hx)), math.copysign(hy, y))
