@@ -166,28 +166,79 @@ def estimate_o_space(
 ) -> OSpace:
     """The o-space of people standing at ``position`` (k, 2) and facing ``yaw`` (k,).
 
-    The centre is the point nearest to every member's facing line (least squares), pulled
-    slightly toward the mean of their stride points (``position + stride × heading``, GCFF's
-    votes), which settles the degenerate case of two people facing each other; the radius is
-    the members' mean distance from it.
+    Positions are trusted more than facings (people turn to whoever speaks, even outside the
+    group):
+
+    * three or more people: the circle through them (least squares), unless it lies behind
+      most of them (people on a line), then the point nearest every facing line;
+    * two people: a point on the perpendicular bisector of the pair, where their facing lines
+      cross it (the mean over those that cross it in front of them, no farther out than the
+      pair's distance), else their midpoint;
+    * one person: ``stride`` in front of them.
+
+    The radius is the members' mean distance from the centre.
     """
     position = np.asarray(position, dtype=np.float64).reshape(-1, 2)
     yaw = np.asarray(yaw, dtype=np.float64).reshape(-1)
-    if position.shape[0] != yaw.shape[0] or position.shape[0] < 1:
+    k = position.shape[0]
+    if yaw.shape[0] != k or k < 1:
         raise ValueError(
             f"position (k, 2) and yaw (k,) must describe k >= 1 people, got {position.shape} "
             f"and {yaw.shape}"
         )
     heading = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
-    votes = position + stride * heading
-    prior = votes.mean(axis=0)
-    # Sum of projections onto each facing line's normal: (I - h h^T).
+    if k == 1:
+        return OSpace(centre=position[0] + stride * heading[0], radius=stride)
+    if k == 2:
+        return OSpace.around(_pair_centre(position, heading), position)
+    centre = _circle_fit(position)
+    if centre is not None:
+        toward = centre - position
+        facing = np.einsum("ij,ij->i", toward, heading)
+        if np.mean(facing > 0.0) >= 0.5:
+            return OSpace.around(centre, position)
+    return OSpace.around(_lines_centre(position, heading, stride), position)
+
+
+def _pair_centre(position: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    middle = position.mean(axis=0)
+    along = position[1] - position[0]
+    half = 0.5 * float(np.hypot(*along))
+    if half == 0.0:
+        return middle
+    normal = np.array([-along[1], along[0]]) / (2.0 * half)
+    offsets = []
+    for p, u in zip(position, heading, strict=True):
+        # p + s u = middle + h normal  ->  [u, -normal] (s, h) = middle - p
+        matrix = np.column_stack([u, -normal])
+        if abs(np.linalg.det(matrix)) < 1e-6:
+            continue
+        s, h = np.linalg.solve(matrix, middle - p)
+        if s > 0.0 and abs(h) <= 2.0 * half:
+            offsets.append(h)
+    if not offsets:
+        return middle
+    return middle + float(np.mean(offsets)) * normal
+
+
+def _circle_fit(position: np.ndarray) -> np.ndarray | None:
+    """Centre of the least-squares circle through the points (None when they are collinear)."""
+    a = np.column_stack([2.0 * position, np.ones(len(position))])
+    b = np.einsum("ij,ij->i", position, position)
+    solution, _, rank, singular = np.linalg.lstsq(a, b, rcond=None)
+    if rank < 3 or singular[-1] < 1e-6 * singular[0]:
+        return None
+    return solution[:2]
+
+
+def _lines_centre(position: np.ndarray, heading: np.ndarray, stride: float) -> np.ndarray:
+    """The point nearest every facing line, pulled toward the mean stride point."""
+    prior = (position + stride * heading).mean(axis=0)
     normal = np.eye(2)[None] - heading[:, :, None] * heading[:, None, :]
     weight = _CENTRE_PRIOR * len(position)
     a = normal.sum(axis=0) + weight * np.eye(2)
     b = np.einsum("kij,kj->i", normal, position) + weight * prior
-    centre = np.linalg.solve(a, b)
-    return OSpace.around(centre, position)
+    return np.linalg.solve(a, b)
 
 
 def joining_place(

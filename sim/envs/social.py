@@ -271,6 +271,21 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._episodes = 0
         self._done = True
 
+    @property
+    def task(self) -> JoinTask | None:
+        """The joining task's parameters (None when observing)."""
+        return self._task
+
+    @property
+    def room(self) -> tuple[float, float]:
+        """(x extent, y extent) of the scenario's room, metres (centred on the origin)."""
+        return self._room
+
+    @property
+    def scenario(self) -> Scenario | None:
+        """The scenario of the current episode (None before the first reset)."""
+        return getattr(self, "_scenario", None)
+
     # ---------------------------------------------------------------------------------------
     # Gymnasium API
 
