@@ -26,7 +26,7 @@ applies the rule to the poses the world produces (`sim.episode` does this for ev
 
 from __future__ import annotations
 
-from scenarios import hri, mingle, word_improv  # noqa: F401  (register their scenarios)
+from scenarios import hri, mingle, randomisation, word_improv  # noqa: F401  (registration)
 from scenarios.registry import (
     Option,
     ScenarioInfo,

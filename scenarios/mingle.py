@@ -40,7 +40,7 @@ from scenarios.script import Intent
 from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
 from scenarios.timeline import TimelineBuilder
 
-__all__ = ["SALSA_RADIUS", "MingleParams", "build_mingle", "mingle"]
+__all__ = ["SALSA_RADIUS", "MingleParams", "NoFloorError", "build_mingle", "mingle"]
 
 SALSA_RADIUS = RadiusLaw(base=0.444, per_member=0.067)  # metres, fit to SALSA (module doc)
 DENSITY_PER_M2 = 0.4  # people per m^2 of a room picked for them (SALSA: ~18 in ~45 m^2)
@@ -69,6 +69,10 @@ ROBOT_ID = 0
 ANGLE_JITTER = 0.4  # share of the even gap a member's angle may deviate by
 
 
+class NoFloorError(ValueError):
+    """The party's groups and people do not fit the room."""
+
+
 @dataclass(frozen=True)
 class MingleParams:
     """Every number that shapes a party (the options of ``mingle``)."""
@@ -83,7 +87,7 @@ class MingleParams:
     radius_per_member: float = SALSA_RADIUS.per_member
     radius_spread: float = 0.10
     position_noise: float = 0.05
-    orientation_noise: float = 0.55
+    orientation_noise: float = 0.7
     head_noise: float = 0.2
     mean_stay: float = 300.0
     mean_alone: float = 10.0
@@ -376,7 +380,7 @@ class _Party:
         for m in alone:
             spot = self.free_spot(ALONE_CLAIM_M)
             if spot is None:
-                raise ValueError(
+                raise NoFloorError(
                     f"mingle: no free floor for {len(self.ids)} people in a "
                     f"{2 * self.half:g} m room; give a larger room_side"
                 )
@@ -769,7 +773,7 @@ def mingle(
     radius_per_member: float = SALSA_RADIUS.per_member,
     radius_spread: float = 0.10,
     position_noise: float = 0.05,
-    orientation_noise: float = 0.55,
+    orientation_noise: float = 0.7,
     head_noise: float = 0.2,
     mean_stay: float = 300.0,
     mean_alone: float = 10.0,
