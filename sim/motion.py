@@ -356,7 +356,310 @@ def write_pose(
 
 
 @numba.njit(cache=True)
-def advance(  # noqa: C901 - one kernel on purpose: every step touches every primitive
+def workspace(state, params):  # pragma: no cover - compiled
+    """Scratch arrays for `step`, kept across the steps of a call (agents sorted by x)."""
+    n = state.shape[0]
+    new_x = np.empty(n)
+    new_y = np.empty(n)
+    weight = np.empty(n)
+    revert = np.zeros(n, dtype=np.bool_)
+    xs = np.empty(n)
+    order = np.argsort(state[:, S_X])
+    moved_order = order.copy()
+    rank = np.empty(n, dtype=np.int64)
+    widest = 0.0
+    for i in range(n):
+        widest = max(widest, params[i, P_RADIUS])
+    return new_x, new_y, weight, revert, xs, order, moved_order, rank, widest
+
+
+@numba.njit(cache=True)
+def step(  # noqa: C901 - one step on purpose: every step touches every primitive
+    state,
+    intent,
+    params,
+    dt,
+    margin,
+    new_x,
+    new_y,
+    weight,
+    revert,
+    xs,
+    order,
+    moved_order,
+    rank,
+    widest,
+):
+    """Moves every agent by one control step of ``dt`` seconds, in place (see `advance`).
+
+    Pair loops visit neighbours along x only: ``order`` keeps the agents sorted by x (nearly
+    sorted from one step to the next, so re-sorting is linear).
+    """
+    n = state.shape[0]
+    # Leaving and entering.
+    for i in range(n):
+        here = state[i, S_PRESENT] > 0.5
+        want = intent[i, I_PRESENT] > 0.5
+        if here and not want:
+            state[i, S_PRESENT] = 0.0
+            state[i, S_VX] = 0.0
+            state[i, S_VY] = 0.0
+        elif want and not here:
+            x, y = state[i, S_X], state[i, S_Y]
+            if intent[i, I_HAS_APPEAR] > 0.5:
+                x, y = intent[i, I_APPEAR_X], intent[i, I_APPEAR_Y]
+            if _is_free(state, params, i, x, y, margin):
+                state[i, S_X] = x
+                state[i, S_Y] = y
+                state[i, S_VX] = 0.0
+                state[i, S_VY] = 0.0
+                state[i, S_PRESENT] = 1.0
+
+    for i in range(n):
+        xs[i] = state[i, S_X]
+    _insertion_sort(order, xs)
+    for a in range(n):
+        rank[order[a]] = a
+
+    # Desired motion, per agent.
+    for i in range(n):
+        x, y, yaw = state[i, S_X], state[i, S_Y], state[i, S_YAW]
+        new_x[i], new_y[i] = x, y
+        weight[i] = STANDING_WEIGHT
+        if state[i, S_PRESENT] < 0.5:
+            continue
+        max_speed = params[i, P_MAX_SPEED]
+        max_accel = params[i, P_MAX_ACCEL]
+        head_limit = params[i, P_HEAD_LIMIT]
+
+        if intent[i, I_CMD] > 0.5:
+            # Velocity commands (the robot): unicycle base, head pan and tilt rates.
+            forward = state[i, S_VX] * math.cos(yaw) + state[i, S_VY] * math.sin(yaw)
+            goal_speed = _clip(intent[i, I_CMD_SPEED], -max_speed, max_speed)
+            forward += _clip(goal_speed - forward, -max_accel * dt, max_accel * dt)
+            turn = _clip(intent[i, I_CMD_TURN], -params[i, P_MAX_TURN], params[i, P_MAX_TURN])
+            yaw = _wrap(yaw + turn * dt)
+            state[i, S_YAW] = yaw
+            state[i, S_VX] = forward * math.cos(yaw)
+            state[i, S_VY] = forward * math.sin(yaw)
+            pan = _clip(intent[i, I_CMD_PAN], -params[i, P_HEAD_RATE], params[i, P_HEAD_RATE])
+            state[i, S_HEAD] = _clip(state[i, S_HEAD] + pan * dt, -head_limit, head_limit)
+            tilt_limit = params[i, P_TILT_LIMIT]
+            tilt = _clip(intent[i, I_CMD_TILT], -params[i, P_TILT_RATE], params[i, P_TILT_RATE])
+            state[i, S_TILT] = _clip(state[i, S_TILT] + tilt * dt, -tilt_limit, tilt_limit)
+            new_x[i] = x + state[i, S_VX] * dt
+            new_y[i] = y + state[i, S_VY] * dt
+            weight[i] = 1.0
+            continue
+
+        vdx, vdy = 0.0, 0.0
+        ux, uy = 0.0, 0.0
+        dist_goal = 0.0
+        moving = False
+        cap = 0.0
+        if intent[i, I_HAS_GOAL] > 0.5:
+            ex, ey = intent[i, I_GOAL_X] - x, intent[i, I_GOAL_Y] - y
+            dist_goal = _norm(ex, ey)
+            if dist_goal > ARRIVE_TOLERANCE_M:
+                ux, uy = ex / dist_goal, ey / dist_goal
+                cap = min(intent[i, I_SPEED], max_speed)
+                speed = cap
+                if dist_goal > SIDESTEP_M:
+                    err = _wrap(math.atan2(uy, ux) - yaw)
+                    speed *= max(0.5 * (1.0 + math.cos(err)), MIN_HEADING_FACTOR)
+                else:
+                    speed = min(speed, SIDESTEP_SPEED_M_S)
+                brake = math.sqrt(2.0 * BRAKE_SHARE * max_accel * (dist_goal - ARRIVE_TOLERANCE_M))
+                speed = min(speed, brake)
+                vdx, vdy = ux * speed, uy * speed
+                moving = True
+        if moving:
+            weight[i] = 1.0
+        if moving and dist_goal > SIDESTEP_M:
+            # Walkers avoid others; the last side step into place does not (personal space
+            # and contact still hold), or people could not close up a tight circle.
+            lo, hi = _window(order, xs, rank[i], AVOID_RANGE_M)
+            for b in range(lo, hi):
+                j = order[b]
+                if j == i or state[j, S_PRESENT] < 0.5:
+                    continue
+                rx, ry = x - state[j, S_X], y - state[j, S_Y]
+                d2 = rx * rx + ry * ry
+                if d2 >= AVOID_RANGE_M * AVOID_RANGE_M or d2 < 1e-18:
+                    continue
+                d = math.sqrt(d2)
+                nx, ny = rx / d, ry / d
+                ahead = -(nx * ux + ny * uy)
+                if ahead < AVOID_FRONT_COS:
+                    continue
+                gap = max(d - params[i, P_RADIUS] - params[j, P_RADIUS] - margin, 0.0)
+                push = AVOID_GAIN_M_S * math.exp(-gap / AVOID_DECAY_M)
+                side = push * AVOID_TANGENT * max(ahead, 0.0)
+                vdx += push * nx + side * uy
+                vdy += push * ny - side * ux
+            norm = _norm(vdx, vdy)
+            if norm > cap:
+                vdx, vdy = vdx * cap / norm, vdy * cap / norm
+
+        # Bounded acceleration.
+        dvx, dvy = vdx - state[i, S_VX], vdy - state[i, S_VY]
+        dv = _norm(dvx, dvy)
+        if dv > max_accel * dt:
+            dvx, dvy = dvx * max_accel * dt / dv, dvy * max_accel * dt / dv
+        vx, vy = state[i, S_VX] + dvx, state[i, S_VY] + dvy
+        if vx != 0.0 or vy != 0.0:
+            # Nobody walks into someone they touch: drop the velocity toward them.
+            touch = params[i, P_RADIUS] + widest + margin + CONTACT_GAP_M
+            lo, hi = _window(order, xs, rank[i], touch)
+            for b in range(lo, hi):
+                j = order[b]
+                if j == i or state[j, S_PRESENT] < 0.5:
+                    continue
+                rx, ry = state[j, S_X] - x, state[j, S_Y] - y
+                reach = params[i, P_RADIUS] + params[j, P_RADIUS] + margin + CONTACT_GAP_M
+                d2 = rx * rx + ry * ry
+                if d2 >= reach * reach or d2 < 1e-18:
+                    continue
+                d = math.sqrt(d2)
+                approach = (vx * rx + vy * ry) / d
+                if approach > 0.0:
+                    vx -= approach * rx / d
+                    vy -= approach * ry / d
+        state[i, S_VX], state[i, S_VY] = vx, vy
+        new_x[i] = x + vx * dt
+        new_y[i] = y + vy * dt
+
+        # Body yaw: the walking direction, else the facing target, turned to follow the gaze.
+        has_gaze, gaze = _gaze_yaw(state, intent, i)
+        walking = moving and dist_goal > SIDESTEP_M and _norm(vx, vy) > WALK_TURN_MIN_SPEED_M_S
+        if walking:
+            target = math.atan2(vy, vx)
+        else:
+            target = _target_yaw(
+                state,
+                intent,
+                i,
+                int(intent[i, I_FACE_MODE]),
+                I_FACE_YAW,
+                I_FACE_X,
+                I_FACE_Y,
+                I_FACE_AGENT,
+                yaw,
+            )
+            if has_gaze:
+                rel = _wrap(gaze - target)
+                if rel > head_limit:
+                    target = gaze - head_limit
+                elif rel < -head_limit:
+                    target = gaze + head_limit
+        error = _wrap(target - yaw)
+        yaw = _wrap(yaw + (_approach(0.0, error, TURN_GAIN_PER_S, params[i, P_MAX_TURN], dt)))
+        state[i, S_YAW] = yaw
+
+        # Head: toward the gaze target, within the limit of the body.
+        goal_head = 0.0
+        if has_gaze:
+            goal_head = _clip(_wrap(gaze - yaw), -head_limit, head_limit)
+        head = _approach(state[i, S_HEAD], goal_head, HEAD_GAIN_PER_S, params[i, P_HEAD_RATE], dt)
+        state[i, S_HEAD] = _clip(head, -head_limit, head_limit)
+
+    # Personal space: push overlapping discs apart, keep inside the walls. A pass that finds
+    # no overlap moves nobody, so its verdict is exact.
+    for i in range(n):
+        if state[i, S_PRESENT] > 0.5:
+            new_x[i] = _clip(new_x[i], params[i, P_X_MIN], params[i, P_X_MAX])
+            new_y[i] = _clip(new_y[i], params[i, P_Y_MIN], params[i, P_Y_MAX])
+    farthest = 2.0 * widest + margin
+    overlap_found = False
+    for _ in range(PROJECTION_ITERATIONS):
+        overlap_found = False
+        _insertion_sort(moved_order, new_x)
+        for a in range(n):
+            i = moved_order[a]
+            if state[i, S_PRESENT] < 0.5:
+                continue
+            for b in range(a + 1, n):
+                j = moved_order[b]
+                if new_x[j] - new_x[i] >= farthest:
+                    break
+                if state[j, S_PRESENT] < 0.5:
+                    continue
+                dx, dy = new_x[j] - new_x[i], new_y[j] - new_y[i]
+                d2 = dx * dx + dy * dy
+                need = params[i, P_RADIUS] + params[j, P_RADIUS] + margin
+                if d2 >= need * need:
+                    continue
+                d = math.sqrt(d2)
+                overlap_found = True
+                if d < 1e-9:
+                    # Coincident: separate along the line between the old positions.
+                    dx, dy = state[j, S_X] - state[i, S_X], state[j, S_Y] - state[i, S_Y]
+                    d = _norm(dx, dy)
+                    if d < 1e-9:
+                        dx, dy, d = 1.0, 0.0, 1.0
+                    dx, dy = dx / d, dy / d
+                    d = 0.0
+                else:
+                    dx, dy = dx / d, dy / d
+                push = need - d + 1e-6
+                share = weight[i] / (weight[i] + weight[j])
+                new_x[i] -= dx * push * share
+                new_y[i] -= dy * push * share
+                new_x[j] += dx * push * (1.0 - share)
+                new_y[j] += dy * push * (1.0 - share)
+        for i in range(n):
+            if state[i, S_PRESENT] > 0.5:
+                new_x[i] = _clip(new_x[i], params[i, P_X_MIN], params[i, P_X_MAX])
+                new_y[i] = _clip(new_y[i], params[i, P_Y_MIN], params[i, P_Y_MAX])
+        if not overlap_found:
+            break
+
+    # Never faster than the speed limit, even when pushed.
+    capped = False
+    for i in range(n):
+        if state[i, S_PRESENT] < 0.5:
+            continue
+        dx, dy = new_x[i] - state[i, S_X], new_y[i] - state[i, S_Y]
+        d = _norm(dx, dy)
+        reach = params[i, P_MAX_SPEED] * dt
+        if d > reach:
+            new_x[i] = state[i, S_X] + dx * reach / d
+            new_y[i] = state[i, S_Y] + dy * reach / d
+            capped = True
+
+    # Whoever still overlaps goes back to where they were (where nobody overlapped).
+    for i in range(n):
+        revert[i] = False
+    for _ in range(n + 1 if (overlap_found or capped) else 0):
+        changed = False
+        for i in range(n):
+            if state[i, S_PRESENT] < 0.5:
+                continue
+            for j in range(i + 1, n):
+                if state[j, S_PRESENT] < 0.5:
+                    continue
+                need = params[i, P_RADIUS] + params[j, P_RADIUS] + margin
+                dx, dy = new_x[j] - new_x[i], new_y[j] - new_y[i]
+                if dx * dx + dy * dy < need * need:
+                    for k in (i, j):
+                        if not revert[k]:
+                            revert[k] = True
+                            new_x[k], new_y[k] = state[k, S_X], state[k, S_Y]
+                            changed = True
+        if not changed:
+            break
+
+    for i in range(n):
+        if state[i, S_PRESENT] < 0.5:
+            continue
+        state[i, S_VX] = (new_x[i] - state[i, S_X]) / dt
+        state[i, S_VY] = (new_y[i] - state[i, S_Y]) / dt
+        state[i, S_X] = new_x[i]
+        state[i, S_Y] = new_y[i]
+
+
+@numba.njit(cache=True)
+def advance(
     state,
     intent,
     params,
@@ -390,285 +693,24 @@ def advance(  # noqa: C901 - one kernel on purpose: every step touches every pri
         rec_qpos: (rows, nq) recorded joint positions (only the head joints are written).
         rec_present: (rows, n) recorded presence.
     """
-    n = state.shape[0]
-    new_x = np.empty(n)
-    new_y = np.empty(n)
-    weight = np.empty(n)
-    revert = np.zeros(n, dtype=np.bool_)
-    # Pair loops visit neighbours along x only: agents sorted by x (kept nearly sorted).
-    xs = np.empty(n)
-    order = np.argsort(state[:, S_X])
-    moved_order = order.copy()
-    rank = np.empty(n, dtype=np.int64)
-    widest = 0.0
-    for i in range(n):
-        widest = max(widest, params[i, P_RADIUS])
+    new_x, new_y, weight, revert, xs, order, moved_order, rank, widest = workspace(state, params)
     for s in range(record_at.shape[0]):
-        # Leaving and entering.
-        for i in range(n):
-            here = state[i, S_PRESENT] > 0.5
-            want = intent[i, I_PRESENT] > 0.5
-            if here and not want:
-                state[i, S_PRESENT] = 0.0
-                state[i, S_VX] = 0.0
-                state[i, S_VY] = 0.0
-            elif want and not here:
-                x, y = state[i, S_X], state[i, S_Y]
-                if intent[i, I_HAS_APPEAR] > 0.5:
-                    x, y = intent[i, I_APPEAR_X], intent[i, I_APPEAR_Y]
-                if _is_free(state, params, i, x, y, margin):
-                    state[i, S_X] = x
-                    state[i, S_Y] = y
-                    state[i, S_VX] = 0.0
-                    state[i, S_VY] = 0.0
-                    state[i, S_PRESENT] = 1.0
-
-        for i in range(n):
-            xs[i] = state[i, S_X]
-        _insertion_sort(order, xs)
-        for a in range(n):
-            rank[order[a]] = a
-
-        # Desired motion, per agent.
-        for i in range(n):
-            x, y, yaw = state[i, S_X], state[i, S_Y], state[i, S_YAW]
-            new_x[i], new_y[i] = x, y
-            weight[i] = STANDING_WEIGHT
-            if state[i, S_PRESENT] < 0.5:
-                continue
-            max_speed = params[i, P_MAX_SPEED]
-            max_accel = params[i, P_MAX_ACCEL]
-            head_limit = params[i, P_HEAD_LIMIT]
-
-            if intent[i, I_CMD] > 0.5:
-                # Velocity commands (the robot): unicycle base, head pan and tilt rates.
-                forward = state[i, S_VX] * math.cos(yaw) + state[i, S_VY] * math.sin(yaw)
-                goal_speed = _clip(intent[i, I_CMD_SPEED], -max_speed, max_speed)
-                forward += _clip(goal_speed - forward, -max_accel * dt, max_accel * dt)
-                turn = _clip(intent[i, I_CMD_TURN], -params[i, P_MAX_TURN], params[i, P_MAX_TURN])
-                yaw = _wrap(yaw + turn * dt)
-                state[i, S_YAW] = yaw
-                state[i, S_VX] = forward * math.cos(yaw)
-                state[i, S_VY] = forward * math.sin(yaw)
-                pan = _clip(intent[i, I_CMD_PAN], -params[i, P_HEAD_RATE], params[i, P_HEAD_RATE])
-                state[i, S_HEAD] = _clip(state[i, S_HEAD] + pan * dt, -head_limit, head_limit)
-                tilt_limit = params[i, P_TILT_LIMIT]
-                tilt = _clip(intent[i, I_CMD_TILT], -params[i, P_TILT_RATE], params[i, P_TILT_RATE])
-                state[i, S_TILT] = _clip(state[i, S_TILT] + tilt * dt, -tilt_limit, tilt_limit)
-                new_x[i] = x + state[i, S_VX] * dt
-                new_y[i] = y + state[i, S_VY] * dt
-                weight[i] = 1.0
-                continue
-
-            vdx, vdy = 0.0, 0.0
-            ux, uy = 0.0, 0.0
-            dist_goal = 0.0
-            moving = False
-            cap = 0.0
-            if intent[i, I_HAS_GOAL] > 0.5:
-                ex, ey = intent[i, I_GOAL_X] - x, intent[i, I_GOAL_Y] - y
-                dist_goal = _norm(ex, ey)
-                if dist_goal > ARRIVE_TOLERANCE_M:
-                    ux, uy = ex / dist_goal, ey / dist_goal
-                    cap = min(intent[i, I_SPEED], max_speed)
-                    speed = cap
-                    if dist_goal > SIDESTEP_M:
-                        err = _wrap(math.atan2(uy, ux) - yaw)
-                        speed *= max(0.5 * (1.0 + math.cos(err)), MIN_HEADING_FACTOR)
-                    else:
-                        speed = min(speed, SIDESTEP_SPEED_M_S)
-                    brake = math.sqrt(
-                        2.0 * BRAKE_SHARE * max_accel * (dist_goal - ARRIVE_TOLERANCE_M)
-                    )
-                    speed = min(speed, brake)
-                    vdx, vdy = ux * speed, uy * speed
-                    moving = True
-            if moving:
-                weight[i] = 1.0
-            if moving and dist_goal > SIDESTEP_M:
-                # Walkers avoid others; the last side step into place does not (personal space
-                # and contact still hold), or people could not close up a tight circle.
-                lo, hi = _window(order, xs, rank[i], AVOID_RANGE_M)
-                for b in range(lo, hi):
-                    j = order[b]
-                    if j == i or state[j, S_PRESENT] < 0.5:
-                        continue
-                    rx, ry = x - state[j, S_X], y - state[j, S_Y]
-                    d2 = rx * rx + ry * ry
-                    if d2 >= AVOID_RANGE_M * AVOID_RANGE_M or d2 < 1e-18:
-                        continue
-                    d = math.sqrt(d2)
-                    nx, ny = rx / d, ry / d
-                    ahead = -(nx * ux + ny * uy)
-                    if ahead < AVOID_FRONT_COS:
-                        continue
-                    gap = max(d - params[i, P_RADIUS] - params[j, P_RADIUS] - margin, 0.0)
-                    push = AVOID_GAIN_M_S * math.exp(-gap / AVOID_DECAY_M)
-                    side = push * AVOID_TANGENT * max(ahead, 0.0)
-                    vdx += push * nx + side * uy
-                    vdy += push * ny - side * ux
-                norm = _norm(vdx, vdy)
-                if norm > cap:
-                    vdx, vdy = vdx * cap / norm, vdy * cap / norm
-
-            # Bounded acceleration.
-            dvx, dvy = vdx - state[i, S_VX], vdy - state[i, S_VY]
-            dv = _norm(dvx, dvy)
-            if dv > max_accel * dt:
-                dvx, dvy = dvx * max_accel * dt / dv, dvy * max_accel * dt / dv
-            vx, vy = state[i, S_VX] + dvx, state[i, S_VY] + dvy
-            if vx != 0.0 or vy != 0.0:
-                # Nobody walks into someone they touch: drop the velocity toward them.
-                touch = params[i, P_RADIUS] + widest + margin + CONTACT_GAP_M
-                lo, hi = _window(order, xs, rank[i], touch)
-                for b in range(lo, hi):
-                    j = order[b]
-                    if j == i or state[j, S_PRESENT] < 0.5:
-                        continue
-                    rx, ry = state[j, S_X] - x, state[j, S_Y] - y
-                    reach = params[i, P_RADIUS] + params[j, P_RADIUS] + margin + CONTACT_GAP_M
-                    d2 = rx * rx + ry * ry
-                    if d2 >= reach * reach or d2 < 1e-18:
-                        continue
-                    d = math.sqrt(d2)
-                    approach = (vx * rx + vy * ry) / d
-                    if approach > 0.0:
-                        vx -= approach * rx / d
-                        vy -= approach * ry / d
-            state[i, S_VX], state[i, S_VY] = vx, vy
-            new_x[i] = x + vx * dt
-            new_y[i] = y + vy * dt
-
-            # Body yaw: the walking direction, else the facing target, turned to follow the gaze.
-            has_gaze, gaze = _gaze_yaw(state, intent, i)
-            walking = moving and dist_goal > SIDESTEP_M and _norm(vx, vy) > WALK_TURN_MIN_SPEED_M_S
-            if walking:
-                target = math.atan2(vy, vx)
-            else:
-                target = _target_yaw(
-                    state,
-                    intent,
-                    i,
-                    int(intent[i, I_FACE_MODE]),
-                    I_FACE_YAW,
-                    I_FACE_X,
-                    I_FACE_Y,
-                    I_FACE_AGENT,
-                    yaw,
-                )
-                if has_gaze:
-                    rel = _wrap(gaze - target)
-                    if rel > head_limit:
-                        target = gaze - head_limit
-                    elif rel < -head_limit:
-                        target = gaze + head_limit
-            error = _wrap(target - yaw)
-            yaw = _wrap(yaw + (_approach(0.0, error, TURN_GAIN_PER_S, params[i, P_MAX_TURN], dt)))
-            state[i, S_YAW] = yaw
-
-            # Head: toward the gaze target, within the limit of the body.
-            goal_head = 0.0
-            if has_gaze:
-                goal_head = _clip(_wrap(gaze - yaw), -head_limit, head_limit)
-            head = _approach(
-                state[i, S_HEAD], goal_head, HEAD_GAIN_PER_S, params[i, P_HEAD_RATE], dt
-            )
-            state[i, S_HEAD] = _clip(head, -head_limit, head_limit)
-
-        # Personal space: push overlapping discs apart, keep inside the walls. A pass that finds
-        # no overlap moves nobody, so its verdict is exact.
-        for i in range(n):
-            if state[i, S_PRESENT] > 0.5:
-                new_x[i] = _clip(new_x[i], params[i, P_X_MIN], params[i, P_X_MAX])
-                new_y[i] = _clip(new_y[i], params[i, P_Y_MIN], params[i, P_Y_MAX])
-        farthest = 2.0 * widest + margin
-        overlap_found = False
-        for _ in range(PROJECTION_ITERATIONS):
-            overlap_found = False
-            _insertion_sort(moved_order, new_x)
-            for a in range(n):
-                i = moved_order[a]
-                if state[i, S_PRESENT] < 0.5:
-                    continue
-                for b in range(a + 1, n):
-                    j = moved_order[b]
-                    if new_x[j] - new_x[i] >= farthest:
-                        break
-                    if state[j, S_PRESENT] < 0.5:
-                        continue
-                    dx, dy = new_x[j] - new_x[i], new_y[j] - new_y[i]
-                    d2 = dx * dx + dy * dy
-                    need = params[i, P_RADIUS] + params[j, P_RADIUS] + margin
-                    if d2 >= need * need:
-                        continue
-                    d = math.sqrt(d2)
-                    overlap_found = True
-                    if d < 1e-9:
-                        # Coincident: separate along the line between the old positions.
-                        dx, dy = state[j, S_X] - state[i, S_X], state[j, S_Y] - state[i, S_Y]
-                        d = _norm(dx, dy)
-                        if d < 1e-9:
-                            dx, dy, d = 1.0, 0.0, 1.0
-                        dx, dy = dx / d, dy / d
-                        d = 0.0
-                    else:
-                        dx, dy = dx / d, dy / d
-                    push = need - d + 1e-6
-                    share = weight[i] / (weight[i] + weight[j])
-                    new_x[i] -= dx * push * share
-                    new_y[i] -= dy * push * share
-                    new_x[j] += dx * push * (1.0 - share)
-                    new_y[j] += dy * push * (1.0 - share)
-            for i in range(n):
-                if state[i, S_PRESENT] > 0.5:
-                    new_x[i] = _clip(new_x[i], params[i, P_X_MIN], params[i, P_X_MAX])
-                    new_y[i] = _clip(new_y[i], params[i, P_Y_MIN], params[i, P_Y_MAX])
-            if not overlap_found:
-                break
-
-        # Never faster than the speed limit, even when pushed.
-        capped = False
-        for i in range(n):
-            if state[i, S_PRESENT] < 0.5:
-                continue
-            dx, dy = new_x[i] - state[i, S_X], new_y[i] - state[i, S_Y]
-            d = _norm(dx, dy)
-            reach = params[i, P_MAX_SPEED] * dt
-            if d > reach:
-                new_x[i] = state[i, S_X] + dx * reach / d
-                new_y[i] = state[i, S_Y] + dy * reach / d
-                capped = True
-
-        # Whoever still overlaps goes back to where they were (where nobody overlapped).
-        for i in range(n):
-            revert[i] = False
-        for _ in range(n + 1 if (overlap_found or capped) else 0):
-            changed = False
-            for i in range(n):
-                if state[i, S_PRESENT] < 0.5:
-                    continue
-                for j in range(i + 1, n):
-                    if state[j, S_PRESENT] < 0.5:
-                        continue
-                    need = params[i, P_RADIUS] + params[j, P_RADIUS] + margin
-                    dx, dy = new_x[j] - new_x[i], new_y[j] - new_y[i]
-                    if dx * dx + dy * dy < need * need:
-                        for k in (i, j):
-                            if not revert[k]:
-                                revert[k] = True
-                                new_x[k], new_y[k] = state[k, S_X], state[k, S_Y]
-                                changed = True
-            if not changed:
-                break
-
-        for i in range(n):
-            if state[i, S_PRESENT] < 0.5:
-                continue
-            state[i, S_VX] = (new_x[i] - state[i, S_X]) / dt
-            state[i, S_VY] = (new_y[i] - state[i, S_Y]) / dt
-            state[i, S_X] = new_x[i]
-            state[i, S_Y] = new_y[i]
-
+        step(
+            state,
+            intent,
+            params,
+            dt,
+            margin,
+            new_x,
+            new_y,
+            weight,
+            revert,
+            xs,
+            order,
+            moved_order,
+            rank,
+            widest,
+        )
         row = record_at[s]
         if row >= 0:
             write_pose(

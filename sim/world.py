@@ -45,7 +45,7 @@ from mujoco import batch as mj_batch
 
 from reform.frame import ROBOT, Frame, Group, wrap_angle
 from scenarios.script import Intent, Point, Script
-from sim import motion
+from sim import _native, motion
 from sim.motion import (
     PERSON_LIMITS,
     ROBOT_LIMITS,
@@ -272,6 +272,8 @@ class World:
         self._data = mujoco.MjData(self._model)
         # Rollouts compute body poses on the kinematic twin: same bodies and joints, few geoms.
         self._twin = build_scene(spec, geometry=False)
+        self._twin_data = mujoco.MjData(self._twin)
+        self._twin_views = _native.data_views(self._twin_data)
         self._batch: mj_batch.Batch | None = None
 
         agents = spec.agents
@@ -523,13 +525,14 @@ class World:
     ) -> Iterator[Poses]:
         """Advances by ``duration`` seconds, yielding poses every ``1 / rate`` s in blocks.
 
-        The fast path: each block of up to ``block_rows`` output times is moved by the compiled
-        motion kernel, then MuJoCo computes the kinematics of all its rows in one call
-        (`mujoco.batch`), on the scene's kinematic twin (``build_scene(spec, geometry=False)``:
-        the same bodies and joints, hence the same body poses, without the geoms no pose
-        depends on). After each block the world (and `data`) is at the block's last time.
-        Only one block is held at a time, so hour-long runs stream in constant memory.
-        ``threads`` > 1 computes a block's kinematics on that many threads (identical results).
+        The fast path: the compiled motion kernel moves the agents and calls MuJoCo's
+        ``mj_kinematics`` itself after every output step (`sim._native`), on the scene's
+        kinematic twin (``build_scene(spec, geometry=False)``: the same bodies and joints, hence
+        the same body poses, without the geoms no pose depends on). With ``threads`` > 1, or
+        where the MuJoCo library cannot be called from compiled code, each block's kinematics
+        run in one ``mujoco.batch`` call instead (on that many threads; identical results).
+        After each block the world (and `data`) is at the block's last time. Only one block is
+        held at a time, so hour-long runs stream in constant memory.
         """
         if isinstance(block_rows, bool) or not isinstance(block_rows, (int, np.integer)):
             raise ValueError(f"block_rows must be a positive int, got {block_rows!r}")
@@ -538,38 +541,49 @@ class World:
         if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
             raise ValueError(f"threads must be a positive int, got {threads!r}")
         every, count = self._output_plan(duration, rate)
-        batch = self._batch_of(int(block_rows), int(threads))
-        b_mpos, b_mquat, b_qpos = batch.mocap_pos, batch.mocap_quat, batch.qpos
-        b_xpos, b_xquat = batch.xpos, batch.xquat
+        block_rows, n = int(block_rows), self._ids.size
         bodies = np.concatenate([self._torso_body, self._head_body])
-        n = self._ids.size
+        native = _native.NATIVE and threads == 1
+        if native:
+            xy = np.empty((block_rows, 2 * n, 2))
+            quat = np.empty((block_rows, 2 * n, 4))
+            present = np.zeros((block_rows, n), dtype=np.bool_)
+        else:
+            batch = self._batch_of(block_rows, int(threads))
         done = 0
         while done < count:
-            rows = min(int(block_rows), count - done)
+            rows = min(block_rows, count - done)
             record_at = np.full(rows * every, -1, dtype=np.int64)
             record_at[every - 1 :: every] = np.arange(rows)
-            mpos, mquat, qpos, present = self._buffer(int(block_rows))
             first_step = self._step_index
-            self._advance(record_at, mpos, mquat, qpos, present)
-            b_mpos[:rows] = mpos[:rows]
-            b_mquat[:rows] = mquat[:rows]
-            b_qpos[:rows] = qpos[:rows]
-            ids = None if rows == batch.nsim else np.arange(rows)
-            batch.forward(ids=ids, stage=mujoco.mjtStage.mjSTAGE_POS)
-            xyz = np.take(b_xpos[:rows], bodies, axis=1)
-            yaws = yaw_from_quat(np.take(b_xquat[:rows], bodies, axis=1))
+            if native:
+                self._advance_native(record_at, bodies, xy, quat, present)
+                yaws = yaw_from_quat(quat[:rows])
+                mpos, mquat, qpos = self._twin_views[:3]
+                last = (mpos[0], mquat[0], qpos[0], present[rows - 1])
+            else:
+                mpos, mquat, qpos, present = self._buffer(block_rows)
+                self._advance(record_at, mpos, mquat, qpos, present)
+                batch.mocap_pos[:rows] = mpos[:rows]
+                batch.mocap_quat[:rows] = mquat[:rows]
+                batch.qpos[:rows] = qpos[:rows]
+                ids = None if rows == batch.nsim else np.arange(rows)
+                batch.forward(ids=ids, stage=mujoco.mjtStage.mjSTAGE_POS)
+                xy = np.take(batch.xpos[:rows], bodies, axis=1)[..., :2]
+                yaws = yaw_from_quat(np.take(batch.xquat[:rows], bodies, axis=1))
+                last = (mpos[rows - 1], mquat[rows - 1], qpos[rows - 1], present[rows - 1])
             steps = first_step + every * np.arange(1, rows + 1)
             groups = self._groups_of_steps(steps)
-            self._load_row(mpos[rows - 1], mquat[rows - 1], qpos[rows - 1], present[rows - 1])
+            self._load_row(*last)
             done += rows
             yield Poses(
                 time=steps * self._dt,
                 ids=self._ids,
                 kinds=self._kinds,
                 present=present[:rows].copy(),
-                position=xyz[:, :n, :2].copy(),
+                position=xy[:rows, :n].copy(),
                 yaw=yaws[:, :n],
-                head_position=xyz[:, n:, :2].copy(),
+                head_position=xy[:rows, n:].copy(),
                 head_yaw=yaws[:, n:],
                 groups=groups,
                 sequence=self._sequence,
@@ -637,6 +651,9 @@ class World:
         batch = self._batch
         if batch is None or batch.nsim != rows or batch.nthread != threads:
             batch = self._batch = mj_batch.Batch(self._twin, nsim=rows, nthread=threads)
+            # Outputs are copied out only once bound: bind them before the first call.
+            batch.bind("xpos")
+            batch.bind("xquat")
         return batch
 
     def _write_initial_pose(self) -> None:
@@ -675,15 +692,9 @@ class World:
         qpos: np.ndarray,
         present: np.ndarray,
     ) -> None:
-        """Runs the motion kernel over ``len(record_at)`` steps, sampling the script on ticks."""
-        spd = self._steps_per_decision
-        start = self._step_index
-        end = start + record_at.size
-        k = start
-        while k < end:
-            if self._script is not None and k % spd == 0 and k // spd != self._intent_tick:
-                self._apply_script_tick(k)
-            segment_end = min(end, (k // spd + 1) * spd)
+        """Runs the motion kernel over ``len(record_at)`` steps, recording into the buffers."""
+
+        def segment(k: int, records: np.ndarray) -> None:
             motion.advance(
                 self._state,
                 self._intent,
@@ -691,7 +702,7 @@ class World:
                 k,
                 self._dt,
                 CLEARANCE_MARGIN_M,
-                record_at[k - start : segment_end - start],
+                records,
                 self._mocap_of,
                 self._head_adr,
                 self._tilt_adr,
@@ -700,6 +711,59 @@ class World:
                 qpos,
                 present,
             )
+
+        self._segments(record_at, segment)
+
+    def _advance_native(
+        self,
+        record_at: np.ndarray,
+        bodies: np.ndarray,
+        xy: np.ndarray,
+        quat: np.ndarray,
+        present: np.ndarray,
+    ) -> None:
+        """The motion kernel with MuJoCo's kinematics (on the twin) at every recorded step."""
+        views = self._twin_views
+        scratch = self._buffer(1)[3]
+
+        def segment(k: int, records: np.ndarray) -> None:
+            _native.advance_with_kinematics(
+                self._twin._address,
+                self._twin_data._address,
+                self._state,
+                self._intent,
+                self._params,
+                k,
+                self._dt,
+                CLEARANCE_MARGIN_M,
+                records,
+                self._mocap_of,
+                self._head_adr,
+                self._tilt_adr,
+                *views,
+                bodies,
+                scratch,
+                xy,
+                quat,
+                present,
+            )
+
+        self._segments(record_at, segment)
+
+    def _segments(self, record_at: np.ndarray, segment: Any) -> None:
+        """Calls ``segment(first_step, record_at_slice)`` between decision ticks.
+
+        The script is sampled on each tick before the steps that follow it.
+        """
+        spd = self._steps_per_decision
+        start = self._step_index
+        end = start + record_at.size
+        k = start
+        while k < end:
+            if self._script is not None and k % spd == 0 and k // spd != self._intent_tick:
+                self._apply_script_tick(k)
+            segment_end = min(end, (k // spd + 1) * spd)
+            segment(k, record_at[k - start : segment_end - start])
             k = segment_end
         self._step_index = end
 

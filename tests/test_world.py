@@ -271,3 +271,18 @@ def test_long_rollouts_stream_in_constant_memory() -> None:
     short, long = peak(30.0), peak(300.0)
     # 10x the rows (30,000 rows x 7 agents of poses would be ~10 MiB), about the same peak.
     assert long < 1.5 * short + 2**20
+
+
+def test_native_and_batched_kinematics_agree() -> None:
+    from sim import _native
+
+    assert _native.NATIVE  # the MuJoCo library ships with the mujoco package
+    spec = _circle(5)
+    blocks = {
+        threads: list(World(spec, seed=2, script=Shuffle(spec, 3)).rollout(3.0, threads=threads))
+        for threads in (1, 2)
+    }
+    for a, b in zip(blocks[1], blocks[2], strict=True):
+        for name in ("time", "present", "position", "yaw", "head_position", "head_yaw"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+        assert a.groups == b.groups
