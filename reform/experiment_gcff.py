@@ -75,6 +75,7 @@ class GcffComparison:
         frames: annotated frames per part: ``salsa-train``, ``salsa-test``, ``babble``.
         train_fraction: share of each SALSA session's annotated frames used for training.
         notes: free-text remarks printed under the tables.
+        added: how many results came from elsewhere (:meth:`with_results`).
     """
 
     results: tuple[Mapping[str, Any], ...]
@@ -82,14 +83,29 @@ class GcffComparison:
     frames: Mapping[str, int]
     train_fraction: float
     notes: tuple[str, ...] = field(default=())
+    added: int = 0
+
+    def all_notes(self) -> tuple[str, ...]:
+        """The notes, plus one saying so when no other detector's results were added."""
+        if self.added:
+            return self.notes
+        return self.notes + (
+            "REFORM's classifiers are not in this run. Score them on the same frames (SALSA "
+            f"test split of reform.time_split, dataset '{SALSA_TEST}'; Babble, dataset "
+            f"'{BABBLE}') and add their evaluation JSON with --with-results "
+            "(reform-sim experiment gcff) or GcffComparison.with_results.",
+        )
 
     def with_results(self, results: Sequence[Mapping[str, Any]]) -> GcffComparison:
         """A copy with more evaluation results (e.g. REFORM's), checked to be on the same frames.
 
         Each result needs ``detector``, ``dataset`` (:data:`SALSA_TEST` or :data:`BABBLE`) and
-        ``frames`` equal to this comparison's count for that dataset.
+        ``frames`` equal to this comparison's count for that dataset. A result whose detector
+        name (ignoring case) is already in the table for that dataset, e.g. another run of the
+        majority baseline, is left out.
         """
         added = []
+        present = {(str(r["detector"]).lower(), r["dataset"]) for r in self.results}
         for i, result in enumerate(results):
             dataset = result.get("dataset")
             if dataset not in (SALSA_TEST, BABBLE):
@@ -101,13 +117,17 @@ class GcffComparison:
                     f"results[{i}] ({result.get('detector')!r} on {dataset}) must be scored on "
                     f"the same {self.frames[dataset]} frames, got {result.get('frames')}"
                 )
-            added.append(result)
+            key = (str(result.get("detector")).lower(), dataset)
+            if key not in present:
+                present.add(key)
+                added.append(result)
         return GcffComparison(
             results=self.results + tuple(added),
             tuning=self.tuning,
             frames=self.frames,
             train_fraction=self.train_fraction,
             notes=self.notes,
+            added=self.added + len(added),
         )
 
     def to_json(self, *, command: str | None = None) -> dict[str, Any]:
@@ -151,7 +171,7 @@ class GcffComparison:
                 d: {k: list(v) for k, v in rows.items()} for d, rows in PAPER_SCORES.items()
             },
             "results": [dict(r) for r in self.results],
-            "notes": list(self.notes),
+            "notes": list(self.all_notes()),
         }
 
     def to_markdown(self, *, command: str | None = None) -> str:
@@ -207,8 +227,9 @@ class GcffComparison:
         ]
         headers = ["stride (m) \\ mdl (m²)"] + [f"{m:g}" for m in mdls]
         lines += [render_table(headers, table, style="markdown"), ""]
-        if self.notes:
-            lines += ["## Notes", ""] + [f"- {note}" for note in self.notes] + [""]
+        notes = self.all_notes()
+        if notes:
+            lines += ["## Notes", ""] + [f"- {note}" for note in notes] + [""]
         return "\n".join(lines)
 
 

@@ -9,7 +9,7 @@ import pytest
 from reform import Gcff, evaluate, time_split
 from reform.experiment_gcff import BABBLE, SALSA_TEST, gcff_comparison
 
-GRID = {"stride_grid": (0.5, 0.7), "mdl_grid": (1.0, 3.0)}
+GRID = {"stride_grid": (0.7,), "mdl_grid": (1.0, 3.0)}
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_rows_datasets_and_split(comparison, salsa_dataset, babble_dataset):
 def test_tuned_on_training_frames_only(comparison, salsa_dataset):
     train, _ = time_split(salsa_dataset.annotated())
     search = comparison.tuning
-    assert search.n_frames == len(train) and search.f1.shape == (4,)
+    assert search.n_frames == len(train) and search.f1.shape == (2,)
     tuned = [r for r in comparison.results if r["detector"].startswith("GCFF, tuned")]
     for result in tuned:
         params = result["detector_params"]
@@ -56,8 +56,12 @@ def test_tuned_on_training_frames_only(comparison, salsa_dataset):
 def test_added_results_must_share_the_frames(comparison):
     ours = comparison.results[0]
     other = dict(ours, detector="Other")
-    bigger = comparison.with_results([other])
+    majority = dict(comparison.results[4], detector="majority")
+    bigger = comparison.with_results([other, majority, other])
     assert bigger.results[-1]["detector"] == "Other"
+    assert len(bigger.results) == len(comparison.results) + 1  # duplicates left out
+    assert any("REFORM's classifiers are not in this run" in n for n in comparison.all_notes())
+    assert bigger.all_notes() == ()
     with pytest.raises(ValueError, match="must be scored on the same"):
         comparison.with_results([dict(other, frames=ours["frames"] + 1)])
     with pytest.raises(ValueError, match="dataset must be 'salsa-test' or 'babble'"):
@@ -73,30 +77,27 @@ def test_markdown_and_json(comparison):
     data = json.loads(json.dumps(comparison.to_json(command=command), allow_nan=False))
     assert data["kind"] == "reform-sim/gcff-comparison"
     assert data["command"] == command
-    assert len(data["tuning"]["grid"]) == 4
+    assert len(data["tuning"]["grid"]) == 2
     assert len(data["results"]) == 10
 
 
-def test_command_writes_markdown_and_json(tmp_path, salsa_dir, babble_dir, capsys):
+def test_command_writes_markdown_and_json(tmp_path, salsa_dataset, salsa_dir, babble_dir):
+    from reform import Majority
     from sim.cli import main
 
-    reform_json = tmp_path / "reform.json"
+    # Another detector's evaluation on the same frames joins the tables.
+    _, test = time_split(salsa_dataset.annotated())
+    other = evaluate(test, Majority().predict(test)).to_json(
+        detector="Other detector", dataset=SALSA_TEST
+    )
+    other_json = tmp_path / "other.json"
+    other_json.write_text(json.dumps({"results": [other]}))
     out = tmp_path / "results" / "gcff-comparison"
     args = ["--salsa", str(salsa_dir), "--babble", str(babble_dir)]
-    args += ["--stride-grid", "0.7", "--mdl-grid", "1"]
-    assert main(["experiment", "gcff", *args, "--out", str(out)]) == 0
-    first = json.loads(out.with_suffix(".json").read_text())
-    assert "--stride-grid 0.7 --mdl-grid 1" in first["command"]
-    assert any("REFORM's classifiers are not in this run" in n for n in first["notes"])
-    # Another detector's evaluation on the same frames joins the tables.
-    other = dict(first["results"][0], detector="Other detector")
-    reform_json.write_text(json.dumps(other))
-    assert (
-        main(["experiment", "gcff", *args, "--with-results", str(reform_json), "--out", str(out)])
-        == 0
-    )
-    second = json.loads(out.with_suffix(".json").read_text())
-    assert second["results"][-1]["detector"] == "Other detector"
-    assert second["notes"] == []
+    args += ["--stride-grid", "0.7", "--mdl-grid", "1", "--with-results", str(other_json)]
+    assert main(["experiment", "gcff", *args, "--out", f"{out}.md"]) == 0
+    written = json.loads(out.with_suffix(".json").read_text())
+    assert "--stride-grid 0.7 --mdl-grid 1 --with-results" in written["command"]
+    assert written["results"][-1]["detector"] == "Other detector"
+    assert written["notes"] == []
     assert "| Other detector" in out.with_suffix(".md").read_text()
-    assert "wrote" in capsys.readouterr().err

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import shlex
 import sys
@@ -166,16 +165,6 @@ def run(args: argparse.Namespace) -> int:
     )
     if extra:
         comparison = comparison.with_results(extra)
-    else:
-        comparison = dataclasses.replace(
-            comparison,
-            notes=comparison.notes
-            + (
-                "REFORM's classifiers are not in this run. Score them on the same frames "
-                "(SALSA test split of reform.time_split, dataset 'salsa-test'; Babble, dataset "
-                "'babble') and add their evaluation JSON files with --with-results.",
-            ),
-        )
     command = _command(args)
     markdown = comparison.to_markdown(command=command)
     out = Path(args.out)
