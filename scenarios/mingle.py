@@ -63,6 +63,7 @@ MEAN_SPLIT_S = 400.0  # seconds, mean time before a group of >= 4 splits
 MEAN_MERGE_S = 600.0  # seconds, mean time before a group merges with a neighbour
 MERGE_REACH_M = 3.5  # metres, groups further apart than this do not merge
 JOIN_REACH_M = 5.0  # metres, people prefer groups nearer than this
+JOIN_SIZE_PENALTY = 0.3  # a group of n is joined 1 / (1 + penalty n) as often
 PASS_GAP_S = (10.0, 60.0)  # seconds, a passer-by waits this long between crossings
 PLACE_TRIES = 60  # random draws when looking for free floor
 ROBOT_ID = 0
@@ -444,7 +445,7 @@ class _Party:
                 continue
             d = float(np.hypot(*(g.centre - here)))
             options.append(gid)
-            weights.append(math.exp(-d / JOIN_REACH_M) / (1.0 + 0.3 * len(g.members)))
+            weights.append(math.exp(-d / JOIN_REACH_M) / (1.0 + JOIN_SIZE_PENALTY * len(g.members)))
         if not options:
             return None
         w = np.array(weights) / sum(weights)
