@@ -64,3 +64,18 @@ def babble_dataset(babble_dir: Path):
     from reform.datasets import load_babble
 
     return load_babble(babble_dir)
+
+
+@pytest.fixture(scope="session")
+def gcff_reference_dir(shared_datasets: Path) -> Path:
+    """The original GCFF code's answers on SALSA: ``<shared>/reference/gcff-reference``.
+
+    Found beside the datasets folder; under CI a missing folder is a failure, not a skip.
+    """
+    path = shared_datasets.parent / "reference" / "gcff-reference"
+    if not path.is_dir():
+        message = f"GCFF reference partitions not found at {path}"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    return path

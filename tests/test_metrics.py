@@ -332,8 +332,6 @@ def test_to_json_schema():
 
 # --- the protocol pinned on the original GCFF code's output ------------------------------------
 
-REFERENCE_DIR = Path(__file__).resolve().parents[2] / "shared" / "reference" / "gcff-reference"
-
 
 def read_reference_partitions(path: Path):
     """``session time id:label ...`` lines -> list of ((sequence, time), partition)."""
@@ -361,10 +359,10 @@ def read_reference_partitions(path: Path):
         ("salsa-body-stride50cm-mdl20000.txt", (0.842, 0.823, 0.833), (0.643, 0.631, 0.637)),
     ],
 )
-def test_reproduces_gcff_reference_scores_on_salsa(salsa_dir, file, two_thirds, one):
-    path = REFERENCE_DIR / file
-    if not path.is_file():
-        pytest.skip(f"GCFF reference partitions not found at {path}")
+def test_reproduces_gcff_reference_scores_on_salsa(
+    salsa_dir, gcff_reference_dir, file, two_thirds, one
+):
+    path = gcff_reference_dir / file
     dataset = load_salsa(salsa_dir)
     frames = dataset.annotated()
     reference = read_reference_partitions(path)
