@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
-from reform.frame import Dataset
+from reform.frame import Dataset, Frame
 from sim.episode import DEFAULT_RATE_HZ
 
 __all__ = [
@@ -334,27 +334,31 @@ def _sequence_name(scenario: str, episode: int) -> str:
     return f"{scenario}-{int(episode)}"
 
 
-def _simulate(spec: GenerationSpec, episode: int) -> Any:
-    """Episode ``episode`` of ``spec`` (a `sim.episode.Episode`), sequence ``"<scenario>-<k>"``."""
-    from sim.episode import simulate_episode
-
-    return simulate_episode(
-        spec.scenario,
+def _summary(
+    spec: GenerationSpec,
+    episode: int,
+    frames: int,
+    annotated: int,
+    rows: int,
+    sizes: Mapping[int, int],
+) -> ShardSummary:
+    return ShardSummary(
+        episode=int(episode),
         seed=episode_seed(spec.seed, episode),
-        options=dict(spec.options),
-        duration=spec.duration,
-        rate=spec.rate,
-        view=spec.view,
-        sensor=spec.sensor,
+        path=shard_path(".", spec.scenario, episode).as_posix().removeprefix("./"),
         sequence=_sequence_name(spec.scenario, episode),
+        frames=frames,
+        annotated_frames=annotated,
+        rows=rows,
+        duration=frames / spec.rate,
+        group_sizes=dict(sorted(sizes.items())),
     )
 
 
-def _summarise(spec: GenerationSpec, episode: int, dataset: Dataset) -> ShardSummary:
+def _summarise_frames(spec: GenerationSpec, episode: int, frames: Sequence[Frame]) -> ShardSummary:
     sizes: Counter[int] = Counter()
-    annotated = 0
-    rows = 0
-    for frame in dataset.frames:
+    annotated = rows = 0
+    for frame in frames:
         n = frame.n_people
         rows += n
         if frame.groups is None:
@@ -366,47 +370,113 @@ def _summarise(spec: GenerationSpec, episode: int, dataset: Dataset) -> ShardSum
             grouped += len(group)
         if n > grouped:
             sizes[1] += n - grouped
-    relative = shard_path(".", spec.scenario, episode).as_posix().removeprefix("./")
-    return ShardSummary(
-        episode=int(episode),
-        seed=episode_seed(spec.seed, episode),
-        path=relative,
-        sequence=_sequence_name(spec.scenario, episode),
-        frames=len(dataset.frames),
-        annotated_frames=annotated,
-        rows=rows,
-        duration=float(dataset.metadata.get("duration_s", len(dataset.frames) / spec.rate)),
-        group_sizes=dict(sorted(sizes.items())),
-    )
+    return _summary(spec, episode, len(frames), annotated, rows, sizes)
 
 
-def _shard_dataset(spec: GenerationSpec, summary: ShardSummary, dataset: Dataset) -> Dataset:
-    """The episode with the metadata its shard carries (the parameters and its own counts)."""
-    metadata = {
+def _summarise_arrays(
+    spec: GenerationSpec,
+    episode: int,
+    ids: np.ndarray,
+    present: np.ndarray,
+    groups: Sequence[Sequence[Sequence[int]] | None],
+) -> ShardSummary:
+    """As `_summarise_frames`, for the frames of a roster (groups restricted to who is present)."""
+    sizes: Counter[int] = Counter()
+    annotated = 0
+    counts = present.sum(axis=1)
+    index_of = {int(i): a for a, i in enumerate(ids.tolist())}
+    for t, frame_groups in enumerate(groups):
+        if frame_groups is None:
+            continue
+        annotated += 1
+        here = present[t]
+        grouped = 0
+        for group in frame_groups:
+            size = sum(1 for m in group if here[index_of[int(m)]])
+            if size:
+                sizes[size] += 1
+                grouped += size
+        if counts[t] > grouped:
+            sizes[1] += int(counts[t]) - grouped
+    return _summary(spec, episode, len(groups), annotated, int(counts.sum()), sizes)
+
+
+def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> dict[str, Any]:
+    """What a shard carries besides its frames: the parameters, its episode, its scenario."""
+    return {
         "generator": "reform-sim generate",
         "parameters": spec.parameters(),
         "episode": summary.to_json(),
-        "episode_metadata": _json_value("episode metadata", dict(dataset.metadata)),
+        "scenario": {
+            "name": made.name,
+            "seed": made.seed,
+            "options": _json_value("scenario options", dict(made.options)),
+            "natural_duration_s": made.duration,
+            "room_m": list(made.stage.room),
+        },
     }
-    return Dataset(
-        frames=dataset.frames,
-        name=spec.scenario,
-        source=f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}",
-        metadata=metadata,
-    )
 
 
 def _write_episode(
     spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
 ) -> ShardSummary:
-    """Simulates one episode and writes its recording (if asked) and then its shard."""
-    from reform.datasets.parquet import write_parquet
+    """Simulates one episode and writes its recording (if asked) and then its shard.
 
-    result = _simulate(spec, episode)
-    summary = _summarise(spec, episode, result.dataset)
+    The ground-truth view without a recording takes the fast path: poses in blocks of arrays
+    (`sim.episode.episode_blocks`) written as columns (`write_parquet_arrays`), no `Frame` per
+    instant. The file is the one the frame path writes, byte for byte.
+    """
+    from reform.datasets.parquet import write_parquet, write_parquet_arrays
+    from sim.episode import episode_blocks, prepare, simulate_episode
+
+    made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
+    sequence = _sequence_name(spec.scenario, episode)
+    source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
+    path = shard_path(out_dir, spec.scenario, episode)
+    if spec.view == "truth" and not save_recordings:
+        blocks = list(
+            episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence)
+        )
+        first = blocks[0]
+        groups = tuple(g for block in blocks for g in block.groups)
+        present = np.concatenate([block.present for block in blocks])
+        summary = _summarise_arrays(spec, episode, first.ids, present, groups)
+        write_parquet_arrays(
+            path,
+            time=np.concatenate([block.time for block in blocks]),
+            ids=first.ids,
+            kinds=first.kinds,
+            present=present,
+            position=np.concatenate([block.position for block in blocks]),
+            yaw=np.concatenate([block.yaw for block in blocks]),
+            head_position=np.concatenate([block.head_position for block in blocks]),
+            head_yaw=np.concatenate([block.head_yaw for block in blocks]),
+            groups=groups,
+            sequence=sequence,
+            name=spec.scenario,
+            source=source,
+            metadata=_shard_metadata(spec, summary, made),
+        )
+        return summary
+    result = simulate_episode(
+        made,
+        duration=spec.duration,
+        rate=spec.rate,
+        view=spec.view,
+        sensor=spec.sensor,
+        sequence=sequence,
+    )
+    frames = result.dataset.frames
+    summary = _summarise_frames(spec, episode, frames)
     if save_recordings:
         _record(spec, episode, result, _recording_path(out_dir, episode))
-    write_parquet(_shard_dataset(spec, summary, result.dataset), out_dir / summary.path)
+    dataset = Dataset(
+        frames=frames,
+        name=spec.scenario,
+        source=source,
+        metadata=_shard_metadata(spec, summary, made),
+    )
+    write_parquet(dataset, path)
     return summary
 
 

@@ -17,6 +17,7 @@ import pytest
 
 from reform.datasets import load_dataset, read_parquet
 from sim.cli import main
+from sim.episode import simulate_episode
 from sim.generate import (
     CARD_JSON,
     CARD_MARKDOWN,
@@ -254,6 +255,24 @@ def test_command_line_writes_the_dataset_and_train_reads_it(tmp_path, capsys):
     assert all("robot" in f.kinds and len(f.kinds) == 3 for f in dataset)  # the truth view
 
 
+def test_truth_view_fast_path_writes_the_frames_of_simulate_episode(tmp_path):
+    # Without recordings the truth view writes columns from the world's pose blocks; with them
+    # it goes through simulate_episode's Frames. The shards are the same bytes.
+    fast, slow = tmp_path / "fast", tmp_path / "slow"
+    kwargs = dict(episodes=2, duration=30.0, view="truth", sensor=None, n_jobs=1)
+    generate(fast, **kwargs)
+    generate(slow, save_recordings=True, **kwargs)
+    for k in range(2):
+        assert (
+            shard_path(fast, SCENARIO, k).read_bytes() == shard_path(slow, SCENARIO, k).read_bytes()
+        )
+    assert read_card(fast) == read_card(slow)
+    episode = simulate_episode(
+        SCENARIO, seed=episode_seed(SEED, 1), duration=30.0, sequence=f"{SCENARIO}-1"
+    )
+    assert read_parquet(shard_path(fast, SCENARIO, 1)).frames == episode.dataset.frames
+
+
 def test_recordings_hold_each_episode(tmp_path):
     rrd = pytest.importorskip("rerun.chunk")
     out = tmp_path / "data"
@@ -374,5 +393,6 @@ def test_shard_metadata_says_where_it_came_from(reference):
     assert meta["generator"] == "reform-sim generate"
     assert meta["parameters"] == read_card(reference)["parameters"]
     assert meta["episode"]["episode"] == 2
-    assert meta["episode_metadata"]["seed"] == episode_seed(SEED, 2)
+    assert meta["scenario"]["seed"] == episode_seed(SEED, 2)
+    assert meta["scenario"]["options"]["radius"] == 0.6
     assert json.loads(json.dumps(dict(meta))) == dict(meta)
