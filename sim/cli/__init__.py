@@ -6,11 +6,31 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from sim.cli import _characterize, _data, _detect, _evaluate, _experiment_gcff, _generate
+from sim.cli import (
+    _calibrate,
+    _characterize,
+    _data,
+    _detect,
+    _evaluate,
+    _experiment_gcff,
+    _generate,
+    _scenarios,
+    _simulate,
+)
 from sim.cli._common import CliError
 
 # Each module exposes ``register(subparsers)``, adding its subcommand(s) with a ``handler``.
-_COMMANDS = (_data, _evaluate, _detect, _experiment_gcff, _characterize, _generate)
+_COMMANDS = (
+    _data,
+    _evaluate,
+    _detect,
+    _experiment_gcff,
+    _characterize,
+    _scenarios,
+    _simulate,
+    _generate,
+    _calibrate,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,100 @@
+"""``reform-sim calibrate``: the scenarios beside SALSA and Babble (docs/results/calibration)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shlex
+import sys
+from pathlib import Path
+
+from sim.cli._common import CliError
+
+DEFAULT_DATASETS = "../shared/datasets"
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "calibrate",
+        help="simulate the scenarios and set them beside SALSA and Babble",
+        description=(
+            "Simulates word-improv and mingle with default options and compares them with "
+            "Babble and SALSA: Tightness and Symmetry by group size (target: within 0.1 m), "
+            "Kolmogorov-Smirnov statistics of the pair features against bounds from the real "
+            "data; also the randomised mode's coverage and the HRI scenes. Writes "
+            "calibration.md and calibration.json into --out."
+        ),
+    )
+    parser.add_argument("--out", required=True, metavar="DIR", help="folder for the report")
+    parser.add_argument(
+        "--datasets",
+        default=DEFAULT_DATASETS,
+        metavar="DIR",
+        help=f"folder holding salsa/ and babble/ (default {DEFAULT_DATASETS})",
+    )
+    parser.add_argument(
+        "--seeds", type=int, default=None, metavar="N", help="episodes per scenario (default 8)"
+    )
+    parser.add_argument(
+        "--check", action="store_true", help="exit with status 1 when a target is missed"
+    )
+    parser.set_defaults(handler=run)
+
+
+def _command(args: argparse.Namespace) -> str:
+    words = ["reform-sim", "calibrate", "--out", args.out]
+    if args.datasets != DEFAULT_DATASETS:
+        words += ["--datasets", args.datasets]
+    if args.seeds is not None:
+        words += ["--seeds", str(args.seeds)]
+    if args.check:
+        words.append("--check")
+    return shlex.join(words)
+
+
+def run(args: argparse.Namespace) -> int:
+    from reform.atomic import atomic_open
+    from reform.datasets import load_babble, load_salsa
+    from sim.scenario_calibration import DEFAULT_SEEDS, calibrate_scenarios
+
+    seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
+    if seeds < 1:
+        raise CliError(f"--seeds must be >= 1, got {seeds}")
+    root = Path(args.datasets)
+    for name in ("salsa", "babble"):
+        if not (root / name).is_dir():
+            raise CliError(f"--datasets {args.datasets}: no {name}/ folder in it")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CliError(f"--out {args.out} is a file; give a folder")
+    report = calibrate_scenarios(
+        load_salsa(root / "salsa"),
+        load_babble(root / "babble"),
+        seeds=seeds,
+        command=_command(args),
+    )
+    out.mkdir(parents=True, exist_ok=True)
+    markdown = out / "calibration.md"
+    with atomic_open(markdown) as handle:
+        handle.write(report.to_markdown())
+    with atomic_open(out / "calibration.json") as handle:
+        json.dump(report.to_json(), handle, indent=2, allow_nan=False)
+        handle.write("\n")
+    for cal in report.calibrations:
+        checked = cal.comparison.reference_sizes()
+        gaps = [abs(d) for s, d in cal.comparison.tightness_difference().items() if s in checked]
+        worst = max((g for g in gaps if math.isfinite(g)), default=math.nan)
+        ks = ", ".join(f"{k.statistic:.3f}" for k in cal.comparison.ks)
+        print(
+            f"{cal.scenario} vs {cal.reference}: largest Tightness difference {worst:.3f} m; "
+            f"KS D (distance in/out, effort in/out) {ks}"
+        )
+    failures = report.failures()
+    print(f"wrote {markdown} and {out / 'calibration.json'}", file=sys.stderr)
+    if failures:
+        for line in failures:
+            print(f"missed: {line}", file=sys.stderr)
+        if args.check:
+            return 1
+    return 0
