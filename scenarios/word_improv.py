@@ -3,9 +3,10 @@
 A moderator and 2-7 players stand in a circle in a 5 m x 5 m area. A turn lasts about
 ``turn_duration`` seconds (drawn within +-40 %): the moderator reads a word and picks a player,
 the two speak in turn, and everyone's head turns to whoever speaks. After each turn the players
-shuffle, walking to new places at random, and the circle re-forms (a little tighter when it has
-lost someone). A player who fails (with probability ``fail_probability`` per turn, seeded)
-leaves the circle and the area; the rest shuffle. The game ends with one player left.
+shuffle, each walking to another player's place at random, and the circle re-forms (a little
+tighter when it has lost someone). A player who fails (with probability ``fail_probability``
+per turn, seeded) leaves the circle and the area; the rest shuffle. The game ends with one
+player left.
 
 Ground truth (see `scenarios.truth`): the standing circle is an F-formation from the frame in
 which everyone stands at their place facing the centre; shuffling frames hold none, as in
@@ -218,7 +219,10 @@ def word_improv(
             builder.set(gone, picked, Intent(present=False))
             builder.event(t, "elimination", f"player {picked} fails and leaves the circle")
         builder.event(t, "shuffle", f"players {remaining} shuffle")
-        order = [moderator, *[remaining[k] for k in rng.permutation(len(remaining))]]
+        # Players in the circle's order (from the moderator on), then each to another's place.
+        circle = sorted(remaining, key=lambda m: (angles_of[m] - moderator_angle) % math.tau)
+        moved = _derangement(len(circle), rng)
+        order = [moderator, *[circle[k] for k in moved]]
         angles_of = slots(order, moderator_angle)
         members = [moderator, *remaining]
         centre, places, facings = formation(members, angles_of)
@@ -267,3 +271,11 @@ def _exit_point(place: np.ndarray) -> tuple[float, float]:
     if hx - abs(x) < hy - abs(y):
         return (math.copysign(hx, x), float(np.clip(y, -hy, hy)))
     return (float(np.clip(x, -hx, hx)), math.copysign(hy, y))
+
+
+def _derangement(n: int, rng: np.random.Generator) -> np.ndarray:
+    """A random permutation of ``range(n)`` moving every index (``n`` >= 2), by rejection."""
+    while True:
+        order = rng.permutation(n)
+        if n < 2 or not np.any(order == np.arange(n)):
+            return order
