@@ -273,6 +273,13 @@ def test_truth_view_fast_path_writes_the_frames_of_simulate_episode(tmp_path):
     assert read_parquet(shard_path(fast, SCENARIO, 1)).frames == episode.dataset.frames
 
 
+def test_progress_bar_on_stderr(tmp_path, capsys):
+    generate(tmp_path / "data", episodes=2, duration=5.0, progress=True)
+    captured = capsys.readouterr()
+    assert f"generate {SCENARIO}" in captured.err and "2/2" in captured.err
+    assert captured.out == ""
+
+
 def test_recordings_hold_each_episode(tmp_path):
     rrd = pytest.importorskip("rerun.chunk")
     out = tmp_path / "data"
