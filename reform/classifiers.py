@@ -118,9 +118,11 @@ CLASSIFIERS: Mapping[str, Callable[..., Any]] = MappingProxyType(
 # Hyper-parameter grids for cross-validation, in the classifiers' own parameter names.
 PARAM_GRIDS: Mapping[str, Mapping[str, tuple[Any, ...]]] = MappingProxyType(
     {
-        WEIGHTED_KNN: MappingProxyType({"knn__n_neighbors": (5, 10, 25, 50, 100, 200)}),
-        BAGGED_TREES: MappingProxyType({"estimator__min_samples_leaf": (1, 5, 20, 50, 100)}),
-        LOGISTIC_REGRESSION: MappingProxyType({"logreg__C": (0.01, 0.1, 1.0, 10.0)}),
+        WEIGHTED_KNN: MappingProxyType({"knn__n_neighbors": (10, 25, 50, 100, 200, 400)}),
+        BAGGED_TREES: MappingProxyType(
+            {"estimator__min_samples_leaf": (10, 25, 50, 100, 200, 400)}
+        ),
+        LOGISTIC_REGRESSION: MappingProxyType({"logreg__C": (0.01, 0.1, 1.0, 10.0, 100.0)}),
     }
 )
 

@@ -36,7 +36,7 @@ CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
 
 Partition = tuple[Group, ...]
 
-__all__ = ["Reform"]
+__all__ = ["Reform", "training_pairs"]
 
 
 class Reform(BaseEstimator):
@@ -110,14 +110,7 @@ class Reform(BaseEstimator):
                 f"time {first.time:g} s); "
                 "pass only annotated frames, e.g. dataset.annotated()"
             )
-        x_parts, y_parts = [], []
-        for frame in frames:
-            order = _id_order(frame)
-            ordered = frame if order is None else _reordered(frame, order)
-            x_parts.append(frame_pair_features(ordered, features=features))
-            y_parts.append(pair_labels(ordered))
-        x = np.concatenate(x_parts) if x_parts else np.zeros((0, len(features)))
-        y_all = np.concatenate(y_parts) if y_parts else np.zeros(0, dtype=np.int64)
+        x, y_all, _ = training_pairs(frames, features=features)
         if y_all.size == 0:
             raise ValueError(
                 f"fit needs frames with at least 2 people, got {len(frames)} frames of 0 or 1"
@@ -269,6 +262,34 @@ class Reform(BaseEstimator):
         else:
             labels = compiled.predict(flat)
         return ids, labels.reshape(len(frames), -1)
+
+
+def training_pairs(
+    frames: Sequence[Frame], *, features: Sequence[str] = DEFAULT_FEATURES
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The deconstruction of annotated frames into labelled pairs, as :meth:`Reform.fit` sees it.
+
+    People are taken in order of their ids in every frame.
+
+    Args:
+        frames: annotated frames.
+        features: pair features.
+
+    Returns:
+        ``(x, y, frame)``: (m, k) float64 features, (m,) int64 labels (1 = same F-formation),
+        (m,) int64 index of each pair's frame in ``frames``.
+    """
+    features = check_features(features)
+    x_parts, y_parts, frame_parts = [], [], []
+    for k, frame in enumerate(frames):
+        order = _id_order(frame)
+        ordered = frame if order is None else _reordered(frame, order)
+        x_parts.append(frame_pair_features(ordered, features=features))
+        y_parts.append(pair_labels(ordered))
+        frame_parts.append(np.full(y_parts[-1].size, k, dtype=np.int64))
+    if not x_parts:
+        return np.zeros((0, len(features))), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(x_parts), np.concatenate(y_parts), np.concatenate(frame_parts)
 
 
 def _as_frames(frames: Iterable[Frame], method: str) -> list[Frame]:
