@@ -420,6 +420,19 @@ def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> d
 def _write_episode(
     spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
 ) -> ShardSummary:
+    """`_simulate_and_write`, its errors naming the episode and its seed (to reproduce it)."""
+    try:
+        return _simulate_and_write(spec, out_dir, episode, save_recordings=save_recordings)
+    except ValueError as exc:
+        raise ValueError(
+            f"episode {episode} of {spec.scenario} (episode seed {episode_seed(spec.seed, episode)}"
+            f", master seed {spec.seed}) failed: {exc}"
+        ) from exc
+
+
+def _simulate_and_write(
+    spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
+) -> ShardSummary:
     """Simulates one episode and writes its recording (if asked) and then its shard.
 
     The ground-truth view without a recording takes the fast path: poses in blocks of arrays
