@@ -98,6 +98,7 @@ __all__ = [
     "SALSA_TRAIN",
     "PaperExperiment",
     "Tuning",
+    "classifier_params",
     "paper_experiment",
     "tune",
 ]
@@ -207,8 +208,8 @@ def _plain(params: Mapping[str, Any]) -> dict[str, Any]:
     return {key: value.item() if hasattr(value, "item") else value for key, value in params.items()}
 
 
-def _factory_params(name: str, params: Mapping[str, Any]) -> dict[str, Any]:
-    """Grid names (``knn__n_neighbors``) -> the ready-made factory's keywords."""
+def classifier_params(name: str, params: Mapping[str, Any]) -> dict[str, Any]:
+    """Grid parameter names (``knn__n_neighbors``) -> keywords of the ready-made factory."""
     names = {
         "knn__n_neighbors": "n_neighbors",
         "estimator__min_samples_leaf": "min_samples_leaf",
@@ -400,7 +401,7 @@ def paper_experiment(
         tuning = tune(name, train, grid=grid, n_folds=n_folds, n_jobs=n_jobs)
         tunings.append(tuning)
         say(f"{name}: training with {tuning.best_params}")
-        model = Reform(make_classifier(name, **_factory_params(name, tuning.best_params)))
+        model = Reform(make_classifier(name, **classifier_params(name, tuning.best_params)))
         models[name] = model.fit(train)
         rows, train_row = score(models[name], name)
         results += rows
@@ -519,6 +520,11 @@ TUNED = "tuned (ours)"
 PRESET = "MATLAB preset"
 
 
+def _paper_share(frames: Sequence[Frame]) -> float:
+    """Share of ``frames`` that makes the paper's 400 training frames (fewer for small sets)."""
+    return min(400, max(1, len(frames) - 1)) / max(1, len(frames))
+
+
 def _diagnostics(
     salsa: Dataset,
     train: Sequence[Frame],
@@ -535,10 +541,10 @@ def _diagnostics(
     * an Effort Angle computed without wrapping, on our split: what a feature slip changes.
     """
     session = [f for f in salsa.annotated() if f.sequence == PAPER_SESSION]
-    tuned = {t.classifier: _factory_params(t.classifier, t.best_params) for t in tunings}
+    tuned = {t.classifier: classifier_params(t.classifier, t.best_params) for t in tunings}
     plans = [
         (TUNED, SESSION_TIME_SPLIT, AS_DEFINED, time_split(session, DEFAULT_TRAIN_FRACTION)),
-        (TUNED, SESSION_RANDOM_SPLIT, AS_DEFINED, random_split(session, 400 / len(session))),
+        (TUNED, SESSION_RANDOM_SPLIT, AS_DEFINED, random_split(session, _paper_share(session))),
         (PRESET, TIME_SPLIT, AS_DEFINED, (train, test)),
         (TUNED, TIME_SPLIT, NO_WRAP, (train, test)),
     ]
@@ -601,7 +607,7 @@ def _cell(ours: float | None, paper: float | None) -> str:
 def _setting(experiment: PaperExperiment, name: str) -> str:
     for tuning in experiment.tuning:
         if tuning.classifier == name:
-            params = _factory_params(name, tuning.best_params)
+            params = classifier_params(name, tuning.best_params)
             return ", ".join(f"{k} = {v:g}" for k, v in params.items())
     return ""
 
@@ -710,14 +716,14 @@ def _markdown(experiment: PaperExperiment, *, command: str | None) -> str:
     tuning_rows = []
     for tuning in experiment.tuning:
         grid = "; ".join(
-            ", ".join(f"{v:g}" for v in _factory_params(tuning.classifier, c).values())
+            ", ".join(f"{v:g}" for v in classifier_params(tuning.classifier, c).values())
             + f": {100 * m:.2f}"
             for c, m in zip(tuning.candidates, tuning.mean_score, strict=True)
         )
         tuning_rows.append(
             [
                 DISPLAY[tuning.classifier],
-                ", ".join(_factory_params(tuning.classifier, tuning.best_params)),
+                ", ".join(classifier_params(tuning.classifier, tuning.best_params)),
                 grid,
                 _setting(experiment, tuning.classifier),
             ]

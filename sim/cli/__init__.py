@@ -12,10 +12,12 @@ from sim.cli import (
     _data,
     _detect,
     _evaluate,
+    _experiment,
     _experiment_gcff,
     _generate,
     _scenarios,
     _simulate,
+    _train,
 )
 from sim.cli._common import CliError
 
@@ -25,6 +27,8 @@ _COMMANDS = (
     _evaluate,
     _detect,
     _experiment_gcff,
+    _experiment,
+    _train,
     _characterize,
     _scenarios,
     _simulate,

@@ -188,11 +188,35 @@ def _gcff(args: argparse.Namespace) -> Any:
     return Gcff(orientation=orientation)
 
 
+def _reform_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--model",
+        metavar="MODEL",
+        help="reform: a model file written by `reform-sim train` (.skops)",
+    )
+
+
+@register_detector(
+    "reform",
+    help="REFORM (Hedayati et al. 2020) from a model trained with `reform-sim train` (--model)",
+    add_arguments=_reform_arguments,
+)
+def _reform(args: argparse.Namespace) -> Any:
+    from reform.persistence import load_model
+
+    if args.model is None:
+        raise CliError("--detector reform needs --model MODEL (train one with `reform-sim train`)")
+    return load_model(args.model)
+
+
 def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
     """``--detector NAME`` plus the options of every registered detector."""
     choices = "; ".join(f"{spec.name}: {spec.help}" for spec in DETECTORS.values())
     parser.add_argument(
-        "--detector", required=True, choices=tuple(DETECTORS), metavar="NAME", help=choices
+        "--detector",
+        choices=tuple(DETECTORS),
+        metavar="NAME",
+        help=choices + " (--model alone implies reform)",
     )
     for spec in DETECTORS.values():
         if spec.add_arguments is not None:
@@ -201,6 +225,10 @@ def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
 
 def build_detector(args: argparse.Namespace) -> Any:
     """The detector named by ``args.detector``, built from the parsed options."""
+    if args.detector is None:
+        if getattr(args, "model", None) is None:
+            raise CliError("give --detector NAME, or --model MODEL for a trained REFORM model")
+        args.detector = "reform"
     spec = DETECTORS.get(args.detector)
     if spec is None:
         raise CliError(f"--detector must be one of {sorted(DETECTORS)}, got {args.detector!r}")
