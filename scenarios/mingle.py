@@ -67,6 +67,8 @@ JOIN_SIZE_PENALTY = 0.3  # a group of n is joined 1 / (1 + penalty n) as often
 PASS_GAP_S = (10.0, 60.0)  # seconds, a passer-by waits this long between crossings
 PLACE_TRIES = 60  # random draws when looking for free floor
 ROBOT_ID = 0
+ROBOT_WALL_GAP_M = 0.6  # metres from the west wall to the watching robot
+ROBOT_CLAIM_M = 0.6  # metres of floor kept free around the robot
 ANGLE_JITTER = 0.4  # share of the even gap a member's angle may deviate by
 
 
@@ -169,8 +171,16 @@ class _Alone:
 class _Party:
     """Plans the party: who is where, in which group, from when to when."""
 
-    def __init__(self, params: MingleParams, rng: np.random.Generator, side: float) -> None:
+    def __init__(
+        self,
+        params: MingleParams,
+        rng: np.random.Generator,
+        side: float,
+        *,
+        keep_clear: tuple[np.ndarray, ...] = (),
+    ) -> None:
         self.p = params
+        self.keep_clear = keep_clear  # spots no group or person may take (the robot's)
         self.rng = rng
         self.half = 0.5 * side
         self.law = RadiusLaw(params.radius_base, params.radius_per_member)
@@ -216,6 +226,9 @@ class _Party:
             if pid in ignore_people:
                 continue
             if np.hypot(*(centre - a.spot)) < claim + ALONE_CLAIM_M:
+                return False
+        for spot in self.keep_clear:
+            if np.hypot(*(centre - spot)) < claim + ROBOT_CLAIM_M:
                 return False
         return True
 
@@ -693,7 +706,11 @@ def build_mingle(params: MingleParams, *, seed: int, name: str, options: dict) -
     params.check(name)
     rng = np.random.default_rng(seed)
     side = params.side()
-    party = _Party(params, rng, side)
+    robot = None
+    if params.robot:
+        robot = RobotPlace(id=ROBOT_ID, position=(-0.5 * side + ROBOT_WALL_GAP_M, 0.0), yaw=0.0)
+    keep_clear = () if robot is None else (np.array(robot.position),)
+    party = _Party(params, rng, side, keep_clear=keep_clear)
     party.run()
     people = party.ids
     passers = list(range(params.people + 1, params.people + params.passers_by + 1))
@@ -726,10 +743,7 @@ def build_mingle(params: MingleParams, *, seed: int, name: str, options: dict) -
         builder.event(t, kind, detail)
     for t, kind, detail in _passers(builder, passers, 0.5 * side, params.duration, rng):
         builder.event(t, kind, detail)
-    robot = None
-    if params.robot:
-        edge = 0.5 * side - 0.6
-        robot = RobotPlace(id=ROBOT_ID, position=(-edge, 0.0), yaw=0.0)
+    if robot is not None:
         t = 0.0
         while t < params.duration:
             builder.set(

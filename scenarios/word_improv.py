@@ -47,8 +47,12 @@ SETTLE_S = 2.5  # seconds allowed beyond the longest walk for the circle to re-f
 CENTRE_JITTER_M = 0.15  # metres, the re-formed circle's centre moves by up to this
 ANGLE_JITTER = 0.2  # share of the even gap a member's angle may deviate by
 EXIT_GAP_M = 0.4  # metres from the wall where a failing player leaves the area
+AROUND_M = 0.6  # metres outside the circle where shuffling players walk round it
+AROUND_STEP_RAD = math.pi / 4  # radians, largest turn between two waypoints round the circle
+ROUTE_PACE = 0.7  # waypoints are timed for walkers this much slower than their speed
 ROBOT_ID = 0
 ROBOT_CORNER_M = 0.6  # metres from the walls, where a watching robot stands
+END_TAIL_S = 2.0  # seconds recorded after the game ends (the last two still stand together)
 MAX_TURNS = 10_000  # turns after which the game stops even without a winner
 
 
@@ -206,8 +210,8 @@ def word_improv(
             )
         t += length
         if final:
-            builder.end_group(handle, t)
             builder.event(t, "end", f"player {picked} wins")
+            t += END_TAIL_S
             break
         builder.end_group(handle, t)
         if rng.random() < fail_probability:
@@ -230,13 +234,25 @@ def word_improv(
         for k, m in enumerate(members):
             delay = 0.0 if m == moderator else float(rng.uniform(*SHUFFLE_DELAY_S))
             speed = float(rng.uniform(*SHUFFLE_SPEED_M_S))
-            builder.set(
-                t + delay,
-                m,
-                standing(places[k], facings[k], speed=speed, gaze_point=tuple(centre)),
-            )
-            distance = float(np.hypot(*(places[k] - place_of[m])))
-            walk = max(walk, delay + distance / speed)
+            step_in = standing(places[k], facings[k], speed=speed, gaze_point=tuple(centre))
+            if m == moderator:
+                builder.set(t + delay, m, step_in)
+                distance = float(np.hypot(*(places[k] - place_of[m])))
+                walk = max(walk, delay + distance / speed)
+                continue
+            # Players step out of the circle, walk around it to just outside their new place
+            # and step in between their neighbours (not across or along a standing circle).
+            here = place_of[m]
+            clock = t + delay
+            gaze = (float(centre[0]), float(centre[1]))
+            pace = ROUTE_PACE * speed  # waypoints are timed for a slowed walker: none skipped
+            for spot in _around(here, places[k], centre, ring=radius_of(places) + AROUND_M):
+                builder.set(clock, m, Intent(goal=spot, speed=speed, gaze_point=gaze))
+                clock += float(np.hypot(*(np.array(spot) - here))) / pace
+                here = np.array(spot)
+            builder.set(clock, m, step_in)
+            clock += float(np.hypot(*(places[k] - here))) / speed
+            walk = max(walk, clock - t)
         handle = builder.group(members, places, facings, centre, start=t)
         place_of = {m: places[k] for k, m in enumerate(members)}
         facing_of = {m: float(facings[k]) for k, m in enumerate(members)}
@@ -262,6 +278,32 @@ def word_improv(
         duration=t,
         description="the Babble Word Improv Game: a shuffling circle that loses a player a turn",
     )
+
+
+def radius_of(places: np.ndarray) -> float:
+    """Mean distance of ``places`` to their mean, metres."""
+    return float(np.hypot(*(places - places.mean(axis=0)).T).mean())
+
+
+def _around(
+    start: np.ndarray, place: np.ndarray, centre: np.ndarray, *, ring: float
+) -> list[tuple[float, float]]:
+    """Waypoints from ``start`` out to a ring of radius ``ring`` round ``centre``, along it the
+    shorter way (steps of at most `AROUND_STEP_RAD`), to just outside ``place``."""
+    a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
+    a1 = math.atan2(place[1] - centre[1], place[0] - centre[0])
+    turn = math.remainder(a1 - a0, math.tau)
+    steps = max(1, math.ceil(abs(turn) / AROUND_STEP_RAD))
+    return [
+        _inside_area(centre + ring * np.array([math.cos(a), math.sin(a)]))
+        for a in a0 + turn * np.arange(steps + 1) / steps
+    ]
+
+
+def _inside_area(point: np.ndarray) -> tuple[float, float]:
+    """``point`` moved inside the area, a body and a margin from the walls."""
+    hx, hy = 0.5 * AREA_M[0] - EXIT_GAP_M, 0.5 * AREA_M[1] - EXIT_GAP_M
+    return (float(np.clip(point[0], -hx, hx)), float(np.clip(point[1], -hy, hy)))
 
 
 def _exit_point(place: np.ndarray) -> tuple[float, float]:
