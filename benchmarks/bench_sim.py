@@ -176,6 +176,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--threads", type=int, default=1, help="also time the rollout on N threads")
     parser.add_argument("--no-hour", action="store_true", help="skip the one-hour 50-person run")
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), choices=SIZES)
     args = parser.parse_args()
     seconds = 10.0 if args.quick else SIM_SECONDS
     repeats = 2 if args.quick else args.repeats
@@ -193,7 +194,7 @@ def main() -> None:
         header += f" {f'rollout x{args.threads}':>12} {'ratio':>6}"
     print(header)
     results = {}
-    for n in SIZES:
+    for n in args.sizes:
         model = world_for(n).model
         bare, roll, frames, threaded = [], [], [], []
         for r in range(repeats):  # interleaved, so that load changes hit both sides alike
@@ -218,6 +219,8 @@ def main() -> None:
             line += f" {speed(threaded):>11,.0f}x {ratio(threaded):>6.2f}"
         print(line)
         results[n] = (speed(roll), ratio(roll))
+    if 18 not in results:
+        return
     speed, ratio = results[18]
     print(
         f"\n18 people: {speed:,.0f}x real time (target >= {TARGET_SPEED_18:,.0f}x), harness "

@@ -312,6 +312,9 @@ class World:
                 rngs[i], standing=isinstance(agent, PersonSpec)
             )
         self._params = params
+        self._bounds = [
+            tuple(float(v) for v in row) for row in params[:, motion.P_X_MIN : motion.P_Y_MAX + 1]
+        ]
         self._limits = (person_limits, robot_limits)
 
         # Motion state and intents.
@@ -836,9 +839,9 @@ class World:
         return tuple(out)
 
     def _apply_intents(self, intents: Mapping[int, Intent], t: float) -> None:
-        last = self._last_intents
+        last, index = self._last_intents, self._index
         for agent_id, intent in intents.items():
-            i = self._index.get(agent_id) if isinstance(agent_id, (int, np.integer)) else None
+            i = index.get(agent_id) if type(agent_id) is not bool else None
             if i is None:
                 raise ValueError(
                     f"intents at t={t:g} s name agent {agent_id!r}, who is not in the scene "
@@ -850,37 +853,40 @@ class World:
             self._write_intent(i, intent, t)
             last[i] = intent
 
+    def _intent_error(self, i: int, t: float, message: str) -> ValueError:
+        return ValueError(f"intent of {self._kinds[i]} {self._ids[i]} at t={t:g} s: {message}")
+
+    def _check_inside(self, i: int, t: float, name: str, point: Point) -> None:
+        x0, x1, y0, y1 = self._bounds[i]
+        x, y = point
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            raise self._intent_error(
+                i,
+                t,
+                f"{name} ({x:g}, {y:g}) is outside the walls: with body radius "
+                f"{self._params[i, motion.P_RADIUS]:.3f} m it must be within "
+                f"x [{x0:.3f}, {x1:.3f}], y [{y0:.3f}, {y1:.3f}] m",
+            )
+
+    def _other_agent(self, i: int, t: float, name: str, agent_id: int) -> float:
+        j = self._index.get(agent_id)
+        if j is None:
+            raise self._intent_error(
+                i, t, f"{name} {agent_id} is not in the scene (ids {self._ids.tolist()})"
+            )
+        if j == i:
+            raise self._intent_error(i, t, f"{name} must be another agent, got the agent itself")
+        return float(j)
+
     def _write_intent(self, i: int, intent: Intent, t: float) -> None:
         if not isinstance(intent, Intent):
             raise ValueError(
                 f"intents at t={t:g} s: agent {self._ids[i]} must get an Intent, got "
                 f"{type(intent).__name__}"
             )
-        label = f"intent of {self._kinds[i]} {self._ids[i]} at t={t:g} s"
-        x0, x1, y0, y1 = self._params[i, motion.P_X_MIN : motion.P_Y_MAX + 1]
-
-        def inside(name: str, point: Point) -> None:
-            x, y = point
-            if not (x0 <= x <= x1 and y0 <= y <= y1):
-                raise ValueError(
-                    f"{label}: {name} ({x:g}, {y:g}) is outside the walls: with body radius "
-                    f"{self._params[i, motion.P_RADIUS]:.3f} m it must be within "
-                    f"x [{x0:.3f}, {x1:.3f}], y [{y0:.3f}, {y1:.3f}] m"
-                )
-
-        def other(name: str, agent_id: int) -> float:
-            j = self._index.get(agent_id)
-            if j is None:
-                raise ValueError(
-                    f"{label}: {name} {agent_id} is not in the scene (ids {self._ids.tolist()})"
-                )
-            if j == i:
-                raise ValueError(f"{label}: {name} must be another agent, got the agent itself")
-            return float(j)
-
-        row = self._intent[i].copy()
+        row = self._intent[i].tolist()
         if intent.goal is not None:
-            inside("goal", intent.goal)
+            self._check_inside(i, t, "goal", intent.goal)
             row[motion.I_HAS_GOAL] = 1.0
             row[motion.I_GOAL_X], row[motion.I_GOAL_Y] = intent.goal
         else:
@@ -895,19 +901,19 @@ class World:
             row[motion.I_FACE_X], row[motion.I_FACE_Y] = intent.face_point
         elif intent.face_agent is not None:
             row[motion.I_FACE_MODE] = motion.FACE_AGENT
-            row[motion.I_FACE_AGENT] = other("face_agent", intent.face_agent)
+            row[motion.I_FACE_AGENT] = self._other_agent(i, t, "face_agent", intent.face_agent)
         row[motion.I_GAZE_MODE] = motion.GAZE_NONE
         if intent.gaze_point is not None:
             row[motion.I_GAZE_MODE] = motion.GAZE_POINT
             row[motion.I_GAZE_X], row[motion.I_GAZE_Y] = intent.gaze_point
         elif intent.gaze_agent is not None:
             row[motion.I_GAZE_MODE] = motion.GAZE_AGENT
-            row[motion.I_GAZE_AGENT] = other("gaze_agent", intent.gaze_agent)
+            row[motion.I_GAZE_AGENT] = self._other_agent(i, t, "gaze_agent", intent.gaze_agent)
         if not intent.present and self._kinds[i] == ROBOT:
-            raise ValueError(f"{label}: the robot cannot leave the scene (present=False)")
-        row[motion.I_PRESENT] = float(intent.present)
+            raise self._intent_error(i, t, "the robot cannot leave the scene (present=False)")
+        row[motion.I_PRESENT] = 1.0 if intent.present else 0.0
         if intent.appear_at is not None:
-            inside("appear_at", intent.appear_at)
+            self._check_inside(i, t, "appear_at", intent.appear_at)
             row[motion.I_HAS_APPEAR] = 1.0
             row[motion.I_APPEAR_X], row[motion.I_APPEAR_Y] = intent.appear_at
         else:
