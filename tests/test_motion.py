@@ -153,7 +153,7 @@ def test_people_and_robot_never_interpenetrate(seed: int) -> None:
     world.command_robot(RobotCommand(speed=0.8, turn_rate=0.6))
     worst = math.inf
     moved = 0.0
-    for block in world.rollout(40.0, rate=100.0):
+    for block in world.rollout(90.0, rate=100.0):
         poses = {"position": block.position, "present": block.present}
         worst = min(worst, _min_clearance(poses, world.radii))
         moved += float(np.abs(np.diff(block.position, axis=0)).sum())
