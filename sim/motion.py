@@ -17,9 +17,10 @@ Primitives, per control step ``dt`` (seconds):
 * **Avoid** other agents while walking: a short-range repulsion with a bias to pass on the right
   (not in the last side step into place, so that people can close up a tight circle).
 * **Keep personal space**, strictly: nobody moves toward an agent they touch (the velocity
-  component toward them is dropped); after each step, overlapping discs (body radius plus
-  ``margin``) are pushed apart (walkers yield more than people standing), clamped inside the
-  walls, and any agent still in conflict is put back where it was, where no conflict existed.
+  component toward them is dropped; a commanded robot stops at people too); after each step,
+  overlapping discs (body radius plus ``margin``) are pushed apart (walkers yield more than
+  people standing), clamped inside the walls, and any agent still in conflict is put back where
+  it was, where no conflict existed.
   So no two present agents are ever closer than the sum of their radii plus ``margin``.
 * **Face** a yaw, a point or another agent when standing (turn rate bounded).
 * **Turn the head** toward a gaze target (a point or an agent) within ``±head_limit`` of the
@@ -239,6 +240,31 @@ def _window(order, keys, at, half):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
+def _keep_off(state, params, i, vx, vy, margin, order, xs, rank, widest):  # pragma: no cover
+    """Agent ``i``'s velocity without its components toward the agents it touches."""
+    if vx == 0.0 and vy == 0.0:
+        return vx, vy
+    x, y = state[i, S_X], state[i, S_Y]
+    touch = params[i, P_RADIUS] + widest + margin + CONTACT_GAP_M
+    lo, hi = _window(order, xs, rank[i], touch)
+    for b in range(lo, hi):
+        j = order[b]
+        if j == i or state[j, S_PRESENT] < 0.5:
+            continue
+        rx, ry = state[j, S_X] - x, state[j, S_Y] - y
+        reach = params[i, P_RADIUS] + params[j, P_RADIUS] + margin + CONTACT_GAP_M
+        d2 = rx * rx + ry * ry
+        if d2 >= reach * reach or d2 < 1e-18:
+            continue
+        d = math.sqrt(d2)
+        approach = (vx * rx + vy * ry) / d
+        if approach > 0.0:
+            vx -= approach * rx / d
+            vy -= approach * ry / d
+    return vx, vy
+
+
+@numba.njit(cache=True)
 def _is_free(state, params, i, x, y, margin):  # pragma: no cover - compiled
     """Whether agent ``i`` could stand at (x, y) without overlapping a present agent."""
     for j in range(state.shape[0]):
@@ -447,8 +473,12 @@ def step(  # noqa: C901 - one step on purpose: every step touches every primitiv
             tilt_limit = params[i, P_TILT_LIMIT]
             tilt = _clip(intent[i, I_CMD_TILT], -params[i, P_TILT_RATE], params[i, P_TILT_RATE])
             state[i, S_TILT] = _clip(state[i, S_TILT] + tilt * dt, -tilt_limit, tilt_limit)
-            new_x[i] = x + state[i, S_VX] * dt
-            new_y[i] = y + state[i, S_VY] * dt
+            vx, vy = _keep_off(
+                state, params, i, state[i, S_VX], state[i, S_VY], margin, order, xs, rank, widest
+            )
+            state[i, S_VX], state[i, S_VY] = vx, vy
+            new_x[i] = x + vx * dt
+            new_y[i] = y + vy * dt
             weight[i] = 1.0
             continue
 
@@ -506,25 +536,18 @@ def step(  # noqa: C901 - one step on purpose: every step touches every primitiv
         dv = _norm(dvx, dvy)
         if dv > max_accel * dt:
             dvx, dvy = dvx * max_accel * dt / dv, dvy * max_accel * dt / dv
-        vx, vy = state[i, S_VX] + dvx, state[i, S_VY] + dvy
-        if vx != 0.0 or vy != 0.0:
-            # Nobody walks into someone they touch: drop the velocity toward them.
-            touch = params[i, P_RADIUS] + widest + margin + CONTACT_GAP_M
-            lo, hi = _window(order, xs, rank[i], touch)
-            for b in range(lo, hi):
-                j = order[b]
-                if j == i or state[j, S_PRESENT] < 0.5:
-                    continue
-                rx, ry = state[j, S_X] - x, state[j, S_Y] - y
-                reach = params[i, P_RADIUS] + params[j, P_RADIUS] + margin + CONTACT_GAP_M
-                d2 = rx * rx + ry * ry
-                if d2 >= reach * reach or d2 < 1e-18:
-                    continue
-                d = math.sqrt(d2)
-                approach = (vx * rx + vy * ry) / d
-                if approach > 0.0:
-                    vx -= approach * rx / d
-                    vy -= approach * ry / d
+        vx, vy = _keep_off(
+            state,
+            params,
+            i,
+            state[i, S_VX] + dvx,
+            state[i, S_VY] + dvy,
+            margin,
+            order,
+            xs,
+            rank,
+            widest,
+        )
         state[i, S_VX], state[i, S_VY] = vx, vy
         new_x[i] = x + vx * dt
         new_y[i] = y + vy * dt
