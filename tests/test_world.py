@@ -286,3 +286,19 @@ def test_native_and_batched_kinematics_agree() -> None:
         for name in ("time", "present", "position", "yaw", "head_position", "head_yaw"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
         assert a.groups == b.groups
+
+
+def test_a_commanded_robot_stops_at_a_person_instead_of_shoving() -> None:
+    spec = SceneSpec(
+        people=[PersonSpec(id=1, position=(0.0, 0.0))],
+        robot=RobotSpec(id=0, position=(-1.5, 0.0)),
+        room=(5.0, 5.0),
+    )
+    world = World(spec, seed=0)
+    world.command_robot(RobotCommand(speed=0.8))
+    world.step(500)
+    frame = world.frame()
+    person, robot = frame.position[frame.index_of(1)], frame.position[frame.index_of(0)]
+    assert np.linalg.norm(person) < 0.02  # idle sway only
+    gap = np.linalg.norm(person - robot) - world.radii.sum()
+    assert 0.0 <= gap < 0.1
