@@ -173,19 +173,25 @@ class Reform(BaseEstimator):
         """
         check_is_fitted(self, "classifier_")
         frames = _as_frames(frames, "predict_pairs")
-        out: list[np.ndarray] = []
-        for frame in frames:
-            n = frame.n_people
+        out: list[np.ndarray] = [np.zeros(0, dtype=bool)] * len(frames)
+        for n, positions in _by_size(frames).items():
             if n < 2:
-                out.append(np.zeros(0, dtype=bool))
                 continue
-            order = np.argsort(frame.ids, kind="stable")
-            _, labels = self._classify_chunk([frame], n)
-            matrix = np.zeros((n, n), dtype=bool)
             i, j = pair_indices(n)
-            matrix[order[i], order[j]] = labels[0]
-            matrix |= matrix.T
-            out.append(matrix[i, j])
+            step = max(1, CHUNK_PAIRS // i.size)
+            for start in range(0, len(positions), step):
+                chunk = positions[start : start + step]
+                _, labels = self._classify_chunk([frames[k] for k in chunk], n)
+                for k, row in zip(chunk, labels, strict=True):
+                    ids = frames[k].ids
+                    if np.all(ids[1:] > ids[:-1]):
+                        out[k] = row.copy()
+                        continue
+                    order = np.argsort(ids, kind="stable")  # sorted row s is frame row order[s]
+                    matrix = np.zeros((n, n), dtype=bool)
+                    matrix[order[i], order[j]] = row
+                    matrix |= matrix.T
+                    out[k] = matrix[i, j]
         return out
 
     def predict_relation_matrix(self, frame: Frame) -> np.ndarray:

@@ -88,10 +88,14 @@ def run(args: argparse.Namespace) -> int:
     from reform import Reform, time_split
     from reform.classifiers import make_classifier
     from reform.experiment import classifier_params, tune
+    from reform.features import check_features
     from reform.persistence import save_model
 
     if not 0.0 < args.train_fraction < 1.0:
         raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
+    if args.threshold is not None and not 0.0 < args.threshold < 1.0:
+        raise CliError(f"--threshold must be a probability in (0, 1), got {args.threshold}")
+    features = check_features([name.strip() for name in args.features.split(",") if name.strip()])
     dataset = load_data(args)
     frames = dataset.annotated()
     if not frames:
@@ -101,7 +105,6 @@ def run(args: argparse.Namespace) -> int:
         frames = train if args.frames == "train" else test
         if not frames:
             raise CliError(f"{args.data}: the {args.frames} part of the split holds no frames")
-    features = tuple(name.strip() for name in args.features.split(",") if name.strip())
     params = {}
     if args.tune:
         print(f"cross-validating {args.classifier} on {len(frames)} frames ...", file=sys.stderr)
