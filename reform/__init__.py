@@ -29,6 +29,7 @@ from reform.frame import HUMAN, KINDS, ROBOT, Dataset, Frame, Group, complete_pa
 from reform.gcff import Gcff
 from reform.majority import Majority
 from reform.metrics import T_ONE, T_TWO_THIRDS, THRESHOLDS, Evaluation, evaluate, pair_labels
+from reform.persistence import load_model, save_model
 from reform.reconstruction import (
     RECONSTRUCTIONS,
     batch_greedy_labels,
@@ -74,11 +75,13 @@ __all__ = [
     "frame_pair_features",
     "greedy_reconstruction",
     "load_dataset",
+    "load_model",
     "pair_indices",
     "pair_labels",
     "partition_from_labels",
     "read_parquet",
     "relation_matrix",
+    "save_model",
     "symmetry",
     "tightness",
     "time_blocks",
