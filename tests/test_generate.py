@@ -253,6 +253,13 @@ def test_command_line_writes_the_dataset_and_train_reads_it(tmp_path, capsys):
     dataset = load_dataset(out)
     assert len(dataset) == 2 * 60
     assert all("robot" in f.kinds and len(f.kinds) == 3 for f in dataset)  # the truth view
+    model = tmp_path / "model.skops"
+    code = main(
+        ["train", "--data", str(out), "--classifier", "logistic-regression"]
+        + ["--frames", "train", "--out", str(model)]
+    )
+    assert code == 0 and model.is_file()
+    assert "hri-robot-excluded" in capsys.readouterr().out
 
 
 def test_truth_view_fast_path_writes_the_frames_of_simulate_episode(tmp_path):
