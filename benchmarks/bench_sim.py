@@ -15,7 +15,8 @@ same run on the same compiled model:
 Then a one-hour run of 50 people streams 360,000 rows of poses through ``World.rollout`` and
 reports the peak memory it traced (numpy allocations) next to the size of the whole run.
 
-Prints medians over ``--repeats`` runs; the ratio harness / bare (lower is better) is the median
+Prints medians over ``--repeats`` runs (and the best runs, the least disturbed by other load on
+the machine); the ratio harness / bare (lower is better) is the median
 of the ratios of runs made one after the other, so that a change of load hits both alike.
 Target (issue 5): 18 people at >= 1,000x real time, harness <= 3x the bare loop.
 
@@ -217,6 +218,9 @@ def main() -> None:
         )
         if args.threads > 1:
             line += f" {speed(threaded):>11,.0f}x {ratio(threaded):>6.2f}"
+        line += (
+            f"   (best runs: bare {seconds / min(bare):,.0f}x, rollout {seconds / min(roll):,.0f}x)"
+        )
         print(line)
         results[n] = (speed(roll), ratio(roll))
     if 18 not in results:
