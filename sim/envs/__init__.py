@@ -33,8 +33,8 @@ _SCENES: dict[str, tuple[str, dict[str, Any]]] = {
     "HRIConversation": ("hri-conversation", {}),
     "HRIRobotExcluded": ("hri-robot-excluded", {}),
     "HRIPassing": ("hri-passing", {}),
-    "WordImprov": ("word-improv", {}),
-    "Mingle": ("mingle", {}),
+    "WordImprov": ("word-improv", {"robot": "watch"}),
+    "Mingle": ("mingle", {"robot": True}),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(

@@ -4,16 +4,17 @@
 the detector's groups, which people it is to join):
 
 1. it remembers where it last saw each person (in the room's frame);
-2. the **detected o-space**: among the detector's F-formations holding people it is to join, the
-   one holding most of them; its people's reported poses give the o-space circle
-   (`sim.envs.reward.estimate_o_space`: the point nearest every member's facing line) and the
-   place to take, in the widest gap, clear of every member's personal space
-   (`sim.envs.reward.joining_place`); the last detected circle is kept while none is detected;
-3. it drives there, going around the circle (on a ring `DETOUR_M` outside it, the short way
-   unless a wall is in the way) rather than through the o-space, then turns to face the
-   centre; its head keeps the group in view. A circle is taken only from people who have stood
-   (moved slower than `STANDING_M_S`) for `STANDING_S`, and dropped when not detected again
-   for `STALE_S`;
+2. the **detected o-space**: the people the detector put in an F-formation with people it is
+   to join, pooled over the last `MEMBER_MEMORY_S` (a circle wider than the field of view is
+   pieced together from several views), at their last reported poses, give the o-space circle
+   (`sim.envs.reward.estimate_o_space`) and the place to take, in the widest gap between the
+   people seen on the circle, clear of their personal space (`sim.envs.reward.joining_place`);
+3. before stepping in, it looks at the gap from `VIEW_M` outside it (people it had not seen
+   may stand there; then it picks another gap); then it drives there, going around the circle
+   (on a ring `DETOUR_M` outside it, the short way unless a wall is in the way) rather than
+   through the o-space, and turns to face the centre; its head keeps the group in view. A
+   circle is taken only from people who have stood (moved slower than `STANDING_M_S`) for
+   `STANDING_S`, and dropped when not detected again for `STALE_S`;
 4. with no group detected yet, it walks toward where it last saw the people it is to join and
    stops `WAIT_DISTANCE_M` from them to watch, moving `ORBIT_RAD` around them for another view
    after each `WAIT_S` without a detection; having seen none of them, it turns in place.
@@ -34,6 +35,7 @@ import numpy as np
 
 from sim.envs.reward import JoinTask, OSpace, estimate_o_space, joining_place
 from sim.motion import ROBOT_LIMITS
+from sim.sensor import KINECT_MAX_RANGE_M
 
 __all__ = ["EpisodeResult", "JoinPolicy", "PolicyEvaluation", "evaluate_policy"]
 
@@ -51,10 +53,19 @@ WAIT_DISTANCE_M = 1.6  # metres from the people's centroid where it waits for a 
 WAIT_S = 3.0  # seconds waited at one spot before moving around the people for another view
 ORBIT_RAD = 0.8  # radians around the people's centroid to the next spot to wait at
 WALL_GAP_M = 0.45  # metres: waypoints keep the robot's centre this far from the walls
+VIEW_M = 1.3  # metres outside the place from where the robot looks at the gap first
+VERIFY_M = 0.9  # metres: the gap counts as seen when in view from at least this far
+VERIFY_BEARING_RAD = math.radians(22.0)  # radians off the sensor's heading to count as in view
+SAME_PLACE_M = 0.3  # metres: a place this close to the one looked at counts as seen
+OPEN_SIDE_M = 0.1  # metres off a pair's midpoint its centre must lie to mark an open side
+PAIR_TOLERANCE_SHARE = 0.8  # share of the ring tolerance used when hedging a pair's centre
 CLEARANCE_MARGIN_M = 0.06  # metres added to the task's clearance when choosing the place
 STANDING_M_S = 0.3  # m/s: people slower than this stand
 STANDING_S = 1.5  # seconds a detected circle's people must have stood to be taken
 STALE_S = 6.0  # seconds a circle is kept without being detected again
+MEMBER_MEMORY_S = 5.0  # seconds someone detected with people to join counts as a member
+OCCUPANT_MEMORY_S = 30.0  # seconds someone seen on the circle's ring counts as standing there
+RING_SLACK_M = 0.5  # metres off the circle within which someone seen occupies it
 TURN_GAIN = 2.5  # rad/s per radian of heading error
 SPEED_GAIN = 1.2  # m/s per metre of distance to the waypoint
 PAN_GAIN = 3.0  # rad/s per radian of head-pan error
@@ -107,12 +118,15 @@ class JoinPolicy:
         self._step = 0
         self._seen_at: dict[int, tuple[int, np.ndarray]] = {}
         self._still_since: dict[int, int] = {}
+        self._yaw_at: dict[int, float] = {}
+        self._together: dict[int, int] = {}
         self._confirmed = 0
         self._circle: OSpace | None = None
         self._members = np.zeros((0, 2))
         self._place: np.ndarray | None = None
         self._side = 0.0
         self._arrived = False
+        self._verified: np.ndarray | None = None
         self._wait_from: int | None = None
         self._wait_bearing = 0.0
 
@@ -143,17 +157,33 @@ class JoinPolicy:
 
         if self._circle is not None:
             centre = self._circle.centre
-            self._place = self._inside(
-                joining_place(
+            place = self._pair_place(robot) if len(self._members) == 2 else None
+            if place is None:
+                place = joining_place(
                     self._circle,
-                    self._members,
+                    self._occupants(),
                     robot,
                     clearance=self.task.clearance + CLEARANCE_MARGIN_M,
-                    max_offset=0.8 * self.task.ring_tolerance,
+                    max_offset=0.7 * self.task.ring_tolerance,
+                    bounds=self._bounds(),
                 )
-            )
-            speed, turn = self._drive(robot, yaw, self._waypoint(robot), centre)
-            look = centre
+            self._place = self._inside(place)
+            place = self._place
+            if self._verified is not None and np.hypot(*(place - self._verified)) < SAME_PLACE_M:
+                speed, turn = self._drive(robot, yaw, self._waypoint(robot, place), centre)
+                look = centre
+            else:
+                # Look before stepping in: see the gap from outside, from where both its sides fit
+                # in the field of view.
+                out = place - centre
+                view = self._inside(place + VIEW_M * out / max(float(np.hypot(*out)), 1e-9))
+                speed, turn = self._drive(
+                    robot, yaw, self._waypoint(robot, view, last_leg=False), place
+                )
+                look = place
+                near = min(VERIFY_M, float(np.hypot(*(view - place))) - 0.1)
+                if self._in_view(robot, yaw + pan, place, near):
+                    self._verified = place
         else:
             known = [self._seen_at[k][1] for k in target.tolist() if k in self._seen_at]
             if known:
@@ -187,23 +217,37 @@ class JoinPolicy:
         world_yaw: np.ndarray,
         target: set[int],
     ) -> None:
-        """Takes the detected F-formation holding most people to join, standing, as the circle."""
+        """The circle of the people lately detected in an F-formation with people to join.
+
+        Views are pooled: everyone detected in the same F-formation as someone to join within
+        the last `MEMBER_MEMORY_S` counts, at the pose last seen, so that a group wider than
+        the field of view is pieced together. Only standing people count, and only a fresh
+        detection of someone to join refreshes the circle.
+        """
+        slots = seen.tolist()
+        for k, slot in enumerate(slots):
+            self._yaw_at[slot] = float(world_yaw[k])
         groups = np.asarray(observation.get("people_group", np.zeros(0)), dtype=np.int64)
         if groups.size == 0 or not target:
             return
-        labels = groups[seen]
-        slots = seen.tolist()
-        votes = [int(g) for g, slot in zip(labels, slots, strict=True) if g and slot in target]
-        if not votes:
+        labels = groups[seen].tolist()
+        joined = {g for g, slot in zip(labels, slots, strict=True) if g and slot in target}
+        if not joined:
             return
-        label = max(set(votes), key=lambda g: (votes.count(g), -g))
-        rows = np.flatnonzero(labels == label)
-        if rows.size < 2:
-            return
+        for g, slot in zip(labels, slots, strict=True):
+            if g in joined:
+                self._together[slot] = self._step
+        memory = MEMBER_MEMORY_S / self.control_dt
         still = STANDING_S / self.control_dt
-        if any(self._step - self._still_since[slots[r]] < still for r in rows):
+        members = [
+            slot
+            for slot, when in self._together.items()
+            if self._step - when <= memory and self._step - self._still_since[slot] >= still
+        ]
+        if len(members) < 2:
             return
-        estimate = estimate_o_space(world[rows], world_yaw[rows])
+        position = np.array([self._seen_at[m][1] for m in members])
+        estimate = estimate_o_space(position, np.array([self._yaw_at[m] for m in members]))
         old = self._circle
         if old is not None and np.hypot(*(estimate.centre - old.centre)) < SAME_CIRCLE_M:
             estimate = OSpace(
@@ -211,9 +255,74 @@ class JoinPolicy:
                 radius=old.radius + SMOOTHING * (estimate.radius - old.radius),
             )
         self._circle = estimate
-        self._members = world[rows]
+        self._members = position
         self._confirmed = self._step
         self._wait_from = None
+
+    def _pair_place(self, robot: np.ndarray) -> np.ndarray | None:
+        """A place beside a pair that is on the circle whether or not it is open.
+
+        Two people's facings rarely tell where their o-space centre is: facing each other it is
+        their midpoint, standing open (a place kept for a third) it lies off it on the
+        perpendicular bisector. The robot stands on the bisector where it is on the circle under
+        both readings (the midpoint, and the estimate; the estimate alone when they are too far
+        apart), clear of both, on the open side (else the side it is on; a side once chosen is
+        kept unless the pair is open the other way); None when no such place is free.
+        """
+        assert self._circle is not None
+        a, b = self._members
+        middle = 0.5 * (a + b)
+        along = b - a
+        half = 0.5 * float(np.hypot(*along))
+        if half == 0.0:
+            return None
+        normal = np.array([-along[1], along[0]]) / (2.0 * half)
+        h_est = float((self._circle.centre - middle) @ normal)
+        tol = PAIR_TOLERANCE_SHARE * self.task.ring_tolerance
+        clear = self.task.clearance + CLEARANCE_MARGIN_M
+        rho_clear = math.sqrt(max(clear * clear - half * half, 0.0))
+        lean = h_est if abs(h_est) > OPEN_SIDE_M else float((robot - middle) @ normal)
+        first = math.copysign(1.0, lean)
+        if self._place is not None and float(np.hypot(*(self._place - middle))) < SAME_CIRCLE_M:
+            kept = math.copysign(1.0, float((self._place - middle) @ normal))
+            if kept * h_est > -OPEN_SIDE_M:  # keep the side unless the pair is open the other way
+                first = kept
+        occupants = self._occupants()[2:]
+        for side in (first, -first):
+            readings = (0.0, abs(h_est)) if side * h_est > 0.0 else (0.0,)
+            for trusted in (readings, readings[-1:]):
+                reach = [h + math.hypot(half, h) for h in trusted]
+                low = max(rho_clear, max(reach) - tol)
+                high = min(reach) + tol
+                if low <= high:
+                    break
+            else:
+                continue
+            place = middle + side * 0.5 * (low + high) * normal
+            if not np.allclose(self._inside(place), place):
+                continue
+            if len(occupants) and np.min(np.hypot(*(occupants - place).T)) < clear:
+                continue
+            return place
+        return None
+
+    def _occupants(self) -> np.ndarray:
+        """(k, 2) the circle's members and anyone else lately seen standing on its ring."""
+        assert self._circle is not None
+        memory = OCCUPANT_MEMORY_S / self.control_dt
+        recent = [p for when, p in self._seen_at.values() if self._step - when <= memory]
+        if not recent:
+            return self._members
+        recent = np.array(recent)
+        off = np.abs(np.hypot(*(recent - self._circle.centre).T) - self._circle.radius)
+        return np.vstack([self._members, recent[off <= RING_SLACK_M]])
+
+    def _bounds(self) -> tuple[float, float, float, float] | None:
+        if self.room is None:
+            return None
+        hx = max(0.5 * self.room[0] - WALL_GAP_M, 0.0)
+        hy = max(0.5 * self.room[1] - WALL_GAP_M, 0.0)
+        return (-hx, hx, -hy, hy)
 
     def _inside(self, point: np.ndarray) -> np.ndarray:
         if self.room is None:
@@ -222,31 +331,44 @@ class JoinPolicy:
         hy = max(0.5 * self.room[1] - WALL_GAP_M, 0.0)
         return np.array([min(max(point[0], -hx), hx), min(max(point[1], -hy), hy)])
 
-    def _waypoint(self, robot: np.ndarray) -> np.ndarray:
-        """The next point on the way to the place, never through the o-space.
+    def _in_view(self, robot: np.ndarray, heading: float, point: np.ndarray, near: float) -> bool:
+        """Whether ``point`` is well inside the sensor's view, at least ``near`` metres away."""
+        delta = point - robot
+        distance = float(np.hypot(*delta))
+        bearing = abs(_wrap(math.atan2(delta[1], delta[0]) - heading))
+        return near <= distance <= KINECT_MAX_RANGE_M and bearing <= VERIFY_BEARING_RAD
 
-        The last leg is radial: from a point `APPROACH_M` outside the place, on its ray from the
-        centre, straight in. The robot goes there directly when the segment keeps out of the
-        disc `KEEP_OUT_M` outside the circle, else around the circle on a ring `DETOUR_M`
-        outside it (pressed inward by the walls), the short way unless the walls leave no room
-        (the side chosen is kept until the last leg).
+    def _waypoint(
+        self, robot: np.ndarray, goal: np.ndarray, *, last_leg: bool = True
+    ) -> np.ndarray:
+        """The next point on the way to ``goal``, never through the o-space.
+
+        For the place (``last_leg``), the last leg is radial: from a point `APPROACH_M` outside
+        it, on its ray from the centre, straight in. The robot goes to that point (or to
+        ``goal``) directly when the segment keeps out of the disc `KEEP_OUT_M` outside the
+        circle, else around the circle on a ring `DETOUR_M` outside it (pressed inward by the
+        walls), the short way unless the walls leave no room (the side chosen is kept until
+        the way is clear).
         """
-        assert self._circle is not None and self._place is not None
+        assert self._circle is not None
         centre, radius = self._circle.centre, self._circle.radius
-        out = self._place - centre
+        out = goal - centre
         reach = float(np.hypot(*out))
-        phi_place = math.atan2(out[1], out[0])
+        phi_goal = math.atan2(out[1], out[0])
         here = robot - centre
         phi_here = math.atan2(here[1], here[0])
-        delta = _wrap(phi_place - phi_here)
-        if abs(delta) <= DIRECT_RAD and float(np.hypot(*here)) >= reach - 0.15:
+        delta = _wrap(phi_goal - phi_here)
+        if last_leg and abs(delta) <= DIRECT_RAD and float(np.hypot(*here)) >= reach - 0.15:
             self._side = 0.0
-            return self._place
-        approach = self._inside(
-            centre + (reach + APPROACH_M) * np.array([math.cos(phi_place), math.sin(phi_place)])
-        )
-        if _segment_clear(robot, approach, centre, radius + KEEP_OUT_M):
-            return approach
+            return goal
+        entry = goal
+        if last_leg:
+            entry = self._inside(
+                centre + (reach + APPROACH_M) * np.array([math.cos(phi_goal), math.sin(phi_goal)])
+            )
+        if _segment_clear(robot, entry, centre, radius + KEEP_OUT_M):
+            self._side = 0.0
+            return entry
         if self._side == 0.0:
             self._side = math.copysign(1.0, delta)
         ring = radius + DETOUR_M

@@ -65,6 +65,7 @@ HOLD_S = 1.0  # seconds the robot must hold its place to have joined
 ROBOT_BODY_RADIUS_M = 0.28  # metres, the robot's base disc (sim.scene.ROBOT_RADIUS_M)
 STRIDE_M = 0.7  # metres, how far in front of a person their o-space vote lies (GCFF's stride)
 _CENTRE_PRIOR = 0.05  # weight of the stride-point mean when intersecting facing lines
+_PLACE_STEPS = 13  # radii tried per gap when placing the robot
 
 # Reward weights (per control step unless stated).
 PROGRESS_WEIGHT = 1.0  # reward per metre of approach to the circle
@@ -171,9 +172,9 @@ def estimate_o_space(
 
     * three or more people: the circle through them (least squares), unless it lies behind
       most of them (people on a line), then the point nearest every facing line;
-    * two people: a point on the perpendicular bisector of the pair, where their facing lines
-      cross it (the mean over those that cross it in front of them, no farther out than the
-      pair's distance), else their midpoint;
+    * two people: a point on the perpendicular bisector of the pair: where their facing lines
+      cross it when both cross it in front of them at points within half their distance of
+      each other (the mean, no farther out than the pair's distance), else their midpoint;
     * one person: ``stride`` in front of them.
 
     The radius is the members' mean distance from the centre.
@@ -212,13 +213,17 @@ def _pair_centre(position: np.ndarray, heading: np.ndarray) -> np.ndarray:
         # p + s u = middle + h normal  ->  [u, -normal] (s, h) = middle - p
         matrix = np.column_stack([u, -normal])
         if abs(np.linalg.det(matrix)) < 1e-6:
-            continue
+            return middle
         s, h = np.linalg.solve(matrix, middle - p)
-        if s > 0.0 and abs(h) <= 2.0 * half:
-            offsets.append(h)
-    if not offsets:
+        if s <= 0.0:
+            return middle
+        offsets.append(float(h))
+    # The two crossings must agree (within half the pair's distance): two people facing each
+    # other, with noise, cross it anywhere, and their centre is the middle.
+    if abs(offsets[0] - offsets[1]) > half:
         return middle
-    return middle + float(np.mean(offsets)) * normal
+    h = 0.5 * (offsets[0] + offsets[1])
+    return middle + math.copysign(min(abs(h), 2.0 * half), h) * normal
 
 
 def _circle_fit(position: np.ndarray) -> np.ndarray | None:
@@ -248,13 +253,15 @@ def joining_place(
     *,
     clearance: float,
     max_offset: float,
+    bounds: tuple[float, float, float, float] | None = None,
 ) -> np.ndarray:
     """Where the robot should stand to join: in a gap of the circle, clear of the members.
 
-    The gaps are the angular intervals between the members around the centre. The widest gap
-    (or, among gaps nearly as wide, the one nearest the robot's bearing) is taken, and the place
-    is on its bisector at the circle's radius, moved outward (by at most ``max_offset``) until
-    every member's centre is ``clearance`` away.
+    The gaps are the angular intervals between the members around the centre. For each, the
+    place is on its bisector, at the circle's radius or moved outward (by at most
+    ``max_offset``) until every member's centre is ``clearance`` away. Among the gaps where that
+    works, the one nearest the robot (around the circle) is taken; when none works, the one
+    leaving the most room.
 
     Args:
         o_space: the circle.
@@ -262,6 +269,8 @@ def joining_place(
         robot_position: (2,) metres.
         clearance: closest the robot's centre may come to a member's, metres.
         max_offset: how far beyond the radius the place may move, metres.
+        bounds: (x_min, x_max, y_min, y_max) where the robot's centre may stand (the walls),
+            metres; None for no walls.
 
     Returns:
         (2,) the place, metres.
@@ -271,26 +280,33 @@ def joining_place(
     robot = np.asarray(robot_position, dtype=np.float64)
     robot_angle = math.atan2(robot[1] - centre[1], robot[0] - centre[0])
     if len(members) == 0:
-        bisector = robot_angle
-    else:
-        angles = np.sort(np.arctan2(members[:, 1] - centre[1], members[:, 0] - centre[0]))
-        widths = np.diff(np.append(angles, angles[0] + 2.0 * math.pi))
-        mids = angles + 0.5 * widths
-        wide = widths >= 0.8 * widths.max()
+        return centre + o_space.radius * np.array([math.cos(robot_angle), math.sin(robot_angle)])
+    angles = np.sort(np.arctan2(members[:, 1] - centre[1], members[:, 0] - centre[0]))
+    widths = np.diff(np.append(angles, angles[0] + 2.0 * math.pi))
+    mids = angles + 0.5 * widths
+    directions = np.stack([np.cos(mids), np.sin(mids)], axis=1)  # (g, 2)
+    radii = o_space.radius + np.linspace(0.0, max_offset, _PLACE_STEPS)  # (s,)
+    spots = centre + radii[None, :, None] * directions[:, None, :]  # (g, s, 2)
+    gaps = np.hypot(*np.moveaxis(spots[:, :, None, :] - members[None, None], -1, 0))
+    room = gaps.min(axis=2)  # (g, s): distance to the nearest member
+    if bounds is not None:
+        x0, x1, y0, y1 = bounds
+        outside = (
+            (spots[..., 0] < x0)
+            | (spots[..., 0] > x1)
+            | (spots[..., 1] < y0)
+            | (spots[..., 1] > y1)
+        )
+        room = np.where(outside, -np.inf, room)
+    ok = room >= clearance
+    feasible = ok.any(axis=1)
+    if feasible.any():
+        first = np.argmax(ok, axis=1)  # the innermost radius that works, per gap
         off = np.abs(wrap_angle(mids - robot_angle))
-        best = int(np.flatnonzero(wide)[np.argmin(off[wide])])
-        bisector = float(mids[best])
-    direction = np.array([math.cos(bisector), math.sin(bisector)])
-    radius = o_space.radius
-    for _ in range(8):
-        place = centre + radius * direction
-        if len(members) == 0:
-            break
-        nearest = float(np.min(np.hypot(*(members - place).T)))
-        if nearest >= clearance or radius >= o_space.radius + max_offset:
-            break
-        radius = min(radius + (clearance - nearest) + 0.02, o_space.radius + max_offset)
-    return centre + radius * direction
+        g = int(np.flatnonzero(feasible)[np.argmin(off[feasible])])
+        return spots[g, first[g]]
+    g, k = np.unravel_index(int(np.argmax(room)), room.shape)
+    return spots[g, k]
 
 
 @dataclass(frozen=True)

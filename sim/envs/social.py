@@ -49,6 +49,7 @@ circle, turned toward it within 45 degrees; ``"scenario"``: where the scenario p
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
@@ -64,9 +65,9 @@ from gymnasium.error import InvalidAction, ResetNeeded
 import scenarios
 from reform.frame import Frame, Group
 from reform.metrics import T_TWO_THIRDS, evaluate
-from scenarios import PlannedGroup, Scenario
+from scenarios import PlannedGroup, Scenario, Stage
 from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
-from sim.envs.target import Target, choose_target
+from sim.envs.target import Target, choose_target, circle_of
 from sim.envs.view import Eyes, Truth, View
 from sim.episode import scene_spec
 from sim.motion import ROBOT_LIMITS
@@ -331,9 +332,9 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         first: PlannedGroup | None = None
         if self._task is not None:
             first = choose_target(scenario.plan, robot_id, self._task, self.np_random)
-        spec = scene_spec(stage, name=scenario.name)
         if start == "random" and first is not None:
-            spec = self._place_robot(spec, first, robot_id)
+            stage = self._place_robot(stage, first)
+        spec = scene_spec(stage, name=scenario.name)
         world_seed = int(self.np_random.integers(_SEED_HIGH))
         self._world = world = World(
             spec,
@@ -488,33 +489,34 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         speed, turn, pan = values * self.action_scale
         return float(speed), float(turn), float(pan)
 
-    def _place_robot(self, spec: Any, group: PlannedGroup, robot_id: int) -> Any:
-        """The spec with the robot at a random free spot outside the target's circle."""
-        from dataclasses import replace
-
-        from sim.envs.target import circle_of
-
-        circle = circle_of(group, robot_id)
-        x0, x1, y0, y1 = spec.inner_bounds(ROBOT_RADIUS_M + START_WALL_GAP_M)
-        others = np.array([p.position for p in spec.people if p.present]).reshape(-1, 2)
-        places = group.places
+    def _place_robot(self, stage: Stage, group: PlannedGroup) -> Stage:
+        """The stage with the robot at a random free spot outside the target's circle (the
+        stage as it is when no spot is found in `START_TRIES` draws)."""
+        assert stage.robot is not None
+        circle = circle_of(group, stage.robot.id)
+        pad = ROBOT_RADIUS_M + START_WALL_GAP_M
+        hx, hy = 0.5 * stage.room[0] - pad, 0.5 * stage.room[1] - pad
+        others = np.array([p.position for p in stage.people if p.present]).reshape(-1, 2)
+        taken = np.vstack([others, group.places])
         rng = self.np_random
         for _ in range(START_TRIES):
             angle = rng.uniform(-math.pi, math.pi)
             distance = circle.radius + rng.uniform(*START_DISTANCE_M)
             turn = rng.uniform(-START_TURN_RAD, START_TURN_RAD)
             spot = circle.centre + distance * np.array([math.cos(angle), math.sin(angle)])
-            if not (x0 <= spot[0] <= x1 and y0 <= spot[1] <= y1):
+            if not (abs(spot[0]) <= hx and abs(spot[1]) <= hy):
                 continue
-            if len(others) and np.min(np.hypot(*(others - spot).T)) < START_CLEARANCE_M:
+            if np.min(np.hypot(*(taken - spot).T)) < START_CLEARANCE_M:
                 continue
-            if np.min(np.hypot(*(places - spot).T)) < START_CLEARANCE_M:
-                continue
-            yaw = math.atan2(*(circle.centre - spot)[::-1]) + turn
-            yaw = math.atan2(math.sin(yaw), math.cos(yaw))
-            robot = replace(spec.robot, position=(float(spot[0]), float(spot[1])), yaw=yaw)
-            return replace(spec, robot=robot)
-        return spec
+            toward = circle.centre - spot
+            yaw = math.atan2(toward[1], toward[0]) + turn
+            robot = dataclasses.replace(
+                stage.robot,
+                position=(float(spot[0]), float(spot[1])),
+                yaw=math.atan2(math.sin(yaw), math.cos(yaw)),
+            )
+            return dataclasses.replace(stage, robot=robot)
+        return stage
 
     def _advance(self, *, first_step: bool) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Observation and info of the state the world is in now."""
