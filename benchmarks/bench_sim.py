@@ -3,14 +3,18 @@
 For 7, 18 and 50 people (and the robot) wandering a room at 100 Hz pose output, measured in the
 same run on the same compiled model:
 
-* **bare**: ``mujoco.mj_kinematics(model, data)`` in a Python loop, once per 100 Hz step, and
-  nothing else (no motion, no output): the floor a Python-driven kinematic world stands on;
+* **bare**: ``mujoco.mj_kinematics(model, data)`` in a Python loop over the scene's model
+  (``World.model``), once per 100 Hz step, and nothing else (no motion, no output): the floor a
+  Python-driven kinematic world stands on. The same loop over the scene's kinematic twin (the
+  model ``World.rollout`` computes poses on: same bodies and joints, one geom per body) is
+  printed too, with the rollout's ratio to it;
 * **rollout**: ``World.rollout(..., rate=100)``: the script sampled at 10 Hz, the compiled motion
-  kernel (walking, avoidance, personal space, head, sway) at 100 Hz, MuJoCo's kinematics for
-  every step (one batched call per block), body and head poses read back as `Poses` arrays;
+  kernel (walking, avoidance, personal space, head, sway) at 100 Hz, MuJoCo's ``mj_kinematics``
+  for every step (called from the compiled loop), body and head poses read back as `Poses`;
 * **frames**: ``World.run(..., rate=100)``: the same, one `reform.Frame` per step (validated
   records; this path is meant for annotation rates of a few hertz);
-* with ``--threads 2``, the rollout again with the block's kinematics on two threads.
+* with ``--threads 2``, the rollout again with each block's kinematics in one ``mujoco.batch``
+  call on two threads.
 
 Then a one-hour run of 50 people streams 360,000 rows of poses through ``World.rollout`` and
 reports the peak memory it traced (numpy allocations) next to the size of the whole run.
@@ -35,7 +39,7 @@ from collections.abc import Mapping
 import mujoco
 import numpy as np
 
-from sim import Intent, PersonSpec, RobotSpec, SceneSpec, World
+from sim import Intent, PersonSpec, RobotSpec, SceneSpec, World, build_scene
 
 SIZES = (7, 18, 50)  # people per scene (plus the robot)
 ROOMS_M = {7: 5.0, 18: 7.0, 50: 11.0}  # metres, side of the square room per size
@@ -196,10 +200,12 @@ def main() -> None:
     print(header)
     results = {}
     for n in args.sizes:
-        model = world_for(n).model
-        bare, roll, frames, threaded = [], [], [], []
+        world = world_for(n)
+        model, twin = world.model, build_scene(world.spec, geometry=False)
+        bare, bare_twin, roll, frames, threaded = [], [], [], [], []
         for r in range(repeats):  # interleaved, so that load changes hit both sides alike
             bare.append(time_bare(model, steps))
+            bare_twin.append(time_bare(twin, steps))
             roll.append(time_rollout(n, seconds))
             if r < max(1, repeats // 2):
                 frames.append(time_frames(n, seconds))
@@ -219,7 +225,9 @@ def main() -> None:
         if args.threads > 1:
             line += f" {speed(threaded):>11,.0f}x {ratio(threaded):>6.2f}"
         line += (
-            f"   (best runs: bare {seconds / min(bare):,.0f}x, rollout {seconds / min(roll):,.0f}x)"
+            f"   (best runs: bare {seconds / min(bare):,.0f}x, rollout {seconds / min(roll):,.0f}x;"
+            f" bare loop over the kinematic twin {speed(bare_twin):,.0f}x, rollout / it "
+            f"{ratio(roll, bare_twin):.2f})"
         )
         print(line)
         results[n] = (speed(roll), ratio(roll))
