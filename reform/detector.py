@@ -142,23 +142,7 @@ class Reform(BaseEstimator):
             members ascending, singletons included.
         """
         check_is_fitted(self, "classifier_")
-        frames = _as_frames(frames, "predict")
-        out: list[Partition | None] = [None] * len(frames)
-        for n, positions in _by_size(frames).items():
-            if n < 2:
-                for k in positions:
-                    out[k] = tuple((int(person),) for person in np.sort(frames[k].ids))
-                continue
-            n_pairs = n * (n - 1) // 2
-            step = max(1, CHUNK_PAIRS // n_pairs)
-            spans: dict[bytes, tuple[slice, ...]] = {}
-            for start in range(0, len(positions), step):
-                chunk = positions[start : start + step]
-                ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
-                labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
-                for k, partition in zip(chunk, _partitions(labels, ids, spans), strict=True):
-                    out[k] = partition
-        return out  # type: ignore[return-value]
+        return self._run(_as_frames(frames, "predict"), partitions=True, pairs=False)[0]
 
     def predict_pairs(self, frames: Iterable[Frame]) -> list[np.ndarray]:
         """The classifier's pair labels, before reconstruction.
@@ -172,27 +156,34 @@ class Reform(BaseEstimator):
             :func:`reform.metrics.pair_labels`).
         """
         check_is_fitted(self, "classifier_")
-        frames = _as_frames(frames, "predict_pairs")
-        out: list[np.ndarray] = [np.zeros(0, dtype=bool)] * len(frames)
+        return self._run(_as_frames(frames, "predict_pairs"), partitions=False, pairs=True)[1]
+
+    def _run(
+        self, frames: list[Frame], *, partitions: bool, pairs: bool
+    ) -> tuple[list[Partition], list[np.ndarray]]:
+        """Partitions and/or pair labels of frames, classified once, in chunks of one size."""
+        out: list[Partition] = [()] * len(frames) if partitions else []
+        out_pairs: list[np.ndarray] = [np.zeros(0, dtype=bool)] * len(frames) if pairs else []
         for n, positions in _by_size(frames).items():
             if n < 2:
+                if partitions:
+                    for k in positions:
+                        out[k] = tuple((int(person),) for person in np.sort(frames[k].ids))
                 continue
             i, j = pair_indices(n)
             step = max(1, CHUNK_PAIRS // i.size)
+            spans: dict[bytes, tuple[slice, ...]] = {}
             for start in range(0, len(positions), step):
                 chunk = positions[start : start + step]
-                _, labels = self._classify_chunk([frames[k] for k in chunk], n)
-                for k, row in zip(chunk, labels, strict=True):
-                    ids = frames[k].ids
-                    if np.all(ids[1:] > ids[:-1]):
-                        out[k] = row.copy()
-                        continue
-                    order = np.argsort(ids, kind="stable")  # sorted row s is frame row order[s]
-                    matrix = np.zeros((n, n), dtype=bool)
-                    matrix[order[i], order[j]] = row
-                    matrix |= matrix.T
-                    out[k] = matrix[i, j]
-        return out
+                ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
+                if partitions:
+                    labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
+                    for k, partition in zip(chunk, _partitions(labels, ids, spans), strict=True):
+                        out[k] = partition
+                if pairs:
+                    for k, row in zip(chunk, pair_labels, strict=True):
+                        out_pairs[k] = _frame_order(row, frames[k].ids, i, j)
+        return out, out_pairs
 
     def predict_relation_matrix(self, frame: Frame) -> np.ndarray:
         """The Relation Matrix of one frame, rows and columns in the frame's row order.
@@ -296,6 +287,18 @@ def training_pairs(
     if not x_parts:
         return np.zeros((0, len(features))), np.zeros(0, np.int64), np.zeros(0, np.int64)
     return np.concatenate(x_parts), np.concatenate(y_parts), np.concatenate(frame_parts)
+
+
+def _frame_order(labels: np.ndarray, ids: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Pair labels over people in id order -> the same pairs over the frame's own rows."""
+    if np.all(ids[1:] > ids[:-1]):
+        return labels.copy()
+    n = ids.size
+    order = np.argsort(ids, kind="stable")  # row s in id order is frame row order[s]
+    matrix = np.zeros((n, n), dtype=bool)
+    matrix[order[i], order[j]] = labels
+    matrix |= matrix.T
+    return matrix[i, j]
 
 
 def _as_frames(frames: Iterable[Frame], method: str) -> list[Frame]:

@@ -197,6 +197,7 @@ def _is_neighbors(estimator: Any) -> bool:
 
     return (
         type(estimator) is KNeighborsClassifier
+        and len(estimator.classes_) == 2
         and estimator.weights in ("uniform", "distance")
         and getattr(estimator, "_fit_method", None) in ("kd_tree", "ball_tree")
         and not estimator.outputs_2d_
@@ -237,14 +238,12 @@ class _NeighborsPairs:
     exact: bool = True
 
     def predict(self, features: np.ndarray) -> np.ndarray:
-        from sklearn.utils.extmath import weighted_mode
-
         model = self.model
         scaled = _scale(self.scalers, features)
         if scaled.shape[0] == 0:
             return np.zeros(0, dtype=bool)
         distance, index = model._tree.query(scaled, model.n_neighbors, return_distance=True)
-        votes = model._y[index]
+        votes = model._y[index]  # class indices
         if model.weights == "distance":
             with np.errstate(divide="ignore"):
                 weights = 1.0 / distance
@@ -253,9 +252,12 @@ class _NeighborsPairs:
             weights[infinite_row] = infinite[infinite_row]
         else:
             weights = np.ones_like(distance)
-        mode, _ = weighted_mode(votes, weights, axis=1)
-        labels = np.asarray(model.classes_).take(np.asarray(mode.ravel(), dtype=np.intp))
-        return labels == 1
+        # sklearn.utils.extmath.weighted_mode for two classes, with its own sums: class 1 wins
+        # only with strictly more weight than class 0.
+        weight_0 = np.sum((votes == 0) * weights, axis=1)
+        weight_1 = np.sum((votes == 1) * weights, axis=1)
+        winner = (weight_1 > weight_0).astype(np.intp)
+        return np.asarray(model.classes_).take(winner) == 1
 
 
 # --------------------------------------------------------------------------------------------
