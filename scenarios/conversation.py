@@ -18,7 +18,7 @@ MAX_UTTERANCE_FACTOR = 3.0  # an utterance lasts at most this many times the mea
 
 
 def standing(
-    place: np.ndarray,
+    place: np.ndarray | tuple[float, float],
     facing: float,
     *,
     gaze_agent: int | None = None,
@@ -47,12 +47,10 @@ def _gaze(
     if head_noise <= 0.0:
         rng.normal()  # keep the stream the same whatever the noise
         return {"gaze_agent": target}
-    here, there = spots[looker], spots[target]
-    delta = there - here
-    angle = math.atan2(delta[1], delta[0]) + rng.normal() * head_noise
-    reach = max(float(np.hypot(*delta)), 0.5)
-    point = here + reach * np.array([math.cos(angle), math.sin(angle)])
-    return {"gaze_point": (float(point[0]), float(point[1]))}
+    (hx, hy), (tx, ty) = spots[looker], spots[target]
+    angle = math.atan2(ty - hy, tx - hx) + float(rng.normal()) * head_noise
+    reach = max(math.hypot(tx - hx, ty - hy), 0.5)
+    return {"gaze_point": (hx + reach * math.cos(angle), hy + reach * math.sin(angle))}
 
 
 def converse(
@@ -82,7 +80,7 @@ def converse(
         ``(time, speaker)`` of every utterance.
     """
     members = [int(m) for m in members]
-    spots = {m: np.asarray(places[k], dtype=np.float64) for k, m in enumerate(members)}
+    spots = {m: (float(places[k][0]), float(places[k][1])) for k, m in enumerate(members)}
     facing = {m: float(facings[k]) for k, m in enumerate(members)}
     allowed = members if speakers is None else [int(s) for s in speakers]
     t = float(start)

@@ -215,20 +215,22 @@ class _Party:
     ) -> bool:
         limit = self.half - WALL_GAP_M - PLANNING_RADIUS_M
         inner = claim - PLANNING_RADIUS_M - GROUP_MARGIN_M
-        if np.any(np.abs(centre) > limit - max(inner, 0.0)):
+        x, y = float(centre[0]), float(centre[1])
+        if max(abs(x), abs(y)) > limit - max(inner, 0.0):
             return False
+        hypot = math.hypot
         for gid, g in self.groups.items():
             if gid in ignore_groups:
                 continue
-            if np.hypot(*(centre - g.centre)) < claim + self.reach(g.radius):
+            if hypot(x - g.centre[0], y - g.centre[1]) < claim + self.reach(g.radius):
                 return False
         for pid, a in self.alone_at.items():
             if pid in ignore_people:
                 continue
-            if np.hypot(*(centre - a.spot)) < claim + ALONE_CLAIM_M:
+            if hypot(x - a.spot[0], y - a.spot[1]) < claim + ALONE_CLAIM_M:
                 return False
         for spot in self.keep_clear:
-            if np.hypot(*(centre - spot)) < claim + ROBOT_CLAIM_M:
+            if hypot(x - spot[0], y - spot[1]) < claim + ROBOT_CLAIM_M:
                 return False
         return True
 

@@ -32,6 +32,10 @@ Point = tuple[float, float]
 def _point(name: str, value: Any) -> Point | None:
     if value is None:
         return None
+    if type(value) is tuple and len(value) == 2:
+        x, y = value
+        if type(x) is float and type(y) is float and math.isfinite(x) and math.isfinite(y):
+            return value  # the common case, without a round trip through numpy
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
