@@ -17,6 +17,7 @@ from sim.cli import (
     _generate,
     _scenarios,
     _simulate,
+    _stress,
     _train,
 )
 from sim.cli._common import CliError
@@ -34,6 +35,7 @@ _COMMANDS = (
     _simulate,
     _generate,
     _calibrate,
+    _stress,
 )
 
 

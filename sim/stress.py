@@ -1,0 +1,1049 @@
+"""Stress tests: how REFORM and GCFF degrade as tracking gets worse and crowds change.
+
+F1 at T = 2/3 and T = 1 (the protocol of :mod:`reform.metrics`) of REFORM with each of the
+paper's three pair classifiers and of GCFF, as functions of:
+
+* tracking errors applied to simulated parties (:class:`reform.perturb.Perturbation`):
+  ``position-noise`` (metres per axis), ``orientation-noise`` (degrees), ``dropout`` (share of
+  people missing from each frame);
+* the scene (the ``mingle`` scenario's options): ``density`` (guests per m², through the room's
+  side), ``groups`` (number of guests at the default density, hence the number of groups),
+  ``group-size`` (largest group allowed);
+* the ``sensor``: the ground truth of everyone in the room against the robot's head sensor
+  (`sim.sensor.Sensor`): field of view and range only, with occlusion by MuJoCo rays, and with
+  occlusion plus Kinect-like tracking errors.
+
+Protocol. The detectors are trained once: REFORM's three classifiers on a synthetic training set
+of ``mingle`` and ``word-improv`` episodes, GCFF tuned (stride and mdl, by grid search with the
+protocol's F1 at T = 2/3) on a subsample of the same frames. Training and test episodes draw
+their seeds from different spawn keys of the master seed (``SeedSequence(seed, spawn_key=(role,
+...))``), so no test episode is a training episode. Each point of a curve is scored on
+``seeds`` test episodes of the SALSA-like party (``mingle``, 18 guests, 0.4 per m², unless the
+axis changes it), frame rate ``rate_hz``; the ground truth of a perturbed or observed frame is
+the truth restricted to the people it holds. Perturbations at every level of an axis use the
+same random numbers (common random numbers), so a curve's steps come from the level, not from
+the draw.
+
+Confidence intervals: two-stage bootstrap (episodes, then frames within each;
+:mod:`reform.bootstrap`), percentile intervals, the same resamples for every detector at a point.
+
+Everything runs in parallel over the machine's cores (joblib processes); the results do not
+depend on the number of workers. ``GRIDS["small"]`` runs in seconds (tests, the demo);
+``GRIDS["default"]`` is the documented run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from reform.bootstrap import ScoreIntervals, bootstrap_weights, frame_intervals
+from reform.classifiers import BAGGED_TREES, LOGISTIC_REGRESSION, WEIGHTED_KNN, make_classifier
+from reform.detector import Reform
+from reform.frame import Frame
+from reform.gcff import Gcff
+from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
+from reform.perturb import Perturbation
+from sim.episode import simulate_episode
+from sim.sensor import Sensor
+
+__all__ = [
+    "AXES",
+    "DETECTORS",
+    "DETECTOR_LABELS",
+    "GRIDS",
+    "SENSORS",
+    "THRESHOLDS",
+    "StressAxis",
+    "StressGrid",
+    "StressPoint",
+    "StressResults",
+    "episode_seed",
+    "run_stress",
+    "train_detectors",
+    "training_frames",
+]
+
+GCFF = "gcff"
+DETECTORS = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION, GCFF)
+DETECTOR_LABELS: Mapping[str, str] = MappingProxyType(
+    {
+        WEIGHTED_KNN: "REFORM weighted KNN",
+        BAGGED_TREES: "REFORM bagged trees",
+        LOGISTIC_REGRESSION: "REFORM logistic regression",
+        GCFF: "GCFF",
+    }
+)
+THRESHOLDS = ("2/3", "1")  # matching thresholds scored (exact: T_TWO_THIRDS, T_ONE)
+_THRESHOLD_VALUES = {"2/3": T_TWO_THIRDS, "1": T_ONE}
+
+TEST_SCENARIO = "mingle"  # the party every point is scored on
+TRAINING_SCENARIOS = ("mingle", "word-improv")
+BASE_PEOPLE = 18  # guests of the test party (SALSA: 18)
+BASE_DENSITY_PER_M2 = 0.4  # guests per m² of the test party (mingle's default, SALSA-like)
+
+# Kinect-like tracking errors of the "tracker" sensor level (skeleton tracking of the robot's
+# head sensor): metres per axis, radians, share of people missed per frame.
+TRACKER_POSITION_NOISE_M = 0.05
+TRACKER_YAW_NOISE_RAD = math.radians(10.0)
+TRACKER_DROPOUT = 0.05
+
+# The sensor levels: None is the ground truth of everyone in the room.
+SENSORS: Mapping[str, Sensor | None] = MappingProxyType(
+    {
+        "truth": None,
+        "fov": Sensor(occlusion=False),
+        "occlusion": Sensor(),
+        "tracker": Sensor(
+            position_noise=TRACKER_POSITION_NOISE_M,
+            yaw_noise=TRACKER_YAW_NOISE_RAD,
+            dropout=TRACKER_DROPOUT,
+        ),
+    }
+)
+_SENSOR_TEXT = {
+    "truth": "ground truth, everyone in the room",
+    "fov": "robot's head sensor: field of view and range only",
+    "occlusion": "robot's head sensor: field of view, range, occlusion",
+    "tracker": (
+        f"robot's head sensor with occlusion and tracking errors ({TRACKER_POSITION_NOISE_M} m, "
+        f"{math.degrees(TRACKER_YAW_NOISE_RAD):g} deg, {TRACKER_DROPOUT:.0%} dropout)"
+    ),
+}
+
+# Seed roles: spawn keys of the master seed, one per use, so that uses never share a seed.
+_ROLE_TRAIN, _ROLE_TEST, _ROLE_PERTURB, _ROLE_BOOTSTRAP = range(4)
+_SEED_BITS = 63  # bits of a scenario seed (a non-negative int64)
+# A party mingle's planner cannot lay out (no free floor) is drawn again with another seed, at
+# most this many times.
+MAX_REDRAWS = 5
+
+
+@dataclass(frozen=True)
+class _AxisInfo:
+    name: str
+    title: str
+    x_label: str
+    kind: str  # "perturb" (applied to the base episodes) or "scene" (a new episode per level)
+    description: str
+
+
+AXES: Mapping[str, _AxisInfo] = MappingProxyType(
+    {
+        info.name: info
+        for info in (
+            _AxisInfo(
+                "position-noise",
+                "Position noise",
+                "position noise (m, sd per axis)",
+                "perturb",
+                "Gaussian noise on every person's position, standard deviation per axis.",
+            ),
+            _AxisInfo(
+                "orientation-noise",
+                "Orientation noise",
+                "orientation noise (deg, sd)",
+                "perturb",
+                "Gaussian noise on every person's body (and head) yaw.",
+            ),
+            _AxisInfo(
+                "dropout",
+                "Tracking dropout",
+                "dropout (share of people missed per frame)",
+                "perturb",
+                "Each person missing from each frame independently with this probability; the "
+                "truth is restricted to the people kept.",
+            ),
+            _AxisInfo(
+                "density",
+                "Crowd density",
+                "density (guests per m²)",
+                "scene",
+                f"{BASE_PEOPLE} guests in a square room whose side gives this density.",
+            ),
+            _AxisInfo(
+                "groups",
+                "Number of groups",
+                "guests (at 0.4 per m²)",
+                "scene",
+                "More guests at the default density: more groups at once (see F-formations "
+                "per frame).",
+            ),
+            _AxisInfo(
+                "group-size",
+                "Size of groups",
+                "largest group allowed (people)",
+                "scene",
+                "The party's largest group (mingle's max_group_size); see the mean F-formation "
+                "size.",
+            ),
+            _AxisInfo(
+                "sensor",
+                "Sensor",
+                "sensor (0 truth, 1 field of view, 2 + occlusion, 3 + tracking errors)",
+                "scene",
+                "The party with the robot watching from the west wall, seen from the ground "
+                "truth or by the robot's head sensor.",
+            ),
+        )
+    }
+)
+
+
+def _floats(name: str, values: Iterable[Any], *, low: float, high: float) -> tuple[float, ...]:
+    out = []
+    for value in values:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"StressGrid.{name} must hold numbers, got {value!r}")
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ValueError(
+                f"StressGrid.{name} values must lie in [{low:g}, {high:g}], got {value}"
+            )
+        out.append(float(value))
+    return tuple(out)
+
+
+def _ints(name: str, values: Iterable[Any], *, low: int, high: int) -> tuple[int, ...]:
+    out = []
+    for value in values:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            raise ValueError(f"StressGrid.{name} must hold integers, got {value!r}")
+        if not low <= value <= high:
+            raise ValueError(f"StressGrid.{name} values must lie in [{low}, {high}], got {value}")
+        out.append(int(value))
+    return tuple(out)
+
+
+# StressGrid's fields: name, kind (a tuple of floats or ints, or one float or int), bounds.
+_GRID_FIELDS = (
+    ("position_noise_m", "floats", 0.0, 5.0),
+    ("orientation_noise_deg", "floats", 0.0, 360.0),
+    ("dropout", "floats", 0.0, 1.0),
+    ("density_per_m2", "floats", 0.01, 1.0),
+    ("people", "ints", 2, 100),
+    ("max_group_size", "ints", 2, 12),
+    ("seeds", "int", 1, 10**6),
+    ("duration_s", "float", 1e-3, 1e6),
+    ("rate_hz", "float", 1e-3, 1e3),
+    ("train_episodes", "int", 1, 10**6),
+    ("train_duration_s", "float", 1e-3, 1e6),
+    ("train_rate_hz", "float", 1e-3, 1e3),
+    ("resamples", "int", 1, 10**7),
+    ("gcff_stride_grid_m", "floats", 0.0, 10.0),
+    ("gcff_mdl_grid_m2", "floats", 1e-6, 1e3),
+    ("gcff_tuning_frames", "int", 1, 10**7),
+)
+
+
+@dataclass(frozen=True)
+class StressGrid:
+    """The levels of every axis and the size of the run.
+
+    Attributes:
+        position_noise_m: position noise levels, metres (0-0.5).
+        orientation_noise_deg: orientation noise levels, degrees (0-60).
+        dropout: dropout levels, shares (0-0.5).
+        density_per_m2: guests per m² (mingle's planner finds room up to about 0.4).
+        people: numbers of guests at the default density.
+        max_group_size: largest groups allowed (3-12).
+        sensors: sensor levels, names of :data:`SENSORS`.
+        seeds: test episodes per point.
+        duration_s: length of a test episode, seconds.
+        rate_hz: frames per second scored.
+        train_episodes: training episodes per training scenario.
+        train_duration_s: length of a training episode, seconds.
+        train_rate_hz: frames per second of the training set.
+        resamples: bootstrap resamples per point.
+        gcff_stride_grid_m: strides GCFF is tuned over, metres.
+        gcff_mdl_grid_m2: mdl values GCFF is tuned over, square metres.
+        gcff_tuning_frames: training frames GCFF is tuned on at most (evenly subsampled).
+    """
+
+    position_noise_m: tuple[float, ...] = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
+    orientation_noise_deg: tuple[float, ...] = (0.0, 10.0, 20.0, 30.0, 45.0, 60.0)
+    dropout: tuple[float, ...] = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)
+    density_per_m2: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4)
+    people: tuple[int, ...] = (6, 12, 18, 30, 48)
+    max_group_size: tuple[int, ...] = (3, 4, 6, 8, 12)
+    sensors: tuple[str, ...] = ("truth", "fov", "occlusion", "tracker")
+    seeds: int = 5
+    duration_s: float = 600.0
+    rate_hz: float = 0.5
+    train_episodes: int = 4
+    train_duration_s: float = 600.0
+    train_rate_hz: float = 0.5
+    resamples: int = 1000
+    gcff_stride_grid_m: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8)
+    gcff_mdl_grid_m2: tuple[float, ...] = (0.5, 1.0, 2.0, 3.0)
+    gcff_tuning_frames: int = 600
+
+    def __post_init__(self) -> None:
+        for name, kind, low, high in _GRID_FIELDS:
+            value = getattr(self, name)
+            if kind == "floats":
+                value = _floats(name, value, low=low, high=high)
+            elif kind == "ints":
+                value = _ints(name, value, low=int(low), high=int(high))
+            elif kind == "int":
+                (value,) = _ints(name, [value], low=int(low), high=int(high))
+            else:
+                (value,) = _floats(name, [value], low=low, high=high)
+            if kind in ("floats", "ints") and not value:
+                raise ValueError(f"StressGrid.{name} must hold at least one level, got none")
+            object.__setattr__(self, name, value)
+        sensors = tuple(self.sensors)
+        unknown = [s for s in sensors if s not in SENSORS]
+        if unknown or not sensors:
+            raise ValueError(f"StressGrid.sensors must be names of {tuple(SENSORS)}, got {sensors}")
+        object.__setattr__(self, "sensors", sensors)
+
+    def levels(self, axis: str) -> tuple[Any, ...]:
+        """The levels of ``axis`` (one of :data:`AXES`)."""
+        return {
+            "position-noise": self.position_noise_m,
+            "orientation-noise": self.orientation_noise_deg,
+            "dropout": self.dropout,
+            "density": self.density_per_m2,
+            "groups": self.people,
+            "group-size": self.max_group_size,
+            "sensor": self.sensors,
+        }[_check_axis(axis)]
+
+    def to_json(self) -> dict[str, Any]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+
+
+GRIDS: Mapping[str, StressGrid] = MappingProxyType(
+    {
+        "default": StressGrid(),
+        "small": StressGrid(
+            position_noise_m=(0.0, 0.25, 0.5),
+            orientation_noise_deg=(0.0, 30.0, 60.0),
+            dropout=(0.0, 0.25, 0.5),
+            density_per_m2=(0.2, 0.4),
+            people=(6, 18),
+            max_group_size=(3, 8),
+            sensors=("truth", "occlusion"),
+            seeds=2,
+            duration_s=40.0,
+            rate_hz=0.5,
+            train_episodes=1,
+            train_duration_s=120.0,
+            train_rate_hz=0.5,
+            resamples=200,
+            gcff_stride_grid_m=(0.7,),
+            gcff_mdl_grid_m2=(1.0,),
+            gcff_tuning_frames=60,
+        ),
+    }
+)
+
+
+def _check_axis(axis: str) -> str:
+    if axis not in AXES:
+        raise ValueError(f"axis must be one of {tuple(AXES)}, got {axis!r}")
+    return axis
+
+
+def episode_seed(seed: int, role: int, *keys: int) -> int:
+    """A scenario seed for one use of the master ``seed``: ``SeedSequence(seed, spawn_key=(role,
+    *keys))``'s first 63 bits. Different roles or keys give independent seeds."""
+    state = np.random.SeedSequence(int(seed), spawn_key=(int(role), *map(int, keys)))
+    return int(state.generate_state(1, dtype=np.uint64)[0] >> np.uint64(64 - _SEED_BITS))
+
+
+def _rng(seed: int, role: int, *keys: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(role, *keys)))
+
+
+# ------------------------------------------------------------------------------------------------
+# Episodes
+
+
+@dataclass(frozen=True)
+class _EpisodeSpec:
+    scenario: str
+    seed: int
+    options: tuple[tuple[str, Any], ...]
+    duration: float
+    rate: float
+    sensor: str = "truth"
+
+
+def _simulate(spec: _EpisodeSpec) -> tuple[Frame, ...]:
+    sensor = SENSORS[spec.sensor]
+    episode = simulate_episode(
+        spec.scenario,
+        seed=spec.seed,
+        duration=spec.duration,
+        rate=spec.rate,
+        options=dict(spec.options),
+        view="truth" if sensor is None else "robot",
+        sensor=sensor,
+    )
+    return episode.dataset.frames
+
+
+def _room_side(people: int, density: float) -> float:
+    """Side of the square room holding ``people`` at ``density`` per m² (rounded up to a µm)."""
+    return math.ceil(math.sqrt(people / density) * 1e6) / 1e6
+
+
+def _scene_spec(grid: StressGrid, axis: str, level: Any, seed: int) -> _EpisodeSpec:
+    options: dict[str, Any] = {"duration": grid.duration_s}
+    sensor = "truth"
+    if axis == "density":
+        options["room_side"] = _room_side(BASE_PEOPLE, float(level))
+    elif axis == "groups":
+        options["people"] = int(level)
+    elif axis == "group-size":
+        options["max_group_size"] = int(level)
+    elif axis == "sensor":
+        options["robot"] = True
+        sensor = str(level)
+    return _EpisodeSpec(
+        TEST_SCENARIO, seed, tuple(sorted(options.items())), grid.duration_s, grid.rate_hz, sensor
+    )
+
+
+def _base_spec(grid: StressGrid, seed: int) -> _EpisodeSpec:
+    return _EpisodeSpec(
+        TEST_SCENARIO,
+        seed,
+        (("duration", grid.duration_s),),
+        grid.duration_s,
+        grid.rate_hz,
+    )
+
+
+def training_frames(
+    *,
+    seed: int,
+    episodes: int = 4,
+    duration: float = 600.0,
+    rate: float = 0.5,
+    scenarios: Sequence[str] = TRAINING_SCENARIOS,
+    jobs: int | None = None,
+) -> tuple[Frame, ...]:
+    """The synthetic training set: ``episodes`` episodes of each training scenario.
+
+    Episode ``i`` of scenario ``s`` (in ``scenarios`` order) has seed
+    ``episode_seed(seed, 0, s, i)``; test episodes of :func:`run_stress` use another role.
+
+    Args:
+        seed: master seed.
+        episodes: episodes per scenario.
+        duration: seconds per episode.
+        rate: frames per second.
+        scenarios: registered scenario names, at their default options.
+        jobs: worker processes (None: every core).
+
+    Returns:
+        The annotated frames, scenario by scenario, episode by episode.
+    """
+    specs = _training_specs(seed, episodes, duration, rate, scenarios)
+    return tuple(f for frames in _parallel(_simulate, specs, jobs=jobs) for f in frames)
+
+
+def _training_specs(
+    seed: int, episodes: int, duration: float, rate: float, scenarios: Sequence[str]
+) -> list[_EpisodeSpec]:
+    return [
+        _EpisodeSpec(name, episode_seed(seed, _ROLE_TRAIN, s, i), (), duration, rate)
+        for s, name in enumerate(scenarios)
+        for i in range(episodes)
+    ]
+
+
+# ------------------------------------------------------------------------------------------------
+# Detectors
+
+
+def _fit(name: str, frames: Sequence[Frame], grid: StressGrid) -> Any:
+    if name == GCFF:
+        step = max(1, math.ceil(len(frames) / grid.gcff_tuning_frames))
+        return Gcff(
+            tune=True,
+            stride_grid=grid.gcff_stride_grid_m,
+            mdl_grid=grid.gcff_mdl_grid_m2,
+        ).fit(list(frames[::step]))
+    return Reform(make_classifier(name)).fit(frames)
+
+
+def train_detectors(
+    frames: Sequence[Frame],
+    *,
+    grid: StressGrid | None = None,
+    jobs: int | None = None,
+) -> dict[str, Any]:
+    """REFORM with each classifier fitted on ``frames``, and GCFF tuned on a subsample of them.
+
+    Args:
+        frames: annotated training frames.
+        grid: the GCFF tuning grid and subsample size (default ``GRIDS["default"]``).
+        jobs: worker processes (None: every core).
+
+    Returns:
+        Detector name (:data:`DETECTORS`) -> fitted detector.
+    """
+    grid = GRIDS["default"] if grid is None else grid
+    fitted = _parallel(_fit, [(name, frames, grid) for name in DETECTORS], jobs=jobs, star=True)
+    return dict(zip(DETECTORS, fitted, strict=True))
+
+
+# ------------------------------------------------------------------------------------------------
+# Scoring one condition
+
+
+@dataclass(frozen=True)
+class _Scored:
+    """Per-frame scores of every detector on one condition of one episode."""
+
+    sequence: tuple[str, ...]
+    precision: Mapping[tuple[str, str], np.ndarray]  # (detector, threshold) -> (n_frames,)
+    recall: Mapping[tuple[str, str], np.ndarray]
+    pairs: int
+    pairs_correct: Mapping[str, int]
+    people: int
+    fformations: int
+    fformation_members: int
+    notes: tuple[str, ...] = ()
+
+    @staticmethod
+    def noted(scored: _Scored, notes: Sequence[str]) -> _Scored:
+        return dataclasses.replace(scored, notes=tuple(notes))
+
+
+def _score(frames: Sequence[Frame], detectors: Mapping[str, Any]) -> _Scored:
+    precision, recall, correct = {}, {}, {}
+    sequence: tuple[str, ...] = ()
+    pairs = 0
+    for name, detector in detectors.items():
+        evaluation = evaluate(frames, detector.predict(frames))
+        for key in THRESHOLDS:
+            scores = evaluation.at(_THRESHOLD_VALUES[key])
+            precision[name, key] = np.asarray(scores.frame_precision)
+            recall[name, key] = np.asarray(scores.frame_recall)
+        correct[name] = int(evaluation.pairs_correct.sum())
+        pairs = int(evaluation.pairs.sum())
+        sequence = evaluation.sequence
+    annotated = [f for f in frames if f.groups is not None]
+    groups = [g for f in annotated for g in f.fformations()]
+    return _Scored(
+        sequence=sequence,
+        precision=precision,
+        recall=recall,
+        pairs=pairs,
+        pairs_correct=correct,
+        people=sum(f.n_people for f in annotated),
+        fformations=len(groups),
+        fformation_members=sum(len(g) for g in groups),
+    )
+
+
+def _perturbation(axis: str, level: float) -> Perturbation:
+    if axis == "position-noise":
+        return Perturbation(position_noise=level)
+    if axis == "orientation-noise":
+        return Perturbation(yaw_noise=math.radians(level))
+    if axis == "dropout":
+        return Perturbation(dropout=level)
+    raise ValueError(f"axis {axis!r} is not a perturbation")
+
+
+def _perturb_task(
+    grid: StressGrid,
+    axis: str,
+    axis_index: int,
+    episode: int,
+    frames: Sequence[Frame],
+    detectors: Mapping[str, Any],
+    seed: int,
+) -> list[tuple[str, int, int, _Scored | str]]:
+    out: list[tuple[str, int, int, _Scored | str]] = []
+    for k, level in enumerate(grid.levels(axis)):
+        perturbation = _perturbation(axis, level)
+        rng = _rng(seed, _ROLE_PERTURB, axis_index, episode)  # the same draws at every level
+        perturbed = perturbation.apply_all(frames, rng)
+        out.append((axis, k, episode, _score(perturbed, detectors)))
+    return out
+
+
+def _scene_task(
+    grid: StressGrid,
+    axis: str,
+    episode: int,
+    seed: int,
+    detectors: Mapping[str, Any],
+) -> list[tuple[str, int, int, _Scored | str]]:
+    out: list[tuple[str, int, int, _Scored | str]] = []
+    for k, level in enumerate(grid.levels(axis)):
+        notes = []
+        for attempt in range(MAX_REDRAWS + 1):
+            keys = (episode,) if attempt == 0 else (episode, attempt)
+            spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
+            try:
+                frames = _simulate(spec)
+            except ValueError as exc:  # the planner cannot lay out this party: draw another
+                notes.append(f"seed {spec.seed}: {exc}")
+                continue
+            out.append((axis, k, episode, _Scored.noted(_score(frames, detectors), notes)))
+            break
+        else:
+            out.append((axis, k, episode, "; ".join(notes)))
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Results
+
+
+@dataclass(frozen=True)
+class StressPoint:
+    """One point of every detector's curves.
+
+    Attributes:
+        value: the level as a number (the sensor's index in :data:`SENSORS` order).
+        label: the level as text.
+        episodes: test episodes scored.
+        frames: annotated frames scored.
+        people_per_frame: mean people (robot included) per frame.
+        fformations_per_frame: mean true F-formations per frame.
+        fformation_size: mean size of the true F-formations (NaN when there are none).
+        scores: detector -> threshold (``"2/3"``, ``"1"``) -> precision, recall, F1 with intervals.
+        pairwise_accuracy: detector -> share of pairs labelled correctly.
+        notes: seeds the scenario could not be made with (each drawn again with another seed;
+            an episode is missing only when every redraw failed).
+    """
+
+    value: float
+    label: str
+    episodes: int
+    frames: int
+    people_per_frame: float
+    fformations_per_frame: float
+    fformation_size: float
+    scores: Mapping[str, Mapping[str, ScoreIntervals]]
+    pairwise_accuracy: Mapping[str, float]
+    notes: tuple[str, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "value": self.value,
+            "label": self.label,
+            "episodes": self.episodes,
+            "frames": self.frames,
+            "people_per_frame": _json_float(self.people_per_frame),
+            "fformations_per_frame": _json_float(self.fformations_per_frame),
+            "fformation_size": _json_float(self.fformation_size),
+            "scores": {
+                d: {t: s.to_json() for t, s in by_t.items()} for d, by_t in self.scores.items()
+            },
+            "pairwise_accuracy": {d: _json_float(v) for d, v in self.pairwise_accuracy.items()},
+            "notes": list(self.notes),
+        }
+
+
+@dataclass(frozen=True)
+class StressAxis:
+    """One stress axis: its points, in level order."""
+
+    name: str
+    title: str
+    x_label: str
+    description: str
+    points: tuple[StressPoint, ...]
+
+    @property
+    def x(self) -> np.ndarray:
+        return np.array([p.value for p in self.points], dtype=np.float64)
+
+    def curve(self, detector: str, threshold: str = "2/3", *, score: str = "f1") -> np.ndarray:
+        """(3, k) value, low, high of ``score`` along the axis (NaN where no frame was scored)."""
+        out = np.full((3, len(self.points)), np.nan)
+        for k, point in enumerate(self.points):
+            if detector in point.scores:
+                interval = getattr(point.scores[detector][threshold], score)
+                out[:, k] = (interval.value, interval.low, interval.high)
+        return out
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "title": self.title,
+            "x_label": self.x_label,
+            "description": self.description,
+            "points": [p.to_json() for p in self.points],
+        }
+
+
+@dataclass(frozen=True)
+class StressResults:
+    """Everything a stress run measured.
+
+    Attributes:
+        grid: the levels and sizes.
+        grid_name: ``"default"``, ``"small"`` or ``"custom"``.
+        seed: master seed.
+        jobs: worker processes used.
+        axes: one :class:`StressAxis` per axis run.
+        training: what the detectors were trained on, and GCFF's tuned setting.
+        timings: wall-clock seconds per stage and in total.
+        environment: the machine: ``cores`` and ``load_average_start`` (1, 5, 15 minutes).
+    """
+
+    grid: StressGrid
+    grid_name: str
+    seed: int
+    jobs: int
+    axes: tuple[StressAxis, ...]
+    training: Mapping[str, Any]
+    timings: Mapping[str, float] = field(default_factory=dict)
+    environment: Mapping[str, Any] = field(default_factory=dict)
+
+    def axis(self, name: str) -> StressAxis:
+        for axis in self.axes:
+            if axis.name == name:
+                return axis
+        raise KeyError(f"axis {name!r} was not run (axes {[a.name for a in self.axes]})")
+
+    def to_json(self, *, command: str | None = None) -> dict[str, Any]:
+        return {
+            "kind": "reform-sim/stress",
+            "schema_version": 1,
+            "command": command,
+            "grid_name": self.grid_name,
+            "grid": self.grid.to_json(),
+            "seed": self.seed,
+            "jobs": self.jobs,
+            "detectors": dict(DETECTOR_LABELS),
+            "sensors": dict(_SENSOR_TEXT),
+            "training": _jsonable(self.training),
+            "timings_s": {k: round(v, 2) for k, v in self.timings.items()},
+            "environment": _jsonable(self.environment),
+            "axes": [a.to_json() for a in self.axes],
+        }
+
+
+def _json_float(value: float) -> float | None:
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return _json_float(float(value))
+    return value
+
+
+def _point(
+    axis: str,
+    k: int,
+    level: Any,
+    scored: list[_Scored],
+    notes_: list[str],
+    *,
+    seed: int,
+    axis_index: int,
+    resamples: int,
+) -> StressPoint:
+    value = float(list(SENSORS).index(level)) if axis == "sensor" else float(level)
+    label = str(level) if axis == "sensor" else f"{level:g}"
+    if not scored:
+        return StressPoint(value, label, 0, 0, math.nan, math.nan, math.nan, {}, {}, tuple(notes_))
+    sequence = [s for part in scored for s in part.sequence]
+    frames = len(sequence)
+    weights = bootstrap_weights(
+        sequence, rng=_rng(seed, _ROLE_BOOTSTRAP, axis_index, k), resamples=resamples
+    )
+    detectors = [d for d in DETECTORS if (d, THRESHOLDS[0]) in scored[0].precision]
+    n_sequences = len(set(sequence))
+    scores = {
+        d: {
+            t: frame_intervals(
+                np.concatenate([part.precision[d, t] for part in scored]),
+                np.concatenate([part.recall[d, t] for part in scored]),
+                weights=weights,
+                sequences=n_sequences,
+            )
+            for t in THRESHOLDS
+        }
+        for d in detectors
+    }
+    pairs = sum(part.pairs for part in scored)
+    accuracy = {
+        d: (sum(part.pairs_correct[d] for part in scored) / pairs if pairs else math.nan)
+        for d in detectors
+    }
+    ff = sum(part.fformations for part in scored)
+    return StressPoint(
+        value=value,
+        label=label,
+        episodes=len(scored),
+        frames=frames,
+        people_per_frame=sum(part.people for part in scored) / frames,
+        fformations_per_frame=ff / frames,
+        fformation_size=sum(part.fformation_members for part in scored) / ff if ff else math.nan,
+        scores=scores,
+        pairwise_accuracy=accuracy,
+        notes=tuple(notes_),
+    )
+
+
+# ------------------------------------------------------------------------------------------------
+# Parallel map
+
+
+def _cpu_count() -> int:
+    import os
+
+    return max(
+        1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    )
+
+
+def _load_average() -> list[float] | None:
+    import os
+
+    try:
+        return [round(v, 2) for v in os.getloadavg()]
+    except OSError:  # pragma: no cover - not every platform has one
+        return None
+
+
+def _timed(function: Callable[..., Any], star: bool, item: Any) -> tuple[Any, float]:
+    """``function(item)`` (or ``function(*item)``) and the CPU seconds it took."""
+    start = time.process_time()
+    result = function(*item) if star else function(item)
+    return result, time.process_time() - start
+
+
+def _parallel(
+    function: Callable[..., Any],
+    items: Sequence[Any],
+    *,
+    jobs: int | None,
+    star: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+    cpu: list[float] | None = None,
+) -> list[Any]:
+    """``function`` over ``items`` in order, on ``jobs`` processes (serial for 1 job or 1 item).
+
+    The CPU seconds of every call are appended to ``cpu`` when it is given.
+    """
+    workers = _cpu_count() if jobs is None else int(jobs)
+    if workers <= 1 or len(items) <= 1:
+        results = (_timed(function, star, item) for item in items)
+    else:
+        from joblib import Parallel, delayed
+
+        runner = Parallel(n_jobs=min(workers, len(items)), return_as="generator")
+        results = runner(delayed(_timed)(function, star, item) for item in items)
+    out = []
+    for k, (result, seconds) in enumerate(results):
+        out.append(result)
+        if cpu is not None:
+            cpu.append(seconds)
+        if progress is not None:
+            progress(k + 1, len(items))
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# The run
+
+
+def run_stress(
+    grid: StressGrid | str = "default",
+    *,
+    seed: int = 0,
+    jobs: int | None = None,
+    axes: Sequence[str] | None = None,
+    detectors: Mapping[str, Any] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> StressResults:
+    """Runs the stress tests.
+
+    Args:
+        grid: a :class:`StressGrid` or the name of one of :data:`GRIDS`.
+        seed: master seed of training episodes, test episodes, perturbations and bootstrap.
+        jobs: worker processes (None: every core). Results do not depend on it.
+        axes: axes to run (names of :data:`AXES`), default all.
+        detectors: fitted detectors by name (:data:`DETECTORS` keys) instead of training them
+            on the synthetic training set; e.g. REFORM trained on SALSA.
+        progress: called with one line of text as stages start and tasks finish.
+
+    Returns:
+        The curves with their confidence intervals, the training summary and the timings.
+    """
+    grid_name = "custom"
+    if isinstance(grid, str):
+        if grid not in GRIDS:
+            raise ValueError(f"grid must be one of {tuple(GRIDS)} or a StressGrid, got {grid!r}")
+        grid_name, grid = grid, GRIDS[grid]
+    elif not isinstance(grid, StressGrid):
+        raise ValueError(f"grid must be a StressGrid or a name, got {type(grid).__name__}")
+    else:
+        grid_name = next((n for n, g in GRIDS.items() if g == grid), "custom")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ValueError(f"jobs must be None or an int >= 1, got {jobs!r}")
+    names = tuple(AXES) if axes is None else tuple(_check_axis(a) for a in axes)
+    workers = _cpu_count() if jobs is None else jobs
+    say = progress if progress is not None else (lambda _line: None)
+    timings: dict[str, float] = {}
+    start = time.perf_counter()
+    environment: dict[str, Any] = {"cores": _cpu_count(), "load_average_start": _load_average()}
+    cpu: list[float] = []
+
+    test_seeds = [episode_seed(seed, _ROLE_TEST, i) for i in range(grid.seeds)]
+    training: dict[str, Any] = {}
+    if detectors is None:
+        say(
+            f"training set: {grid.train_episodes} episode(s) each of "
+            f"{', '.join(TRAINING_SCENARIOS)} ({grid.train_duration_s:g} s at "
+            f"{grid.train_rate_hz:g} Hz)"
+        )
+        t0 = time.perf_counter()
+        specs = _training_specs(
+            seed, grid.train_episodes, grid.train_duration_s, grid.train_rate_hz, TRAINING_SCENARIOS
+        )
+        train = tuple(
+            f for frames in _parallel(_simulate, specs, jobs=jobs, cpu=cpu) for f in frames
+        )
+        train_seeds = {
+            name: [episode_seed(seed, _ROLE_TRAIN, s, i) for i in range(grid.train_episodes)]
+            for s, name in enumerate(TRAINING_SCENARIOS)
+        }
+        overlap = set(test_seeds) & {x for seeds in train_seeds.values() for x in seeds}
+        if overlap:  # pragma: no cover - 63-bit seeds from distinct spawn keys
+            raise RuntimeError(f"test and training seeds overlap: {sorted(overlap)}")
+        timings["training set"] = time.perf_counter() - t0
+        say(f"training REFORM (3 classifiers) and tuning GCFF on {len(train)} frames")
+        t0 = time.perf_counter()
+        detectors = dict(
+            zip(
+                DETECTORS,
+                _parallel(
+                    _fit,
+                    [(name, train, grid) for name in DETECTORS],
+                    jobs=jobs,
+                    star=True,
+                    cpu=cpu,
+                ),
+                strict=True,
+            )
+        )
+        timings["training"] = time.perf_counter() - t0
+        gcff = detectors[GCFF]
+        training = {
+            "source": "synthetic",
+            "scenarios": list(TRAINING_SCENARIOS),
+            "episode_seeds": train_seeds,
+            "frames": len(train),
+            "pairs": detectors[WEIGHTED_KNN].training_summary_["pairs"],
+            "together_pairs": detectors[WEIGHTED_KNN].training_summary_["together_pairs"],
+            "gcff_stride_m": gcff.stride_,
+            "gcff_mdl_m2": gcff.mdl_,
+            "gcff_tuning_frames": gcff.grid_search_.n_frames,
+            "gcff_tuning_f1": gcff.grid_search_.best_f1,
+        }
+    else:
+        missing = [d for d in DETECTORS if d not in detectors]
+        if missing:
+            raise ValueError(f"detectors must hold {DETECTORS}, missing {missing}")
+        training = {"source": "given"}
+    training["test_seeds"] = test_seeds
+
+    perturb_axes = [a for a in names if AXES[a].kind == "perturb"]
+    scene_axes = [a for a in names if AXES[a].kind == "scene"]
+    base: list[tuple[Frame, ...]] = []
+    t0 = time.perf_counter()
+    if perturb_axes:
+        say(f"simulating {grid.seeds} test episode(s) of {TEST_SCENARIO}")
+        base = _parallel(_simulate, [_base_spec(grid, s) for s in test_seeds], jobs=jobs, cpu=cpu)
+    timings["test episodes"] = time.perf_counter() - t0
+
+    axis_index = {name: list(AXES).index(name) for name in names}
+    tasks: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
+    for name in perturb_axes:
+        for e, frames in enumerate(base):
+            tasks.append(
+                (_perturb_task, (grid, name, axis_index[name], e, frames, detectors, seed))
+            )
+    for name in scene_axes:
+        for e in range(grid.seeds):
+            tasks.append((_scene_task, (grid, name, e, seed, detectors)))
+    say(f"scoring {len(tasks)} task(s) on {min(workers, max(len(tasks), 1))} worker(s)")
+    t0 = time.perf_counter()
+
+    def report(done: int, total: int) -> None:
+        say(f"  {done}/{total} tasks done ({time.perf_counter() - start:.0f} s)")
+
+    results = _parallel(_call, tasks, jobs=jobs, progress=report, cpu=cpu)
+    timings["scoring"] = time.perf_counter() - t0
+
+    cells: dict[tuple[str, int], list[tuple[int, _Scored | str]]] = {}
+    for batch in results:
+        for axis, k, episode, scored in batch:
+            cells.setdefault((axis, k), []).append((episode, scored))
+    out_axes = []
+    for name in names:
+        points = []
+        for k, level in enumerate(grid.levels(name)):
+            entries = sorted(cells.get((name, k), []), key=lambda item: item[0])
+            scored = [s for _, s in entries if isinstance(s, _Scored)]
+            notes_ = [s for _, s in entries if isinstance(s, str)]
+            notes_ += [n for s in scored for n in s.notes]
+            points.append(
+                _point(
+                    name,
+                    k,
+                    level,
+                    scored,
+                    notes_,
+                    seed=seed,
+                    axis_index=axis_index[name],
+                    resamples=grid.resamples,
+                )
+            )
+        info = AXES[name]
+        out_axes.append(
+            StressAxis(info.name, info.title, info.x_label, info.description, tuple(points))
+        )
+    timings["total"] = time.perf_counter() - start
+    environment["cpu_s"] = round(sum(cpu), 2)
+    environment["load_average_end"] = _load_average()
+    return StressResults(
+        grid=grid,
+        grid_name=grid_name,
+        seed=int(seed),
+        jobs=workers,
+        axes=tuple(out_axes),
+        training=training,
+        timings=timings,
+        environment=environment,
+    )
+
+
+def _call(task: tuple[Callable[..., Any], tuple[Any, ...]]) -> Any:
+    function, args = task
+    return function(*args)
+
+
+def sensor_description(name: str) -> str:
+    """One line on sensor level ``name``."""
+    return _SENSOR_TEXT[name]

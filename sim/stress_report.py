@@ -1,0 +1,311 @@
+"""The stress tests' report: Markdown with tables and PNG plots, JSON, and a Rerun recording.
+
+:func:`write_report` writes, into one folder, ``stress.md`` (the command that regenerates it,
+the protocol, a summary and, per axis, a plot and tables of F1 with 95 % bootstrap intervals),
+``stress.json`` (every number) and ``stress-<axis>.png`` (F1 against the axis at T = 2/3 and
+T = 1, intervals shaded). :func:`log_results` puts the curves into a Rerun recording
+(``sim.recording.log_stress_curves``), one bar chart per axis and threshold.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.atomic import atomic_open, atomic_path
+from reform.report import render_table
+from sim.stress import DETECTOR_LABELS, THRESHOLDS, StressAxis, StressResults, sensor_description
+
+__all__ = [
+    "MARKDOWN_NAME",
+    "JSON_NAME",
+    "log_results",
+    "plot_axis",
+    "plot_path",
+    "record",
+    "recording_names",
+    "to_markdown",
+    "write_report",
+]
+
+MARKDOWN_NAME = "stress.md"
+JSON_NAME = "stress.json"
+PLOT_DPI = 110  # dots per inch of the PNG plots
+PLOT_SIZE_IN = (10.0, 3.6)  # inches, one axis: two panels side by side
+_THRESHOLD_TEXT = {"2/3": "T = 2/3", "1": "T = 1"}
+
+
+def _pct(value: float) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{100.0 * value:.1f}"
+
+
+def _cell(interval: Any) -> str:
+    if not math.isfinite(interval.value):
+        return "-"
+    return f"{_pct(interval.value)} [{_pct(interval.low)}, {_pct(interval.high)}]"
+
+
+def plot_path(out_dir: str | Path, axis: str) -> Path:
+    """Where the plot of ``axis`` goes in ``out_dir``."""
+    return Path(out_dir) / f"stress-{axis}.png"
+
+
+def plot_axis(axis: StressAxis, path: str | Path) -> Path:
+    """F1 of every detector along ``axis`` at T = 2/3 and T = 1, intervals shaded, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    x = axis.x
+    categorical = axis.name == "sensor"
+    positions = np.arange(x.size) if categorical else x
+    figure, panels = plt.subplots(1, len(THRESHOLDS), figsize=PLOT_SIZE_IN, sharey=True)
+    for panel, threshold in zip(np.atleast_1d(panels), THRESHOLDS, strict=True):
+        for index, detector in enumerate(DETECTOR_LABELS):
+            value, low, high = axis.curve(detector, threshold)
+            if np.all(np.isnan(value)):
+                continue
+            colour = f"C{index}"
+            style = "--" if detector == "gcff" else "-"
+            panel.plot(
+                positions,
+                value,
+                style,
+                marker="o",
+                ms=3,
+                color=colour,
+                label=DETECTOR_LABELS[detector],
+            )
+            panel.fill_between(positions, low, high, color=colour, alpha=0.15, linewidth=0)
+        panel.set_title(f"{axis.title}: F1 at {_THRESHOLD_TEXT[threshold]}")
+        panel.set_xlabel(axis.x_label if not categorical else "sensor")
+        if categorical:
+            panel.set_xticks(positions, [p.label for p in axis.points])
+        panel.set_ylim(0.0, 1.02)
+        panel.grid(alpha=0.3)
+    np.atleast_1d(panels)[0].set_ylabel("F1 (95% bootstrap interval)")
+    np.atleast_1d(panels)[-1].legend(fontsize=7, loc="lower left")
+    figure.tight_layout()
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        figure.savefig(tmp, dpi=PLOT_DPI, format="png")
+    plt.close(figure)
+    return path
+
+
+def _axis_tables(axis: StressAxis) -> list[str]:
+    detectors = [d for d in DETECTOR_LABELS if any(d in p.scores for p in axis.points)]
+    context = ["level", "episodes", "frames", "people/frame", "F-formations/frame", "mean size"]
+    lines = []
+    rows = [
+        [
+            p.label if axis.name != "sensor" else f"{p.label} ({sensor_description(p.label)})",
+            str(p.episodes),
+            str(p.frames),
+            "-" if not math.isfinite(p.people_per_frame) else f"{p.people_per_frame:.1f}",
+            "-" if not math.isfinite(p.fformations_per_frame) else f"{p.fformations_per_frame:.2f}",
+            "-" if not math.isfinite(p.fformation_size) else f"{p.fformation_size:.2f}",
+        ]
+        for p in axis.points
+    ]
+    lines += [render_table(context, rows, style="markdown"), ""]
+    for threshold in THRESHOLDS:
+        headers = ["level", *(DETECTOR_LABELS[d] for d in detectors)]
+        rows = [
+            [
+                p.label,
+                *(_cell(p.scores[d][threshold].f1) if d in p.scores else "-" for d in detectors),
+            ]
+            for p in axis.points
+        ]
+        lines += [
+            f"F1 at {_THRESHOLD_TEXT[threshold]}, % [95% interval]:",
+            "",
+            render_table(headers, rows, style="markdown"),
+            "",
+        ]
+    notes = [n for p in axis.points for n in p.notes]
+    if notes:
+        lines += [
+            f"{len(notes)} test part(s) could not be laid out by mingle's planner with their "
+            "first seed and were drawn again with another (see stress.json).",
+            "",
+        ]
+    return lines
+
+
+def _summary(results: StressResults) -> list[str]:
+    lines = [
+        "| axis | from → to | " + " | ".join(DETECTOR_LABELS[d] for d in DETECTOR_LABELS) + " |",
+        "|:--|:--|" + "--:|" * len(DETECTOR_LABELS),
+    ]
+    for axis in results.axes:
+        first, last = axis.points[0], axis.points[-1]
+        cells = []
+        for detector in DETECTOR_LABELS:
+            a = first.scores.get(detector, {}).get("2/3")
+            b = last.scores.get(detector, {}).get("2/3")
+            if a is None or b is None:
+                cells.append("-")
+                continue
+            cells.append(
+                f"{_pct(a.f1.value)} → {_pct(b.f1.value)} "
+                f"({100.0 * (b.f1.value - a.f1.value):+.1f})"
+            )
+        lines.append(f"| {axis.title} | {first.label} → {last.label} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _minutes(seconds: float) -> str:
+    return f"{seconds / 60.0:.1f} min" if seconds >= 60 else f"{seconds:.0f} s"
+
+
+def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str]) -> str:
+    """The report as Markdown; ``plots`` maps an axis name to its PNG's path relative to it."""
+    grid = results.grid
+    training = results.training
+    timings = results.timings
+    env = results.environment
+    lines = [
+        "# Stress tests: REFORM and GCFF under tracking errors, crowds and the robot's sensor",
+        "",
+        "Produced by:",
+        "",
+        "```sh",
+        command,
+        "```",
+        "",
+        f"Grid `{results.grid_name}`, master seed {results.seed}, {results.jobs} worker "
+        f"process(es) on a {env.get('cores', '?')}-core machine (load average "
+        f"{env.get('load_average_start', '?')} when the run started). Wall time "
+        f"{_minutes(timings.get('total', math.nan))}: "
+        + ", ".join(f"{k} {_minutes(v)}" for k, v in timings.items() if k != "total")
+        + f". CPU time of all tasks: {_minutes(env.get('cpu_s', math.nan))} (on an otherwise idle "
+        f"machine the wall time approaches CPU time / workers; the load average says how busy "
+        f"this one was: {env.get('load_average_end', '?')} at the end).",
+        "",
+        "## Protocol",
+        "",
+    ]
+    if training.get("source") == "synthetic":
+        lines += [
+            f"- **Training (synthetic, once).** REFORM's three classifiers (weighted KNN, bagged "
+            f"trees, logistic regression; `reform.classifiers`) are fitted on "
+            f"{training['frames']:,} frames ({training['pairs']:,} pairs, "
+            f"{training['together_pairs']:,} together) of {grid.train_episodes} episode(s) each "
+            f"of {' and '.join(training['scenarios'])} at default options "
+            f"({grid.train_duration_s:g} s at {grid.train_rate_hz:g} Hz). GCFF is tuned on "
+            f"{training['gcff_tuning_frames']} of those frames (grid search, F1 at T = 2/3, "
+            f"strides {list(grid.gcff_stride_grid_m)} m, mdl {list(grid.gcff_mdl_grid_m2)} m²): "
+            f"stride {training['gcff_stride_m']:g} m, mdl {training['gcff_mdl_m2']:g} m². "
+            "No real data is used. Training and test episodes take their seeds from different "
+            "spawn keys of the master seed (`sim.stress.episode_seed`), so they never share one.",
+        ]
+    else:
+        lines += ["- **Detectors** were given, already fitted."]
+    lines += [
+        f"- **Test parties.** Each point is scored on {grid.seeds} episode(s) of `mingle` "
+        f"(18 guests at 0.4 per m², SALSA-like, unless the axis changes it), "
+        f"{grid.duration_s:g} s at {grid.rate_hz:g} Hz. Position noise, orientation noise and "
+        "dropouts (`reform.perturb.Perturbation`) are applied to the same episodes at every "
+        "level with the same random numbers (common random numbers); the other axes simulate "
+        "a new episode per level with the same seeds. The ground truth of a perturbed or "
+        "observed frame is the truth restricted to the people it holds.",
+        "- **Scores.** The field's protocol (`reform.metrics.evaluate`, GCFF's "
+        "`ff_evalgroups`): per frame P and R of the groups of two or more, F1 of the frame "
+        "means, at T = 2/3 (the paper's setting) and T = 1 (exact). 95 % intervals: two-stage "
+        f"bootstrap, {grid.resamples} resamples of episodes then frames within them "
+        "(`reform.bootstrap`), the same resamples for every detector at a point.",
+        "- **Sensor levels.** "
+        + "; ".join(f"`{name}`: {sensor_description(name)}" for name in grid.sensors)
+        + ". The robot watches from the west wall and is part of every frame.",
+        "",
+        "## Summary (F1 at T = 2/3, %, first → last level)",
+        "",
+        *_summary(results),
+        "",
+    ]
+    for axis in results.axes:
+        lines += [f"## {axis.title}", "", axis.description, ""]
+        if axis.name in plots:
+            lines += [f"![{axis.title}]({plots[axis.name]})", ""]
+        lines += _axis_tables(axis)
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def recording_names(results: StressResults) -> list[str]:
+    """The names :func:`log_results` logs curves under (for the blueprint)."""
+    return [f"{axis.name}-{_slug(t)}" for axis in results.axes for t in THRESHOLDS]
+
+
+def _slug(threshold: str) -> str:
+    return "t" + threshold.replace("/", "of")
+
+
+def log_results(rec: Any, results: StressResults) -> None:
+    """Every axis's F1 curves, at each threshold, as stress bar charts in ``rec``."""
+    from sim.recording import log_stress_curves
+
+    for axis in results.axes:
+        for threshold in THRESHOLDS:
+            curves = {
+                DETECTOR_LABELS[d]: np.nan_to_num(axis.curve(d, threshold)[0], nan=0.0)
+                for d in DETECTOR_LABELS
+            }
+            log_stress_curves(
+                rec,
+                axis.x,
+                curves,
+                x_label=f"{axis.x_label}; F1 at {_THRESHOLD_TEXT[threshold]}",
+                name=f"{axis.name}-{_slug(threshold)}",
+            )
+
+
+def write_report(
+    results: StressResults,
+    out_dir: str | Path,
+    *,
+    command: str,
+    save: str | Path | None = None,
+) -> dict[str, Path]:
+    """Writes the Markdown report, the JSON, the plots and, with ``save``, a ``.rrd``.
+
+    Returns:
+        What was written: ``"markdown"``, ``"json"``, ``"plot:<axis>"`` and ``"recording"``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, Path] = {}
+    plots = {}
+    for axis in results.axes:
+        path = plot_axis(axis, plot_path(out, axis.name))
+        written[f"plot:{axis.name}"] = path
+        plots[axis.name] = path.name
+    markdown = out / MARKDOWN_NAME
+    with atomic_open(markdown) as handle:
+        handle.write(to_markdown(results, command=command, plots=plots))
+    written["markdown"] = markdown
+    data = out / JSON_NAME
+    with atomic_open(data) as handle:
+        json.dump(results.to_json(command=command), handle, indent=1, allow_nan=False)
+        handle.write("\n")
+    written["json"] = data
+    if save is not None:
+        written["recording"] = record(results, save)
+    return written
+
+
+def record(results: StressResults, path: str | Path) -> Path:
+    """The curves as a Rerun recording at ``path`` (``.rrd``)."""
+    from sim.recording import default_blueprint, open_recording
+
+    blueprint = default_blueprint(scores=False, stress=recording_names(results))
+    with open_recording(path, name="stress", seed=results.seed, blueprint=blueprint) as rec:
+        log_results(rec, results)
+    return Path(path)
