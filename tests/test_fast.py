@@ -30,7 +30,7 @@ def queries(seed: int) -> np.ndarray:
 
 
 CLASSIFIERS = {
-    "bagged-trees": lambda: bagged_trees(min_samples_leaf=5),
+    "bagged-trees": lambda: bagged_trees(min_samples_leaf=15),
     "bagged-trees-pure": lambda: bagged_trees(n_estimators=8, min_samples_leaf=1),
     "bagged-feature-subsets": lambda: BaggingClassifier(
         DecisionTreeClassifier(), n_estimators=10, max_features=1, random_state=1
