@@ -156,31 +156,35 @@ def bench(model: Reform, n: int, quick: bool) -> dict:
 
 
 def stages(model: Reform, n: int, n_frames: int) -> dict[str, float]:
-    """Where a batch's time goes: stacking, features, classification, reconstruction, output."""
-    from reform.detector import _partitions
+    """Where a batch's time goes, chunk by chunk as ``predict`` does: stacking the frames'
+    arrays, features, classification, reconstruction, building the partitions."""
+    from reform.detector import CHUNK_PAIRS, _partitions
 
     rng = np.random.default_rng(SEED)
     pool = [scene(rng, n) for _ in range(2000)]
     frames = [pool[k % len(pool)] for k in range(n_frames)]
-    out = {}
-    start = time.perf_counter()
-    position = np.concatenate([f.position for f in frames]).reshape(n_frames, n, 2)
-    yaw = np.concatenate([f.yaw for f in frames]).reshape(n_frames, n)
-    ids = np.concatenate([f.ids for f in frames]).reshape(n_frames, n)
-    out["stack"] = time.perf_counter() - start
-    start = time.perf_counter()
-    x = batch_pair_features(position, yaw)
-    out["features"] = time.perf_counter() - start
     compiled = model._pair_classifier()
-    start = time.perf_counter()
-    labels = compiled.predict(x.reshape(-1, 2)).reshape(n_frames, -1)
-    out["classify"] = time.perf_counter() - start
-    start = time.perf_counter()
-    groups = batch_greedy_labels(labels, n)
-    out["reconstruct"] = time.perf_counter() - start
-    start = time.perf_counter()
-    _partitions(groups, ids)
-    out["partitions"] = time.perf_counter() - start
+    step = max(1, CHUNK_PAIRS // (n * (n - 1) // 2))
+    out = dict.fromkeys(("stack", "features", "classify", "reconstruct", "partitions"), 0.0)
+    spans: dict = {}
+    for start in range(0, n_frames, step):
+        chunk = frames[start : start + step]
+        count = len(chunk)
+        t0 = time.perf_counter()
+        position = np.concatenate([f.position for f in chunk]).reshape(count, n, 2)
+        yaw = np.concatenate([f.yaw for f in chunk]).reshape(count, n)
+        ids = np.concatenate([f.ids for f in chunk]).reshape(count, n)
+        t1 = time.perf_counter()
+        x = batch_pair_features(position, yaw)
+        t2 = time.perf_counter()
+        labels = compiled.predict(x.reshape(-1, 2)).reshape(count, -1)
+        t3 = time.perf_counter()
+        groups = batch_greedy_labels(labels, n)
+        t4 = time.perf_counter()
+        _partitions(groups, ids, spans)
+        t5 = time.perf_counter()
+        for key, seconds in zip(out, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4), strict=True):
+            out[key] += seconds
     return out
 
 
