@@ -110,7 +110,6 @@ GAZE_NONE, GAZE_POINT, GAZE_AGENT = 0, 1, 2
 ) = range(28)
 N_PARAM = 28
 
-WALK_SPEED_M_S = 1.2  # m/s, default preferred walking speed
 ARRIVE_TOLERANCE_M = 0.03  # metres, a goal closer than this is reached
 SIDESTEP_M = 0.5  # metres, closer to the goal than this people step without turning
 SIDESTEP_SPEED_M_S = 0.5  # m/s, top speed of a side step

@@ -44,12 +44,11 @@ import numpy as np
 from mujoco import batch as mj_batch
 
 from reform.frame import ROBOT, Frame, Group, wrap_angle
-from scenarios.script import Intent, Point, Script
+from scenarios.script import WALK_SPEED_M_S, Intent, Point, Script
 from sim import _native, motion
 from sim.motion import (
     PERSON_LIMITS,
     ROBOT_LIMITS,
-    WALK_SPEED_M_S,
     MotionLimits,
 )
 from sim.scene import (
