@@ -7,6 +7,9 @@ Public surface (loaded on first use, so that the command line starts fast):
   `PERSON_LIMITS`, `ROBOT_LIMITS`;
 * the robot's view: `Sensor`, `HeadCamera` (optional rendering);
 * assets: `asset_names`, `asset_path`, `asset_xml`.
+
+Importing ``sim`` registers the Gymnasium environments (``ReformSim/...``, `sim.envs`); that
+imports gymnasium only, the environments themselves load on ``gymnasium.make``.
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ from typing import Any
 # Offscreen rendering on a headless Linux machine needs EGL, chosen before mujoco is imported.
 if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")
+
+from sim import envs  # noqa: E402, F401  (registers the Gymnasium environments)
 
 _EXPORTS = {
     "SceneSpec": "sim.scene",
