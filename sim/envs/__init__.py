@@ -28,13 +28,14 @@ import gymnasium as gym
 NAMESPACE = "ReformSim"
 ENTRY_POINT = "sim.envs.social:SocialEnv"
 
-# Environment name -> scenario name (and its options for the environment).
-_SCENES: dict[str, tuple[str, dict[str, Any]]] = {
-    "HRIConversation": ("hri-conversation", {}),
-    "HRIRobotExcluded": ("hri-robot-excluded", {}),
-    "HRIPassing": ("hri-passing", {}),
-    "WordImprov": ("word-improv", {"robot": "watch"}),
-    "Mingle": ("mingle", {"robot": True}),
+# Environment name -> scenario name and its options for the environment (joining, observing):
+# the robot must be in the scene; a joining episode needs only the first minute of a party.
+_SCENES: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
+    "HRIConversation": ("hri-conversation", {}, {}),
+    "HRIRobotExcluded": ("hri-robot-excluded", {}, {}),
+    "HRIPassing": ("hri-passing", {}, {}),
+    "WordImprov": ("word-improv", {"robot": "watch"}, {"robot": "watch"}),
+    "Mingle": ("mingle", {"robot": True, "duration": 60.0}, {"robot": True}),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(
@@ -44,8 +45,11 @@ ENV_IDS: tuple[str, ...] = tuple(
 
 def register_envs() -> None:
     """Registers every environment of `ENV_IDS` (again: registering twice is harmless)."""
-    for name, (scenario, options) in _SCENES.items():
-        for suffix, task in (("", "join"), ("Observe", "observe")):
+    for name, (scenario, join_options, observe_options) in _SCENES.items():
+        for suffix, task, options in (
+            ("", "join", join_options),
+            ("Observe", "observe", observe_options),
+        ):
             env_id = f"{NAMESPACE}/{name}{suffix}-v0"
             if env_id in gym.registry:
                 continue
