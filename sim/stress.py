@@ -482,6 +482,7 @@ def train_detectors(
     *,
     grid: StressGrid | None = None,
     jobs: int | None = None,
+    names: Sequence[str] = DETECTORS,
 ) -> dict[str, Any]:
     """REFORM with each classifier fitted on ``frames``, and GCFF tuned on a subsample of them.
 
@@ -489,13 +490,17 @@ def train_detectors(
         frames: annotated training frames.
         grid: the GCFF tuning grid and subsample size (default ``GRIDS["default"]``).
         jobs: worker processes (None: every core).
+        names: which of :data:`DETECTORS` to fit.
 
     Returns:
-        Detector name (:data:`DETECTORS`) -> fitted detector.
+        Detector name -> fitted detector, in ``names`` order.
     """
     grid = GRIDS["default"] if grid is None else grid
-    fitted = _parallel(_fit, [(name, frames, grid) for name in DETECTORS], jobs=jobs, star=True)
-    return dict(zip(DETECTORS, fitted, strict=True))
+    unknown = [n for n in names if n not in DETECTORS]
+    if unknown:
+        raise ValueError(f"names must be among {DETECTORS}, got {unknown}")
+    fitted = _parallel(_fit, [(name, frames, grid) for name in names], jobs=jobs, star=True)
+    return dict(zip(names, fitted, strict=True))
 
 
 # ------------------------------------------------------------------------------------------------

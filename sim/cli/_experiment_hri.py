@@ -1,0 +1,155 @@
+"""``reform-sim experiment hri``: the paper's HRI proof of concept, re-enacted in simulation."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import shlex
+import sys
+import time
+from pathlib import Path
+
+from sim.cli._common import CliError
+from sim.cli._experiment_gcff import _experiment_subparsers
+
+_DESCRIPTION = """\
+Simulates the three HRI scenes of the REFORM paper (hri-conversation: two people and the robot
+converse; hri-robot-excluded: two people talk in front of the robot; hri-passing: people walk
+past, no F-formation) with several seeds, and scores REFORM (weighted KNN, bagged trees, logistic
+regression; trained on the SALSA training split when --salsa or --datasets is given, and on a
+synthetic training set), GCFF (the paper's setting and the reference default) and the majority
+baseline from the ground truth and from the robot's head sensor, beside the paper's HRI numbers.
+Writes OUT.md and OUT.json; with --recordings DIR, one Rerun recording per scene (first seed,
+robot view, detections of REFORM and GCFF).
+"""
+
+
+def register(subparsers) -> None:
+    from sim.hri_experiment import DEFAULT_SEEDS, VIEWS
+
+    parser = _experiment_subparsers(subparsers).add_parser(
+        "hri",
+        help="the paper's HRI proof of concept re-enacted: REFORM and GCFF on the HRI scenes",
+        description=_DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "--datasets", metavar="DIR", help="folder holding salsa/ (e.g. ../shared/datasets)"
+    )
+    parser.add_argument("--salsa", metavar="PATH", help="SALSA folder (default: DIR/salsa)")
+    parser.add_argument(
+        "--out",
+        required=True,
+        metavar="OUT",
+        help="output path without extension: writes OUT.md and OUT.json",
+    )
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        default=DEFAULT_SEEDS,
+        metavar="K",
+        help=f"episodes per scene (default {DEFAULT_SEEDS})",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
+    parser.add_argument(
+        "--views",
+        default=",".join(VIEWS),
+        metavar="V1,V2",
+        help=f"views to score (default {','.join(VIEWS)})",
+    )
+    parser.add_argument(
+        "--jobs", type=int, default=None, metavar="N", help="worker processes for training"
+    )
+    parser.add_argument(
+        "--recordings",
+        default=None,
+        metavar="DIR",
+        help="write DIR/<scene>.rrd: the first episode of each scene from the robot's view",
+    )
+    parser.set_defaults(handler=run)
+
+
+def _command(args: argparse.Namespace) -> str:
+    from sim.hri_experiment import DEFAULT_SEEDS, VIEWS
+
+    words = ["reform-sim", "experiment", "hri"]
+    if args.datasets is not None:
+        words += ["--datasets", args.datasets]
+    if args.salsa is not None:
+        words += ["--salsa", args.salsa]
+    if args.seeds != DEFAULT_SEEDS:
+        words += ["--seeds", str(args.seeds)]
+    if args.seed != 0:
+        words += ["--seed", str(args.seed)]
+    if args.views != ",".join(VIEWS):
+        words += ["--views", args.views]
+    if args.jobs is not None:
+        words += ["--jobs", str(args.jobs)]
+    if args.recordings is not None:
+        words += ["--recordings", args.recordings]
+    words += ["--out", args.out]
+    return shlex.join(words)
+
+
+def run(args: argparse.Namespace) -> int:
+    from reform.atomic import atomic_open
+    from reform.datasets import load_salsa
+    from sim.hri_experiment import VIEWS, hri_detectors, hri_experiment, record_scenes
+
+    if args.seeds < 1:
+        raise CliError(f"--seeds must be >= 1, got {args.seeds}")
+    if args.seed < 0:
+        raise CliError(f"--seed must be >= 0, got {args.seed}")
+    if args.jobs is not None and args.jobs < 1:
+        raise CliError(f"--jobs must be >= 1, got {args.jobs}")
+    views = [v.strip() for v in args.views.split(",") if v.strip()]
+    unknown = [v for v in views if v not in VIEWS]
+    if unknown or not views:
+        raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
+    salsa_path = args.salsa
+    if salsa_path is None and args.datasets is not None:
+        salsa_path = str(Path(args.datasets) / "salsa")
+    salsa = None
+    if salsa_path is not None:
+        if not Path(salsa_path).exists():
+            raise CliError(f"SALSA not found at {salsa_path} (give --salsa PATH or --datasets DIR)")
+        print(f"loading SALSA from {salsa_path}", file=sys.stderr)
+        salsa = load_salsa(salsa_path).frames
+    else:
+        print("no SALSA given: the SALSA-trained REFORM rows are left out", file=sys.stderr)
+
+    def progress(line: str) -> None:
+        print(line, file=sys.stderr, flush=True)
+
+    start = time.perf_counter()
+    detectors, training = hri_detectors(
+        salsa=salsa, seed=args.seed, jobs=args.jobs, progress=progress
+    )
+    trained = time.perf_counter() - start
+    experiment = hri_experiment(
+        seed=args.seed,
+        seeds=args.seeds,
+        views=views,
+        detectors=detectors,
+        training=training,
+        progress=progress,
+    )
+    timings = {"training": trained, **experiment.timings}
+    timings["total"] = time.perf_counter() - start
+    experiment = dataclasses.replace(experiment, timings=timings)
+    command = _command(args)
+    out = Path(args.out)
+    if out.suffix in (".md", ".json"):
+        out = out.with_suffix("")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_open(out.with_name(out.name + ".md")) as handle:
+        handle.write(experiment.to_markdown(command=command))
+    with atomic_open(out.with_name(out.name + ".json")) as handle:
+        json.dump(experiment.to_json(command=command), handle, indent=1, allow_nan=False)
+        handle.write("\n")
+    print(f"wrote {out}.md and {out}.json")
+    if args.recordings is not None:
+        for path in record_scenes(detectors, args.recordings, seed=args.seed):
+            print(f"wrote recording {path}")
+    return 0
