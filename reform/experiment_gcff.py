@@ -45,6 +45,7 @@ PAPER_MDL_M2 = 3.0  # square metres: the paper's "MDL = 30000", read as cm²
 SALSA_TEST = "salsa-test"  # dataset label of the SALSA test split
 BABBLE = "babble"  # dataset label of Babble (every annotated frame)
 SCHEMA_VERSION = 1  # of GcffComparison.to_json
+_GCFF_SETTINGS = ("GCFF, paper (", "GCFF, reference default", "GCFF, tuned")  # summary rows
 
 # The REFORM paper's own figures, T = 2/3, precision / recall / F1 in % (definitions.md).
 PAPER_SCORES = {
@@ -130,6 +131,41 @@ class GcffComparison:
             added=self.added + len(added),
         )
 
+    def summary(self) -> tuple[str, ...]:
+        """One line per dataset: the best GCFF setting beside the best added detector.
+
+        GCFF rows are the paper, reference-default and tuned settings (the units-ignored row is
+        a diagnostic); added rows are those of :meth:`with_results` other than a majority
+        baseline. Empty when nothing was added.
+        """
+        lines = []
+        for dataset, title in ((SALSA_TEST, "SALSA test split"), (BABBLE, "Babble")):
+            rows = [r for r in self.results if r["dataset"] == dataset]
+            gcff = [r for r in rows if str(r["detector"]).startswith(_GCFF_SETTINGS)]
+            others = [
+                r
+                for r in rows[len(rows) - self._added_on(dataset) :]
+                if "majority" not in str(r["detector"]).lower()
+            ]
+            if not gcff or not others:
+                continue
+            best_gcff = max(gcff, key=lambda r: r["2/3"]["f1"])
+            best_other = max(others, key=lambda r: r["2/3"]["f1"])
+            g, o = best_gcff["2/3"]["f1"], best_other["2/3"]["f1"]
+            order = "above" if g > o else "below" if g < o else "level with"
+            lines.append(
+                f"{title}: the best GCFF row, {best_gcff['detector']}, scores "
+                f"{100 * g:.1f}, {order} the best added detector, {best_other['detector']}, "
+                f"{100 * o:.1f}. The paper's GCFF figure here: "
+                f"{PAPER_SCORES[dataset]['GCFF'][2]:.1f}."
+            )
+        return tuple(lines)
+
+    def _added_on(self, dataset: str) -> int:
+        """How many of the last results of ``dataset`` were added by :meth:`with_results`."""
+        added = self.results[len(self.results) - self.added :] if self.added else ()
+        return sum(1 for r in added if r["dataset"] == dataset)
+
     def to_json(self, *, command: str | None = None) -> dict[str, Any]:
         """A JSON-ready dict: the command, the split, the tuning and every evaluation."""
         from reform import __version__
@@ -171,6 +207,7 @@ class GcffComparison:
                 d: {k: list(v) for k, v in rows.items()} for d, rows in PAPER_SCORES.items()
             },
             "results": [dict(r) for r in self.results],
+            "summary": list(self.summary()),
             "notes": list(self.all_notes()),
         }
 
@@ -214,6 +251,9 @@ class GcffComparison:
                 + ".",
                 "",
             ]
+        summary = self.summary()
+        if summary:
+            lines += ["## Summary (F1 at T = 2/3)", ""] + [f"- {line}" for line in summary] + [""]
         lines += ["## Tuning grid (SALSA training split, F1 at T = 2/3, %)", ""]
         strides = sorted({float(s) for s in search.stride})
         mdls = sorted({float(m) for m in search.mdl})

@@ -62,6 +62,10 @@ def test_added_results_must_share_the_frames(comparison):
     assert len(bigger.results) == len(comparison.results) + 1  # duplicates left out
     assert any("REFORM's classifiers are not in this run" in n for n in comparison.all_notes())
     assert bigger.all_notes() == ()
+    assert comparison.summary() == ()
+    (line,) = bigger.summary()  # only SALSA test got an added row
+    assert line.startswith("SALSA test split: the best GCFF row, GCFF, ")
+    assert "the best added detector, Other, " in line and line.endswith("here: 64.2.")
     with pytest.raises(ValueError, match="must be scored on the same"):
         comparison.with_results([dict(other, frames=ours["frames"] + 1)])
     with pytest.raises(ValueError, match="dataset must be 'salsa-test' or 'babble'"):
