@@ -63,6 +63,7 @@ from sim.stress import (
     TRACKER_DROPOUT,
     TRACKER_POSITION_NOISE_M,
     TRACKER_YAW_NOISE_RAD,
+    StressGrid,
     episode_seed,
     train_detectors,
     training_frames,
@@ -181,10 +182,25 @@ def hri_detectors(
     salsa: Sequence[Frame] | None,
     seed: int,
     train_fraction: float = DEFAULT_TRAIN_FRACTION,
+    grid: StressGrid | str = "default",
     jobs: int | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[list[HriDetector], dict[str, Any]]:
-    """The detectors of the experiment, fitted, and what they were trained on."""
+    """The detectors of the experiment, fitted, and what they were trained on.
+
+    Args:
+        salsa: SALSA's frames, to train REFORM on its training split; None: no SALSA rows.
+        seed: master seed of the synthetic training set.
+        train_fraction: share of each SALSA session's annotated frames, by time, for training.
+        grid: the size of the synthetic training set (``train_*`` fields of a
+            :class:`sim.stress.StressGrid`, or a name of :data:`sim.stress.GRIDS`).
+        jobs: worker processes (None: every core).
+        progress: called with one line of text per stage.
+
+    Returns:
+        The detectors (SALSA-trained REFORM, synthetic-trained REFORM, GCFF twice, majority)
+        and a summary of the training data.
+    """
     say = progress or (lambda _line: None)
     detectors: list[HriDetector] = []
     info: dict[str, Any] = {}
@@ -208,7 +224,10 @@ def hri_detectors(
             "train_fraction": train_fraction,
             "pairs": fitted[WEIGHTED_KNN].training_summary_["pairs"],
         }
-    grid = GRIDS["default"]
+    if isinstance(grid, str):
+        if grid not in GRIDS:
+            raise ValueError(f"grid must be one of {tuple(GRIDS)} or a StressGrid, got {grid!r}")
+        grid = GRIDS[grid]
     say(
         f"simulating the synthetic training set ({grid.train_episodes} episodes each of mingle "
         "and word-improv)"
