@@ -83,29 +83,46 @@ class Intent:
     appear_at: Point | None = None
 
     def __post_init__(self) -> None:
-        for name in ("goal", "face_point", "gaze_point", "appear_at"):
-            object.__setattr__(self, name, _point(name, getattr(self, name)))
-        for name in ("face_agent", "gaze_agent"):
-            object.__setattr__(self, name, _agent_id(name, getattr(self, name)))
-        speed = float(self.speed)
-        if not (math.isfinite(speed) and speed > 0.0):
-            raise ValueError(f"Intent.speed must be positive and finite (m/s), got {self.speed!r}")
-        object.__setattr__(self, "speed", speed)
+        # Written out field by field: scripts make thousands of intents per episode.
+        set_ = object.__setattr__
+        for name, value in (
+            ("goal", self.goal),
+            ("face_point", self.face_point),
+            ("gaze_point", self.gaze_point),
+            ("appear_at", self.appear_at),
+        ):
+            if value is not None:
+                set_(self, name, _point(name, value))
+        if self.face_agent is not None:
+            set_(self, "face_agent", _agent_id("face_agent", self.face_agent))
+        if self.gaze_agent is not None:
+            set_(self, "gaze_agent", _agent_id("gaze_agent", self.gaze_agent))
+        speed = self.speed
+        if type(speed) is not float or not 0.0 < speed < math.inf:
+            speed = float(speed)
+            if not (math.isfinite(speed) and speed > 0.0):
+                raise ValueError(
+                    f"Intent.speed must be positive and finite (m/s), got {self.speed!r}"
+                )
+            set_(self, "speed", speed)
         if self.face_yaw is not None:
             face_yaw = float(self.face_yaw)
             if not math.isfinite(face_yaw):
                 raise ValueError(f"Intent.face_yaw must be finite (radians), got {self.face_yaw!r}")
-            object.__setattr__(self, "face_yaw", face_yaw)
-        faces = [
-            n for n in ("face_yaw", "face_point", "face_agent") if getattr(self, n) is not None
-        ]
-        if len(faces) > 1:
+            set_(self, "face_yaw", face_yaw)
+        if (self.face_yaw is not None) + (self.face_point is not None) + (
+            self.face_agent is not None
+        ) > 1:
+            faces = [
+                n for n in ("face_yaw", "face_point", "face_agent") if getattr(self, n) is not None
+            ]
             raise ValueError(
                 f"Intent takes at most one of face_yaw, face_point, face_agent, got {faces}"
             )
         if self.gaze_point is not None and self.gaze_agent is not None:
             raise ValueError("Intent takes at most one of gaze_point, gaze_agent, got both")
-        object.__setattr__(self, "present", bool(self.present))
+        if type(self.present) is not bool:
+            set_(self, "present", bool(self.present))
 
 
 @runtime_checkable
