@@ -1,0 +1,163 @@
+"""Stress tests (sim.stress, sim.stress_report, reform-sim stress) on a tiny grid."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import matplotlib.image
+import pytest
+
+from sim.cli import main
+from sim.stress import (
+    AXES,
+    DETECTORS,
+    GRIDS,
+    StressGrid,
+    episode_seed,
+    run_stress,
+    train_detectors,
+    training_frames,
+)
+from sim.stress_report import recording_names, write_report
+
+# Two levels per axis, short episodes: every code path, a few seconds of work.
+TINY = dataclasses.replace(
+    GRIDS["small"],
+    position_noise_m=(0.0, 0.5),
+    orientation_noise_deg=(0.0, 60.0),
+    dropout=(0.0, 0.5),
+    density_per_m2=(0.2, 0.4),
+    people=(8, 24),
+    max_group_size=(3, 8),
+    sensors=("truth", "occlusion"),
+    seeds=2,
+    duration_s=30.0,
+    rate_hz=0.5,
+    train_episodes=1,
+    train_duration_s=60.0,
+    resamples=100,
+)
+
+
+@pytest.fixture(scope="module")
+def detectors():
+    frames = training_frames(seed=0, episodes=1, duration=60.0, rate=0.5, jobs=1)
+    return train_detectors(frames, grid=TINY, jobs=1)
+
+
+@pytest.fixture(scope="module")
+def results(detectors):
+    return run_stress(TINY, seed=0, jobs=1, detectors=detectors)
+
+
+def test_every_axis_and_detector_is_scored(results) -> None:
+    assert [a.name for a in results.axes] == list(AXES)
+    for axis in results.axes:
+        assert len(axis.points) == 2
+        for point in axis.points:
+            assert point.episodes == 2 and point.frames > 0
+            assert set(point.scores) == set(DETECTORS)
+            for by_threshold in point.scores.values():
+                for s in by_threshold.values():
+                    assert 0.0 <= s.f1.low <= s.f1.high <= 1.0
+                    assert 0.0 <= s.f1.value <= 1.0
+
+
+def test_unperturbed_levels_agree(results) -> None:
+    # Level 0 of the three perturbation axes is the same unperturbed frames.
+    first = [results.axis(a).points[0] for a in ("position-noise", "orientation-noise", "dropout")]
+    for detector in DETECTORS:
+        values = {p.scores[detector]["2/3"].f1.value for p in first}
+        assert len(values) == 1
+
+
+def test_half_a_metre_of_noise_hurts_every_detector(results) -> None:
+    axis = results.axis("position-noise")
+    for detector in DETECTORS:
+        clean, noisy = axis.curve(detector, "2/3")[0]
+        assert noisy < clean - 0.05
+
+
+def test_scene_axes_change_the_scene(results) -> None:
+    groups = results.axis("groups").points
+    assert groups[1].fformations_per_frame > groups[0].fformations_per_frame
+    assert groups[1].people_per_frame == 24 and groups[0].people_per_frame == 8
+    sensor = results.axis("sensor").points
+    assert [p.label for p in sensor] == ["truth", "occlusion"]
+    assert sensor[1].people_per_frame < sensor[0].people_per_frame  # the robot sees fewer
+    dropout = results.axis("dropout").points
+    assert dropout[1].people_per_frame < dropout[0].people_per_frame
+
+
+def test_training_and_test_seeds_differ() -> None:
+    train = {episode_seed(0, 0, s, i) for s in range(2) for i in range(4)}
+    test = {episode_seed(0, 1, i) for i in range(5)}
+    assert len(train) == 8 and len(test) == 5 and not train & test
+
+
+def test_results_do_not_depend_on_the_number_of_workers(detectors, results) -> None:
+    two = run_stress(TINY, seed=0, jobs=2, detectors=detectors, axes=["dropout"])
+    for a, b in zip(two.axis("dropout").points, results.axis("dropout").points, strict=True):
+        assert a.to_json() == b.to_json()
+
+
+def test_report_files(results, tmp_path) -> None:
+    from rerun.chunk import RrdReader
+
+    written = write_report(results, tmp_path, command="reform-sim stress", save=tmp_path / "s.rrd")
+    markdown = written["markdown"].read_text()
+    assert "reform-sim stress" in markdown
+    for axis in results.axes:
+        assert f"## {axis.title}" in markdown
+        image = matplotlib.image.imread(written[f"plot:{axis.name}"])
+        assert image.ndim == 3 and image.shape[0] > 100
+    data = json.loads(written["json"].read_text())
+    assert data["kind"] == "reform-sim/stress"
+    point = data["axes"][0]["points"][1]
+    expected = results.axes[0].points[1].scores["bagged-trees"]["1"].f1.value
+    assert point["scores"]["bagged-trees"]["1"]["f1"]["value"] == pytest.approx(expected)
+    store = RrdReader(written["recording"]).stream().collect()
+    paths = {chunk.entity_path for chunk in store.stream()}
+    for name in recording_names(results):
+        assert f"/dataset/stress/{name}/table" in paths
+        assert f"/dataset/stress/{name}/GCFF" in paths
+
+
+def test_grid_validation() -> None:
+    with pytest.raises(ValueError, match=r"StressGrid.dropout values must lie in \[0, 1\], got 2"):
+        StressGrid(dropout=(0.0, 2.0))
+    with pytest.raises(ValueError, match="StressGrid.sensors must be names of"):
+        StressGrid(sensors=("lidar",))
+    with pytest.raises(ValueError, match="StressGrid.people must hold at least one level"):
+        StressGrid(people=())
+    with pytest.raises(ValueError, match="grid must be one of"):
+        run_stress("huge")
+    with pytest.raises(ValueError, match="axis must be one of"):
+        run_stress(TINY, axes=["weather"])
+
+
+def test_cli_runs_one_axis(tmp_path, capsys) -> None:
+    out = tmp_path / "report"
+    code = main(
+        ["stress", "--grid", "small", "--axes", "dropout", "--seeds", "1", "--jobs", "1"]
+        + ["--out", str(out)]
+    )
+    assert code == 0
+    markdown = (out / "stress.md").read_text()
+    assert "reform-sim stress --grid small --seeds 1 --axes dropout --jobs 1 --out" in markdown
+    assert (out / "stress-dropout.png").is_file()
+    assert f"wrote markdown: {out / 'stress.md'}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--axes", "weather"], "--axes must name axes among"),
+        (["--seeds", "0"], "--seeds must be >= 1, got 0"),
+        (["--save", "curves.txt"], "--save must be a path ending in .rrd"),
+    ],
+)
+def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
+    assert main(["stress", "--grid", "small", "--out", str(tmp_path), *argv]) == 2
+    assert message in capsys.readouterr().err
