@@ -1,0 +1,142 @@
+"""The paper's HRI proof of concept re-enacted (sim.hri_experiment, reform-sim experiment hri)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from reform import Reform, time_split
+from reform.classifiers import make_classifier
+from sim.cli import main
+from sim.hri_experiment import (
+    HRI_SCENARIOS,
+    PAPER_HRI,
+    VIEWS,
+    HriDetector,
+    hri_detectors,
+    hri_episodes,
+    hri_experiment,
+    record_scenes,
+)
+
+SEEDS = 2
+
+
+@pytest.fixture(scope="module")
+def detectors(salsa_dataset):
+    """SALSA-trained REFORM (logistic regression, on part of the training split) and the
+    experiment's synthetic-trained models, GCFF and majority on the small grid."""
+    train, _ = time_split(salsa_dataset.annotated())
+    salsa = HriDetector(
+        "logistic-regression@salsa",
+        "REFORM logistic regression, SALSA-trained",
+        "SALSA train",
+        Reform(make_classifier("logistic-regression")).fit(train[::4]),
+    )
+    others, training = hri_detectors(salsa=None, seed=0, grid="small", jobs=1)
+    return [salsa, *others], training
+
+
+@pytest.fixture(scope="module")
+def experiment(detectors):
+    fitted, training = detectors
+    return hri_experiment(
+        seed=0, seeds=SEEDS, detectors=fitted, training=training, resamples=100, rate=1.0
+    )
+
+
+def test_rows_cover_every_detector_view_and_scene(experiment, detectors) -> None:
+    keys = [d.key for d in detectors[0]]
+    assert experiment.detectors == tuple(keys)
+    assert "logistic-regression@salsa" in keys and "bagged-trees@synthetic" in keys
+    for key in keys:
+        for view in VIEWS:
+            for scenario in (*HRI_SCENARIOS, "all"):
+                row = experiment.row(key, view, scenario)
+                assert set(row.scores) == {"2/3", "1"}
+
+
+def test_passing_frames_are_degenerate(experiment) -> None:
+    # No true F-formation: recall 1 whatever is detected; precision 1 only when nothing is.
+    for key in experiment.detectors:
+        for view in VIEWS:
+            row = experiment.row(key, view, "hri-passing")
+            assert row.scores["2/3"].recall.value == 1.0
+            assert row.scores["1"].recall.value == 1.0
+            precision, recall, _ = row.micro["2/3"]
+            assert recall == 1.0 and precision in (0.0, 1.0)
+    majority = experiment.row("majority", "truth", "hri-passing").scores["2/3"]
+    assert majority.f1.value == 1.0
+    assert experiment.row("majority", "truth", "hri-conversation").scores["2/3"].recall.value < 0.5
+
+
+def test_the_scenes_hold_what_the_paper_describes(experiment) -> None:
+    truth = experiment.data["truth"]
+    assert truth["hri-passing"]["frames_with_fformation"] == 0.0
+    assert truth["hri-conversation"]["frames_with_fformation"] > 0.5
+    assert truth["hri-conversation"]["people_per_frame"] == pytest.approx(3.0, abs=0.1)
+    for scenario in HRI_SCENARIOS:
+        assert (
+            experiment.data["robot"][scenario]["people_per_frame"]
+            < truth[scenario]["people_per_frame"]
+        )
+        assert experiment.data["robot"][scenario]["episodes"] == SEEDS
+
+
+def test_reform_finds_the_conversations_from_the_ground_truth(experiment) -> None:
+    for key in ("logistic-regression@salsa", "logistic-regression@synthetic"):
+        for scenario in ("hri-conversation", "hri-robot-excluded"):
+            assert experiment.row(key, "truth", scenario).scores["2/3"].recall.value > 0.8
+
+
+def test_report(experiment) -> None:
+    markdown = experiment.to_markdown(command="reform-sim experiment hri --out hri")
+    assert "reform-sim experiment hri --out hri" in markdown
+    for name, (_, _, f1) in PAPER_HRI.items():
+        assert f"paper: {name}" in markdown and f"{f1:.1f}" in markdown
+    assert "Degenerate frames" in markdown and "SALSA-trained" in markdown
+    data = json.loads(json.dumps(experiment.to_json(command="x"), allow_nan=False))
+    assert data["kind"] == "reform-sim/hri-experiment"
+    assert len(data["rows"]) == len(experiment.rows)
+
+
+def test_episodes_are_deterministic() -> None:
+    a = hri_episodes(seed=3, seeds=1, rate=1.0, views=("truth",))
+    b = hri_episodes(seed=3, seeds=1, rate=1.0, views=("truth",))
+    assert a.keys() == b.keys()
+    for key in a:
+        assert a[key] == b[key]
+
+
+def test_recordings(detectors, tmp_path) -> None:
+    from rerun.chunk import RrdReader
+
+    paths = record_scenes(detectors[0], tmp_path, seed=0, rate=1.0)
+    assert [p.name for p in paths] == [f"{s}.rrd" for s in HRI_SCENARIOS]
+    store = RrdReader(paths[0]).stream().collect()
+    entities = {chunk.entity_path for chunk in store.stream()}
+    assert any(path.startswith("/world") for path in entities)
+    assert any("reform" in path for path in entities) and any("gcff" in path for path in entities)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--views", "sonar"], "--views must name views among"),
+        (["--seeds", "0"], "--seeds must be >= 1, got 0"),
+        (["--salsa", "/nonexistent/salsa"], "SALSA not found at /nonexistent/salsa"),
+    ],
+)
+def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
+    assert main(["experiment", "hri", "--out", str(tmp_path / "hri"), *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_bad_arguments() -> None:
+    with pytest.raises(ValueError, match="views must be among"):
+        hri_episodes(seed=0, seeds=1, views=("sonar",))
+    with pytest.raises(ValueError, match="seeds must be an int >= 1, got 0"):
+        hri_experiment(seeds=0, detectors=[])
+    with pytest.raises(ValueError, match="grid must be one of"):
+        hri_detectors(salsa=None, seed=0, grid="huge")
