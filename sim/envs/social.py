@@ -43,8 +43,9 @@ reward, never terminated, truncated at the time limit; a testbed for detectors).
 
 Options of `reset`: ``scenario_options`` (the scenario's options for this episode, over those
 given at construction), ``scenario_seed`` (the scenario's seed; by default drawn from the
-env's generator), ``robot_start`` (``"random"``: a free spot 1.5-3.5 m outside the target's
-circle, turned toward it within 45 degrees; ``"scenario"``: where the scenario puts the robot).
+env's generator, drawn again when a party finds no floor for everyone), ``robot_start``
+(``"random"``: a free spot 1.5-3.5 m outside the target's circle, turned toward it within 45
+degrees; ``"scenario"``: where the scenario puts the robot).
 """
 
 from __future__ import annotations
@@ -66,6 +67,7 @@ import scenarios
 from reform.frame import Frame, Group
 from reform.metrics import T_TWO_THIRDS, evaluate
 from scenarios import PlannedGroup, Scenario, Stage
+from scenarios.mingle import NoFloorError
 from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
 from sim.envs.target import Target, choose_target, circle_of
 from sim.envs.view import Eyes, Truth, View
@@ -95,6 +97,7 @@ START_CLEARANCE_M = 0.9  # metres from anyone's start (centre to centre) the rob
 START_WALL_GAP_M = 0.1  # metres between the robot's body and the walls at the start
 START_TURN_RAD = math.pi / 4.0  # radians, the robot starts turned this much at most off the group
 START_TRIES = 200  # random start spots tried before falling back to the scenario's
+SCENARIO_DRAWS = 10  # scenario seeds tried when a draw finds no floor for everyone
 RENDER_SIZE_PX = (480, 360)  # pixels, width x height of rendered frames
 TASKS = ("join", "observe")
 ROBOT_STARTS = ("random", "scenario")
@@ -240,7 +243,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._observe_groups = bool(observe_groups)
         self._record_dir = None if record_dir is None else Path(record_dir)
 
-        probe = self._make(0, self._scenario_options)
+        probe = self._draw(self._scenario_options, rng=np.random.default_rng(0))
         if probe.stage.robot is None:
             raise ValueError(
                 f"scenario {self._scenario_name!r} has no robot with options "
@@ -302,9 +305,9 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 f"reset: unknown options {unknown}; expected some of {list(RESET_OPTIONS)}"
             )
         scenario_seed = options.get("scenario_seed")
-        if scenario_seed is None:
-            scenario_seed = int(self.np_random.integers(_SEED_HIGH))
-        elif isinstance(scenario_seed, bool) or not isinstance(scenario_seed, (int, np.integer)):
+        if scenario_seed is not None and (
+            isinstance(scenario_seed, bool) or not isinstance(scenario_seed, (int, np.integer))
+        ):
             raise ValueError(f"reset: scenario_seed must be an int, got {scenario_seed!r}")
         start = _robot_start(options.get("robot_start", self._robot_start))
         extra = options.get("scenario_options") or {}
@@ -313,7 +316,11 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 f"reset: scenario_options must be a mapping of option names to values, got "
                 f"{type(extra).__name__}"
             )
-        scenario = self._make(int(scenario_seed), {**self._scenario_options, **extra})
+        merged = {**self._scenario_options, **extra}
+        if scenario_seed is not None:
+            scenario = self._make(int(scenario_seed), merged)
+        else:
+            scenario = self._draw(merged)
         stage = scenario.stage
         if stage.robot is None:
             raise ValueError(f"reset: scenario {scenario.name!r} has no robot with these options")
@@ -430,6 +437,20 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     # ---------------------------------------------------------------------------------------
     # Internals
 
+    def _draw(
+        self, options: Mapping[str, Any], *, rng: np.random.Generator | None = None
+    ) -> Scenario:
+        """A scenario with a seed drawn from ``rng`` (the env's generator by default); a draw
+        that finds no floor for everyone (`scenarios.mingle.NoFloorError`) is drawn again."""
+        rng = self.np_random if rng is None else rng
+        for attempt in range(SCENARIO_DRAWS):
+            try:
+                return self._make(int(rng.integers(_SEED_HIGH)), options)
+            except NoFloorError:
+                if attempt == SCENARIO_DRAWS - 1:
+                    raise
+        raise AssertionError("unreachable")
+
     def _make(self, seed: int, options: Mapping[str, Any]) -> Scenario:
         if self._factory is None:
             return scenarios.make(self._scenario_name, seed=seed, **dict(options))
@@ -483,7 +504,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
             raise InvalidAction(
-                f"action[{k}] ({_ACTION_NAMES[k]}) must be within [-1, 1], got {values[k]!r} "
+                f"action[{k}] ({_ACTION_NAMES[k]}) must be within [-1, 1], got {float(values[k])} "
                 f"(action {values.tolist()} is outside {self.action_space})"
             )
         speed, turn, pan = values * self.action_scale
@@ -685,22 +706,22 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return summary
 
     def _record(self, observed: list[Frame], partitions: list[tuple[Group, ...]]) -> Path:
-        from reform.atomic import atomic_path
+        """Saves the episode's Rerun recording (written atomically by `sim.recording`)."""
         from sim.recording import record_episode
 
+        assert self._record_dir is not None
         scenario = self._scenario
         path = self._record_dir / f"{scenario.name}-{scenario.seed}-{self._episodes}.rrd"
         path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp:
-            record_episode(
-                tmp,
-                self._recorded,
-                observed=observed,
-                detections={self.detector_name: partitions},
-                events=scenario.events,
-                seed=int(scenario.seed),
-                name=self._sequence,
-            )
+        record_episode(
+            path,
+            self._recorded,
+            observed=observed,
+            detections={self.detector_name: partitions},
+            events=scenario.events,
+            seed=int(scenario.seed),
+            name=self._sequence,
+        )
         return path
 
     def _close_renderer(self) -> None:

@@ -181,8 +181,11 @@ class Eyes:
             s = np.flatnonzero(seen)
             position[s] += noise[s, 0:2]
             head_position[s] += noise[s, 2:4]
-            yaw[s] = (yaw[s] + noise[s, 4] + math.pi) % (2.0 * math.pi) - math.pi
-            head_yaw[s] = (head_yaw[s] + noise[s, 5] + math.pi) % (2.0 * math.pi) - math.pi
+            yaw[s] += noise[s, 4]
+            head_yaw[s] += noise[s, 5]
+        # Wrapped like Sensor.observe (reform.wrap_angle's arithmetic), every agent.
+        yaw = (yaw + math.pi) % (2.0 * math.pi) - math.pi
+        head_yaw = (head_yaw + math.pi) % (2.0 * math.pi) - math.pi
         return View(
             seen=seen,
             head_seen=head_seen,

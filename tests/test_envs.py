@@ -1,0 +1,525 @@
+"""Gymnasium environments: the contract, determinism, the joining task's reward and endings,
+bad input, vectorisation, the robot's view, rendering and recording, the scripted baseline."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.error import InvalidAction, ResetNeeded
+from gymnasium.utils.env_checker import check_env, data_equivalence
+
+import sim  # noqa: F401  (registers the environments)
+from scenarios import RobotPlace, Role, Scenario, Stage, TimelineBuilder
+from sim import Sensor
+from sim.envs import (
+    ENV_IDS,
+    REWARD_TERMS,
+    JoinPolicy,
+    JoinTask,
+    OSpace,
+    SocialEnv,
+    estimate_o_space,
+    evaluate_policy,
+    joining_place,
+)
+from sim.envs.reward import assess, reward_terms
+from sim.envs.view import Eyes
+from sim.world import World
+
+PAIR_HALF_M = 0.5  # metres, half the distance between the toy pair
+ROBOT_START_Y_M = -2.0  # metres, where the toy scene's robot starts (facing +y, the pair)
+
+
+def toy_pair(
+    *, seed: int, end: float = math.inf, length: float = 30.0, half: float = PAIR_HALF_M
+) -> Scenario:
+    """Two people ``2 half`` apart facing each other across the origin; the robot 2 m south,
+    facing them. The plan declares them a group from the start (they stand at their places)
+    until ``end``.
+    """
+    places = np.array([[-half, 0.0], [half, 0.0]])
+    facings = np.array([0.0, math.pi])
+    people = tuple(
+        Role(id=i + 1, position=tuple(places[i]), yaw=float(facings[i])) for i in range(2)
+    )
+    builder = TimelineBuilder([1, 2, 0])
+    builder.group([1, 2], places, facings, np.zeros(2), start=0.0, end=end)
+    return Scenario(
+        name="toy-pair",
+        seed=seed,
+        options={},
+        stage=Stage(
+            room=(6.0, 6.0),
+            people=people,
+            robot=RobotPlace(id=0, position=(0.0, ROBOT_START_Y_M), yaw=math.pi / 2),
+        ),
+        timeline=builder.build(),
+        duration=length,
+    )
+
+
+def toy_env(**kwargs) -> SocialEnv:
+    kwargs.setdefault("robot_start", "scenario")
+    return SocialEnv(toy_pair, **kwargs)
+
+
+def _rollout(env: gym.Env, seed: int, steps: int) -> list:
+    observation, info = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    out = [(observation, info)]
+    for _ in range(steps):
+        step = env.step(env.action_space.sample())
+        out.append(step)
+        if step[2] or step[3]:
+            break
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Registration and the Gymnasium contract
+
+
+def test_import_sim_registers_every_id_and_stays_light() -> None:
+    code = (
+        "import sys, gymnasium, sim\n"
+        "ids = [i for i in gymnasium.registry if i.startswith('ReformSim/')]\n"
+        "heavy = [m for m in ('mujoco', 'sklearn', 'reform', 'scenarios', 'sim.envs.social')"
+        " if m in sys.modules]\n"
+        "print(len(ids), heavy)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split()[0] == str(len(ENV_IDS))
+    assert out.stdout.strip().endswith("[]")
+
+
+def test_ids_name_a_task_and_an_observe_variant_per_scenario() -> None:
+    assert len(ENV_IDS) == 10
+    for env_id in ENV_IDS:
+        spec = gym.spec(env_id)
+        assert spec.entry_point == "sim.envs.social:SocialEnv"
+        assert spec.kwargs["task"] == ("observe" if "Observe" in env_id else "join")
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS, ids=lambda i: i.split("/")[1])
+def test_check_env_passes(env_id: str) -> None:
+    env = gym.make(env_id, episode_seconds=3.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a warning from the checker fails the test
+        check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_two_envs_with_one_seed_roll_out_identically() -> None:
+    a = gym.make("ReformSim/HRIConversation-v0", disable_env_checker=True)
+    b = gym.make("ReformSim/HRIConversation-v0", disable_env_checker=True)
+    first, second = _rollout(a, 7, 60), _rollout(b, 7, 60)
+    assert len(first) == len(second) > 1
+    for x, y in zip(first, second, strict=True):
+        assert data_equivalence(x, y, exact=True)
+    other = _rollout(a, 8, 60)
+    assert not data_equivalence(first[0][0], other[0][0], exact=True)
+
+
+def test_observation_layout_and_info() -> None:
+    env = toy_env()
+    observation, info = env.reset(seed=0)
+    assert env.observation_space.contains(observation)
+    assert set(observation) == {
+        "robot_pose",
+        "head_pan",
+        "people_position",
+        "people_yaw",
+        "people_head_yaw",
+        "people_seen",
+        "people_head_seen",
+        "people_group",
+        "people_target",
+    }
+    # The robot, 2 m south facing north, sees both people ahead: person 1 (x = -0.5) on its
+    # left (robot frame y > 0), person 2 on its right.
+    np.testing.assert_allclose(
+        observation["robot_pose"], [0.0, ROBOT_START_Y_M, math.pi / 2], atol=1e-5
+    )
+    assert observation["people_seen"].tolist() == [1, 1]
+    np.testing.assert_allclose(observation["people_position"], [[2.0, 0.5], [2.0, -0.5]], atol=0.03)
+    # Their bodies face east and west: -90 and +90 degrees relative to the robot's heading.
+    np.testing.assert_allclose(observation["people_yaw"], [-math.pi / 2, math.pi / 2], atol=0.05)
+    assert observation["people_target"].tolist() == [1, 1]
+    assert info["target"] == (1, 2)
+    assert info["groups"] == ((1, 2),)
+    assert set(info["reward_terms"]) == set(REWARD_TERMS)
+    assert set(info["metrics"]) == {"precision", "recall", "f1", "pairwise_accuracy"}
+    # The detector's partition covers the robot and the people it sees.
+    assert sorted(m for g in info["detected_groups"] for m in g) == [0, 1, 2]
+
+
+# ---------------------------------------------------------------------------------------------
+# The joining task
+
+
+def _drive_north(
+    env: SocialEnv, *, stop_y: float, top: float = 0.5, gain: float = 2.0, seed: int = 0
+) -> list[tuple]:
+    """Drives the robot straight north (at most ``top`` m/s, slowing ``gain`` m/s per metre
+    before ``stop_y``), then stands; returns every step."""
+    observation, _ = env.reset(seed=seed)
+    steps = []
+    done = False
+    while not done:
+        y = float(observation["robot_pose"][1])
+        speed = float(np.clip((stop_y - y) * gain, 0.0, top)) / env.action_scale[0]
+        observation, reward, terminated, truncated, info = env.step(
+            np.array([speed, 0.0, 0.0], dtype=np.float32)
+        )
+        steps.append((reward, terminated, truncated, info))
+        done = terminated or truncated
+    return steps
+
+
+def test_joining_terminates_with_success_and_terms_sum_to_the_reward() -> None:
+    env = toy_env()
+    # Stopping 0.6 m south of the pair's centre: on the circle (radius 0.5, tolerance 0.3), 0.78 m
+    # from each person (clear of 0.35 + 0.28 m), facing the centre.
+    steps = _drive_north(env, stop_y=-0.6)
+    reward, terminated, truncated, info = steps[-1]
+    assert terminated and not truncated
+    assert info["is_success"]
+    assert info["reward_terms"]["success"] == JoinTask().success_reward
+    assert info["intruded"] == ()
+    for reward, _, _, info in steps:
+        assert reward == pytest.approx(sum(info["reward_terms"].values()), abs=1e-12)
+    # Approaching the circle earns progress: 1.5 m from the circle at the start, ~0.1 at the end.
+    progress = sum(info["reward_terms"]["progress"] for _, _, _, info in steps)
+    assert progress == pytest.approx(1.4, abs=0.1)
+    assert steps[-1][3]["episode"]["scenario"] == "toy-pair"
+
+
+def test_walking_into_the_o_space_is_penalised_and_never_succeeds() -> None:
+    # A pair 1.6 m apart: the robot fits between them, 0.8 m from each (clear of their personal
+    # space) but in the o-space (closer to the centre than 0.8 - 0.3 m). It crosses the ring at
+    # 0.8 m/s, in less than the 1 s a place must be held.
+    env = SocialEnv(
+        lambda *, seed: toy_pair(seed=seed, half=0.8), robot_start="scenario", episode_seconds=8.0
+    )
+    steps = _drive_north(env, stop_y=0.0, top=0.8, gain=1.6)
+    reward, terminated, truncated, info = steps[-1]
+    assert truncated and not terminated and not info["is_success"]
+    assert info["distance_to_circle"] == pytest.approx(0.8, abs=0.05)
+    assert info["reward_terms"]["o_space"] == -JoinTask().o_space_penalty
+    assert info["intruded"] == ()
+    assert reward == pytest.approx(-JoinTask().o_space_penalty - JoinTask().time_penalty, abs=0.01)
+
+
+def test_the_episode_ends_when_the_target_group_is_gone() -> None:
+    # The pair is planned to talk for 21 s (a target must be planned to last 20 s).
+    env = SocialEnv(lambda *, seed: toy_pair(seed=seed, end=21.0), robot_start="scenario")
+    env.reset(seed=0)
+    steps, done = 0, False
+    while not done:
+        _, _, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+        steps += 1
+        done = terminated or truncated
+    assert terminated and not info["is_success"]
+    assert steps == 210  # the plan ends at t = 21 s: step 210 at 10 Hz
+    assert info["target"] == ()
+    with pytest.raises(ResetNeeded, match="after the episode ended"):
+        env.step(np.zeros(3, dtype=np.float32))
+
+
+def test_observe_variant_has_zero_reward_and_is_truncated_at_its_limit() -> None:
+    env = gym.make("ReformSim/HRIConversationObserve-v0", episode_seconds=2.0)
+    observation, info = env.reset(seed=1)
+    assert "people_target" not in observation
+    total, steps, done = 0.0, 0, False
+    while not done:
+        _, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        total += reward
+        steps += 1
+        assert info["reward_terms"] == {} and reward == 0.0
+        done = terminated or truncated
+    assert truncated and not terminated and steps == 20
+    assert info["episode"]["detections"] == 5  # at t = 0, 0.5, ... 2.0 s: 2 Hz
+
+
+def test_random_start_keeps_the_robot_outside_the_circle_facing_it() -> None:
+    env = toy_env(robot_start="random")
+    for seed in range(5):
+        observation, info = env.reset(seed=seed)
+        x, y, yaw = (float(v) for v in observation["robot_pose"])
+        distance = math.hypot(x, y)
+        assert PAIR_HALF_M + 1.5 - 0.05 <= distance <= PAIR_HALF_M + 3.5 + 0.05
+        bearing = math.atan2(-y, -x)
+        assert abs(math.remainder(bearing - yaw, 2 * math.pi)) <= math.pi / 4 + 1e-6
+
+
+def test_reset_options_pick_the_scenario_seed_and_options() -> None:
+    env = gym.make("ReformSim/HRIConversation-v0", disable_env_checker=True)
+    _, a = env.reset(seed=0, options={"scenario_seed": 5})
+    _, b = env.reset(seed=1, options={"scenario_seed": 5, "robot_start": "scenario"})
+    assert env.unwrapped.scenario.seed == 5
+    assert a["target"] == b["target"] == (1, 2)
+    env.reset(seed=2, options={"scenario_options": {"radius": 0.9}})
+    assert env.unwrapped.scenario.options["radius"] == 0.9
+
+
+# ---------------------------------------------------------------------------------------------
+# Bad input
+
+
+def test_actions_outside_the_space_are_refused() -> None:
+    env = toy_env()
+    env.reset(seed=0)
+    with pytest.raises(InvalidAction, match=r"action\[0\] \(speed\) must be within .*, got 1.5"):
+        env.step(np.array([1.5, 0.0, 0.0], dtype=np.float32))
+    with pytest.raises(InvalidAction, match=r"action\[2\] \(head-pan rate\).*got nan"):
+        env.step(np.array([0.0, 0.0, np.nan]))
+    with pytest.raises(InvalidAction, match=r"must have shape \(3,\).*got shape \(2,\)"):
+        env.step(np.zeros(2))
+    with pytest.raises(InvalidAction, match="must be an array of shape"):
+        env.step("forward")
+
+
+def test_step_before_reset_is_refused() -> None:
+    env = toy_env()
+    with pytest.raises(ResetNeeded, match=r"Cannot call env.step\(\) before calling env.reset\(\)"):
+        env.step(np.zeros(3, dtype=np.float32))
+
+
+def test_unknown_options_and_bad_arguments_are_refused() -> None:
+    env = toy_env()
+    with pytest.raises(ValueError, match=r"unknown options \['speed'\]; expected some of"):
+        env.reset(seed=0, options={"speed": 2})
+    with pytest.raises(ValueError, match="robot_start must be one of"):
+        env.reset(seed=0, options={"robot_start": "corner"})
+    with pytest.raises(ValueError, match="scenario_seed must be an int"):
+        env.reset(seed=0, options={"scenario_seed": 1.5})
+    with pytest.raises(ValueError, match="scenario must be one of .* or a factory, got 'party'"):
+        SocialEnv("party")
+    with pytest.raises(ValueError, match="task must be one of"):
+        toy_env(task="dance")
+    with pytest.raises(ValueError, match="max_people must be at least the scenario's 2 people"):
+        toy_env(max_people=1)
+    with pytest.raises(ValueError, match="detect_rate: 1 / rate = 0.25 s must be a whole number"):
+        toy_env(detect_rate=4.0)
+    with pytest.raises(ValueError, match="render_mode must be None or one of"):
+        toy_env(render_mode="human")
+    with pytest.raises(ValueError, match="has no robot"):
+        gym.make("ReformSim/WordImprov-v0", scenario_options={"robot": "none"})
+
+
+# ---------------------------------------------------------------------------------------------
+# Vectorisation, the robot's view, rendering, recording
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_make_vec_works(mode: str) -> None:
+    envs = gym.make_vec(
+        "ReformSim/HRIRobotExcluded-v0", num_envs=2, vectorization_mode=mode, episode_seconds=1.0
+    )
+    try:
+        observation, info = envs.reset(seed=3)
+        assert observation["people_position"].shape == (2, 2, 2)
+        for _ in range(12):  # past the 1 s limit: the envs reset themselves
+            observation, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
+        assert reward.shape == (2,) and observation["robot_pose"].shape == (2, 3)
+    finally:
+        envs.close()
+
+
+def test_the_view_equals_the_sensor_model() -> None:
+    scenario = toy_pair(seed=0)
+    from sim.episode import scene_spec
+
+    world = World(scene_spec(scenario.stage), seed=1)
+    sensor = Sensor(position_noise=0.05, yaw_noise=0.1, dropout=0.2)
+    eyes = Eyes(world, sensor)
+    for seed in range(10):
+        expected = sensor.observe(world, np.random.default_rng(seed))
+        truth = eyes.truth()
+        view = eyes.look(truth, np.random.default_rng(seed))
+        frame = eyes.observed_frame(truth, view, None)
+        assert frame.ids.tolist() == expected.ids.tolist()
+        np.testing.assert_array_equal(frame.position, expected.position)
+        np.testing.assert_array_equal(frame.yaw, expected.yaw)
+        np.testing.assert_array_equal(frame.head_position, expected.head_position)
+        np.testing.assert_array_equal(frame.head_yaw, expected.head_yaw)
+
+
+def test_render_gives_an_overview_image() -> None:
+    env = toy_env(render_mode="rgb_array", render_size=(160, 120))
+    env.reset(seed=0)
+    image = env.render()
+    assert image.shape == (120, 160, 3) and image.dtype == np.uint8
+    assert image.std() > 5.0  # a scene, not a blank
+    env.close()
+
+
+def test_record_dir_saves_a_readable_recording(tmp_path: Path) -> None:
+    from rerun.chunk import RrdReader
+
+    env = toy_env(record_dir=tmp_path, episode_seconds=1.0)
+    env.reset(seed=0)
+    done = False
+    while not done:
+        *_, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+        done = terminated or truncated
+    path = Path(info["episode"]["recording"])
+    assert path.parent == tmp_path and path.exists()
+    store = RrdReader(path).stream().collect()
+    entities = {chunk.entity_path for chunk in store.stream()}
+    assert any("people" in e for e in entities)
+    assert any("groups" in e for e in entities)
+
+
+# ---------------------------------------------------------------------------------------------
+# The task's geometry (hand-worked scenes)
+
+
+def test_o_space_of_a_circle_a_facing_pair_and_an_open_pair() -> None:
+    angles = np.array([0.3, 2.2, 4.1])
+    ring = 0.8 * np.stack([np.cos(angles), np.sin(angles)], axis=1) + [1.0, 2.0]
+    circle = estimate_o_space(ring, angles + math.pi)
+    np.testing.assert_allclose(circle.centre, [1.0, 2.0], atol=1e-9)
+    assert circle.radius == pytest.approx(0.8)
+    # Two people facing each other, both turned 0.2 rad the same way: their facing lines cross
+    # the bisector 0.1 m either side of the midpoint, which is the centre.
+    pair = estimate_o_space([[-0.5, 0.0], [0.5, 0.0]], [0.2, math.pi + 0.2])
+    np.testing.assert_allclose(pair.centre, [0.0, 0.0], atol=1e-9)
+    # Facings that disagree (crossings 0.68 m apart, more than half the pair's distance): the
+    # midpoint too.
+    pair = estimate_o_space([[-0.5, 0.0], [0.5, 0.0]], [0.9, math.pi - 0.1])
+    np.testing.assert_allclose(pair.centre, [0.0, 0.0], atol=1e-9)
+    # Two of an equilateral triangle of side 1, facing its centre: the centre, 0.29 m off their
+    # midpoint toward the empty corner.
+    a, b = np.array([-0.5, 0.0]), np.array([0.5, 0.0])
+    centre = np.array([0.0, -0.5 / math.sqrt(3.0)])
+    yaws = [math.atan2(*(centre - p)[::-1]) for p in (a, b)]
+    open_pair = estimate_o_space([a, b], yaws)
+    np.testing.assert_allclose(open_pair.centre, centre, atol=1e-9)
+
+
+def test_joining_place_takes_a_gap_clear_of_everyone() -> None:
+    circle = OSpace(centre=[0.0, 0.0], radius=0.6)
+    members = 0.6 * np.array([[1.0, 0.0], [-0.5, math.sqrt(0.75)], [-0.5, -math.sqrt(0.75)]])
+    place = joining_place(circle, members, [0.0, -3.0], clearance=0.63, max_offset=0.3)
+    # The gap facing the robot is between the members at -120 and 0 degrees: bisector -60.
+    assert math.degrees(math.atan2(place[1], place[0])) == pytest.approx(-60.0)
+    assert np.min(np.hypot(*(members - place).T)) >= 0.63
+    assert 0.6 <= np.hypot(*place) <= 0.9
+    # A wall north of the pair's gap sends the robot to the other side.
+    pair = np.array([[-0.5, 0.0], [0.5, 0.0]])
+    walled = joining_place(
+        OSpace(centre=[0.0, 0.0], radius=0.5),
+        pair,
+        [0.0, 2.0],
+        clearance=0.63,
+        max_offset=0.3,
+        bounds=(-3.0, 3.0, -3.0, 0.2),
+    )
+    assert walled[1] < 0.0
+
+
+def test_assessment_and_terms_by_hand() -> None:
+    task = JoinTask()
+    circle = OSpace(centre=[0.0, 0.0], radius=0.5)
+    people = np.array([[-0.5, 0.0], [0.5, 0.0]])
+    placed = assess(
+        task,
+        robot_position=[0.0, -0.6],
+        robot_yaw=math.pi / 2,
+        people_ids=[1, 2],
+        people_position=people,
+        o_space=circle,
+    )
+    assert placed.placed and placed.distance_to_circle == pytest.approx(0.1)
+    assert placed.facing_error == pytest.approx(0.0)
+    turned = assess(
+        task,
+        robot_position=[0.0, -0.6],
+        robot_yaw=0.0,
+        people_ids=[1, 2],
+        people_position=people,
+        o_space=circle,
+    )
+    assert turned.on_circle and not turned.facing and not turned.placed
+    inside = assess(
+        task,
+        robot_position=[0.0, -0.1],
+        robot_yaw=math.pi / 2,
+        people_ids=[1, 2],
+        people_position=people,
+        o_space=circle,
+    )
+    assert inside.in_o_space and inside.intruded == (1, 2)
+    terms = reward_terms(task, turned, placed, joined=True)
+    assert terms["progress"] == pytest.approx(0.0)
+    assert terms["facing"] == pytest.approx(task.facing_weight)
+    assert terms["success"] == task.success_reward
+    assert sum(terms.values()) == pytest.approx(
+        task.facing_weight - task.time_penalty + task.success_reward
+    )
+    with pytest.raises(ValueError, match="JoinTask.hold must be finite and >= 0, got -1"):
+        JoinTask(hold=-1)
+
+
+# ---------------------------------------------------------------------------------------------
+# The scripted baseline and its command
+
+
+def test_the_baseline_joins_the_toy_pair_from_a_random_start() -> None:
+    env = toy_env(robot_start="random")
+    policy = JoinPolicy(task=env.task, action_scale=env.action_scale, room=env.room)
+    for seed in range(3):
+        observation, info = env.reset(seed=seed)
+        policy.reset()
+        done = False
+        while not done:
+            observation, _, terminated, truncated, info = env.step(policy(observation))
+            done = terminated or truncated
+        assert info["is_success"], f"seed {seed}: {info['episode']}"
+
+
+def test_evaluate_policy_reports_seeded_episodes() -> None:
+    result = evaluate_policy("ReformSim/HRIRobotExcluded-v0", episodes=2, seed=4)
+    assert [e.seed for e in result.episodes] == [4, 5]
+    assert result.detector == "gcff"
+    data = result.to_json()
+    assert data["episodes"] == 2 and 0.0 <= data["success_rate"] <= 1.0
+    with pytest.raises(ValueError, match="no joining task"):
+        evaluate_policy("ReformSim/HRIPassingObserve-v0", episodes=1)
+    with pytest.raises(ValueError, match="episodes must be a positive int"):
+        evaluate_policy("ReformSim/HRIPassing-v0", episodes=0)
+
+
+def test_policy_evaluate_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from sim.cli import main
+
+    out = tmp_path / "baseline.json"
+    code = main(
+        [
+            "policy",
+            "evaluate",
+            "--env",
+            "ReformSim/HRIRobotExcluded-v0",
+            "--episodes",
+            "2",
+            "--seed",
+            "4",
+            "--json",
+            str(out),
+        ]
+    )
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "success rate" in printed and "ReformSim/HRIRobotExcluded-v0" in printed
+    data = json.loads(out.read_text())
+    assert data["episodes"] == 2 and len(data["per_episode"]) == 2
+    assert main(["policy", "evaluate", "--env", "ReformSim/Nope-v0", "--episodes", "1"]) == 2
