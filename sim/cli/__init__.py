@@ -16,6 +16,7 @@ from sim.cli import (
     _experiment_gcff,
     _experiment_hri,
     _generate,
+    _policy,
     _scenarios,
     _simulate,
     _stress,
@@ -38,6 +39,7 @@ _COMMANDS = (
     _generate,
     _calibrate,
     _stress,
+    _policy,
 )
 
 
