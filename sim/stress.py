@@ -124,6 +124,7 @@ _SEED_BITS = 63  # bits of a scenario seed (a non-negative int64)
 # A party mingle's planner cannot lay out (no free floor) is drawn again with another seed, at
 # most this many times.
 MAX_REDRAWS = 5
+ROBOT_VIEW_COST = 4.0  # a robot-view episode costs about this many ground-truth ones (rays)
 
 
 @dataclass(frozen=True)
@@ -584,26 +585,37 @@ def _perturb_task(
 def _scene_task(
     grid: StressGrid,
     axis: str,
+    k: int,
     episode: int,
     seed: int,
     detectors: Mapping[str, Any],
 ) -> list[tuple[str, int, int, _Scored | str]]:
-    out: list[tuple[str, int, int, _Scored | str]] = []
-    for k, level in enumerate(grid.levels(axis)):
-        notes = []
-        for attempt in range(MAX_REDRAWS + 1):
-            keys = (episode,) if attempt == 0 else (episode, attempt)
-            spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
-            try:
-                frames = _simulate(spec)
-            except ValueError as exc:  # the planner cannot lay out this party: draw another
-                notes.append(f"seed {spec.seed}: {exc}")
-                continue
-            out.append((axis, k, episode, _Scored.noted(_score(frames, detectors), notes)))
-            break
-        else:
-            out.append((axis, k, episode, "; ".join(notes)))
-    return out
+    level = grid.levels(axis)[k]
+    notes = []
+    for attempt in range(MAX_REDRAWS + 1):
+        keys = (episode,) if attempt == 0 else (episode, attempt)
+        spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
+        try:
+            frames = _simulate(spec)
+        except ValueError as exc:  # the planner cannot lay out this party: draw another
+            notes.append(f"seed {spec.seed}: {exc}")
+            continue
+        return [(axis, k, episode, _Scored.noted(_score(frames, detectors), notes))]
+    return [(axis, k, episode, "; ".join(notes))]
+
+
+def _cost(grid: StressGrid, task: tuple[Callable[..., Any], tuple[Any, ...]]) -> float:
+    """A rough relative cost of a task, to start the longest first (people x frames)."""
+    function, args = task
+    if function is _perturb_task:
+        return len(grid.levels(args[1])) * BASE_PEOPLE
+    axis, k = args[1], args[2]
+    level = grid.levels(axis)[k]
+    if axis == "groups":
+        return float(level)
+    if axis == "sensor":
+        return BASE_PEOPLE * (1.0 if level == "truth" else ROBOT_VIEW_COST)
+    return float(BASE_PEOPLE)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -990,8 +1002,11 @@ def run_stress(
                 (_perturb_task, (grid, name, axis_index[name], e, frames, detectors, seed))
             )
     for name in scene_axes:
-        for e in range(grid.seeds):
-            tasks.append((_scene_task, (grid, name, e, seed, detectors)))
+        for k in range(len(grid.levels(name))):
+            for e in range(grid.seeds):
+                tasks.append((_scene_task, (grid, name, k, e, seed, detectors)))
+    # Longest first, so that no long task starts last; the results do not depend on the order.
+    tasks.sort(key=lambda task: -_cost(grid, task))
     say(f"scoring {len(tasks)} task(s) on {min(workers, max(len(tasks), 1))} worker(s)")
     t0 = time.perf_counter()
 
