@@ -70,7 +70,7 @@ from scenarios import PlannedGroup, Scenario, Stage
 from scenarios.mingle import NoFloorError
 from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
 from sim.envs.target import Target, choose_target, circle_of
-from sim.envs.view import Eyes, Truth, View
+from sim.envs.view import Eyes, Truth, View, robot_frame
 from sim.episode import scene_spec
 from sim.motion import ROBOT_LIMITS
 from sim.scene import ROBOT_RADIUS_M
@@ -352,7 +352,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         world.command_robot(RobotCommand())
         self._eyes = Eyes(world, self._sensor)
         self._robot_index = self._eyes.robot
-        self._people_rows = np.flatnonzero(~np.isin(np.arange(world.ids.size), [self._robot_index]))
+        self._people_rows = np.flatnonzero(world.ids != world.robot_id).astype(np.int64)
         self._truth_rule = scenario.ground_truth(world.ids.tolist())
         self._target = None if first is None else Target(scenario.plan, first, world.ids, robot_id)
         limit = scenario.duration
@@ -589,27 +589,29 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     def _observation(self, truth: Truth, view: View) -> dict[str, np.ndarray]:
         m = self.max_people
         r = self._robot_index
-        rows = self._people_rows
-        k = rows.size
         x, y, yaw = float(truth.position[r, 0]), float(truth.position[r, 1]), float(truth.yaw[r])
-        c, s = math.cos(yaw), math.sin(yaw)
-        seen = view.seen[rows]
-        head_seen = view.head_seen[rows]
-        position = np.zeros((m, 2), dtype=np.float32)
-        body = np.zeros(m, dtype=np.float32)
-        head = np.zeros(m, dtype=np.float32)
-        if seen.any():
-            slots = np.flatnonzero(seen)
-            delta = view.position[rows[slots]] - (x, y)
-            local = delta @ np.array([[c, -s], [s, c]])
-            position[slots] = np.clip(local, -self._reach, self._reach)
-            body[slots] = (view.yaw[rows[slots]] - yaw + math.pi) % _TWO_PI - math.pi
-            heads = np.flatnonzero(head_seen)
-            head[heads] = (view.head_yaw[rows[heads]] - yaw + math.pi) % _TWO_PI - math.pi
-        seen_out = np.zeros(m, dtype=np.int8)
-        seen_out[:k] = seen
-        head_out = np.zeros(m, dtype=np.int8)
-        head_out[:k] = head_seen
+        position = np.empty((m, 2), dtype=np.float32)
+        body = np.empty(m, dtype=np.float32)
+        head = np.empty(m, dtype=np.float32)
+        seen = np.empty(m, dtype=np.int8)
+        head_seen = np.empty(m, dtype=np.int8)
+        robot_frame(
+            self._people_rows,
+            view.seen,
+            view.head_seen,
+            view.position,
+            view.yaw,
+            view.head_yaw,
+            x,
+            y,
+            yaw,
+            self._reach,
+            position,
+            body,
+            head,
+            seen,
+            head_seen,
+        )
         hx, hy = self._half_room
         obs = {
             "robot_pose": np.array(
@@ -620,15 +622,15 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             "people_position": position,
             "people_yaw": body,
             "people_head_yaw": head,
-            "people_seen": seen_out,
-            "people_head_seen": head_out,
+            "people_seen": seen,
+            "people_head_seen": head_seen,
         }
         if self._observe_groups:
-            obs["people_group"] = self._group_number * seen_out
+            obs["people_group"] = self._group_number * seen
         if self._task is not None:
             target = np.zeros(m, dtype=np.int8)
             if self._target is not None and not self._target.gone:
-                target[:k] = self._target_mask
+                target[: self._people_rows.size] = self._target_mask
             obs["people_target"] = target
         return obs
 

@@ -17,13 +17,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from reform.frame import ROBOT, Frame, Group
 from sim.sensor import Sensor, _rays_clear
 from sim.world import World, yaw_from_quat
 
-__all__ = ["Eyes", "Truth", "View"]
+__all__ = ["Eyes", "Truth", "View", "robot_frame"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,9 +93,9 @@ class Eyes:
         self._head = world.head_bodies
         self._roots = world.root_bodies
         self._bodies = np.concatenate([self._torso, self._head])
-        self._is_robot = np.array([k == ROBOT for k in world.kinds], dtype=bool)
+        self._is_robot = np.array([k == ROBOT for k in world.kinds], dtype=np.bool_)
         self._human = ~self._is_robot
-        self._all = np.arange(self.ids.size)
+        self._all = np.arange(self.ids.size, dtype=np.int64)
         self._half_fov = math.radians(sensor.fov_deg) / 2.0
         model = world.model
         self._pan_adr = int(model.jnt_qposadr[model.joint("robot/head_pan").id])
@@ -130,62 +131,53 @@ class Eyes:
         """
         world, sensor = self.world, self.sensor
         data = world.data
-        total = self.ids.size
-        everyone = bool(truth.present.all())
-        rows = self._all if everyone else np.flatnonzero(truth.present)  # World.frame's agents
-        n = rows.size
+        rows = self._all if truth.present.all() else np.flatnonzero(truth.present)
+        n = rows.size  # the agents of World.frame, in its order
         origin = data.site_xpos[world.sensor_site].copy()
         xmat = data.site_xmat[world.sensor_site]
-        heading = math.atan2(xmat[3], xmat[0])
-        delta = truth.position - origin[:2]
-        distance = np.hypot(delta[:, 0], delta[:, 1])
-        bearing = np.arctan2(delta[:, 1], delta[:, 0]) - heading
-        bearing = np.abs((bearing + math.pi) % (2.0 * math.pi) - math.pi)
-        body_seen = (
-            self._human
-            & truth.present
-            & (distance >= sensor.min_range)
-            & (distance <= sensor.max_range)
-            & (bearing <= self._half_fov)
+        seen = np.empty(self.ids.size, dtype=np.bool_)
+        _in_view(
+            truth.position,
+            truth.present,
+            self._human,
+            origin[0],
+            origin[1],
+            math.atan2(xmat[3], xmat[0]),
+            self._half_fov,
+            sensor.min_range,
+            sensor.max_range,
+            seen,
         )
-        head_seen = body_seen.copy()
-        if sensor.occlusion and body_seen.any():
-            cand = np.flatnonzero(body_seen)
+        head_seen = seen.copy()
+        if sensor.occlusion and seen.any():
+            cand = np.flatnonzero(seen)
             targets = np.concatenate([truth.torso_xyz[cand], truth.head_xyz[cand]])
             roots = self._roots[cand]
             clear = _rays_clear(world.model, data, origin, targets, np.concatenate([roots, roots]))
             k = cand.size
-            body_seen[cand] = clear[:k] | clear[k:]
+            seen[cand] = clear[:k] | clear[k:]
             head_seen[cand] = clear[k:]
-
         # Sensor.observe's draws, in its order: dropouts, then 6 n normals in one call (the
         # same numbers as its four calls).
         missed = rng.random(n) < sensor.dropout
         normal = rng.normal(0.0, 1.0, size=6 * n)
-        seen = body_seen
-        if everyone:
-            seen &= ~missed
-        else:
-            seen[rows] &= ~missed
-        head_seen &= seen
         position = truth.position.copy()
         yaw = truth.yaw.copy()
         head_position = truth.head_position.copy()
         head_yaw = truth.head_yaw.copy()
-        if seen.any():
-            noise = np.zeros((total, 6))
-            noise[rows, 0:2] = normal[: 2 * n].reshape(n, 2) * sensor.position_noise
-            noise[rows, 2:4] = normal[2 * n : 4 * n].reshape(n, 2) * sensor.position_noise
-            noise[rows, 4] = normal[4 * n : 5 * n] * sensor.yaw_noise
-            noise[rows, 5] = normal[5 * n :] * sensor.yaw_noise
-            s = np.flatnonzero(seen)
-            position[s] += noise[s, 0:2]
-            head_position[s] += noise[s, 2:4]
-            yaw[s] += noise[s, 4]
-            head_yaw[s] += noise[s, 5]
-        # Wrapped like Sensor.observe (reform.wrap_angle's arithmetic), every agent.
-        yaw = (yaw + math.pi) % (2.0 * math.pi) - math.pi
-        head_yaw = (head_yaw + math.pi) % (2.0 * math.pi) - math.pi
+        _report(
+            rows,
+            missed,
+            normal,
+            sensor.position_noise,
+            sensor.yaw_noise,
+            seen,
+            head_seen,
+            position,
+            yaw,
+            head_position,
+            head_yaw,
+        )
         return View(
             seen=seen,
             head_seen=head_seen,
@@ -263,3 +255,112 @@ class Eyes:
             time=time,
             sequence=sequence,
         )
+
+
+# ---------------------------------------------------------------------------------------------
+# Compiled kernels: the same arithmetic as `sim.Sensor` (numpy there), per agent, without the
+# overhead of a dozen small array operations per control step.
+
+
+@numba.njit(cache=True)
+def _in_view(
+    position: np.ndarray,
+    present: np.ndarray,
+    human: np.ndarray,
+    ox: float,
+    oy: float,
+    heading: float,
+    half_fov: float,
+    min_range: float,
+    max_range: float,
+    out: np.ndarray,
+) -> None:
+    """``out[i]``: person ``i`` is present and within the field of view and range."""
+    for i in range(position.shape[0]):
+        dx = position[i, 0] - ox
+        dy = position[i, 1] - oy
+        distance = math.hypot(dx, dy)
+        bearing = (math.atan2(dy, dx) - heading + math.pi) % (2.0 * math.pi) - math.pi
+        out[i] = (
+            human[i]
+            and present[i]
+            and distance >= min_range
+            and distance <= max_range
+            and abs(bearing) <= half_fov
+        )
+
+
+@numba.njit(cache=True)
+def _report(
+    rows: np.ndarray,
+    missed: np.ndarray,
+    normal: np.ndarray,
+    position_noise: float,
+    yaw_noise: float,
+    seen: np.ndarray,
+    head_seen: np.ndarray,
+    position: np.ndarray,
+    yaw: np.ndarray,
+    head_position: np.ndarray,
+    head_yaw: np.ndarray,
+) -> None:
+    """Dropouts and noise on the seen, in place; every yaw wrapped (as `Sensor.observe`)."""
+    n = rows.size
+    for k in range(n):
+        i = rows[k]
+        if missed[k]:
+            seen[i] = False
+        if not seen[i]:
+            head_seen[i] = False
+            continue
+        position[i, 0] += normal[2 * k] * position_noise
+        position[i, 1] += normal[2 * k + 1] * position_noise
+        head_position[i, 0] += normal[2 * n + 2 * k] * position_noise
+        head_position[i, 1] += normal[2 * n + 2 * k + 1] * position_noise
+        yaw[i] += normal[4 * n + k] * yaw_noise
+        head_yaw[i] += normal[5 * n + k] * yaw_noise
+    for i in range(yaw.size):
+        yaw[i] = (yaw[i] + math.pi) % (2.0 * math.pi) - math.pi
+        head_yaw[i] = (head_yaw[i] + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@numba.njit(cache=True)
+def robot_frame(
+    rows: np.ndarray,
+    seen: np.ndarray,
+    head_seen: np.ndarray,
+    position: np.ndarray,
+    yaw: np.ndarray,
+    head_yaw: np.ndarray,
+    x: float,
+    y: float,
+    heading: float,
+    reach: float,
+    out_position: np.ndarray,
+    out_yaw: np.ndarray,
+    out_head_yaw: np.ndarray,
+    out_seen: np.ndarray,
+    out_head_seen: np.ndarray,
+) -> None:
+    """The people ``rows`` (slot ``k`` = ``rows[k]``) in the robot's frame, into the ``out``
+    arrays (zeroed first): position (x forward, y left, clipped to ``reach``), body and head yaw
+    relative to ``heading``, wrapped; zeros where not seen."""
+    c, s = math.cos(heading), math.sin(heading)
+    out_position[:] = 0.0
+    out_yaw[:] = 0.0
+    out_head_yaw[:] = 0.0
+    out_seen[:] = 0
+    out_head_seen[:] = 0
+    for k in range(rows.size):
+        i = rows[k]
+        if not seen[i]:
+            continue
+        dx = position[i, 0] - x
+        dy = position[i, 1] - y
+        out_position[k, 0] = min(max(c * dx + s * dy, -reach), reach)
+        out_position[k, 1] = min(max(-s * dx + c * dy, -reach), reach)
+        out_yaw[k] = (yaw[i] - heading + math.pi) % (2.0 * math.pi) - math.pi
+        out_seen[k] = 1
+        if head_seen[i]:
+            out_head_yaw[k] = (head_yaw[i] - heading + math.pi) % (2.0 * math.pi) - math.pi
+            out_head_seen[k] = 1
