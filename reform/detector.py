@@ -12,6 +12,7 @@ rows are stored in.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -172,7 +173,7 @@ class Reform(BaseEstimator):
                 continue
             i, j = pair_indices(n)
             step = max(1, CHUNK_PAIRS // i.size)
-            spans: dict[bytes, tuple[slice, ...]] = {}
+            spans: dict[bytes, Any] = {}
             for start in range(0, len(positions), step):
                 chunk = positions[start : start + step]
                 ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
@@ -355,34 +356,41 @@ def _by_size(frames: list[Frame]) -> dict[int, list[int]]:
 
 
 def _partitions(
-    labels: np.ndarray, ids: np.ndarray, spans: dict[bytes, tuple[slice, ...]] | None = None
+    labels: np.ndarray, ids: np.ndarray, spans: dict[bytes, Any] | None = None
 ) -> list[Partition]:
     """Partitions from (F, n) group labels and (F, n) ids, in id order.
 
     Sorting each frame's people by label lines its groups up (a group's label is its first
     member, so groups come ordered by their smallest id); the frame's partition is then its id
-    tuple cut where the label changes. The cuts of each pattern are kept in ``spans``, a cache
-    the caller may share across calls.
+    tuple cut where the label changes. Each cut pattern gets one ``operator.itemgetter`` of
+    slices, kept in ``spans``, a cache the caller may share across calls.
     """
     n_frames, n = labels.shape
     spans = {} if spans is None else spans
     order = np.argsort(labels, axis=1, kind="stable")
     sorted_labels = np.take_along_axis(labels, order, axis=1)
     sorted_ids = np.take_along_axis(ids, order, axis=1)
-    cuts = sorted_labels[:, 1:] != sorted_labels[:, :-1]
-    packed = np.packbits(cuts, axis=1)
+    packed = np.packbits(sorted_labels[:, 1:] != sorted_labels[:, :-1], axis=1)
     width = packed.shape[1]
     flat = packed.tobytes()
     patterns = [flat[k : k + width] for k in range(0, n_frames * width, width)]
     out: list[Partition] = []
-    for f, (pattern, row) in enumerate(zip(patterns, map(tuple, sorted_ids.tolist()), strict=True)):
-        pieces = spans.get(pattern)
-        if pieces is None:
-            edges = [0, *(k + 1 for k, cut in enumerate(cuts[f].tolist()) if cut), n]
-            pieces = tuple(slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True))
-            spans[pattern] = pieces
-        out.append(tuple(map(row.__getitem__, pieces)))
+    for pattern, row in zip(patterns, map(tuple, sorted_ids.tolist()), strict=True):
+        cut = spans.get(pattern)
+        if cut is None:
+            cut = spans[pattern] = _cutter(pattern, n)
+        out.append(cut(row))
     return out
+
+
+def _cutter(pattern: bytes, n: int) -> Any:
+    """``row -> tuple of groups`` for one packed cut pattern (bit k set: a group ends after k)."""
+    value = int.from_bytes(pattern, "big")
+    top = 8 * len(pattern) - 1  # np.packbits puts element 0 in the highest bit
+    edges = [0, *(k + 1 for k in range(n - 1) if value >> (top - k) & 1), n]
+    if len(edges) == 2:
+        return lambda row: (row,)
+    return operator.itemgetter(*(slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)))
 
 
 def _summary(frames: list[Frame], targets: np.ndarray) -> dict[str, Any]:

@@ -117,7 +117,7 @@ def compile_classifier(
                 return table
         return _TreeApply(classifier, ensemble, threshold)
     if _is_logistic(final):
-        return _LinearPairs(scalers, final, threshold)
+        return _LinearPairs(classifier, scalers, final, threshold)
     if _is_neighbors(final) and threshold is None:
         return _NeighborsPairs(scalers, final)
     return _SklearnPairs(classifier, threshold)
@@ -210,6 +210,15 @@ def _is_neighbors(estimator: Any) -> bool:
 
 @dataclass(frozen=True, eq=False)
 class _LinearPairs:
+    """Logistic regression as an elementwise dot product.
+
+    scikit-learn computes ``X @ coef_.T + intercept_`` with BLAS, which for two columns is
+    slower than the arithmetic itself and may round differently (fused multiply-adds). The sum is
+    computed here elementwise; where its sign (or its side of the threshold) could depend on
+    that last-bit rounding, the classifier itself decides.
+    """
+
+    classifier: Any
     scalers: tuple[Any, ...]
     model: Any
     threshold: float | None
@@ -217,17 +226,37 @@ class _LinearPairs:
     exact: bool = True
 
     def predict(self, features: np.ndarray) -> np.ndarray:
+        features = np.asarray(features, dtype=np.float64)
         scaled = _scale(self.scalers, features)
-        # LinearClassifierMixin.decision_function: X @ coef_.T + intercept_
-        scores = (scaled @ self.model.coef_.T + self.model.intercept_).reshape(-1)
+        coef = np.asarray(self.model.coef_, dtype=np.float64)[0]
+        intercept = float(np.asarray(self.model.intercept_, dtype=np.float64)[0])
+        score = np.full(scaled.shape[0], intercept)
+        size = np.full(scaled.shape[0], abs(intercept))
+        for column, weight in enumerate(coef.tolist()):
+            term = scaled[:, column] * weight
+            score += term
+            size += np.abs(term)
         positive = int(np.flatnonzero(np.asarray(self.model.classes_) == 1)[0])
-        if self.threshold is None:
-            together = scores > 0  # class index 1 where the score is positive
-            return together if positive == 1 else ~together
-        from scipy.special import expit
+        cut = 0.0 if self.threshold is None else _logit(self.threshold)
+        if positive != 1:
+            score, cut = -score, -cut
+        # Rounding of a sum of k + 1 terms stays far below 8 (k + 1) ulp of their magnitudes;
+        # with a threshold, expit's own rounding moves the cut by about eps / (p (1 - p)).
+        eps = np.finfo(np.float64).eps
+        slack = 0.0 if self.threshold is None else 8 * eps / (self.threshold * (1 - self.threshold))
+        doubt = np.abs(score - cut) <= 8 * (coef.size + 1) * eps * (size + abs(cut)) + slack
+        together = score > cut if self.threshold is None else score >= cut
+        if doubt.any():
+            rows = np.flatnonzero(doubt)
+            together[rows] = sklearn_pair_labels(
+                self.classifier, features[rows], threshold=self.threshold
+            )
+        return together
 
-        proba = expit(scores)  # LinearClassifierMixin._predict_proba_lr: P(classes_[1])
-        return (proba if positive == 1 else 1 - proba) >= self.threshold
+
+def _logit(p: float) -> float:
+    """The score at which ``expit(score) == p``."""
+    return float(np.log(p) - np.log1p(-p))
 
 
 @dataclass(frozen=True, eq=False)
