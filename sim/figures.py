@@ -1,0 +1,229 @@
+"""Figures for reports, as PNG files (matplotlib, no display needed).
+
+* :func:`score_bars`: grouped bars (one group per test set, one bar per detector) with error
+  bars, e.g. F1 at T = 2/3 with bootstrap intervals;
+* :func:`curves`: scores against a stressed parameter (position noise, dropout, ...);
+* :func:`top_view`: one frame from above: people as discs with facing arrows, groups as
+  rings, truth and a detector side by side.
+
+matplotlib is imported inside the functions, with the non-interactive ``Agg`` backend; every
+file is written atomically.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.atomic import atomic_path
+from reform.frame import Frame, Group
+
+__all__ = ["Bar", "curves", "score_bars", "top_view"]
+
+DPI = 110  # dots per inch of the PNG files
+WIDTH_IN = 8.0  # inches, figure width
+
+
+@dataclass(frozen=True)
+class Bar:
+    """One bar: a label, a value and, optionally, an interval around it.
+
+    Attributes:
+        label: the series it belongs to (one colour per label across groups).
+        value: the bar's height.
+        low: lower end of its interval, or None.
+        high: upper end of its interval, or None.
+    """
+
+    label: str
+    value: float
+    low: float | None = None
+    high: float | None = None
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig: Any, path: str | os.PathLike[str]) -> Path:
+    plt = _pyplot()
+    target = Path(path)
+    with atomic_path(target) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI, bbox_inches="tight")
+    plt.close(fig)
+    return target
+
+
+def score_bars(
+    groups: Mapping[str, Sequence[Bar]],
+    path: str | os.PathLike[str],
+    *,
+    ylabel: str,
+    title: str = "",
+    reference: Mapping[str, float] | None = None,
+) -> Path:
+    """Grouped bars: one group per key of ``groups``, one colour per bar label.
+
+    Args:
+        groups: group name (e.g. a test set) -> its bars.
+        path: the PNG file to write.
+        ylabel: the value's name and unit.
+        title: figure title.
+        reference: horizontal reference lines, label -> value (e.g. the paper's F1).
+
+    Returns:
+        The path written.
+    """
+    if not groups or not any(groups.values()):
+        raise ValueError("groups must hold at least one bar, got none")
+    plt = _pyplot()
+    labels = list(dict.fromkeys(bar.label for bars in groups.values() for bar in bars))
+    width = 0.8 / len(labels)
+    fig, ax = plt.subplots(figsize=(WIDTH_IN, 3.8))
+    colours = plt.get_cmap("tab10")
+    for g, bars in enumerate(groups.values()):
+        for bar in bars:
+            k = labels.index(bar.label)
+            x = g + (k - (len(labels) - 1) / 2) * width
+            error = None
+            if bar.low is not None and bar.high is not None:
+                error = [[max(bar.value - bar.low, 0.0)], [max(bar.high - bar.value, 0.0)]]
+            ax.bar(
+                x,
+                bar.value,
+                width=width * 0.95,
+                color=colours(k % 10),
+                yerr=error,
+                capsize=2,
+                label=bar.label,
+            )
+    for name, value in (reference or {}).items():
+        ax.axhline(value, color="0.3", linestyle="--", linewidth=0.8)
+        ax.annotate(name, (len(groups) - 0.5, value), ha="right", va="bottom", fontsize=7)
+    ax.set_xticks(range(len(groups)), list(groups))
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    handles, names = ax.get_legend_handles_labels()
+    unique = dict(zip(names, handles, strict=True))
+    ax.legend(unique.values(), unique.keys(), fontsize=7, loc="lower left", framealpha=0.9)
+    ax.grid(axis="y", alpha=0.3)
+    return _save(fig, path)
+
+
+def curves(
+    x: Sequence[float],
+    series: Mapping[str, Sequence[float]],
+    path: str | os.PathLike[str],
+    *,
+    xlabel: str,
+    ylabel: str,
+    title: str = "",
+    bands: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
+) -> Path:
+    """Lines of scores against a parameter, with optional shaded intervals.
+
+    Args:
+        x: (k,) parameter values.
+        series: name -> (k,) values.
+        path: the PNG file to write.
+        xlabel, ylabel: axis names with units.
+        title: figure title.
+        bands: name -> ((k,) low, (k,) high), shaded around that series.
+
+    Returns:
+        The path written.
+    """
+    xs = np.asarray(x, dtype=np.float64)
+    if xs.ndim != 1 or xs.size == 0:
+        raise ValueError(f"x must be a non-empty 1-D sequence, got shape {xs.shape}")
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH_IN * 0.62, 3.4))
+    for name, values in series.items():
+        ys = np.asarray(values, dtype=np.float64)
+        if ys.shape != xs.shape:
+            raise ValueError(f"series[{name!r}] must have shape {xs.shape}, got {ys.shape}")
+        (line,) = ax.plot(xs, ys, marker="o", markersize=3, label=name)
+        if bands and name in bands:
+            low, high = (np.asarray(b, dtype=np.float64) for b in bands[name])
+            ax.fill_between(xs, low, high, color=line.get_color(), alpha=0.15, linewidth=0)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def top_view(
+    frame: Frame,
+    partitions: Mapping[str, Sequence[Group]],
+    path: str | os.PathLike[str],
+    *,
+    title: str = "",
+) -> Path:
+    """One frame from above, once per partition (e.g. ground truth, REFORM, GCFF).
+
+    People are discs with an arrow along their body yaw (robots are squares); members of a
+    group of two or more share a colour and a ring through them; singletons are grey.
+
+    Args:
+        frame: the frame.
+        partitions: panel title -> a full partition of the frame's ids.
+        path: the PNG file to write.
+        title: figure title.
+
+    Returns:
+        The path written.
+    """
+    if not partitions:
+        raise ValueError("partitions must hold at least one partition, got none")
+    plt = _pyplot()
+    panels = len(partitions)
+    fig, axes = plt.subplots(1, panels, figsize=(3.3 * panels, 3.4), squeeze=False)
+    colours = plt.get_cmap("tab10")
+    row_of = {int(i): k for k, i in enumerate(frame.ids)}
+    lo = frame.position.min(axis=0) - 0.8
+    hi = frame.position.max(axis=0) + 0.8
+    for ax, (name, partition) in zip(axes[0], partitions.items(), strict=True):
+        colour_of: dict[int, Any] = {}
+        track = 0
+        for group in partition:
+            if len(group) < 2:
+                continue
+            colour = colours(track % 10)
+            track += 1
+            rows = [row_of[int(m)] for m in group if int(m) in row_of]
+            centre = frame.position[rows].mean(axis=0)
+            radius = float(np.mean(np.linalg.norm(frame.position[rows] - centre, axis=1)))
+            ax.add_patch(
+                plt.Circle(centre, radius, fill=False, color=colour, linewidth=1.2, alpha=0.8)
+            )
+            for m in group:
+                colour_of[int(m)] = colour
+        for k, person in enumerate(frame.ids.tolist()):
+            x, y = frame.position[k]
+            colour = colour_of.get(int(person), "0.6")
+            marker = "s" if frame.is_robot[k] else "o"
+            ax.plot(x, y, marker=marker, color=colour, markersize=7, markeredgecolor="k")
+            dx, dy = 0.35 * np.cos(frame.yaw[k]), 0.35 * np.sin(frame.yaw[k])
+            ax.arrow(x, y, dx, dy, head_width=0.08, color=colour, length_includes_head=True)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_aspect("equal")
+        ax.set_title(name, fontsize=9)
+        ax.tick_params(labelsize=7)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return _save(fig, path)
