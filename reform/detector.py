@@ -11,9 +11,11 @@ rows are stored in.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import math
 import operator
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -375,12 +377,25 @@ def _partitions(
     flat = packed.tobytes()
     patterns = [flat[k : k + width] for k in range(0, n_frames * width, width)]
     out: list[Partition] = []
-    for pattern, row in zip(patterns, map(tuple, sorted_ids.tolist()), strict=True):
-        cut = spans.get(pattern)
-        if cut is None:
-            cut = spans[pattern] = _cutter(pattern, n)
-        out.append(cut(row))
+    with _collector_paused():  # tuples of ints cannot form cycles: spare the collector's scans
+        for pattern, row in zip(patterns, map(tuple, sorted_ids.tolist()), strict=True):
+            cut = spans.get(pattern)
+            if cut is None:
+                cut = spans[pattern] = _cutter(pattern, n)
+            out.append(cut(row))
     return out
+
+
+@contextlib.contextmanager
+def _collector_paused() -> Iterator[None]:
+    """Pauses Python's cyclic garbage collector while building many acyclic tuples."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 def _cutter(pattern: bytes, n: int) -> Any:
