@@ -25,6 +25,7 @@ are written for every group and every person standing alone.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 from dataclasses import dataclass, field
@@ -40,7 +41,14 @@ from scenarios.script import Intent
 from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
 from scenarios.timeline import TimelineBuilder
 
-__all__ = ["SALSA_RADIUS", "MingleParams", "NoFloorError", "build_mingle", "mingle"]
+__all__ = [
+    "SALSA_RADIUS",
+    "MingleParams",
+    "NoFloorError",
+    "build_mingle",
+    "build_mingle_in_room",
+    "mingle",
+]
 
 SALSA_RADIUS = RadiusLaw(base=0.444, per_member=0.067)  # metres, fit to SALSA (module doc)
 DENSITY_PER_M2 = 0.4  # people per m^2 of a room picked for them (SALSA: ~18 in ~45 m^2)
@@ -66,6 +74,9 @@ JOIN_REACH_M = 5.0  # metres, people prefer groups nearer than this
 JOIN_SIZE_PENALTY = 0.3  # a group of n is joined 1 / (1 + penalty n) as often
 PASS_GAP_S = (10.0, 60.0)  # seconds, a passer-by waits this long between crossings
 PLACE_TRIES = 60  # random draws when looking for free floor
+START_MISSES = 500  # groups in a row that find no floor before the largest size shrinks
+ROOM_RETRIES = 10  # times an auto-sized room grows when the drawn party does not fit
+ROOM_GROWTH = 1.1  # factor of each growth
 ROBOT_ID = 0
 ROBOT_WALL_GAP_M = 0.6  # metres from the west wall to the watching robot
 ROBOT_CLAIM_M = 0.6  # metres of floor kept free around the robot
@@ -369,16 +380,28 @@ class _Party:
         n_alone = int(round(self.p.alone_share * len(unplaced)))
         alone = unplaced[:n_alone]
         unplaced = unplaced[n_alone:]
+        largest = self.p.max_group_size  # shrinks when groups keep finding no floor
+        misses = 0
         while len(unplaced) >= 2:
             n = int(min(rng.choice(sizes, p=share), len(unplaced)))
-            if len(unplaced) - n == 1:
-                n = n + 1 if n < self.p.max_group_size else n - 1
+            if len(unplaced) - n == 1:  # leave nobody as the odd one out, where sizes allow
+                if n < largest:
+                    n += 1
+                elif n > 2:
+                    n -= 1
             radius = self.draw_radius(n)
             centre = self.free_spot(self.reach(radius))
             if centre is None:
                 if n > 2:
+                    misses += 1
+                    if misses >= START_MISSES:
+                        # No floor for groups this large: draw only smaller ones from now on.
+                        largest, misses = n - 1, 0
+                        share = np.where(sizes <= largest, share, 0.0)
+                        share = share / share.sum()
                     continue
                 break
+            misses = 0
             members, unplaced = unplaced[:n], unplaced[n:]
             for k, m in enumerate(members):
                 angle = 2.0 * math.pi * k / n
@@ -803,7 +826,8 @@ def mingle(
         seed: seeds every draw.
         people: guests (2-100).
         duration: length of the party, seconds (> 0).
-        room_side: side of the square room, metres (0: 0.4 people per m^2, at least 4 m).
+        room_side: side of the square room, metres (0: 0.4 people per m^2, at least 4 m, grown
+            by 10% steps while the drawn party does not fit).
         max_group_size: largest group (2-12; SALSA holds groups of 8).
         robot: whether the robot stands by the west wall, watching.
         passers_by: extra people crossing the room now and then (0-20).
@@ -836,4 +860,22 @@ def mingle(
         alone_share=alone_share,
         mean_utterance=mean_utterance,
     )
-    return build_mingle(MingleParams(**options), seed=seed, name="mingle", options=options)
+    params = MingleParams(**options)
+    if room_side > 0.0:  # the user's room: a party that does not fit is an error
+        return build_mingle(params, seed=seed, name="mingle", options=options)
+    return build_mingle_in_room(params, seed=seed, name="mingle", options=options)
+
+
+def build_mingle_in_room(params: MingleParams, *, seed: int, name: str, options: dict) -> Scenario:
+    """`build_mingle`, growing the room by `ROOM_GROWTH` (at most `ROOM_RETRIES` times) while
+    the drawn party does not fit; the room actually used is the scenario's stage."""
+    params = dataclasses.replace(params, room_side=params.side())
+    for _ in range(ROOM_RETRIES):
+        try:
+            return build_mingle(params, seed=seed, name=name, options=options)
+        except NoFloorError:
+            params = dataclasses.replace(params, room_side=params.room_side * ROOM_GROWTH)
+    raise NoFloorError(
+        f"{name}: no room found for the drawn party (seed {seed}): {params.people} people still "
+        f"do not fit a {params.room_side:g} m room"
+    )

@@ -11,12 +11,11 @@ ranges cover both real datasets this project measures: SALSA's tight, noisy grou
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
-from scenarios.mingle import MingleParams, NoFloorError, build_mingle
+from scenarios.mingle import MingleParams, build_mingle_in_room
 from scenarios.registry import register
 from scenarios.scenario import Scenario, check_option
 
@@ -38,8 +37,6 @@ RANGES: dict[str, tuple[float, float]] = {
     "passers_by": (0, 3),  # people
 }
 _INTEGERS = ("max_group_size", "passers_by")
-ROOM_RETRIES = 10  # times the room grows when the drawn party does not fit
-ROOM_GROWTH = 1.1  # factor of each growth
 
 
 def draw_params(
@@ -103,16 +100,8 @@ def mingle_randomised(
         "drawn": {"people": people, **drawn},
     }
     party_seed = int(rng.integers(2**63 - 1))
-    for _ in range(ROOM_RETRIES):
-        try:
-            made = build_mingle(params, seed=party_seed, name=name, options=options)
-            break
-        except NoFloorError:
-            # The drawn groups are too wide for the drawn density: a larger room.
-            params = dataclasses.replace(params, room_side=params.room_side * ROOM_GROWTH)
-            drawn["room_side"] = params.room_side
-    else:  # pragma: no cover - the room grows ~2.6x over the retries
-        raise ValueError(f"{name}: no room found for the drawn party (seed {seed})")
+    made = build_mingle_in_room(params, seed=party_seed, name=name, options=options)
+    drawn["room_side"] = made.stage.room[0]
     return Scenario(
         name=name,
         seed=seed,
