@@ -1,4 +1,4 @@
-"""The data model: one instant of a social scene (`Frame`) and an ordered sequence of them (`Dataset`).
+"""The data model: one instant of a scene (`Frame`) and an ordered sequence of them (`Dataset`).
 
 One `Frame` type travels the whole pipeline: scenario script -> MuJoCo world -> ground truth ->
 robot's sensor model -> detector -> metrics -> report. Both records are frozen dataclasses whose
@@ -56,9 +56,9 @@ def _float_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
 
 
 def _check_yaw(name: str, yaw: np.ndarray) -> None:
-    finite = yaw[np.isfinite(yaw)]
-    if finite.size and np.max(np.abs(finite)) > math.pi + _YAW_TOLERANCE_RAD:
-        worst = float(finite[np.argmax(np.abs(finite))])
+    beyond = np.abs(yaw) > math.pi + _YAW_TOLERANCE_RAD  # NaN (a missing head) compares False
+    if beyond.any():
+        worst = float(yaw[np.argmax(np.where(beyond, np.abs(yaw), -1.0))])
         raise ValueError(
             f"{name} must be radians wrapped to [-pi, pi], got {worst:.6g} "
             "(wrap with reform.wrap_angle; values beyond 2*pi often mean degrees)"
@@ -103,14 +103,16 @@ class Frame:
                 raise ValueError(f"ids must be integers, got dtype {ids.dtype}")
         ids = ids.astype(np.int64)
         n = ids.size
-        unique, counts = np.unique(ids, return_counts=True)
-        if np.any(counts > 1):
-            raise ValueError(f"ids must be unique within a frame, got duplicates {unique[counts > 1].tolist()}")
+        if len(set(ids.tolist())) != n:
+            unique, counts = np.unique(ids, return_counts=True)
+            raise ValueError(
+                f"ids must be unique within a frame, got duplicates {unique[counts > 1].tolist()}"
+            )
         position = _float_array("position", self.position, (n, 2))
-        if not np.all(np.isfinite(position)):
+        if not np.isfinite(position).all():
             raise ValueError("position must be finite, got NaN or inf")
         yaw = _float_array("yaw", self.yaw, (n,))
-        if not np.all(np.isfinite(yaw)):
+        if not np.isfinite(yaw).all():
             raise ValueError("yaw must be finite, got NaN or inf")
         _check_yaw("yaw", yaw)
 
@@ -127,12 +129,15 @@ class Frame:
         if self.head_position is not None:
             head_position = _float_array("head_position", self.head_position, (n, 2))
             head_yaw = _float_array("head_yaw", self.head_yaw, (n,))
-            if np.any(np.isinf(head_position)) or np.any(np.isinf(head_yaw)):
-                raise ValueError("head_position and head_yaw must be finite or NaN (missing), got inf")
+            if np.isinf(head_position).any() or np.isinf(head_yaw).any():
+                raise ValueError(
+                    "head_position and head_yaw must be finite or NaN (missing), got inf"
+                )
             missing_pos = np.isnan(head_position)
-            if np.any(missing_pos[:, 0] != missing_pos[:, 1]) or np.any(
-                missing_pos[:, 0] != np.isnan(head_yaw)
-            ):
+            missing_yaw = np.isnan(head_yaw)
+            if (missing_pos[:, 0] != missing_pos[:, 1]).any() or (
+                missing_pos[:, 0] != missing_yaw
+            ).any():
                 raise ValueError("a head is either fully observed (x, y, yaw) or fully NaN")
             _check_yaw("head_yaw", head_yaw)
 
@@ -144,8 +149,10 @@ class Frame:
         object.__setattr__(self, "position", _readonly(position))
         object.__setattr__(self, "yaw", _readonly(yaw))
         object.__setattr__(self, "kinds", kinds)
-        object.__setattr__(self, "head_position", None if head_position is None else _readonly(head_position))
-        object.__setattr__(self, "head_yaw", None if head_yaw is None else _readonly(head_yaw))
+        if head_position is not None:
+            head_position, head_yaw = _readonly(head_position), _readonly(head_yaw)
+        object.__setattr__(self, "head_position", head_position)
+        object.__setattr__(self, "head_yaw", head_yaw)
         object.__setattr__(self, "groups", groups)
         try:
             object.__setattr__(self, "time", float(self.time))
@@ -244,7 +251,9 @@ def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[
             raise ValueError(f"groups[{g}] is empty")
         for m in members:
             if m not in known:
-                raise ValueError(f"groups[{g}] names person {m}, who is not in the frame (ids {sorted(known)})")
+                raise ValueError(
+                    f"groups[{g}] names person {m}, who is not in the frame (ids {sorted(known)})"
+                )
             if m in seen:
                 raise ValueError(f"groups must be disjoint, person {m} appears twice (groups[{g}])")
             seen.add(m)
