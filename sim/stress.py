@@ -586,36 +586,44 @@ def _scene_task(
     grid: StressGrid,
     axis: str,
     k: int,
-    episode: int,
     seed: int,
     detectors: Mapping[str, Any],
 ) -> list[tuple[str, int, int, _Scored | str]]:
+    """Every test episode of level ``k`` of a scene axis (one task: the detectors are unpacked
+    and compiled once per task)."""
     level = grid.levels(axis)[k]
-    notes = []
-    for attempt in range(MAX_REDRAWS + 1):
-        keys = (episode,) if attempt == 0 else (episode, attempt)
-        spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
-        try:
-            frames = _simulate(spec)
-        except ValueError as exc:  # the planner cannot lay out this party: draw another
-            notes.append(f"seed {spec.seed}: {exc}")
-            continue
-        return [(axis, k, episode, _Scored.noted(_score(frames, detectors), notes))]
-    return [(axis, k, episode, "; ".join(notes))]
+    out: list[tuple[str, int, int, _Scored | str]] = []
+    for episode in range(grid.seeds):
+        notes = []
+        for attempt in range(MAX_REDRAWS + 1):
+            keys = (episode,) if attempt == 0 else (episode, attempt)
+            spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
+            try:
+                frames = _simulate(spec)
+            except ValueError as exc:  # the planner cannot lay out this party: draw another
+                notes.append(f"seed {spec.seed}: {exc}")
+                continue
+            out.append((axis, k, episode, _Scored.noted(_score(frames, detectors), notes)))
+            break
+        else:
+            out.append((axis, k, episode, "; ".join(notes)))
+    return out
 
 
 def _cost(grid: StressGrid, task: tuple[Callable[..., Any], tuple[Any, ...]]) -> float:
-    """A rough relative cost of a task, to start the longest first (people x frames)."""
+    """A rough relative cost of a task (people x frames), to start the longest first."""
     function, args = task
     if function is _perturb_task:
         return len(grid.levels(args[1])) * BASE_PEOPLE
     axis, k = args[1], args[2]
     level = grid.levels(axis)[k]
     if axis == "groups":
-        return float(level)
-    if axis == "sensor":
-        return BASE_PEOPLE * (1.0 if level == "truth" else ROBOT_VIEW_COST)
-    return float(BASE_PEOPLE)
+        people = float(level)
+    elif axis == "sensor":
+        people = BASE_PEOPLE * (1.0 if level == "truth" else ROBOT_VIEW_COST)
+    else:
+        people = float(BASE_PEOPLE)
+    return people * grid.seeds
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1003,8 +1011,7 @@ def run_stress(
             )
     for name in scene_axes:
         for k in range(len(grid.levels(name))):
-            for e in range(grid.seeds):
-                tasks.append((_scene_task, (grid, name, k, e, seed, detectors)))
+            tasks.append((_scene_task, (grid, name, k, seed, detectors)))
     # Longest first, so that no long task starts last; the results do not depend on the order.
     tasks.sort(key=lambda task: -_cost(grid, task))
     say(f"scoring {len(tasks)} task(s) on {min(workers, max(len(tasks), 1))} worker(s)")

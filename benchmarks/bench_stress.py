@@ -1,0 +1,112 @@
+"""Where a stress-test point spends its time: one test episode of the SALSA-like party.
+
+For one simulated episode (mingle, 18 guests, 600 s at 0.5 Hz = 300 frames) this times, as
+medians over repeats: simulating it, perturbing it (position and yaw noise and dropouts,
+``reform.perturb``), predicting with each detector, scoring (``reform.evaluate``) and the
+two-stage bootstrap (1000 resamples, ``reform.bootstrap``). The baseline, measured in the same
+run, is ``reform.evaluate`` on the same frames: every figure is printed as a ratio to it, so the
+table reads the same on a busy or an idle machine. Also prints the CPU seconds of the small grid
+end to end (``run_stress("small", jobs=1)``).
+
+    python benchmarks/bench_stress.py [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from reform import evaluate
+from reform.bootstrap import bootstrap_weights, frame_intervals
+from reform.perturb import Perturbation
+from sim.episode import simulate_episode
+from sim.stress import DETECTORS, GRIDS, run_stress, train_detectors, training_frames
+
+
+def _median(function, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.process_time()
+        function()
+        times.append(time.process_time() - start)
+    return statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+
+    print("training the detectors on a small synthetic set ...", flush=True)
+    detectors = train_detectors(
+        training_frames(seed=0, episodes=1, duration=300.0, rate=0.5, jobs=1), jobs=1
+    )
+
+    def simulate():
+        return simulate_episode("mingle", seed=11, duration=600.0, rate=0.5).dataset.frames
+
+    frames = simulate()
+    perturbation = Perturbation(position_noise=0.2, yaw_noise=0.3, dropout=0.2)
+    predictions = detectors["bagged-trees"].predict(frames)
+    evaluation = evaluate(frames, predictions)
+    weights = bootstrap_weights(evaluation.sequence, rng=np.random.default_rng(0))
+    scores = evaluation.at("2/3")
+
+    rows = [
+        ("reform.evaluate (baseline)", _median(lambda: evaluate(frames, predictions), args.repeats))
+    ]
+    rows.append(("simulate the episode", _median(simulate, args.repeats)))
+    rows.append(
+        (
+            "perturb every frame",
+            _median(lambda: perturbation.apply_all(frames, np.random.default_rng(0)), args.repeats),
+        )
+    )
+    for name in DETECTORS:
+        rows.append(
+            (f"predict: {name}", _median(lambda d=detectors[name]: d.predict(frames), args.repeats))
+        )
+    rows.append(
+        (
+            "bootstrap weights (1000 resamples)",
+            _median(
+                lambda: bootstrap_weights(evaluation.sequence, rng=np.random.default_rng(0)),
+                args.repeats,
+            ),
+        )
+    )
+    rows.append(
+        (
+            "bootstrap intervals of one detector",
+            _median(
+                lambda: frame_intervals(
+                    scores.frame_precision, scores.frame_recall, weights=weights, sequences=1
+                ),
+                args.repeats,
+            ),
+        )
+    )
+    baseline = rows[0][1]
+    print(
+        f"\none episode: {len(frames)} frames of {frames[0].n_people} people; "
+        f"CPU seconds, median of {args.repeats}"
+    )
+    width = max(len(name) for name, _ in rows)
+    for name, seconds in rows:
+        print(f"  {name:<{width}}  {seconds:8.4f} s  {seconds / baseline:8.1f} x baseline")
+
+    start = time.perf_counter()
+    cpu = time.process_time()
+    results = run_stress(GRIDS["small"], seed=0, jobs=1)
+    scored = sum(p.frames for a in results.axes for p in a.points)
+    print(
+        f"\nrun_stress('small', jobs=1): {time.perf_counter() - start:.1f} s wall, "
+        f"{time.process_time() - cpu:.1f} s CPU, {scored} frames scored per detector"
+    )
+
+
+if __name__ == "__main__":
+    main()
