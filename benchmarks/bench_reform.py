@@ -181,7 +181,6 @@ def stages(model: Reform, n: int, n_frames: int) -> dict[str, float]:
     compiled = model._pair_classifier()
     step = max(1, CHUNK_PAIRS // (n * (n - 1) // 2))
     out = dict.fromkeys(("stack", "features", "classify", "reconstruct", "partitions"), 0.0)
-    spans: dict = {}
     for start in range(0, n_frames, step):
         chunk = frames[start : start + step]
         count = len(chunk)
@@ -196,7 +195,7 @@ def stages(model: Reform, n: int, n_frames: int) -> dict[str, float]:
         t3 = time.perf_counter()
         groups = batch_greedy_labels(labels, n)
         t4 = time.perf_counter()
-        _partitions(groups, ids, spans)
+        _partitions(groups, ids)
         t5 = time.perf_counter()
         for key, seconds in zip(out, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4), strict=True):
             out[key] += seconds

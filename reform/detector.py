@@ -175,13 +175,12 @@ class Reform(BaseEstimator):
                 continue
             i, j = pair_indices(n)
             step = max(1, CHUNK_PAIRS // i.size)
-            spans: dict[bytes, Any] = {}
             for start in range(0, len(positions), step):
                 chunk = positions[start : start + step]
                 ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
                 if partitions:
                     labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
-                    for k, partition in zip(chunk, _partitions(labels, ids, spans), strict=True):
+                    for k, partition in zip(chunk, _partitions(labels, ids), strict=True):
                         out[k] = partition
                 if pairs:
                     for k, row in zip(chunk, pair_labels, strict=True):
@@ -357,33 +356,30 @@ def _by_size(frames: list[Frame]) -> dict[int, list[int]]:
     return groups
 
 
-def _partitions(
-    labels: np.ndarray, ids: np.ndarray, spans: dict[bytes, Any] | None = None
-) -> list[Partition]:
+def _partitions(labels: np.ndarray, ids: np.ndarray) -> list[Partition]:
     """Partitions from (F, n) group labels and (F, n) ids, in id order.
 
     Sorting each frame's people by label lines its groups up (a group's label is its first
-    member, so groups come ordered by their smallest id); the frame's partition is then its id
-    tuple cut where the label changes. Each cut pattern gets one ``operator.itemgetter`` of
-    slices, kept in ``spans``, a cache the caller may share across calls.
+    member, so groups come ordered by their smallest id). Over the whole chunk, the sorted ids
+    form one tuple and every group is a slice of it: one ``operator.itemgetter`` call cuts all
+    groups, and each frame's partition is a slice of the tuple of groups.
     """
     n_frames, n = labels.shape
-    spans = {} if spans is None else spans
+    if n_frames == 0:
+        return []
     order = np.argsort(labels, axis=1, kind="stable")
     sorted_labels = np.take_along_axis(labels, order, axis=1)
     sorted_ids = np.take_along_axis(ids, order, axis=1)
-    packed = np.packbits(sorted_labels[:, 1:] != sorted_labels[:, :-1], axis=1)
-    width = packed.shape[1]
-    flat = packed.tobytes()
-    patterns = [flat[k : k + width] for k in range(0, n_frames * width, width)]
-    out: list[Partition] = []
+    opens = np.ones((n_frames, n), dtype=bool)  # a group starts here
+    np.not_equal(sorted_labels[:, 1:], sorted_labels[:, :-1], out=opens[:, 1:])
+    starts = np.flatnonzero(opens)
+    ends = np.append(starts[1:], n_frames * n)
+    frame_end = np.cumsum(np.count_nonzero(opens, axis=1)).tolist()
     with _collector_paused():  # tuples of ints cannot form cycles: spare the collector's scans
-        for pattern, row in zip(patterns, map(tuple, sorted_ids.tolist()), strict=True):
-            cut = spans.get(pattern)
-            if cut is None:
-                cut = spans[pattern] = _cutter(pattern, n)
-            out.append(cut(row))
-    return out
+        flat = tuple(sorted_ids.ravel().tolist())
+        cut = operator.itemgetter(*map(slice, starts.tolist(), ends.tolist()))
+        groups = cut(flat) if starts.size > 1 else (cut(flat),)
+        return [groups[a:b] for a, b in zip([0, *frame_end[:-1]], frame_end, strict=True)]
 
 
 @contextlib.contextmanager
@@ -396,16 +392,6 @@ def _collector_paused() -> Iterator[None]:
     finally:
         if enabled:
             gc.enable()
-
-
-def _cutter(pattern: bytes, n: int) -> Any:
-    """``row -> tuple of groups`` for one packed cut pattern (bit k set: a group ends after k)."""
-    value = int.from_bytes(pattern, "big")
-    top = 8 * len(pattern) - 1  # np.packbits puts element 0 in the highest bit
-    edges = [0, *(k + 1 for k in range(n - 1) if value >> (top - k) & 1), n]
-    if len(edges) == 2:
-        return lambda row: (row,)
-    return operator.itemgetter(*(slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)))
 
 
 def _summary(frames: list[Frame], targets: np.ndarray) -> dict[str, Any]:
