@@ -116,7 +116,9 @@ def score_bars(
         ax.set_title(title)
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles, strict=True))
-    ax.legend(unique.values(), unique.keys(), fontsize=7, loc="lower left", framealpha=0.9)
+    ax.legend(
+        unique.values(), unique.keys(), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0)
+    )
     ax.grid(axis="y", alpha=0.3)
     return _save(fig, path)
 

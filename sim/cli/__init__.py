@@ -10,6 +10,7 @@ from sim.cli import (
     _calibrate,
     _characterize,
     _data,
+    _demo,
     _detect,
     _evaluate,
     _experiment,
@@ -27,6 +28,7 @@ from sim.cli._common import CliError
 
 # Each module exposes ``register(subparsers)``, adding its subcommand(s) with a ``handler``.
 _COMMANDS = (
+    _demo,
     _data,
     _evaluate,
     _detect,

@@ -1,0 +1,632 @@
+"""The one-command demo (``reform-sim demo``): the whole toolkit on an embedded default, in minutes.
+
+Stages, each announced on stderr:
+
+1. **Scenarios.** Every registered scenario (``scenarios.names()``) is simulated briefly in
+   MuJoCo (ground truth).
+2. **Synthetic training set.** ``mingle`` and ``word-improv`` episodes generated as
+   hive-partitioned Parquet (:func:`sim.generate.generate_dataset`) under ``OUT/synthetic``,
+   with the sim-to-real recipe of :mod:`sim.sim2real`: tracker noise on ``mingle`` calibrated on
+   SALSA's training split when SALSA is at hand, sources balanced by pairs.
+3. **Training.** REFORM with the paper's three classifiers on the synthetic set (their
+   ready-made hyper-parameters); Bagged Trees is saved as ``OUT/model.skops``. With SALSA at
+   hand, Bagged Trees trained on SALSA's training split is added for reference.
+4. **Evaluation.** REFORM and GCFF (the paper's setting) on held-back synthetic episodes (seeds
+   never trained on) and, when the datasets are found, on the SALSA test split and every
+   annotated Babble frame.
+5. **Stress tests** on the small grid (:func:`sim.stress.run_stress`) with the demo's models.
+6. **The paper's HRI experiment re-enacted** (:func:`sim.hri_experiment.hri_experiment`).
+7. **Recordings and report.** One Rerun ``.rrd`` per scenario (people, groups, REFORM's and
+   GCFF's detections, events), one per evaluation, the stress curves and the HRI scenes; a
+   Markdown report with tables and PNG plots (``OUT/report.md``) and every number in
+   ``OUT/results.json``.
+
+The same seed gives the same numbers; a second run in the same folder reuses the generated
+episodes. ``quick=True`` shrinks every budget (for tests).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.frame import Dataset, Frame
+from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
+from sim.sim2real import SyntheticSource
+
+__all__ = [
+    "DEFAULT_OUT",
+    "DemoBudget",
+    "DemoResult",
+    "FULL",
+    "QUICK",
+    "run_demo",
+]
+
+DEFAULT_OUT = "demo-output"  # the output folder, relative to the working directory
+REPORT = "report.md"
+RESULTS = "results.json"
+MODEL = "model.skops"
+RECORDINGS = "recordings"
+FIGURES = "figures"
+SYNTHETIC = "synthetic"
+HELD_BACK_SEED_OFFSET = 1_000_003  # held-back episodes: master seed + this (never trained on)
+CLASSIFIERS = ("bagged-trees", "weighted-knn", "logistic-regression")
+SAVED_CLASSIFIER = "bagged-trees"  # the paper's best; saved as model.skops
+GCFF_LABEL = "GCFF (paper: 70 cm, 30000 cm²)"
+CLASSIFIER_TEXT = {
+    "bagged-trees": "Bagged Trees",
+    "weighted-knn": "Weighted KNN",
+    "logistic-regression": "Logistic Regression",
+}
+
+
+@dataclass(frozen=True)
+class DemoBudget:
+    """How much the demo simulates and scores.
+
+    Attributes:
+        name: ``"full"`` or ``"quick"``.
+        scenario_s: seconds of each registered scenario simulated for its recording.
+        train: the synthetic training set's sources.
+        held_back: the held-back synthetic sources (another master seed).
+        noise_position_grid: tracker-noise position levels calibrated over, metres.
+        noise_yaw_grid: tracker-noise yaw levels, radians.
+        stress_grid: a name of :data:`sim.stress.GRIDS` or a ``StressGrid``.
+        stress_axes: stress axes run (None: all).
+        hri_seeds: episodes per HRI scene.
+        hri_views: views of the HRI experiment.
+        resamples: bootstrap resamples (stress, HRI).
+        real_frames: annotated real frames scored at most per dataset (None: all), evenly
+            spaced in time.
+    """
+
+    name: str
+    scenario_s: float
+    train: tuple[SyntheticSource, ...]
+    held_back: tuple[SyntheticSource, ...]
+    noise_position_grid: tuple[float, ...]
+    noise_yaw_grid: tuple[float, ...]
+    stress_grid: Any
+    stress_axes: tuple[str, ...] | None
+    hri_seeds: int
+    hri_views: tuple[str, ...]
+    resamples: int
+    real_frames: int | None = None
+
+
+FULL = DemoBudget(
+    name="full",
+    scenario_s=60.0,
+    train=(
+        SyntheticSource("mingle", episodes=4, duration=300.0, tracker_noise=True),
+        SyntheticSource("word-improv", episodes=6),
+    ),
+    held_back=(
+        SyntheticSource("mingle", episodes=2, duration=300.0),
+        SyntheticSource("word-improv", episodes=2),
+    ),
+    noise_position_grid=(0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3),
+    noise_yaw_grid=(0.0, 0.2, 0.4, 0.6, 0.8, 1.0),
+    stress_grid="small",
+    stress_axes=None,
+    hri_seeds=2,
+    hri_views=("truth", "robot"),
+    resamples=200,
+)
+
+QUICK = DemoBudget(
+    name="quick",
+    scenario_s=15.0,
+    train=(
+        SyntheticSource("mingle", episodes=1, duration=90.0, rate=0.5, tracker_noise=True),
+        SyntheticSource("word-improv", episodes=1, duration=240.0, rate=0.5),
+    ),
+    held_back=(
+        SyntheticSource("mingle", episodes=1, duration=60.0, rate=0.5),
+        SyntheticSource("word-improv", episodes=1, duration=120.0, rate=0.5),
+    ),
+    noise_position_grid=(0.0, 0.15),
+    noise_yaw_grid=(0.0, 0.4),
+    stress_grid="small",
+    stress_axes=("position-noise",),
+    hri_seeds=1,
+    hri_views=("truth",),
+    resamples=50,
+    real_frames=60,
+)
+
+
+@dataclass(frozen=True)
+class DemoResult:
+    """What the demo did and wrote.
+
+    Attributes:
+        out_dir: the output folder.
+        report: the Markdown report.
+        results: the JSON of every number.
+        model: the saved REFORM model (skops).
+        recordings: every ``.rrd`` written.
+        figures: every PNG written.
+        scores: ``(detector, dataset) -> Evaluation.to_json`` of every detector scored.
+        timings: seconds per stage and in total.
+        datasets: the real datasets found (``"salsa"``, ``"babble"``).
+    """
+
+    out_dir: Path
+    report: Path
+    results: Path
+    model: Path
+    recordings: tuple[Path, ...]
+    figures: tuple[Path, ...]
+    scores: Mapping[tuple[str, str], Mapping[str, Any]]
+    timings: Mapping[str, float]
+    datasets: tuple[str, ...] = field(default=())
+
+
+class _Stages:
+    """Announces stages on a callback and times them."""
+
+    def __init__(self, total: int, say: Callable[[str], None]) -> None:
+        self.total = total
+        self.say = say
+        self.index = 0
+        self.started = time.perf_counter()
+        self.timings: dict[str, float] = {}
+        self._name: str | None = None
+        self._t0 = 0.0
+
+    def begin(self, name: str, text: str) -> None:
+        self.end()
+        self.index += 1
+        self._name, self._t0 = name, time.perf_counter()
+        elapsed = time.perf_counter() - self.started
+        self.say(f"[{self.index}/{self.total}] {text}  (at {elapsed:.0f} s)")
+
+    def end(self) -> None:
+        if self._name is not None:
+            self.timings[self._name] = time.perf_counter() - self._t0
+            self._name = None
+
+
+def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = True) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(
+        iterable,
+        desc=desc,
+        total=total,
+        file=sys.stderr,
+        disable=not show,
+        dynamic_ncols=True,
+        leave=False,
+    )
+
+
+def _find_datasets(datasets: str | os.PathLike[str] | None) -> dict[str, Dataset]:
+    """SALSA and Babble under ``datasets`` (``salsa/``, ``babble/``), those present."""
+    from reform.datasets import load_babble, load_salsa
+
+    found: dict[str, Dataset] = {}
+    if datasets is None:
+        return found
+    root = Path(datasets)
+    if not root.is_dir():
+        raise FileNotFoundError(f"datasets: {root} is not a folder (expected salsa/ and babble/)")
+    if (root / "salsa").is_dir():
+        found["salsa"] = load_salsa(root / "salsa")
+    if (root / "babble").is_dir():
+        found["babble"] = load_babble(root / "babble")
+    return found
+
+
+def _even(frames: Sequence[Frame], most: int | None) -> tuple[Frame, ...]:
+    frames = tuple(frames)
+    if most is None or len(frames) <= most:
+        return frames
+    keep = np.unique(np.linspace(0, len(frames) - 1, most).round().astype(int))
+    return tuple(frames[k] for k in keep)
+
+
+def _snapshot_index(frames: Sequence[Frame]) -> int:
+    """The frame to draw: the one with the most F-formations, latest among equals."""
+    return max(range(len(frames)), key=lambda k: (len(frames[k].fformations()), k))
+
+
+def _scores_row(evaluation: Evaluation) -> dict[str, float]:
+    two, one = evaluation.at(T_TWO_THIRDS), evaluation.at(T_ONE)
+    return {
+        "precision": two.precision,
+        "recall": two.recall,
+        "f1": two.f1,
+        "f1_t1": one.f1,
+        "pairwise_accuracy": evaluation.pairwise_accuracy,
+    }
+
+
+def run_demo(
+    *,
+    out_dir: str | os.PathLike[str] = DEFAULT_OUT,
+    datasets: str | os.PathLike[str] | None = None,
+    seed: int = 0,
+    jobs: int | None = None,
+    quick: bool = False,
+    progress: Callable[[str], None] | None = None,
+    progress_bars: bool = True,
+) -> DemoResult:
+    """Runs the demo and writes its report, recordings, model and figures into ``out_dir``.
+
+    Args:
+        out_dir: the output folder (created; generated episodes in it are reused).
+        datasets: folder holding ``salsa/`` and/or ``babble/``; None or missing ones are
+            skipped.
+        seed: master seed of everything drawn.
+        jobs: worker processes (None: every core).
+        quick: tiny budgets (:data:`QUICK`) instead of :data:`FULL`.
+        progress: ``callable(str)`` told each stage (default: print to stderr).
+        progress_bars: tqdm bars on stderr.
+
+    Returns:
+        The :class:`DemoResult`.
+    """
+    import scenarios
+    from reform.detector import Reform
+    from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
+    from reform.gcff import Gcff
+    from reform.majority import Majority
+    from reform.persistence import save_model
+    from reform.splits import time_split
+    from sim.episode import simulate_episode
+    from sim.recording import record_episode, record_evaluation
+    from sim.sim2real import balance_pairs, calibrate_tracker_noise, count_pairs, generate_sources
+
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ValueError(f"jobs must be None or an int >= 1, got {jobs!r}")
+    budget = QUICK if quick else FULL
+    say = progress or (lambda line: print(line, file=sys.stderr, flush=True))
+    out = Path(out_dir)
+    real = _find_datasets(datasets)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / RECORDINGS).mkdir(exist_ok=True)
+    (out / FIGURES).mkdir(exist_ok=True)
+    stages = _Stages(7, say)
+    recordings: list[Path] = []
+    figures: list[Path] = []
+    say(
+        f"reform-sim demo ({budget.name} budget, seed {seed}) -> {out}; real data: "
+        + (", ".join(sorted(real)) if real else "none found")
+    )
+
+    # 1. Every registered scenario, briefly.
+    names = scenarios.names()
+    stages.begin("scenarios", f"simulating every registered scenario ({len(names)}) briefly")
+    episodes = {}
+    for k, name in enumerate(_bar(names, desc="scenarios", show=progress_bars)):
+        made = scenarios.make(name, seed=seed + k)
+        duration = min(made.duration, budget.scenario_s)
+        episodes[name] = simulate_episode(made, duration=duration)
+
+    # 2. The synthetic training set.
+    stages.begin("synthetic", "generating the synthetic training set (Parquet shards)")
+    train_frames = generate_sources(
+        budget.train, root=out / SYNTHETIC / "train", seed=seed, n_jobs=jobs, progress=progress_bars
+    )
+    salsa_train: tuple[Frame, ...] = ()
+    salsa_test: tuple[Frame, ...] = ()
+    if "salsa" in real:
+        salsa_train, salsa_test = time_split(real["salsa"].annotated(), 0.6)
+    noise = None
+    if salsa_train and any(s.tracker_noise for s in budget.train):
+        noisy_sources = [s for s in budget.train if s.tracker_noise]
+        pooled = [f for s in noisy_sources for f in train_frames[s.scenario]]
+        noise = calibrate_tracker_noise(
+            pooled,
+            salsa_train,
+            seed=seed,
+            position_grid=budget.noise_position_grid,
+            yaw_grid=budget.noise_yaw_grid,
+        )
+        for k, source in enumerate(budget.train):
+            if source.tracker_noise:
+                rng = np.random.default_rng([seed, k])
+                train_frames[source.scenario] = tuple(
+                    noise.perturbation().apply_all(train_frames[source.scenario], rng)
+                )
+    kept = balance_pairs(train_frames)
+    synthetic = tuple(f for frames in kept.values() for f in frames)
+    training_summary = {
+        name: {"frames": len(frames), "pairs": count_pairs(frames)} for name, frames in kept.items()
+    }
+
+    # 3. Training.
+    stages.begin("training", f"training REFORM on {len(synthetic)} synthetic frames")
+    models: dict[str, Any] = {}
+    for name in _bar(CLASSIFIERS, desc="classifiers", show=progress_bars):
+        models[name] = Reform(_classifier(name, jobs)).fit(synthetic)
+    model_path = save_model(models[SAVED_CLASSIFIER], out / MODEL)
+    salsa_model = None
+    if salsa_train:
+        salsa_model = Reform(_classifier(SAVED_CLASSIFIER, jobs)).fit(salsa_train)
+
+    # 4. Evaluation.
+    stages.begin("evaluation", "scoring REFORM and GCFF on held-back episodes and real data")
+    held = generate_sources(
+        budget.held_back,
+        root=out / SYNTHETIC / "held-back",
+        seed=seed + HELD_BACK_SEED_OFFSET,
+        n_jobs=jobs,
+        progress=progress_bars,
+    )
+    tests: dict[str, tuple[Frame, ...]] = {
+        "held-back synthetic": tuple(f for frames in held.values() for f in frames)
+    }
+    if salsa_test:
+        tests["SALSA test split"] = _even(salsa_test, budget.real_frames)
+    if "babble" in real:
+        tests["Babble"] = _even(real["babble"].annotated(), budget.real_frames)
+    gcff = Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)
+    detectors: dict[str, Any] = {
+        f"REFORM {CLASSIFIER_TEXT[n]} (synthetic)": models[n] for n in CLASSIFIERS
+    }
+    if salsa_model is not None:
+        detectors[f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (SALSA train)"] = salsa_model
+    detectors[GCFF_LABEL] = gcff
+    detectors["Majority"] = Majority()
+    scores: dict[tuple[str, str], dict[str, Any]] = {}
+    evaluations: dict[tuple[str, str], Evaluation] = {}
+    predictions: dict[tuple[str, str], list[Any]] = {}
+    work = [(d, t) for t in tests for d in detectors]
+    for detector, dataset in _bar(work, desc="scoring", show=progress_bars):
+        frames = tests[dataset]
+        predicted = detectors[detector].predict(frames)
+        evaluation = evaluate(frames, predicted)
+        predictions[(detector, dataset)] = predicted
+        evaluations[(detector, dataset)] = evaluation
+        scores[(detector, dataset)] = evaluation.to_json(detector=detector, dataset=dataset)
+
+    # 5. Stress tests.
+    stages.begin("stress", "stress tests on the small grid (noise, dropouts, crowds, sensor)")
+    from sim.stress import GCFF as STRESS_GCFF
+    from sim.stress import run_stress
+    from sim.stress_report import record as record_stress
+    from sim.stress_report import write_report as write_stress
+
+    stress = run_stress(
+        budget.stress_grid,
+        seed=seed,
+        jobs=jobs,
+        axes=budget.stress_axes,
+        detectors={**{n: models[n] for n in CLASSIFIERS}, STRESS_GCFF: gcff},
+        progress=lambda line: None,
+    )
+    stress_files = write_stress(stress, out / "stress", command=_command(out, datasets, seed))
+    figures += [p for k, p in stress_files.items() if k.startswith("plot:")]
+    recordings.append(record_stress(stress, out / RECORDINGS / "stress.rrd"))
+
+    # 6. The HRI re-enactment.
+    stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
+    from sim.hri_experiment import HriDetector, hri_experiment, record_scenes
+
+    hri_detectors = [
+        HriDetector(
+            f"{SAVED_CLASSIFIER}@synthetic",
+            "REFORM bagged trees, synthetic-trained",
+            "synthetic",
+            models[SAVED_CLASSIFIER],
+        )
+    ]
+    if salsa_model is not None:
+        hri_detectors.append(
+            HriDetector(
+                f"{SAVED_CLASSIFIER}@salsa",
+                "REFORM bagged trees, SALSA-trained",
+                "SALSA train",
+                salsa_model,
+            )
+        )
+    hri_detectors += [
+        HriDetector("gcff@paper", "GCFF, paper setting (70 cm, 30000 cm²)", "-", gcff),
+        HriDetector("majority", "Majority (no groups)", "-", Majority()),
+    ]
+    # What the HRI page says about the SALSA-trained model (the synthetic one is described in
+    # the demo's report: its training set is not sim.stress's).
+    hri_training: dict[str, Any] = {}
+    if salsa_model is not None:
+        hri_training["salsa"] = {
+            "frames": len(salsa_train),
+            "train_fraction": 0.6,
+            "pairs": salsa_model.training_summary_["pairs"],
+        }
+    hri = hri_experiment(
+        seed=seed,
+        seeds=budget.hri_seeds,
+        views=budget.hri_views,
+        resamples=budget.resamples,
+        detectors=hri_detectors,
+        training=hri_training,
+    )
+    command = _command(out, datasets, seed, quick=quick)
+    with _atomic_text(out / "hri.md") as handle:
+        handle.write(hri.to_markdown(command=command))
+    recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
+
+    # 7. Recordings, figures, report.
+    stages.begin("report", "writing recordings (.rrd), figures (PNG) and the report")
+    from sim.figures import Bar, score_bars, top_view
+
+    reform_main = models[SAVED_CLASSIFIER]
+    scenario_rows = []
+    for name in _bar(names, desc="recordings", show=progress_bars):
+        episode = episodes[name]
+        frames = episode.truth
+        reform_parts = reform_main.predict(frames)
+        gcff_parts = gcff.predict(frames)
+        path = out / RECORDINGS / f"scenario-{name}.rrd"
+        recorded = record_episode(
+            path,
+            frames,
+            detections={"reform": reform_parts, "gcff": gcff_parts},
+            events=episode.events,
+            model=episode.model,
+            seed=episode.scenario.seed,
+            name=f"scenario {name}",
+        )
+        recordings.append(path)
+        k = _snapshot_index(frames)
+        snapshot = frames[k]
+        figures.append(
+            top_view(
+                snapshot,
+                {
+                    "ground truth": snapshot.partition(),
+                    "REFORM": reform_parts[k],
+                    "GCFF": gcff_parts[k],
+                },
+                out / FIGURES / f"scenario-{name}.png",
+                title=f"{name}, t = {snapshot.time:g} s",
+            )
+        )
+        evaluations_here = recorded.evaluations
+        scenario_rows.append(
+            {
+                "scenario": name,
+                "description": episode.scenario.description,
+                "people": max(f.n_people for f in frames),
+                "seconds": len(frames) / episode.dataset.metadata["rate_hz"],
+                "frames": len(frames),
+                "fformations_per_frame": float(np.mean([len(f.fformations()) for f in frames])),
+                "reform_f1": _f1(evaluations_here.get("reform")),
+                "gcff_f1": _f1(evaluations_here.get("gcff")),
+                "recording": str(path.relative_to(out)),
+                "figure": f"{FIGURES}/scenario-{name}.png",
+            }
+        )
+    main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
+    for dataset, frames in tests.items():
+        slug = dataset.lower().replace(" ", "-")
+        path = out / RECORDINGS / f"evaluation-{slug}.rrd"
+        record_evaluation(
+            path,
+            frames,
+            {
+                "reform": predictions[(main_label, dataset)],
+                "gcff": predictions[(GCFF_LABEL, dataset)],
+            },
+            {
+                "reform": evaluations[(main_label, dataset)],
+                "gcff": evaluations[(GCFF_LABEL, dataset)],
+            },
+            name=f"evaluation {dataset}",
+            dataset=slug,
+            seed=seed,
+            classifier=reform_main.classifier_,
+        )
+        recordings.append(path)
+    bars = {
+        dataset: [
+            Bar(detector, 100 * evaluations[(detector, dataset)].at(T_TWO_THIRDS).f1)
+            for detector in detectors
+            if detector != "Majority"
+        ]
+        for dataset in tests
+    }
+    figures.append(
+        score_bars(
+            bars,
+            out / FIGURES / "scores.png",
+            ylabel="F1 at T = 2/3 (%)",
+            title="REFORM trained on synthetic crowds, and GCFF",
+        )
+    )
+    stages.end()
+    timings = dict(stages.timings)
+    timings["total"] = time.perf_counter() - stages.started
+    result = DemoResult(
+        out_dir=out,
+        report=out / REPORT,
+        results=out / RESULTS,
+        model=model_path,
+        recordings=tuple(recordings),
+        figures=tuple(figures),
+        scores=scores,
+        timings=timings,
+        datasets=tuple(sorted(real)),
+    )
+    from sim.demo_report import demo_json, demo_markdown
+
+    context = {
+        "budget": budget,
+        "seed": seed,
+        "command": command,
+        "scenarios": scenario_rows,
+        "training": training_summary,
+        "noise": noise,
+        "tests": {d: len(f) for d, f in tests.items()},
+        "detectors": list(detectors),
+        "evaluations": {k: _scores_row(v) for k, v in evaluations.items()},
+        "stress": stress,
+        "stress_plots": {
+            k.split(":", 1)[1]: str(p.relative_to(out))
+            for k, p in stress_files.items()
+            if k.startswith("plot:")
+        },
+        "hri": hri,
+        "machine": {"cores": os.cpu_count(), "platform": platform.platform()},
+    }
+    with _atomic_text(result.report) as handle:
+        handle.write(demo_markdown(result, context))
+    with _atomic_text(result.results) as handle:
+        json.dump(demo_json(result, context), handle, indent=1, allow_nan=False)
+        handle.write("\n")
+    return replace(result, timings={**timings, "total": time.perf_counter() - stages.started})
+
+
+def _classifier(name: str, jobs: int | None) -> Any:
+    """A ready-made classifier; bagged trees grow their trees on ``jobs`` processes (the same
+    trees whatever the number: scikit-learn draws every tree's seed before splitting the
+    work)."""
+    from reform.classifiers import BAGGED_TREES, make_classifier
+
+    estimator = make_classifier(name)
+    if name == BAGGED_TREES:
+        estimator.set_params(n_jobs=jobs if jobs is not None else -1)
+    return estimator
+
+
+def _f1(evaluation: Evaluation | None) -> float | None:
+    if evaluation is None or evaluation.n_frames == 0:
+        return None
+    return float(evaluation.at(T_TWO_THIRDS).f1)
+
+
+def _atomic_text(path: Path) -> Any:
+    from reform.atomic import atomic_open
+
+    return atomic_open(path)
+
+
+def _command(
+    out: Path, datasets: str | os.PathLike[str] | None, seed: int, *, quick: bool = False
+) -> str:
+    import shlex
+
+    words = ["reform-sim", "demo"]
+    if datasets is not None:
+        words += ["--datasets", str(datasets)]
+    words += ["--out", str(out)]
+    if seed:
+        words += ["--seed", str(seed)]
+    if quick:
+        words.append("--quick")
+    return shlex.join(words)

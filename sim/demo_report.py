@@ -1,0 +1,281 @@
+"""The demo's report: Markdown with tables and plots (``report.md``) and every number as JSON."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from reform.report import render_table
+
+if TYPE_CHECKING:
+    from sim.demo import DemoResult
+
+__all__ = ["demo_json", "demo_markdown"]
+
+_STAGE_TEXT = {
+    "scenarios": "simulate every registered scenario",
+    "synthetic": "generate the synthetic training set",
+    "training": "train REFORM",
+    "evaluation": "score REFORM and GCFF",
+    "stress": "stress tests (small grid)",
+    "hri": "HRI re-enactment",
+    "report": "recordings, figures, report",
+    "total": "total",
+}
+
+
+def _pct(value: float | None) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{100.0 * value:.1f}"
+
+
+def _rel(result: DemoResult, path: Any) -> str:
+    from pathlib import Path
+
+    try:
+        return str(Path(path).relative_to(result.out_dir))
+    except ValueError:
+        return str(path)
+
+
+def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
+    """The report page: what ran, the scenarios, the training set, the scores, the stress
+    curves, the HRI re-enactment and where every file is."""
+    budget = context["budget"]
+    lines = ["# reform-sim demo", ""]
+    lines += [
+        "Produced by:",
+        "",
+        "```sh",
+        context["command"],
+        "```",
+        "",
+        f"Budget `{budget.name}`, seed {context['seed']}, real datasets: "
+        + (", ".join(result.datasets) if result.datasets else "none found")
+        + f". Machine: {context['machine']['cores']} cores, {context['machine']['platform']}.",
+        "",
+        "## What ran",
+        "",
+        render_table(
+            ["stage", "seconds"],
+            [[_STAGE_TEXT.get(k, k), f"{v:.1f}"] for k, v in result.timings.items()],
+            style="markdown",
+        ),
+        "",
+        "## Scenarios",
+        "",
+        "Every registered scenario, simulated briefly in MuJoCo (ground truth), with the groups "
+        "REFORM (Bagged Trees, trained on the synthetic set below) and GCFF (the paper's "
+        "setting) find. F1 at T = 2/3 over the episode's annotated frames (`-`: no "
+        "F-formation to find and none found scores no frame). Open a recording with "
+        "`rerun <file>`.",
+        "",
+    ]
+    rows = [
+        [
+            f"`{s['scenario']}`",
+            s["description"],
+            str(s["people"]),
+            f"{s['seconds']:g}",
+            f"{s['fformations_per_frame']:.2f}",
+            _pct(s["reform_f1"]),
+            _pct(s["gcff_f1"]),
+            f"[{s['recording']}]({s['recording']})",
+        ]
+        for s in context["scenarios"]
+    ]
+    lines += [
+        render_table(
+            [
+                "scenario",
+                "what it is",
+                "agents",
+                "seconds",
+                "groups / frame",
+                "REFORM F1",
+                "GCFF F1",
+                "recording",
+            ],
+            rows,
+            style="markdown",
+        ),
+        "",
+    ]
+    for s in context["scenarios"]:
+        lines += [f"![{s['scenario']}]({s['figure']})", ""]
+    lines += ["## Synthetic training set", ""]
+    training = context["training"]
+    lines += [
+        render_table(
+            ["scenario", "episodes", "frames kept", "pairs kept"],
+            [
+                [
+                    f"`{src.scenario}`",
+                    str(src.episodes),
+                    f"{training[src.scenario]['frames']:,}",
+                    f"{training[src.scenario]['pairs']:,}",
+                ]
+                for src in budget.train
+            ],
+            style="markdown",
+        ),
+        "",
+        "Hive-partitioned Parquet under `synthetic/train` (read it with "
+        "`reform.datasets.read_parquet`); held-back episodes, from another master seed, under "
+        "`synthetic/held-back`. The sources are balanced by pairs (`sim.sim2real.balance_pairs`).",
+        "",
+    ]
+    noise = context["noise"]
+    if noise is not None:
+        lines += [
+            f"Tracker noise on `mingle`, calibrated on SALSA's training split "
+            f"(`sim.sim2real.calibrate_tracker_noise`): {noise.position_noise:g} m per axis, "
+            f"{noise.yaw_noise:g} rad of yaw (sum of KS statistics {noise.objective:.3f}).",
+            "",
+        ]
+    else:
+        lines += ["No tracker noise: SALSA was not found to calibrate it on.", ""]
+    lines += [
+        f"Model: [`{_rel(result, result.model)}`]({_rel(result, result.model)}) (REFORM Bagged "
+        "Trees, skops; load it with `reform.persistence.load_model`).",
+        "",
+        "## Scores",
+        "",
+        "Protocol: GCFF's `ff_evalgroups` (`reform.evaluate`): singletons dropped, P and R "
+        "means of the per-frame values, F1 of the means; %. SALSA test split: "
+        "`reform.time_split` (per session, the last 40 % of annotated frames by time).",
+        "",
+    ]
+    evaluations = context["evaluations"]
+    rows = []
+    for dataset, count in context["tests"].items():
+        for detector in context["detectors"]:
+            s = evaluations.get((detector, dataset))
+            if s is None:
+                continue
+            rows.append(
+                [
+                    detector,
+                    f"{dataset} ({count})",
+                    _pct(s["pairwise_accuracy"]),
+                    _pct(s["precision"]),
+                    _pct(s["recall"]),
+                    _pct(s["f1"]),
+                    _pct(s["f1_t1"]),
+                ]
+            )
+    lines += [
+        render_table(
+            ["detector", "test set (frames)", "pair acc.", "P@2/3", "R@2/3", "F1@2/3", "F1@1"],
+            rows,
+            style="markdown",
+        ),
+        "",
+        "![F1 at T = 2/3](figures/scores.png)",
+        "",
+        "The full sim-to-real experiment (more data, tuned hyper-parameters, GCFF tuned, "
+        "bootstrap intervals) is `reform-sim experiment sim2real`; its results are in "
+        "`docs/results/sim2real.md`.",
+        "",
+        "## Stress tests (small grid)",
+        "",
+        "F1 of the demo's REFORM models and GCFF as tracking gets worse and crowds change, "
+        "scored on held-out `mingle` parties (`sim.stress.run_stress`). Full tables: "
+        "[`stress/stress.md`](stress/stress.md); curves also in `recordings/stress.rrd`.",
+        "",
+    ]
+    stress = context["stress"]
+    rows = []
+    for axis in stress.axes:
+        for detector in ("bagged-trees", "gcff"):
+            curve = axis.curve(detector)[0]
+            rows.append(
+                [
+                    axis.title,
+                    "REFORM Bagged Trees" if detector == "bagged-trees" else "GCFF",
+                    " / ".join(_pct(v) for v in curve),
+                    " / ".join(p.label for p in axis.points),
+                ]
+            )
+    lines += [
+        render_table(
+            ["axis", "detector", "F1@2/3 at each level", "levels"], rows, style="markdown"
+        ),
+        "",
+    ]
+    for axis, plot in context["stress_plots"].items():
+        lines += [f"![{axis}]({plot})", ""]
+    hri = context["hri"]
+    lines += [
+        "## The paper's HRI experiment, re-enacted",
+        "",
+        "The three proof-of-concept scenes with the Directions Robot (two people and the robot "
+        "converse; two people converse, the robot left out; people walk past), "
+        f"{hri.seeds} episode(s) each. Full page: [`hri.md`](hri.md); recordings of each scene "
+        "from the robot's view under `recordings/hri/`.",
+        "",
+    ]
+    rows = []
+    for view in hri.views:
+        for key in hri.detectors:
+            row = hri.row(key, view)
+            s = row.scores["2/3"]
+            rows.append(
+                [
+                    row.label,
+                    view,
+                    _pct(s.precision.value),
+                    _pct(s.recall.value),
+                    _pct(s.f1.value),
+                ]
+            )
+    from sim.hri_experiment import PAPER_HRI
+
+    for name, (p, r, f1) in PAPER_HRI.items():
+        rows.append([f"paper: {name}", "Kinect", f"{p:.1f}", f"{r:.1f}", f"{f1:.1f}"])
+    lines += [
+        render_table(["detector", "view", "P@2/3", "R@2/3", "F1@2/3"], rows, style="markdown"),
+        "",
+        "## Files",
+        "",
+        f"Everything is under `{result.out_dir}`:",
+        "",
+    ]
+    lines += [f"- `{_rel(result, p)}`" for p in result.recordings]
+    lines += [
+        f"- `{_rel(result, result.model)}`: the REFORM model",
+        "- `results.json`: every number above",
+        "- `figures/`, `stress/`: the plots",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def demo_json(result: DemoResult, context: Mapping[str, Any]) -> dict[str, Any]:
+    """Every number of the demo, JSON-ready."""
+    from reform import __version__
+
+    noise = context["noise"]
+    return {
+        "kind": "reform-sim/demo",
+        "schema_version": 1,
+        "reform_version": __version__,
+        "command": context["command"],
+        "budget": context["budget"].name,
+        "seed": context["seed"],
+        "datasets": list(result.datasets),
+        "timings_s": {k: round(v, 2) for k, v in result.timings.items()},
+        "scenarios": list(context["scenarios"]),
+        "training": {k: dict(v) for k, v in context["training"].items()},
+        "tracker_noise": None if noise is None else noise.to_json(),
+        "tests": dict(context["tests"]),
+        "scores": [dict(v) for v in result.scores.values()],
+        "stress": context["stress"].to_json(command=context["command"]),
+        "hri": context["hri"].to_json(command=context["command"]),
+        "files": {
+            "report": _rel(result, result.report),
+            "model": _rel(result, result.model),
+            "recordings": [_rel(result, p) for p in result.recordings],
+            "figures": [_rel(result, p) for p in result.figures],
+        },
+    }
