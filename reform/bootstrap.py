@@ -33,6 +33,7 @@ __all__ = [
     "Interval",
     "ScoreIntervals",
     "bootstrap_weights",
+    "frame_intervals",
     "score_intervals",
 ]
 
@@ -132,6 +133,60 @@ def _interval(point: float, samples: np.ndarray, level: float) -> Interval:
     return Interval(float(point), float(low), float(high))
 
 
+def frame_intervals(
+    frame_precision: npt.ArrayLike,
+    frame_recall: npt.ArrayLike,
+    *,
+    weights: np.ndarray,
+    sequences: int,
+    level: float = DEFAULT_LEVEL,
+) -> ScoreIntervals:
+    """Bootstrap intervals of P̄, R̄ and F1 from per-frame precision and recall.
+
+    Args:
+        frame_precision: (n_frames,) per-frame precision (``ThresholdScores.frame_precision``).
+        frame_recall: (n_frames,) per-frame recall.
+        weights: (resamples, n_frames) from :func:`bootstrap_weights`.
+        sequences: how many sequences the frames come from (reported, not used).
+        level: coverage of the interval, in (0, 1).
+
+    Returns:
+        The point estimates (frame means and the F1 of the means) and their intervals.
+    """
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"level must lie in (0, 1), got {level!r}")
+    precision = np.asarray(frame_precision, dtype=np.float64)
+    recall = np.asarray(frame_recall, dtype=np.float64)
+    n = precision.size
+    if precision.shape != (n,) or recall.shape != (n,) or n == 0:
+        raise ValueError(
+            "frame_precision and frame_recall must be non-empty 1-D arrays of one length, got "
+            f"shapes {precision.shape} and {recall.shape}"
+        )
+    weights = np.asarray(weights, dtype=np.float64)
+    if weights.ndim != 2 or weights.shape[1] != n:
+        raise ValueError(
+            f"weights must have shape (resamples, {n}) for these {n} frames, got {weights.shape}"
+        )
+    total = weights.sum(axis=1)
+    p = weights @ precision / total
+    r = weights @ recall / total
+    f1 = _f1(p, r)
+    p_hat, r_hat = float(precision.mean()), float(recall.mean())
+    return ScoreIntervals(
+        precision=_interval(p_hat, p, level),
+        recall=_interval(r_hat, r, level),
+        f1=_interval(float(_f1(np.array([p_hat]), np.array([r_hat]))[0]), f1, level),
+        frames=n,
+        sequences=int(sequences),
+    )
+
+
+def _f1(p: np.ndarray, r: np.ndarray) -> np.ndarray:
+    total = p + r
+    return np.where(total > 0, 2.0 * p * r / np.where(total > 0, total, 1.0), 0.0)
+
+
 def score_intervals(
     evaluation: Evaluation,
     threshold: Any,
@@ -139,11 +194,11 @@ def score_intervals(
     weights: np.ndarray,
     level: float = DEFAULT_LEVEL,
 ) -> ScoreIntervals:
-    """Bootstrap intervals of P̄, R̄ and F1 at ``threshold``.
+    """Bootstrap intervals of P̄, R̄ and F1 of an evaluation at ``threshold``.
 
     Args:
-        evaluation: the detector's evaluation (its frames in the order the weights were made
-            for: ``bootstrap_weights(evaluation.sequence, ...)``).
+        evaluation: the detector's evaluation; the weights must have been made for its frames,
+            e.g. ``bootstrap_weights(evaluation.sequence, rng=...)``.
         threshold: matching threshold, e.g. ``"2/3"``.
         weights: (resamples, n_frames) from :func:`bootstrap_weights`.
         level: coverage of the interval, in (0, 1).
@@ -151,26 +206,11 @@ def score_intervals(
     Returns:
         The point estimates (as :meth:`Evaluation.at` gives them) and their intervals.
     """
-    if not 0.0 < level < 1.0:
-        raise ValueError(f"level must lie in (0, 1), got {level!r}")
-    weights = np.asarray(weights, dtype=np.float64)
-    n = evaluation.n_frames
-    if weights.ndim != 2 or weights.shape[1] != n:
-        raise ValueError(
-            f"weights must have shape (resamples, {n}) for this evaluation's {n} frames, "
-            f"got {weights.shape}"
-        )
     scores = evaluation.at(threshold)
-    total = weights.sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        p = weights @ scores.frame_precision / total
-        r = weights @ scores.frame_recall / total
-        denominator = p + r
-        f1 = np.where(denominator > 0, 2.0 * p * r / np.where(denominator > 0, denominator, 1), 0.0)
-    return ScoreIntervals(
-        precision=_interval(scores.precision, p, level),
-        recall=_interval(scores.recall, r, level),
-        f1=_interval(scores.f1, f1, level),
-        frames=n,
+    return frame_intervals(
+        scores.frame_precision,
+        scores.frame_recall,
+        weights=weights,
         sequences=len(set(evaluation.sequence)),
+        level=level,
     )
