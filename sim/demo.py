@@ -88,6 +88,8 @@ class DemoBudget:
         resamples: bootstrap resamples (stress, HRI).
         real_frames: annotated real frames scored at most per dataset (None: all), evenly
             spaced in time.
+        salsa_train_frames: SALSA training frames the SALSA-trained model learns from at most
+            (None: the whole training split), evenly spaced in time.
     """
 
     name: str
@@ -102,6 +104,7 @@ class DemoBudget:
     hri_views: tuple[str, ...]
     resamples: int
     real_frames: int | None = None
+    salsa_train_frames: int | None = None
 
 
 FULL = DemoBudget(
@@ -137,12 +140,13 @@ QUICK = DemoBudget(
     ),
     noise_position_grid=(0.0, 0.15),
     noise_yaw_grid=(0.0, 0.4),
-    stress_grid="small",
+    stress_grid="quick",
     stress_axes=("position-noise",),
     hri_seeds=1,
     hri_views=("truth",),
     resamples=50,
     real_frames=60,
+    salsa_train_frames=120,
 )
 
 
@@ -357,7 +361,9 @@ def run_demo(
     model_path = save_model(models[SAVED_CLASSIFIER], out / MODEL)
     salsa_model = None
     if salsa_train:
-        salsa_model = Reform(_classifier(SAVED_CLASSIFIER, jobs)).fit(salsa_train)
+        salsa_model = Reform(_classifier(SAVED_CLASSIFIER, jobs)).fit(
+            _even(salsa_train, budget.salsa_train_frames)
+        )
 
     # 4. Evaluation.
     stages.begin("evaluation", "scoring REFORM and GCFF on held-back episodes and real data")
@@ -403,7 +409,7 @@ def run_demo(
     from sim.stress_report import write_report as write_stress
 
     stress = run_stress(
-        budget.stress_grid,
+        _stress_grid(budget.stress_grid),
         seed=seed,
         jobs=jobs,
         axes=budget.stress_axes,
@@ -444,7 +450,7 @@ def run_demo(
     hri_training: dict[str, Any] = {}
     if salsa_model is not None:
         hri_training["salsa"] = {
-            "frames": len(salsa_train),
+            "frames": len(_even(salsa_train, budget.salsa_train_frames)),
             "train_fraction": 0.6,
             "pairs": salsa_model.training_summary_["pairs"],
         }
@@ -590,6 +596,17 @@ def run_demo(
         json.dump(demo_json(result, context), handle, indent=1, allow_nan=False)
         handle.write("\n")
     return replace(result, timings={**timings, "total": time.perf_counter() - stages.started})
+
+
+def _stress_grid(name: str) -> Any:
+    """``"quick"``: the small grid cut to two levels, one short episode; else a grid's name."""
+    from sim.stress import GRIDS
+
+    if name != "quick":
+        return name
+    return replace(
+        GRIDS["small"], position_noise_m=(0.0, 0.5), seeds=1, duration_s=20.0, resamples=50
+    )
 
 
 def _classifier(name: str, jobs: int | None) -> Any:

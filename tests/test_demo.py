@@ -1,0 +1,151 @@
+"""The one-command demo end to end (quick budget): report, numbers, recordings, model."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import scenarios
+from reform import evaluate
+from reform.datasets import read_parquet
+from reform.metrics import T_TWO_THIRDS
+from reform.persistence import load_model
+from sim.cli import main
+from sim.demo import FULL, QUICK, run_demo
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory, shared_datasets) -> Path:
+    """One quick demo run through the command line, with the real datasets."""
+    out = tmp_path_factory.mktemp("demo") / "demo-output"
+    argv = ["demo", "--quick", "--datasets", str(shared_datasets), "--out", str(out)]
+    assert main([*argv, "--seed", "3", "--jobs", "1", "--no-progress"]) == 0
+    return out
+
+
+def _entities(path: Path) -> set[str]:
+    from rerun.chunk import RrdReader
+
+    return {chunk.entity_path for chunk in RrdReader(path).stream()}
+
+
+def test_says_where_everything_is(demo, capsys) -> None:
+    # The fixture ran first in this module; its stdout is gone, so look at the files it names.
+    report = (demo / "report.md").read_text()
+    assert "reform-sim demo --datasets" in report and "--quick" in report and "--seed 3" in report
+    for section in ("## What ran", "## Scenarios", "## Scores", "## Stress tests", "## Files"):
+        assert section in report
+    assert "The paper's HRI experiment, re-enacted" in report
+
+
+def test_report_covers_every_scenario_and_test_set(demo) -> None:
+    report = (demo / "report.md").read_text()
+    for name in scenarios.names():
+        assert f"`{name}`" in report
+        assert (demo / "figures" / f"scenario-{name}.png").stat().st_size > 1000
+    for test_set in ("held-back synthetic", "SALSA test split", "Babble"):
+        assert test_set in report
+    assert "![F1 at T = 2/3](figures/scores.png)" in report
+    assert (demo / "figures" / "scores.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (demo / "stress" / "stress.md").is_file()
+    assert (demo / "hri.md").is_file()
+
+
+def test_results_json_holds_every_score(demo) -> None:
+    data = json.loads((demo / "results.json").read_text())
+    assert data["kind"] == "reform-sim/demo"
+    assert data["budget"] == "quick" and data["seed"] == 3
+    assert data["datasets"] == ["babble", "salsa"]
+    assert [s["scenario"] for s in data["scenarios"]] == list(scenarios.names())
+    pairs = {(s["detector"], s["dataset"]) for s in data["scores"]}
+    for dataset in ("held-back synthetic", "SALSA test split", "Babble"):
+        for detector in (
+            "REFORM Bagged Trees (synthetic)",
+            "REFORM Bagged Trees (SALSA train)",
+            "GCFF (paper: 70 cm, 30000 cm²)",
+            "Majority",
+        ):
+            assert (detector, dataset) in pairs
+    for score in data["scores"]:
+        assert 0.0 <= score["2/3"]["f1"] <= 1.0
+    assert data["tracker_noise"]["reference"] == "salsa-train"
+    assert data["stress"]["kind"] == "reform-sim/stress"
+    assert data["hri"]["kind"] == "reform-sim/hri-experiment"
+    assert set(data["timings_s"]) >= {"scenarios", "training", "evaluation", "total"}
+
+
+def test_recordings_hold_people_groups_and_detections(demo) -> None:
+    recordings = demo / "recordings"
+    for name in scenarios.names():
+        entities = _entities(recordings / f"scenario-{name}.rrd")
+        assert any(e.startswith("/world") for e in entities), name
+        assert any("reform" in e for e in entities), name
+        assert any("gcff" in e for e in entities), name
+    for test_set in ("held-back-synthetic", "salsa-test-split", "babble"):
+        entities = _entities(recordings / f"evaluation-{test_set}.rrd")
+        assert any("reform" in e for e in entities) and any("gcff" in e for e in entities)
+        assert any(e.startswith("/dataset") for e in entities)
+    assert any("stress" in e for e in _entities(recordings / "stress.rrd"))
+    for scene in ("hri-conversation", "hri-robot-excluded", "hri-passing"):
+        assert (recordings / "hri" / f"{scene}.rrd").is_file()
+
+
+def test_model_reproduces_the_reported_scores(demo) -> None:
+    """The saved model, loaded back, scores the held-back episodes as the report says."""
+    model = load_model(demo / "model.skops")
+    held = read_parquet(demo / "synthetic" / "held-back").annotated()
+    evaluation = evaluate(held, model.predict(held))
+    data = json.loads((demo / "results.json").read_text())
+    (reported,) = [
+        s
+        for s in data["scores"]
+        if s["detector"] == "REFORM Bagged Trees (synthetic)"
+        and s["dataset"] == "held-back synthetic"
+    ]
+    assert reported["frames"] == evaluation.n_frames
+    assert reported["2/3"]["f1"] == pytest.approx(evaluation.at(T_TWO_THIRDS).f1, abs=1e-12)
+    # Held-back episodes come from another master seed: none of them was trained on.
+    train = {f.sequence for f in read_parquet(demo / "synthetic" / "train").annotated()}
+    card = json.loads(next((demo / "synthetic" / "held-back").glob("*/dataset.json")).read_text())
+    train_card = json.loads(next((demo / "synthetic" / "train").glob("*/dataset.json")).read_text())
+    assert train and card["parameters"]["seed"] != train_card["parameters"]["seed"]
+
+
+def test_without_real_data(tmp_path) -> None:
+    """No datasets: the synthetic parts run, the real rows are left out, no noise calibrated."""
+    result = run_demo(
+        out_dir=tmp_path / "out",
+        datasets=None,
+        seed=1,
+        jobs=1,
+        quick=True,
+        progress=lambda line: None,
+        progress_bars=False,
+    )
+    assert result.datasets == ()
+    assert {d for _, d in result.scores} == {"held-back synthetic"}
+    data = json.loads(result.results.read_text())
+    assert data["tracker_noise"] is None
+    assert "No tracker noise" in result.report.read_text()
+    assert result.model.is_file()
+
+
+def test_budgets() -> None:
+    assert QUICK.scenario_s < FULL.scenario_s
+    assert {s.scenario for s in FULL.train} == {"mingle", "word-improv"}
+    assert FULL.stress_grid == "small"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--seed", "-1"], "--seed must be >= 0, got -1"),
+        (["--jobs", "0"], "--jobs must be >= 1, got 0"),
+        (["--datasets", "/nonexistent/datasets"], "/nonexistent/datasets is not a folder"),
+    ],
+)
+def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
+    assert main(["demo", "--quick", "--out", str(tmp_path / "o"), *argv]) == 2
+    assert message in capsys.readouterr().err
