@@ -692,9 +692,18 @@ def _markdown(experiment: HriExperiment, *, command: str) -> str:
             f"and `word-improv` ({s['duration_s']:g} s at {s['rate_hz']:g} Hz, "
             "`sim.stress.training_frames`, seeds disjoint from the HRI episodes'). No real data."
         )
+    untrained = [
+        experiment.row(key, experiment.views[0]).label
+        for key in experiment.detectors
+        if experiment.row(key, experiment.views[0]).training == "-"
+    ]
+    if untrained:
+        lines.append(
+            f"- Not trained: {'; '.join(untrained)}. GCFF's paper setting reads the paper's "
+            '"stride = 0.7, MDL = 30000" as 70 cm and 30,000 cm² (GCFF works in cm); the '
+            "majority baseline predicts no group."
+        )
     lines += [
-        "- GCFF needs no training: the paper's setting (stride 0.7 m, MDL 30000 read as cm²) "
-        "and the reference code's default. The majority baseline predicts no group.",
         "",
         "Views: " + "; ".join(f"`{v}`: {VIEW_TEXT[v]}" for v in experiment.views) + ".",
         "",
