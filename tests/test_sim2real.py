@@ -1,0 +1,228 @@
+"""Sim-to-real: sources, balance, tracker-noise calibration, the experiment on a tiny budget."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from reform.perturb import Perturbation
+from sim.cli import main
+from sim.episode import simulate_episode
+from sim.sim2real import (
+    BABBLE,
+    PAPER_BABBLE_F1,
+    SALSA_TEST,
+    SyntheticSource,
+    balance_pairs,
+    calibrate_tracker_noise,
+    count_pairs,
+    sim_to_real,
+)
+from sim.sim2real_report import sim2real_figure
+
+
+@pytest.fixture(scope="module")
+def party():
+    """Two minutes of mingle, one frame every 2 s."""
+    return simulate_episode("mingle", seed=5, duration=120.0, rate=0.5).dataset.annotated()
+
+
+@pytest.fixture(scope="module")
+def game():
+    return simulate_episode("word-improv", seed=5, duration=200.0, rate=0.5).dataset.annotated()
+
+
+def test_source_folder_names_its_data() -> None:
+    a = SyntheticSource("mingle", episodes=3)
+    assert a.folder(0) == SyntheticSource("mingle", episodes=9).folder(0)  # more episodes extend
+    assert a.folder(0).startswith("mingle-seed0-")
+    assert a.folder(1) != a.folder(0)
+    assert SyntheticSource("mingle", episodes=3, options={"people": 12}).folder(0) != a.folder(0)
+    assert SyntheticSource("mingle", episodes=3, rate=1.0).folder(0) != a.folder(0)
+    with pytest.raises(ValueError, match="episodes must be an int >= 1, got 0"):
+        SyntheticSource("mingle", episodes=0)
+
+
+def test_count_pairs(party) -> None:
+    # Hand count: n (n - 1) / 2 per frame.
+    assert count_pairs(party) == sum(f.n_people * (f.n_people - 1) // 2 for f in party)
+    assert count_pairs(()) == 0
+
+
+def test_balance_pairs_evens_out_the_sources(party, game) -> None:
+    kept = balance_pairs({"mingle": party, "word-improv": game})
+    small = min(count_pairs(party), count_pairs(game))
+    assert list(kept) == ["mingle", "word-improv"]
+    for name, frames in kept.items():
+        # Within one frame's worth of pairs of the smallest source.
+        most = max(f.n_people * (f.n_people - 1) // 2 for f in frames)
+        assert abs(count_pairs(frames) - small) <= most, name
+    larger = "mingle" if count_pairs(party) > count_pairs(game) else "word-improv"
+    source = party if larger == "mingle" else game
+    times = [f.time for f in kept[larger]]
+    assert times == sorted(times)  # an even subset, in order
+    assert times[0] == source[0].time and times[-1] == source[-1].time  # spans the episode
+    assert balance_pairs({"mingle": party, "word-improv": game}) == kept
+    with pytest.raises(ValueError, match="every source needs frames with pairs"):
+        balance_pairs({"mingle": party, "empty": ()})
+
+
+def test_calibration_recovers_known_noise(party) -> None:
+    """A reference made by perturbing the frames with known noise is matched best by that
+    noise (other draws, so not the same numbers)."""
+    reference = Perturbation(position_noise=0.1, yaw_noise=0.4).apply_all(
+        party, np.random.default_rng(99)
+    )
+    calibration = calibrate_tracker_noise(
+        party, reference, seed=0, position_grid=(0.0, 0.1, 0.3), yaw_grid=(0.0, 0.4, 1.0)
+    )
+    assert (calibration.position_noise, calibration.yaw_noise) == (0.1, 0.4)
+    assert len(calibration.grid) == 9
+    ks, total = calibration.ks_at(0.1, 0.4)
+    assert len(ks) == 4 and total == pytest.approx(calibration.objective)
+    assert all(total <= sum(k) for _, _, k in calibration.grid)
+    assert calibration.perturbation() == Perturbation(position_noise=0.1, yaw_noise=0.4)
+    data = calibration.to_json()
+    assert data["position_noise_m"] == 0.1 and len(data["grid"]) == 9
+    with pytest.raises(ValueError, match="not on the calibration grid"):
+        calibration.ks_at(0.2, 0.4)
+    with pytest.raises(ValueError, match="calibration needs synthetic and reference frames"):
+        calibrate_tracker_noise((), reference, seed=0)
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory, salsa_dataset, babble_dataset):
+    """The experiment on a tiny budget: one short episode per source, one classifier."""
+    root = tmp_path_factory.mktemp("synthetic")
+    sources = (
+        SyntheticSource("mingle", episodes=1, duration=90.0, rate=0.5, tracker_noise=True),
+        SyntheticSource("word-improv", episodes=1, duration=240.0, rate=0.5),
+    )
+    result = sim_to_real(
+        salsa_dataset,
+        babble_dataset,
+        synthetic_root=root,
+        sources=sources,
+        seed=2,
+        classifiers=("logistic-regression",),
+        gcff_grids={"stride_grid": (0.6, 0.7), "mdl_grid": (1.0, 3.0)},
+        diagnostics=False,
+        progress_bars=False,
+    )
+    return result, root
+
+
+def test_experiment_rows(tiny) -> None:
+    result, _ = tiny
+    main_rows = [r for r in result.rows if not r.diagnostic]
+    # LR synthetic, LR SALSA-trained, GCFF paper, GCFF tuned, majority, on each test set.
+    assert len(main_rows) == 10
+    assert {r.dataset for r in main_rows} == {SALSA_TEST, BABBLE}
+    assert result.frames[SALSA_TEST] == 458 and result.frames[BABBLE] == 99
+    for row in main_rows:
+        assert row.result["frames"] == result.frames[row.dataset]
+        low, high = row.f1_interval
+        assert low <= row.f1() + 1e-9 and row.f1() <= high + 1e-9
+    gcff = result.row(classifier=None, training="none", dataset=SALSA_TEST)
+    assert gcff.detector.startswith("GCFF, paper")
+    assert result.gcff_tuning["stride_m"] in (0.6, 0.7)
+    assert result.row(classifier=None, training="salsa-train", dataset=BABBLE).detector.startswith(
+        "GCFF, tuned on SALSA train"
+    )
+
+
+def test_synthetic_data_and_noise(tiny) -> None:
+    result, root = tiny
+    assert result.noise is not None and result.noise.reference == "salsa-train"
+    counts = result.training
+    assert set(counts) == {"mingle", "word-improv"}
+    kept = [c["pairs_kept"] for c in counts.values()]
+    assert min(kept) == min(c["pairs_generated"] for c in counts.values())
+    for source in result.sources:  # generated as Parquet under the root, with a card
+        assert (root / source.folder(2) / "dataset.json").is_file()
+    assert result.calibration["mingle"]["reference"] == "salsa-train"
+    assert result.calibration["word-improv"]["reference"] == "babble"
+    assert set(result.tuning) == {"synthetic", "salsa-train"}
+
+
+def test_goals_follow_from_the_rows(tiny) -> None:
+    result, _ = tiny
+    names = [g.name for g in result.goals]
+    assert names == [
+        "Logistic Regression: SALSA test",
+        "Logistic Regression: Babble vs SALSA-trained",
+        "Logistic Regression: Babble vs GCFF",
+    ]
+    synthetic = result.row(
+        classifier="logistic-regression", training="synthetic", dataset=SALSA_TEST
+    )
+    salsa = result.row(classifier="logistic-regression", training="salsa-train", dataset=SALSA_TEST)
+    assert result.goals[0].met == (synthetic.f1() >= salsa.f1() - 0.02 - 1e-12)
+    babble = result.row(classifier="logistic-regression", training="synthetic", dataset=BABBLE)
+    salsa_babble = result.row(
+        classifier="logistic-regression", training="salsa-train", dataset=BABBLE
+    )
+    assert result.goals[1].met == (
+        babble.f1() >= PAPER_BABBLE_F1 and babble.f1() > salsa_babble.f1()
+    )
+    difference, low, high = result.differences[("logistic-regression", SALSA_TEST)]
+    assert difference == pytest.approx(synthetic.f1() - salsa.f1())
+    assert low <= difference + 1e-9 and difference <= high + 1e-9
+
+
+def test_report_files(tiny, tmp_path) -> None:
+    result, _ = tiny
+    figure = sim2real_figure(result, tmp_path / "s.png")
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    markdown = result.to_markdown(command="reform-sim experiment sim2real --out x", figure="s.png")
+    assert "reform-sim experiment sim2real --out x" in markdown
+    for heading in ("## Goals", "## SALSA test split", "## Babble", "## Tracker noise"):
+        assert heading in markdown
+    data = json.loads(json.dumps(result.to_json(command="c"), allow_nan=False))
+    assert data["kind"] == "reform-sim/sim2real"
+    assert len(data["rows"]) == len(result.rows)
+    assert len(data["goals"]) == 3
+
+
+def test_deterministic_data(tiny, salsa_dataset) -> None:
+    """The same seed gives the same calibration on the cached data."""
+    result, root = tiny
+    from sim.sim2real import generate_sources
+
+    frames = generate_sources(result.sources, root=root, seed=2, progress=False)
+    from reform import time_split
+
+    train, _ = time_split(salsa_dataset.annotated(), 0.6)
+    again = calibrate_tracker_noise(frames["mingle"], train, seed=2)
+    assert (again.position_noise, again.yaw_noise) == (
+        result.noise.position_noise,
+        result.noise.yaw_noise,
+    )
+    assert again.grid == result.noise.grid
+
+
+def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
+    with pytest.raises(ValueError, match="classifiers must be among"):
+        sim_to_real(salsa_dataset, babble_dataset, synthetic_root=tmp_path, classifiers=("svm",))
+    with pytest.raises(ValueError, match="sources must name each scenario once"):
+        from sim.sim2real import generate_sources
+
+        source = SyntheticSource("mingle", episodes=1)
+        generate_sources([source, dataclasses.replace(source)], root=tmp_path, seed=0)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--episodes-scale", "0"], "--episodes-scale must be > 0, got 0.0"),
+        (["--classifiers", "svm"], "--classifiers must be among"),
+        ([], "give --datasets DIR"),
+    ],
+)
+def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
+    extra = [] if not argv else ["--datasets", "/nonexistent"]
+    assert main(["experiment", "sim2real", "--out", str(tmp_path), *extra, *argv]) == 2
+    assert message in capsys.readouterr().err
