@@ -251,9 +251,9 @@ class StressGrid:
         position_noise_m: position noise levels, metres (0-0.5).
         orientation_noise_deg: orientation noise levels, degrees (0-60).
         dropout: dropout levels, shares (0-0.5).
-        density_per_m2: guests per m² (mingle's planner finds room up to about 0.4).
+        density_per_m2: guests per m² (mingle's planner lays out 18 guests up to about 0.5).
         people: numbers of guests at the default density.
-        max_group_size: largest groups allowed (3-12).
+        max_group_size: largest groups allowed (2-12).
         sensors: sensor levels, names of :data:`SENSORS`.
         seeds: test episodes per point.
         duration_s: length of a test episode, seconds.
@@ -270,9 +270,9 @@ class StressGrid:
     position_noise_m: tuple[float, ...] = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
     orientation_noise_deg: tuple[float, ...] = (0.0, 10.0, 20.0, 30.0, 45.0, 60.0)
     dropout: tuple[float, ...] = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)
-    density_per_m2: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4)
+    density_per_m2: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5)
     people: tuple[int, ...] = (6, 12, 18, 30, 48)
-    max_group_size: tuple[int, ...] = (3, 4, 6, 8, 12)
+    max_group_size: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
     sensors: tuple[str, ...] = ("truth", "fov", "occlusion", "tracker")
     seeds: int = 5
     duration_s: float = 600.0
@@ -379,6 +379,11 @@ class _EpisodeSpec:
 
 
 def _simulate(spec: _EpisodeSpec) -> tuple[Frame, ...]:
+    return _simulate_scene(spec)[0]
+
+
+def _simulate_scene(spec: _EpisodeSpec) -> tuple[tuple[Frame, ...], float]:
+    """The episode's frames and its crowd density: humans in the room per m² (time mean)."""
     sensor = SENSORS[spec.sensor]
     episode = simulate_episode(
         spec.scenario,
@@ -389,7 +394,9 @@ def _simulate(spec: _EpisodeSpec) -> tuple[Frame, ...]:
         view="truth" if sensor is None else "robot",
         sensor=sensor,
     )
-    return episode.dataset.frames
+    width, depth = episode.dataset.metadata["room_m"]
+    humans = np.mean([np.count_nonzero(~f.is_robot) for f in episode.truth])
+    return episode.dataset.frames, float(humans) / (float(width) * float(depth))
 
 
 def _room_side(people: int, density: float) -> float:
@@ -520,6 +527,7 @@ class _Scored:
     people: int
     fformations: int
     fformation_members: int
+    density: float  # humans in the room per m²
     notes: tuple[str, ...] = ()
 
     @staticmethod
@@ -527,7 +535,7 @@ class _Scored:
         return dataclasses.replace(scored, notes=tuple(notes))
 
 
-def _score(frames: Sequence[Frame], detectors: Mapping[str, Any]) -> _Scored:
+def _score(frames: Sequence[Frame], detectors: Mapping[str, Any], density: float) -> _Scored:
     precision, recall, correct = {}, {}, {}
     sequence: tuple[str, ...] = ()
     pairs = 0
@@ -551,6 +559,7 @@ def _score(frames: Sequence[Frame], detectors: Mapping[str, Any]) -> _Scored:
         people=sum(f.n_people for f in annotated),
         fformations=len(groups),
         fformation_members=sum(len(g) for g in groups),
+        density=density,
     )
 
 
@@ -569,16 +578,17 @@ def _perturb_task(
     axis: str,
     axis_index: int,
     episode: int,
-    frames: Sequence[Frame],
+    base: tuple[Sequence[Frame], float],
     detectors: Mapping[str, Any],
     seed: int,
 ) -> list[tuple[str, int, int, _Scored | str]]:
+    frames, density = base
     out: list[tuple[str, int, int, _Scored | str]] = []
     for k, level in enumerate(grid.levels(axis)):
         perturbation = _perturbation(axis, level)
         rng = _rng(seed, _ROLE_PERTURB, axis_index, episode)  # the same draws at every level
         perturbed = perturbation.apply_all(frames, rng)
-        out.append((axis, k, episode, _score(perturbed, detectors)))
+        out.append((axis, k, episode, _score(perturbed, detectors, density)))
     return out
 
 
@@ -599,11 +609,12 @@ def _scene_task(
             keys = (episode,) if attempt == 0 else (episode, attempt)
             spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
             try:
-                frames = _simulate(spec)
+                frames, density = _simulate_scene(spec)
             except ValueError as exc:  # the planner cannot lay out this party: draw another
                 notes.append(f"seed {spec.seed}: {exc}")
                 continue
-            out.append((axis, k, episode, _Scored.noted(_score(frames, detectors), notes)))
+            scored = _score(frames, detectors, density)
+            out.append((axis, k, episode, _Scored.noted(scored, notes)))
             break
         else:
             out.append((axis, k, episode, "; ".join(notes)))
@@ -640,6 +651,7 @@ class StressPoint:
         episodes: test episodes scored.
         frames: annotated frames scored.
         people_per_frame: mean people (robot included) per frame.
+        people_per_m2: crowd density: humans in the room per m², mean over episodes.
         fformations_per_frame: mean true F-formations per frame.
         fformation_size: mean size of the true F-formations (NaN when there are none).
         scores: detector -> threshold (``"2/3"``, ``"1"``) -> precision, recall, F1 with intervals.
@@ -653,6 +665,7 @@ class StressPoint:
     episodes: int
     frames: int
     people_per_frame: float
+    people_per_m2: float
     fformations_per_frame: float
     fformation_size: float
     scores: Mapping[str, Mapping[str, ScoreIntervals]]
@@ -666,6 +679,7 @@ class StressPoint:
             "episodes": self.episodes,
             "frames": self.frames,
             "people_per_frame": _json_float(self.people_per_frame),
+            "people_per_m2": _json_float(self.people_per_m2),
             "fformations_per_frame": _json_float(self.fformations_per_frame),
             "fformation_size": _json_float(self.fformation_size),
             "scores": {
@@ -787,7 +801,8 @@ def _point(
     value = float(list(SENSORS).index(level)) if axis == "sensor" else float(level)
     label = str(level) if axis == "sensor" else f"{level:g}"
     if not scored:
-        return StressPoint(value, label, 0, 0, math.nan, math.nan, math.nan, {}, {}, tuple(notes_))
+        nan = math.nan
+        return StressPoint(value, label, 0, 0, nan, nan, nan, nan, {}, {}, tuple(notes_))
     sequence = [s for part in scored for s in part.sequence]
     frames = len(sequence)
     weights = bootstrap_weights(
@@ -819,6 +834,7 @@ def _point(
         episodes=len(scored),
         frames=frames,
         people_per_frame=sum(part.people for part in scored) / frames,
+        people_per_m2=float(np.mean([part.density for part in scored])),
         fformations_per_frame=ff / frames,
         fformation_size=sum(part.fformation_members for part in scored) / ff if ff else math.nan,
         scores=scores,
@@ -995,19 +1011,21 @@ def run_stress(
 
     perturb_axes = [a for a in names if AXES[a].kind == "perturb"]
     scene_axes = [a for a in names if AXES[a].kind == "scene"]
-    base: list[tuple[Frame, ...]] = []
+    base: list[tuple[tuple[Frame, ...], float]] = []
     t0 = time.perf_counter()
     if perturb_axes:
         say(f"simulating {grid.seeds} test episode(s) of {TEST_SCENARIO}")
-        base = _parallel(_simulate, [_base_spec(grid, s) for s in test_seeds], jobs=jobs, cpu=cpu)
+        base = _parallel(
+            _simulate_scene, [_base_spec(grid, s) for s in test_seeds], jobs=jobs, cpu=cpu
+        )
     timings["test episodes"] = time.perf_counter() - t0
 
     axis_index = {name: list(AXES).index(name) for name in names}
     tasks: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
     for name in perturb_axes:
-        for e, frames in enumerate(base):
+        for e, episode in enumerate(base):
             tasks.append(
-                (_perturb_task, (grid, name, axis_index[name], e, frames, detectors, seed))
+                (_perturb_task, (grid, name, axis_index[name], e, episode, detectors, seed))
             )
     for name in scene_axes:
         for k in range(len(grid.levels(name))):

@@ -101,13 +101,22 @@ def plot_axis(axis: StressAxis, path: str | Path) -> Path:
 
 def _axis_tables(axis: StressAxis) -> list[str]:
     detectors = [d for d in DETECTOR_LABELS if any(d in p.scores for p in axis.points)]
-    context = ["level", "episodes", "frames", "people/frame", "F-formations/frame", "mean size"]
+    context = [
+        "level",
+        "episodes",
+        "frames",
+        "guests/m²",
+        "people/frame",
+        "F-formations/frame",
+        "mean size",
+    ]
     lines = []
     rows = [
         [
             p.label if axis.name != "sensor" else f"{p.label} ({sensor_description(p.label)})",
             str(p.episodes),
             str(p.frames),
+            "-" if not math.isfinite(p.people_per_m2) else f"{p.people_per_m2:.2f}",
             "-" if not math.isfinite(p.people_per_frame) else f"{p.people_per_frame:.1f}",
             "-" if not math.isfinite(p.fformations_per_frame) else f"{p.fformations_per_frame:.2f}",
             "-" if not math.isfinite(p.fformation_size) else f"{p.fformation_size:.2f}",
@@ -240,10 +249,12 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
         "- **Sensor** levels change the question as well as the difficulty: the head sensor "
         "sees a handful of the guests (see people per frame), so its frames hold fewer and "
         "smaller groups, cut by the edge of the field of view.",
-        "- **Density** stops at 0.4 guests per m²: `mingle`'s planner cannot lay out 18 "
-        "guests in smaller rooms for most seeds (0.45 per m²: 4 of 20 seeds fail; 0.5: 11 of "
-        "20). **Group size** starts at 3 for the same reason (a largest group of 2 fails for "
-        "most seeds). **Number of groups** grows the party at constant density.",
+        "- **Density** stops at 0.5 guests per m²: in a smaller room `mingle`'s planner cannot "
+        "lay out 18 guests (at 0.6 per m² no seed works). Near the limit some seeds fail and "
+        "are drawn again, so those points hold the parties that fit (the tables count the "
+        "redraws). **Number of groups** grows the party in a room sized for 0.4 guests per m², "
+        "and **group size** keeps 18 guests there; `mingle` enlarges a room a drawn party does "
+        "not fit, so read the density they ran at in the guests/m² column.",
         "- Scene axes draw a new party per level with the same seeds, so their levels differ "
         "in the whole party, not only in the option; perturbation axes change nothing but "
         "the tracking errors.",

@@ -86,6 +86,8 @@ def test_scene_axes_change_the_scene(results) -> None:
     sensor = results.axis("sensor").points
     assert [p.label for p in sensor] == ["truth", "occlusion"]
     assert sensor[1].people_per_frame < sensor[0].people_per_frame  # the robot sees fewer
+    for point in results.axis("density").points:
+        assert point.people_per_m2 == pytest.approx(point.value, rel=0.01)
     dropout = results.axis("dropout").points
     assert dropout[1].people_per_frame < dropout[0].people_per_frame
 
