@@ -255,7 +255,7 @@ def test_random_start_keeps_the_robot_outside_the_circle_facing_it() -> None:
         observation, info = env.reset(seed=seed)
         x, y, yaw = (float(v) for v in observation["robot_pose"])
         distance = math.hypot(x, y)
-        assert PAIR_HALF_M + 1.5 - 0.05 <= distance <= PAIR_HALF_M + 3.5 + 0.05
+        assert PAIR_HALF_M + 1.0 - 0.05 <= distance <= PAIR_HALF_M + 2.5 + 0.05
         bearing = math.atan2(-y, -x)
         assert abs(math.remainder(bearing - yaw, 2 * math.pi)) <= math.pi / 4 + 1e-6
 

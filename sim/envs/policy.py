@@ -9,15 +9,16 @@ the detector's groups, which people it is to join):
    pieced together from several views), at their last reported poses, give the o-space circle
    (`sim.envs.reward.estimate_o_space`) and the place to take, in the widest gap between the
    people seen on the circle, clear of their personal space (`sim.envs.reward.joining_place`);
-3. before stepping in, it looks at the gap from `VIEW_M` outside it (people it had not seen
-   may stand there; then it picks another gap); then it drives there, going around the circle
-   (on a ring `DETOUR_M` outside it, the short way unless a wall is in the way) rather than
-   through the o-space, and turns to face the centre; its head keeps the group in view. A
-   circle is taken only from people who have stood (moved slower than `STANDING_M_S`) for
-   `STANDING_S`, and dropped when not detected again for `STALE_S`;
+3. it walks to the place on the shortest way clear of everyone lately seen and of the circle
+   (`sim.envs.planner`; the last leg radial, straight in), its head on the gap (anyone seen
+   standing there moves the place to another gap), then turns to face the centre. A circle is
+   taken only from people who have stood (moved slower than `STANDING_M_S`) for
+   `STANDING_S`, and dropped when not detected again for `STALE_S`; when driving forward has
+   not moved the robot for `STUCK_S` (someone too close to be seen), it backs up;
 4. with no group detected yet, it walks toward where it last saw the people it is to join and
    stops `WAIT_DISTANCE_M` from them to watch, moving `ORBIT_RAD` around them for another view
-   after each `WAIT_S` without a detection; having seen none of them, it turns in place.
+   after each `WAIT_S` without a detection; having seen none of them, it turns in place,
+   sweeping its head from side to side.
 
 `evaluate_policy` runs it for a number of seeded episodes (episode ``k`` is reset with seed
 ``seed + k``) and reports the success rate.
@@ -33,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
+from sim.envs.planner import Field, next_point, plan_field
 from sim.envs.reward import JoinTask, OSpace, estimate_o_space, joining_place
 from sim.motion import ROBOT_LIMITS
-from sim.sensor import KINECT_MAX_RANGE_M
 
 __all__ = ["EpisodeResult", "JoinPolicy", "PolicyEvaluation", "evaluate_policy"]
 
@@ -52,24 +53,34 @@ SAME_CIRCLE_M = 1.0  # metres: estimates this close to the last circle refine it
 WAIT_DISTANCE_M = 1.6  # metres from the people's centroid where it waits for a detection
 WAIT_S = 3.0  # seconds waited at one spot before moving around the people for another view
 ORBIT_RAD = 0.8  # radians around the people's centroid to the next spot to wait at
-WALL_GAP_M = 0.45  # metres: waypoints keep the robot's centre this far from the walls
-VIEW_M = 1.3  # metres outside the place from where the robot looks at the gap first
-VERIFY_M = 0.9  # metres: the gap counts as seen when in view from at least this far
-VERIFY_BEARING_RAD = math.radians(22.0)  # radians off the sensor's heading to count as in view
-SAME_PLACE_M = 0.3  # metres: a place this close to the one looked at counts as seen
+WALL_GAP_M = 0.4  # metres: places and waypoints keep the robot's centre this far from walls
 OPEN_SIDE_M = 0.1  # metres off a pair's midpoint its centre must lie to mark an open side
+OBSTACLE_MEMORY_S = 10.0  # seconds someone seen counts as an obstacle where last seen
+STUCK_S = 2.0  # seconds of driving forward without moving `STUCK_M` that mean being stuck
+STUCK_M = 0.1  # metres
+BACK_UP_S = 1.0  # seconds the robot then backs up, turning
+BACK_UP_M_S = 0.3  # m/s
+PASS_M = 0.6  # metres between the robot's centre and a person's that paths keep (bodies clear)
+NO_PROGRESS_M = 0.15  # metres: a way whose next point is this close leads nowhere
+REPLAN_M = 0.2  # metres the goal may move before the way is planned again
+REPLAN_STEPS = 5  # control steps a planned way is followed before it is planned again
 PAIR_TOLERANCE_SHARE = 0.8  # share of the ring tolerance used when hedging a pair's centre
-CLEARANCE_MARGIN_M = 0.06  # metres added to the task's clearance when choosing the place
+LOOK_AT_GAP_M = 1.0  # metres from the place beyond which the head watches the gap
+CLEARANCE_MARGIN_M = 0.1  # metres added to the task's clearance when choosing the place
 STANDING_M_S = 0.3  # m/s: people slower than this stand
 STANDING_S = 1.5  # seconds a detected circle's people must have stood to be taken
 STALE_S = 6.0  # seconds a circle is kept without being detected again
 MEMBER_MEMORY_S = 5.0  # seconds someone detected with people to join counts as a member
+VOTE_DECAY = 0.97  # per step: how fast old detections of who is with whom are forgotten
+MIN_VOTES = 2.0  # (decayed) detections with people to join that make a member
 OCCUPANT_MEMORY_S = 30.0  # seconds someone seen on the circle's ring counts as standing there
 RING_SLACK_M = 0.5  # metres off the circle within which someone seen occupies it
 TURN_GAIN = 2.5  # rad/s per radian of heading error
 SPEED_GAIN = 1.2  # m/s per metre of distance to the waypoint
 PAN_GAIN = 3.0  # rad/s per radian of head-pan error
-SCAN_TURN_RAD_S = 0.6  # rad/s, turning in place while no one it is to join was seen
+SCAN_TURN_RAD_S = 0.4  # rad/s, turning in place while no one it is to join was seen
+SWEEP_PERIOD_S = 3.0  # seconds per sweep of the head from side to side while looking round
+SWEEP_SHARE = 0.8  # share of the head's pan limit the sweep reaches
 CONTROL_DT_S = 0.1  # seconds between observations (the environments' 10 Hz)
 
 
@@ -120,13 +131,18 @@ class JoinPolicy:
         self._still_since: dict[int, int] = {}
         self._yaw_at: dict[int, float] = {}
         self._together: dict[int, int] = {}
+        self._votes: dict[int, tuple[float, float]] = {}
         self._confirmed = 0
         self._circle: OSpace | None = None
         self._members = np.zeros((0, 2))
         self._place: np.ndarray | None = None
         self._side = 0.0
         self._arrived = False
-        self._verified: np.ndarray | None = None
+        self._plan: Field | None = None
+        self._planned_at = 0
+        self._track: list[tuple[int, np.ndarray, float]] = []
+        self._backing_until = 0
+        self._back_turn = 0.0
         self._wait_from: int | None = None
         self._wait_bearing = 0.0
 
@@ -159,31 +175,27 @@ class JoinPolicy:
             centre = self._circle.centre
             place = self._pair_place(robot) if len(self._members) == 2 else None
             if place is None:
+                # The gap nearest the robot; once chosen, the gap nearest the last place (no
+                # dithering between two gaps as the robot walks round).
+                reference = robot
+                if self._place is not None:
+                    off = float(np.hypot(*(self._place - centre))) - self._circle.radius
+                    if off < SAME_CIRCLE_M:
+                        reference = self._place
                 place = joining_place(
                     self._circle,
                     self._occupants(),
-                    robot,
+                    reference,
                     clearance=self.task.clearance + CLEARANCE_MARGIN_M,
                     max_offset=0.7 * self.task.ring_tolerance,
                     bounds=self._bounds(),
                 )
             self._place = self._inside(place)
             place = self._place
-            if self._verified is not None and np.hypot(*(place - self._verified)) < SAME_PLACE_M:
-                speed, turn = self._drive(robot, yaw, self._waypoint(robot, place), centre)
-                look = centre
-            else:
-                # Look before stepping in: see the gap from outside, from where both its sides fit
-                # in the field of view.
-                out = place - centre
-                view = self._inside(place + VIEW_M * out / max(float(np.hypot(*out)), 1e-9))
-                speed, turn = self._drive(
-                    robot, yaw, self._waypoint(robot, view, last_leg=False), place
-                )
-                look = place
-                near = min(VERIFY_M, float(np.hypot(*(view - place))) - 0.1)
-                if self._in_view(robot, yaw + pan, place, near):
-                    self._verified = place
+            speed, turn = self._drive(robot, yaw, self._waypoint(robot, place), centre)
+            # The head watches the gap on the way (anyone standing there moves the place), the
+            # centre once there.
+            look = place if float(np.hypot(*(place - robot))) > LOOK_AT_GAP_M else centre
         else:
             known = [self._seen_at[k][1] for k in target.tolist() if k in self._seen_at]
             if known:
@@ -197,15 +209,25 @@ class JoinPolicy:
                     self._wait_from = self._step
                 direction = np.array([math.cos(self._wait_bearing), math.sin(self._wait_bearing)])
                 stop = self._inside(look + WAIT_DISTANCE_M * direction)
-                speed, turn = self._drive(robot, yaw, stop, look)
+                step_to = stop
+                if self.room is not None and float(np.hypot(*(stop - robot))) > SLOW_M:
+                    step_to = self._route(robot, stop)
+                    step_to = stop if step_to is None else step_to
+                speed, turn = self._drive(robot, yaw, step_to, look)
             else:
                 look = None
                 speed, turn = 0.0, SCAN_TURN_RAD_S
         pan_rate = 0.0
-        if look is not None:
+        if look is None:
+            # Looking round: the base turns slowly, the head sweeps from side to side.
+            phase = 2.0 * math.pi * self._step * self.control_dt / SWEEP_PERIOD_S
+            want = SWEEP_SHARE * self.head_limit * math.sin(phase)
+            pan_rate = PAN_GAIN * (want - pan)
+        else:
             want = _wrap(math.atan2(look[1] - y, look[0] - x) - yaw)
             want = min(max(want, -self.head_limit), self.head_limit)
             pan_rate = PAN_GAIN * (want - pan)
+        speed, turn = self._unstick(robot, yaw, speed, turn)
         command = np.array([speed, turn, pan_rate]) / self.action_scale
         return np.clip(command, -1.0, 1.0).astype(np.float32)
 
@@ -221,8 +243,10 @@ class JoinPolicy:
 
         Views are pooled: everyone detected in the same F-formation as someone to join within
         the last `MEMBER_MEMORY_S` counts, at the pose last seen, so that a group wider than
-        the field of view is pieced together. Only standing people count, and only a fresh
-        detection of someone to join refreshes the circle.
+        the field of view is pieced together, provided the detector put them with the people
+        to join at least as often as apart (a vote over the last few seconds, older detections
+        counting less). Only standing people count, and only a fresh detection of someone to
+        join refreshes the circle.
         """
         slots = seen.tolist()
         for k, slot in enumerate(slots):
@@ -234,7 +258,12 @@ class JoinPolicy:
         joined = {g for g, slot in zip(labels, slots, strict=True) if g and slot in target}
         if not joined:
             return
+        for slot in list(self._votes):
+            together, apart = self._votes[slot]
+            self._votes[slot] = (VOTE_DECAY * together, VOTE_DECAY * apart)
         for g, slot in zip(labels, slots, strict=True):
+            together, apart = self._votes.get(slot, (0.0, 0.0))
+            self._votes[slot] = (together + 1.0, apart) if g in joined else (together, apart + 1.0)
             if g in joined:
                 self._together[slot] = self._step
         memory = MEMBER_MEMORY_S / self.control_dt
@@ -242,7 +271,9 @@ class JoinPolicy:
         members = [
             slot
             for slot, when in self._together.items()
-            if self._step - when <= memory and self._step - self._still_since[slot] >= still
+            if self._step - when <= memory
+            and self._step - self._still_since[slot] >= still
+            and self._votes[slot][0] >= max(self._votes[slot][1], MIN_VOTES)
         ]
         if len(members) < 2:
             return
@@ -331,24 +362,18 @@ class JoinPolicy:
         hy = max(0.5 * self.room[1] - WALL_GAP_M, 0.0)
         return np.array([min(max(point[0], -hx), hx), min(max(point[1], -hy), hy)])
 
-    def _in_view(self, robot: np.ndarray, heading: float, point: np.ndarray, near: float) -> bool:
-        """Whether ``point`` is well inside the sensor's view, at least ``near`` metres away."""
-        delta = point - robot
-        distance = float(np.hypot(*delta))
-        bearing = abs(_wrap(math.atan2(delta[1], delta[0]) - heading))
-        return near <= distance <= KINECT_MAX_RANGE_M and bearing <= VERIFY_BEARING_RAD
-
     def _waypoint(
         self, robot: np.ndarray, goal: np.ndarray, *, last_leg: bool = True
     ) -> np.ndarray:
         """The next point on the way to ``goal``, never through the o-space.
 
         For the place (``last_leg``), the last leg is radial: from a point `APPROACH_M` outside
-        it, on its ray from the centre, straight in. The robot goes to that point (or to
-        ``goal``) directly when the segment keeps out of the disc `KEEP_OUT_M` outside the
-        circle, else around the circle on a ring `DETOUR_M` outside it (pressed inward by the
-        walls), the short way unless the walls leave no room (the side chosen is kept until
-        the way is clear).
+        it, on its ray from the centre, straight in. In a known room the robot walks to that
+        point (or to ``goal``) on the shortest way clear of everyone's personal space and of
+        the disc `KEEP_OUT_M` outside the circle (`sim.envs.planner`); without walls to plan
+        in, or with no way found, it goes directly when the segment keeps out of that disc,
+        else around the circle on a ring `DETOUR_M` outside it, the short way unless the walls
+        leave no room (the side chosen is kept until the way is clear).
         """
         assert self._circle is not None
         centre, radius = self._circle.centre, self._circle.radius
@@ -366,6 +391,10 @@ class JoinPolicy:
             entry = self._inside(
                 centre + (reach + APPROACH_M) * np.array([math.cos(phi_goal), math.sin(phi_goal)])
             )
+        if self.room is not None:
+            point = self._route(robot, entry, keep_out=(centre, radius + KEEP_OUT_M))
+            if point is not None:
+                return point
         if _segment_clear(robot, entry, centre, radius + KEEP_OUT_M):
             self._side = 0.0
             return entry
@@ -381,6 +410,59 @@ class JoinPolicy:
                 self._side = side
                 return point
         return first
+
+    def _route(
+        self,
+        robot: np.ndarray,
+        goal: np.ndarray,
+        *,
+        keep_out: tuple[np.ndarray, float] | None = None,
+    ) -> np.ndarray | None:
+        """The next point on the shortest way to ``goal`` around the people lately seen (None
+        when there is no way); the plan is redone when the goal moves or grows old."""
+        plan = self._plan
+        if (
+            plan is None
+            or float(np.hypot(*(plan.goal - goal))) > REPLAN_M
+            or self._step - self._planned_at >= REPLAN_STEPS
+        ):
+            memory = OBSTACLE_MEMORY_S / self.control_dt
+            people = [p for when, p in self._seen_at.values() if self._step - when <= memory]
+            bounds = self._bounds()
+            assert bounds is not None
+            plan = self._plan = plan_field(
+                bounds,
+                goal,
+                np.array(people).reshape(-1, 2),
+                radius=PASS_M,
+                keep_out=keep_out,
+            )
+            self._planned_at = self._step
+        point = next_point(plan, robot)
+        if point is not None and float(np.hypot(*(point - robot))) < NO_PROGRESS_M:
+            return None  # the way starts where the robot stands: boxed in, no way found
+        return point
+
+    def _unstick(
+        self, robot: np.ndarray, yaw: float, speed: float, turn: float
+    ) -> tuple[float, float]:
+        """Backs up, turning, for `BACK_UP_S` when driving forward has not moved the robot
+        `STUCK_M` in `STUCK_S` (someone too close to be seen stands in the way)."""
+        if self._step < self._backing_until:
+            return -BACK_UP_M_S, self._back_turn
+        self._track.append((self._step, robot.copy(), speed))
+        window = int(round(STUCK_S / self.control_dt))
+        if len(self._track) > window:
+            self._track.pop(0)
+        if len(self._track) == window and all(s > 0.2 for _, _, s in self._track):
+            moved = float(np.hypot(*(robot - self._track[0][1])))
+            if moved < STUCK_M:
+                self._backing_until = self._step + int(round(BACK_UP_S / self.control_dt))
+                self._back_turn = math.copysign(SCAN_TURN_RAD_S, math.sin(7.0 * self._step))
+                self._track.clear()
+                self._plan = None
+                return -BACK_UP_M_S, self._back_turn
+        return speed, turn
 
     def _drive(
         self, robot: np.ndarray, yaw: float, goal: np.ndarray, face: np.ndarray

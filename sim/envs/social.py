@@ -43,9 +43,12 @@ reward, never terminated, truncated at the time limit; a testbed for detectors).
 
 Options of `reset`: ``scenario_options`` (the scenario's options for this episode, over those
 given at construction), ``scenario_seed`` (the scenario's seed; by default drawn from the
-env's generator, drawn again when a party finds no floor for everyone), ``robot_start``
-(``"random"``: a free spot 1.5-3.5 m outside the target's circle, turned toward it within 45
-degrees; ``"scenario"``: where the scenario puts the robot).
+env's generator, drawn again when a party finds no floor for everyone or, joining, offers no
+group to join), ``robot_start``
+(``"random"``: a free spot facing the target's open side, 1.0-2.5 m beyond the place it can
+take and within 60 degrees of its bearing from the centre, away from everyone's start and
+every place planned in the first 30 s, turned toward the centre within 45 degrees;
+``"scenario"``: where the scenario puts the robot).
 """
 
 from __future__ import annotations
@@ -54,7 +57,7 @@ import dataclasses
 import functools
 import math
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -69,7 +72,7 @@ from reform.metrics import T_TWO_THIRDS, evaluate
 from scenarios import PlannedGroup, Scenario, Stage
 from scenarios.mingle import NoFloorError
 from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
-from sim.envs.target import Target, choose_target, circle_of
+from sim.envs.target import Target, choose_target, circle_of, joinable_place
 from sim.envs.view import Eyes, Truth, View, robot_frame
 from sim.episode import scene_spec
 from sim.motion import ROBOT_LIMITS
@@ -92,12 +95,15 @@ DETECT_RATE_HZ = 2.0  # Hz, detector runs on the robot's view
 JOIN_EPISODE_S = 40.0  # seconds, time limit of a joining episode
 VIEW_MARGIN_M = 1.0  # metres beyond the sensor's range that observed positions may reach
 ROOM_MARGIN_M = 0.5  # metres beyond the walls in the bounds of the robot's position
-START_DISTANCE_M = (1.5, 3.5)  # metres outside the target's circle where the robot may start
+START_DISTANCE_M = (1.0, 2.5)  # metres outside the target's circle where the robot may start
 START_CLEARANCE_M = 0.9  # metres from anyone's start (centre to centre) the robot starts
 START_WALL_GAP_M = 0.1  # metres between the robot's body and the walls at the start
 START_TURN_RAD = math.pi / 4.0  # radians, the robot starts turned this much at most off the group
+JOIN_WALL_GAP_M = 0.45  # metres from a wall to the robot's centre, at least, at a joinable place
+START_SPREAD_RAD = math.radians(60.0)  # radians around the circle off the place's bearing
+START_PLAN_S = 30.0  # seconds: the robot starts away from the places planned this soon
 START_TRIES = 200  # random start spots tried before falling back to the scenario's
-SCENARIO_DRAWS = 10  # scenario seeds tried when a draw finds no floor for everyone
+SCENARIO_DRAWS = 20  # scenario seeds tried for a party with floor for all and a group to join
 RENDER_SIZE_PX = (480, 360)  # pixels, width x height of rendered frames
 TASKS = ("join", "observe")
 ROBOT_STARTS = ("random", "scenario")
@@ -317,30 +323,24 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 f"{type(extra).__name__}"
             )
         merged = {**self._scenario_options, **extra}
-        if scenario_seed is not None:
-            scenario = self._make(int(scenario_seed), merged)
-        else:
-            scenario = self._draw(merged)
-        stage = scenario.stage
-        if stage.robot is None:
-            raise ValueError(f"reset: scenario {scenario.name!r} has no robot with these options")
-        if len(stage.people) > self.max_people:
-            raise ValueError(
-                f"reset: the scenario has {len(stage.people)} people, more than max_people = "
-                f"{self.max_people} observation slots"
-            )
-        if stage.room[0] > self._room[0] or stage.room[1] > self._room[1]:
-            raise ValueError(
-                f"reset: the room {stage.room} is larger than the {self._room} the observation "
-                "bounds were made for; give such options at construction (scenario_options)"
-            )
+        for attempt in range(SCENARIO_DRAWS):
+            if scenario_seed is not None:
+                scenario = self._make(int(scenario_seed), merged)
+            else:
+                scenario = self._draw(merged)
+            stage = scenario.stage
+            self._check_stage(stage)
+            first = self._choose_target(scenario)
+            # A joining episode needs a group to join: a draw with none is drawn again (a scene
+            # that plans no group at all, like hri-passing, is taken as it is).
+            if first is not None or self._task is None or scenario_seed is not None:
+                break
+            if not scenario.plan or attempt == SCENARIO_DRAWS - 1:
+                break
         self._scenario = scenario
         robot_id = stage.robot.id
-        first: PlannedGroup | None = None
-        if self._task is not None:
-            first = choose_target(scenario.plan, robot_id, self._task, self.np_random)
         if start == "random" and first is not None:
-            stage = self._place_robot(stage, first)
+            stage = self._place_robot(stage, first, scenario.plan)
         spec = scene_spec(stage, name=scenario.name)
         world_seed = int(self.np_random.integers(_SEED_HIGH))
         self._world = world = World(
@@ -437,6 +437,31 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     # ---------------------------------------------------------------------------------------
     # Internals
 
+    def _check_stage(self, stage: Stage) -> None:
+        if stage.robot is None:
+            raise ValueError("reset: the scenario has no robot with these options")
+        if len(stage.people) > self.max_people:
+            raise ValueError(
+                f"reset: the scenario has {len(stage.people)} people, more than max_people = "
+                f"{self.max_people} observation slots"
+            )
+        if stage.room[0] > self._room[0] or stage.room[1] > self._room[1]:
+            raise ValueError(
+                f"reset: the room {stage.room} is larger than the {self._room} the observation "
+                "bounds were made for; give such options at construction (scenario_options)"
+            )
+
+    def _choose_target(self, scenario: Scenario) -> PlannedGroup | None:
+        """The group to join (None when observing or when the scene has none to offer)."""
+        if self._task is None:
+            return None
+        stage = scenario.stage
+        assert stage.robot is not None
+        hx, hy = 0.5 * stage.room[0] - JOIN_WALL_GAP_M, 0.5 * stage.room[1] - JOIN_WALL_GAP_M
+        return choose_target(
+            scenario.plan, stage.robot.id, self._task, self.np_random, bounds=(-hx, hx, -hy, hy)
+        )
+
     def _draw(
         self, options: Mapping[str, Any], *, rng: np.random.Generator | None = None
     ) -> Scenario:
@@ -510,19 +535,30 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         speed, turn, pan = values * self.action_scale
         return float(speed), float(turn), float(pan)
 
-    def _place_robot(self, stage: Stage, group: PlannedGroup) -> Stage:
-        """The stage with the robot at a random free spot outside the target's circle (the
-        stage as it is when no spot is found in `START_TRIES` draws)."""
+    def _place_robot(
+        self, stage: Stage, group: PlannedGroup, plan: Sequence[PlannedGroup]
+    ) -> Stage:
+        """The stage with the robot at a random free spot facing the target's open side: 1.0 to
+        2.5 m beyond its place (`joinable_place`), within `START_SPREAD_RAD` of the place's
+        bearing from the centre, away from everyone's start and every place planned in the
+        first `START_PLAN_S`, turned toward the centre within `START_TURN_RAD` (the stage as it
+        is when no spot is found in `START_TRIES` draws)."""
         assert stage.robot is not None
         circle = circle_of(group, stage.robot.id)
         pad = ROBOT_RADIUS_M + START_WALL_GAP_M
         hx, hy = 0.5 * stage.room[0] - pad, 0.5 * stage.room[1] - pad
+        place = joinable_place(group, stage.robot.id, self._task or JoinTask())
+        out = (place if place is not None else circle.centre + (1.0, 0.0)) - circle.centre
+        reach = float(np.hypot(*out))
+        bearing = math.atan2(out[1], out[0])
+        spread = START_SPREAD_RAD if place is not None else math.pi
         others = np.array([p.position for p in stage.people if p.present]).reshape(-1, 2)
-        taken = np.vstack([others, group.places])
+        soon = [g.places for g in plan if g.start <= START_PLAN_S]
+        taken = np.vstack([others, group.places, *soon])
         rng = self.np_random
         for _ in range(START_TRIES):
-            angle = rng.uniform(-math.pi, math.pi)
-            distance = circle.radius + rng.uniform(*START_DISTANCE_M)
+            angle = bearing + rng.uniform(-spread, spread)
+            distance = reach + rng.uniform(*START_DISTANCE_M)
             turn = rng.uniform(-START_TURN_RAD, START_TURN_RAD)
             spot = circle.centre + distance * np.array([math.cos(angle), math.sin(angle)])
             if not (abs(spot[0]) <= hx and abs(spot[1]) <= hy):

@@ -5,8 +5,10 @@ The target is one of the scenario's planned F-formations (`scenarios.PlannedGrou
 1. a planned group the script puts the robot in (``hri-conversation``), the earliest; else
 2. a planned group of people that the robot can join, chosen at random (with the env's
    generator) among those planned to start within `TARGET_HORIZON_S` of the start and to last
-   at least `TARGET_MIN_LIFE_S`: *joinable* means that a place on its circle, at most
-   ``ring_tolerance`` outside it, keeps the task's clearance from every member's planned place;
+   at least `TARGET_MIN_LIFE_S`: *joinable* means that a place on its circle, at most 0.7 of
+   ``ring_tolerance`` outside it and inside the walls, keeps the task's clearance plus 0.1 m
+   from every member's planned place and from the places of the other groups planned
+   meanwhile (`joinable_place`);
 3. none (``hri-passing``): the task cannot succeed.
 
 The target's circle is the plan's o-space centre with the mean distance of the **people's**
@@ -28,10 +30,20 @@ import numpy as np
 from scenarios import GroundTruth, PlannedGroup
 from sim.envs.reward import JoinTask, OSpace, joining_place
 
-__all__ = ["TARGET_HORIZON_S", "TARGET_MIN_LIFE_S", "Target", "choose_target", "is_joinable"]
+__all__ = [
+    "TARGET_HORIZON_S",
+    "TARGET_MIN_LIFE_S",
+    "Target",
+    "choose_target",
+    "circle_of",
+    "is_joinable",
+    "joinable_place",
+]
 
 TARGET_HORIZON_S = 10.0  # seconds: a target chosen at random starts within this
 TARGET_MIN_LIFE_S = 20.0  # seconds: ... and is planned to last at least this long
+JOIN_MARGIN_M = 0.1  # metres beyond the task's clearance a joinable place keeps from people
+JOIN_OFFSET_SHARE = 0.7  # share of the ring tolerance a joinable place may lie outside the circle
 _TIME_SLACK_S = 1e-6  # seconds
 
 
@@ -44,41 +56,93 @@ def circle_of(group: PlannedGroup, robot_id: int) -> OSpace:
     return OSpace.around(group.centre, group.places[_people(group, robot_id)])
 
 
-def is_joinable(group: PlannedGroup, robot_id: int, task: JoinTask) -> bool:
-    """Whether a place on the group's circle (at most ``ring_tolerance`` outside) keeps the
-    task's clearance from every person's planned place."""
+def joinable_place(
+    group: PlannedGroup,
+    robot_id: int,
+    task: JoinTask,
+    bounds: tuple[float, float, float, float] | None = None,
+    others: np.ndarray | None = None,
+) -> np.ndarray | None:
+    """A place for the robot in the group's circle, from the plan, or None.
+
+    For a group the script puts the robot in, its planned place. Otherwise a place on the
+    circle (at most `JOIN_OFFSET_SHARE` of ``ring_tolerance`` outside it, inside ``bounds``
+    (x_min, x_max, y_min, y_max), the walls, when given) that keeps the task's clearance and
+    `JOIN_MARGIN_M` more from every member's planned place and from ``others`` (k, 2), people
+    planned to stand nearby: a place with room to spare, not one on the edge of the rules.
+    """
     people = _people(group, robot_id)
     if people.sum() < 2:
-        return False
+        return None
+    if not people.all():
+        return np.array(group.places[~people][0], dtype=np.float64)
     circle = circle_of(group, robot_id)
-    places = group.places[people]
-    angles = np.arctan2(places[:, 1] - circle.centre[1], places[:, 0] - circle.centre[0])
-    widest = np.sort(angles)
-    gaps = np.diff(np.append(widest, widest[0] + 2.0 * math.pi))
+    places = group.places
+    if others is not None and len(others):
+        near = np.hypot(*(others - circle.centre).T) <= circle.radius + 2.0 * task.clearance
+        places = np.vstack([places, others[near]])
+    angles = np.sort(np.arctan2(places[:, 1] - circle.centre[1], places[:, 0] - circle.centre[0]))
+    gaps = np.diff(np.append(angles, angles[0] + 2.0 * math.pi))
     k = int(np.argmax(gaps))
-    outward = circle.centre + np.array(
-        [math.cos(widest[k] + 0.5 * gaps[k]), math.sin(widest[k] + 0.5 * gaps[k])]
-    )
+    mid = angles[k] + 0.5 * gaps[k]
+    outward = circle.centre + np.array([math.cos(mid), math.sin(mid)])
+    clearance = task.clearance + JOIN_MARGIN_M
     place = joining_place(
-        circle, places, outward, clearance=task.clearance, max_offset=task.ring_tolerance
+        circle,
+        places,
+        outward,
+        clearance=clearance,
+        max_offset=JOIN_OFFSET_SHARE * task.ring_tolerance,
+        bounds=bounds,
     )
-    return bool(np.min(np.hypot(*(places - place).T)) >= task.clearance)
+    if bounds is not None:
+        x0, x1, y0, y1 = bounds
+        if not (x0 <= place[0] <= x1 and y0 <= place[1] <= y1):
+            return None
+    if np.min(np.hypot(*(places - place).T)) < clearance:
+        return None
+    return place
+
+
+def is_joinable(
+    group: PlannedGroup,
+    robot_id: int,
+    task: JoinTask,
+    bounds: tuple[float, float, float, float] | None = None,
+    others: np.ndarray | None = None,
+) -> bool:
+    """Whether `joinable_place` finds a place."""
+    return joinable_place(group, robot_id, task, bounds, others) is not None
 
 
 def choose_target(
-    plan: Sequence[PlannedGroup], robot_id: int, task: JoinTask, rng: np.random.Generator
+    plan: Sequence[PlannedGroup],
+    robot_id: int,
+    task: JoinTask,
+    rng: np.random.Generator,
+    *,
+    bounds: tuple[float, float, float, float] | None = None,
 ) -> PlannedGroup | None:
-    """The planned group the robot is meant to join (see the module doc), or None."""
+    """The planned group the robot is meant to join (see the module doc), or None.
+
+    ``bounds`` (x_min, x_max, y_min, y_max): where the robot's centre may stand (the walls).
+    """
     with_robot = [g for g in plan if robot_id in g.members and _people(g, robot_id).sum() >= 2]
     if with_robot:
         return min(with_robot, key=lambda g: g.start)
-    candidates = [
-        g
-        for g in plan
-        if g.start <= TARGET_HORIZON_S
-        and g.end - max(g.start, 0.0) >= TARGET_MIN_LIFE_S
-        and is_joinable(g, robot_id, task)
-    ]
+    candidates = []
+    for g in plan:
+        if g.start > TARGET_HORIZON_S or g.end - max(g.start, 0.0) < TARGET_MIN_LIFE_S:
+            continue
+        # Other people planned to stand around then must leave the gap free too.
+        others = [
+            h.places[[m != robot_id and m not in g.members for m in h.members]]
+            for h in plan
+            if h is not g and h.start < g.end and h.end > g.start and h.start <= TARGET_HORIZON_S
+        ]
+        crowd = np.vstack(others) if others else None
+        if is_joinable(g, robot_id, task, bounds, crowd):
+            candidates.append(g)
     if not candidates:
         return None
     return candidates[int(rng.integers(len(candidates)))]
@@ -121,6 +185,7 @@ class Target:
             end=group.end,
         )
         self._truth = GroundTruth([alone], self._ids)
+        self._formed = False
 
     @property
     def gone(self) -> bool:
