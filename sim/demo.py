@@ -118,8 +118,9 @@ FULL = DemoBudget(
         SyntheticSource("mingle", episodes=2, duration=300.0),
         SyntheticSource("word-improv", episodes=2),
     ),
-    noise_position_grid=(0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3),
-    noise_yaw_grid=(0.0, 0.2, 0.4, 0.6, 0.8, 1.0),
+    # A coarser grid than the documented experiment's (sim.sim2real), for time.
+    noise_position_grid=(0.0, 0.1, 0.2, 0.3),
+    noise_yaw_grid=(0.0, 0.3, 0.6, 0.9),
     stress_grid="small",
     stress_axes=None,
     hri_seeds=2,

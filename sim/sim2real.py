@@ -70,6 +70,8 @@ __all__ = [
     "calibrate_tracker_noise",
     "count_pairs",
     "generate_sources",
+    "joint_distances",
+    "nearest_neighbour_quantiles",
     "sim_to_real",
     "train_reform",
 ]
@@ -347,6 +349,54 @@ def calibrate_tracker_noise(
 
 
 # ------------------------------------------------------------------------------------------
+# Where synthetic and real data differ
+
+
+JOINT_DISTANCE_EDGES_M = (0.0, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 4.0, math.inf)
+JOINT_EFFORT_BINS = 8  # Effort Angle bins over [0, 2 pi]
+NEIGHBOUR_QUANTILES = (0.1, 0.25, 0.5)
+
+
+def nearest_neighbour_quantiles(frames: Sequence[Frame]) -> tuple[float, ...]:
+    """Quantiles (:data:`NEIGHBOUR_QUANTILES`) of every person's distance to the nearest other
+    person in the same frame, metres."""
+    nearest = []
+    for frame in frames:
+        if frame.n_people < 2:
+            continue
+        p = frame.position
+        d = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1])
+        np.fill_diagonal(d, np.inf)
+        nearest.append(d.min(axis=1))
+    if not nearest:
+        raise ValueError("frames must hold at least one frame of two or more people")
+    return tuple(float(q) for q in np.quantile(np.concatenate(nearest), NEIGHBOUR_QUANTILES))
+
+
+def joint_distances(frames: Sequence[Frame], reference: Sequence[Frame]) -> tuple[float, float]:
+    """Total-variation distance between the joint (Distance, Effort Angle) histograms of two
+    datasets' pairs: in-group pairs, then out-of-group pairs (0: same shares in every bin, 1:
+    disjoint). The marginals compared by KS can agree while the joint, which a pair classifier
+    learns, does not."""
+    from reform.detector import training_pairs
+
+    edges = (
+        np.asarray(JOINT_DISTANCE_EDGES_M),
+        np.linspace(0.0, 2.0 * math.pi, JOINT_EFFORT_BINS + 1),
+    )
+
+    def shares(x: np.ndarray, y: np.ndarray, label: int) -> np.ndarray:
+        h, _, _ = np.histogram2d(x[y == label, 0], x[y == label, 1], bins=edges)
+        return h / max(h.sum(), 1.0)
+
+    xa, ya, _ = training_pairs(frames)
+    xb, yb, _ = training_pairs(reference)
+    return tuple(  # type: ignore[return-value]
+        float(0.5 * np.abs(shares(xa, ya, label) - shares(xb, yb, label)).sum()) for label in (1, 0)
+    )
+
+
+# ------------------------------------------------------------------------------------------
 # Training and scoring
 
 
@@ -495,6 +545,9 @@ class SimToReal:
         noise: the tracker-noise calibration (None when no source asks for noise).
         calibration: per source, :meth:`reform.calibration.Comparison.to_json` against its
             real counterpart (mingle: SALSA's training split; word-improv: Babble).
+        realism: per data set compared with SALSA's training split (the SALSA-like sources,
+            plain and with tracker noise): nearest-neighbour distance quantiles and the joint
+            pair-feature distances (:func:`joint_distances`), SALSA's own quantiles beside.
         tuning: per training set and classifier, :meth:`reform.experiment.Tuning.to_json`.
         gcff_tuning: the tuned GCFF setting (stride m, mdl m², training F1).
         frames: annotated frames per part.
@@ -509,6 +562,7 @@ class SimToReal:
     training: Mapping[str, Mapping[str, int]]
     noise: NoiseCalibration | None
     calibration: Mapping[str, Mapping[str, Any]]
+    realism: Mapping[str, Mapping[str, Any]]
     tuning: Mapping[str, Mapping[str, Any]]
     gcff_tuning: Mapping[str, float]
     frames: Mapping[str, int]
@@ -544,6 +598,7 @@ class SimToReal:
             "training": {k: dict(v) for k, v in self.training.items()},
             "tracker_noise": None if self.noise is None else self.noise.to_json(),
             "calibration": {k: dict(v) for k, v in self.calibration.items()},
+            "realism": {k: dict(v) for k, v in self.realism.items()},
             "tuning": {k: dict(v) for k, v in self.tuning.items()},
             "gcff_tuning": dict(self.gcff_tuning),
             "bootstrap": {
@@ -674,9 +729,26 @@ def sim_to_real(
     calibration = {}
     for s in sources:
         ref_name, ref_frames = counterpart.get(s.scenario, (SALSA_TRAIN, train))
-        comparison = compare(generated[s.scenario], ref_frames).to_json()
+        comparison = compare(exact[s.scenario], ref_frames).to_json()
         comparison["reference"] = ref_name
         calibration[s.scenario] = comparison
+
+    realism: dict[str, dict[str, Any]] = {
+        SALSA_TRAIN: {"nearest_neighbour_m": list(nearest_neighbour_quantiles(train))}
+    }
+    for s in sources:
+        if s.scenario in counterpart:
+            continue
+        variants = [(s.scenario, exact[s.scenario])]
+        if s.tracker_noise:
+            variants.append((f"{s.scenario} + tracker noise", generated[s.scenario]))
+        for label, frames in variants:
+            tv_in, tv_out = joint_distances(frames, train)
+            realism[label] = {
+                "nearest_neighbour_m": list(nearest_neighbour_quantiles(frames)),
+                "joint_tv_in_group": tv_in,
+                "joint_tv_out_of_group": tv_out,
+            }
 
     groups = {d: _block_labels(frames, BOOTSTRAP_BLOCKS) for d, frames in tests.items()}
     weights = {}
@@ -796,6 +868,7 @@ def sim_to_real(
         training=training,
         noise=noise,
         calibration=calibration,
+        realism=realism,
         tuning=tuning,
         gcff_tuning=gcff_tuning,
         frames={

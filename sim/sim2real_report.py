@@ -226,6 +226,7 @@ def sim2real_markdown(
             + ".",
             "",
         ]
+    lines += _realism_section(result)
     lines += ["## Hyper-parameters", ""]
     body = []
     for training, by_classifier in result.tuning.items():
@@ -265,6 +266,68 @@ def sim2real_markdown(
             lines += [f"### {titles[dataset]}", "", rows_table(rows), ""]
     lines += [f"Run time: {result.seconds / 60:.1f} min.", ""]
     return "\n".join(lines)
+
+
+def _realism_section(result: SimToReal) -> list[str]:
+    """Where the SALSA-like synthetic data still differ from SALSA's training split."""
+    from sim.sim2real import NEIGHBOUR_QUANTILES, SALSA_TRAIN
+
+    realism = result.realism
+    if SALSA_TRAIN not in realism or len(realism) < 2:
+        return []
+    quantiles = " / ".join(f"q{round(100 * q)}" for q in NEIGHBOUR_QUANTILES)
+    rows = []
+    for name, stats in realism.items():
+        rows.append(
+            [
+                "SALSA training split" if name == SALSA_TRAIN else f"`{name}`",
+                " / ".join(f"{v:.2f}" for v in stats["nearest_neighbour_m"]),
+                _m3(stats.get("joint_tv_in_group")),
+                _m3(stats.get("joint_tv_out_of_group")),
+            ]
+        )
+    lines = [
+        "## Where the synthetic parties still differ from SALSA",
+        "",
+        "Statistics of training data only (SALSA's training split), no detection scores. "
+        "Nearest neighbour: every person's distance to the closest other person in the frame. "
+        "Joint TV: total-variation distance between the (Distance, Effort Angle) histograms "
+        "of the pairs (bins: 11 distances x 8 Effort Angles), in-group and out-of-group; the "
+        "KS statistics above compare the two features one at a time, the joint is what a pair "
+        "classifier learns from.",
+        "",
+        render_table(
+            ["data", f"nearest neighbour {quantiles} (m)", "joint TV in-group", "joint TV out"],
+            rows,
+            style="markdown",
+        ),
+        "",
+    ]
+    for scenario, comparison in result.calibration.items():
+        if comparison.get("reference") != SALSA_TRAIN:
+            continue
+        sizes = [
+            e
+            for e in comparison["by_size"]
+            if e["checked"] and e["size"] >= 3 and e["symmetry_candidate_deg"] is not None
+        ]
+        if sizes:
+            lines += [
+                f"Symmetry (deg, 0 = members evenly around the centre), `{scenario}` / SALSA "
+                "training split: "
+                + ", ".join(
+                    f"f{e['size']} {e['symmetry_candidate_deg']:.0f} / "
+                    f"{e['symmetry_reference_deg']:.0f}"
+                    for e in sizes
+                )
+                + ".",
+                "",
+            ]
+    return lines
+
+
+def _m3(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f}"
 
 
 def row_name(classifier: str) -> str:

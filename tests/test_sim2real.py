@@ -226,3 +226,29 @@ def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
     extra = [] if not argv else ["--datasets", "/nonexistent"]
     assert main(["experiment", "sim2real", "--out", str(tmp_path), *extra, *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_nearest_neighbour_quantiles() -> None:
+    from reform import Frame
+    from sim.sim2real import nearest_neighbour_quantiles
+
+    # Hand-computed: people at x = 0, 1, 3 m; nearest neighbours 1, 1, 2 m.
+    frame = Frame(
+        ids=np.array([1, 2, 3]),
+        position=np.array([[0.0, 0.0], [1.0, 0.0], [3.0, 0.0]]),
+        yaw=np.zeros(3),
+        groups=((1, 2), (3,)),
+    )
+    q10, q25, q50 = nearest_neighbour_quantiles([frame])
+    assert q50 == pytest.approx(1.0) and q10 == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="at least one frame of two or more people"):
+        nearest_neighbour_quantiles([])
+
+
+def test_joint_distances(party) -> None:
+    from sim.sim2real import joint_distances
+
+    assert joint_distances(party, party) == (0.0, 0.0)
+    spread = [f.replace(position=f.position * 10.0) for f in party]  # every pair 10 x apart
+    tv_in, tv_out = joint_distances(spread, party)
+    assert tv_in > 0.9 and 0.0 < tv_out <= 1.0
