@@ -79,6 +79,7 @@ __all__ = [
 SALSA_RATE_HZ = 1.0 / 3.0  # Hz: SALSA is annotated every 3 s
 SALSA_TEST = "salsa-test"  # dataset label of the SALSA test split
 BABBLE = "babble"  # dataset label of Babble (every annotated frame)
+BABBLE_EMPTY = "babble-without-fformation"  # Babble's annotated frames holding no F-formation
 SYNTHETIC = "synthetic"  # training label: the synthetic set
 SALSA_TRAIN = "salsa-train"  # training label: SALSA's training split
 NONE = "none"  # training label of detectors that learn nothing (GCFF paper, majority)
@@ -875,6 +876,7 @@ def sim_to_real(
             SALSA_TRAIN: len(train),
             SALSA_TEST: len(test),
             BABBLE: len(babble_frames),
+            BABBLE_EMPTY: sum(1 for f in babble_frames if not f.fformations()),
             SYNTHETIC: len(synthetic),
         },
         seed=int(seed),
