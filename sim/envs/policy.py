@@ -296,9 +296,10 @@ class JoinPolicy:
         Two people's facings rarely tell where their o-space centre is: facing each other it is
         their midpoint, standing open (a place kept for a third) it lies off it on the
         perpendicular bisector. The robot stands on the bisector where it is on the circle under
-        both readings (the midpoint, and the estimate; the estimate alone when they are too far
-        apart), clear of both, on the open side (else the side it is on; a side once chosen is
-        kept unless the pair is open the other way); None when no such place is free.
+        both readings (the midpoint, and the estimate; halfway between them when no place
+        suits both), clear of both, on the open side (else the side it is on; a side once
+        chosen is kept unless the pair is open the other way); None when no such place is
+        free.
         """
         assert self._circle is not None
         a, b = self._members
@@ -321,15 +322,13 @@ class JoinPolicy:
         occupants = self._occupants()[2:]
         for side in (first, -first):
             readings = (0.0, abs(h_est)) if side * h_est > 0.0 else (0.0,)
-            for trusted in (readings, readings[-1:]):
-                reach = [h + math.hypot(half, h) for h in trusted]
-                low = max(rho_clear, max(reach) - tol)
-                high = min(reach) + tol
-                if low <= high:
-                    break
-            else:
-                continue
-            place = middle + side * 0.5 * (low + high) * normal
+            reach = [h + math.hypot(half, h) for h in readings]
+            low = max(rho_clear, max(reach) - tol)
+            high = min(reach) + tol
+            # Where both readings hold, the middle of that stretch; when none does, halfway
+            # between the two (each reading then misses by the same, least amount).
+            rho = 0.5 * (low + high) if low <= high else max(rho_clear, 0.5 * sum(reach))
+            place = middle + side * rho * normal
             if not np.allclose(self._inside(place), place):
                 continue
             if len(occupants) and np.min(np.hypot(*(occupants - place).T)) < clear:

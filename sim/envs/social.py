@@ -44,11 +44,16 @@ reward, never terminated, truncated at the time limit; a testbed for detectors).
 Options of `reset`: ``scenario_options`` (the scenario's options for this episode, over those
 given at construction), ``scenario_seed`` (the scenario's seed; by default drawn from the
 env's generator, drawn again when a party finds no floor for everyone or, joining, offers no
-group to join), ``robot_start``
-(``"random"``: a free spot facing the target's open side, 1.0-2.5 m beyond the place it can
-take and within 60 degrees of its bearing from the centre, away from everyone's start and
-every place planned in the first 30 s, turned toward the centre within 45 degrees;
-``"scenario"``: where the scenario puts the robot).
+group to join or no free spot to start from near it), ``robot_start`` (``"random"``: a free
+spot facing the target's open side, 1.0-2.5 m beyond the place it can take and within 60
+degrees of its bearing from the centre, away from everyone's start and every place planned in
+the first 30 s, turned toward the centre within 45 degrees; ``"scenario"``: where the scenario
+puts the robot).
+
+Timing, a design choice: the agent decides at 10 Hz (a person's reaction time; the robot's
+top speed moves it 8 cm per step), the world moves at its own 100 Hz underneath, and the
+detector, by far the costliest part of a step, runs at 2 Hz (Babble's annotation rate): the
+groups a robot acts on are at most half a second old.
 """
 
 from __future__ import annotations
@@ -88,6 +93,7 @@ __all__ = [
     "ROBOT_STARTS",
     "TASKS",
     "SocialEnv",
+    "TruthDetector",
 ]
 
 CONTROL_RATE_HZ = 10.0  # Hz, agent decisions (the world moves at 100 Hz in between)
@@ -161,7 +167,9 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         control_rate: agent decisions per second (a divisor of the world's 100 Hz).
         detect_rate: detector runs per second (a divisor of ``control_rate``).
         sensor: the robot's head sensor (default: `sim.Sensor()`, a Kinect's view).
-        detector: an F-formation detector with ``predict(frames)`` (fitted); default GCFF.
+        detector: an F-formation detector with ``predict(frames)`` (fitted), ``"gcff"`` (the
+            default, `reform.Gcff` with the reference settings) or ``"truth"`` (`TruthDetector`:
+            the ground truth of what the robot sees, an upper bound).
         model: path to a REFORM model file (`reform.persistence.save_model`) to detect with.
         observe_groups: whether the observation holds ``people_group``.
         robot_start: default start of the robot, ``"random"`` or ``"scenario"``; default:
@@ -331,6 +339,12 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             stage = scenario.stage
             self._check_stage(stage)
             first = self._choose_target(scenario)
+            if start == "random" and first is not None:
+                placed = self._place_robot(stage, first, scenario.plan)
+                if placed is not None:
+                    stage = placed
+                elif scenario_seed is None and attempt < SCENARIO_DRAWS - 1:
+                    continue  # no free spot near the group: draw again
             # A joining episode needs a group to join: a draw with none is drawn again (a scene
             # that plans no group at all, like hri-passing, is taken as it is).
             if first is not None or self._task is None or scenario_seed is not None:
@@ -339,8 +353,6 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 break
         self._scenario = scenario
         robot_id = stage.robot.id
-        if start == "random" and first is not None:
-            stage = self._place_robot(stage, first, scenario.plan)
         spec = scene_spec(stage, name=scenario.name)
         world_seed = int(self.np_random.integers(_SEED_HIGH))
         self._world = world = World(
@@ -537,12 +549,12 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     def _place_robot(
         self, stage: Stage, group: PlannedGroup, plan: Sequence[PlannedGroup]
-    ) -> Stage:
+    ) -> Stage | None:
         """The stage with the robot at a random free spot facing the target's open side: 1.0 to
         2.5 m beyond its place (`joinable_place`), within `START_SPREAD_RAD` of the place's
         bearing from the centre, away from everyone's start and every place planned in the
-        first `START_PLAN_S`, turned toward the centre within `START_TURN_RAD` (the stage as it
-        is when no spot is found in `START_TRIES` draws)."""
+        first `START_PLAN_S`, turned toward the centre within `START_TURN_RAD` (None when no
+        spot is found in `START_TRIES` draws)."""
         assert stage.robot is not None
         circle = circle_of(group, stage.robot.id)
         pad = ROBOT_RADIUS_M + START_WALL_GAP_M
@@ -573,7 +585,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 yaw=math.atan2(math.sin(yaw), math.cos(yaw)),
             )
             return dataclasses.replace(stage, robot=robot)
-        return stage
+        return None
 
     def _advance(self, *, first_step: bool) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Observation and info of the state the world is in now."""
@@ -811,9 +823,31 @@ def _robot_start(value: Any) -> str:
     return str(value)
 
 
+class TruthDetector:
+    """A detector that knows: each frame's ground truth as its partition (an upper bound for
+    policies acting on detections; the frames an environment detects on carry the truth
+    restricted to what the robot sees)."""
+
+    def fit(self, frames: Sequence[Frame]) -> TruthDetector:
+        return self
+
+    def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
+        return [frame.partition() for frame in frames]
+
+
 def _detector(detector: Any, model: str | os.PathLike[str] | None) -> tuple[Any, str]:
     if detector is not None and model is not None:
         raise ValueError("give a detector or a model file, not both")
+    if isinstance(detector, str):
+        if detector == "gcff":
+            detector = None
+        elif detector == "truth":
+            return TruthDetector(), "truth"
+        else:
+            raise ValueError(
+                f"detector must be 'gcff', 'truth' or an object with predict(frames), got "
+                f"{detector!r}"
+            )
     if model is not None:
         from reform.persistence import load_model
 

@@ -12,12 +12,15 @@ The target is one of the scenario's planned F-formations (`scenarios.PlannedGrou
 3. none (``hri-passing``): the task cannot succeed.
 
 The target's circle is the plan's o-space centre with the mean distance of the **people's**
-planned places from it as radius. The group is *formed* when its people have arrived at their
-places, by the scenario's ground-truth rule (`scenarios.GroundTruth`) applied to the people
-alone (so a group the robot belongs to is formed before the robot gets there). When the planned
-group ends, the target passes to its successor: the next planned group to start (at or after
-the end) that shares at least two people with it (the circle re-formed after a shuffle, two
-groups merged, someone joined). With no successor the target is *gone*.
+planned places from it as radius; once they stand there, it follows where they actually stand
+(people arrive within the ground-truth rule's 0.25 m of their places): the planned centre
+moved by the people's mean offset from their places, the radius their mean distance from it.
+The group is *formed* when its people have arrived at their places, by the scenario's
+ground-truth rule (`scenarios.GroundTruth`) applied to the people alone (so a group the robot
+belongs to is formed before the robot gets there). When the planned group ends, the target
+passes to its successor: the next planned group to start (at or after the end) that shares at
+least two people with it (the circle re-formed after a shuffle, two groups merged, someone
+joined). With no successor the target is *gone*.
 """
 
 from __future__ import annotations
@@ -186,6 +189,8 @@ class Target:
         )
         self._truth = GroundTruth([alone], self._ids)
         self._formed = False
+        self._rows = np.array([self._ids.index(m) for m in self.members], dtype=np.int64)
+        self._places = group.places[people]
 
     @property
     def gone(self) -> bool:
@@ -215,5 +220,14 @@ class Target:
                 self._gone = True
                 return False
             self._follow(successor)
-        groups = self._truth.update(np.array([time]), present[None], position[None], yaw[None])[0]
-        return bool(groups)
+        if not self._formed:  # once formed, a lone planned group lasts until its end
+            groups = self._truth.update(np.array([time]), present[None], position[None], yaw[None])[
+                0
+            ]
+            self._formed = bool(groups)
+        if self._formed:
+            # The circle where the people actually stand: the planned centre moved with them.
+            actual = position[self._rows]
+            centre = self.group.centre + (actual - self._places).mean(axis=0)
+            self.circle = OSpace.around(centre, actual)
+        return self._formed
