@@ -13,9 +13,9 @@ joining task and one for observing::
 ``model=``, ``sensor=``, ``render_mode="rgb_array"``, ``record_dir=``, ...). Registration
 imports only gymnasium: the environment's module (MuJoCo, the detectors) loads on first make.
 
-Public surface (loaded on first use): `SocialEnv`, the task (`JoinTask`, `OSpace`,
-`estimate_o_space`, `joining_place`, `REWARD_TERMS`), the scripted baseline (`JoinPolicy`,
-`evaluate_policy`, `PolicyEvaluation`), `ENV_IDS`.
+Public surface (loaded on first use): `SocialEnv`, `TruthDetector`, the task (`JoinTask`,
+`OSpace`, `estimate_o_space`, `joining_place`, `REWARD_TERMS`), the scripted baseline
+(`JoinPolicy`, `evaluate_policy`, `PolicyEvaluation`), `ENV_IDS`.
 """
 
 from __future__ import annotations
@@ -65,6 +65,7 @@ register_envs()
 
 _EXPORTS = {
     "SocialEnv": "sim.envs.social",
+    "TruthDetector": "sim.envs.social",
     "JoinTask": "sim.envs.reward",
     "OSpace": "sim.envs.reward",
     "REWARD_TERMS": "sim.envs.reward",
