@@ -523,3 +523,27 @@ def test_policy_evaluate_command(tmp_path: Path, capsys: pytest.CaptureFixture[s
     data = json.loads(out.read_text())
     assert data["episodes"] == 2 and len(data["per_episode"]) == 2
     assert main(["policy", "evaluate", "--env", "ReformSim/Nope-v0", "--episodes", "1"]) == 2
+
+
+def test_detectors_truth_gcff_and_a_reform_model_file(tmp_path: Path) -> None:
+    from toy_scenes import toy_frames
+
+    from reform import Reform
+    from reform.persistence import save_model
+
+    truth = toy_env(detector="truth")
+    _, info = truth.reset(seed=0)
+    assert truth.detector_name == "truth"
+    assert info["detected_groups"] == ((1, 2), (0,))  # the pair (the robot alone) it sees
+    assert info["metrics"]["f1"] == 1.0
+    assert toy_env(detector="gcff").detector_name == "gcff"
+    path = tmp_path / "reform.skops"
+    save_model(Reform().fit(toy_frames(0, 20)), path)
+    reform = toy_env(model=path)
+    assert reform.detector_name == "reform"
+    _, info = reform.reset(seed=0)
+    assert sorted(m for g in info["detected_groups"] for m in g) == [0, 1, 2]
+    with pytest.raises(ValueError, match="detector must be 'gcff', 'truth' or an object"):
+        toy_env(detector="oracle")
+    with pytest.raises(ValueError, match="give a detector or a model file, not both"):
+        toy_env(detector="truth", model=path)

@@ -13,7 +13,8 @@ _DESCRIPTION = """\
 Runs the scripted baseline of the joining task (go to the gap in the detected o-space, face the
 centre; sim.envs.JoinPolicy) for --episodes episodes of a joining environment (episode k is
 reset with seed S + k) and prints its success rate. The environment detects F-formations with
-GCFF, or with the REFORM model given by --model.
+GCFF, with the REFORM model given by --model, or, with --detector truth, knows them (the
+policy's upper bound).
 """
 
 
@@ -41,6 +42,13 @@ def register(subparsers) -> None:
     evaluate.add_argument(
         "--model", default=None, metavar="FILE", help="REFORM model file to detect with"
     )
+    evaluate.add_argument(
+        "--detector",
+        choices=("gcff", "truth"),
+        default=None,
+        help="detector without a --model: gcff (default) or truth (the ground truth of what the "
+        "robot sees: the policy's upper bound)",
+    )
     evaluate.add_argument("--json", default=None, metavar="FILE", help="write the results here")
     evaluate.add_argument("--progress", action="store_true", help="show a progress bar")
     evaluate.set_defaults(handler=_evaluate)
@@ -59,6 +67,10 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.episodes < 1:
         raise CliError(f"--episodes must be a positive number, got {args.episodes}")
     kwargs = {}
+    if args.detector is not None:
+        if args.model is not None:
+            raise CliError("give --model or --detector, not both")
+        kwargs["detector"] = args.detector
     if args.model is not None:
         if not Path(args.model).is_file():
             raise CliError(f"--model: no such file {args.model}")
