@@ -107,10 +107,11 @@ def score_bars(
                 capsize=2,
                 label=bar.label,
             )
+    ax.set_xticks(range(len(groups)), list(groups))
     for name, value in (reference or {}).items():
         ax.axhline(value, color="0.3", linestyle="--", linewidth=0.8)
-        ax.annotate(name, (len(groups) - 0.5, value), ha="right", va="bottom", fontsize=7)
-    ax.set_xticks(range(len(groups)), list(groups))
+        right = ax.get_xlim()[1]
+        ax.annotate(name, (right, value), ha="right", va="bottom", fontsize=7, color="0.3")
     ax.set_ylabel(ylabel)
     if title:
         ax.set_title(title)

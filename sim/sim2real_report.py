@@ -100,6 +100,7 @@ def sim2real_markdown(
         ),
         "",
     ]
+    lines += _reading(result)
     empty = result.frames.get(BABBLE_EMPTY)
     if empty:
         share = (result.frames[BABBLE] - empty) / result.frames[BABBLE]
@@ -267,9 +268,10 @@ def sim2real_markdown(
         lines += [
             "## Diagnostics",
             "",
-            "Bagged Trees with the synthetic model's hyper-parameters, trained on parts of the "
-            "synthetic data: each source alone, and both without tracker noise. They show what "
-            "each part contributes; they informed no choice.",
+            "Bagged Trees with the synthetic model's hyper-parameters, trained on variants of "
+            "the synthetic data: each source alone, both without tracker noise, and the "
+            "randomised mode (`mingle-randomised`, no tracker noise) in place of `mingle`. They "
+            "show what each part contributes; they informed no choice.",
             "",
         ]
         for dataset in (SALSA_TEST, BABBLE):
@@ -277,6 +279,67 @@ def sim2real_markdown(
             lines += [f"### {titles[dataset]}", "", rows_table(rows), ""]
     lines += [f"Run time: {result.seconds / 60:.1f} min.", ""]
     return "\n".join(lines)
+
+
+def _reading(result: SimToReal) -> list[str]:
+    """The goals in words, from the numbers."""
+    from sim.sim2real import BABBLE, SALSA_TEST, SALSA_TRAIN
+
+    salsa = {c: v for (c, d), v in result.differences.items() if d == SALSA_TEST}
+    babble = {c: v for (c, d), v in result.differences.items() if d == BABBLE}
+    if not salsa:
+        return []
+    lines = ["Reading the results:", ""]
+    worst = min(v[0] for v in salsa.values())
+    best = max(v[0] for v in salsa.values())
+    below = all(v[2] < 0 for v in salsa.values())
+    lines.append(
+        f"- SALSA test split: synthetic-only training lands {100 * -best:.1f} to "
+        f"{100 * -worst:.1f} F1 points below SALSA-trained REFORM"
+        + (" (every 95 % interval of the difference below zero)" if below else "")
+        + (
+            "; the 2-point goal is missed."
+            if best < -0.02
+            else "; within 2 points for at least one classifier."
+        )
+    )
+    gcff_rows = [
+        r for r in result.rows if not r.diagnostic and r.dataset == BABBLE and "GCFF" in r.detector
+    ]
+    synthetic_babble = [
+        r.f1()
+        for r in result.rows
+        if not r.diagnostic and r.dataset == BABBLE and r.training == "synthetic"
+    ]
+    if babble and synthetic_babble and gcff_rows:
+        lines.append(
+            f"- Babble: synthetic-only training scores {100 * min(synthetic_babble):.1f}-"
+            f"{100 * max(synthetic_babble):.1f}, {100 * min(v[0] for v in babble.values()):.1f} "
+            f"to {100 * max(v[0] for v in babble.values()):.1f} points above SALSA-trained REFORM "
+            "and above the paper's 82.1; against GCFF: "
+            + ", ".join(f"{r.detector} {100 * r.f1():.1f}" for r in gcff_rows)
+            + "."
+        )
+    realism = result.realism
+    noisy = [k for k in realism if k.endswith("tracker noise")]
+    if SALSA_TRAIN in realism and noisy and best < -0.02:
+        real_nn = realism[SALSA_TRAIN]["nearest_neighbour_m"]
+        plain = noisy[0].replace(" + tracker noise", "")
+        sim_nn = realism[plain]["nearest_neighbour_m"]
+        lines.append(
+            "- Why SALSA is missed (training data only, see *Where the synthetic parties still "
+            f"differ*): SALSA's people stand closer (nearest neighbour q10 {real_nn[0]:.2f} m "
+            f"against {sim_nn[0]:.2f} m: the simulated bodies are discs that keep people about "
+            "0.6 m apart) and its groups are far less even around their centre (Symmetry below). "
+            "The calibrated tracker noise brings each pair feature's distribution close to "
+            "SALSA's, but not their joint distribution, which is what the pair classifier "
+            f"learns (TV {realism[plain]['joint_tv_in_group']:.2f} / "
+            f"{realism[plain]['joint_tv_out_of_group']:.2f} before noise, "
+            f"{realism[noisy[0]]['joint_tv_in_group']:.2f} / "
+            f"{realism[noisy[0]]['joint_tv_out_of_group']:.2f} after). The randomised mode "
+            "(wider group shapes, the same bodies) does not close the gap either (Diagnostics)."
+        )
+    return [*lines, ""]
 
 
 def _realism_section(result: SimToReal) -> list[str]:
