@@ -12,7 +12,6 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-
 _DEFAULT_FILE_MODE = 0o666
 
 

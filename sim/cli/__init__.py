@@ -50,7 +50,9 @@ _COMMANDS = (
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="reform-sim",
-        description="Simulate social scenes, detect F-formations (REFORM, GCFF), evaluate, log to Rerun.",
+        description=(
+            "Simulate social scenes, detect F-formations (REFORM, GCFF), evaluate, log to Rerun."
+        ),
     )
     from reform import __version__
 
