@@ -313,8 +313,8 @@ def _reading(result: SimToReal) -> list[str]:
     ]
     if babble and synthetic_babble and gcff_rows:
         lines.append(
-            f"- Babble: synthetic-only training scores {100 * min(synthetic_babble):.1f}-"
-            f"{100 * max(synthetic_babble):.1f}, {100 * min(v[0] for v in babble.values()):.1f} "
+            f"- Babble: synthetic-only training scores {_span(synthetic_babble)}, "
+            f"{100 * min(v[0] for v in babble.values()):.1f} "
             f"to {100 * max(v[0] for v in babble.values()):.1f} points above SALSA-trained REFORM "
             "and above the paper's 82.1; against GCFF: "
             + ", ".join(f"{r.detector} {100 * r.f1():.1f}" for r in gcff_rows)
@@ -340,6 +340,15 @@ def _reading(result: SimToReal) -> list[str]:
             "(wider group shapes, the same bodies) does not close the gap either (Diagnostics)."
         )
     return [*lines, ""]
+
+
+def _span(values: list[float]) -> str:
+    low, high = min(values), max(values)
+    return (
+        f"{100 * low:.1f}"
+        if f"{100 * low:.1f}" == f"{100 * high:.1f}"
+        else (f"{100 * low:.1f}-{100 * high:.1f}")
+    )
 
 
 def _realism_section(result: SimToReal) -> list[str]:
