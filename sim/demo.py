@@ -417,7 +417,8 @@ def run_demo(
         detectors={**{n: models[n] for n in CLASSIFIERS}, STRESS_GCFF: gcff},
         progress=lambda line: None,
     )
-    stress_files = write_stress(stress, out / "stress", command=_command(out, datasets, seed))
+    command = _command(out, datasets, seed, quick=quick)
+    stress_files = write_stress(stress, out / "stress", command=command)
     figures += [p for k, p in stress_files.items() if k.startswith("plot:")]
     recordings.append(record_stress(stress, out / RECORDINGS / "stress.rrd"))
 
@@ -463,7 +464,6 @@ def run_demo(
         detectors=hri_detectors,
         training=hri_training,
     )
-    command = _command(out, datasets, seed, quick=quick)
     with _atomic_text(out / "hri.md") as handle:
         handle.write(hri.to_markdown(command=command))
     recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
