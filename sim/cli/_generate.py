@@ -4,23 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
 
-from sim.cli._common import CliError
-
-# Sensor flags: field of sim.Sensor -> (flag, unit shown in the help).
-_SENSOR_NUMBERS = {
-    "fov_deg": ("--fov-deg", "horizontal field of view, degrees"),
-    "min_range": ("--min-range", "nearest distance seen, metres"),
-    "max_range": ("--max-range", "farthest distance seen, metres"),
-    "position_noise": ("--position-noise", "position noise per axis (std), metres"),
-    "yaw_noise": ("--yaw-noise", "yaw noise (std), radians"),
-    "dropout": ("--dropout", "probability that a seen person is missed"),
-}
-_SENSOR_SWITCHES = {
-    "occlusion": ("--occlusion", "other bodies hide people (default: yes)"),
-    "include_robot": ("--include-robot", "the observed frames hold the robot (default: yes)"),
-}
+from sim.cli._common import CliError, add_sensor_arguments, parse_overrides, sensor_options
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -58,17 +43,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="truth",
         help="ground truth, or what the robot's head sensor observes",
     )
-    sensor = parser.add_argument_group("sensor (with --view robot)")
-    for name, (flag, text) in _SENSOR_NUMBERS.items():
-        sensor.add_argument(flag, dest=f"sensor_{name}", type=float, default=None, help=text)
-    for name, (flag, text) in _SENSOR_SWITCHES.items():
-        sensor.add_argument(
-            flag,
-            dest=f"sensor_{name}",
-            action=argparse.BooleanOptionalAction,
-            default=None,
-            help=text,
-        )
+    add_sensor_arguments(parser)
     parser.add_argument(
         "--jobs", type=int, default=None, metavar="N", help="local worker processes (all cores)"
     )
@@ -85,38 +60,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=_run)
 
 
-def parse_overrides(scenario: str, items: list[str]) -> dict[str, Any]:
-    """``--set`` items (``["people=18", "robot=true"]``) as typed options of ``scenario``."""
-    import scenarios
-
-    pairs: dict[str, str] = {}
-    for item in items:
-        key, sep, text = item.partition("=")
-        key = key.strip()
-        if not sep or not key:
-            raise CliError(f"--set must be KEY=VALUE, got {item!r}")
-        if key in pairs:
-            raise CliError(f"--set {key} given twice")
-        pairs[key] = text
-    if not pairs:
-        return {}
-    return scenarios.parse_options(scenario, pairs)
-
-
-def _sensor(args: argparse.Namespace) -> dict[str, Any] | None:
-    given = {
-        name: getattr(args, f"sensor_{name}")
-        for name in (*_SENSOR_NUMBERS, *_SENSOR_SWITCHES)
-        if getattr(args, f"sensor_{name}") is not None
-    }
-    if args.view == "truth":
-        if given:
-            flags = [(_SENSOR_NUMBERS | _SENSOR_SWITCHES)[n][0] for n in given]
-            raise CliError(f"sensor options need --view robot, got {', '.join(flags)}")
-        return None
-    return given
-
-
 def _run(args: argparse.Namespace) -> int:
     from sim.generate import generate_dataset
 
@@ -129,7 +72,7 @@ def _run(args: argparse.Namespace) -> int:
         out_dir=args.out,
         options=parse_overrides(args.scenario, args.overrides),
         view=args.view,
-        sensor=_sensor(args),
+        sensor=sensor_options(args),
         **({} if args.rate is None else {"rate": args.rate}),
         duration=args.duration,
         backend=args.backend,

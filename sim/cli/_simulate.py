@@ -8,8 +8,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from sim.cli._common import CliError
-from sim.cli._generate import _SENSOR_NUMBERS, _SENSOR_SWITCHES, parse_overrides
+from sim.cli._common import CliError, add_sensor_arguments, parse_overrides, sensor_options
 
 _DESCRIPTION = """\
 Runs one episode of a registered scenario (reform-sim scenarios lists them and their options)
@@ -64,31 +63,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="control step of the world (default 0.01; up to 0.1, faster and rougher)",
     )
-    sensor = parser.add_argument_group("sensor (with --view robot)")
-    for name, (flag, text) in _SENSOR_NUMBERS.items():
-        sensor.add_argument(flag, dest=f"sensor_{name}", type=float, default=None, help=text)
-    for name, (flag, text) in _SENSOR_SWITCHES.items():
-        sensor.add_argument(
-            flag,
-            dest=f"sensor_{name}",
-            action=argparse.BooleanOptionalAction,
-            default=None,
-            help=text,
-        )
+    add_sensor_arguments(parser)
     add_recording_arguments(parser)
     parser.set_defaults(handler=run)
 
 
 def _sensor(args: argparse.Namespace):
-    given = {
-        name: getattr(args, f"sensor_{name}")
-        for name in (*_SENSOR_NUMBERS, *_SENSOR_SWITCHES)
-        if getattr(args, f"sensor_{name}") is not None
-    }
-    if args.view == "truth":
-        if given:
-            flags = [(_SENSOR_NUMBERS | _SENSOR_SWITCHES)[n][0] for n in given]
-            raise CliError(f"sensor options need --view robot, got {', '.join(flags)}")
+    given = sensor_options(args)
+    if given is None:
         return None
     from sim.sensor import Sensor
 
