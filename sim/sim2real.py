@@ -28,6 +28,11 @@ The experiment behind ``reform-sim experiment sim2real`` (results in
    annotated frames by time) and every annotated Babble frame, scored by
    :func:`reform.evaluate` (GCFF's protocol). 95 % block-bootstrap intervals of F1 and of the
    difference synthetic minus SALSA-trained, resampling stretches of time.
+7. **Across periods, on training data only** (:class:`CrossPeriod`): SALSA's training split
+   cut in time into an earlier and a later half; a SALSA-trained model learns from one half and
+   is scored on the other, beside the synthetic-trained model on the same half. It asks how
+   much of the SALSA-trained model's lead on the test split comes from learning the same party
+   minutes earlier, without looking at any test frame.
 
 No test score feeds any choice: the noise comes from calibration statistics of training data,
 the hyper-parameters from cross-validation on synthetic data.
@@ -61,6 +66,7 @@ __all__ = [
     "SALSA_RATE_HZ",
     "SALSA_TEST",
     "SALSA_WITHIN_F1",
+    "CrossPeriod",
     "Goal",
     "NoiseCalibration",
     "Row",
@@ -508,6 +514,45 @@ class Row:
 
 
 @dataclass(frozen=True)
+class CrossPeriod:
+    """One classifier on one half (in time) of SALSA's training split: trained on SALSA's other
+    half, or on the synthetic set.
+
+    Attributes:
+        classifier: the REFORM classifier's name.
+        held_out: ``"earlier"`` or ``"later"``: the half scored (per session, by time).
+        frames: annotated frames of that half.
+        salsa: F1 at T = 2/3 of REFORM trained on SALSA's other half (the hyper-parameters tuned
+            on SALSA's training split).
+        synthetic: F1 at T = 2/3 of the synthetic-trained REFORM.
+        difference: ``synthetic - salsa`` with its 95 % block-bootstrap interval
+            ``(difference, low, high)``.
+        pairwise: pairwise accuracy ``(salsa, synthetic)``.
+    """
+
+    classifier: str
+    held_out: str
+    frames: int
+    salsa: float
+    synthetic: float
+    difference: tuple[float, float, float]
+    pairwise: tuple[float, float]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "classifier": self.classifier,
+            "held_out": self.held_out,
+            "frames": self.frames,
+            "f1_salsa_other_half": self.salsa,
+            "f1_synthetic": self.synthetic,
+            "synthetic_minus_salsa": self.difference[0],
+            "interval": list(self.difference[1:]),
+            "pairwise_accuracy_salsa_other_half": self.pairwise[0],
+            "pairwise_accuracy_synthetic": self.pairwise[1],
+        }
+
+
+@dataclass(frozen=True)
 class Goal:
     """One of the experiment's goals, checked.
 
@@ -551,6 +596,8 @@ class SimToReal:
             pair-feature distances (:func:`joint_distances`), SALSA's own quantiles beside.
         tuning: per training set and classifier, :meth:`reform.experiment.Tuning.to_json`.
         gcff_tuning: the tuned GCFF setting (stride m, mdl m², training F1).
+        cross_period: per classifier and half of SALSA's training split, the synthetic-trained
+            model beside one trained on the other half (training data only).
         frames: annotated frames per part.
         seed: master seed of the synthetic data and the noise.
         seconds: wall-clock time.
@@ -569,6 +616,7 @@ class SimToReal:
     frames: Mapping[str, int]
     seed: int
     seconds: float
+    cross_period: tuple[CrossPeriod, ...] = ()
 
     def row(self, *, classifier: str | None, training: str, dataset: str) -> Row:
         """The main row of a REFORM classifier (or, with ``classifier=None``, of GCFF by its
@@ -620,6 +668,7 @@ class SimToReal:
                 for (c, d), v in self.differences.items()
             ],
             "goals": [g.to_json() for g in self.goals],
+            "cross_period": [c.to_json() for c in self.cross_period],
             "seconds": self.seconds,
         }
 
@@ -791,17 +840,24 @@ def sim_to_real(
 
     tuning: dict[str, dict[str, Any]] = {SYNTHETIC: {}, SALSA_TRAIN: {}}
     synthetic_params: dict[str, Mapping[str, Any]] = {}
+    synthetic_models: dict[str, Any] = {}
+    salsa_params: dict[str, Mapping[str, Any]] = {}
     for name in classifiers:
         label = DISPLAY[name]
         say(f"{label}: tuning and training on the synthetic set ({len(synthetic)} frames)")
         model, tuned = train_reform(name, synthetic, n_jobs=n_jobs)
         tuning[SYNTHETIC][name] = tuned.to_json()
         synthetic_params[name] = dict(tuned.best_params)
+        synthetic_models[name] = model
         add(model, f"REFORM {label}", SYNTHETIC, name)
         say(f"{label}: tuning and training on SALSA's training split ({len(train)} frames)")
         model, tuned = train_reform(name, train, n_jobs=n_jobs)
         tuning[SALSA_TRAIN][name] = tuned.to_json()
+        salsa_params[name] = dict(tuned.best_params)
         add(model, f"REFORM {label}", SALSA_TRAIN, name)
+
+    say("across periods: SALSA's training split in halves, each scored by the other's model")
+    cross_period = _cross_period(train, synthetic_models, salsa_params, seed=seed)
 
     say("GCFF: the paper's setting and a grid search on SALSA's training split")
     comparison = gcff_comparison(
@@ -881,10 +937,53 @@ def sim_to_real(
         },
         seed=int(seed),
         seconds=0.0,
+        cross_period=cross_period,
     )
     return dataclasses.replace(
         result, goals=check_goals(result, classifiers), seconds=time.perf_counter() - started
     )
+
+
+def _cross_period(
+    train: Sequence[Frame],
+    synthetic_models: Mapping[str, Any],
+    salsa_params: Mapping[str, Mapping[str, Any]],
+    *,
+    seed: int,
+) -> tuple[CrossPeriod, ...]:
+    """Each half (in time) of SALSA's training split scored by a model trained on the other
+    half and by the synthetic model (see :class:`CrossPeriod`)."""
+    from reform.bootstrap import bootstrap_weights
+    from reform.splits import time_split
+
+    earlier, later = time_split(train, 0.5)
+    if not earlier or not later:
+        return ()
+    halves = {"earlier": (tuple(earlier), tuple(later)), "later": (tuple(later), tuple(earlier))}
+    out = []
+    for k, (held_out, (scored, other)) in enumerate(halves.items()):
+        rng = np.random.default_rng([seed, 2000 + k])
+        weights = bootstrap_weights(
+            _block_labels(scored, BOOTSTRAP_BLOCKS), rng=rng, resamples=BOOTSTRAP_RESAMPLES
+        )
+        for name, synthetic_model in synthetic_models.items():
+            salsa_model, _ = train_reform(name, other, tune=False, params=salsa_params[name])
+            a = _evaluate(synthetic_model, scored)
+            b = _evaluate(salsa_model, scored)
+            diff = _resampled_f1(a, weights) - _resampled_f1(b, weights)
+            point = a.at(T_TWO_THIRDS).f1 - b.at(T_TWO_THIRDS).f1
+            out.append(
+                CrossPeriod(
+                    classifier=name,
+                    held_out=held_out,
+                    frames=len(scored),
+                    salsa=float(b.at(T_TWO_THIRDS).f1),
+                    synthetic=float(a.at(T_TWO_THIRDS).f1),
+                    difference=(float(point), *_interval(diff)),
+                    pairwise=(float(b.pairwise_accuracy), float(a.pairwise_accuracy)),
+                )
+            )
+    return tuple(out)
 
 
 def _check_gcff_rows(rows: Sequence[Row], reference: Sequence[Mapping[str, Any]]) -> None:

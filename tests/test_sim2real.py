@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from reform.metrics import T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
 from sim.cli import main
 from sim.episode import simulate_episode
@@ -20,6 +21,7 @@ from sim.sim2real import (
     calibrate_tracker_noise,
     count_pairs,
     sim_to_real,
+    train_reform,
 )
 from sim.sim2real_report import sim2real_figure
 
@@ -173,18 +175,48 @@ def test_goals_follow_from_the_rows(tiny) -> None:
     assert low <= difference + 1e-9 and difference <= high + 1e-9
 
 
+def test_cross_period_uses_training_halves_only(tiny, salsa_dataset) -> None:
+    from reform import time_split
+
+    result, _ = tiny
+    train, _ = time_split(salsa_dataset.annotated(), 0.6)
+    earlier, later = time_split(train, 0.5)
+    rows = {c.held_out: c for c in result.cross_period}
+    assert set(rows) == {"earlier", "later"}
+    assert rows["earlier"].frames == len(earlier) and rows["later"].frames == len(later)
+    assert rows["earlier"].frames + rows["later"].frames == result.frames["salsa-train"]
+    for row in rows.values():
+        assert row.classifier == "logistic-regression"
+        difference, low, high = row.difference
+        assert difference == pytest.approx(row.synthetic - row.salsa)
+        assert low <= difference + 1e-9 and difference <= high + 1e-9
+        assert 0.0 <= row.salsa <= 1.0 and 0.0 <= row.synthetic <= 1.0
+    # The SALSA row of the later half is a model trained on the earlier half, with the
+    # hyper-parameters tuned on the training split.
+    params = result.tuning["salsa-train"]["logistic-regression"]["best_params"]
+    model, _ = train_reform("logistic-regression", earlier, tune=False, params=params)
+    assert rows["later"].salsa == evaluate(later, model.predict(later)).at(T_TWO_THIRDS).f1
+
+
 def test_report_files(tiny, tmp_path) -> None:
     result, _ = tiny
     figure = sim2real_figure(result, tmp_path / "s.png")
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     markdown = result.to_markdown(command="reform-sim experiment sim2real --out x", figure="s.png")
     assert "reform-sim experiment sim2real --out x" in markdown
-    for heading in ("## Goals", "## SALSA test split", "## Babble", "## Tracker noise"):
+    for heading in (
+        "## Goals",
+        "## SALSA test split",
+        "## Babble",
+        "## Tracker noise",
+        "## Across periods of SALSA's training split",
+    ):
         assert heading in markdown
     data = json.loads(json.dumps(result.to_json(command="c"), allow_nan=False))
     assert data["kind"] == "reform-sim/sim2real"
     assert len(data["rows"]) == len(result.rows)
     assert len(data["goals"]) == 3
+    assert len(data["cross_period"]) == 2
 
 
 def test_deterministic_data(tiny, salsa_dataset) -> None:
