@@ -27,6 +27,7 @@ with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, 
 from __future__ import annotations
 
 from sim.recording._blueprint import default_blueprint
+from sim.recording._columns import FrameColumns
 from sim.recording._dataset_views import (
     DATASET_ROOT,
     log_characterisation,
@@ -100,6 +101,7 @@ __all__ = [
     "Clock",
     "Event",
     "FieldOfView",
+    "FrameColumns",
     "LoggedGroups",
     "Recorded",
     "RecordingTarget",

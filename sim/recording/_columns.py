@@ -1,34 +1,57 @@
-"""Flattening a run's frames into the columns that ``send_columns`` takes."""
+"""A run's frames as columns, and the columns that ``send_columns`` takes.
+
+`FrameColumns` holds every person of every frame of a run in flat arrays (one row per person,
+frame after frame) beside each frame's time, sequence and ground truth. Every logging function
+works on it, so a run is read once, whatever number of entities it feeds; it is built from
+``reform.Frame`` objects (`FrameColumns.of`) or straight from the simulator's pose blocks
+(`FrameColumns.from_blocks`, without making a Frame per time step).
+"""
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Sequence
-from dataclasses import dataclass
+import functools
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import rerun as rr
 
-from reform import ROBOT, Frame
+from reform import ROBOT, Frame, Group
+
+__all__ = [
+    "FrameColumns",
+    "at_height",
+    "line_strips_column",
+    "ragged_arange",
+    "slices_equal",
+    "unit",
+    "value_columns",
+]
 
 _POINT_TYPE = pa.list_(pa.field("item", pa.float32(), nullable=False), 3)
 _LINE_STRIP_TYPE = pa.list_(pa.field("item", _POINT_TYPE, nullable=False))
 
 
 @dataclass(frozen=True, eq=False)
-class Flat:
-    """Every person of every frame, one row each, frame by frame.
+class FrameColumns:
+    """Every person of every frame of a run, one row each, frame by frame.
 
     Attributes:
         counts: (n_frames,) int64 people per frame.
-        frame: (n,) int64 index of each row's frame in the input.
+        frame: (n,) int64 index of each row's frame.
         ids: (n,) int64 person ids.
         robot: (n,) bool, True for robots.
         position: (n, 2) float64 metres.
         yaw: (n,) float64 radians.
         head_position: (n, 2) float64 metres, NaN where unknown.
         head_yaw: (n,) float64 radians, NaN where unknown.
+        time: (n_frames,) float64 each frame's time stamp, seconds.
+        sequence: n_frames sequence names.
+        groups: n_frames ground truths (groups of person ids), None where not annotated.
+        frames: the ``reform.Frame`` objects the columns were made of, if any (detectors and
+            ``reform.evaluate`` take frames).
     """
 
     counts: np.ndarray
@@ -39,46 +62,204 @@ class Flat:
     yaw: np.ndarray
     head_position: np.ndarray
     head_yaw: np.ndarray
+    time: np.ndarray
+    sequence: tuple[str, ...]
+    groups: tuple[tuple[Group, ...] | None, ...]
+    frames: tuple[Frame, ...] | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        n_frames = len(self.sequence)
+        n = int(np.asarray(self.ids).shape[0])
+        expected = {
+            "counts": (n_frames,),
+            "frame": (n,),
+            "robot": (n,),
+            "position": (n, 2),
+            "yaw": (n,),
+            "head_position": (n, 2),
+            "head_yaw": (n,),
+            "time": (n_frames,),
+        }
+        for name, shape in expected.items():
+            found = np.shape(getattr(self, name))
+            if found != shape:
+                raise ValueError(f"FrameColumns.{name} must have shape {shape}, got {found}")
+        if len(self.groups) != n_frames:
+            raise ValueError(
+                f"FrameColumns.groups must have {n_frames} entries, got {len(self.groups)}"
+            )
+        if int(np.sum(self.counts)) != n:
+            raise ValueError(f"FrameColumns.counts must sum to {n} rows, got {np.sum(self.counts)}")
 
     @classmethod
-    def of(cls, frames: Sequence[Frame]) -> Flat:
-        counts = np.fromiter((f.n_people for f in frames), dtype=np.int64, count=len(frames))
-        n = int(counts.sum())
-        if n == 0:
-            empty = np.zeros(0)
-            return cls(
-                counts=counts,
-                frame=np.zeros(0, dtype=np.int64),
-                ids=np.zeros(0, dtype=np.int64),
-                robot=np.zeros(0, dtype=bool),
-                position=np.zeros((0, 2)),
-                yaw=empty,
-                head_position=np.zeros((0, 2)),
-                head_yaw=empty,
-            )
-        offsets = np.concatenate([[0], np.cumsum(counts)])
-        head_position = np.full((n, 2), np.nan)
-        head_yaw = np.full(n, np.nan)
-        for k, frame in enumerate(frames):
-            if frame.head_position is not None:
-                head_position[offsets[k] : offsets[k + 1]] = frame.head_position
-                head_yaw[offsets[k] : offsets[k + 1]] = frame.head_yaw
-        kinds = np.array(list(itertools.chain.from_iterable(f.kinds for f in frames)))
+    def of(cls, frames: Iterable[Frame]) -> FrameColumns:
+        """The columns of ``frames`` (any iterable of ``reform.Frame``, e.g. a Dataset).
+
+        Raises:
+            ValueError: if an item is not a ``reform.Frame``.
+        """
+        frames = tuple(frames)
+        if not all(isinstance(f, Frame) for f in frames):
+            i = next(i for i, f in enumerate(frames) if not isinstance(f, Frame))
+            raise ValueError(f"frames[{i}] must be a reform.Frame, got {type(frames[i]).__name__}")
+        n_frames = len(frames)
+        ids = [f.ids for f in frames]
+        counts = np.fromiter(map(len, ids), dtype=np.int64, count=n_frames)
+        robot_of: dict[tuple[str, ...], np.ndarray] = {}
+        robot = []
+        for kinds in (f.kinds for f in frames):
+            mask = robot_of.get(kinds)
+            if mask is None:
+                mask = robot_of[kinds] = np.array([k == ROBOT for k in kinds], dtype=bool)
+            robot.append(mask)
+        head_position = [f.head_position for f in frames]
+        head_yaw = [f.head_yaw for f in frames]
+        if any(h is None for h in head_position):
+            head_position = [
+                np.full((c, 2), np.nan) if h is None else h
+                for h, c in zip(head_position, counts.tolist(), strict=True)
+            ]
+            head_yaw = [
+                np.full(c, np.nan) if h is None else h
+                for h, c in zip(head_yaw, counts.tolist(), strict=True)
+            ]
         return cls(
             counts=counts,
-            frame=np.repeat(np.arange(len(frames)), counts),
-            ids=np.concatenate([f.ids for f in frames]),
-            robot=kinds == ROBOT,
-            position=np.concatenate([f.position for f in frames]),
-            yaw=np.concatenate([f.yaw for f in frames]),
-            head_position=head_position,
-            head_yaw=head_yaw,
+            frame=np.repeat(np.arange(n_frames, dtype=np.int64), counts),
+            ids=_concatenate(ids, (0,), np.int64),
+            robot=_concatenate(robot, (0,), bool),
+            position=_concatenate([f.position for f in frames], (0, 2), np.float64),
+            yaw=_concatenate([f.yaw for f in frames], (0,), np.float64),
+            head_position=_concatenate(head_position, (0, 2), np.float64),
+            head_yaw=_concatenate(head_yaw, (0,), np.float64),
+            time=np.fromiter((f.time for f in frames), dtype=np.float64, count=n_frames),
+            sequence=tuple(f.sequence for f in frames),
+            groups=tuple(f.groups for f in frames),
+            frames=frames,
         )
 
-    def select(self, mask: np.ndarray) -> Flat:
-        """The rows where ``mask`` holds, with the per-frame counts recomputed."""
-        return Flat(
-            counts=np.bincount(self.frame[mask], minlength=self.counts.size).astype(np.int64),
+    @classmethod
+    def from_blocks(cls, blocks: Iterable[Any]) -> FrameColumns:
+        """The columns of the simulator's pose blocks (``sim.world.Poses``, as
+        ``sim.episode.episode_blocks`` yields them), equal to ``FrameColumns.of`` of the frames
+        the blocks hold (``Poses.frames()``), without making those frames.
+        """
+        from sim.world import restrict_groups
+
+        parts: list[FrameColumns] = []
+        for block in blocks:
+            present = np.asarray(block.present, dtype=bool)
+            rows, agents = np.nonzero(present)
+            n_rows = present.shape[0]
+            changed = np.ones(n_rows, dtype=bool)
+            changed[1:] = np.any(present[1:] != present[:-1], axis=1)
+            groups: list[tuple[Group, ...] | None] = []
+            last: tuple[Any, tuple[Group, ...] | None] = (None, None)
+            for row, declared in enumerate(block.groups):
+                if declared is None:
+                    groups.append(None)
+                    last = (None, None)
+                    continue
+                if (
+                    changed[row]
+                    or last[0] is None
+                    or not (declared is last[0] or declared == last[0])
+                ):
+                    present_ids = set(block.ids[present[row]].tolist())
+                    last = (declared, restrict_groups(declared, present_ids))
+                groups.append(last[1])
+            counts = present.sum(axis=1).astype(np.int64)
+            robot = np.array([k == ROBOT for k in block.kinds], dtype=bool)
+            parts.append(
+                cls(
+                    counts=counts,
+                    frame=rows.astype(np.int64),
+                    ids=np.asarray(block.ids, dtype=np.int64)[agents],
+                    robot=robot[agents],
+                    position=np.asarray(block.position, dtype=np.float64)[rows, agents],
+                    yaw=np.asarray(block.yaw, dtype=np.float64)[rows, agents],
+                    head_position=np.asarray(block.head_position, dtype=np.float64)[rows, agents],
+                    head_yaw=np.asarray(block.head_yaw, dtype=np.float64)[rows, agents],
+                    time=np.asarray(block.time, dtype=np.float64),
+                    sequence=(str(block.sequence),) * n_rows,
+                    groups=tuple(groups),
+                )
+            )
+        return cls.concatenate(parts)
+
+    @classmethod
+    def concatenate(cls, parts: Sequence[FrameColumns]) -> FrameColumns:
+        """The frames of ``parts``, one after the other."""
+        parts = list(parts)
+        offsets = np.cumsum([0, *(len(p) for p in parts)])[:-1]
+        frames = [p.frames for p in parts]
+        return cls(
+            counts=_concatenate([p.counts for p in parts], (0,), np.int64),
+            frame=_concatenate(
+                [p.frame + k for p, k in zip(parts, offsets.tolist(), strict=True)], (0,), np.int64
+            ),
+            ids=_concatenate([p.ids for p in parts], (0,), np.int64),
+            robot=_concatenate([p.robot for p in parts], (0,), bool),
+            position=_concatenate([p.position for p in parts], (0, 2), np.float64),
+            yaw=_concatenate([p.yaw for p in parts], (0,), np.float64),
+            head_position=_concatenate([p.head_position for p in parts], (0, 2), np.float64),
+            head_yaw=_concatenate([p.head_yaw for p in parts], (0,), np.float64),
+            time=_concatenate([p.time for p in parts], (0,), np.float64),
+            sequence=tuple(s for p in parts for s in p.sequence),
+            groups=tuple(g for p in parts for g in p.groups),
+            frames=None if any(f is None for f in frames) else tuple(x for f in frames for x in f),  # type: ignore[union-attr]
+        )
+
+    @classmethod
+    def coerce(cls, frames: Iterable[Frame] | FrameColumns) -> FrameColumns:
+        """``frames`` if already columns, else their columns."""
+        return frames if isinstance(frames, FrameColumns) else cls.of(frames)
+
+    def __len__(self) -> int:
+        return len(self.sequence)
+
+    @functools.cached_property
+    def starts(self) -> np.ndarray:
+        """(n_frames + 1,) int64 first row of each frame, then the row count."""
+        return np.concatenate([[0], np.cumsum(self.counts)]).astype(np.int64)
+
+    @functools.cached_property
+    def segment(self) -> np.ndarray:
+        """(n_frames,) int64 index of each frame's run of consecutive frames of one sequence."""
+        names = np.array(self.sequence, dtype=object)
+        new = np.ones(names.size, dtype=bool)
+        new[1:] = names[1:] != names[:-1]
+        return np.cumsum(new) - 1
+
+    @functools.cached_property
+    def known_ids(self) -> np.ndarray:
+        """(k,) int64 sorted distinct person ids of the run."""
+        return np.unique(self.ids)
+
+    def ids_of(self, index: int) -> np.ndarray:
+        """(counts[index],) the person ids of frame ``index``."""
+        return self.ids[self.starts[index] : self.starts[index + 1]]
+
+    def describe(self, index: int) -> str:
+        """``"sequence 's', time 1.5 s"`` of frame ``index``, for messages."""
+        sequence = self.sequence[index]
+        where = f"sequence {sequence!r}, " if sequence else ""
+        return f"{where}time {self.time[index]:g} s"
+
+    def same_people_as_previous(self) -> np.ndarray:
+        """(n_frames,) bool: frame ``i`` holds the ids of frame ``i - 1``, in the same order."""
+        n = len(self)
+        out = np.zeros(n, dtype=bool)
+        if n > 1:
+            index = np.arange(1, n)
+            out[1:] = slices_equal(self.ids, self.starts, index, index - 1)
+        return out
+
+    def select(self, mask: np.ndarray) -> FrameColumns:
+        """The rows where ``mask`` holds, with the per-frame counts recomputed (frame times,
+        sequences and ground truth unchanged)."""
+        return FrameColumns(
+            counts=np.bincount(self.frame[mask], minlength=len(self)).astype(np.int64),
             frame=self.frame[mask],
             ids=self.ids[mask],
             robot=self.robot[mask],
@@ -86,7 +267,51 @@ class Flat:
             yaw=self.yaw[mask],
             head_position=self.head_position[mask],
             head_yaw=self.head_yaw[mask],
+            time=self.time,
+            sequence=self.sequence,
+            groups=self.groups,
         )
+
+
+def _concatenate(arrays: Sequence[np.ndarray], empty: tuple[int, ...], dtype: Any) -> np.ndarray:
+    if not arrays:
+        return np.zeros(empty, dtype=dtype)
+    return np.concatenate(arrays).astype(dtype, copy=False)
+
+
+def ragged_arange(lengths: np.ndarray) -> np.ndarray:
+    """``concatenate([arange(n) for n in lengths])``, vectorised: (sum(lengths),) int64."""
+    lengths = np.asarray(lengths, dtype=np.int64)
+    total = int(lengths.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    ends = np.cumsum(lengths)
+    return np.arange(total, dtype=np.int64) - np.repeat(ends - lengths, lengths)
+
+
+def slices_equal(
+    values: np.ndarray, starts: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """(k,) bool: slice ``a[i]`` of ``values`` equals slice ``b[i]`` element by element.
+
+    Args:
+        values: (n, ...) the rows.
+        starts: (m + 1,) int64 first row of each slice, then n.
+        a, b: (k,) int64 slice indices to compare.
+    """
+    a = np.asarray(a, dtype=np.int64)
+    b = np.asarray(b, dtype=np.int64)
+    length = starts[a + 1] - starts[a]
+    same = length == starts[b + 1] - starts[b]
+    pick = np.flatnonzero(same)
+    lengths = length[pick]
+    owner = np.repeat(pick, lengths)
+    local = ragged_arange(lengths)
+    differ = values[starts[a[owner]] + local] != values[starts[b[owner]] + local]
+    if differ.ndim > 1:
+        differ = differ.reshape(differ.shape[0], -1).any(axis=1)
+    same[owner[differ]] = False
+    return same
 
 
 class _ArrowBatch:

@@ -26,7 +26,13 @@ import rerun as rr
 
 from reform import Frame
 from sim.recording import _colours
-from sim.recording._columns import Flat, at_height, line_strips_column, unit, value_columns
+from sim.recording._columns import (
+    FrameColumns,
+    at_height,
+    line_strips_column,
+    unit,
+    value_columns,
+)
 from sim.recording._timeline import Clock
 
 __all__ = [
@@ -108,7 +114,7 @@ class PersonIndex:
     robot: np.ndarray
 
     @classmethod
-    def of(cls, *streams: Flat) -> PersonIndex:
+    def of(cls, *streams: FrameColumns) -> PersonIndex:
         """Every id of the given (flattened) streams; an id is a robot if any row says so."""
         all_ids = np.concatenate([s.ids for s in streams]) if streams else np.zeros(0, np.int64)
         all_robot = np.concatenate([s.robot for s in streams]) if streams else np.zeros(0, bool)
@@ -150,9 +156,9 @@ def log_world_setup(rec: rr.RecordingStream) -> None:
 
 def log_frames(
     rec: rr.RecordingStream,
-    frames: Sequence[Frame],
+    frames: Sequence[Frame] | FrameColumns,
     *,
-    observed: Sequence[Frame] | None = None,
+    observed: Sequence[Frame] | FrameColumns | None = None,
     clock: Clock | None = None,
     field_of_view: FieldOfView | None = KINECT_FIELD_OF_VIEW,
     shapes: bool = True,
@@ -162,10 +168,11 @@ def log_frames(
 
     Args:
         rec: the recording stream.
-        frames: the run's (world) frames, in time order.
+        frames: the run's (world) frames, in time order, as ``reform.Frame`` objects or
+            :class:`FrameColumns`.
         observed: what the robot's sensor reported, frames matched to ``frames`` by (sequence,
             time); may miss people (dropouts) and hold noisy poses.
-        clock: the run's clock; default: ``Clock.from_frames(frames)``.
+        clock: the run's clock; default: the clock of ``frames``.
         field_of_view: drawn from each robot's head, or None for none.
         shapes: draw capsules for bodies; False when the MuJoCo geometry is logged instead.
         trail_s: seconds of path behind each person; 0 for no trails.
@@ -176,15 +183,13 @@ def log_frames(
     Raises:
         ValueError: if an observed frame matches no frame of the run, or ``trail_s`` < 0.
     """
-    frames = tuple(frames)
     if trail_s < 0:
         raise ValueError(f"trail_s must be >= 0 seconds, got {trail_s}")
-    clock = Clock.from_frames(frames) if clock is None else clock
-    rows = clock.rows_of(frames)
-    flat = Flat.of(frames)
-    seen = None if observed is None else tuple(observed)
-    seen_flat = None if seen is None else Flat.of(seen)
-    people = PersonIndex.of(flat, *(() if seen_flat is None else (seen_flat,)))
+    flat = FrameColumns.coerce(frames)
+    clock = Clock.from_columns(flat) if clock is None else clock
+    rows = clock.rows_of_columns(flat)
+    seen = None if observed is None else FrameColumns.coerce(observed)
+    people = PersonIndex.of(flat, *(() if seen is None else (seen,)))
     log_world_setup(rec)
     rec.log(WORLD_ROOT, people.annotation_context(), static=True)
 
@@ -201,14 +206,14 @@ def log_frames(
         if robot and field_of_view is not None:
             _log_field_of_view(rec, part, clock.columns(rows), field_of_view)
     if seen is not None:
-        _log_observed(rec, seen, seen_flat, clock, people)
+        _log_observed(rec, seen, clock, people)
     return clock
 
 
 def _log_agents(
     rec: rr.RecordingStream,
     root: str,
-    part: Flat,
+    part: FrameColumns,
     people: PersonIndex,
     times: list[rr.TimeColumn],
     *,
@@ -296,7 +301,7 @@ def _log_arrows(
 def _log_trails(
     rec: rr.RecordingStream,
     entity: str,
-    part: Flat,
+    part: FrameColumns,
     clock: Clock,
     rows: np.ndarray,
     people: PersonIndex,
@@ -306,9 +311,11 @@ def _log_trails(
     """Each person's path over the last ``trail_s`` seconds of their sequence, as a line strip."""
     n_frames = part.counts.size
     sim_time = clock.sim_time[rows]
-    # Dense (frame, person) table of positions, NaN where the person is absent.
+    # Dense (frame, person) table of positions, NaN where the person is absent (float32, as
+    # drawn).
+    n_slots = people.ids.size
     slot = np.searchsorted(people.ids, part.ids)
-    dense = np.full((n_frames, people.ids.size, 2), np.nan)
+    dense = np.full((n_frames, n_slots, 2), np.nan, dtype=np.float32)
     dense[part.frame, slot] = part.position
     # Last frame before each frame at which each person was absent: trails do not jump gaps.
     absent = np.isnan(dense[..., 0])
@@ -322,15 +329,20 @@ def _log_trails(
     start = np.maximum(start, segment)[frame_of_row]
     start = np.maximum(start, last_absent[frame_of_row, slot] + 1)
     span = frame_of_row - start  # frames back to the window's start
-    # Up to TRAIL_POINTS frames evenly spread from the window's start to now, both included.
-    n_points = np.minimum(TRAIL_POINTS, span + 1)
+    # Up to TRAIL_POINTS frames evenly spread from the window's start to now, both included,
+    # worked out once per span.
+    spans = np.arange(int(span.max(initial=0)) + 1)
+    n_points = np.minimum(TRAIL_POINTS, spans + 1)
     j = np.arange(TRAIL_POINTS)[None, :]
-    valid = j < n_points[:, None]
-    offset = np.rint(j * span[:, None] / np.maximum(n_points - 1, 1)[:, None]).astype(np.int64)
-    candidate = np.where(valid, start[:, None] + offset, frame_of_row[:, None])
-    points = dense[candidate, slot[:, None]]
-    strip_lengths = valid.sum(axis=1)
-    flat_points = at_height(points[valid], TRAIL_Z_M)
+    offset = np.rint(j * spans[:, None] / np.maximum(n_points - 1, 1)[:, None]).astype(np.int64)
+    strip_lengths = n_points[span]
+    picked = (start[:, None] + offset[span]) * n_slots + slot[:, None]
+    if np.any(strip_lengths < TRAIL_POINTS):
+        picked = picked[j < strip_lengths[:, None]]
+    picked = picked.reshape(-1)
+    flat_points = np.empty((picked.size, 3), dtype=np.float32)
+    flat_points[:, :2] = dense.reshape(-1, 2)[picked]
+    flat_points[:, 2] = TRAIL_Z_M
     rec.log(
         entity,
         rr.LineStrips3D.from_fields(radii=[TRAIL_RADIUS_M], colors=[_colours.TRAIL]),
@@ -348,7 +360,7 @@ def _log_trails(
 
 
 def _log_field_of_view(
-    rec: rr.RecordingStream, robots: Flat, times: list[rr.TimeColumn], fov: FieldOfView
+    rec: rr.RecordingStream, robots: FrameColumns, times: list[rr.TimeColumn], fov: FieldOfView
 ) -> None:
     """A wedge (far arc, near arc) from each robot's head along its head yaw (else body yaw)."""
     yaw = np.where(np.isfinite(robots.head_yaw), robots.head_yaw, robots.yaw)
@@ -382,12 +394,11 @@ def _log_field_of_view(
 
 def _log_observed(
     rec: rr.RecordingStream,
-    observed: tuple[Frame, ...],
-    flat: Flat,
+    flat: FrameColumns,
     clock: Clock,
     people: PersonIndex,
 ) -> None:
-    rows = clock.rows_of(observed, what="observed")
+    rows = clock.rows_of_columns(flat, what="observed")
     humans = flat.select(~flat.robot)
     times = clock.columns(rows)
     rec.log(

@@ -18,29 +18,43 @@ For detectors, on annotated frames, mistakes are drawn under ``world/groups/<nam
 ``missed`` (true F-formations no detected group matches, red rings), ``spurious`` (detected
 F-formations that match no true group, magenta rings) and ``wrong_members`` (in a matched pair,
 people the detected group added, ``extra``, or left out, ``missing``).
+
+Partitions change seldom from one frame to the next, so the work is done once per distinct
+partition and once per change, and spread over the frames with numpy.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import rerun as rr
 
-from reform import T_TWO_THIRDS, Evaluation, Frame, Group, evaluate
+from reform import T_TWO_THIRDS, Evaluation, Frame, Group, complete_partition, evaluate
 from sim.recording import _colours
-from sim.recording._columns import at_height, value_columns
-from sim.recording._timeline import Clock, frame_keys
+from sim.recording._columns import (
+    FrameColumns,
+    at_height,
+    ragged_arange,
+    slices_equal,
+    value_columns,
+)
+from sim.recording._timeline import Clock, time_keys
 
 __all__ = [
     "GROUPS_ROOT",
     "TRUTH",
     "GroupLayout",
     "LoggedGroups",
+    "Stretches",
     "evaluate_detector",
     "group_tracks",
     "log_groups",
+    "stretches",
+    "truth_partitions",
 ]
 
 GROUPS_ROOT = "world/groups"
@@ -58,6 +72,9 @@ WRONG_MEMBER_Z_M = 0.35  # metres
 WRONG_MEMBER_RADIUS_M = 0.12  # metres
 TRUTH_Z_M = 0.01  # metres: height of the truth tree's drawings (layer 0)
 LAYER_STEP_M = 0.02  # metres: each next tree (layer) is drawn this much higher
+_DENSE_LOOKUP_CELLS = 4_000_000  # (frame, person) cells of a lookup table (32 MB of int64)
+
+Partition = Sequence[Group]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,9 +85,13 @@ class GroupLayout:
         counts: (n_frames,) people per frame with a partition (0 where none).
         person_frame, person_id, person_group: (n_people_rows,) frame index, person id and index
             of the person's group in that frame's partition.
+        person_row: (n_people_rows,) the person's row in the run's columns.
         person_position: (n_people_rows, 2) metres.
         group_frame: (n_fformations,) frame index of each F-formation (two or more people).
-        group_members: the members of each F-formation, tuples of ids.
+        group_key: (n_fformations,) index of each F-formation's members in ``members_table``.
+        group_set: (n_fformations,) index of each F-formation's member set in ``sets``.
+        members_table: the distinct F-formations, as tuples of ids in the order given.
+        sets: the distinct F-formations as sets of ids.
         group_centre: (n_fformations, 2) metres, mean of the members' positions.
         group_radius: (n_fformations,) metres, the group's Tightness.
         group_of_person: (n_people_rows,) row of the person's F-formation, -1 when alone.
@@ -80,58 +101,62 @@ class GroupLayout:
     person_frame: np.ndarray
     person_id: np.ndarray
     person_group: np.ndarray
+    person_row: np.ndarray
     person_position: np.ndarray
     group_frame: np.ndarray
-    group_members: tuple[Group, ...]
+    group_key: np.ndarray
+    group_set: np.ndarray
+    members_table: tuple[Group, ...]
+    sets: tuple[frozenset[int], ...]
     group_centre: np.ndarray
     group_radius: np.ndarray
     group_of_person: np.ndarray
 
     @classmethod
     def of(
-        cls, frames: Sequence[Frame], partitions: Sequence[Sequence[Group] | None], *, what: str
+        cls,
+        frames: Sequence[Frame] | FrameColumns,
+        partitions: Sequence[Partition | None],
+        *,
+        what: str,
     ) -> GroupLayout:
-        """Lays out ``partitions[i]`` (a full partition of ``frames[i]``'s ids, or None)."""
-        if len(partitions) != len(frames):
+        """Lays out ``partitions[i]`` (a full partition of frame ``i``'s ids, or None).
+
+        Raises:
+            ValueError: if there is not one partition per frame, or one is not a full
+                partition of its frame's ids (naming ``what``, the frame and the person).
+        """
+        columns = FrameColumns.coerce(frames)
+        n = len(columns)
+        if len(partitions) != n:
             raise ValueError(
-                f"{what} must hold one partition per frame: expected {len(frames)}, "
-                f"found {len(partitions)}"
+                f"{what} must hold one partition per frame: expected {n}, found {len(partitions)}"
             )
-        m_frame: list[int] = []  # one entry per member, in partition order
-        m_id: list[int] = []
-        m_group: list[int] = []
-        m_ff: list[int] = []
-        g_frame: list[int] = []
-        g_members: list[Group] = []
-        has_partition = np.zeros(len(frames), dtype=bool)
-        for f, partition in enumerate(partitions):
-            if partition is None:
-                continue
-            has_partition[f] = True
-            for gi, group in enumerate(partition):
-                members = tuple(map(int, group))
-                size = len(members)
-                if not size:
-                    raise ValueError(f"{_where(what, f, frames[f])}: group {gi} is empty")
-                ff = -1
-                if size >= 2:
-                    ff = len(g_frame)
-                    g_frame.append(f)
-                    g_members.append(members)
-                m_id.extend(members)
-                m_frame.extend([f] * size)
-                m_group.extend([gi] * size)
-                m_ff.extend([ff] * size)
-        person_frame = np.asarray(m_frame, dtype=np.int64)
-        person_id = np.asarray(m_id, dtype=np.int64)
-        rows, flat_position = _locate(frames, person_frame, person_id)
-        _check_partitions(frames, partitions, what, has_partition, person_frame, person_id, rows)
-        counts = np.bincount(person_frame, minlength=len(frames)).astype(np.int64)
-        person_position = flat_position[rows]
-        group_of_person = np.asarray(m_ff, dtype=np.int64)
-        n_groups = len(g_frame)
+        table = _Patterns()
+        pattern = table.index(partitions, columns, what)
+        has = pattern >= 0
+        with_partition = np.flatnonzero(has)
+        kinds = pattern[has]
+        size = table.size[kinds]
+        person_frame = np.repeat(with_partition, size)
+        pick = np.repeat(table.start[kinds], size) + ragged_arange(size)
+        person_id = table.member[pick]
+        rows = _locate(columns, person_frame, person_id)
+        _check_partitions(columns, partitions, what, has, person_frame, rows)
+        counts = np.zeros(n, dtype=np.int64)
+        counts[with_partition] = size
+        n_ff = table.n_ff[kinds]
+        group_frame = np.repeat(with_partition, n_ff)
+        ff_pick = np.repeat(table.ff_start[kinds], n_ff) + ragged_arange(n_ff)
+        ff_counts = np.zeros(n, dtype=np.int64)
+        ff_counts[with_partition] = n_ff
+        first_ff = np.concatenate([[0], np.cumsum(ff_counts)])
+        local_ff = table.member_ff[pick]
+        group_of_person = np.where(local_ff >= 0, first_ff[person_frame] + local_ff, -1)
+        person_position = columns.position[rows]
+        n_groups = group_frame.size
         member = group_of_person >= 0
-        size = np.bincount(group_of_person[member], minlength=n_groups).astype(np.float64)
+        group_size = np.bincount(group_of_person[member], minlength=n_groups).astype(np.float64)
         centre = np.zeros((n_groups, 2))
         radius = np.zeros(n_groups)
         if n_groups:
@@ -142,31 +167,179 @@ class GroupLayout:
                         weights=person_position[member, axis],
                         minlength=n_groups,
                     )
-                    / size
+                    / group_size
                 )
             distance = np.linalg.norm(
                 person_position[member] - centre[group_of_person[member]], axis=1
             )
             radius = (
-                np.bincount(group_of_person[member], weights=distance, minlength=n_groups) / size
+                np.bincount(group_of_person[member], weights=distance, minlength=n_groups)
+                / group_size
             )
         return cls(
             counts=counts,
             person_frame=person_frame,
             person_id=person_id,
-            person_group=np.asarray(m_group, dtype=np.int64),
+            person_group=table.member_group[pick],
+            person_row=rows,
             person_position=person_position,
-            group_frame=np.asarray(g_frame, dtype=np.int64),
-            group_members=tuple(g_members),
+            group_frame=group_frame,
+            group_key=table.ff_key[ff_pick],
+            group_set=table.ff_set[ff_pick],
+            members_table=tuple(table.members),
+            sets=tuple(table.sets),
             group_centre=centre,
             group_radius=radius,
             group_of_person=group_of_person,
         )
 
-    @property
+    @classmethod
+    def truth(cls, frames: Sequence[Frame] | FrameColumns) -> GroupLayout:
+        """The ground truth's layout (each annotated frame's full partition)."""
+        columns = FrameColumns.coerce(frames)
+        return cls.of(columns, truth_partitions(columns), what=f"{TRUTH} partitions")
+
+    @functools.cached_property
+    def group_members(self) -> tuple[Group, ...]:
+        """The members of each F-formation, tuples of ids."""
+        table = self.members_table
+        return tuple(table[k] for k in self.group_key.tolist())
+
+    @functools.cached_property
     def group_counts(self) -> np.ndarray:
         """(n_frames,) F-formations per frame."""
         return np.bincount(self.group_frame, minlength=self.counts.size).astype(np.int64)
+
+    @functools.cached_property
+    def group_starts(self) -> np.ndarray:
+        """(n_frames + 1,) first F-formation row of each frame, then the row count."""
+        return np.concatenate([[0], np.cumsum(self.group_counts)]).astype(np.int64)
+
+    @functools.cached_property
+    def group_size(self) -> np.ndarray:
+        """(n_fformations,) people per F-formation."""
+        sizes = np.fromiter(map(len, self.members_table), dtype=np.int64)
+        return sizes[self.group_key]
+
+    @functools.cached_property
+    def group_person_start(self) -> np.ndarray:
+        """(n_fformations,) first person row of each F-formation (its members are adjacent)."""
+        member = np.flatnonzero(self.group_of_person >= 0)
+        rows = np.searchsorted(self.group_of_person[member], np.arange(self.group_frame.size))
+        return member[rows]
+
+
+class _Patterns:
+    """The distinct partitions of a run, each flattened once."""
+
+    def __init__(self) -> None:
+        self.members: list[Group] = []  # distinct F-formations (ordered)
+        self.sets: list[frozenset[int]] = []  # distinct F-formations (as sets)
+        self._key_of: dict[Group, int] = {}
+        self._set_of: dict[frozenset[int], int] = {}
+        self._parts: list[tuple[list[int], list[int], list[int], list[int], list[int]]] = []
+
+    def index(
+        self, partitions: Sequence[Partition | None], columns: FrameColumns, what: str
+    ) -> np.ndarray:
+        """(n_frames,) int64 the pattern of each frame's partition, -1 where none; then the
+        flattened patterns are in ``member``, ``member_group``, ``member_ff``, ``start``,
+        ``size``, ``ff_key``, ``ff_set``, ``ff_start``, ``n_ff``."""
+        kinds: list[int] = []
+        known: dict[Any, int] = {}
+        previous: Any = None
+        previous_kind = -1
+        for f, partition in enumerate(partitions):
+            if partition is None:
+                kinds.append(-1)
+                continue
+            if partition is not previous:
+                try:
+                    kind = known.get(partition, -1)
+                    hashable = True
+                except TypeError:  # lists, arrays: keyed by their canonical form
+                    kind, hashable = -1, False
+                if kind < 0:
+                    canonical = _canonical(partition, what, f, columns)
+                    kind = known.get(canonical, -1)
+                    if kind < 0:
+                        kind = known[canonical] = self._add(canonical)
+                    if hashable:
+                        known[partition] = kind
+                previous, previous_kind = partition, kind
+            kinds.append(previous_kind)
+        pattern = np.array(kinds, dtype=np.int64)
+        self._flatten()
+        return pattern
+
+    def _add(self, partition: tuple[Group, ...]) -> int:
+        member: list[int] = []
+        member_group: list[int] = []
+        member_ff: list[int] = []
+        ff_key: list[int] = []
+        ff_set: list[int] = []
+        for gi, group in enumerate(partition):
+            ff = -1
+            if len(group) >= 2:
+                ff = len(ff_key)
+                key = self._key_of.get(group)
+                if key is None:
+                    key = self._key_of[group] = len(self.members)
+                    self.members.append(group)
+                as_set = frozenset(group)
+                index = self._set_of.get(as_set)
+                if index is None:
+                    index = self._set_of[as_set] = len(self.sets)
+                    self.sets.append(as_set)
+                ff_key.append(key)
+                ff_set.append(index)
+            member.extend(group)
+            member_group.extend([gi] * len(group))
+            member_ff.extend([ff] * len(group))
+        self._parts.append((member, member_group, member_ff, ff_key, ff_set))
+        return len(self._parts) - 1
+
+    def _flatten(self) -> None:
+        def joined(k: int) -> np.ndarray:
+            return np.array([v for part in self._parts for v in part[k]], dtype=np.int64)
+
+        self.member, self.member_group, self.member_ff = joined(0), joined(1), joined(2)
+        self.ff_key, self.ff_set = joined(3), joined(4)
+        self.size = np.array([len(p[0]) for p in self._parts], dtype=np.int64)
+        self.n_ff = np.array([len(p[3]) for p in self._parts], dtype=np.int64)
+        self.start = np.concatenate([[0], np.cumsum(self.size)[:-1]]).astype(np.int64)
+        self.ff_start = np.concatenate([[0], np.cumsum(self.n_ff)[:-1]]).astype(np.int64)
+
+
+def _canonical(partition: Partition, what: str, f: int, columns: FrameColumns) -> tuple[Group, ...]:
+    groups = tuple(tuple(map(int, group)) for group in partition)
+    for gi, group in enumerate(groups):
+        if not group:
+            raise ValueError(f"{_where(what, f, columns)}: group {gi} is empty")
+    return groups
+
+
+def truth_partitions(columns: FrameColumns) -> list[tuple[Group, ...] | None]:
+    """Each frame's ground truth as a full partition (None where not annotated); consecutive
+    frames with the same people and groups share one partition object."""
+    same_people = columns.same_people_as_previous()
+    out: list[tuple[Group, ...] | None] = [None] * len(columns)
+    last_frame = -2
+    last_groups: Any = None
+    last: tuple[Group, ...] | None = None
+    for f, groups in enumerate(columns.groups):
+        if groups is None:
+            continue
+        if not (
+            last_frame == f - 1
+            and same_people[f]
+            and (groups is last_groups or groups == last_groups)
+        ):
+            last = complete_partition(groups, columns.ids_of(f).tolist())
+            last_groups = groups
+        out[f] = last
+        last_frame = f
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -176,136 +349,198 @@ class LoggedGroups:
     Attributes:
         layout: the groups, flattened.
         tracks: (n_fformations,) each F-formation's track (its colour class).
-        frame_keys: (sequence, time in microseconds) of each frame.
+        columns: the frames the groups belong to.
         rows: (n_frames,) each frame's row on the run's clock.
         evaluation: for a detector's tree on frames with ground truth, its evaluation.
+        ground_truth: True for the tree of the frames' own ground truth.
     """
 
     layout: GroupLayout
     tracks: np.ndarray
-    frame_keys: tuple[tuple[str, int], ...]
+    columns: FrameColumns
     rows: np.ndarray
     evaluation: Evaluation | None = None
+    ground_truth: bool = False
+
+    @functools.cached_property
+    def frame_keys(self) -> tuple[tuple[str, int], ...]:
+        """(sequence, time in microseconds) of each frame."""
+        keys = time_keys(self.columns.time).tolist()
+        return tuple(zip(self.columns.sequence, keys, strict=True))
 
     def track_map(self) -> dict[tuple[str, int, frozenset[int]], int]:
         """(sequence, time in microseconds, members) -> track."""
         return {
-            (*self.frame_keys[f], frozenset(m)): int(t)
-            for f, m, t in zip(
+            (*self.frame_keys[f], self.layout.sets[s]): int(t)
+            for f, s, t in zip(
                 self.layout.group_frame.tolist(),
-                self.layout.group_members,
+                self.layout.group_set.tolist(),
                 self.tracks.tolist(),
                 strict=True,
             )
         }
 
 
-def _locate(
-    frames: Sequence[Frame], member_frame: np.ndarray, member_id: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Row of each (frame, person id) in the frames' concatenated arrays (-1 when absent), and
-    those concatenated positions."""
-    if not frames:
-        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
-    counts = np.fromiter((f.n_people for f in frames), dtype=np.int64, count=len(frames))
-    flat_id = np.concatenate([f.ids for f in frames])
-    flat_position = (
-        np.concatenate([f.position for f in frames]) if counts.sum() else np.zeros((0, 2))
-    )
-    flat_frame = np.repeat(np.arange(len(frames)), counts)
-    known = np.unique(flat_id)
-    rank = np.searchsorted(known, member_id)
-    found = (rank < known.size) & (known[np.minimum(rank, max(known.size - 1, 0))] == member_id)
-    table = flat_frame * known.size + np.searchsorted(known, flat_id)
-    order = np.argsort(table, kind="stable")
+def _locate(columns: FrameColumns, member_frame: np.ndarray, member_id: np.ndarray) -> np.ndarray:
+    """(n,) int64 row of each (frame, person id) in the columns, -1 when absent."""
+    known = columns.known_ids
+    rows = np.full(member_id.size, -1, dtype=np.int64)
+    if known.size == 0 or member_id.size == 0:
+        return rows
+    rank = np.minimum(np.searchsorted(known, member_id), known.size - 1)
+    found = known[rank] == member_id
+    n_frames = len(columns)
+    if n_frames * known.size <= _DENSE_LOOKUP_CELLS:
+        table = np.full((n_frames, known.size), -1, dtype=np.int64)
+        table[columns.frame, np.searchsorted(known, columns.ids)] = np.arange(columns.ids.size)
+        rows[found] = table[member_frame[found], rank[found]]
+        return rows
+    key = columns.frame * known.size + np.searchsorted(known, columns.ids)
+    order = np.argsort(key, kind="stable")
     wanted = member_frame * known.size + rank
-    at = np.minimum(np.searchsorted(table[order], wanted), max(table.size - 1, 0))
-    found &= table.size > 0
-    found[found] &= table[order][at[found]] == wanted[found]
-    rows = np.where(found, order[at] if table.size else -1, -1)
-    return rows.astype(np.int64), flat_position
+    at = np.minimum(np.searchsorted(key[order], wanted), key.size - 1)
+    found &= key[order][at] == wanted
+    rows[found] = order[at[found]]
+    return rows
 
 
 def _check_partitions(
-    frames: Sequence[Frame],
-    partitions: Sequence[Sequence[Group] | None],
+    columns: FrameColumns,
+    partitions: Sequence[Partition | None],
     what: str,
     has_partition: np.ndarray,
     member_frame: np.ndarray,
-    member_id: np.ndarray,
     rows: np.ndarray,
 ) -> None:
     """Raises for the first frame whose partition names a stranger, someone twice, or misses
     someone."""
-    counts = np.fromiter((f.n_people for f in frames), dtype=np.int64, count=len(frames))
-    expected = np.where(has_partition, counts, 0)
-    covered = np.bincount(rows[rows >= 0], minlength=int(counts.sum()))
-    per_frame = np.bincount(member_frame, minlength=len(frames))
-    strangers = member_frame[rows < 0]
-    twice = np.zeros(len(frames), dtype=bool)
-    np.logical_or.at(twice, np.repeat(np.arange(len(frames)), counts), covered > 1)
-    bad = np.zeros(len(frames), dtype=bool)
-    bad[strangers] = True
-    bad |= twice | (per_frame != expected)
+    n = len(columns)
+    expected = np.where(has_partition, columns.counts, 0)
+    covered = np.bincount(rows[rows >= 0], minlength=columns.ids.size)
+    per_frame = np.bincount(member_frame, minlength=n)
+    bad = np.zeros(n, dtype=bool)
+    bad[member_frame[rows < 0]] = True
+    bad[columns.frame[covered > 1]] = True
+    bad |= per_frame != expected
     if not np.any(bad):
         return
     f = int(np.flatnonzero(bad)[0])
-    frame = frames[f]
+    ids = columns.ids_of(f).tolist()
+    present = set(ids)
     seen: set[int] = set()
     for gi, group in enumerate(partitions[f]):
         for m in (int(x) for x in group):
-            if m not in set(frame.ids.tolist()) or m in seen:
+            if m not in present or m in seen:
                 problem = "appears twice" if m in seen else "is not in the frame"
                 raise ValueError(
-                    f"{_where(what, f, frame)}: person {m} (group {gi}) {problem}; "
-                    f"expected a full partition of ids {frame.ids.tolist()}"
+                    f"{_where(what, f, columns)}: person {m} (group {gi}) {problem}; "
+                    f"expected a full partition of ids {ids}"
                 )
             seen.add(m)
-    missing = next(i for i in frame.ids.tolist() if i not in seen)
+    missing = next(i for i in ids if i not in seen)
     raise ValueError(
-        f"{_where(what, f, frame)}: person {missing} is in no group; "
+        f"{_where(what, f, columns)}: person {missing} is in no group; "
         "expected a full partition of the frame's ids, singletons included"
     )
 
 
-def _where(what: str, index: int, frame: Frame) -> str:
-    seq = f"sequence {frame.sequence!r}, " if frame.sequence else ""
-    return f"{what}[{index}] ({seq}time {frame.time:g} s)"
+def _where(what: str, index: int, columns: FrameColumns) -> str:
+    return f"{what}[{index}] ({columns.describe(index)})"
+
+
+@dataclass(frozen=True, eq=False)
+class Stretches:
+    """Where a run's F-formations change.
+
+    Attributes:
+        processed: (m,) int64 the frames with a partition.
+        previous: (m,) int64 the processed frame before each in its sequence, -1 for none.
+        fresh: (m,) bool, False where a frame holds the F-formations of its previous one, in
+            the same order and with the same imposed tracks (its tracks are then the previous
+            frame's).
+        head: (n_frames,) int64 for each processed frame, the fresh frame whose F-formations it
+            repeats (itself when fresh); -1 elsewhere.
+    """
+
+    processed: np.ndarray
+    previous: np.ndarray
+    fresh: np.ndarray
+    head: np.ndarray
+
+
+def stretches(
+    layout: GroupLayout, segment: np.ndarray, fixed: np.ndarray | None = None
+) -> Stretches:
+    """Where the F-formations of ``layout`` change.
+
+    Args:
+        layout: the groups.
+        segment: (n_frames,) index of each frame's run of consecutive frames of one sequence.
+        fixed: (n_fformations,) a track imposed on each F-formation, -1 for none.
+    """
+    processed = np.flatnonzero(layout.counts > 0)
+    previous = np.full(processed.size, -1, dtype=np.int64)
+    if processed.size > 1:
+        same_segment = segment[processed[1:]] == segment[processed[:-1]]
+        previous[1:] = np.where(same_segment, processed[:-1], -1)
+    fresh = np.ones(processed.size, dtype=bool)
+    follow = np.flatnonzero(previous >= 0)
+    if follow.size:
+        now, before = processed[follow], previous[follow]
+        starts = layout.group_starts
+        same = slices_equal(layout.group_set, starts, now, before)
+        if fixed is not None:
+            same &= slices_equal(fixed, starts, now, before)
+        fresh[follow] = ~same
+    head = np.full(layout.counts.size, -1, dtype=np.int64)
+    if processed.size:
+        last_fresh = np.maximum.accumulate(np.where(fresh, np.arange(processed.size), 0))
+        head[processed] = processed[last_fresh]
+    return Stretches(processed=processed, previous=previous, fresh=fresh, head=head)
 
 
 def group_tracks(
     layout: GroupLayout,
-    frames: Sequence[Frame],
+    segment: np.ndarray,
     *,
-    fixed: dict[int, int] | None = None,
+    fixed: np.ndarray | None = None,
     first_track: int = 1,
 ) -> np.ndarray:
     """(n_fformations,) track id of each F-formation: stable while a group keeps a majority.
 
-    An F-formation continues the track of a group of the previous frame (same sequence) when
-    each holds more than half of the larger one (``2·|A∩B| > max(|A|, |B|)``, so the match is
-    unique); otherwise it starts a new track. ``fixed`` imposes tracks on some F-formations
-    (row -> track), e.g. a detected group takes the track of the true group it matches.
+    An F-formation continues the track of a group of the previous frame with a partition (same
+    sequence) when each holds more than half of the larger one (``2·|A∩B| > max(|A|, |B|)``,
+    so the match is unique); otherwise it starts a new track. Frames without a partition keep
+    the tracks alive across the gap.
+
+    Args:
+        layout: the groups.
+        segment: (n_frames,) index of each frame's run of consecutive frames of one sequence
+            (``FrameColumns.segment``).
+        fixed: (n_fformations,) tracks imposed on some F-formations (-1 elsewhere), e.g. a
+            detected group takes the track of the true group it matches.
+        first_track: the first new track's id.
     """
-    fixed = fixed or {}
-    tracks = np.zeros(len(layout.group_members), dtype=np.int64)
-    next_track = max([first_track, *(t + 1 for t in fixed.values())])
-    previous: list[tuple[frozenset[int], int]] = []
-    previous_sequence: str | None = None
-    starts = np.searchsorted(layout.group_frame, np.arange(len(frames) + 1))
-    for f, frame in enumerate(frames):
-        rows = range(int(starts[f]), int(starts[f + 1]))
-        if frame.sequence != previous_sequence:
-            previous, previous_sequence = [], frame.sequence
-        if not rows and layout.counts[f] == 0:
-            continue  # no partition here: keep the tracks alive across the gap
-        used = {fixed[r] for r in rows if r in fixed}
+    n_ff = layout.group_frame.size
+    fixed = np.full(n_ff, -1, dtype=np.int64) if fixed is None else np.asarray(fixed, np.int64)
+    tracks = np.zeros(n_ff, dtype=np.int64)
+    next_track = max(first_track, int(fixed.max(initial=-1)) + 1)
+    runs = stretches(layout, segment, fixed)
+    processed, previous, fresh, head = runs.processed, runs.previous, runs.fresh, runs.head
+    starts = layout.group_starts.tolist()
+    sets, group_set, imposed = layout.sets, layout.group_set.tolist(), fixed.tolist()
+    state: dict[int, list[tuple[frozenset[int], int]]] = {}
+    for i in np.flatnonzero(fresh).tolist():
+        f, p = int(processed[i]), int(previous[i])
+        before = state[int(head[p])] if p >= 0 else []
+        rows = range(starts[f], starts[f + 1])
+        used = {imposed[r] for r in rows if imposed[r] >= 0}
         current: list[tuple[frozenset[int], int]] = []
         for r in rows:
-            members = frozenset(layout.group_members[r])
-            track = fixed.get(r)
+            members = sets[group_set[r]]
+            track = imposed[r] if imposed[r] >= 0 else None
             if track is None:
-                for old, old_track in previous:
+                for old, old_track in before:
                     if old_track not in used and 2 * len(members & old) > max(
                         len(members), len(old)
                     ):
@@ -317,12 +552,18 @@ def group_tracks(
             used.add(track)
             tracks[r] = track
             current.append((members, track))
-        previous = current
+        state[f] = current
+    repeat = processed[~fresh]
+    if repeat.size:
+        lengths = layout.group_counts[repeat]
+        local = ragged_arange(lengths)
+        source = np.repeat(layout.group_starts[head[repeat]], lengths) + local
+        tracks[np.repeat(layout.group_starts[repeat], lengths) + local] = tracks[source]
     return tracks
 
 
 def evaluate_detector(
-    frames: Sequence[Frame], partitions: Sequence[Sequence[Group]]
+    frames: Sequence[Frame], partitions: Sequence[Partition]
 ) -> Evaluation | None:
     """``reform.evaluate`` at T = 2/3 (and 1), or None when no frame carries ground truth."""
     if not any(f.groups is not None for f in frames):
@@ -330,41 +571,92 @@ def evaluate_detector(
     return evaluate(frames, partitions)
 
 
-def _matches(
-    evaluation: Evaluation, frames: Sequence[Frame], layout: GroupLayout
-) -> tuple[dict[int, tuple[Group, bool]], np.ndarray]:
-    """Which groups matched at T = 2/3, read from the evaluation's records.
+@dataclass(frozen=True, eq=False)
+class _Matches:
+    """A detector's F-formations against the true ones, on the evaluated frames.
 
-    Returns:
-        frame index -> [(true F-formation, matched)] for the annotated frames, and
-        (n_fformations,) bool: each detected F-formation of ``layout`` matched a true group.
+    Attributes:
+        evaluated: (n_frames,) bool, frames the evaluation scored.
+        true_matched: (n_true,) bool, true F-formation matched at T = 2/3.
+        detected_matched: (n_detected,) bool, detected F-formation matched a true one.
+        pair_detected, pair_true: (n_pairs,) every (detected, true) F-formation pair of an
+            evaluated frame, detected-major.
+        overlap: (n_pairs,) shared members of each pair.
     """
+
+    evaluated: np.ndarray
+    true_matched: np.ndarray
+    detected_matched: np.ndarray
+    pair_detected: np.ndarray
+    pair_true: np.ndarray
+    overlap: np.ndarray
+
+
+def _matches(evaluation: Evaluation, layout: GroupLayout, truth: GroupLayout) -> _Matches:
+    """Which groups matched at T = 2/3, read from the evaluation's records."""
     k = evaluation.thresholds.index(T_TWO_THIRDS)
-    detected_matched = np.zeros(len(layout.group_members), dtype=bool)
-    truth: dict[int, list[tuple[Group, bool]]] = {}
-    det_rows = np.searchsorted(layout.group_frame, np.arange(len(frames) + 1))
-    true_start = np.searchsorted(evaluation.true_frame, np.arange(evaluation.n_frames + 1))
-    det_start = np.searchsorted(evaluation.detected_frame, np.arange(evaluation.n_frames + 1))
-    for r, f in enumerate(evaluation.frame_index.tolist()):
-        true_groups = frames[f].fformations()
-        flags = evaluation.true_matched[k, true_start[r] : true_start[r + 1]]
-        det_flags = evaluation.detected_matched[k, det_start[r] : det_start[r + 1]]
-        rows = np.arange(det_rows[f], det_rows[f + 1])
-        if len(true_groups) != flags.size or rows.size != det_flags.size:
-            raise ValueError(
-                f"evaluation does not belong to these frames and partitions (frame {f}: "
-                f"{len(true_groups)} true and {rows.size} detected F-formations, evaluation has "
-                f"{flags.size} and {det_flags.size})"
-            )
-        truth[f] = [(g, bool(m)) for g, m in zip(true_groups, flags.tolist(), strict=True)]
-        detected_matched[rows] = det_flags
-    return truth, detected_matched
+    n = layout.counts.size
+    scored = np.asarray(evaluation.frame_index, dtype=np.int64)
+    outside = np.flatnonzero((scored < 0) | (scored >= n))
+    if outside.size:
+        raise ValueError(
+            f"evaluation does not belong to these frames: it scores frame "
+            f"{int(scored[outside[0]])}, expected one of {n}"
+        )
+    true_counts = np.bincount(evaluation.true_frame, minlength=scored.size)
+    detected_counts = np.bincount(evaluation.detected_frame, minlength=scored.size)
+    ours_true = truth.group_counts[scored]
+    ours_detected = layout.group_counts[scored]
+    bad = np.flatnonzero((true_counts != ours_true) | (detected_counts != ours_detected))
+    if bad.size:
+        r = int(bad[0])
+        raise ValueError(
+            f"evaluation does not belong to these frames and partitions (frame {scored[r]}: "
+            f"{ours_true[r]} true and {ours_detected[r]} detected F-formations, evaluation has "
+            f"{true_counts[r]} and {detected_counts[r]})"
+        )
+    evaluated = np.zeros(n, dtype=bool)
+    evaluated[scored] = True
+    true_matched = np.zeros(truth.group_frame.size, dtype=bool)
+    true_matched[evaluated[truth.group_frame]] = evaluation.true_matched[k]
+    detected_matched = np.zeros(layout.group_frame.size, dtype=bool)
+    detected_matched[evaluated[layout.group_frame]] = evaluation.detected_matched[k]
+    # Every (detected, true) pair of an evaluated frame, and how many members they share.
+    n_detected = layout.group_counts[scored]
+    n_true = truth.group_counts[scored]
+    n_pairs = n_detected * n_true
+    local = ragged_arange(n_pairs)
+    width = np.repeat(n_true, n_pairs)
+    pair_detected = np.repeat(layout.group_starts[scored], n_pairs) + local // np.maximum(width, 1)
+    pair_true = np.repeat(truth.group_starts[scored], n_pairs) + local % np.maximum(width, 1)
+    n_sets = max(len(truth.sets), 1)
+    cell = layout.group_set[pair_detected] * n_sets + truth.group_set[pair_true]
+    cells, inverse = np.unique(cell, return_inverse=True)
+    shared = np.array(
+        [len(layout.sets[c // n_sets] & truth.sets[c % n_sets]) for c in cells.tolist()],
+        dtype=np.int64,
+    )
+    return _Matches(
+        evaluated=evaluated,
+        true_matched=true_matched,
+        detected_matched=detected_matched,
+        pair_detected=pair_detected,
+        pair_true=pair_true,
+        overlap=shared[inverse.reshape(-1)] if cells.size else np.zeros(0, dtype=np.int64),
+    )
+
+
+def _truth_layout(columns: FrameColumns, truth: LoggedGroups | None) -> GroupLayout:
+    """The ground truth of ``columns``: the truth tree's when drawn from these very columns."""
+    if truth is not None and truth.ground_truth and truth.columns is columns:
+        return truth.layout
+    return GroupLayout.truth(columns)
 
 
 def log_groups(
     rec: rr.RecordingStream,
-    frames: Sequence[Frame],
-    partitions: Sequence[Sequence[Group] | None] | None = None,
+    frames: Sequence[Frame] | FrameColumns,
+    partitions: Sequence[Partition | None] | None = None,
     *,
     name: str = TRUTH,
     clock: Clock | None = None,
@@ -376,11 +668,12 @@ def log_groups(
 
     Args:
         rec: the recording stream.
-        frames: the frames the groups belong to (positions are drawn from them), in time order.
+        frames: the frames the groups belong to (positions are drawn from them), in time order,
+            as ``reform.Frame`` objects or :class:`FrameColumns`.
         partitions: one full partition per frame (None where unknown); default: the frames'
             ground truth (None for frames without).
         name: the tree's name, ``"truth"`` or a detector's (``"reform"``, ``"gcff"``).
-        clock: the run's clock; default: ``Clock.from_frames(frames)``.
+        clock: the run's clock; default: the clock of ``frames``.
         evaluation: ``reform.evaluate(frames, partitions)``, for the mistakes and the colours
             of matched groups; computed here when None and the frames carry ground truth.
         truth: the truth tree's :func:`log_groups` result, so that detected groups that
@@ -396,13 +689,14 @@ def log_groups(
         ValueError: if a partition is not a full partition of its frame's ids (naming the
             frame and the person) or a frame matches no frame of ``clock``.
     """
-    frames = tuple(frames)
-    clock = Clock.from_frames(frames) if clock is None else clock
-    rows = clock.rows_of(frames)
+    columns = FrameColumns.coerce(frames)
+    clock = Clock.from_columns(columns) if clock is None else clock
+    rows = clock.rows_of_columns(columns)
     is_truth = partitions is None
     if is_truth:
-        partitions = [f.partition() if f.groups is not None else None for f in frames]
-    layout = GroupLayout.of(frames, partitions, what=f"{name} partitions")
+        layout = GroupLayout.truth(columns)
+    else:
+        layout = GroupLayout.of(columns, partitions, what=f"{name} partitions")
     layer = (0 if is_truth else 1) if layer is None else int(layer)
     if layer < 0:
         raise ValueError(f"layer must be >= 0, got {layer}")
@@ -410,18 +704,23 @@ def log_groups(
     disc = max(MEMBER_RADIUS_M - layer * MEMBER_RADIUS_STEP_M, MIN_MEMBER_RADIUS_M)
     root = f"{GROUPS_ROOT}/{name}"
 
-    fixed: dict[int, int] = {}
-    truth_by_frame: dict[int, list[tuple[Group, bool]]] = {}
-    detected_matched = np.zeros(len(layout.group_members), dtype=bool)
+    fixed = None
+    matches = None
     if not is_truth:
-        if evaluation is None:
-            evaluation = evaluate_detector(frames, partitions)
+        if evaluation is None and any(g is not None for g in columns.groups):
+            if columns.frames is None:
+                raise ValueError(
+                    f"scoring {name} needs the frames it ran on: pass evaluation=, or columns "
+                    "made with FrameColumns.of(frames)"
+                )
+            evaluation = evaluate(columns.frames, partitions)
         if evaluation is not None:
-            truth_by_frame, detected_matched = _matches(evaluation, frames, layout)
+            true_layout = _truth_layout(columns, truth)
+            matches = _matches(evaluation, layout, true_layout)
             if truth is not None:
-                fixed = _inherit_tracks(layout, truth, frames, truth_by_frame, detected_matched)
+                fixed = _inherit_tracks(layout, true_layout, matches, truth, rows)
     first = 1 if truth is None else int(truth.tracks.max(initial=0)) + 1
-    tracks = group_tracks(layout, frames, fixed=fixed, first_track=first)
+    tracks = group_tracks(layout, columns.segment, fixed=fixed, first_track=first)
 
     n_tracks = int(tracks.max(initial=0))
     label = "group" if is_truth else f"{name} group"
@@ -496,114 +795,133 @@ def log_groups(
         ).partition(group_counts),
         strict=True,
     )
-    if not is_truth and evaluation is not None:
-        _log_mistakes(rec, root, frames, layout, truth_by_frame, detected_matched, times, z=z)
+    if matches is not None:
+        _log_mistakes(rec, root, layout, _truth_layout(columns, truth), matches, times, z=z)
     return LoggedGroups(
         layout=layout,
         tracks=tracks,
-        frame_keys=frame_keys(frames),
+        columns=columns,
         rows=rows,
         evaluation=evaluation,
+        ground_truth=is_truth,
     )
 
 
 def _inherit_tracks(
     layout: GroupLayout,
+    true_layout: GroupLayout,
+    matches: _Matches,
     truth: LoggedGroups,
-    frames: Sequence[Frame],
-    truth_by_frame: dict[int, list[tuple[Group, bool]]],
-    detected_matched: np.ndarray,
-) -> dict[int, int]:
-    """Detected F-formation row -> track of the true F-formation it matches (T = 2/3)."""
-    track_of = truth.track_map()
-    keys = frame_keys(frames)
-    fixed: dict[int, int] = {}
-    for r in np.flatnonzero(detected_matched).tolist():
-        f = int(layout.group_frame[r])
-        members = frozenset(layout.group_members[r])
-        for true_group, matched in truth_by_frame.get(f, []):
-            if matched and 3 * len(members & set(true_group)) >= 2 * max(
-                len(members), len(true_group)
-            ):
-                key = (*keys[f], frozenset(true_group))
-                if key in track_of:
-                    fixed[r] = track_of[key]
-                break
+    rows: np.ndarray,
+) -> np.ndarray:
+    """(n_fformations,) for each matched detected F-formation, the truth tree's track of the
+    first true F-formation of its frame it matches (T = 2/3), where the truth tree holds that
+    group at that time; -1 elsewhere."""
+    fixed = np.full(layout.group_frame.size, -1, dtype=np.int64)
+    d, t, shared = matches.pair_detected, matches.pair_true, matches.overlap
+    largest = np.maximum(layout.group_size[d], true_layout.group_size[t])
+    fits = matches.detected_matched[d] & matches.true_matched[t] & (3 * shared >= 2 * largest)
+    d, t = d[fits], t[fits]
+    d, first = np.unique(d, return_index=True)  # pairs run detected-major, true in order
+    t = t[first]
+    tree = truth.layout
+    if not d.size or not tree.group_frame.size:
+        return fixed
+    tree_set = {s: k for k, s in enumerate(tree.sets)}
+    global_set = np.array([tree_set.get(s, -1) for s in true_layout.sets], dtype=np.int64)
+    n_sets = len(tree.sets)
+    tree_key = truth.rows[tree.group_frame] * n_sets + tree.group_set
+    order = np.argsort(tree_key, kind="stable")
+    sorted_key = tree_key[order]
+    wanted_set = global_set[true_layout.group_set[t]]
+    wanted = rows[layout.group_frame[d]] * n_sets + wanted_set
+    at = np.minimum(np.searchsorted(sorted_key, wanted), sorted_key.size - 1)
+    hit = (wanted_set >= 0) & (sorted_key[at] == wanted)
+    fixed[d[hit]] = truth.tracks[order[at[hit]]]
     return fixed
 
 
 def _log_mistakes(
     rec: rr.RecordingStream,
     root: str,
-    frames: Sequence[Frame],
     layout: GroupLayout,
-    truth_by_frame: dict[int, list[tuple[Group, bool]]],
-    detected_matched: np.ndarray,
+    true_layout: GroupLayout,
+    matches: _Matches,
     times: list[rr.TimeColumn],
     *,
     z: float,
 ) -> None:
-    n = len(frames)
-    missed_centre: list[np.ndarray] = []
-    missed_radius: list[float] = []
-    missed_label: list[str] = []
-    missed_counts = np.zeros(n, dtype=np.int64)
-    wrong_position: list[np.ndarray] = []
-    wrong_label: list[str] = []
-    wrong_colour: list[tuple[int, int, int, int]] = []
-    wrong_counts = np.zeros(n, dtype=np.int64)
-    det_start = np.searchsorted(layout.group_frame, np.arange(n + 1))
-    for f, truth in truth_by_frame.items():
-        frame = frames[f]
-        row_of = {pid: k for k, pid in enumerate(frame.ids.tolist())}
-        detected = [
-            frozenset(layout.group_members[r]) for r in range(det_start[f], det_start[f + 1])
-        ]
-        for true_group, matched in truth:
-            if matched and frozenset(true_group) in detected:
-                continue  # found exactly: nothing to show
-            members = frame.position[[row_of[m] for m in true_group]]
-            centre = members.mean(axis=0)
-            if not matched:
-                missed_centre.append(centre)
-                missed_radius.append(float(np.linalg.norm(members - centre, axis=1).mean()))
-                missed_label.append("missed " + ",".join(str(m) for m in true_group))
-                missed_counts[f] += 1
-                continue
-            true_set = set(true_group)
-            partner = max(detected, key=lambda d: len(d & true_set))
-            for person, kind, colour in [
-                *((p, "extra", _colours.EXTRA_MEMBER) for p in sorted(partner - true_set)),
-                *((p, "missing", _colours.MISSING_MEMBER) for p in sorted(true_set - partner)),
-            ]:
-                wrong_position.append(frame.position[row_of[person]])
-                wrong_label.append(f"{kind} {person}")
-                wrong_colour.append(colour)
-                wrong_counts[f] += 1
-    spurious = np.flatnonzero(~detected_matched & np.isin(layout.group_frame, list(truth_by_frame)))
-    spurious_counts = np.bincount(layout.group_frame[spurious], minlength=n).astype(np.int64)
+    n = layout.counts.size
+    d, t, shared = matches.pair_detected, matches.pair_true, matches.overlap
+    same = (shared == layout.group_size[d]) & (shared == true_layout.group_size[t])
+    exact = np.zeros(true_layout.group_frame.size, dtype=bool)
+    exact[t[same]] = True
+    scored = matches.evaluated[true_layout.group_frame]
+    missed = np.flatnonzero(scored & ~matches.true_matched)
+    wrong = np.flatnonzero(scored & matches.true_matched & ~exact)
+    # Each wrongly matched true group's partner: the detected group sharing most members (the
+    # first such in the partition's order).
+    order = np.lexsort((d, -shared, t))
+    first_true, first = np.unique(t[order], return_index=True)
+    partner_of = np.full(true_layout.group_frame.size, -1, dtype=np.int64)
+    partner_of[first_true] = d[order][first]
+    partner = partner_of[wrong]
+
+    # The people the partner added (extra) or left out (missing), per wrong group, sorted.
+    n_rows = max(
+        int(layout.person_row.max(initial=-1)), int(true_layout.person_row.max(initial=-1))
+    )
+    true_group_of_row = np.full(n_rows + 1, -1, dtype=np.int64)
+    true_group_of_row[true_layout.person_row] = true_layout.group_of_person
+    detected_group_of_row = np.full(n_rows + 1, -1, dtype=np.int64)
+    detected_group_of_row[layout.person_row] = layout.group_of_person
+    extra_size = layout.group_size[partner]
+    extra_owner = np.repeat(np.arange(wrong.size), extra_size)
+    extra_at = np.repeat(layout.group_person_start[partner], extra_size) + ragged_arange(extra_size)
+    keep = true_group_of_row[layout.person_row[extra_at]] != wrong[extra_owner]
+    extra_owner, extra_at = extra_owner[keep], extra_at[keep]
+    missing_size = true_layout.group_size[wrong]
+    missing_owner = np.repeat(np.arange(wrong.size), missing_size)
+    missing_at = np.repeat(true_layout.group_person_start[wrong], missing_size) + ragged_arange(
+        missing_size
+    )
+    keep = detected_group_of_row[true_layout.person_row[missing_at]] != partner[missing_owner]
+    missing_owner, missing_at = missing_owner[keep], missing_at[keep]
+    owner = np.concatenate([extra_owner, missing_owner])
+    kind = np.concatenate(
+        [np.zeros(extra_owner.size, np.int64), np.ones(missing_owner.size, np.int64)]
+    )
+    person = np.concatenate([layout.person_id[extra_at], true_layout.person_id[missing_at]])
+    position = np.concatenate(
+        [layout.person_position[extra_at], true_layout.person_position[missing_at]]
+    ).reshape(-1, 2)
+    order = np.lexsort((person, kind, owner))
+    owner, kind, person, position = owner[order], kind[order], person[order], position[order]
+    cells, inverse = np.unique(person * 2 + kind, return_inverse=True)
+    names = [f"{('extra', 'missing')[c & 1]} {c >> 1}" for c in cells.tolist()]
+    wrong_label = [names[k] for k in inverse.reshape(-1).tolist()]
+    wrong_colour = np.array([_colours.EXTRA_MEMBER, _colours.MISSING_MEMBER], dtype=np.uint8)[kind]
+    wrong_counts = np.bincount(true_layout.group_frame[wrong[owner]], minlength=n).astype(np.int64)
 
     _log_rings(
         rec,
         f"{root}/mistakes/missed",
-        centres=np.array(missed_centre).reshape(-1, 2),
-        radii=np.array(missed_radius),
-        labels=missed_label,
-        counts=missed_counts,
+        centres=true_layout.group_centre[missed],
+        radii=true_layout.group_radius[missed],
+        labels=_labels("missed", true_layout, missed),
+        counts=np.bincount(true_layout.group_frame[missed], minlength=n).astype(np.int64),
         colour=_colours.MISSED,
         times=times,
         z=z,
     )
+    spurious = np.flatnonzero(~matches.detected_matched & matches.evaluated[layout.group_frame])
     _log_rings(
         rec,
         f"{root}/mistakes/spurious",
         centres=layout.group_centre[spurious],
         radii=layout.group_radius[spurious],
-        labels=[
-            "spurious " + ",".join(str(m) for m in layout.group_members[r])
-            for r in spurious.tolist()
-        ],
-        counts=spurious_counts,
+        labels=_labels("spurious", layout, spurious),
+        counts=np.bincount(layout.group_frame[spurious], minlength=n).astype(np.int64),
         colour=_colours.SPURIOUS,
         times=times,
         z=z,
@@ -614,12 +932,20 @@ def _log_mistakes(
         entity,
         indexes=times,
         columns=rr.Points3D.columns(
-            positions=at_height(np.array(wrong_position).reshape(-1, 2), WRONG_MEMBER_Z_M),
+            positions=at_height(position, WRONG_MEMBER_Z_M),
             labels=wrong_label,
-            colors=np.array(wrong_colour, dtype=np.uint8).reshape(-1, 4),
+            colors=wrong_colour.reshape(-1, 4),
         ).partition(wrong_counts),
         strict=True,
     )
+
+
+def _labels(kind: str, layout: GroupLayout, rows: np.ndarray) -> list[str]:
+    """``"<kind> 1,2,3"`` for the F-formations ``rows`` of ``layout``."""
+    keys = layout.group_key[rows]
+    used = np.unique(keys)
+    text = {k: f"{kind} " + ",".join(map(str, layout.members_table[k])) for k in used.tolist()}
+    return [text[k] for k in keys.tolist()]
 
 
 def _log_rings(

@@ -13,15 +13,15 @@ Entity tree:
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import rerun as rr
 
-from reform import T_TWO_THIRDS, Evaluation, Frame
+from reform import T_TWO_THIRDS, Evaluation
 from sim.recording import _colours
-from sim.recording._groups import TRUTH, LoggedGroups
+from sim.recording._groups import TRUTH, LoggedGroups, stretches
 from sim.recording._timeline import FRAME_TIMELINE, SIM_TIME_TIMELINE, Clock
 
 __all__ = [
@@ -83,18 +83,14 @@ class Event:
 
 
 def log_running_scores(
-    rec: rr.RecordingStream,
-    evaluations: Mapping[str, Evaluation],
-    frames_by_detector: Mapping[str, Sequence[Frame]],
-    *,
-    clock: Clock,
+    rec: rr.RecordingStream, evaluations: Mapping[str, Evaluation], *, clock: Clock
 ) -> None:
     """Running P̄, R̄ and F1 (T = 2/3) per detector, one row per annotated frame.
 
     Args:
         rec: the recording stream.
-        evaluations: detector name -> ``reform.evaluate(frames, predictions)``.
-        frames_by_detector: detector name -> the frames it was evaluated on (to place rows).
+        evaluations: detector name -> ``reform.evaluate(frames, predictions)`` (its frames'
+            sequences and times place the rows).
         clock: the run's clock.
     """
     for index, (name, evaluation) in enumerate(evaluations.items()):
@@ -104,10 +100,7 @@ def log_running_scores(
         recall = np.cumsum(scores.frame_recall) / count
         total = precision + recall
         f1 = np.divide(2.0 * precision * recall, total, out=np.zeros_like(total), where=total > 0)
-        frames = frames_by_detector[name]
-        rows = clock.rows_of(
-            [frames[i] for i in evaluation.frame_index.tolist()], what=f"{name} frames"
-        )
+        rows = clock.rows_at(evaluation.sequence, evaluation.time, what=f"{name} frames")
         colour = _colours.series_colour(index)
         for score, values in zip(SCORES, (precision, recall, f1), strict=True):
             entity = f"{METRICS_ROOT}/{score}/{name}"
@@ -144,50 +137,44 @@ def log_group_counts(
         )
 
 
-def group_events(frames: Sequence[Frame], truth: LoggedGroups) -> list[Event]:
-    """Ground-truth groups forming and dissolving, from the truth tree's tracks."""
-    layout, tracks = truth.layout, truth.tracks
-    starts = np.searchsorted(layout.group_frame, np.arange(len(frames) + 1))
+def group_events(truth: LoggedGroups) -> list[Event]:
+    """Ground-truth groups forming, changing and dissolving, from the truth tree's tracks.
+
+    Events happen only where the F-formations change, so only those frames are visited.
+    """
+    layout, tracks, columns = truth.layout, truth.tracks, truth.columns
+    runs = stretches(layout, columns.segment)
+    processed, previous, fresh, head = runs.processed, runs.previous, runs.fresh, runs.head
+    starts = layout.group_starts.tolist()
+    keys, track_list = layout.group_key.tolist(), tracks.tolist()
+    sorted_members = [tuple(sorted(members)) for members in layout.members_table]
+    alive_at: dict[int, dict[int, tuple[int, ...]]] = {}
     events: list[Event] = []
-    alive: dict[int, tuple[int, ...]] = {}
-    sequence: str | None = None
-    for f, frame in enumerate(frames):
-        if frame.sequence != sequence:
-            alive, sequence = {}, frame.sequence
-        if layout.counts[f] == 0:
-            continue
-        now = {
-            int(tracks[r]): tuple(sorted(layout.group_members[r]))
-            for r in range(starts[f], starts[f + 1])
-        }
+    for i in np.flatnonzero(fresh).tolist():
+        f, p = int(processed[i]), int(previous[i])
+        alive = alive_at[int(head[p])] if p >= 0 else {}
+        now = {track_list[r]: sorted_members[keys[r]] for r in range(starts[f], starts[f + 1])}
+        alive_at[f] = now
+        time, sequence = float(columns.time[f]), columns.sequence[f]
         for track, members in now.items():
             if track not in alive:
                 events.append(
-                    Event(
-                        frame.time,
-                        f"group {track} forms: {_names(members)}",
-                        sequence=frame.sequence,
-                    )
+                    Event(time, f"group {track} forms: {_names(members)}", sequence=sequence)
                 )
             elif alive[track] != members:
                 events.append(
                     Event(
-                        frame.time,
+                        time,
                         f"group {track} changes: {_names(alive[track])} -> {_names(members)}",
                         level="DEBUG",
-                        sequence=frame.sequence,
+                        sequence=sequence,
                     )
                 )
         for track, members in alive.items():
             if track not in now:
                 events.append(
-                    Event(
-                        frame.time,
-                        f"group {track} dissolves: {_names(members)}",
-                        sequence=frame.sequence,
-                    )
+                    Event(time, f"group {track} dissolves: {_names(members)}", sequence=sequence)
                 )
-        alive = now
     return events
 
 

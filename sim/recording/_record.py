@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 from collections.abc import Iterable, Mapping, Sequence
@@ -13,6 +14,7 @@ import rerun as rr
 
 from reform import Evaluation, Frame, Group
 from sim.recording._blueprint import default_blueprint
+from sim.recording._columns import FrameColumns
 from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
 from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
 from sim.recording._groups import (
@@ -31,7 +33,7 @@ from sim.recording._scene import (
     room_bounds,
 )
 from sim.recording._stream import RecordingTarget, open_recording, recording_id, target_from_args
-from sim.recording._timeline import Clock, frame_keys
+from sim.recording._timeline import Clock
 
 __all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
 
@@ -61,23 +63,31 @@ def _check_names(detections: Mapping[str, Any]) -> None:
             )
 
 
-def _with_truth(observed: Sequence[Frame], world: Sequence[Frame]) -> tuple[Frame, ...]:
+def _with_truth(observed: FrameColumns, world: FrameColumns, clock: Clock) -> FrameColumns:
     """Observed frames without ground truth get the world's, restricted to who was observed."""
-    world_by_key = dict(zip(frame_keys(world), world, strict=True))
-    out = []
-    for frame, key in zip(observed, frame_keys(observed), strict=True):
-        truth = world_by_key.get(key)
-        if frame.groups is None and truth is not None and truth.groups is not None:
-            seen = set(frame.ids.tolist())
-            groups = tuple(kept for g in truth.groups if (kept := tuple(m for m in g if m in seen)))
-            frame = frame.replace(groups=groups)
-        out.append(frame)
-    return tuple(out)
+    missing = [f for f, groups in enumerate(observed.groups) if groups is None]
+    if not missing:
+        return observed
+    world_truth = dict(zip(clock.rows_of_columns(world).tolist(), world.groups, strict=True))
+    rows = clock.rows_of_columns(observed, what="observed")
+    groups = list(observed.groups)
+    for f in missing:
+        truth = world_truth.get(int(rows[f]))
+        if truth is not None:
+            seen = set(observed.ids_of(f).tolist())
+            groups[f] = tuple(kept for g in truth if (kept := tuple(m for m in g if m in seen)))
+    frames = observed.frames
+    if frames is not None:
+        frames = tuple(
+            frame if frame.groups is groups[f] else frame.replace(groups=groups[f])
+            for f, frame in enumerate(frames)
+        )
+    return dataclasses.replace(observed, groups=tuple(groups), frames=frames)
 
 
 def _log_detectors(
     rec: rr.RecordingStream,
-    frames: Sequence[Frame],
+    frames: FrameColumns,
     detections: Mapping[str, Sequence[Partition]],
     evaluations: Mapping[str, Evaluation] | None,
     *,
@@ -87,11 +97,10 @@ def _log_detectors(
     trees: dict[str, LoggedGroups] = {}
     scored: dict[str, Evaluation] = {}
     for index, (name, partitions) in enumerate(detections.items()):
-        partitions = list(partitions)
         trees[name] = log_groups(
             rec,
             frames,
-            partitions,
+            list(partitions),
             name=name,
             clock=clock,
             evaluation=(evaluations or {}).get(name),
@@ -105,10 +114,11 @@ def _log_detectors(
 
 def record_episode(
     target: RecordingTarget | str | os.PathLike[str],
-    world_frames: Iterable[Frame],
+    world_frames: Iterable[Frame] | FrameColumns,
     *,
-    observed: Iterable[Frame] | None = None,
+    observed: Iterable[Frame] | FrameColumns | None = None,
     detections: Mapping[str, Sequence[Partition]] | None = None,
+    evaluations: Mapping[str, Evaluation] | None = None,
     events: Iterable[object] | None = None,
     model: Any = None,
     body_poses: BodyPoses | None = None,
@@ -121,12 +131,16 @@ def record_episode(
 
     Args:
         target: a ``.rrd`` path, or a :class:`RecordingTarget` (file, viewer, server).
-        world_frames: the episode's ground-truth frames, in time order (any iterable).
+        world_frames: the episode's ground-truth frames, in time order (any iterable of
+            ``reform.Frame``), or their :class:`FrameColumns` (e.g.
+            ``FrameColumns.from_blocks(sim.episode.episode_blocks(...))``).
         observed: the robot's observed frames (noise, dropouts), matched to the world frames by
             (sequence, time). Observed frames without ground truth are scored against the
             world's groups restricted to the people observed.
         detections: detector name (``"reform"``, ``"gcff"``) -> one full partition per frame of
             the stream the detector saw: ``observed`` when given, else ``world_frames``.
+        evaluations: detector name -> ``reform.evaluate(stream, partitions)``, if already
+            computed; otherwise computed here where the stream carries ground truth.
         events: scenario events (:class:`Event`, ``(time, text[, level])`` tuples or objects
             with ``time`` and ``text``/``kind``); ground-truth groups forming and dissolving
             are added.
@@ -141,17 +155,18 @@ def record_episode(
     Returns:
         The recording id, frame count and the detectors' evaluations.
     """
-    world = tuple(world_frames)
-    if not world:
+    world = FrameColumns.coerce(world_frames)
+    if not len(world):
         raise ValueError("world_frames must hold at least one frame, got none")
     if body_poses is not None and model is None:
         raise ValueError("body_poses needs the model they belong to: pass model=")
     detections = dict(detections or {})
     _check_names(detections)
-    seen = None if observed is None else _with_truth(tuple(observed), world)
+    clock = Clock.from_columns(world)
+    seen = None if observed is None else _with_truth(FrameColumns.coerce(observed), world, clock)
     detected_on = seen if seen is not None else world
-    name = name or world[0].sequence or "episode"
-    annotated = any(f.groups is not None for f in world)
+    name = name or world.sequence[0] or "episode"
+    annotated = any(groups is not None for groups in world.groups)
     cameras = tuple(cameras)
     bounds = room_bounds(world)
     blueprint = default_blueprint(
@@ -160,10 +175,11 @@ def record_episode(
         cameras=tuple(c.name for c in cameras),
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
-        clock = log_frames(
+        log_frames(
             rec,
             world,
             observed=seen,
+            clock=clock,
             field_of_view=field_of_view,
             shapes=body_poses is None,
         )
@@ -176,25 +192,25 @@ def record_episode(
         for camera in cameras:
             log_camera_images(rec, camera, clock=clock)
         truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
-        trees, evaluations = _log_detectors(
-            rec, detected_on, detections, None, clock=clock, truth=truth
+        trees, scored = _log_detectors(
+            rec, detected_on, detections, evaluations, clock=clock, truth=truth
         )
         if truth is not None:
             trees = {TRUTH: truth, **trees}
         log_group_counts(rec, trees, clock=clock)
-        log_running_scores(rec, evaluations, {n: detected_on for n in evaluations}, clock=clock)
+        log_running_scores(rec, scored, clock=clock)
         all_events = list(events or ())
         if truth is not None:
-            all_events.extend(group_events(world, truth))
+            all_events.extend(group_events(truth))
         log_events(rec, all_events, clock=clock)
     return Recorded(
-        recording_id=recording_id(name, seed=seed), n_frames=len(world), evaluations=evaluations
+        recording_id=recording_id(name, seed=seed), n_frames=len(world), evaluations=scored
     )
 
 
 def record_evaluation(
     target: RecordingTarget | str | os.PathLike[str],
-    frames: Iterable[Frame],
+    frames: Iterable[Frame] | FrameColumns,
     predictions_by_detector: Mapping[str, Sequence[Partition]],
     evaluations: Mapping[str, Evaluation] | None = None,
     *,
@@ -209,7 +225,8 @@ def record_evaluation(
 
     Args:
         target: a ``.rrd`` path, or a :class:`RecordingTarget`.
-        frames: the frames the detectors ran on, in time order (a Dataset works).
+        frames: the frames the detectors ran on, in time order (a Dataset works), or their
+            :class:`FrameColumns` made with ``FrameColumns.of``.
         predictions_by_detector: detector name -> one full partition per frame.
         evaluations: detector name -> ``reform.evaluate(frames, predictions)``, if already
             computed; otherwise computed here where the frames carry ground truth.
@@ -223,15 +240,17 @@ def record_evaluation(
     Returns:
         The recording id, frame count and the detectors' evaluations.
     """
-    frames = tuple(frames)
-    if not frames:
+    columns = FrameColumns.coerce(frames)
+    if not len(columns):
         raise ValueError("frames must hold at least one frame, got none")
     predictions = dict(predictions_by_detector)
     _check_names(predictions)
-    annotated = any(f.groups is not None for f in frames)
-    dataset = dataset or frames[0].sequence or "dataset"
+    annotated = any(groups is not None for groups in columns.groups)
+    dataset = dataset or columns.sequence[0] or "dataset"
     views = (dataset,) if dataset_views and annotated else ()
-    bounds = room_bounds(frames)
+    if views and columns.frames is None:
+        raise ValueError("dataset views need the frames: pass reform.Frame objects, not columns")
+    bounds = room_bounds(columns)
     blueprint = default_blueprint(
         scores=annotated and bool(predictions),
         bounds=bounds,
@@ -239,24 +258,24 @@ def record_evaluation(
         pairs=views,
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
-        clock = log_frames(rec, frames, field_of_view=None)
+        clock = log_frames(rec, columns, field_of_view=None)
         log_room(rec, bounds)
-        truth = log_groups(rec, frames, name=TRUTH, clock=clock) if annotated else None
+        truth = log_groups(rec, columns, name=TRUTH, clock=clock) if annotated else None
         trees, scored = _log_detectors(
-            rec, frames, predictions, evaluations, clock=clock, truth=truth
+            rec, columns, predictions, evaluations, clock=clock, truth=truth
         )
         if truth is not None:
             trees = {TRUTH: truth, **trees}
         log_group_counts(rec, trees, clock=clock)
-        log_running_scores(rec, scored, {n: frames for n in scored}, clock=clock)
+        log_running_scores(rec, scored, clock=clock)
         if truth is not None:
-            log_events(rec, group_events(frames, truth), clock=clock)
+            log_events(rec, group_events(truth), clock=clock)
         if views:
-            log_characterisation(rec, frames, name=dataset)
-            distance, effort, label = pair_scatter_data(frames)
+            log_characterisation(rec, columns.frames, name=dataset)
+            distance, effort, label = pair_scatter_data(columns.frames)
             log_pair_scatter(rec, distance, effort, label, name=dataset, classifier=classifier)
     return Recorded(
-        recording_id=recording_id(name, seed=seed), n_frames=len(frames), evaluations=scored
+        recording_id=recording_id(name, seed=seed), n_frames=len(columns), evaluations=scored
     )
 
 

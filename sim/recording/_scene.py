@@ -22,6 +22,7 @@ import rerun as rr
 
 from reform import Frame
 from sim.recording import _colours
+from sim.recording._columns import FrameColumns
 from sim.recording._timeline import Clock
 
 __all__ = [
@@ -350,15 +351,14 @@ def log_body_poses(
 
 
 def room_bounds(
-    frames: Iterable[Frame], *, margin_m: float = ROOM_MARGIN_M
+    frames: Iterable[Frame] | FrameColumns, *, margin_m: float = ROOM_MARGIN_M
 ) -> tuple[float, float, float, float]:
     """``(x_min, x_max, y_min, y_max)`` metres: everyone's extent over the run plus a margin."""
-    frames = [f for f in frames if f.n_people]
-    if not frames:
+    position = FrameColumns.coerce(frames).position
+    if not position.size:
         return (-margin_m, margin_m, -margin_m, margin_m)
-    positions = np.concatenate([f.position for f in frames])
-    low = positions.min(axis=0) - margin_m
-    high = positions.max(axis=0) + margin_m
+    low = position.min(axis=0) - margin_m
+    high = position.max(axis=0) + margin_m
     return (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
 
 

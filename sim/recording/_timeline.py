@@ -16,6 +16,7 @@ import numpy.typing as npt
 import rerun as rr
 
 from reform import Frame
+from sim.recording._columns import FrameColumns
 
 __all__ = ["FRAME_TIMELINE", "SIM_TIME_TIMELINE", "Clock", "frame_keys", "time_keys"]
 
@@ -76,6 +77,11 @@ class Clock:
             sequences.append(frame.sequence)
             times.append(frame.time)
         return cls.from_times(sequences, times)
+
+    @classmethod
+    def from_columns(cls, columns: FrameColumns) -> Clock:
+        """The clock of a run given as columns: frame ``i`` is row ``i``."""
+        return cls.from_times(columns.sequence, columns.time)
 
     @classmethod
     def from_times(cls, sequences: Sequence[str], times: npt.ArrayLike) -> Clock:
@@ -150,8 +156,11 @@ class Clock:
         Raises:
             ValueError: naming the first (sequence, time) that is not a frame of the run.
         """
-        sequences = list(sequences)
+        sequences = tuple(sequences)
         time = np.asarray(times, dtype=np.float64).reshape(-1)
+        if len(sequences) == len(self) and np.array_equal(time, self.time):
+            if sequences == self.sequence:
+                return np.arange(len(self), dtype=np.int64)  # the clock's own frames
         keys = time_keys(time)
         rows = np.full(keys.size, -1, dtype=np.int64)
         names = np.array(sequences, dtype=object)
@@ -173,6 +182,14 @@ class Clock:
                 "frame of the run: expected the (sequence, time) of one of its frames"
             )
         return rows
+
+    def rows_of_columns(self, columns: FrameColumns, *, what: str = "frames") -> np.ndarray:
+        """(n_frames,) int64 row of each frame of ``columns``, found by (sequence, time).
+
+        Raises:
+            ValueError: naming the first frame whose (sequence, time) is not in the run.
+        """
+        return self.rows_at(columns.sequence, columns.time, what=what)
 
     def row_at(self, time: float, *, sequence: str | None = None) -> int:
         """Row of the last frame of ``sequence`` (default: the first) at or before ``time``."""
