@@ -53,8 +53,6 @@ _mj_kinematics = types.ExternalFunction("mj_kinematics", types.void(types.uintp,
 
 @numba.njit(cache=True)
 def advance_with_kinematics(  # pragma: no cover - compiled
-    model_address,
-    data_address,
     state,
     intent,
     params,
@@ -62,16 +60,12 @@ def advance_with_kinematics(  # pragma: no cover - compiled
     dt,
     margin,
     record_at,
-    mocap_of,
-    head_adr,
-    tilt_adr,
-    data_mocap_pos,
-    data_mocap_quat,
-    data_qpos,
-    data_xpos,
-    data_xquat,
-    bodies,
+    layout,
+    model_address,
+    data_address,
+    views,
     present,
+    bodies,
     out_xy,
     out_quat,
     out_present,
@@ -79,53 +73,25 @@ def advance_with_kinematics(  # pragma: no cover - compiled
     """`sim.motion.advance`, with MuJoCo's kinematics after every recorded step.
 
     Args:
+        state, intent, params, step0, dt, margin, record_at, layout: as for
+            `sim.motion.advance`.
         model_address, data_address: ``MjModel._address`` and ``MjData._address``.
-        state, intent, params, step0, dt, margin, record_at, mocap_of, head_adr, tilt_adr: as
-            for `sim.motion.advance`.
-        data_mocap_pos: (1, nmocap, 3) view of the MjData's ``mocap_pos``.
-        data_mocap_quat: (1, nmocap, 4) view of its ``mocap_quat``.
-        data_qpos: (1, nq) view of its ``qpos``.
-        data_xpos, data_xquat: (nbody, 3) and (nbody, 4) views of its ``xpos`` and ``xquat``.
-        bodies: (k,) ids of the bodies to read.
+        views: `data_views` of that MjData.
         present: (1, n) scratch for the presence of a step.
+        bodies: (k,) ids of the bodies to read.
         out_xy: (rows, k, 2) ground-plane positions of ``bodies``, written at recorded rows.
         out_quat: (rows, k, 4) their quaternions.
         out_present: (rows, n) presence.
     """
-    new_x, new_y, weight, revert, xs, order, moved_order, rank, widest = workspace(state, params)
+    data_mocap_pos, data_mocap_quat, data_qpos, data_xpos, data_xquat = views
+    records = (data_mocap_pos, data_mocap_quat, data_qpos, present)
+    work = workspace(state, params)
     for s in range(record_at.shape[0]):
-        step(
-            state,
-            intent,
-            params,
-            dt,
-            margin,
-            new_x,
-            new_y,
-            weight,
-            revert,
-            xs,
-            order,
-            moved_order,
-            rank,
-            widest,
-        )
+        step(state, intent, params, dt, margin, work)
         row = record_at[s]
         if row < 0:
             continue
-        write_pose(
-            state,
-            params,
-            (step0 + s + 1) * dt,
-            0,
-            mocap_of,
-            head_adr,
-            tilt_adr,
-            data_mocap_pos,
-            data_mocap_quat,
-            data_qpos,
-            present,
-        )
+        write_pose(state, params, (step0 + s + 1) * dt, 0, layout, records)
         _mj_kinematics(model_address, data_address)
         for b in range(bodies.shape[0]):
             body = bodies[b]
@@ -138,7 +104,13 @@ def advance_with_kinematics(  # pragma: no cover - compiled
 
 
 def data_views(data: mujoco.MjData) -> tuple[np.ndarray, ...]:
-    """The views of ``data`` that `advance_with_kinematics` writes and reads."""
+    """The views of ``data`` that `advance_with_kinematics` writes and reads.
+
+    Returns:
+        ``(mocap_pos, mocap_quat, qpos, xpos, xquat)``: the first three with a leading axis of
+        one row, (1, nmocap, 3), (1, nmocap, 4) and (1, nq), written as `sim.motion.write_pose`
+        records; then (nbody, 3) and (nbody, 4), read after the kinematics.
+    """
     return (
         data.mocap_pos.reshape(1, *data.mocap_pos.shape),
         data.mocap_quat.reshape(1, *data.mocap_quat.shape),

@@ -310,23 +310,24 @@ def _gaze_yaw(state, intent, i):
 
 
 @numba.njit(cache=True)
-def write_pose(
-    state,
-    params,
-    time,
-    row,
-    mocap_of,
-    head_adr,
-    tilt_adr,
-    rec_mpos,
-    rec_mquat,
-    rec_qpos,
-    rec_present,
-):  # noqa: E501
+def write_pose(state, params, time, row, layout, records):  # pragma: no cover - compiled
     """Writes every agent's mocap pose and joint angles at ``time`` into row ``row``.
 
     Present agents get their position and yaw plus idle sway; absent ones are parked.
+
+    Args:
+        state: (n, N_STATE) motion state.
+        params: (n, N_PARAM) per-agent parameters.
+        time: seconds (the phase of the idle sway).
+        row: the row of ``records`` to write.
+        layout: ``(mocap_of, head_adr, tilt_adr)``: (n,) mocap index of each agent's root body
+            and (n,) qpos address of its head yaw / tilt joint, or -1.
+        records: ``(mpos, mquat, qpos, present)``: (rows, nmocap, 3) mocap positions,
+            (rows, nmocap, 4) mocap quaternions (w, x, y, z), (rows, nq) joint positions (only
+            the head joints are written) and (rows, n) presence.
     """
+    mocap_of, head_adr, tilt_adr = layout
+    rec_mpos, rec_mquat, rec_qpos, rec_present = records
     w1 = 2.0 * math.pi * SWAY_FREQ_1_HZ * time
     w2 = 2.0 * math.pi * SWAY_FREQ_2_HZ * time
     s1, c1, s2, c2 = math.sin(w1), math.cos(w1), math.sin(w2), math.cos(w2)
@@ -382,7 +383,12 @@ def write_pose(
 
 @numba.njit(cache=True)
 def workspace(state, params):  # pragma: no cover - compiled
-    """Scratch arrays for `step`, kept across the steps of a call (agents sorted by x)."""
+    """Scratch for `step`, kept across the steps of a call (agents sorted by x).
+
+    Returns:
+        ``(new_x, new_y, weight, revert, xs, order, moved_order, rank, widest)``: (n,) arrays
+        and the widest body radius, metres; passed to `step` as one tuple.
+    """
     n = state.shape[0]
     new_x = np.empty(n)
     new_y = np.empty(n)
@@ -399,27 +405,14 @@ def workspace(state, params):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def step(  # noqa: C901 - one step on purpose: every step touches every primitive
-    state,
-    intent,
-    params,
-    dt,
-    margin,
-    new_x,
-    new_y,
-    weight,
-    revert,
-    xs,
-    order,
-    moved_order,
-    rank,
-    widest,
-):
+def step(state, intent, params, dt, margin, work):  # noqa: C901 - one step, every primitive
     """Moves every agent by one control step of ``dt`` seconds, in place (see `advance`).
 
-    Pair loops visit neighbours along x only: ``order`` keeps the agents sorted by x (nearly
-    sorted from one step to the next, so re-sorting is linear).
+    ``work`` is the `workspace` of the call. Pair loops visit neighbours along x only:
+    ``order`` keeps the agents sorted by x (nearly sorted from one step to the next, so
+    re-sorting is linear).
     """
+    new_x, new_y, weight, revert, xs, order, moved_order, rank, widest = work
     n = state.shape[0]
     # Leaving and entering.
     for i in range(n):
@@ -681,22 +674,7 @@ def step(  # noqa: C901 - one step on purpose: every step touches every primitiv
 
 
 @numba.njit(cache=True)
-def advance(
-    state,
-    intent,
-    params,
-    step0,
-    dt,
-    margin,
-    record_at,
-    mocap_of,
-    head_adr,
-    tilt_adr,
-    rec_mpos,
-    rec_mquat,
-    rec_qpos,
-    rec_present,
-):
+def advance(state, intent, params, step0, dt, margin, record_at, layout, records):
     """Moves every agent by ``len(record_at)`` control steps of ``dt`` seconds, in place.
 
     Args:
@@ -708,46 +686,15 @@ def advance(
         margin: metres kept between agents beyond the sum of their body radii.
         record_at: (n_steps,) int: after step s, write the pose into row ``record_at[s]`` of the
             records, or nothing when it is negative.
-        mocap_of: (n,) mocap index of each agent's root body.
-        head_adr, tilt_adr: (n,) qpos address of each agent's head yaw / tilt joint, or -1.
-        rec_mpos: (rows, nmocap, 3) recorded mocap positions.
-        rec_mquat: (rows, nmocap, 4) recorded mocap quaternions (w, x, y, z).
-        rec_qpos: (rows, nq) recorded joint positions (only the head joints are written).
-        rec_present: (rows, n) recorded presence.
+        layout: ``(mocap_of, head_adr, tilt_adr)`` as for `write_pose`.
+        records: ``(mpos, mquat, qpos, present)`` as for `write_pose`, a row per recorded step.
     """
-    new_x, new_y, weight, revert, xs, order, moved_order, rank, widest = workspace(state, params)
+    work = workspace(state, params)
     for s in range(record_at.shape[0]):
-        step(
-            state,
-            intent,
-            params,
-            dt,
-            margin,
-            new_x,
-            new_y,
-            weight,
-            revert,
-            xs,
-            order,
-            moved_order,
-            rank,
-            widest,
-        )
+        step(state, intent, params, dt, margin, work)
         row = record_at[s]
         if row >= 0:
-            write_pose(
-                state,
-                params,
-                (step0 + s + 1) * dt,
-                row,
-                mocap_of,
-                head_adr,
-                tilt_adr,
-                rec_mpos,
-                rec_mquat,
-                rec_qpos,
-                rec_present,
-            )
+            write_pose(state, params, (step0 + s + 1) * dt, row, layout, records)
 
 
 def sway_parameters(rng: np.random.Generator, *, standing: bool) -> np.ndarray:

@@ -484,8 +484,9 @@ class World:
             raise ValueError(f"n_steps must be a positive int, got {n_steps!r}")
         record_at = np.full(int(n_steps), -1, dtype=np.int64)
         record_at[-1] = 0
-        mpos, mquat, qpos, present = self._buffer(1)
-        self._advance(record_at, mpos, mquat, qpos, present)
+        records = self._buffer(1)
+        self._advance(record_at, records)
+        mpos, mquat, qpos, present = records
         self._load_row(mpos[0], mquat[0], qpos[0], present[0])
 
     def frame(self) -> Frame:
@@ -564,8 +565,9 @@ class World:
                 mpos, mquat, qpos = self._twin_views[:3]
                 last = (mpos[0], mquat[0], qpos[0], present[rows - 1])
             else:
-                mpos, mquat, qpos, present = self._buffer(block_rows)
-                self._advance(record_at, mpos, mquat, qpos, present)
+                records = self._buffer(block_rows)
+                self._advance(record_at, records)
+                mpos, mquat, qpos, present = records
                 batch.mocap_pos[:rows] = mpos[:rows]
                 batch.mocap_quat[:rows] = mquat[:rows]
                 batch.qpos[:rows] = qpos[:rows]
@@ -611,9 +613,9 @@ class World:
         self._root_body = np.empty(n, dtype=np.int64)
         self._torso_body = np.empty(n, dtype=np.int64)
         self._head_body = np.empty(n, dtype=np.int64)
-        self._mocap_of = np.empty(n, dtype=np.int64)
-        self._head_adr = np.full(n, -1, dtype=np.int64)
-        self._tilt_adr = np.full(n, -1, dtype=np.int64)
+        mocap_of = np.empty(n, dtype=np.int64)
+        head_adr = np.full(n, -1, dtype=np.int64)
+        tilt_adr = np.full(n, -1, dtype=np.int64)
         for i, agent in enumerate(agents):
             prefix = agent.prefix
             robot = isinstance(agent, RobotSpec)
@@ -621,16 +623,18 @@ class World:
             self._root_body[i] = root
             self._torso_body[i] = body(prefix + "torso")
             self._head_body[i] = body(prefix + "head")
-            self._mocap_of[i] = int(model.body_mocapid[root])
-            if self._mocap_of[i] < 0:
+            mocap_of[i] = int(model.body_mocapid[root])
+            if mocap_of[i] < 0:
                 raise ValueError(
                     f"model does not match the spec: {prefix} root is not a mocap body"
                 )
             if robot:
-                self._head_adr[i] = joint(prefix + "head_pan")
-                self._tilt_adr[i] = joint(prefix + "head_tilt")
+                head_adr[i] = joint(prefix + "head_pan")
+                tilt_adr[i] = joint(prefix + "head_tilt")
             else:
-                self._head_adr[i] = joint(prefix + "neck_yaw")
+                head_adr[i] = joint(prefix + "neck_yaw")
+        # Where the motion kernel writes each agent's pose (`sim.motion.write_pose`).
+        self._layout = (mocap_of, head_adr, tilt_adr)
         self._sensor_site = -1
         self._head_camera = -1
         if any(isinstance(a, RobotSpec) for a in agents):
@@ -659,20 +663,9 @@ class World:
         return batch
 
     def _write_initial_pose(self) -> None:
-        mpos, mquat, qpos, present = self._buffer(1)
-        motion.write_pose(
-            self._state,
-            self._params,
-            0.0,
-            0,
-            self._mocap_of,
-            self._head_adr,
-            self._tilt_adr,
-            mpos,
-            mquat,
-            qpos,
-            present,
-        )
+        records = self._buffer(1)
+        motion.write_pose(self._state, self._params, 0.0, 0, self._layout, records)
+        mpos, mquat, qpos, present = records
         self._load_row(mpos[0], mquat[0], qpos[0], present[0])
 
     def _load_row(
@@ -686,35 +679,9 @@ class World:
         mujoco.mj_kinematics(self._model, data)
         self._present = present.copy()
 
-    def _advance(
-        self,
-        record_at: np.ndarray,
-        mpos: np.ndarray,
-        mquat: np.ndarray,
-        qpos: np.ndarray,
-        present: np.ndarray,
-    ) -> None:
-        """Runs the motion kernel over ``len(record_at)`` steps, recording into the buffers."""
-
-        def segment(k: int, records: np.ndarray) -> None:
-            motion.advance(
-                self._state,
-                self._intent,
-                self._params,
-                k,
-                self._dt,
-                CLEARANCE_MARGIN_M,
-                records,
-                self._mocap_of,
-                self._head_adr,
-                self._tilt_adr,
-                mpos,
-                mquat,
-                qpos,
-                present,
-            )
-
-        self._segments(record_at, segment)
+    def _advance(self, record_at: np.ndarray, records: tuple[np.ndarray, ...]) -> None:
+        """Runs the motion kernel over ``len(record_at)`` steps, recording into ``records``."""
+        self._segments(record_at, motion.advance, records)
 
     def _advance_native(
         self,
@@ -725,37 +692,25 @@ class World:
         present: np.ndarray,
     ) -> None:
         """The motion kernel with MuJoCo's kinematics (on the twin) at every recorded step."""
-        views = self._twin_views
-        scratch = self._buffer(1)[3]
+        self._segments(
+            record_at,
+            _native.advance_with_kinematics,
+            self._twin._address,
+            self._twin_data._address,
+            self._twin_views,
+            self._buffer(1)[3],
+            bodies,
+            xy,
+            quat,
+            present,
+        )
 
-        def segment(k: int, records: np.ndarray) -> None:
-            _native.advance_with_kinematics(
-                self._twin._address,
-                self._twin_data._address,
-                self._state,
-                self._intent,
-                self._params,
-                k,
-                self._dt,
-                CLEARANCE_MARGIN_M,
-                records,
-                self._mocap_of,
-                self._head_adr,
-                self._tilt_adr,
-                *views,
-                bodies,
-                scratch,
-                xy,
-                quat,
-                present,
-            )
+    def _segments(self, record_at: np.ndarray, kernel: Any, *rest: Any) -> None:
+        """Runs ``kernel`` (`sim.motion.advance` or a variant) between decision ticks.
 
-        self._segments(record_at, segment)
-
-    def _segments(self, record_at: np.ndarray, segment: Any) -> None:
-        """Calls ``segment(first_step, record_at_slice)`` between decision ticks.
-
-        The script is sampled on each tick before the steps that follow it.
+        Each call moves the agents from one tick to the next: ``kernel(state, intent, params,
+        first_step, dt, margin, record_at_slice, layout, *rest)``. The script is sampled on
+        each tick before the steps that follow it.
         """
         spd = self._steps_per_decision
         start = self._step_index
@@ -765,7 +720,17 @@ class World:
             if self._script is not None and k % spd == 0 and k // spd != self._intent_tick:
                 self._apply_script_tick(k)
             segment_end = min(end, (k // spd + 1) * spd)
-            segment(k, record_at[k - start : segment_end - start])
+            kernel(
+                self._state,
+                self._intent,
+                self._params,
+                k,
+                self._dt,
+                CLEARANCE_MARGIN_M,
+                record_at[k - start : segment_end - start],
+                self._layout,
+                *rest,
+            )
             k = segment_end
         self._step_index = end
 
