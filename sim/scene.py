@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
@@ -154,6 +154,8 @@ class PersonSpec:
     present: bool = True
     asset: str = PERSON_ASSET
 
+    kind: ClassVar[str] = HUMAN
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "id", _check_id("PersonSpec.id", self.id))
         label = f"person {self.id}"
@@ -175,10 +177,6 @@ class PersonSpec:
             object.__setattr__(self, "color", color if len(color) == 4 else (*color, 1.0))
         object.__setattr__(self, "present", bool(self.present))
         _check_asset(f"{label}: asset", self.asset)
-
-    @property
-    def kind(self) -> str:
-        return HUMAN
 
     @property
     def radius(self) -> float:
@@ -215,6 +213,11 @@ class RobotSpec:
     head_tilt: float = 0.0
     asset: str = ROBOT_ASSET
 
+    kind: ClassVar[str] = ROBOT
+    radius: ClassVar[float] = ROBOT_RADIUS_M  # metres, body radius: the base disc
+    present: ClassVar[bool] = True  # the robot is always in the room
+    prefix: ClassVar[str] = ROBOT_PREFIX
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "id", _check_id("RobotSpec.id", self.id))
         object.__setattr__(self, "position", _pair("robot: position", self.position))
@@ -225,23 +228,6 @@ class RobotSpec:
         object.__setattr__(self, "head_pan", _finite("robot: head_pan", self.head_pan))
         object.__setattr__(self, "head_tilt", _finite("robot: head_tilt", self.head_tilt))
         _check_asset("robot: asset", self.asset)
-
-    @property
-    def kind(self) -> str:
-        return ROBOT
-
-    @property
-    def radius(self) -> float:
-        """Body radius, metres: the base disc."""
-        return ROBOT_RADIUS_M
-
-    @property
-    def present(self) -> bool:
-        return True
-
-    @property
-    def prefix(self) -> str:
-        return ROBOT_PREFIX
 
 
 Agent = PersonSpec | RobotSpec
