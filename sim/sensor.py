@@ -146,7 +146,7 @@ class Sensor:
             head = data.xpos[world.head_bodies[index]]
             roots = world.root_bodies[index]
             targets = np.concatenate([torso, head])
-            clear = _rays_clear(model, data, origin, targets, np.concatenate([roots, roots]))
+            clear = rays_clear(model, data, origin, targets, np.concatenate([roots, roots]))
             k = rows.size
             torso_clear, head_clear = clear[:k], clear[k:]
             body_seen[rows] = torso_clear | head_clear
@@ -238,17 +238,30 @@ class Sensor:
         return frame, seen, seen.copy()
 
 
-def _rays_clear(
+def rays_clear(
     model: mujoco.MjModel,
     data: mujoco.MjData,
     origin: np.ndarray,
     targets: np.ndarray,
     target_roots: np.ndarray,
 ) -> np.ndarray:
-    """Whether the segment from ``origin`` to each of ``targets`` (k, 3) is unobstructed.
+    """Whether the segment from ``origin`` to each of ``targets`` is unobstructed.
 
-    A ray is clear when it hits nothing before the target, or when the first geom it hits
-    belongs to the target's own body tree (root body ``target_roots``).
+    One ``mujoco.mj_multiRay`` call casts every ray against the geoms of the room and the
+    people (the robot's own geoms are left out). A ray is clear when it hits nothing before the
+    target (a hit within a micrometre of it counts as the target), or when the first geom it
+    hits belongs to the target's own body tree. This is the occlusion test of
+    `Sensor.visibility`.
+
+    Args:
+        model: the scene's MuJoCo model.
+        data: its data, with the kinematics of the moment computed.
+        origin: (3,) where the rays start (the sensor), metres.
+        targets: (k, 3) points the rays aim at, metres.
+        target_roots: (k,) root body id of each target's body tree.
+
+    Returns:
+        (k,) bool: whether each target is in plain sight of ``origin``.
     """
     vec = targets - origin
     distance = np.linalg.norm(vec, axis=1)

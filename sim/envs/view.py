@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from reform.frame import ROBOT, Frame, Group
-from sim.sensor import Sensor, _rays_clear
+from sim.sensor import Sensor, rays_clear
 from sim.world import World, yaw_from_quat
 
 __all__ = ["Eyes", "Truth", "View", "robot_frame"]
@@ -153,7 +153,7 @@ class Eyes:
             cand = np.flatnonzero(seen)
             targets = np.concatenate([truth.torso_xyz[cand], truth.head_xyz[cand]])
             roots = self._roots[cand]
-            clear = _rays_clear(world.model, data, origin, targets, np.concatenate([roots, roots]))
+            clear = rays_clear(world.model, data, origin, targets, np.concatenate([roots, roots]))
             k = cand.size
             seen[cand] = clear[:k] | clear[k:]
             head_seen[cand] = clear[k:]
