@@ -25,6 +25,7 @@ from sim.recording import (
     Clock,
     Event,
     FieldOfView,
+    FrameColumns,
     RecordingTarget,
     add_recording_arguments,
     body_entity,
@@ -518,6 +519,412 @@ def test_sequences_follow_each_other_on_sim_time(tmp_path):
     # trails do not reach back into the previous sequence
     strips = rec.rows["/world/people/trails"][6]["LineStrips3D:strips"]
     assert all(len(strip) == 1 for strip in strips)
+
+
+# ----------------------------------------------------------------------------- columns, edge cases
+
+
+def random_run(seed: int, n: int = 120) -> list[Frame]:
+    """Two sequences of people coming and going, the robot now there, now not, heads seen or
+    not (or not tracked at all), people listed in any order, an empty frame, frames without
+    ground truth and an annotated frame where nobody is grouped."""
+    rng = np.random.default_rng(seed)
+    frames = []
+    for sequence, step_s in (("a", 0.125), ("b", 0.5)):  # (exact in binary: sim_time too)
+        present = set(range(7))
+        home = rng.uniform(0.0, 6.0, (9, 2))
+        groups: tuple[tuple[int, ...], ...] = ()
+        for t in range(n // 2):
+            if rng.random() < 0.2:
+                present ^= {int(rng.integers(0, 9))}
+            ids = [] if t == 5 else sorted(present)
+            if rng.random() < 0.3:
+                rng.shuffle(ids)
+            if t == 0 or rng.random() < 0.25 or not {m for g in groups for m in g} <= set(ids):
+                order = rng.permutation(ids).tolist()
+                cuts = np.sort(rng.choice(np.arange(1, max(len(order), 2)), 2)).tolist()
+                parts = [order[: cuts[0]], order[cuts[0] : cuts[1]], order[cuts[1] :]]
+                groups = tuple(tuple(p) for p in parts if p and rng.random() < 0.85)
+            robot = rng.random() < 0.7 and t != 5
+            n_people = len(ids) + robot
+            position = np.array([home[i] for i in ids] + [[3.0, -2.0]] * robot).reshape(-1, 2)
+            position = position + rng.normal(0.0, 0.05, position.shape)
+            head_position = position + 0.05
+            head_position[rng.random(n_people) < 0.3] = np.nan
+            head_yaw = np.where(np.isnan(head_position[:, 0]), np.nan, 0.5)
+            tracked = rng.random() < 0.8
+            frames.append(
+                Frame(
+                    ids=[*ids, *([ROBOT_ID] * robot)],
+                    position=position,
+                    yaw=rng.uniform(-3.0, 3.0, n_people),
+                    kinds=["human"] * len(ids) + ["robot"] * robot,
+                    head_position=head_position if tracked else None,
+                    head_yaw=head_yaw if tracked else None,
+                    groups=None if t % 4 == 3 else () if t == 8 else groups,
+                    time=round(t * step_s, 6),
+                    sequence=sequence,
+                )
+            )
+    return frames
+
+
+def random_detector(frames: list[Frame], seed: int) -> list[tuple[tuple[int, ...], ...]]:
+    """Partitions that often repeat, often follow the truth with a merge, a split or a person
+    moved, and sometimes are anything."""
+    rng = np.random.default_rng(seed)
+    out: list[tuple[tuple[int, ...], ...]] = []
+    for k, frame in enumerate(frames):
+        ids = frame.ids.tolist()
+        if k and ids == frames[k - 1].ids.tolist() and rng.random() < 0.4:
+            out.append(out[-1])
+            continue
+        if frame.groups is not None and rng.random() < 0.7:
+            part = [list(g) for g in frame.partition()]
+            move = rng.random()
+            if move < 0.3 and len(part) > 1:
+                part[0] += part.pop(1)
+            elif move < 0.6 and part and len(part[0]) > 2:
+                part[0:1] = [part[0][:1], part[0][1:]]
+            elif move < 0.8 and len(part) > 1 and len(part[0]) > 1:
+                part[1].append(part[0].pop())
+        else:
+            order = rng.permutation(ids).tolist()
+            half = int(rng.integers(0, len(order) + 1))
+            part = [order[:half], order[half:]]
+        out.append(tuple(tuple(g) for g in part if g))
+    return out
+
+
+def reference_tracks(
+    frames, partitions, *, truth=None, first_track=1
+) -> list[dict[frozenset[int], int]]:
+    """Each frame's F-formation -> colour, the rule written plainly: a group keeps its track
+    while it keeps a majority of its members; given the truth's tracks, a detected group that
+    matches a true group (T = 2/3, the first in the truth's order) takes its track."""
+    out, previous, sequence, next_track = [], [], None, first_track
+    for t, (frame, partition) in enumerate(zip(frames, partitions, strict=True)):
+        if frame.sequence != sequence:
+            previous, sequence = [], frame.sequence
+        if partition is None or not frame.n_people:
+            out.append({})
+            continue
+        groups = [frozenset(g) for g in partition if len(g) >= 2]
+        fixed = {}
+        if truth is not None and frame.groups is not None:
+            trues = [frozenset(g) for g in frame.groups if len(g) >= 2]
+            for group in groups:
+                fit = [tr for tr in trues if 3 * len(group & tr) >= 2 * max(len(group), len(tr))]
+                if fit:
+                    fixed[group] = truth[t][fit[0]]
+        current, used = [], set(fixed.values())
+        for group in groups:
+            track = fixed.get(group) or next(
+                (
+                    k
+                    for old, k in previous
+                    if k not in used and 2 * len(group & old) > max(len(group), len(old))
+                ),
+                None,
+            )
+            if track is None:
+                track, next_track = next_track, next_track + 1
+            used.add(track)
+            current.append((group, track))
+        previous = current
+        out.append(dict(current))
+    return out
+
+
+def reference_mistakes(frame: Frame, partition) -> tuple[list[str], list[str], list[str]]:
+    """Missed, spurious and wrong-member labels of one annotated frame (T = 2/3), plainly."""
+    trues = [tuple(g) for g in frame.groups if len(g) >= 2]
+    found = [tuple(g) for g in partition if len(g) >= 2]
+
+    def fits(a, b):
+        return 3 * len(set(a) & set(b)) >= 2 * max(len(a), len(b))
+
+    missed, wrong = [], []
+    for true in trues:
+        matched = any(fits(d, true) for d in found)
+        if matched and any(set(d) == set(true) for d in found):
+            continue
+        if not matched:
+            missed.append("missed " + ",".join(map(str, true)))
+            continue
+        partner = max(found, key=lambda d: len(set(d) & set(true)))
+        wrong += [f"extra {p}" for p in sorted(set(partner) - set(true))]
+        wrong += [f"missing {p}" for p in sorted(set(true) - set(partner))]
+    spurious = [
+        "spurious " + ",".join(map(str, d)) for d in found if not any(fits(d, t) for t in trues)
+    ]
+    return missed, spurious, wrong
+
+
+@pytest.fixture(scope="module")
+def random_episode(tmp_path_factory):
+    frames = random_run(5)
+    detections = {f"d{k}": random_detector(frames, k) for k in (1, 2, 3)}
+    path = tmp_path_factory.mktemp("random") / "random.rrd"
+    record_episode(path, frames, detections=detections, events=[Event(0.2, "start")], seed=3)
+    return {"frames": frames, "detections": detections, "path": path, "rec": Recording(path)}
+
+
+def test_random_runs_log_every_entity_once_per_frame_on_both_timelines(random_episode):
+    rec, frames = random_episode["rec"], random_episode["frames"]
+    clock = Clock.from_frames(frames)
+    per_frame = [
+        e
+        for e in rec.rows
+        if e.startswith(("/world/people", "/world/robot", "/world/groups"))
+        and not e.endswith("/field_of_view")
+    ]
+    assert len(per_frame) == 5 + 5 + 4 * 3 + 3 * 3
+    for entity in per_frame:
+        assert rec.frames(entity) == list(range(len(frames))), entity
+        assert rec.timelines[entity] == {"frame", "sim_time"}, entity
+        sim_time = [t.total_seconds() for t in rec.column(entity, "sim_time")]
+        np.testing.assert_allclose(sim_time, clock.sim_time, atol=1e-6)
+    robot_frames = [t for t, f in enumerate(frames) if f.is_robot.any()]
+    strips = rec.column("/world/robot/field_of_view", "LineStrips3D:strips")
+    assert [t for t, s in enumerate(strips) if s] == robot_frames
+
+
+def test_random_runs_log_exactly_the_frames_people(random_episode):
+    rec, frames = random_episode["rec"], random_episode["frames"]
+    for t, frame in enumerate(frames):
+        for root, mask in (("people", ~frame.is_robot), ("robot", frame.is_robot)):
+            row = rec.rows[f"/world/{root}/labels"][t]
+            assert (row.get("person_id") or []) == frame.ids[mask].tolist()
+            positions = np.array(row.get("Points3D:positions") or np.zeros((0, 3)))
+            np.testing.assert_allclose(positions[:, :2], frame.position[mask], atol=1e-5)
+            heads = rec.rows[f"/world/{root}/head_facing"][t].get("Arrows3D:origins") or []
+            seen = np.zeros(frame.n_people, bool)
+            if frame.head_yaw is not None:
+                seen = np.isfinite(frame.head_yaw)
+            assert len(heads) == int((seen & mask).sum())
+            strips = rec.rows[f"/world/{root}/trails"][t].get("LineStrips3D:strips") or []
+            assert len(strips) == int(mask.sum())
+            for strip, k in zip(strips, np.flatnonzero(mask).tolist(), strict=True):
+                np.testing.assert_allclose(strip[-1][:2], frame.position[k], atol=1e-5)
+
+
+def test_random_runs_log_exactly_the_groups_and_their_shapes(random_episode):
+    rec, frames = random_episode["rec"], random_episode["frames"]
+    trees = {
+        "truth": [f.partition() if f.groups is not None else None for f in frames],
+        **random_episode["detections"],
+    }
+    for name, partitions in trees.items():
+        for t, (frame, partition) in enumerate(zip(frames, partitions, strict=True)):
+            members = rec.rows[f"/world/groups/{name}/members"][t]
+            expected = [] if partition is None else list(partition)
+            flat = [(m, g) for g, group in enumerate(expected) for m in group]
+            assert (members.get("person_id") or []) == [m for m, _ in flat], (name, t)
+            assert (members.get("group_index") or []) == [g for _, g in flat], (name, t)
+            xy = np.array(members.get("Cylinders3D:centers") or np.zeros((0, 3)))[:, :2]
+            np.testing.assert_allclose(
+                xy, frame.position[[frame.index_of(m) for m, _ in flat]].reshape(-1, 2), atol=1e-5
+            )
+            fformations = [g for g in expected if len(g) >= 2]
+            centres = rec.rows[f"/world/groups/{name}/centres"][t].get("Points3D:positions")
+            circles = rec.rows[f"/world/groups/{name}/circles"][t].get("Cylinders3D:radii")
+            assert len(centres or []) == len(circles or []) == len(fformations), (name, t)
+            for group, centre, radius in zip(
+                fformations, centres or [], circles or [], strict=True
+            ):
+                where = frame.position[[frame.index_of(m) for m in group]]
+                mean = where.mean(axis=0)
+                np.testing.assert_allclose(centre[:2], mean, atol=1e-5)
+                tightness = np.linalg.norm(where - mean, axis=1).mean()
+                assert radius == pytest.approx(max(tightness, 0.15), abs=1e-5)
+
+
+def test_random_runs_colour_groups_by_the_majority_rule(random_episode):
+    rec, frames = random_episode["rec"], random_episode["frames"]
+    truth_tracks = reference_tracks(
+        frames, [f.partition() if f.groups is not None else None for f in frames]
+    )
+    first = 1 + max(k for tracks in truth_tracks for k in tracks.values())
+    trees = {
+        "truth": truth_tracks,
+        **{
+            name: reference_tracks(frames, partitions, truth=truth_tracks, first_track=first)
+            for name, partitions in random_episode["detections"].items()
+        },
+    }
+    for name, by_frame in trees.items():
+        for t, tracks in enumerate(by_frame):
+            row = rec.rows[f"/world/groups/{name}/members"][t]
+            expected = [
+                next((k for g, k in tracks.items() if m in g), 0)
+                for m in row.get("person_id") or []
+            ]
+            assert (row.get("Cylinders3D:class_ids") or []) == expected, (name, t)
+
+
+def test_random_runs_name_exactly_the_mistakes(random_episode):
+    rec, frames = random_episode["rec"], random_episode["frames"]
+    for name, partitions in random_episode["detections"].items():
+        root = f"/world/groups/{name}/mistakes"
+        for t, (frame, partition) in enumerate(zip(frames, partitions, strict=True)):
+            missed, spurious, wrong = (
+                ([], [], []) if frame.groups is None else reference_mistakes(frame, partition)
+            )
+            assert (rec.rows[f"{root}/missed"][t].get("Cylinders3D:labels") or []) == missed
+            assert (rec.rows[f"{root}/spurious"][t].get("Cylinders3D:labels") or []) == spurious
+            row = rec.rows[f"{root}/wrong_members"][t]
+            assert (row.get("Points3D:labels") or []) == wrong, (name, t)
+            people = [int(label.split()[1]) for label in wrong]
+            xy = np.array(row.get("Points3D:positions") or np.zeros((0, 3)))[:, :2]
+            where = frame.position[[frame.index_of(p) for p in people]].reshape(-1, 2)
+            np.testing.assert_allclose(xy, where, atol=1e-5)
+
+
+def test_random_runs_log_the_truth_groups_forming_and_dissolving(random_episode):
+    frames = random_episode["frames"]
+    truth = [f.partition() if f.groups is not None else None for f in frames]
+    expected, alive, sequence = [(1, "start")], {}, None  # 0.2 s: frame 1 (0.125 s)
+    tracks_by_frame = reference_tracks(frames, truth)
+    for t, (frame, tracks) in enumerate(zip(frames, tracks_by_frame, strict=True)):
+        if frame.sequence != sequence:
+            alive, sequence = {}, frame.sequence
+        if truth[t] is None or not frame.n_people:
+            continue
+        now = {k: tuple(sorted(g)) for g, k in tracks.items()}
+        names = {k: "{" + ", ".join(map(str, m)) + "}" for k, m in {**alive, **now}.items()}
+        expected += [(t, f"group {k} forms: {names[k]}") for k in now if k not in alive]
+        expected += [
+            (t, f"group {k} changes: {'{' + ', '.join(map(str, alive[k])) + '}'} -> {names[k]}")
+            for k in now
+            if k in alive and alive[k] != now[k]
+        ]
+        expected += [(t, f"group {k} dissolves: {names[k]}") for k in alive if k not in now]
+        alive = now
+    logged = []
+    for chunk in RrdReader(random_episode["path"]).stream():
+        if chunk.entity_path == "/events":
+            data = chunk.to_record_batch().to_pydict()
+            texts = data["TextLog:text"]
+            logged += [(f, text[0]) for f, text in zip(data["frame"], texts, strict=True)]
+    assert sorted(logged) == sorted(expected)
+
+
+def test_columns_hold_what_the_frames_hold():
+    frames = random_run(2)
+    columns = FrameColumns.of(frames)
+    assert len(columns) == len(frames) and columns.frames == tuple(frames)
+    assert columns.counts.tolist() == [f.n_people for f in frames]
+    for t, frame in enumerate(frames):
+        rows = slice(columns.starts[t], columns.starts[t + 1])
+        assert columns.ids[rows].tolist() == frame.ids.tolist()
+        assert columns.robot[rows].tolist() == frame.is_robot.tolist()
+        np.testing.assert_array_equal(columns.position[rows], frame.position)
+        np.testing.assert_array_equal(columns.yaw[rows], frame.yaw)
+        heads = frame.head_yaw if frame.head_yaw is not None else np.full(frame.n_people, np.nan)
+        np.testing.assert_array_equal(columns.head_yaw[rows], heads)
+        assert columns.time[t] == frame.time and columns.sequence[t] == frame.sequence
+        assert columns.groups[t] == frame.groups
+    assert columns.counts[5] == 0  # the empty frame
+    assert columns.same_people_as_previous()[1:].tolist() == [
+        a.ids.tolist() == b.ids.tolist() for a, b in zip(frames, frames[1:], strict=False)
+    ]
+    with pytest.raises(ValueError, match=r"frames\[1\] must be a reform\.Frame, got str"):
+        FrameColumns.of([frames[0], "frame"])
+    with pytest.raises(ValueError, match=r"FrameColumns\.yaw must have shape \(3,\), got \(2,\)"):
+        FrameColumns(
+            counts=np.array([3]),
+            frame=np.zeros(3, int),
+            ids=np.arange(3),
+            robot=np.zeros(3, bool),
+            position=np.zeros((3, 2)),
+            yaw=np.zeros(2),
+            head_position=np.zeros((3, 2)),
+            head_yaw=np.zeros(3),
+            time=np.zeros(1),
+            sequence=("s",),
+            groups=(None,),
+        )
+
+
+def test_pose_blocks_make_the_columns_of_their_frames(tmp_path):
+    from sim.episode import episode_blocks
+    from sim.world import Poses
+
+    blocks = list(episode_blocks("word-improv", seed=3, duration=20, rate=2, block_rows=16))
+    rng = np.random.default_rng(0)
+    present = np.ones((6, 3), bool)
+    present[2:4, 1] = False  # person 2 leaves for two frames
+    present[5, :] = False  # nobody
+    made = Poses(
+        time=np.arange(6) * 0.5 + 30.0,
+        ids=np.array([1, 2, 100]),
+        kinds=("human", "human", "robot"),
+        present=present,
+        position=rng.normal(size=(6, 3, 2)),
+        yaw=rng.uniform(-3, 3, (6, 3)),
+        head_position=rng.normal(size=(6, 3, 2)),
+        head_yaw=rng.uniform(-3, 3, (6, 3)),
+        groups=(((1, 2),), ((1, 2),), ((1, 2),), None, ((1, 2),), ((1, 2),)),
+        sequence=blocks[0].sequence,
+    )
+    blocks.append(made)
+    columns = FrameColumns.from_blocks(blocks)
+    frames = [frame for block in blocks for frame in block.frames()]
+    expected = FrameColumns.of(frames)
+    for name in ("counts", "frame", "ids", "robot", "position", "yaw", "head_position", "time"):
+        np.testing.assert_array_equal(getattr(columns, name), getattr(expected, name), name)
+    assert columns.sequence == expected.sequence and columns.groups == expected.groups
+    assert columns.groups[-4:] == (((1,),), None, ((1, 2),), ())
+    record_episode(tmp_path / "blocks.rrd", columns, seed=1, name="run")
+    record_episode(tmp_path / "frames.rrd", frames, seed=1, name="run")
+    assert content(tmp_path / "blocks.rrd") == content(tmp_path / "frames.rrd")
+    with pytest.raises(ValueError, match="scoring d needs the frames it ran on: pass evaluation="):
+        record_episode(tmp_path / "x.rrd", columns, detections={"d": Majority().predict(frames)})
+
+
+def test_a_simulated_episode_is_logged_as_simulated_and_detected(tmp_path):
+    from sim.episode import simulate_episode
+
+    episode = simulate_episode(
+        "word-improv", seed=4, duration=30, rate=2, view="robot", options={"robot": "watch"}
+    )
+    observed = episode.dataset.frames
+    detections = {"majority": Majority().predict(observed), "det": random_detector(observed, 3)}
+    path = tmp_path / "sim.rrd"
+    record_episode(path, episode.truth, observed=observed, detections=detections)
+    rec = Recording(path)
+    n = len(episode.truth)
+    for entity in ("/world/people/labels", "/world/robot/field_of_view", "/world/observed/people"):
+        assert rec.frames(entity) == list(range(n))
+    for t, (world, seen) in enumerate(zip(episode.truth, observed, strict=True)):
+        human = ~world.is_robot
+        row = rec.rows["/world/people/labels"][t]
+        assert row["person_id"] == world.ids[human].tolist()
+        np.testing.assert_allclose(
+            np.array(row["Points3D:positions"])[:, :2], world.position[human], atol=1e-5
+        )
+        row = rec.rows["/world/observed/people"][t]
+        assert (row.get("person_id") or []) == seen.ids[~seen.is_robot].tolist()
+        assert partitions_from(rec, "/world/groups/truth/members")[t] == {
+            frozenset(g) for g in world.partition()
+        }
+        for name, partitions in detections.items():
+            logged = partitions_from(rec, f"/world/groups/{name}/members")[t]
+            assert logged == {frozenset(g) for g in partitions[t]}
+
+
+def test_bad_partitions_and_evaluations_are_named(tmp_path):
+    frames = make_frames(4)
+    bad = alternating_detector(frames)
+    bad[1] = ((0, 1), (), (2, 3, 4, 5, ROBOT_ID))
+    with pytest.raises(ValueError, match=r"d partitions\[1\] \(sequence 'episode', time 0\.1 s\)"):
+        record_evaluation(tmp_path / "a.rrd", frames, {"d": bad})
+    good = alternating_detector(frames)
+    other = evaluate(frames, Majority().predict(frames))
+    with pytest.raises(ValueError, match="evaluation does not belong to these frames"):
+        record_evaluation(tmp_path / "a.rrd", frames, {"d": good}, {"d": other})
+    assert not (tmp_path / "a.rrd").exists()
 
 
 # ----------------------------------------------------------------------------- MuJoCo scene

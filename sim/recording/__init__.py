@@ -15,9 +15,16 @@ One call records a whole run::
 or, piece by piece, open a stream and pass it to the ``log_*`` functions::
 
     with open_recording("run.rrd", name="babble", seed=7, blueprint=default_blueprint()) as rec:
-        clock = log_frames(rec, frames)
-        truth = log_groups(rec, frames, clock=clock)
-        log_groups(rec, frames, predictions, name="reform", clock=clock, truth=truth)
+        columns = FrameColumns.of(frames)  # read the frames once
+        clock = log_frames(rec, columns)
+        truth = log_groups(rec, columns, clock=clock)
+        log_groups(rec, columns, predictions, name="reform", clock=clock, truth=truth)
+
+Logging is columnar: a run's frames are read once into :class:`FrameColumns` (every person of
+every frame in flat arrays), partitions are laid out once per distinct partition, and group
+colours, events and mistakes are worked out only where the partitions change. The simulator's
+pose blocks can be recorded without making Frames: ``record_episode(path,
+FrameColumns.from_blocks(sim.episode.episode_blocks(...)))``.
 
 Entity tree: ``world/`` (room, MuJoCo model, people, robot, observed people, groups per source
 with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, group counts),

@@ -26,8 +26,8 @@ __all__ = [
     "line_strips_column",
     "ragged_arange",
     "slices_equal",
-    "unit",
     "value_columns",
+    "vectors",
 ]
 
 _POINT_TYPE = pa.list_(pa.field("item", pa.float32(), nullable=False), 3)
@@ -258,6 +258,8 @@ class FrameColumns:
     def select(self, mask: np.ndarray) -> FrameColumns:
         """The rows where ``mask`` holds, with the per-frame counts recomputed (frame times,
         sequences and ground truth unchanged)."""
+        if np.all(mask):
+            return self
         return FrameColumns(
             counts=np.bincount(self.frame[mask], minlength=len(self)).astype(np.int64),
             frame=self.frame[mask],
@@ -370,14 +372,19 @@ def line_strips_column(
     )
 
 
-def at_height(position: np.ndarray, z: float | np.ndarray) -> np.ndarray:
-    """(n, 3) ground-plane positions lifted to height ``z`` (metres)."""
-    out = np.empty((position.shape[0], 3), dtype=np.float64)
+def at_height(position: np.ndarray, z: float) -> np.ndarray:
+    """(n, 3) float32 ground-plane positions (metres) lifted to height ``z``, as Rerun stores
+    them."""
+    out = np.empty((position.shape[0], 3), dtype=np.float32)
     out[:, :2] = position
     out[:, 2] = z
     return out
 
 
-def unit(yaw: np.ndarray) -> np.ndarray:
-    """(n, 3) horizontal unit vectors pointing along ``yaw`` (radians)."""
-    return np.column_stack([np.cos(yaw), np.sin(yaw), np.zeros_like(yaw)])
+def vectors(yaw: np.ndarray, length: float) -> np.ndarray:
+    """(n, 3) float32 horizontal vectors of ``length`` (metres) along ``yaw`` (radians)."""
+    out = np.empty((yaw.shape[0], 3), dtype=np.float32)
+    out[:, 0] = np.cos(yaw) * length
+    out[:, 1] = np.sin(yaw) * length
+    out[:, 2] = 0.0
+    return out

@@ -30,8 +30,8 @@ from sim.recording._columns import (
     FrameColumns,
     at_height,
     line_strips_column,
-    unit,
     value_columns,
+    vectors,
 )
 from sim.recording._timeline import Clock
 
@@ -265,14 +265,13 @@ def _log_agents(
         colour=_colours.BODY_FACING,
     )
     has_head = np.isfinite(part.head_yaw)
-    head = part.select(has_head)
     _log_arrows(
         rec,
         f"{root}/head_facing",
         origins=at_height(part.head_position[has_head], head_z),
         yaw=part.head_yaw[has_head],
         length=HEAD_ARROW_M,
-        counts=head.counts,
+        counts=np.bincount(part.frame[has_head], minlength=part.counts.size),
         times=times,
         colour=_colours.HEAD_FACING,
     )
@@ -293,7 +292,9 @@ def _log_arrows(
     rec.send_columns(
         entity,
         indexes=times,
-        columns=rr.Arrows3D.columns(origins=origins, vectors=unit(yaw) * length).partition(counts),
+        columns=rr.Arrows3D.columns(origins=origins, vectors=vectors(yaw, length)).partition(
+            counts
+        ),
         strict=True,
     )
 
@@ -311,12 +312,13 @@ def _log_trails(
     """Each person's path over the last ``trail_s`` seconds of their sequence, as a line strip."""
     n_frames = part.counts.size
     sim_time = clock.sim_time[rows]
-    # Dense (frame, person) table of positions, NaN where the person is absent (float32, as
-    # drawn).
+    # Dense (frame, person) table of the trail's points, as drawn (float32, at the trails'
+    # height), NaN where the person is absent.
     n_slots = people.ids.size
     slot = np.searchsorted(people.ids, part.ids)
-    dense = np.full((n_frames, n_slots, 2), np.nan, dtype=np.float32)
-    dense[part.frame, slot] = part.position
+    dense = np.full((n_frames, n_slots, 3), np.nan, dtype=np.float32)
+    dense[..., 2] = TRAIL_Z_M
+    dense[part.frame, slot, :2] = part.position
     # Last frame before each frame at which each person was absent: trails do not jump gaps.
     absent = np.isnan(dense[..., 0])
     frame_index = np.arange(n_frames)[:, None]
@@ -340,9 +342,9 @@ def _log_trails(
     if np.any(strip_lengths < TRAIL_POINTS):
         picked = picked[j < strip_lengths[:, None]]
     picked = picked.reshape(-1)
-    flat_points = np.empty((picked.size, 3), dtype=np.float32)
-    flat_points[:, :2] = dense.reshape(-1, 2)[picked]
-    flat_points[:, 2] = TRAIL_Z_M
+    # One 12-byte item per point: taking whole points at once is several times faster.
+    points = dense.reshape(-1, 3).view(np.dtype((np.void, 12))).reshape(-1)
+    flat_points = np.take(points, picked).view(np.float32).reshape(-1, 3)
     rec.log(
         entity,
         rr.LineStrips3D.from_fields(radii=[TRAIL_RADIUS_M], colors=[_colours.TRAIL]),

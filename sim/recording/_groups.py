@@ -26,6 +26,7 @@ partition and once per change, and spread over the frames with numpy.
 from __future__ import annotations
 
 import functools
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -169,9 +170,8 @@ class GroupLayout:
                     )
                     / group_size
                 )
-            distance = np.linalg.norm(
-                person_position[member] - centre[group_of_person[member]], axis=1
-            )
+            offset = person_position[member] - centre[group_of_person[member]]
+            distance = np.sqrt(offset[:, 0] * offset[:, 0] + offset[:, 1] * offset[:, 1])
             radius = (
                 np.bincount(group_of_person[member], weights=distance, minlength=n_groups)
                 / group_size
@@ -195,9 +195,14 @@ class GroupLayout:
 
     @classmethod
     def truth(cls, frames: Sequence[Frame] | FrameColumns) -> GroupLayout:
-        """The ground truth's layout (each annotated frame's full partition)."""
+        """The ground truth's layout (each annotated frame's full partition), worked out once
+        per columns object."""
         columns = FrameColumns.coerce(frames)
-        return cls.of(columns, truth_partitions(columns), what=f"{TRUTH} partitions")
+        layout = _TRUTH_LAYOUTS.get(columns)
+        if layout is None:
+            layout = cls.of(columns, truth_partitions(columns), what=f"{TRUTH} partitions")
+            _TRUTH_LAYOUTS[columns] = layout
+        return layout
 
     @functools.cached_property
     def group_members(self) -> tuple[Group, ...]:
@@ -229,6 +234,11 @@ class GroupLayout:
         return member[rows]
 
 
+# Columns -> the layout of their ground truth (the truth tree and every detector's mistakes use
+# it); columns are immutable, and an entry goes when its columns do.
+_TRUTH_LAYOUTS: weakref.WeakKeyDictionary[FrameColumns, GroupLayout] = weakref.WeakKeyDictionary()
+
+
 class _Patterns:
     """The distinct partitions of a run, each flattened once."""
 
@@ -253,7 +263,7 @@ class _Patterns:
             if partition is None:
                 kinds.append(-1)
                 continue
-            if partition is not previous:
+            if partition is not previous and not _equal(partition, previous):
                 try:
                     kind = known.get(partition, -1)
                     hashable = True
@@ -311,6 +321,14 @@ class _Patterns:
         self.ff_start = np.concatenate([[0], np.cumsum(self.n_ff)[:-1]]).astype(np.int64)
 
 
+def _equal(a: Any, b: Any) -> bool:
+    """``a == b`` for partitions, False where the comparison is not a plain truth value."""
+    try:
+        return (a == b) is True
+    except (TypeError, ValueError):
+        return False
+
+
 def _canonical(partition: Partition, what: str, f: int, columns: FrameColumns) -> tuple[Group, ...]:
     groups = tuple(tuple(map(int, group)) for group in partition)
     for gi, group in enumerate(groups):
@@ -352,7 +370,6 @@ class LoggedGroups:
         columns: the frames the groups belong to.
         rows: (n_frames,) each frame's row on the run's clock.
         evaluation: for a detector's tree on frames with ground truth, its evaluation.
-        ground_truth: True for the tree of the frames' own ground truth.
     """
 
     layout: GroupLayout
@@ -360,7 +377,6 @@ class LoggedGroups:
     columns: FrameColumns
     rows: np.ndarray
     evaluation: Evaluation | None = None
-    ground_truth: bool = False
 
     @functools.cached_property
     def frame_keys(self) -> tuple[tuple[str, int], ...]:
@@ -646,13 +662,6 @@ def _matches(evaluation: Evaluation, layout: GroupLayout, truth: GroupLayout) ->
     )
 
 
-def _truth_layout(columns: FrameColumns, truth: LoggedGroups | None) -> GroupLayout:
-    """The ground truth of ``columns``: the truth tree's when drawn from these very columns."""
-    if truth is not None and truth.ground_truth and truth.columns is columns:
-        return truth.layout
-    return GroupLayout.truth(columns)
-
-
 def log_groups(
     rec: rr.RecordingStream,
     frames: Sequence[Frame] | FrameColumns,
@@ -715,7 +724,7 @@ def log_groups(
                 )
             evaluation = evaluate(columns.frames, partitions)
         if evaluation is not None:
-            true_layout = _truth_layout(columns, truth)
+            true_layout = GroupLayout.truth(columns)
             matches = _matches(evaluation, layout, true_layout)
             if truth is not None:
                 fixed = _inherit_tracks(layout, true_layout, matches, truth, rows)
@@ -796,14 +805,13 @@ def log_groups(
         strict=True,
     )
     if matches is not None:
-        _log_mistakes(rec, root, layout, _truth_layout(columns, truth), matches, times, z=z)
+        _log_mistakes(rec, root, layout, GroupLayout.truth(columns), matches, times, z=z)
     return LoggedGroups(
         layout=layout,
         tracks=tracks,
         columns=columns,
         rows=rows,
         evaluation=evaluation,
-        ground_truth=is_truth,
     )
 
 

@@ -357,9 +357,13 @@ def room_bounds(
     position = FrameColumns.coerce(frames).position
     if not position.size:
         return (-margin_m, margin_m, -margin_m, margin_m)
-    low = position.min(axis=0) - margin_m
-    high = position.max(axis=0) + margin_m
-    return (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
+    x, y = position[:, 0], position[:, 1]  # (one column at a time: far faster than axis=0)
+    return (
+        float(x.min() - margin_m),
+        float(x.max() + margin_m),
+        float(y.min() - margin_m),
+        float(y.max() + margin_m),
+    )
 
 
 def log_room(rec: rr.RecordingStream, bounds: Sequence[float]) -> None:
