@@ -47,44 +47,72 @@ def _walk_time(a: np.ndarray, b: np.ndarray, speed: float) -> float:
     return float(np.hypot(*(np.asarray(b) - np.asarray(a)))) / speed + SETTLE_S
 
 
-def _approach_starts(
-    rng: np.random.Generator, side: str, room: tuple[float, float], robot_x: float
-) -> np.ndarray:
-    """(2, 2) start positions of two people walking in side by side."""
-    hx, hy = 0.5 * room[0] - 0.5, 0.5 * room[1] - 0.5
+def _approach(
+    rng: np.random.Generator,
+    side: str,
+    robot: RobotPlace,
+    places: np.ndarray,
+    facings: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two people walk in side by side from ``side`` to ``places``: their (2, 2) start
+    positions, metres, and the (2, 2) places and (2,) facings reordered so that their paths do
+    not cross."""
+    hx, hy = 0.5 * ROOM_M[0] - 0.5, 0.5 * ROOM_M[1] - 0.5
     if side == "random":
         side = ("front", "left", "right")[int(rng.integers(3))]
     if side == "front":
         x = rng.uniform(hx - 0.6, hx)
         y = rng.uniform(-0.6, 0.6)
-        return np.array([[x, y + 0.4], [x, y - 0.4]])
-    sign = 1.0 if side == "left" else -1.0
-    x = robot_x + rng.uniform(1.2, 2.4)
-    return np.array([[x - 0.4, sign * hy], [x + 0.4, sign * hy]])
-
-
-def _match(
-    starts: np.ndarray, places: np.ndarray, facings: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Places (and facings) reordered so that two walkers' paths do not cross."""
+        starts = np.array([[x, y + 0.4], [x, y - 0.4]])
+    else:
+        sign = 1.0 if side == "left" else -1.0
+        x = robot.position[0] + rng.uniform(1.2, 2.4)
+        starts = np.array([[x - 0.4, sign * hy], [x + 0.4, sign * hy]])
     straight = np.hypot(*(starts[0] - places[0])) + np.hypot(*(starts[1] - places[1]))
     swapped = np.hypot(*(starts[0] - places[1])) + np.hypot(*(starts[1] - places[0]))
     if swapped < straight:
-        return places[::-1].copy(), facings[::-1].copy()
-    return places, facings
+        return starts, places[::-1].copy(), facings[::-1].copy()
+    return starts, places, facings
+
+
+def _take_places(
+    builder: TimelineBuilder,
+    people: list[int],
+    starts: np.ndarray,
+    places: np.ndarray,
+    facings: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    walk_in: bool = True,
+) -> float:
+    """``people`` stand at ``starts``, then walk to ``places`` (each setting off within
+    `START_DELAY_S` when they walk in) and face ``facings``; returns when the last has arrived,
+    seconds (0 when they do not walk in)."""
+    arrive = 0.0
+    for k, person in enumerate(people):
+        delay = float(rng.uniform(*START_DELAY_S)) if walk_in else 0.0
+        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
+        builder.set(0.0, person, Intent())
+        builder.set(delay, person, standing(places[k], facings[k], speed=speed))
+        if walk_in:
+            arrive = max(arrive, delay + _walk_time(starts[k], places[k], speed))
+    return arrive
 
 
 def _leave(
     builder: TimelineBuilder,
     people: list[int],
     places: np.ndarray,
-    room: tuple[float, float],
+    robot: RobotPlace,
     t: float,
     rng: np.random.Generator,
 ) -> float:
-    """People walk to the east wall and out; returns when the last is gone."""
+    """At ``t`` the robot stops following and ``people`` walk from ``places`` to the east wall
+    and out; returns the episode's end, a second after the last is gone."""
+    builder.event(t, "leave", f"people {people} walk away")
+    builder.set(t, ROBOT_ID, standing(np.array(robot.position), robot.yaw))
     gone = t
-    hx = 0.5 * room[0] - EXIT_GAP_M
+    hx = 0.5 * ROOM_M[0] - EXIT_GAP_M
     for k, person in enumerate(people):
         exit_at = np.array([hx, float(np.clip(places[k, 1] + rng.uniform(-0.8, 0.8), -1.5, 1.5))])
         speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
@@ -92,7 +120,7 @@ def _leave(
         out = t + _walk_time(places[k], exit_at, speed)
         builder.set(out, person, Intent(present=False))
         gone = max(gone, out)
-    return gone
+    return gone + 1.0
 
 
 @register("hri-conversation")
@@ -139,19 +167,11 @@ def hri_conversation(
         position_noise=position_noise,
         orientation_noise=orientation_noise,
     )
-    starts = _approach_starts(rng, approach, ROOM_M, robot_xy[0])
-    places, facings = _match(starts, places, facings)
+    starts, places, facings = _approach(rng, approach, robot, places, facings)
     people = [1, 2]
-    start_yaws = facing_centre(starts, centre)
-    roles = cast(rng, people, starts, start_yaws, parts="guest")
+    roles = cast(rng, people, starts, facing_centre(starts, centre), parts="guest")
     builder = TimelineBuilder([*people, ROBOT_ID])
-    arrive = 0.0
-    for k, person in enumerate(people):
-        delay = float(rng.uniform(*START_DELAY_S))
-        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
-        builder.set(0.0, person, Intent())
-        builder.set(delay, person, standing(places[k], facings[k], speed=speed))
-        arrive = max(arrive, delay + _walk_time(starts[k], places[k], speed))
+    arrive = _take_places(builder, people, starts, places, facings, rng)
     members = [ROBOT_ID, *people]
     all_places = np.vstack([robot_xy, places])
     all_facings = np.concatenate([[robot.yaw], facings])
@@ -170,11 +190,7 @@ def hri_conversation(
         mean_utterance=mean_utterance,
     )
     builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=people[0]))
-    duration = talk_end
-    if leave:
-        builder.event(talk_end, "leave", f"people {people} walk away")
-        builder.set(talk_end, ROBOT_ID, standing(robot_xy, robot.yaw))
-        duration = _leave(builder, people, places, ROOM_M, talk_end, rng) + 1.0
+    duration = _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end
     return Scenario(
         name=name,
         seed=seed,
@@ -243,22 +259,13 @@ def hri_robot_excluded(
     )
     people = [1, 2]
     if walk_in:
-        starts = _approach_starts(rng, "random", ROOM_M, robot_xy[0])
-        places, facings = _match(starts, places, facings)
+        starts, places, facings = _approach(rng, "random", robot, places, facings)
         start_yaws = facing_centre(starts, centre)
     else:
-        starts = places.copy()
-        start_yaws = facings.copy()
+        starts, start_yaws = places.copy(), facings.copy()
     roles = cast(rng, people, starts, start_yaws, parts="guest")
     builder = TimelineBuilder([*people, ROBOT_ID])
-    arrive = 0.0
-    for k, person in enumerate(people):
-        delay = float(rng.uniform(*START_DELAY_S)) if walk_in else 0.0
-        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
-        builder.set(0.0, person, Intent())
-        builder.set(delay, person, standing(places[k], facings[k], speed=speed))
-        if walk_in:
-            arrive = max(arrive, delay + _walk_time(starts[k], places[k], speed))
+    arrive = _take_places(builder, people, starts, places, facings, rng, walk_in=walk_in)
     talk_end = arrive + talk_duration
     end = talk_end if leave else math.inf
     builder.group(people, places, facings, centre, start=0.0, end=end)
@@ -275,11 +282,7 @@ def hri_robot_excluded(
     builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_point=tuple(centre)))
     for t, speaker in turns:
         builder.set(t, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=speaker))
-    duration = talk_end
-    if leave:
-        builder.event(talk_end, "leave", f"people {people} walk away")
-        builder.set(talk_end, ROBOT_ID, standing(robot_xy, robot.yaw))
-        duration = _leave(builder, people, places, ROOM_M, talk_end, rng) + 1.0
+    duration = _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end
     return Scenario(
         name=name,
         seed=seed,
