@@ -157,6 +157,11 @@ class _Group:
     record: int = -1  # index of its current record
     version: int = 0
 
+    def place_of(self, m: int) -> np.ndarray:
+        """(2,) where member ``m`` stands on the o-space circle (before noise), metres."""
+        angle = self.angles[m]
+        return self.centre + self.radius * np.array([math.cos(angle), math.sin(angle)])
+
 
 @dataclass
 class _Record:
@@ -328,6 +333,14 @@ class _Party:
             self.group_of[m] = gid
             self.end_alone(m, t)
         return gid
+
+    def gather(self, gid: int, t: float) -> None:
+        """The members of new group ``gid`` walk to their places from ``t``; it is recorded
+        and its split and merge scheduled."""
+        g = self.groups[gid]
+        speeds = {m: self.walk(m, g.place_of(m), t)[0] for m in g.members}
+        self.record(gid, t, speeds=speeds)
+        self.schedule_group(gid, t)
 
     def schedule_group(self, gid: int, t: float) -> None:
         g = self.groups[gid]
@@ -506,8 +519,7 @@ class _Party:
         g.radius = radius
         g.angles = self.spread(g.members, angles, radius)
         self.group_of[m] = gid
-        target = centre + radius * np.array([math.cos(g.angles[m]), math.sin(g.angles[m])])
-        speed, arrive = self.walk(m, target, t)
+        speed, arrive = self.walk(m, g.place_of(m), t)
         shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
         self.close_all(gid, shift, but=m)
         self.record(gid, shift, speeds={m: speed})
@@ -553,14 +565,7 @@ class _Party:
             if spot is None:
                 return False
             centre = spot
-        gid = self.new_group([a, b], centre, radius, t)
-        speeds = {}
-        g = self.groups[gid]
-        for m in (a, b):
-            target = centre + radius * np.array([math.cos(g.angles[m]), math.sin(g.angles[m])])
-            speeds[m], _ = self.walk(m, target, t)
-        self.record(gid, t, speeds=speeds)
-        self.schedule_group(gid, t)
+        self.gather(self.new_group([a, b], centre, radius, t), t)
         for m in (a, b):
             self.schedule_member(m, t)
         self.events.append((t, "pair", f"people {a} and {b} start talking"))
@@ -605,13 +610,7 @@ class _Party:
         new = self.new_group(moving, centre, radius, t)
         self.record(gid, t)
         self.schedule_group(gid, t)
-        speeds = {}
-        h = self.groups[new]
-        for m in moving:
-            target = centre + radius * np.array([math.cos(h.angles[m]), math.sin(h.angles[m])])
-            speeds[m], _ = self.walk(m, target, t)
-        self.record(new, t, speeds=speeds)
-        self.schedule_group(new, t)
+        self.gather(new, t)
 
     def fits_pair(self, a: np.ndarray, ra: float, b: np.ndarray, rb: float) -> bool:
         return float(np.hypot(*(a - b))) >= ra + rb
@@ -650,14 +649,7 @@ class _Party:
         del self.groups[best]
         for m in members:
             self.group_of.pop(m, None)
-        new = self.new_group(members, centre, radius, t)
-        speeds = {}
-        k = self.groups[new]
-        for m in members:
-            target = centre + radius * np.array([math.cos(k.angles[m]), math.sin(k.angles[m])])
-            speeds[m], _ = self.walk(m, target, t)
-        self.record(new, t, speeds=speeds)
-        self.schedule_group(new, t)
+        self.gather(self.new_group(members, centre, radius, t), t)
 
 
 def _glances(
