@@ -11,6 +11,7 @@ ranges cover both real datasets this project measures: SALSA's tight, noisy grou
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -100,14 +101,9 @@ def mingle_randomised(
         "drawn": {"people": people, **drawn},
     }
     party_seed = int(rng.integers(2**63 - 1))
-    made = build_mingle_in_room(params, seed=party_seed, name=name, options=options)
-    drawn["room_side"] = made.stage.room[0]
-    return Scenario(
-        name=name,
+    party = build_mingle_in_room(params, seed=party_seed, name=name, options=options)
+    return dataclasses.replace(
+        party,
         seed=seed,
-        options=options,
-        stage=made.stage,
-        timeline=made.timeline,
-        duration=made.duration,
         description="mingling with every shape parameter drawn from wide ranges",
     )
