@@ -861,6 +861,7 @@ def mingle(
 def build_mingle_in_room(params: MingleParams, *, seed: int, name: str, options: dict) -> Scenario:
     """`build_mingle`, growing the room by `ROOM_GROWTH` (at most `ROOM_RETRIES` times) while
     the drawn party does not fit; the room actually used is the scenario's stage."""
+    params.check(name)  # before the room is picked: a negative room_side is not "pick one"
     params = dataclasses.replace(params, room_side=params.side())
     for _ in range(ROOM_RETRIES):
         try:

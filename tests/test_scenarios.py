@@ -380,6 +380,9 @@ def test_registry_lists_typed_options():
         ("mingle", {"people": 101}, r"option people must be within \[2, 100\], got 101"),
         ("mingle", {"people": 60, "room_side": 6.0}, r"60 people do not fit a 6 m x 6 m room"),
         ("mingle", {"duration": -5.0}, r"option duration must be within \(0, inf\] s, got -5.0"),
+        ("mingle", {"room_side": -3.0}, r"option room_side must be within \[0, 100\] m, got -3.0"),
+        ("mingle", {"people": -1}, r"option people must be within \[2, 100\], got -1"),
+        ("mingle", {"passers_by": 99999}, r"option passers_by must be within \[0, 20\], got 99999"),
         ("hri-passing", {"people": 0}, r"option people must be within \[1, 6\]"),
         (
             "mingle-randomised",
