@@ -914,6 +914,20 @@ def test_a_simulated_episode_is_logged_as_simulated_and_detected(tmp_path):
             assert logged == {frozenset(g) for g in partitions[t]}
 
 
+def test_partitions_as_lists_or_arrays_log_as_tuples_do(tmp_path):
+    frames = random_run(7, n=24)
+    tuples = random_detector(frames, 4)
+    forms = {
+        "tuples": tuples,
+        "lists": [[list(g) for g in p] for p in tuples],
+        "arrays": [[np.array(g) for g in p] for p in tuples],
+    }
+    for form, partitions in forms.items():
+        record_evaluation(tmp_path / f"{form}.rrd", frames, {"d": partitions}, name="same")
+    assert content(tmp_path / "lists.rrd") == content(tmp_path / "tuples.rrd")
+    assert content(tmp_path / "arrays.rrd") == content(tmp_path / "tuples.rrd")
+
+
 def test_bad_partitions_and_evaluations_are_named(tmp_path):
     frames = make_frames(4)
     bad = alternating_detector(frames)

@@ -22,6 +22,7 @@ from reform import ROBOT, Frame, Group
 
 __all__ = [
     "FrameColumns",
+    "annotation_context",
     "at_height",
     "line_strips_column",
     "ragged_arange",
@@ -324,6 +325,45 @@ class _ArrowBatch:
 
     def as_arrow_array(self) -> pa.Array:
         return self._array
+
+
+def annotation_context(
+    classes: Sequence[tuple[int, str, tuple[int, int, int, int]]],
+) -> list[rr.DescribedComponentBatch]:
+    """An ``AnnotationContext`` of ``(class id, label, RGBA colour)`` classes, for ``rec.log``,
+    built straight in Arrow (the archetype converts each class in Python, about 20 µs apiece).
+    """
+    list_type = rr.components.AnnotationContextBatch._ARROW_DATATYPE
+    entry_type = list_type.value_type
+    description_type = entry_type.field("class_description").type
+    keypoints_type = description_type.field("keypoint_annotations").type
+    connections_type = description_type.field("keypoint_connections").type
+    n = len(classes)
+    ids = pa.array([c[0] for c in classes], pa.uint16())
+    rgba = np.array([c[2] for c in classes], dtype=np.uint32).reshape(n, 4)
+    packed = (rgba[:, 0] << 24) | (rgba[:, 1] << 16) | (rgba[:, 2] << 8) | rgba[:, 3]
+    info = pa.StructArray.from_arrays(
+        [ids, pa.array([c[1] for c in classes], pa.utf8()), pa.array(packed, pa.uint32())],
+        fields=list(description_type.field("info").type),
+    )
+    none = pa.array(np.zeros(n + 1, dtype=np.int32))
+    description = pa.StructArray.from_arrays(
+        [
+            info,
+            pa.ListArray.from_arrays(
+                none, pa.array([], keypoints_type.value_type), type=keypoints_type
+            ),
+            pa.ListArray.from_arrays(
+                none, pa.array([], connections_type.value_type), type=connections_type
+            ),
+        ],
+        fields=list(description_type),
+    )
+    entries = pa.StructArray.from_arrays([ids, description], fields=list(entry_type))
+    context = pa.ListArray.from_arrays(pa.array([0, n], pa.int32()), entries, type=list_type)
+    return [
+        rr.DescribedComponentBatch(_ArrowBatch(context), rr.AnnotationContext.descriptor_context())
+    ]
 
 
 def value_columns(counts: np.ndarray, **values: np.ndarray) -> list[rr.ComponentColumn]:

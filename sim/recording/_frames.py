@@ -28,6 +28,7 @@ from reform import Frame
 from sim.recording import _colours
 from sim.recording._columns import (
     FrameColumns,
+    annotation_context,
     at_height,
     line_strips_column,
     value_columns,
@@ -131,14 +132,11 @@ class PersonIndex:
     def label(self, person_id: int, robot: bool) -> str:
         return f"robot {person_id}" if robot else str(person_id)
 
-    def annotation_context(self) -> rr.AnnotationContext:
-        return rr.AnnotationContext(
+    def annotation_context(self) -> list[rr.DescribedComponentBatch]:
+        """The class of each person: label and colour (for ``rec.log``)."""
+        return annotation_context(
             [
-                rr.AnnotationInfo(
-                    id=k + 1,
-                    label=self.label(int(pid), bool(robot)),
-                    color=_colours.ROBOT if robot else _colours.HUMAN,
-                )
+                (k + 1, self.label(pid, robot), _colours.ROBOT if robot else _colours.HUMAN)
                 for k, (pid, robot) in enumerate(
                     zip(self.ids.tolist(), self.robot.tolist(), strict=True)
                 )

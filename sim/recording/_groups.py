@@ -26,6 +26,7 @@ partition and once per change, and spread over the frames with numpy.
 from __future__ import annotations
 
 import functools
+import itertools
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -38,6 +39,7 @@ from reform import T_TWO_THIRDS, Evaluation, Frame, Group, complete_partition, e
 from sim.recording import _colours
 from sim.recording._columns import (
     FrameColumns,
+    annotation_context,
     at_height,
     ragged_arange,
     slices_equal,
@@ -255,30 +257,41 @@ class _Patterns:
         """(n_frames,) int64 the pattern of each frame's partition, -1 where none; then the
         flattened patterns are in ``member``, ``member_group``, ``member_ff``, ``start``,
         ``size``, ``ff_key``, ``ff_set``, ``ff_start``, ``n_ff``."""
-        kinds: list[int] = []
+        n = len(partitions)
+
+        def pairs() -> Any:  # each partition with the next, afresh on every call
+            return zip(partitions, itertools.islice(partitions, 1, None), strict=False)
+
+        try:  # where each partition differs from the one before: one pass, in bulk
+            same = np.fromiter(
+                (a is b or (a == b) is True for a, b in pairs()), dtype=bool, count=max(n - 1, 0)
+            )
+        except (TypeError, ValueError):  # partitions holding arrays: compare one by one
+            same = np.array([_equal(a, b) for a, b in pairs()], dtype=bool).reshape(-1)
+        changes = np.flatnonzero(np.concatenate([[True], ~same])) if n else np.zeros(0, int)
         known: dict[Any, int] = {}
-        previous: Any = None
-        previous_kind = -1
-        for f, partition in enumerate(partitions):
+        kinds = []
+        for f in changes.tolist():
+            partition = partitions[f]
             if partition is None:
                 kinds.append(-1)
                 continue
-            if partition is not previous and not _equal(partition, previous):
-                try:
-                    kind = known.get(partition, -1)
-                    hashable = True
-                except TypeError:  # lists, arrays: keyed by their canonical form
-                    kind, hashable = -1, False
+            try:
+                kind = known.get(partition, -1)
+                hashable = True
+            except TypeError:  # lists, arrays: keyed by their canonical form
+                kind, hashable = -1, False
+            if kind < 0:
+                canonical = _canonical(partition, what, f, columns)
+                kind = known.get(canonical, -1)
                 if kind < 0:
-                    canonical = _canonical(partition, what, f, columns)
-                    kind = known.get(canonical, -1)
-                    if kind < 0:
-                        kind = known[canonical] = self._add(canonical)
-                    if hashable:
-                        known[partition] = kind
-                previous, previous_kind = partition, kind
-            kinds.append(previous_kind)
-        pattern = np.array(kinds, dtype=np.int64)
+                    kind = known[canonical] = self._add(canonical)
+                if hashable:
+                    known[partition] = kind
+            kinds.append(kind)
+        pattern = np.asarray(kinds, dtype=np.int64)[
+            np.searchsorted(changes, np.arange(n), side="right") - 1
+        ]
         self._flatten()
         return pattern
 
@@ -735,12 +748,9 @@ def log_groups(
     label = "group" if is_truth else f"{name} group"
     rec.log(
         root,
-        rr.AnnotationContext(
-            [rr.AnnotationInfo(id=0, label="alone", color=_colours.SINGLETON)]
-            + [
-                rr.AnnotationInfo(id=t, label=f"{label} {t}", color=_colours.group_colour(t))
-                for t in range(1, n_tracks + 1)
-            ]
+        annotation_context(
+            [(0, "alone", _colours.SINGLETON)]
+            + [(t, f"{label} {t}", _colours.group_colour(t)) for t in range(1, n_tracks + 1)]
         ),
         static=True,
     )
