@@ -1,4 +1,8 @@
-"""The ``reform-sim`` command: thin subcommands that parse, call one library function, report."""
+"""The ``reform-sim`` command: thin subcommands that parse, call one library function, report.
+
+Building the parser imports argparse and this package only (see `sim.cli._common.CommandParser`),
+so that ``reform-sim --help`` answers at once.
+"""
 
 from __future__ import annotations
 
@@ -14,9 +18,6 @@ from sim.cli import (
     _detect,
     _evaluate,
     _experiment,
-    _experiment_gcff,
-    _experiment_hri,
-    _experiment_sim2real,
     _generate,
     _policy,
     _scenarios,
@@ -24,18 +25,16 @@ from sim.cli import (
     _stress,
     _train,
 )
-from sim.cli._common import CliError
+from sim.cli._common import CliError, CommandParser
 
-# Each module exposes ``register(subparsers)``, adding its subcommand(s) with a ``handler``.
+# Each module exposes ``register(subparsers)``, adding its subcommand: a name and help line at
+# once, the arguments (and the ``handler`` default) when the subcommand is used.
 _COMMANDS = (
     _demo,
     _data,
     _evaluate,
     _detect,
-    _experiment_gcff,
     _experiment,
-    _experiment_hri,
-    _experiment_sim2real,
     _train,
     _characterize,
     _scenarios,
@@ -47,6 +46,22 @@ _COMMANDS = (
 )
 
 
+class _VersionAction(argparse._VersionAction):
+    """``--version``: the package's version, read when asked for (``reform`` is not light)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: object,
+        option_string: str | None = None,
+    ) -> None:
+        from reform import __version__
+
+        self.version = f"reform-sim {__version__}"
+        super().__call__(parser, namespace, values, option_string)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="reform-sim",
@@ -54,10 +69,10 @@ def build_parser() -> argparse.ArgumentParser:
             "Simulate social scenes, detect F-formations (REFORM, GCFF), evaluate, log to Rerun."
         ),
     )
-    from reform import __version__
-
-    parser.add_argument("--version", action="version", version=f"reform-sim {__version__}")
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    parser.add_argument("--version", action=_VersionAction)
+    subparsers = parser.add_subparsers(
+        dest="command", metavar="COMMAND", required=True, parser_class=CommandParser
+    )
     for module in _COMMANDS:
         module.register(subparsers)
     return parser

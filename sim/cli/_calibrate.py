@@ -15,7 +15,7 @@ DEFAULT_DATASETS = "../shared/datasets"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
+    subparsers.add_parser(
         "calibrate",
         help="simulate the scenarios and set them beside SALSA and Babble",
         description=(
@@ -25,7 +25,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "data; also the randomised mode's coverage and the HRI scenes. Writes "
             "calibration.md and calibration.json into --out."
         ),
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="folder for the report")
     parser.add_argument(
         "--datasets",

@@ -28,14 +28,18 @@ reference holds at least --min-groups times (--check: exit status 1 when not).
 """
 
 
-def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "characterize",
         aliases=["characterise"],
         help="Tightness and Symmetry by group size, ANOVA, Tukey's HSD; compare with real data",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--data", required=True, nargs="+", metavar="PATH", help="dataset file(s) or folder(s)"
     )

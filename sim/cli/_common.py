@@ -1,20 +1,74 @@
-"""Pieces the subcommands share."""
+"""Pieces the subcommands share.
+
+Building the parser imports only argparse and these modules: a subcommand's arguments are added
+when that subcommand is parsed or its help is shown (`CommandParser`), and the libraries a
+subcommand runs on are imported inside its handler.
+"""
 
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable, Sequence
 from typing import Any
 
 FORMATS = ("salsa", "babble", "gcff", "parquet")
+# Default share of each sequence's annotated frames, by time, that trains (reform.time_split's).
+TRAIN_FRACTION = 0.6
 
 
 class CliError(Exception):
     """A user-facing error: printed as one line by ``reform-sim``, exit status 2."""
 
 
+class CommandParser(argparse.ArgumentParser):
+    """The parser of a subcommand, its arguments added on first use.
+
+    ``subparsers.add_parser(name, help=..., arguments=add)`` registers the subcommand at once
+    (its name and help line) and calls ``add(parser)`` only when the subcommand is parsed or its
+    usage or help is formatted, so that ``reform-sim --help`` and every other subcommand do not
+    import what this one's arguments need. ``add`` also sets the ``handler`` default.
+    """
+
+    def __init__(
+        self,
+        *args: Any,
+        arguments: Callable[[argparse.ArgumentParser], None] | None = None,
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(*args, **kwargs)
+        self._add_arguments = arguments
+
+    def _ensure_arguments(self) -> None:
+        add, self._add_arguments = self._add_arguments, None
+        if add is not None:
+            add(self)
+
+    def parse_known_args(
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        self._ensure_arguments()
+        return super().parse_known_args(args, namespace)
+
+    def format_usage(self) -> str:
+        self._ensure_arguments()
+        return super().format_usage()
+
+    def format_help(self) -> str:
+        self._ensure_arguments()
+        return super().format_help()
+
+
 def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data") -> None:
-    """``--data PATH [--format F] [--units cm|m]``: where a dataset is and how to read it."""
-    parser.add_argument(flag, required=True, metavar="PATH", help="dataset file or folder")
+    """``--data PATH [--format F] [--units cm|m]``: where a dataset is and how to read it.
+
+    Args:
+        parser: the subcommand's parser.
+        flag: ``"--data"`` (a required option) or a name without dashes (a positional).
+    """
+    if flag.startswith("-"):
+        parser.add_argument(flag, required=True, metavar="PATH", help="dataset file or folder")
+    else:
+        parser.add_argument(flag, metavar="PATH", help="dataset file or folder")
     parser.add_argument(
         "--format",
         choices=FORMATS,
@@ -25,8 +79,22 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data")
         "--units",
         choices=("cm", "m"),
         default=None,
-        help="length unit of the file's positions (GCFF folders: default cm; others fixed)",
+        help="length unit of the file's positions (GCFF folders: default cm; others are metres)",
     )
+
+
+def add_train_fraction_argument(parser: argparse.ArgumentParser, *, help: str) -> None:  # noqa: A002
+    """``--train-fraction F``: the training share of `reform.time_split`, checked by
+    :func:`check_train_fraction`."""
+    parser.add_argument(
+        "--train-fraction", type=float, default=TRAIN_FRACTION, metavar="F", help=help
+    )
+
+
+def check_train_fraction(args: argparse.Namespace) -> None:
+    """Raises `CliError` unless ``--train-fraction`` lies in (0, 1)."""
+    if not 0.0 < args.train_fraction < 1.0:
+        raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
 
 
 def load_data(args: argparse.Namespace, *, attribute: str = "data"):
@@ -49,6 +117,29 @@ _SENSOR_SWITCHES = {
     "occlusion": ("--occlusion", "other bodies hide people (default: yes)"),
     "include_robot": ("--include-robot", "the observed frames hold the robot (default: yes)"),
 }
+
+
+def add_overrides_argument(parser: argparse.ArgumentParser) -> None:
+    """``--set KEY=VALUE`` (repeatable): scenario options, read by :func:`parse_overrides`."""
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        dest="overrides",
+        help="scenario option (reform-sim scenarios lists them); repeatable",
+    )
+
+
+def add_view_argument(parser: argparse.ArgumentParser) -> None:
+    """``--view truth|robot``: the ground truth or the robot sensor's view (see
+    :func:`add_sensor_arguments`)."""
+    parser.add_argument(
+        "--view",
+        choices=("truth", "robot"),
+        default="truth",
+        help="ground truth, or what the robot's head sensor observes",
+    )
 
 
 def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:

@@ -7,7 +7,7 @@ import json
 import sys
 from typing import Any
 
-from sim.cli._common import FORMATS
+from sim.cli._common import add_data_arguments
 
 _INFO_DESCRIPTION = """\
 Loads a dataset (SALSA / DANTE text, Babble, a GCFF MATLAB folder, or the project's Parquet)
@@ -22,49 +22,43 @@ Loads a dataset in any supported format and writes it in the project's Parquet f
 """
 
 
-def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("path", metavar="PATH", help="dataset file or folder")
-    parser.add_argument(
-        "--format",
-        choices=FORMATS,
-        default=None,
-        help="dataset format (default: detected from the path)",
-    )
-    parser.add_argument(
-        "--units",
-        choices=("cm", "m"),
-        default=None,
-        help="length unit of the file's positions (GCFF folders: default cm; others are metres)",
-    )
-
-
-def register(subparsers) -> None:
-    data = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "data",
         help="inspect or convert a dataset",
         description="Inspect a dataset (info) or convert it to Parquet (convert).",
+        arguments=_actions,
     )
-    actions = data.add_subparsers(dest="action", metavar="ACTION", required=True)
 
-    info = actions.add_parser(
+
+def _actions(parser: argparse.ArgumentParser) -> None:
+    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    actions.add_parser(
         "info",
         help="print frames, people, annotation, group sizes, units and the loader's report",
         description=_INFO_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_info_arguments,
     )
-    _add_source_arguments(info)
-    info.add_argument("--json", action="store_true", help="print the summary as JSON")
-    info.set_defaults(handler=run_info)
-
-    convert = actions.add_parser(
+    actions.add_parser(
         "convert",
         help="write a dataset in the project's Parquet format",
         description=_CONVERT_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_convert_arguments,
     )
-    _add_source_arguments(convert)
-    convert.add_argument("--out", required=True, metavar="OUT", help="the .parquet file to write")
-    convert.set_defaults(handler=run_convert)
+
+
+def _info_arguments(parser: argparse.ArgumentParser) -> None:
+    add_data_arguments(parser, flag="path")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.set_defaults(handler=run_info)
+
+
+def _convert_arguments(parser: argparse.ArgumentParser) -> None:
+    add_data_arguments(parser, flag="path")
+    parser.add_argument("--out", required=True, metavar="OUT", help="the .parquet file to write")
+    parser.set_defaults(handler=run_convert)
 
 
 def _load(args: argparse.Namespace):

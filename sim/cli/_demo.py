@@ -17,15 +17,19 @@ small grid and re-enacts the paper's HRI experiment. Writes Rerun recordings (.r
 """
 
 
-def register(subparsers) -> None:
-    from sim.demo import DEFAULT_OUT
-
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "demo",
         help="the whole toolkit on an embedded default: simulate, train, evaluate, record, report",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from sim.demo import DEFAULT_OUT
+
     parser.add_argument(
         "--datasets",
         metavar="DIR",

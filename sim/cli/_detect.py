@@ -7,8 +7,9 @@ import json
 import sys
 from typing import Any
 
-from sim.cli._common import CliError, add_data_arguments, load_data
-from sim.cli._detectors import add_detector_arguments, build_detector, detector_params
+from sim.cli._common import CliError, load_data
+from sim.cli._detection import add_detection_arguments, record_detection, run_detector
+from sim.cli._detectors import detector_params
 
 # Version of the JSON written by ``detect`` (docs/json-schema.md).
 DETECTIONS_SCHEMA_VERSION = 1
@@ -19,23 +20,26 @@ the detected F-formations (groups of two or more person ids; everyone in no grou
 """
 
 
-def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "detect",
         help="run a detector and write the detected groups of every frame as JSON",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
-    add_detector_arguments(parser)
-    add_data_arguments(parser)
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from sim.recording import add_recording_arguments
+
+    add_detection_arguments(parser)
     parser.add_argument("--out", required=True, metavar="OUT", help="JSON file to write")
     parser.add_argument(
         "--annotated-only",
         action="store_true",
         help="only the frames that carry ground truth (default: every frame)",
     )
-    from sim.recording import add_recording_arguments
-
     add_recording_arguments(parser)
     parser.set_defaults(handler=run)
 
@@ -87,8 +91,7 @@ def run(args: argparse.Namespace) -> int:
     frames = [dataset.frames[i] for i in indices]
     if not frames:
         raise CliError(f"{args.data}: no frames to run the detector on")
-    detector = build_detector(args)
-    predictions = detector.predict(frames)
+    detector, predictions = run_detector(args, frames)
     if len(predictions) != len(frames):
         raise CliError(
             f"detector {args.detector!r} returned {len(predictions)} partitions "
@@ -116,13 +119,7 @@ def run(args: argparse.Namespace) -> int:
         f"detected; wrote {args.out}",
         file=sys.stderr,
     )
-    from sim.recording import record_from_args
-
-    record_from_args(
-        args,
-        frames,
-        {args.detector: predictions},
-        name=f"detect-{args.detector}-{dataset.name}",
-        dataset=dataset.name,
+    record_detection(
+        args, command="detect", dataset=dataset, frames=frames, predictions=predictions
     )
     return 0

@@ -6,8 +6,9 @@ import argparse
 import json
 import sys
 
-from sim.cli._common import CliError, add_data_arguments, load_data
-from sim.cli._detectors import add_detector_arguments, build_detector, detector_params
+from sim.cli._common import CliError, load_data
+from sim.cli._detection import add_detection_arguments, record_detection, run_detector
+from sim.cli._detectors import detector_params
 
 _DESCRIPTION = """\
 Runs a detector on every annotated frame of a dataset and scores it with the field's protocol
@@ -17,15 +18,20 @@ recall and precision by group size. Prints the table; --json and --markdown save
 """
 
 
-def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "evaluate",
         help="score a detector on a dataset (pairwise accuracy, P/R/F1 at T=2/3 and T=1)",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
-    add_detector_arguments(parser)
-    add_data_arguments(parser)
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from sim.recording import add_recording_arguments
+
+    add_detection_arguments(parser)
     parser.add_argument(
         "--json", metavar="OUT", help="write the results as JSON (docs/json-schema.md)"
     )
@@ -35,8 +41,6 @@ def register(subparsers) -> None:
         action="store_true",
         help="include every frame's scores in the JSON (for time-series plots)",
     )
-    from sim.recording import add_recording_arguments
-
     add_recording_arguments(parser)
     parser.set_defaults(handler=run)
 
@@ -50,8 +54,7 @@ def run(args: argparse.Namespace) -> int:
     frames = dataset.annotated()
     if not frames:
         raise CliError(f"{args.data}: the dataset has no annotated frames, nothing to evaluate")
-    detector = build_detector(args)
-    predictions = detector.predict(frames)
+    detector, predictions = run_detector(args, frames)
     evaluation = evaluate(frames, predictions)
     result = evaluation.to_json(
         detector=args.detector,
@@ -70,14 +73,12 @@ def run(args: argparse.Namespace) -> int:
         with atomic_open(args.markdown) as handle:
             handle.write(format_report(result, style="markdown"))
         print(f"wrote {args.markdown}", file=sys.stderr)
-    from sim.recording import record_from_args
-
-    record_from_args(
+    record_detection(
         args,
-        frames,
-        {args.detector: predictions},
-        {args.detector: evaluation},
-        name=f"evaluate-{args.detector}-{dataset.name}",
-        dataset=dataset.name,
+        command="evaluate",
+        dataset=dataset,
+        frames=frames,
+        predictions=predictions,
+        evaluation=evaluation,
     )
     return 0

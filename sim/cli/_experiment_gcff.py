@@ -9,7 +9,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, add_train_fraction_argument, check_train_fraction
+from sim.cli._experiment_io import add_out_argument, publish
 
 _DESCRIPTION = """\
 Scores GCFF with the REFORM paper's setting (stride 0.7 m, MDL 30000 read as 30000 cm² =
@@ -21,41 +22,22 @@ OUT.md and OUT.json and prints the Markdown.
 """
 
 
-def _experiment_subparsers(subparsers) -> Any:
-    """The ``experiment`` command's own subparsers, creating the command if needed."""
-    parser = subparsers.choices.get("experiment")
-    if parser is None:
-        parser = subparsers.add_parser(
-            "experiment",
-            help="run a documented experiment and write its results (Markdown + JSON)",
-        )
-        return parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
-    for action in parser._actions:  # argparse keeps subparsers among the actions
-        if isinstance(action, argparse._SubParsersAction):
-            return action
-    raise CliError("the 'experiment' command exists but takes no sub-experiments")
-
-
-def register(subparsers) -> None:
-    parser = _experiment_subparsers(subparsers).add_parser(
+def register(experiments: argparse._SubParsersAction) -> None:
+    experiments.add_parser(
         "gcff",
         help="GCFF (paper setting, tuned on SALSA train) beside REFORM, SALSA test and Babble",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--salsa", required=True, metavar="PATH", help="SALSA (DANTE folder)")
     parser.add_argument("--babble", required=True, metavar="PATH", help="Babble folder")
-    parser.add_argument(
-        "--out",
-        required=True,
-        metavar="OUT",
-        help="output path without extension: writes OUT.md and OUT.json",
-    )
-    parser.add_argument(
-        "--train-fraction",
-        type=float,
-        default=0.6,
-        metavar="F",
+    add_out_argument(parser)
+    add_train_fraction_argument(
+        parser,
         help="share of each SALSA session's annotated frames, by time, used to tune (default 0.6)",
     )
     parser.add_argument(
@@ -143,12 +125,10 @@ def _read_results(path: str) -> list[dict[str, Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from reform.atomic import atomic_open
     from reform.datasets import load_babble, load_salsa
     from reform.experiment_gcff import gcff_comparison
 
-    if not 0.0 < args.train_fraction < 1.0:
-        raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
+    check_train_fraction(args)
     extra = [result for path in args.with_results for result in _read_results(path)]
     print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
     grids = {
@@ -165,16 +145,5 @@ def run(args: argparse.Namespace) -> int:
     )
     if extra:
         comparison = comparison.with_results(extra)
-    command = _command(args)
-    markdown = comparison.to_markdown(command=command)
-    out = Path(args.out)
-    if out.suffix in (".md", ".json"):
-        out = out.with_suffix("")
-    with atomic_open(out.with_name(out.name + ".md")) as handle:
-        handle.write(markdown)
-    with atomic_open(out.with_name(out.name + ".json")) as handle:
-        json.dump(comparison.to_json(command=command), handle, indent=2, allow_nan=False)
-        handle.write("\n")
-    print(markdown, end="")
-    print(f"wrote {out}.md and {out}.json", file=sys.stderr)
+    publish(comparison, out=args.out, command=_command(args))
     return 0

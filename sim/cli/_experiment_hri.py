@@ -4,14 +4,18 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import shlex
 import sys
 import time
 from pathlib import Path
 
 from sim.cli._common import CliError
-from sim.cli._experiment_gcff import _experiment_subparsers
+from sim.cli._experiment_io import (
+    add_dataset_arguments,
+    add_out_argument,
+    report_stem,
+    write_report,
+)
 
 _DESCRIPTION = """\
 Simulates the three HRI scenes of the REFORM paper (hri-conversation: two people and the robot
@@ -25,25 +29,21 @@ robot view, detections of REFORM and GCFF).
 """
 
 
-def register(subparsers) -> None:
-    from sim.hri_experiment import DEFAULT_SEEDS, VIEWS
-
-    parser = _experiment_subparsers(subparsers).add_parser(
+def register(experiments: argparse._SubParsersAction) -> None:
+    experiments.add_parser(
         "hri",
         help="the paper's HRI proof of concept re-enacted: REFORM and GCFF on the HRI scenes",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
-    parser.add_argument(
-        "--datasets", metavar="DIR", help="folder holding salsa/ (e.g. ../shared/datasets)"
-    )
-    parser.add_argument("--salsa", metavar="PATH", help="SALSA folder (default: DIR/salsa)")
-    parser.add_argument(
-        "--out",
-        required=True,
-        metavar="OUT",
-        help="output path without extension: writes OUT.md and OUT.json",
-    )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from sim.hri_experiment import DEFAULT_SEEDS, VIEWS
+
+    add_dataset_arguments(parser, babble=False)
+    add_out_argument(parser)
     parser.add_argument(
         "--seeds",
         type=int,
@@ -93,7 +93,6 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from reform.atomic import atomic_open
     from reform.datasets import load_salsa
     from sim.hri_experiment import VIEWS, hri_detectors, hri_experiment, record_scenes
 
@@ -139,15 +138,10 @@ def run(args: argparse.Namespace) -> int:
     timings["total"] = time.perf_counter() - start
     experiment = dataclasses.replace(experiment, timings=timings)
     command = _command(args)
-    out = Path(args.out)
-    if out.suffix in (".md", ".json"):
-        out = out.with_suffix("")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_open(out.with_name(out.name + ".md")) as handle:
-        handle.write(experiment.to_markdown(command=command))
-    with atomic_open(out.with_name(out.name + ".json")) as handle:
-        json.dump(experiment.to_json(command=command), handle, indent=1, allow_nan=False)
-        handle.write("\n")
+    out = report_stem(args.out)
+    write_report(
+        out, experiment.to_markdown(command=command), experiment.to_json(command=command), indent=1
+    )
     print(f"wrote {out}.md and {out}.json")
     if args.recordings is not None:
         for path in record_scenes(detectors, args.recordings, seed=args.seed):

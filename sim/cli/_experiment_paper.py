@@ -3,14 +3,23 @@
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 import sys
 import time
-from pathlib import Path
 
-from sim.cli._common import CliError
-from sim.cli._experiment_gcff import _experiment_subparsers
+from sim.cli._common import (
+    TRAIN_FRACTION,
+    CliError,
+    add_train_fraction_argument,
+    check_train_fraction,
+)
+from sim.cli._experiment_io import (
+    add_dataset_arguments,
+    add_out_argument,
+    dataset_words,
+    publish,
+    salsa_and_babble,
+)
 
 _DESCRIPTION = """\
 Trains REFORM with the paper's three classifiers on the SALSA training split (reform.time_split:
@@ -23,31 +32,21 @@ prints the Markdown.
 """
 
 
-def register(subparsers) -> None:
-    parser = _experiment_subparsers(subparsers).add_parser(
+def register(experiments: argparse._SubParsersAction) -> None:
+    experiments.add_parser(
         "paper",
         help="the REFORM paper's experiment (Table I, Babble) on SALSA and Babble",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
-    parser.add_argument(
-        "--datasets",
-        metavar="DIR",
-        help="folder holding salsa/ and babble/ (e.g. ../shared/datasets)",
-    )
-    parser.add_argument("--salsa", metavar="PATH", help="SALSA folder (default: DIR/salsa)")
-    parser.add_argument("--babble", metavar="PATH", help="Babble folder (default: DIR/babble)")
-    parser.add_argument(
-        "--out",
-        required=True,
-        metavar="OUT",
-        help="output path without extension: writes OUT.md and OUT.json",
-    )
-    parser.add_argument(
-        "--train-fraction",
-        type=float,
-        default=0.6,
-        metavar="F",
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    add_dataset_arguments(parser)
+    add_out_argument(parser)
+    add_train_fraction_argument(
+        parser,
         help="share of each SALSA session's annotated frames, by time, for training (0.6)",
     )
     parser.add_argument("--folds", type=int, default=5, metavar="K", help="CV folds (5)")
@@ -59,13 +58,8 @@ def register(subparsers) -> None:
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "experiment", "paper"]
-    if args.datasets:
-        words += ["--datasets", args.datasets]
-    for flag, value in (("--salsa", args.salsa), ("--babble", args.babble)):
-        if value:
-            words += [flag, value]
-    if args.train_fraction != 0.6:
+    words = ["reform-sim", "experiment", "paper", *dataset_words(args)]
+    if args.train_fraction != TRAIN_FRACTION:
         words += ["--train-fraction", f"{args.train_fraction:g}"]
     if args.folds != 5:
         words += ["--folds", str(args.folds)]
@@ -78,18 +72,13 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from reform.atomic import atomic_open
     from reform.datasets import load_babble, load_salsa
     from reform.experiment import paper_experiment
 
-    if not 0.0 < args.train_fraction < 1.0:
-        raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
+    check_train_fraction(args)
     if args.folds < 2:
         raise CliError(f"--folds must be at least 2, got {args.folds}")
-    salsa = args.salsa or (args.datasets and str(Path(args.datasets) / "salsa"))
-    babble = args.babble or (args.datasets and str(Path(args.datasets) / "babble"))
-    if not salsa or not babble:
-        raise CliError("give --datasets DIR (holding salsa/ and babble/) or --salsa and --babble")
+    salsa, babble = salsa_and_babble(args)
     started = time.perf_counter()
 
     def progress(message: str) -> None:
@@ -104,16 +93,5 @@ def run(args: argparse.Namespace) -> int:
         diagnostics=not args.no_diagnostics,
         progress=progress,
     )
-    command = _command(args)
-    markdown = experiment.to_markdown(command=command)
-    out = Path(args.out)
-    if out.suffix in (".md", ".json"):
-        out = out.with_suffix("")
-    with atomic_open(out.with_name(out.name + ".md")) as handle:
-        handle.write(markdown)
-    with atomic_open(out.with_name(out.name + ".json")) as handle:
-        json.dump(experiment.to_json(command=command), handle, indent=2, allow_nan=False)
-        handle.write("\n")
-    print(markdown, end="")
-    print(f"wrote {out}.md and {out}.json", file=sys.stderr)
+    publish(experiment, out=args.out, command=_command(args))
     return 0

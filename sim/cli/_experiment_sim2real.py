@@ -3,14 +3,21 @@
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 import sys
 import time
 from pathlib import Path
 
 from sim.cli._common import CliError
-from sim.cli._experiment_gcff import _experiment_subparsers
+from sim.cli._experiment_io import (
+    REPORT_SUFFIXES,
+    add_dataset_arguments,
+    add_out_argument,
+    dataset_words,
+    report_stem,
+    salsa_and_babble,
+    write_report,
+)
 
 _DESCRIPTION = """\
 Trains REFORM (the paper's three classifiers) only on simulated episodes of mingle (a SALSA-like
@@ -27,25 +34,20 @@ DEFAULT_SYNTHETIC = "runs/sim2real"
 BASENAME = "sim2real"
 
 
-def register(subparsers) -> None:
-    parser = _experiment_subparsers(subparsers).add_parser(
+def register(experiments: argparse._SubParsersAction) -> None:
+    experiments.add_parser(
         "sim2real",
         help="REFORM trained on synthetic crowds only, tested on SALSA and Babble",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
-    parser.add_argument(
-        "--datasets",
-        metavar="DIR",
-        help="folder holding salsa/ and babble/ (e.g. ../shared/datasets)",
-    )
-    parser.add_argument("--salsa", metavar="PATH", help="SALSA folder (default: DIR/salsa)")
-    parser.add_argument("--babble", metavar="PATH", help="Babble folder (default: DIR/babble)")
-    parser.add_argument(
-        "--out",
-        required=True,
-        metavar="OUT",
-        help="a folder (writes sim2real.md/.json/.png in it) or a path without extension",
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    add_dataset_arguments(parser)
+    add_out_argument(
+        parser, help="a folder (writes sim2real.md/.json/.png in it) or a path without extension"
     )
     parser.add_argument(
         "--synthetic",
@@ -81,12 +83,7 @@ def register(subparsers) -> None:
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "experiment", "sim2real"]
-    if args.datasets:
-        words += ["--datasets", args.datasets]
-    for flag, value in (("--salsa", args.salsa), ("--babble", args.babble)):
-        if value:
-            words += [flag, value]
+    words = ["reform-sim", "experiment", "sim2real", *dataset_words(args)]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
     if args.episodes_scale != 1.0:
@@ -106,23 +103,17 @@ def _outputs(out: str) -> Path:
     path = Path(out)
     if out.endswith(("/", "\\")) or path.is_dir():
         return path / BASENAME
-    if path.suffix in (".md", ".json", ".png"):
-        return path.with_suffix("")
-    return path
+    return report_stem(out, suffixes=(*REPORT_SUFFIXES, ".png"))
 
 
 def run(args: argparse.Namespace) -> int:
     import dataclasses
 
-    from reform.atomic import atomic_open
     from reform.datasets import load_babble, load_salsa
     from sim.sim2real import CLASSIFIER_NAMES, DEFAULT_SOURCES, RANDOMISED_SOURCES, sim_to_real
     from sim.sim2real_report import sim2real_figure
 
-    salsa = args.salsa or (args.datasets and str(Path(args.datasets) / "salsa"))
-    babble = args.babble or (args.datasets and str(Path(args.datasets) / "babble"))
-    if not salsa or not babble:
-        raise CliError("give --datasets DIR (holding salsa/ and babble/) or --salsa and --babble")
+    salsa, babble = salsa_and_babble(args)
     if not args.episodes_scale > 0:
         raise CliError(f"--episodes-scale must be > 0, got {args.episodes_scale}")
     if args.seed < 0:
@@ -162,11 +153,7 @@ def run(args: argparse.Namespace) -> int:
     out = _outputs(args.out)
     figure = sim2real_figure(result, out.with_name(out.name + ".png"))
     markdown = result.to_markdown(command=command, figure=figure.name)
-    with atomic_open(out.with_name(out.name + ".md")) as handle:
-        handle.write(markdown)
-    with atomic_open(out.with_name(out.name + ".json")) as handle:
-        json.dump(result.to_json(command=command), handle, indent=2, allow_nan=False)
-        handle.write("\n")
+    write_report(out, markdown, result.to_json(command=command))
     print(markdown, end="")
     print(f"wrote {out}.md, {out}.json and {out}.png", file=sys.stderr)
     return 0

@@ -5,11 +5,18 @@ from __future__ import annotations
 import argparse
 import sys
 
-from sim.cli._common import CliError, add_sensor_arguments, parse_overrides, sensor_options
+from sim.cli._common import (
+    CliError,
+    add_overrides_argument,
+    add_sensor_arguments,
+    add_view_argument,
+    parse_overrides,
+    sensor_options,
+)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
+    subparsers.add_parser(
         "generate",
         help="generate a synthetic dataset: many seeded episodes as Parquet shards",
         description=(
@@ -18,31 +25,23 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "(DIR/dataset.json, DIR/README.md). Same seed, same data; finished shards are "
             "skipped, so an interrupted run resumes and a larger --episodes extends."
         ),
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
     parser.add_argument("--episodes", required=True, type=int, metavar="N", help="episodes")
     parser.add_argument("--seed", required=True, type=int, metavar="S", help="master seed")
     parser.add_argument("--out", required=True, metavar="DIR", help="dataset folder")
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        dest="overrides",
-        help="scenario option (reform-sim scenarios lists them); repeatable",
-    )
+    add_overrides_argument(parser)
     parser.add_argument(
         "--duration", type=float, default=None, metavar="SECONDS", help="episode length"
     )
     parser.add_argument(
         "--rate", type=float, default=None, metavar="HZ", help="output (annotation) rate (2 Hz)"
     )
-    parser.add_argument(
-        "--view",
-        choices=("truth", "robot"),
-        default="truth",
-        help="ground truth, or what the robot's head sensor observes",
-    )
+    add_view_argument(parser)
     add_sensor_arguments(parser)
     parser.add_argument(
         "--jobs", type=int, default=None, metavar="N", help="local worker processes (all cores)"

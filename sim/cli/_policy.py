@@ -18,40 +18,48 @@ policy's upper bound).
 """
 
 
-def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "policy",
         help="scripted baseline of the Gymnasium joining task: success rate",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_actions,
     )
+
+
+def _actions(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
-    evaluate = actions.add_parser(
+    actions.add_parser(
         "evaluate",
         help="success rate of the scripted baseline over seeded episodes",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_evaluate_arguments,
     )
-    evaluate.add_argument(
+
+
+def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
         "--env", required=True, metavar="ID", help="environment id, e.g. ReformSim/Mingle-v0"
     )
-    evaluate.add_argument("--episodes", type=int, default=100, metavar="N", help="default 100")
-    evaluate.add_argument(
+    parser.add_argument("--episodes", type=int, default=100, metavar="N", help="default 100")
+    parser.add_argument(
         "--seed", type=int, default=0, metavar="S", help="episode k uses seed S + k (default 0)"
     )
-    evaluate.add_argument(
+    parser.add_argument(
         "--model", default=None, metavar="FILE", help="REFORM model file to detect with"
     )
-    evaluate.add_argument(
+    parser.add_argument(
         "--detector",
         choices=("gcff", "truth"),
         default=None,
         help="detector without a --model: gcff (default) or truth (the ground truth of what the "
         "robot sees: the policy's upper bound)",
     )
-    evaluate.add_argument("--json", default=None, metavar="FILE", help="write the results here")
-    evaluate.add_argument("--progress", action="store_true", help="show a progress bar")
-    evaluate.set_defaults(handler=_evaluate)
+    parser.add_argument("--json", default=None, metavar="FILE", help="write the results here")
+    parser.add_argument("--progress", action="store_true", help="show a progress bar")
+    parser.set_defaults(handler=_evaluate)
 
 
 def _evaluate(args: argparse.Namespace) -> int:

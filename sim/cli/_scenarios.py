@@ -7,14 +7,18 @@ import json
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
+    subparsers.add_parser(
         "scenarios",
         help="list the registered scenarios and their options",
         description=(
             "Lists the registered scenarios with a line on each and their options (name, type, "
             "default, meaning). Set options with `reform-sim simulate --set KEY=VALUE`."
         ),
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("names", nargs="*", metavar="NAME", help="only these scenarios")
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
     parser.set_defaults(handler=run)

@@ -8,7 +8,14 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from sim.cli._common import CliError, add_sensor_arguments, parse_overrides, sensor_options
+from sim.cli._common import (
+    CliError,
+    add_overrides_argument,
+    add_sensor_arguments,
+    add_view_argument,
+    parse_overrides,
+    sensor_options,
+)
 
 _DESCRIPTION = """\
 Runs one episode of a registered scenario (reform-sim scenarios lists them and their options)
@@ -21,14 +28,18 @@ the scenario's events).
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from sim.recording import add_recording_arguments
-
-    parser = subparsers.add_parser(
+    subparsers.add_parser(
         "simulate",
         help="run one episode of a scenario and write its frames (Parquet)",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from sim.recording import add_recording_arguments
+
     parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
     parser.add_argument("--seed", required=True, type=int, metavar="S", help="episode seed")
     parser.add_argument("--out", required=True, metavar="FILE.parquet", help="output file")
@@ -42,20 +53,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--rate", type=float, default=None, metavar="HZ", help="frames per second (default 2)"
     )
-    parser.add_argument(
-        "--view",
-        choices=("truth", "robot"),
-        default="truth",
-        help="ground truth, or what the robot's head sensor observes",
-    )
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        dest="overrides",
-        help="scenario option (reform-sim scenarios lists them); repeatable",
-    )
+    add_view_argument(parser)
+    add_overrides_argument(parser)
     parser.add_argument(
         "--dt",
         type=float,

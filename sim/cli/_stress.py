@@ -23,15 +23,19 @@ Grids: 'default' (the documented run, a few minutes on two cores) and 'small' (s
 """
 
 
-def register(subparsers) -> None:
-    from sim.stress import AXES, GRIDS
-
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "stress",
         help="stress tests: F1 of REFORM and GCFF against noise, dropouts, crowds, the sensor",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from sim.stress import AXES, GRIDS
+
     parser.add_argument(
         "--grid",
         choices=tuple(GRIDS),

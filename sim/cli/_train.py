@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from sim.cli._common import CliError, add_data_arguments, load_data
+from sim.cli._common import (
+    CliError,
+    add_data_arguments,
+    add_train_fraction_argument,
+    check_train_fraction,
+    load_data,
+)
 
 FRAME_CHOICES = ("all", "train", "test")
 
@@ -21,17 +27,21 @@ hyper-parameters by time-blocked cross-validation on the frames used for trainin
 """
 
 
-def register(subparsers) -> None:
-    from reform.classifiers import CLASSIFIERS
-    from reform.features import DEFAULT_FEATURES, FEATURES
-    from reform.reconstruction import RECONSTRUCTIONS
-
-    parser = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
         "train",
         help="train REFORM on a dataset's annotated frames and save it (skops)",
         description=_DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        arguments=_arguments,
     )
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    from reform.classifiers import CLASSIFIERS
+    from reform.features import DEFAULT_FEATURES, FEATURES
+    from reform.reconstruction import RECONSTRUCTIONS
+
     add_data_arguments(parser)
     parser.add_argument(
         "--classifier",
@@ -45,11 +55,8 @@ def register(subparsers) -> None:
         default="all",
         help="annotated frames to train on: all, or the train/test part of reform.time_split",
     )
-    parser.add_argument(
-        "--train-fraction",
-        type=float,
-        default=0.6,
-        metavar="F",
+    add_train_fraction_argument(
+        parser,
         help="share of each sequence's annotated frames, by time, in the train part (0.6)",
     )
     parser.add_argument(
@@ -91,8 +98,7 @@ def run(args: argparse.Namespace) -> int:
     from reform.features import check_features
     from reform.persistence import save_model
 
-    if not 0.0 < args.train_fraction < 1.0:
-        raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
+    check_train_fraction(args)
     if args.threshold is not None and not 0.0 < args.threshold < 1.0:
         raise CliError(f"--threshold must be a probability in (0, 1), got {args.threshold}")
     features = check_features([name.strip() for name in args.features.split(",") if name.strip()])

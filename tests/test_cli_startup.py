@@ -1,0 +1,131 @@
+"""``reform-sim`` starts light: building the parser imports argparse and ``sim.cli`` only, each
+subcommand's arguments are added when it is used, and ``import sim`` leaves gymnasium unloaded
+until it is imported (then the environments are registered)."""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from sim.cli import build_parser, main
+from sim.cli._common import CommandParser
+
+ROOT = Path(__file__).resolve().parents[1]
+# Packages a command needs only once it runs (each costs 0.1 to 0.7 s to import).
+HEAVY = ("gymnasium", "numpy", "scipy", "sklearn", "rerun", "mujoco", "reform", "scenarios")
+
+
+def _python(code: str) -> str:
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+    )
+    return out.stdout.strip()
+
+
+def _subcommands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    """Every (sub)subcommand's parser by its prog, e.g. ``"reform-sim experiment gcff"``."""
+    found = {}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in dict.fromkeys(action.choices.values()):  # aliases share a parser
+                found[child.prog] = child
+                child.format_help()  # adds the child's arguments (and its own subcommands)
+                found |= _subcommands(child)
+    return found
+
+
+def test_building_the_parser_imports_nothing_heavy() -> None:
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import build_parser\n"
+        "build_parser().format_help()\n"
+        f"print([m for m in {HEAVY!r} if m in sys.modules])\n"
+    )
+    assert loaded == "[]"
+
+
+def test_a_light_subcommand_imports_nothing_heavy_for_its_help() -> None:
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        "try:\n"
+        "    main(['data', 'info', '--help'])\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        f"print([m for m in {HEAVY!r} if m in sys.modules])\n"
+    )
+    assert loaded.splitlines()[-1] == "[]"
+
+
+def test_every_subcommand_gets_its_arguments_and_a_handler() -> None:
+    parsers = _subcommands(build_parser())
+    assert "reform-sim characterize" in parsers
+    for name in ("paper", "gcff", "hri", "sim2real"):
+        assert f"reform-sim experiment {name}" in parsers
+    groups = {"reform-sim data", "reform-sim experiment", "reform-sim policy"}
+    for prog, parser in parsers.items():
+        assert isinstance(parser, CommandParser)
+        if prog not in groups:
+            assert callable(parser.get_default("handler")), prog
+            assert len(parser._actions) > 1, prog  # more than --help
+
+
+def test_arguments_are_added_once_whatever_comes_first(capsys) -> None:
+    calls = []
+
+    def arguments(parser: argparse.ArgumentParser) -> None:
+        calls.append(parser.prog)
+        parser.add_argument("--size", type=int, default=1, help="how many")
+
+    top = argparse.ArgumentParser(prog="tool")
+    sub = top.add_subparsers(dest="command", required=True, parser_class=CommandParser)
+    child = sub.add_parser("go", help="go somewhere", arguments=arguments)
+    assert calls == []
+    assert "go somewhere" in top.format_help()
+    assert calls == []  # the top-level help needs only the help line
+    assert "--size SIZE  how many" in child.format_help()
+    assert top.parse_args(["go", "--size", "3"]).size == 3
+    assert calls == ["tool go"]
+    with pytest.raises(SystemExit):
+        top.parse_args(["go", "--size", "many"])
+    assert "argument --size: invalid int value: 'many'" in capsys.readouterr().err
+
+
+def test_version_is_the_package_version(capsys) -> None:
+    from reform import __version__
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out == f"reform-sim {__version__}\n"
+
+
+def test_import_sim_defers_gymnasium_and_registers_when_it_is_imported() -> None:
+    out = _python(
+        "import sys\n"
+        "import sim\n"
+        "print('gymnasium' in sys.modules)\n"
+        "import gymnasium\n"
+        "ids = [i for i in gymnasium.registry if i.startswith('ReformSim/')]\n"
+        "print(len(ids), type(gymnasium.__spec__.loader).__name__, gymnasium.__loader__ is "
+        "gymnasium.__spec__.loader)\n"
+        "print([m for m in ('mujoco', 'reform', 'scenarios', 'sim.envs.social')"
+        " if m in sys.modules])\n"
+    )
+    from sim.envs import ENV_IDS
+
+    assert out.splitlines() == ["False", f"{len(ENV_IDS)} SourceFileLoader True", "[]"]
+
+
+def test_gymnasium_make_works_after_import_sim_alone() -> None:
+    out = _python(
+        "import sim\n"
+        "import gymnasium as gym\n"
+        "env = gym.make('ReformSim/HRIPassingObserve-v0')\n"
+        "print(type(env.unwrapped).__name__, sim.envs.ENV_IDS[0])\n"
+    )
+    assert out == "SocialEnv ReformSim/HRIConversation-v0"
