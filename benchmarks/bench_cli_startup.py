@@ -1,0 +1,72 @@
+"""Start-up time of the ``reform-sim`` command, beside every subcommand's parser built at once.
+
+Measured in the same run, each a fresh interpreter (wall time, median of ``--repeats``):
+
+* **python**: ``python -c pass``, the floor under any command;
+* **--help**: ``reform-sim --help``: the parser with each subcommand's name and help line only;
+* **data info --help**, **evaluate --help**: one subcommand's arguments added (evaluate's pull
+  in the Rerun flags of `sim.recording`, hence rerun and reform);
+* **every parser** (the baseline): gymnasium imported and every subcommand's arguments added, as
+  building the parser did before subcommands were added on use.
+
+The ratio every parser / --help is the median of the ratios of runs made one after the other,
+so that a change of load on the machine hits both alike.
+
+Run: ``python benchmarks/bench_cli_startup.py [--repeats 7]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+COMMAND = [sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())"]
+EVERY_PARSER = (
+    "import argparse, gymnasium\n"
+    "from sim.cli import build_parser\n"
+    "def build(parser):\n"
+    "    for action in parser._actions:\n"
+    "        if isinstance(action, argparse._SubParsersAction):\n"
+    "            for child in action.choices.values():\n"
+    "                child.format_help()\n"
+    "                build(child)\n"
+    "build(build_parser())\n"
+)
+CASES = {
+    "python": [sys.executable, "-c", "pass"],
+    "--help": [*COMMAND, "--help"],
+    "data info --help": [*COMMAND, "data", "info", "--help"],
+    "evaluate --help": [*COMMAND, "evaluate", "--help"],
+    "every parser": [sys.executable, "-c", EVERY_PARSER],
+}
+
+
+def _seconds(argv: list[str]) -> float:
+    start = time.perf_counter()
+    subprocess.run(argv, cwd=ROOT, stdout=subprocess.DEVNULL, check=True)
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7, help="runs per case (default 7)")
+    repeats = parser.parse_args().repeats
+    for argv in CASES.values():  # warm the file cache
+        _seconds(argv)
+    times: dict[str, list[float]] = {name: [] for name in CASES}
+    for _ in range(repeats):
+        for name, argv in CASES.items():
+            times[name].append(_seconds(argv))
+    for name, values in times.items():
+        print(f"{name:<18} median {statistics.median(values):6.3f} s  best {min(values):6.3f} s")
+    ratios = [e / h for e, h in zip(times["every parser"], times["--help"], strict=True)]
+    print(f"every parser / --help: {statistics.median(ratios):.1f}x")
+
+
+if __name__ == "__main__":
+    main()
