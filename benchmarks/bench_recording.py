@@ -213,7 +213,7 @@ def bench_rate(
     print(
         f"  record_episode: truth + events (simulate --save)       {t_log:7.3f} s   "
         f"ratio {ratio:.3f} of simulate_episode ({verdict(ratio)}), "
-        f"{t_log / t_blocks:.3f} of the bare rollout; first call in the process {t_first:.3f} s"
+        f"{t_log / t_blocks:.3f} of the bare rollout; warm-up call {t_first:.3f} s"
     )
     t_cols, _, _ = warm_timed(
         lambda: record_episode(
@@ -250,13 +250,13 @@ def bench_rate(
         f"  detection, not timed as logging: REFORM {t_detect['reform']:.2f} s, "
         f"GCFF {t_detect['gcff']:.2f} s; scoring both (reform.evaluate) {t_score:.3f} s"
     )
-    ratios = {f"{rate:g} Hz truth + events": ratio}
+    ratios = {f"{rate:g} Hz  simulate --save: truth + events": ratio}
     for label, seconds in (
         ("+ REFORM + GCFF, scored inside record_episode", t_det_scored),
         ("+ REFORM + GCFF, evaluations given", t_det_given),
     ):
         r = seconds / t_sim
-        ratios[f"{rate:g} Hz truth {label}"] = r
+        ratios[f"{rate:g} Hz  truth view {label}"] = r
         print(f"  {label:53s}{seconds:7.3f} s   ratio {r:.3f} of simulate_episode ({verdict(r)})")
 
     robot_kwargs = {**kwargs, "view": "robot", "options": ROBOT_OPTIONS}
@@ -277,7 +277,7 @@ def bench_rate(
     )
     robot_size = robot_path.stat().st_size
     r = t_robot / t_robot_sim
-    ratios[f"{rate:g} Hz robot watching, observed + detections"] = r
+    ratios[f"{rate:g} Hz  robot watching: world, observed, field of view, detections"] = r
     print(
         f"  robot watching (view='robot'): simulate_episode       {t_robot_sim:7.3f} s   "
         f"baseline (REFORM {robot_detect['reform']:.2f} s, GCFF {robot_detect['gcff']:.2f} s "
@@ -354,9 +354,22 @@ def main() -> None:
                     per_frame=rate == max(args.rates),
                 )
             )
-    print(f"\nGoal: logging costs at most {GOAL:.0%} of simulating.")
-    for label, ratio in ratios.items():
-        print(f"  {label:66s} {ratio:.3f}  {'met' if ratio <= GOAL else 'NOT met'}")
+    session = {k: v for k, v in ratios.items() if "truth view" not in k}
+    extra = {k: v for k, v in ratios.items() if "truth view" in k}
+    print(
+        f"\nGoal: logging a simulated 35-minute, 7-person session costs at most {GOAL:.0%} of "
+        "simulating it (logging / simulate_episode):"
+    )
+    for label, ratio in sorted(session.items(), key=lambda kv: "robot" in kv[0]):
+        print(f"  {label:72s} {ratio:.3f}  {'met' if ratio <= GOAL else 'NOT met'}")
+    print(
+        "Also: detections on the truth view (a simulation without the robot's sensor to pay for):"
+    )
+    for label, ratio in extra.items():
+        print(f"  {label:72s} {ratio:.3f}  {'met' if ratio <= GOAL else 'NOT met'}")
+    met = all(r <= GOAL for r in session.values())
+    rates = " and ".join(f"{r:g} Hz" for r in args.rates)
+    print(f"The goal is {'met' if met else 'NOT met'} at {rates}.")
 
 
 if __name__ == "__main__":

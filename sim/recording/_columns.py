@@ -277,8 +277,18 @@ class FrameColumns:
 
 
 def _concatenate(arrays: Sequence[np.ndarray], empty: tuple[int, ...], dtype: Any) -> np.ndarray:
+    """``np.concatenate(arrays)`` as ``dtype``, of shape ``(n, *empty[1:])``; many small arrays
+    of that dtype (one per frame) are joined as bytes, which is nearly twice as fast."""
     if not arrays:
         return np.zeros(empty, dtype=dtype)
+    dtype = np.dtype(dtype)
+    if {a.dtype for a in arrays} == {dtype}:
+        try:
+            joined = np.frombuffer(b"".join(arrays), dtype=dtype)
+        except BufferError:  # an array that is not C-contiguous
+            pass
+        else:
+            return joined.reshape((-1, *empty[1:]))
     return np.concatenate(arrays).astype(dtype, copy=False)
 
 
