@@ -28,7 +28,7 @@ import time
 
 import gymnasium as gym
 
-import sim  # noqa: F401  (registers the environments)
+import sim.envs  # noqa: F401  (registers the environments)
 from sim.envs.social import _Intents  # the env's own script adapter (intents, no groups)
 from sim.episode import scene_spec
 from sim.world import World

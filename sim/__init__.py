@@ -8,21 +8,17 @@ Public surface (loaded on first use, so that the command line starts fast):
 * the robot's view: `Sensor`, `HeadCamera` (optional rendering);
 * assets: `asset_names`, `asset_path`, `asset_xml`.
 
-Importing ``sim`` registers the Gymnasium environments (``ReformSim/...``, `sim.envs`) with
-gymnasium: at once when gymnasium is already imported, else the moment it is (so ``import sim``
-alone, as the ``reform-sim`` command does, stays light). The environments themselves load on
-``gymnasium.make``.
+The Gymnasium environments (``ReformSim/...``) live in `sim.envs`: ``import sim.envs`` registers
+them, or name the module in the id, ``gymnasium.make("sim.envs:ReformSim/Mingle-v0")``.
+``import sim`` alone loads neither gymnasium nor MuJoCo, so the ``reform-sim`` command starts
+fast.
 """
 
 from __future__ import annotations
 
 import importlib
-import importlib.abc
-import importlib.machinery
-import importlib.util
 import os
 import sys
-from types import ModuleType
 from typing import Any
 
 # Offscreen rendering on a headless Linux machine needs EGL, chosen before mujoco is imported.
@@ -50,48 +46,6 @@ _EXPORTS = {
 }
 
 __all__ = sorted(_EXPORTS)
-
-
-class _RegisterWithGymnasium(importlib.abc.MetaPathFinder, importlib.abc.Loader):
-    """Imports `sim.envs` (which registers the environments) right after gymnasium is imported.
-
-    Sits first on ``sys.meta_path`` until gymnasium is looked up, then hands the import to
-    gymnasium's own loader and steps aside: the module keeps that loader, nothing else changes.
-    """
-
-    def __init__(self) -> None:
-        self._loader: importlib.abc.Loader | None = None
-
-    def find_spec(
-        self, fullname: str, path: Any = None, target: ModuleType | None = None
-    ) -> importlib.machinery.ModuleSpec | None:
-        if fullname != _GYMNASIUM:
-            return None
-        if self in sys.meta_path:
-            sys.meta_path.remove(self)
-        spec = importlib.util.find_spec(fullname)
-        if spec is None or spec.loader is None:
-            return spec
-        self._loader, spec.loader = spec.loader, self
-        return spec
-
-    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType | None:
-        assert self._loader is not None
-        return self._loader.create_module(spec)
-
-    def exec_module(self, module: ModuleType) -> None:
-        assert self._loader is not None
-        module.__loader__ = module.__spec__.loader = self._loader
-        self._loader.exec_module(module)
-        importlib.import_module("sim.envs")
-
-
-_GYMNASIUM = "gymnasium"
-
-if _GYMNASIUM in sys.modules:
-    importlib.import_module("sim.envs")
-else:
-    sys.meta_path.insert(0, _RegisterWithGymnasium())
 
 
 def __getattr__(name: str) -> Any:

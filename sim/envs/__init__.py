@@ -1,7 +1,7 @@
 """Gymnasium environments: the Directions Robot as the agent in scripted social scenes.
 
-Importing this package (``import sim`` does) registers one environment per scenario for the
-joining task and one for observing::
+Importing this package registers one environment per scenario for the joining task and one for
+observing (or name it in the id: ``gymnasium.make("sim.envs:ReformSim/Mingle-v0")``)::
 
     ReformSim/HRIConversation-v0    ReformSim/HRIConversationObserve-v0
     ReformSim/HRIRobotExcluded-v0   ReformSim/HRIRobotExcludedObserve-v0
