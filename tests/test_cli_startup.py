@@ -48,12 +48,13 @@ def test_building_the_parser_imports_nothing_heavy() -> None:
     assert loaded == "[]"
 
 
-def test_a_light_subcommand_imports_nothing_heavy_for_its_help() -> None:
+@pytest.mark.parametrize("command", ["data info", "evaluate", "detect", "simulate"])
+def test_a_light_subcommand_imports_nothing_heavy_for_its_help(command: str) -> None:
     loaded = _python(
         "import sys\n"
         "from sim.cli import main\n"
         "try:\n"
-        "    main(['data', 'info', '--help'])\n"
+        f"    main({command.split()!r} + ['--help'])\n"
         "except SystemExit:\n"
         "    pass\n"
         f"print([m for m in {HEAVY!r} if m in sys.modules])\n"

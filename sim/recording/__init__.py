@@ -33,109 +33,76 @@ with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, 
 
 from __future__ import annotations
 
-from sim.recording._blueprint import default_blueprint
-from sim.recording._columns import FrameColumns
-from sim.recording._dataset_views import (
-    DATASET_ROOT,
-    log_characterisation,
-    log_pair_scatter,
-    log_stress_curves,
-    pair_scatter_data,
-)
-from sim.recording._frames import (
-    KINECT_FIELD_OF_VIEW,
-    OBSERVED_ROOT,
-    PEOPLE_ROOT,
-    ROBOT_ROOT,
-    WORLD_ROOT,
-    FieldOfView,
-    log_frames,
-    log_world_setup,
-)
-from sim.recording._groups import GROUPS_ROOT, TRUTH, LoggedGroups, evaluate_detector, log_groups
-from sim.recording._metrics import (
-    EVENTS_ENTITY,
-    METRICS_ROOT,
-    Event,
-    group_events,
-    log_events,
-    log_group_counts,
-    log_running_scores,
-)
-from sim.recording._record import Recorded, record_episode, record_evaluation, record_from_args
-from sim.recording._scene import (
-    CAMERA_ROOT,
-    MODEL_ROOT,
-    ROOM_ROOT,
-    BodyPoses,
-    CameraImages,
-    body_entity,
-    log_body_poses,
-    log_camera_images,
-    log_model,
-    log_room,
-    room_bounds,
-)
-from sim.recording._stream import (
-    APPLICATION_ID,
-    RecordingTarget,
-    add_recording_arguments,
-    open_recording,
-    recording_id,
-    target_from_args,
-)
-from sim.recording._timeline import FRAME_TIMELINE, SIM_TIME_TIMELINE, Clock
+import importlib
+from typing import Any
 
-__all__ = [
-    "APPLICATION_ID",
-    "CAMERA_ROOT",
-    "DATASET_ROOT",
-    "EVENTS_ENTITY",
-    "FRAME_TIMELINE",
-    "GROUPS_ROOT",
-    "KINECT_FIELD_OF_VIEW",
-    "METRICS_ROOT",
-    "MODEL_ROOT",
-    "OBSERVED_ROOT",
-    "PEOPLE_ROOT",
-    "ROBOT_ROOT",
-    "ROOM_ROOT",
-    "SIM_TIME_TIMELINE",
-    "TRUTH",
-    "WORLD_ROOT",
-    "BodyPoses",
-    "CameraImages",
-    "Clock",
-    "Event",
-    "FieldOfView",
-    "FrameColumns",
-    "LoggedGroups",
-    "Recorded",
-    "RecordingTarget",
-    "add_recording_arguments",
-    "body_entity",
-    "default_blueprint",
-    "evaluate_detector",
-    "group_events",
-    "log_body_poses",
-    "log_camera_images",
-    "log_characterisation",
-    "log_events",
-    "log_frames",
-    "log_group_counts",
-    "log_groups",
-    "log_model",
-    "log_pair_scatter",
-    "log_room",
-    "log_running_scores",
-    "log_stress_curves",
-    "log_world_setup",
-    "open_recording",
-    "pair_scatter_data",
-    "recording_id",
-    "record_episode",
-    "record_evaluation",
-    "record_from_args",
-    "room_bounds",
-    "target_from_args",
-]
+# Public name -> the module defining it; loaded on first use, so that declaring a command's
+# recording flags (`add_recording_arguments`) does not import Rerun.
+_EXPORTS = {
+    "default_blueprint": "sim.recording._blueprint",
+    "FrameColumns": "sim.recording._columns",
+    "DATASET_ROOT": "sim.recording._dataset_views",
+    "log_characterisation": "sim.recording._dataset_views",
+    "log_pair_scatter": "sim.recording._dataset_views",
+    "log_stress_curves": "sim.recording._dataset_views",
+    "pair_scatter_data": "sim.recording._dataset_views",
+    "KINECT_FIELD_OF_VIEW": "sim.recording._frames",
+    "OBSERVED_ROOT": "sim.recording._frames",
+    "PEOPLE_ROOT": "sim.recording._frames",
+    "ROBOT_ROOT": "sim.recording._frames",
+    "WORLD_ROOT": "sim.recording._frames",
+    "FieldOfView": "sim.recording._frames",
+    "log_frames": "sim.recording._frames",
+    "log_world_setup": "sim.recording._frames",
+    "GROUPS_ROOT": "sim.recording._groups",
+    "TRUTH": "sim.recording._groups",
+    "LoggedGroups": "sim.recording._groups",
+    "evaluate_detector": "sim.recording._groups",
+    "log_groups": "sim.recording._groups",
+    "EVENTS_ENTITY": "sim.recording._metrics",
+    "METRICS_ROOT": "sim.recording._metrics",
+    "Event": "sim.recording._metrics",
+    "group_events": "sim.recording._metrics",
+    "log_events": "sim.recording._metrics",
+    "log_group_counts": "sim.recording._metrics",
+    "log_running_scores": "sim.recording._metrics",
+    "Recorded": "sim.recording._record",
+    "record_episode": "sim.recording._record",
+    "record_evaluation": "sim.recording._record",
+    "record_from_args": "sim.recording._record",
+    "CAMERA_ROOT": "sim.recording._scene",
+    "MODEL_ROOT": "sim.recording._scene",
+    "ROOM_ROOT": "sim.recording._scene",
+    "BodyPoses": "sim.recording._scene",
+    "CameraImages": "sim.recording._scene",
+    "body_entity": "sim.recording._scene",
+    "log_body_poses": "sim.recording._scene",
+    "log_camera_images": "sim.recording._scene",
+    "log_model": "sim.recording._scene",
+    "log_room": "sim.recording._scene",
+    "room_bounds": "sim.recording._scene",
+    "APPLICATION_ID": "sim.recording._stream",
+    "RecordingTarget": "sim.recording._target",
+    "add_recording_arguments": "sim.recording._target",
+    "open_recording": "sim.recording._stream",
+    "recording_id": "sim.recording._stream",
+    "target_from_args": "sim.recording._target",
+    "FRAME_TIMELINE": "sim.recording._timeline",
+    "SIM_TIME_TIMELINE": "sim.recording._timeline",
+    "Clock": "sim.recording._timeline",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'sim.recording' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

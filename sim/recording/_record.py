@@ -32,7 +32,8 @@ from sim.recording._scene import (
     log_room,
     room_bounds,
 )
-from sim.recording._stream import RecordingTarget, open_recording, recording_id, target_from_args
+from sim.recording._stream import open_recording, recording_id
+from sim.recording._target import RecordingTarget, target_from_args
 from sim.recording._timeline import Clock
 
 __all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
