@@ -21,6 +21,8 @@ import os
 import sys
 from typing import Any
 
+from sim._lazy import lazy_exports
+
 # Offscreen rendering on a headless Linux machine needs EGL, chosen before mujoco is imported.
 if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")
@@ -48,16 +50,10 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
+_lazy_getattr, __dir__ = lazy_exports(__name__, _EXPORTS)
+
+
 def __getattr__(name: str) -> Any:
-    if name == "envs":
+    if name == "envs":  # the subpackage, imported on first use (it registers the environments)
         return importlib.import_module("sim.envs")
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'sim' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    return _lazy_getattr(name)

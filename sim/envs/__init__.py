@@ -20,10 +20,11 @@ Public surface (loaded on first use): `SocialEnv`, `TruthDetector`, the task (`J
 
 from __future__ import annotations
 
-import importlib
 from typing import Any
 
 import gymnasium as gym
+
+from sim._lazy import lazy_exports
 
 NAMESPACE = "ReformSim"
 ENTRY_POINT = "sim.envs.social:SocialEnv"
@@ -79,14 +80,4 @@ _EXPORTS = {
 __all__ = sorted([*_EXPORTS, "ENV_IDS", "NAMESPACE", "register_envs"])
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'sim.envs' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -33,8 +33,7 @@ with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, 
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from sim._lazy import lazy_exports
 
 # Public name -> the module defining it; loaded on first use, so that declaring a command's
 # recording flags (`add_recording_arguments`) does not import Rerun.
@@ -95,14 +94,4 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'sim.recording' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
