@@ -54,6 +54,7 @@ __all__ = [
     "DEFAULT_RATE_HZ",
     "VIEWS",
     "Episode",
+    "ScenarioScript",
     "episode_blocks",
     "prepare",
     "scene_spec",
@@ -136,8 +137,9 @@ def _frame_count(duration: float, rate: float) -> int:
     return count
 
 
-class _Driver:
-    """The scenario's intents for the world; the ground truth is settled from the poses."""
+class ScenarioScript:
+    """A scenario's intents as the world's `scenarios.script.Script`; it declares no groups, as
+    the ground truth is settled from the poses (`scenarios.truth`)."""
 
     def __init__(self, scenario: Scenario) -> None:
         self._timeline = scenario.timeline
@@ -191,7 +193,7 @@ def _world(plan: _Plan) -> World:
     return World(
         scene_spec(plan.scenario.stage, name=plan.scenario.name),
         seed=plan.world_seed,
-        script=_Driver(plan.scenario),
+        script=ScenarioScript(plan.scenario),
         dt=plan.dt,
         decision_rate=plan.decision_rate,
         sequence=plan.sequence,

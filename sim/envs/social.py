@@ -79,7 +79,7 @@ from scenarios.mingle import NoFloorError
 from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
 from sim.envs.target import Target, choose_target, circle_of, joinable_place
 from sim.envs.view import Eyes, Truth, View, robot_frame
-from sim.episode import scene_spec
+from sim.episode import ScenarioScript, scene_spec
 from sim.motion import ROBOT_LIMITS
 from sim.scene import ROBOT_RADIUS_M
 from sim.sensor import Sensor
@@ -119,19 +119,6 @@ _TWO_PI = 2.0 * math.pi
 _ACTION_NAMES = ("speed", "turn rate", "head-pan rate")
 
 ScenarioFactory = Callable[..., Scenario]
-
-
-class _Intents:
-    """The scenario's intents for the world; the ground truth is settled from the poses."""
-
-    def __init__(self, scenario: Scenario) -> None:
-        self._timeline = scenario.timeline
-
-    def intents(self, t: float) -> Mapping[int, Any]:
-        return self._timeline.intents(t)
-
-    def groups(self, t: float) -> None:
-        return None
 
 
 def _rate(name: str, value: Any) -> float:
@@ -358,7 +345,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._world = world = World(
             spec,
             seed=world_seed,
-            script=_Intents(scenario),
+            script=ScenarioScript(scenario),
             sequence=f"{scenario.name}-{scenario.seed}",
         )
         world.command_robot(RobotCommand())
