@@ -35,18 +35,23 @@ from reform.detector import Reform, training_pairs
 from reform.features import DEFAULT_FEATURES
 from reform.frame import Dataset, Frame
 from reform.majority import Majority
-from reform.metrics import evaluate, pair_labels
+from reform.metrics import PROTOCOL, evaluate, pair_labels
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_blocks, time_split
 
-SALSA_TRAIN = "salsa-train"
-SALSA_TEST = "salsa-test"
-BABBLE = "babble"
+SALSA_TRAIN = "salsa-train"  # dataset label of the SALSA training split
+SALSA_TEST = "salsa-test"  # dataset label of the SALSA test split
+BABBLE = "babble"  # dataset label of Babble (every annotated frame)
 MAJORITY = "majority"
 N_FOLDS = 5  # time blocks per session, one per cross-validation fold
 SCORING = "accuracy"  # cross-validation objective: pairwise accuracy of the classifier
 DIAGNOSTIC_SEED = 2020  # random split of the paper-like protocol
 PAPER_SESSION = "session1"  # 645 feature rows: the paper's "400 + 245 frames"
 SCHEMA_VERSION = 1
+# How the experiments split the data, as their JSON results state it.
+SPLIT_RULE = (
+    "reform.time_split: per SALSA session, the first share of annotated frames by time trains, "
+    "the rest tests; Babble is test only"
+)
 
 DISPLAY = {
     MAJORITY: "Majority baseline",
@@ -96,6 +101,7 @@ __all__ = [
     "PAPER_TABLE_I",
     "SALSA_TEST",
     "SALSA_TRAIN",
+    "SPLIT_RULE",
     "PaperExperiment",
     "Tuning",
     "classifier_params",
@@ -304,11 +310,10 @@ class PaperExperiment:
             "kind": "reform-sim/paper-experiment",
             "reform_version": __version__,
             "command": command,
-            "protocol": "ff_evalgroups: singletons dropped; frame-mean P and R; F1 of the means",
+            "protocol": PROTOCOL,
             "split": {
                 "train_fraction": self.train_fraction,
-                "rule": "reform.time_split: per SALSA session, the first share of annotated "
-                "frames by time trains, the rest tests; Babble is test only",
+                "rule": SPLIT_RULE,
                 "frames": dict(self.frames),
             },
             "features": list(DEFAULT_FEATURES),

@@ -17,6 +17,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from reform.experiment import BABBLE, SALSA_TEST, SPLIT_RULE
 from reform.frame import Dataset, Frame
 from reform.gcff import (
     MDL_GRID_M2,
@@ -29,6 +30,7 @@ from reform.gcff import (
     labels_to_partition,
 )
 from reform.majority import Majority
+from reform.metrics import PROTOCOL
 
 __all__ = [
     "PAPER_MDL_M2",
@@ -42,8 +44,6 @@ __all__ = [
 
 PAPER_STRIDE_M = 0.7  # metres: the paper's "stride = 0.7"
 PAPER_MDL_M2 = 3.0  # square metres: the paper's "MDL = 30000", read as cm²
-SALSA_TEST = "salsa-test"  # dataset label of the SALSA test split
-BABBLE = "babble"  # dataset label of Babble (every annotated frame)
 SCHEMA_VERSION = 1  # of GcffComparison.to_json
 
 # The REFORM paper's own figures, T = 2/3, precision / recall / F1 in % (definitions.md).
@@ -185,11 +185,10 @@ class GcffComparison:
             "kind": "reform-sim/gcff-comparison",
             "reform_version": __version__,
             "command": command,
-            "protocol": "ff_evalgroups: singletons dropped; frame-mean P and R; F1 of the means",
+            "protocol": PROTOCOL,
             "split": {
                 "train_fraction": self.train_fraction,
-                "rule": "reform.time_split: per SALSA session, the first share of annotated "
-                "frames by time trains, the rest tests; Babble is test only",
+                "rule": SPLIT_RULE,
                 "frames": dict(self.frames),
             },
             "units": {

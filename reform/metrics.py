@@ -50,6 +50,7 @@ from reform.frame import Frame, Group
 
 __all__ = [
     "JSON_SCHEMA_VERSION",
+    "PROTOCOL",
     "THRESHOLDS",
     "T_ONE",
     "T_TWO_THIRDS",
@@ -69,6 +70,9 @@ THRESHOLDS = (T_TWO_THIRDS, T_ONE)
 
 # Version of the JSON written by Evaluation.to_json (docs/json-schema.md).
 JSON_SCHEMA_VERSION = 1
+
+# The protocol this module implements, as every JSON result states it.
+PROTOCOL = "ff_evalgroups: singletons dropped; frame-mean P and R; F1 of the means"
 
 
 def f1_score(precision: float, recall: float) -> float:
@@ -473,7 +477,7 @@ class Evaluation:
             "schema_version": JSON_SCHEMA_VERSION,
             "kind": "reform-sim/evaluation",
             "reform_version": __version__,
-            "protocol": "ff_evalgroups: singletons dropped; frame-mean P and R; F1 of the means",
+            "protocol": PROTOCOL,
             "detector": detector,
             "detector_params": dict(detector_params or {}),
             "dataset": dataset,

@@ -56,7 +56,7 @@ from typing import Any
 import numpy as np
 
 from reform.frame import Dataset, Frame
-from reform.metrics import T_TWO_THIRDS, Evaluation, evaluate
+from reform.metrics import PROTOCOL, T_TWO_THIRDS, Evaluation, evaluate
 
 __all__ = [
     "BABBLE",
@@ -640,7 +640,7 @@ class SimToReal:
             "kind": "reform-sim/sim2real",
             "reform_version": __version__,
             "command": command,
-            "protocol": "ff_evalgroups: singletons dropped; frame-mean P and R; F1 of the means",
+            "protocol": PROTOCOL,
             "seed": self.seed,
             "frames": dict(self.frames),
             "sources": [s.to_json() for s in self.sources],
