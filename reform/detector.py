@@ -31,7 +31,7 @@ from reform.features import (
     frame_pair_features,
     pair_indices,
 )
-from reform.frame import Frame, Group
+from reform.frame import Frame, Group, check_frames
 from reform.metrics import pair_labels
 from reform.reconstruction import UNION, batch_greedy_labels, check_reconstruction
 
@@ -97,7 +97,7 @@ class Reform(BaseEstimator):
                 only, a bad parameter.
             TypeError: an entry that is not a Frame.
         """
-        frames = _as_frames(frames, "fit")
+        frames = check_frames(frames, caller="fit")
         features = check_features(self.features)
         check_reconstruction(self.reconstruction)
         classifier = bagged_trees() if self.classifier is None else clone(self.classifier)
@@ -145,7 +145,7 @@ class Reform(BaseEstimator):
             members ascending, singletons included.
         """
         check_is_fitted(self, "classifier_")
-        return self._run(_as_frames(frames, "predict"), partitions=True, pairs=False)[0]
+        return self._run(check_frames(frames, caller="predict"), partitions=True, pairs=False)[0]
 
     def predict_pairs(self, frames: Iterable[Frame]) -> list[np.ndarray]:
         """The classifier's pair labels, before reconstruction.
@@ -159,10 +159,12 @@ class Reform(BaseEstimator):
             :func:`reform.metrics.pair_labels`).
         """
         check_is_fitted(self, "classifier_")
-        return self._run(_as_frames(frames, "predict_pairs"), partitions=False, pairs=True)[1]
+        return self._run(
+            check_frames(frames, caller="predict_pairs"), partitions=False, pairs=True
+        )[1]
 
     def _run(
-        self, frames: list[Frame], *, partitions: bool, pairs: bool
+        self, frames: Sequence[Frame], *, partitions: bool, pairs: bool
     ) -> tuple[list[Partition], list[np.ndarray]]:
         """Partitions and/or pair labels of frames, classified once, in chunks of one size."""
         out: list[Partition] = [()] * len(frames) if partitions else []
@@ -303,16 +305,6 @@ def _frame_order(labels: np.ndarray, ids: np.ndarray, i: np.ndarray, j: np.ndarr
     return matrix[i, j]
 
 
-def _as_frames(frames: Iterable[Frame], method: str) -> list[Frame]:
-    frames = list(frames)
-    for k, frame in enumerate(frames):
-        if not isinstance(frame, Frame):
-            raise TypeError(
-                f"{method} takes reform.Frame objects, got {type(frame).__name__} at frames[{k}]"
-            )
-    return frames
-
-
 def _check_threshold(threshold: float | None, classifier: Any) -> None:
     if threshold is None:
         return
@@ -349,7 +341,7 @@ def _reordered(frame: Frame, order: np.ndarray) -> Frame:
     )
 
 
-def _by_size(frames: list[Frame]) -> dict[int, list[int]]:
+def _by_size(frames: Sequence[Frame]) -> dict[int, list[int]]:
     groups: dict[int, list[int]] = {}
     for k, frame in enumerate(frames):
         groups.setdefault(frame.n_people, []).append(k)
@@ -394,7 +386,7 @@ def _collector_paused() -> Iterator[None]:
             gc.enable()
 
 
-def _summary(frames: list[Frame], targets: np.ndarray) -> dict[str, Any]:
+def _summary(frames: Sequence[Frame], targets: np.ndarray) -> dict[str, Any]:
     people = [frame.n_people for frame in frames]
     sequences = sorted({frame.sequence for frame in frames})
     spans = {}

@@ -272,6 +272,28 @@ def _person_id(value: Any, where: str) -> int:
     raise ValueError(f"{where} must hold integer person ids, got {value!r}")
 
 
+def check_frames(frames: Iterable[Any], *, caller: str | None = None) -> tuple[Frame, ...]:
+    """The entries of ``frames`` as a tuple, each checked to be a :class:`Frame`.
+
+    Args:
+        frames: the entries (a Dataset works too).
+        caller: the checking function's name, for the message ``"<caller> takes reform.Frame
+            objects, got <type> at frames[k]"``; without it the message is ``"frames[k] must be a
+            reform.Frame, got <type>"``.
+
+    Raises:
+        TypeError: at the first entry that is not a Frame.
+    """
+    frames = tuple(frames)
+    for k, frame in enumerate(frames):
+        if not isinstance(frame, Frame):
+            found = type(frame).__name__
+            if caller is None:
+                raise TypeError(f"frames[{k}] must be a reform.Frame, got {found}")
+            raise TypeError(f"{caller} takes reform.Frame objects, got {found} at frames[{k}]")
+    return frames
+
+
 def complete_partition(groups: Iterable[Sequence[int]], ids: Iterable[int]) -> tuple[Group, ...]:
     """``groups`` plus a singleton for every id in no group (in ``ids`` order)."""
     groups = tuple(tuple(int(m) for m in g) for g in groups)
@@ -298,10 +320,7 @@ class Dataset:
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        frames = tuple(self.frames)
-        for i, frame in enumerate(frames):
-            if not isinstance(frame, Frame):
-                raise TypeError(f"frames[{i}] must be a reform.Frame, got {type(frame).__name__}")
+        frames = check_frames(self.frames)
         if self.units != "m":
             raise ValueError(f"units must be 'm' (loaders convert to metres), got {self.units!r}")
         object.__setattr__(self, "frames", frames)

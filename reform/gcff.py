@@ -67,7 +67,7 @@ import numpy.typing as npt
 from sklearn.base import BaseEstimator
 from sklearn.exceptions import NotFittedError
 
-from reform.frame import Frame, Group
+from reform.frame import Frame, Group, check_frames
 
 __all__ = [
     "CM_PER_M",
@@ -487,14 +487,6 @@ def _orientation(frame: Frame, orientation: str) -> np.ndarray:
     return np.where(np.isfinite(frame.head_yaw), frame.head_yaw, frame.yaw)
 
 
-def _check_frames(frames: Sequence[Frame]) -> tuple[Frame, ...]:
-    frames = tuple(frames)
-    for i, frame in enumerate(frames):
-        if not isinstance(frame, Frame):
-            raise TypeError(f"frames[{i}] must be a reform.Frame, got {type(frame).__name__}")
-    return frames
-
-
 def _predict(
     frames: Sequence[Frame], *, stride: float, mdl: float, orientation: str
 ) -> list[tuple[Group, ...]]:
@@ -574,7 +566,7 @@ def grid_search(
     """
     from reform.metrics import evaluate
 
-    annotated = [f for f in _check_frames(frames) if f.groups is not None]
+    annotated = [f for f in check_frames(frames) if f.groups is not None]
     if not annotated:
         raise ValueError("frames must include annotated frames to tune on, got none")
     strides = [_check_positive("stride_grid entry", s, allow_zero=True) for s in stride_grid]
@@ -718,7 +710,7 @@ class Gcff(BaseEstimator):
     def fit(self, frames: Sequence[Frame]) -> Gcff:
         """Validates the parameters; with ``tune=True``, picks stride and mdl on ``frames``."""
         self._validate()
-        frames = _check_frames(frames)
+        frames = check_frames(frames)
         if self.tune:
             search = grid_search(
                 frames,
@@ -750,7 +742,7 @@ class Gcff(BaseEstimator):
     def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
         """One full partition per frame: groups in order of first member, singletons included."""
         stride, mdl = self._settings()
-        return _predict(_check_frames(frames), stride=stride, mdl=mdl, orientation=self.orientation)
+        return _predict(check_frames(frames), stride=stride, mdl=mdl, orientation=self.orientation)
 
     def predict_labels(self, frame: Frame) -> np.ndarray:
         """(n,) int64 GCFF labels of one frame (row order of ``frame.ids``)."""

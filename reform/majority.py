@@ -11,17 +11,9 @@ from collections.abc import Sequence
 
 from sklearn.base import BaseEstimator
 
-from reform.frame import Frame, Group
+from reform.frame import Frame, Group, check_frames
 
 __all__ = ["Majority"]
-
-
-def _check_frames(frames: Sequence[Frame], name: str) -> tuple[Frame, ...]:
-    frames = tuple(frames)
-    for i, frame in enumerate(frames):
-        if not isinstance(frame, Frame):
-            raise TypeError(f"{name}[{i}] must be a reform.Frame, got {type(frame).__name__}")
-    return frames
 
 
 class Majority(BaseEstimator):
@@ -38,12 +30,12 @@ class Majority(BaseEstimator):
 
     def fit(self, frames: Sequence[Frame]) -> Majority:
         """Checks ``frames`` and returns ``self`` (there is nothing to learn)."""
-        _check_frames(frames, "frames")
+        check_frames(frames)
         return self
 
     def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
         """One partition per frame: each person alone, in the frame's row order."""
-        return [tuple((int(i),) for i in frame.ids) for frame in _check_frames(frames, "frames")]
+        return [tuple((int(i),) for i in frame.ids) for frame in check_frames(frames)]
 
     def __sklearn_is_fitted__(self) -> bool:
         return True

@@ -13,21 +13,11 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from reform.frame import Frame
+from reform.frame import Frame, check_frames
 
 DEFAULT_TRAIN_FRACTION = 0.6  # share of each sequence's annotated frames used for training
 
 __all__ = ["DEFAULT_TRAIN_FRACTION", "time_blocks", "time_split"]
-
-
-def _check_frames(frames: Iterable[Frame], name: str) -> tuple[Frame, ...]:
-    frames = tuple(frames)
-    for k, frame in enumerate(frames):
-        if not isinstance(frame, Frame):
-            raise TypeError(
-                f"{name} takes reform.Frame objects, got {type(frame).__name__} at frames[{k}]"
-            )
-    return frames
 
 
 def time_split(
@@ -52,7 +42,7 @@ def time_split(
     """
     if isinstance(train_fraction, bool) or not 0.0 < float(train_fraction) < 1.0:
         raise ValueError(f"train_fraction must lie in (0, 1), got {train_fraction!r}")
-    frames = _check_frames(frames, "time_split")
+    frames = check_frames(frames, caller="time_split")
     cut_time: dict[str, float] = {}
     for sequence in dict.fromkeys(frame.sequence for frame in frames):
         times = sorted(f.time for f in frames if f.sequence == sequence and f.groups is not None)
@@ -81,7 +71,7 @@ def time_blocks(frames: Iterable[Frame], n_blocks: int = 5) -> np.ndarray:
     """
     if isinstance(n_blocks, bool) or int(n_blocks) != n_blocks or n_blocks < 2:
         raise ValueError(f"n_blocks must be an integer >= 2, got {n_blocks!r}")
-    frames = _check_frames(frames, "time_blocks")
+    frames = check_frames(frames, caller="time_blocks")
     blocks = np.zeros(len(frames), dtype=np.int64)
     sequences = np.array([frame.sequence for frame in frames], dtype=object)
     times = np.array([frame.time for frame in frames], dtype=np.float64)
