@@ -159,6 +159,14 @@ def _paper_anova(paper: Mapping[str, Any] | None, measure: str) -> str:
 # One dataset
 
 
+def _versus_paper(
+    ours: float, theirs: float | None, *, digits: int, paper_digits: int
+) -> list[str]:
+    """The paper's figure and ours minus it (missing where the paper gives none)."""
+    difference = None if theirs is None else ours - theirs
+    return [_number(theirs, paper_digits), _number(difference, digits, signed=True)]
+
+
 def _by_size_table(summary: Mapping[str, Any], style: str) -> str:
     paper = summary.get("paper")
     headers = ["size", "groups", "Tightness (m)", "sd"]
@@ -177,22 +185,20 @@ def _by_size_table(summary: Mapping[str, Any], style: str) -> str:
             _number(entry["tightness_std_m"], 3),
         ]
         if paper:
-            theirs = paper["tightness_m"].get(str(size))
-            row += [
-                _number(theirs, 2),
-                _MISSING
-                if theirs is None
-                else _number(entry["tightness_mean_m"] - theirs, 3, signed=True),
-            ]
+            row += _versus_paper(
+                entry["tightness_mean_m"],
+                paper["tightness_m"].get(str(size)),
+                digits=3,
+                paper_digits=2,
+            )
         row += [_number(entry["symmetry_mean_deg"], 1), _number(entry["symmetry_std_deg"], 1)]
         if paper:
-            theirs = paper["symmetry_deg"].get(str(size))
-            row += [
-                _number(theirs, 0),
-                _MISSING
-                if theirs is None
-                else _number(entry["symmetry_mean_deg"] - theirs, 1, signed=True),
-            ]
+            row += _versus_paper(
+                entry["symmetry_mean_deg"],
+                paper["symmetry_deg"].get(str(size)),
+                digits=1,
+                paper_digits=0,
+            )
         rows.append(row)
     return render_table(headers, rows, style=style)
 

@@ -35,13 +35,18 @@ __all__ = [
 FULL_TURN_DEG = 360.0  # degrees
 
 
-def _member_positions(positions: npt.ArrayLike) -> np.ndarray:
+def _member_positions(positions: npt.ArrayLike, *, batch: bool = False) -> np.ndarray:
+    """Checked float64 positions of one group's members, or (``batch``) of many groups'."""
     array = np.asarray(positions, dtype=np.float64)
-    if array.ndim != 2 or array.shape[1] != 2:
-        raise ValueError(f"positions must have shape (n_members, 2), got {array.shape}")
-    if array.shape[0] < 2:
+    ndim, shape, per_group = (
+        (3, "(n_groups, n_members, 2)", " per group") if batch else (2, "(n_members, 2)", "")
+    )
+    if array.ndim != ndim or array.shape[-1] != 2:
+        raise ValueError(f"positions must have shape {shape}, got {array.shape}")
+    if array.shape[-2] < 2:
         raise ValueError(
-            f"positions must hold at least 2 members (an F-formation), got {array.shape[0]}"
+            f"positions must hold at least 2 members{per_group} (an F-formation), "
+            f"got {array.shape[-2]}"
         )
     if not np.all(np.isfinite(array)):
         raise ValueError("positions must be finite, got NaN or inf")
@@ -132,20 +137,6 @@ class GroupShapes:
         }
 
 
-def _batch_positions(positions: npt.ArrayLike) -> np.ndarray:
-    array = np.asarray(positions, dtype=np.float64)
-    if array.ndim != 3 or array.shape[2] != 2:
-        raise ValueError(f"positions must have shape (n_groups, n_members, 2), got {array.shape}")
-    if array.shape[1] < 2:
-        raise ValueError(
-            f"positions must hold at least 2 members per group (an F-formation), "
-            f"got {array.shape[1]}"
-        )
-    if not np.all(np.isfinite(array)):
-        raise ValueError("positions must be finite, got NaN or inf")
-    return array
-
-
 def batch_tightness(positions: npt.ArrayLike) -> np.ndarray:
     """:func:`tightness` of many groups of the same size at once.
 
@@ -155,7 +146,7 @@ def batch_tightness(positions: npt.ArrayLike) -> np.ndarray:
     Returns:
         (n_groups,) float64 Tightness, metres.
     """
-    members = _batch_positions(positions)
+    members = _member_positions(positions, batch=True)
     offsets = members - members.mean(axis=1, keepdims=True)
     return np.sqrt((offsets * offsets).sum(axis=2)).mean(axis=1)
 
@@ -169,7 +160,7 @@ def batch_symmetry(positions: npt.ArrayLike) -> np.ndarray:
     Returns:
         (n_groups,) float64 Symmetry, degrees; zeros for pairs.
     """
-    members = _batch_positions(positions)
+    members = _member_positions(positions, batch=True)
     n_groups, n = members.shape[:2]
     if n == 2:
         return np.zeros(n_groups, dtype=np.float64)
