@@ -56,7 +56,6 @@ _EXPORTS = {
     "GROUPS_ROOT": "sim.recording._groups",
     "TRUTH": "sim.recording._groups",
     "LoggedGroups": "sim.recording._groups",
-    "evaluate_detector": "sim.recording._groups",
     "log_groups": "sim.recording._groups",
     "EVENTS_ENTITY": "sim.recording._metrics",
     "METRICS_ROOT": "sim.recording._metrics",

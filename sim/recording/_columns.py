@@ -26,6 +26,7 @@ __all__ = [
     "at_height",
     "line_strips_column",
     "ragged_arange",
+    "send_rows",
     "slices_equal",
     "value_columns",
     "vectors",
@@ -420,6 +421,28 @@ def line_strips_column(
     return rr.ComponentColumn(
         rr.LineStrips3D.descriptor_strips(), _ArrowBatch(strips), lengths=frame_lengths
     )
+
+
+def send_rows(
+    rec: rr.RecordingStream,
+    entity: str,
+    defaults: Any,
+    times: Sequence[rr.TimeColumn],
+    columns: Iterable[Any],
+) -> None:
+    """Logs ``columns`` on ``entity``, one row per time, after its static ``defaults``.
+
+    Args:
+        rec: the recording stream.
+        entity: the entity path.
+        defaults: an archetype of the components every row shares (radii, colours, fill
+            mode), logged once as static; None for none.
+        times: the rows' time columns (``Clock.columns``).
+        columns: the time-varying component columns.
+    """
+    if defaults is not None:
+        rec.log(entity, defaults, static=True)
+    rec.send_columns(entity, indexes=times, columns=columns, strict=True)
 
 
 def at_height(position: np.ndarray, z: float) -> np.ndarray:

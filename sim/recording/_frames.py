@@ -31,6 +31,7 @@ from sim.recording._columns import (
     annotation_context,
     at_height,
     line_strips_column,
+    send_rows,
     value_columns,
     vectors,
 )
@@ -186,6 +187,7 @@ def log_frames(
     flat = FrameColumns.coerce(frames)
     clock = Clock.from_columns(flat) if clock is None else clock
     rows = clock.rows_of_columns(flat)
+    times = clock.columns(rows)
     seen = None if observed is None else FrameColumns.coerce(observed)
     people = PersonIndex.of(flat, *(() if seen is None else (seen,)))
     log_world_setup(rec)
@@ -198,13 +200,23 @@ def log_frames(
         if robot and not np.any(mask):
             continue
         part = flat.select(mask)
-        _log_agents(rec, root, part, people, clock.columns(rows), robot=robot, shapes=shapes)
+        person_ids = value_columns(part.counts, person_id=part.ids)
+        _log_agents(rec, root, part, people, times, person_ids, robot=robot, shapes=shapes)
         if trail_s > 0:
-            _log_trails(rec, f"{root}/trails", part, clock, rows, people, trail_s=trail_s)
+            strips = _trails(part, clock, rows, people, trail_s=trail_s)
+            send_rows(
+                rec,
+                f"{root}/trails",
+                rr.LineStrips3D.from_fields(radii=[TRAIL_RADIUS_M], colors=[_colours.TRAIL]),
+                times,
+                [strips, *person_ids],
+            )
         if robot and field_of_view is not None:
-            _log_field_of_view(rec, part, clock.columns(rows), field_of_view)
+            _log_field_of_view(rec, part, times, field_of_view)
     if seen is not None:
-        _log_observed(rec, seen, clock, people)
+        _log_observed(
+            rec, seen, clock.columns(clock.rows_of_columns(seen, what="observed")), people
+        )
     return clock
 
 
@@ -214,6 +226,7 @@ def _log_agents(
     part: FrameColumns,
     people: PersonIndex,
     times: list[rr.TimeColumn],
+    person_ids: list[rr.ComponentColumn],
     *,
     robot: bool,
     shapes: bool,
@@ -225,32 +238,32 @@ def _log_agents(
     n = part.ids.size
     class_ids = people.class_ids(part.ids)
     if shapes:
-        rec.log(f"{root}/bodies", rr.Capsules3D.from_fields(show_labels=False), static=True)
-        rec.send_columns(
+        send_rows(
+            rec,
             f"{root}/bodies",
-            indexes=times,
-            columns=[
+            rr.Capsules3D.from_fields(show_labels=False),
+            times,
+            [
                 *rr.Capsules3D.columns(
                     lengths=np.full(n, height - 2.0 * radius, dtype=np.float32),
                     radii=np.full(n, radius, dtype=np.float32),
                     translations=at_height(part.position, radius),
                     class_ids=class_ids,
                 ).partition(part.counts),
-                *value_columns(part.counts, person_id=part.ids),
+                *person_ids,
             ],
-            strict=True,
         )
-    rec.log(f"{root}/labels", rr.Points3D.from_fields(radii=[LABEL_RADIUS_M]), static=True)
-    rec.send_columns(
+    send_rows(
+        rec,
         f"{root}/labels",
-        indexes=times,
-        columns=[
+        rr.Points3D.from_fields(radii=[LABEL_RADIUS_M]),
+        times,
+        [
             *rr.Points3D.columns(
                 positions=at_height(part.position, height + LABEL_CLEARANCE_M), class_ids=class_ids
             ).partition(part.counts),
-            *value_columns(part.counts, person_id=part.ids),
+            *person_ids,
         ],
-        strict=True,
     )
     _log_arrows(
         rec,
@@ -286,28 +299,25 @@ def _log_arrows(
     times: list[rr.TimeColumn],
     colour: tuple[int, int, int, int],
 ) -> None:
-    rec.log(entity, rr.Arrows3D.from_fields(colors=[colour], radii=[ARROW_RADIUS_M]), static=True)
-    rec.send_columns(
+    send_rows(
+        rec,
         entity,
-        indexes=times,
-        columns=rr.Arrows3D.columns(origins=origins, vectors=vectors(yaw, length)).partition(
-            counts
-        ),
-        strict=True,
+        rr.Arrows3D.from_fields(colors=[colour], radii=[ARROW_RADIUS_M]),
+        times,
+        rr.Arrows3D.columns(origins=origins, vectors=vectors(yaw, length)).partition(counts),
     )
 
 
-def _log_trails(
-    rec: rr.RecordingStream,
-    entity: str,
+def _trails(
     part: FrameColumns,
     clock: Clock,
     rows: np.ndarray,
     people: PersonIndex,
     *,
     trail_s: float,
-) -> None:
-    """Each person's path over the last ``trail_s`` seconds of their sequence, as a line strip."""
+) -> rr.ComponentColumn:
+    """Each person's path over the last ``trail_s`` seconds of their sequence: one line strip
+    per person and frame."""
     n_frames = part.counts.size
     sim_time = clock.sim_time[rows]
     # Dense (frame, person) table of the trail's points, as drawn (float32, at the trails'
@@ -343,20 +353,7 @@ def _log_trails(
     # One 12-byte item per point: taking whole points at once is several times faster.
     points = dense.reshape(-1, 3).view(np.dtype((np.void, 12))).reshape(-1)
     flat_points = np.take(points, picked).view(np.float32).reshape(-1, 3)
-    rec.log(
-        entity,
-        rr.LineStrips3D.from_fields(radii=[TRAIL_RADIUS_M], colors=[_colours.TRAIL]),
-        static=True,
-    )
-    rec.send_columns(
-        entity,
-        indexes=clock.columns(rows),
-        columns=[
-            line_strips_column(flat_points, strip_lengths, part.counts),
-            *value_columns(part.counts, person_id=part.ids),
-        ],
-        strict=True,
-    )
+    return line_strips_column(flat_points, strip_lengths, part.counts)
 
 
 def _log_field_of_view(
@@ -378,50 +375,39 @@ def _log_field_of_view(
     x = apex[:, 0:1] + radii[None, :] * np.cos(angles)
     y = apex[:, 1:2] + radii[None, :] * np.sin(angles)
     points = np.stack([x, y, np.full_like(x, ROBOT_HEAD_Z_M)], axis=-1).reshape(-1, 3)
-    entity = f"{ROBOT_ROOT}/field_of_view"
-    rec.log(
-        entity,
+    send_rows(
+        rec,
+        f"{ROBOT_ROOT}/field_of_view",
         rr.LineStrips3D.from_fields(colors=[_colours.FIELD_OF_VIEW], radii=[0.01]),
-        static=True,
-    )
-    rec.send_columns(
-        entity,
-        indexes=times,
-        columns=[line_strips_column(points, np.full(robots.ids.size, radii.size), robots.counts)],
-        strict=True,
+        times,
+        [line_strips_column(points, np.full(robots.ids.size, radii.size), robots.counts)],
     )
 
 
 def _log_observed(
     rec: rr.RecordingStream,
     flat: FrameColumns,
-    clock: Clock,
+    times: list[rr.TimeColumn],
     people: PersonIndex,
 ) -> None:
-    rows = clock.rows_of_columns(flat, what="observed")
     humans = flat.select(~flat.robot)
-    times = clock.columns(rows)
-    rec.log(
+    at = at_height(humans.position, OBSERVED_Z_M)
+    send_rows(
+        rec,
         f"{OBSERVED_ROOT}/people",
         rr.Points3D.from_fields(radii=[OBSERVED_RADIUS_M], colors=[_colours.OBSERVED]),
-        static=True,
-    )
-    rec.send_columns(
-        f"{OBSERVED_ROOT}/people",
-        indexes=times,
-        columns=[
-            *rr.Points3D.columns(
-                positions=at_height(humans.position, OBSERVED_Z_M),
-                class_ids=people.class_ids(humans.ids),
-            ).partition(humans.counts),
+        times,
+        [
+            *rr.Points3D.columns(positions=at, class_ids=people.class_ids(humans.ids)).partition(
+                humans.counts
+            ),
             *value_columns(humans.counts, person_id=humans.ids),
         ],
-        strict=True,
     )
     _log_arrows(
         rec,
         f"{OBSERVED_ROOT}/body_facing",
-        origins=at_height(humans.position, OBSERVED_Z_M),
+        origins=at,
         yaw=humans.yaw,
         length=BODY_ARROW_M,
         counts=humans.counts,

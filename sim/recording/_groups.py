@@ -28,7 +28,7 @@ from __future__ import annotations
 import functools
 import itertools
 import weakref
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,10 +42,11 @@ from sim.recording._columns import (
     annotation_context,
     at_height,
     ragged_arange,
+    send_rows,
     slices_equal,
     value_columns,
 )
-from sim.recording._timeline import Clock, time_keys
+from sim.recording._timeline import Clock
 
 __all__ = [
     "GROUPS_ROOT",
@@ -53,7 +54,6 @@ __all__ = [
     "GroupLayout",
     "LoggedGroups",
     "Stretches",
-    "evaluate_detector",
     "group_tracks",
     "log_groups",
     "stretches",
@@ -391,24 +391,6 @@ class LoggedGroups:
     rows: np.ndarray
     evaluation: Evaluation | None = None
 
-    @functools.cached_property
-    def frame_keys(self) -> tuple[tuple[str, int], ...]:
-        """(sequence, time in microseconds) of each frame."""
-        keys = time_keys(self.columns.time).tolist()
-        return tuple(zip(self.columns.sequence, keys, strict=True))
-
-    def track_map(self) -> dict[tuple[str, int, frozenset[int]], int]:
-        """(sequence, time in microseconds, members) -> track."""
-        return {
-            (*self.frame_keys[f], self.layout.sets[s]): int(t)
-            for f, s, t in zip(
-                self.layout.group_frame.tolist(),
-                self.layout.group_set.tolist(),
-                self.tracks.tolist(),
-                strict=True,
-            )
-        }
-
 
 def _locate(columns: FrameColumns, member_frame: np.ndarray, member_id: np.ndarray) -> np.ndarray:
     """(n,) int64 row of each (frame, person id) in the columns, -1 when absent."""
@@ -496,6 +478,13 @@ class Stretches:
     fresh: np.ndarray
     head: np.ndarray
 
+    def changes(self) -> Iterator[tuple[int, int]]:
+        """Each fresh frame in order, with the fresh frame whose F-formations the frame before
+        it holds (-1 at the start of a sequence)."""
+        for i in np.flatnonzero(self.fresh).tolist():
+            p = int(self.previous[i])
+            yield int(self.processed[i]), int(self.head[p]) if p >= 0 else -1
+
 
 def stretches(
     layout: GroupLayout, segment: np.ndarray, fixed: np.ndarray | None = None
@@ -555,26 +544,17 @@ def group_tracks(
     tracks = np.zeros(n_ff, dtype=np.int64)
     next_track = max(first_track, int(fixed.max(initial=-1)) + 1)
     runs = stretches(layout, segment, fixed)
-    processed, previous, fresh, head = runs.processed, runs.previous, runs.fresh, runs.head
     starts = layout.group_starts.tolist()
     sets, group_set, imposed = layout.sets, layout.group_set.tolist(), fixed.tolist()
-    state: dict[int, list[tuple[frozenset[int], int]]] = {}
-    for i in np.flatnonzero(fresh).tolist():
-        f, p = int(processed[i]), int(previous[i])
-        before = state[int(head[p])] if p >= 0 else []
+    state: dict[int, list[tuple[frozenset[int], int]]] = {-1: []}
+    for f, before_frame in runs.changes():
+        before = state[before_frame]
         rows = range(starts[f], starts[f + 1])
         used = {imposed[r] for r in rows if imposed[r] >= 0}
         current: list[tuple[frozenset[int], int]] = []
         for r in rows:
             members = sets[group_set[r]]
-            track = imposed[r] if imposed[r] >= 0 else None
-            if track is None:
-                for old, old_track in before:
-                    if old_track not in used and 2 * len(members & old) > max(
-                        len(members), len(old)
-                    ):
-                        track = old_track
-                        break
+            track = imposed[r] if imposed[r] >= 0 else _continued(members, before, used)
             if track is None:
                 track = next_track
                 next_track += 1
@@ -582,22 +562,24 @@ def group_tracks(
             tracks[r] = track
             current.append((members, track))
         state[f] = current
-    repeat = processed[~fresh]
+    repeat = runs.processed[~runs.fresh]
     if repeat.size:
         lengths = layout.group_counts[repeat]
         local = ragged_arange(lengths)
-        source = np.repeat(layout.group_starts[head[repeat]], lengths) + local
+        source = np.repeat(layout.group_starts[runs.head[repeat]], lengths) + local
         tracks[np.repeat(layout.group_starts[repeat], lengths) + local] = tracks[source]
     return tracks
 
 
-def evaluate_detector(
-    frames: Sequence[Frame], partitions: Sequence[Partition]
-) -> Evaluation | None:
-    """``reform.evaluate`` at T = 2/3 (and 1), or None when no frame carries ground truth."""
-    if not any(f.groups is not None for f in frames):
-        return None
-    return evaluate(frames, partitions)
+def _continued(
+    members: frozenset[int], before: list[tuple[frozenset[int], int]], used: set[int]
+) -> int | None:
+    """The track of the first group of ``before`` (members, track) whose track is not ``used``
+    and that shares a strict majority of the larger group with ``members``; None for none."""
+    for old, track in before:
+        if track not in used and 2 * len(members & old) > max(len(members), len(old)):
+            return track
+    return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -728,6 +710,7 @@ def log_groups(
 
     fixed = None
     matches = None
+    true_layout = None
     if not is_truth:
         if evaluation is None and any(g is not None for g in columns.groups):
             if columns.frames is None:
@@ -756,7 +739,8 @@ def log_groups(
     )
     times = clock.columns(rows)
     person_class = np.append(tracks, 0)[layout.group_of_person]  # -1 (alone) picks the 0
-    rec.log(
+    send_rows(
+        rec,
         f"{root}/members",
         rr.Cylinders3D.from_fields(
             lengths=[DISC_HEIGHT_M],
@@ -764,12 +748,8 @@ def log_groups(
             fill_mode=rr.components.FillMode.Solid,
             show_labels=False,
         ),
-        static=True,
-    )
-    rec.send_columns(
-        f"{root}/members",
-        indexes=times,
-        columns=[
+        times,
+        [
             *rr.Cylinders3D.columns(
                 centers=at_height(layout.person_position, z),
                 class_ids=person_class.astype(np.uint16),
@@ -778,23 +758,19 @@ def log_groups(
                 layout.counts, person_id=layout.person_id, group_index=layout.person_group
             ),
         ],
-        strict=True,
     )
-    group_counts = layout.group_counts
-    rec.log(
+    group_class = tracks.astype(np.uint16)
+    send_rows(
+        rec,
         f"{root}/centres",
         rr.Points3D.from_fields(radii=[CENTRE_RADIUS_M], show_labels=False),
-        static=True,
+        times,
+        rr.Points3D.columns(
+            positions=at_height(layout.group_centre, z + 0.005), class_ids=group_class
+        ).partition(layout.group_counts),
     )
-    rec.send_columns(
-        f"{root}/centres",
-        indexes=times,
-        columns=rr.Points3D.columns(
-            positions=at_height(layout.group_centre, z + 0.005), class_ids=tracks.astype(np.uint16)
-        ).partition(group_counts),
-        strict=True,
-    )
-    rec.log(
+    send_rows(
+        rec,
         f"{root}/circles",
         rr.Cylinders3D.from_fields(
             lengths=[RING_HEIGHT_M],
@@ -802,20 +778,15 @@ def log_groups(
             fill_mode=rr.components.FillMode.MajorWireframe,
             show_labels=False,
         ),
-        static=True,
-    )
-    rec.send_columns(
-        f"{root}/circles",
-        indexes=times,
-        columns=rr.Cylinders3D.columns(
+        times,
+        rr.Cylinders3D.columns(
             centers=at_height(layout.group_centre, z + RING_HEIGHT_M / 2),
             radii=np.maximum(layout.group_radius, MIN_CIRCLE_M).astype(np.float32),
-            class_ids=tracks.astype(np.uint16),
-        ).partition(group_counts),
-        strict=True,
+            class_ids=group_class,
+        ).partition(layout.group_counts),
     )
     if matches is not None:
-        _log_mistakes(rec, root, layout, GroupLayout.truth(columns), matches, times, z=z)
+        _log_mistakes(rec, root, layout, true_layout, matches, times, z=z)
     return LoggedGroups(
         layout=layout,
         tracks=tracks,
@@ -944,17 +915,16 @@ def _log_mistakes(
         times=times,
         z=z,
     )
-    entity = f"{root}/mistakes/wrong_members"
-    rec.log(entity, rr.Points3D.from_fields(radii=[WRONG_MEMBER_RADIUS_M]), static=True)
-    rec.send_columns(
-        entity,
-        indexes=times,
-        columns=rr.Points3D.columns(
+    send_rows(
+        rec,
+        f"{root}/mistakes/wrong_members",
+        rr.Points3D.from_fields(radii=[WRONG_MEMBER_RADIUS_M]),
+        times,
+        rr.Points3D.columns(
             positions=at_height(position, WRONG_MEMBER_Z_M),
             labels=wrong_label,
             colors=wrong_colour.reshape(-1, 4),
         ).partition(wrong_counts),
-        strict=True,
     )
 
 
@@ -979,7 +949,8 @@ def _log_rings(
     z: float,
 ) -> None:
     rings = np.maximum(radii, MIN_CIRCLE_M) + MISTAKE_MARGIN_M
-    rec.log(
+    send_rows(
+        rec,
         entity,
         rr.Cylinders3D.from_fields(
             lengths=[RING_HEIGHT_M],
@@ -987,15 +958,10 @@ def _log_rings(
             colors=[colour],
             fill_mode=rr.components.FillMode.MajorWireframe,
         ),
-        static=True,
-    )
-    rec.send_columns(
-        entity,
-        indexes=times,
-        columns=rr.Cylinders3D.columns(
+        times,
+        rr.Cylinders3D.columns(
             centers=at_height(centres, z + RING_HEIGHT_M),
             radii=rings.astype(np.float32),
             labels=labels,
         ).partition(counts),
-        strict=True,
     )

@@ -143,16 +143,13 @@ def group_events(truth: LoggedGroups) -> list[Event]:
     Events happen only where the F-formations change, so only those frames are visited.
     """
     layout, tracks, columns = truth.layout, truth.tracks, truth.columns
-    runs = stretches(layout, columns.segment)
-    processed, previous, fresh, head = runs.processed, runs.previous, runs.fresh, runs.head
     starts = layout.group_starts.tolist()
     keys, track_list = layout.group_key.tolist(), tracks.tolist()
     sorted_members = [tuple(sorted(members)) for members in layout.members_table]
-    alive_at: dict[int, dict[int, tuple[int, ...]]] = {}
+    alive_at: dict[int, dict[int, tuple[int, ...]]] = {-1: {}}
     events: list[Event] = []
-    for i in np.flatnonzero(fresh).tolist():
-        f, p = int(processed[i]), int(previous[i])
-        alive = alive_at[int(head[p])] if p >= 0 else {}
+    for f, before in stretches(layout, columns.segment).changes():
+        alive = alive_at[before]
         now = {track_list[r]: sorted_members[keys[r]] for r in range(starts[f], starts[f + 1])}
         alive_at[f] = now
         time, sequence = float(columns.time[f]), columns.sequence[f]
