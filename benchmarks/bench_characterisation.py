@@ -12,12 +12,10 @@ over frames with the same number of people) against a loop of ``frame_pair_featu
 from __future__ import annotations
 
 import argparse
-import os
-import statistics
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import default_datasets, median_seconds
 
 from reform.calibration import PAIR_FEATURES, pair_feature_samples
 from reform.characterisation import characterise, symmetry, tightness
@@ -42,21 +40,9 @@ def loop_pairs(frames) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(features), np.concatenate(labels)
 
 
-def median_seconds(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    default = os.environ.get(
-        "REFORM_SIM_DATASETS", str(Path(__file__).resolve().parents[2] / "shared" / "datasets")
-    )
-    parser.add_argument("--datasets", default=default)
+    parser.add_argument("--datasets", default=default_datasets())
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     frames = load_salsa(Path(args.datasets) / "salsa").annotated()

@@ -14,9 +14,10 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import time
 
 import numpy as np
+from circles import circle, wrap_yaws
+from timing import timed
 
 from reform.gcff import MAX_REFITS, VISIBILITY_BASE, VISIBILITY_COSINE, energy, gcff_labels
 
@@ -37,16 +38,18 @@ def scene(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         size = int(min(rng.integers(1, 6), n - len(position)))
         centre = GRID_SPACING_M * np.array([cell % side, cell // side], dtype=float)
         cell += 1
-        radius = 0.45 + 0.12 * size
-        phase = rng.uniform(0.0, 2.0 * math.pi)
-        for m in range(size):
-            a = phase + 2.0 * math.pi * m / size + rng.normal(0.0, 0.15)
-            p = centre + radius * np.array([math.cos(a), math.sin(a)]) + rng.normal(0.0, 0.05, 2)
-            facing = math.atan2(*(centre - p)[::-1]) + rng.normal(0.0, 0.2)
-            position.append(p)
-            yaw.append(facing if size > 1 else rng.uniform(-math.pi, math.pi))
-    yaw = (np.asarray(yaw) + math.pi) % (2.0 * math.pi) - math.pi
-    return np.asarray(position), yaw
+        members, facing = circle(
+            rng,
+            centre=centre,
+            size=size,
+            radius=0.45 + 0.12 * size,
+            angle_sd=0.15,
+            position_sd=0.05,
+            yaw_sd=0.2,
+        )
+        position += members
+        yaw += facing
+    return np.asarray(position), wrap_yaws(yaw)
 
 
 def loop_gcff(position_m: np.ndarray, yaw: np.ndarray) -> np.ndarray:
@@ -107,15 +110,7 @@ def loop_gcff(position_m: np.ndarray, yaw: np.ndarray) -> np.ndarray:
 
 def per_frame_seconds(fn, scenes, repeats: int) -> float:
     """Median over scenes of the best of ``repeats`` runs, seconds per frame."""
-    times = []
-    for position, yaw in scenes:
-        best = math.inf
-        for _ in range(repeats):
-            start = time.perf_counter()
-            fn(position, yaw)
-            best = min(best, time.perf_counter() - start)
-        times.append(best)
-    return statistics.median(times)
+    return statistics.median(timed(fn, repeats, args=people).best for people in scenes)
 
 
 def main() -> None:

@@ -11,11 +11,10 @@ Prints medians and ratios (loader / baseline).
 from __future__ import annotations
 
 import argparse
-import os
-import statistics
 import tempfile
-import time
 from pathlib import Path
+
+from timing import default_datasets, median_seconds
 
 from reform.datasets import load_babble, load_salsa, read_parquet, write_parquet
 
@@ -38,21 +37,9 @@ def parse_floor_babble(folder: Path) -> int:
     return n + len((folder / "annotated-frames.csv").read_text().splitlines())
 
 
-def median_seconds(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    default = os.environ.get(
-        "REFORM_SIM_DATASETS", str(Path(__file__).resolve().parents[2] / "shared" / "datasets")
-    )
-    parser.add_argument("--datasets", default=default)
+    parser.add_argument("--datasets", default=default_datasets())
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     root = Path(args.datasets)

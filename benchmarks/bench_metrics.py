@@ -10,12 +10,10 @@ process on the same predictions, and the two must agree. Prints medians and thei
 from __future__ import annotations
 
 import argparse
-import os
-import statistics
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import default_datasets, median_seconds
 
 from reform import T_ONE, T_TWO_THIRDS, evaluate
 from reform.datasets import load_salsa
@@ -70,19 +68,9 @@ def read_partitions(path: Path):
     return out
 
 
-def median_seconds(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    default = os.environ.get("REFORM_SIM_DATASETS", "../shared/datasets")
-    parser.add_argument("--datasets", default=default, help="folder holding salsa/")
+    parser.add_argument("--datasets", default=default_datasets(), help="folder holding salsa/")
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
     datasets = Path(args.datasets)

@@ -61,6 +61,7 @@ from typing import Any
 
 import numpy as np
 import rerun as rr
+from timing import timed
 
 from reform import Frame, Gcff, Reform, evaluate
 from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
@@ -88,23 +89,10 @@ GOAL = 0.20  # logging may cost at most this fraction of simulating
 ROBOT_OPTIONS = {"robot": "watch"}  # the Directions Robot watches from a corner
 
 
-def timed(function: Callable[[], Any], repeats: int) -> tuple[float, float, Any]:
-    """(median seconds of ``repeats`` calls, seconds of the first call, last result)."""
-    times, result = [], None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        result = function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), times[0], result
-
-
-def warm_timed(function: Callable[[], Any], repeats: int) -> tuple[float, float, Any]:
-    """(median of ``repeats`` calls after a warm-up call, seconds of the warm-up, result)."""
-    start = time.perf_counter()
-    function()
-    first = time.perf_counter() - start
-    median, _, result = timed(function, repeats)
-    return median, first, result
+def warm_timed(function: Callable[[], Any], repeats: int) -> tuple[float, float]:
+    """(median seconds of ``repeats`` calls after a warm-up call, seconds of the warm-up)."""
+    first = timed(function, 1).first
+    return timed(function, repeats).median, first
 
 
 def detect(frames: Sequence[Frame], reform: Reform) -> tuple[dict[str, list], dict[str, float]]:
@@ -209,8 +197,10 @@ def bench_rate(
 ) -> dict[str, float]:
     """Prints the figures of one frame rate; returns the ratios that have a goal."""
     kwargs = {"seed": seed, "duration": DURATION_S, "rate": rate}
-    t_sim, _, episode = timed(lambda: simulate_episode(SCENARIO, **kwargs), repeats)
-    t_blocks, _, blocks = timed(lambda: list(episode_blocks(SCENARIO, **kwargs)), repeats)
+    simulated = timed(lambda: simulate_episode(SCENARIO, **kwargs), repeats)
+    rolled = timed(lambda: list(episode_blocks(SCENARIO, **kwargs)), repeats)
+    t_sim, episode = simulated.median, simulated.result
+    t_blocks, blocks = rolled.median, rolled.result
     world, events = episode.truth, episode.events
     minutes = len(world) / rate / 60.0
     people = sorted({int(i) for f in world for i in f.ids})
@@ -222,7 +212,7 @@ def bench_rate(
     print(f"  bare rollout, episode_blocks (pose blocks, no Frames)  {t_blocks:7.3f} s")
 
     path = tmp / f"truth-{rate:g}.rrd"
-    t_log, t_first, _ = warm_timed(
+    t_log, t_first = warm_timed(
         lambda: record_episode(path, world, events=events, seed=seed), repeats
     )
     size = path.stat().st_size
@@ -232,7 +222,7 @@ def bench_rate(
         f"ratio {ratio:.3f} of simulate_episode ({verdict(ratio)}), "
         f"{t_log / t_blocks:.3f} of the bare rollout; warm-up call {t_first:.3f} s"
     )
-    t_cols, _, _ = warm_timed(
+    t_cols, _ = warm_timed(
         lambda: record_episode(
             tmp / "blocks.rrd", FrameColumns.from_blocks(blocks), events=events, seed=seed
         ),
@@ -248,11 +238,11 @@ def bench_rate(
     evaluations = {name: evaluate(world, partitions) for name, partitions in found.items()}
     t_score = time.perf_counter() - start
     detections_path = tmp / f"detections-{rate:g}.rrd"
-    t_det_scored, _, _ = warm_timed(
+    t_det_scored, _ = warm_timed(
         lambda: record_episode(detections_path, world, detections=found, events=events, seed=seed),
         repeats,
     )
-    t_det_given, _, _ = warm_timed(
+    t_det_given, _ = warm_timed(
         lambda: record_episode(
             detections_path,
             world,
@@ -277,11 +267,12 @@ def bench_rate(
         print(f"  {label:53s}{seconds:7.3f} s   ratio {r:.3f} of simulate_episode ({verdict(r)})")
 
     robot_kwargs = {**kwargs, "view": "robot", "options": ROBOT_OPTIONS}
-    t_robot_sim, _, robot = timed(lambda: simulate_episode(SCENARIO, **robot_kwargs), repeats)
+    robot_run = timed(lambda: simulate_episode(SCENARIO, **robot_kwargs), repeats)
+    t_robot_sim, robot = robot_run.median, robot_run.result
     observed = robot.dataset.frames
     robot_found, robot_detect = detect(observed, reform)
     robot_path = tmp / f"robot-{rate:g}.rrd"
-    t_robot, _, _ = warm_timed(
+    t_robot, _ = warm_timed(
         lambda: record_episode(
             robot_path,
             robot.truth,

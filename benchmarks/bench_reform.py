@@ -23,12 +23,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import statistics
 import time
 from pathlib import Path
 
 import numpy as np
+from circles import circle, wrap_yaws
+from timing import default_datasets, timed_each
 
 import reform
 from reform import Frame, Reform, greedy_reconstruction, relation_matrix, time_split
@@ -43,7 +44,6 @@ GRID_SPACING_M = 3.0  # metres between circle centres
 TARGET_SINGLE_MS = 0.5  # milliseconds, Bagged Trees, 18 people
 TARGET_BATCH_FPS = 50_000  # frames per second, Bagged Trees, 18 people
 BATCH_SECONDS = 1.0  # aim for batches that take about this long
-REPO = Path(__file__).resolve().parents[1]
 
 
 def scene(rng: np.random.Generator, n: int) -> Frame:
@@ -58,21 +58,22 @@ def scene(rng: np.random.Generator, n: int) -> Frame:
         k += 1
         centre = GRID_SPACING_M * np.array([cell % side, cell // side], dtype=float)
         centre += rng.normal(0.0, 0.3, 2) + (k // cells.size) * 0.9
-        radius = 0.45 + 0.1 * size
-        phase = rng.uniform(0.0, 2.0 * math.pi)
-        for m in range(size):
-            a = phase + 2.0 * math.pi * m / size + rng.normal(0.0, 0.2)
-            p = centre + radius * np.array([math.cos(a), math.sin(a)]) + rng.normal(0.0, 0.08, 2)
-            facing = math.atan2(*(centre - p)[::-1]) + rng.normal(0.0, 0.35)
-            position.append(p)
-            yaw.append(facing if size > 1 else rng.uniform(-math.pi, math.pi))
-    yaw = (np.asarray(yaw) + math.pi) % (2.0 * math.pi) - math.pi
-    return Frame(ids=np.arange(1, n + 1), position=np.asarray(position), yaw=yaw)
+        members, facing = circle(
+            rng,
+            centre=centre,
+            size=size,
+            radius=0.45 + 0.1 * size,
+            angle_sd=0.2,
+            position_sd=0.08,
+            yaw_sd=0.35,
+        )
+        position += members
+        yaw += facing
+    return Frame(ids=np.arange(1, n + 1), position=np.asarray(position), yaw=wrap_yaws(yaw))
 
 
 def training_frames() -> tuple[tuple[Frame, ...], str]:
-    configured = os.environ.get("REFORM_SIM_DATASETS")
-    root = Path(configured) if configured else REPO.parent / "shared" / "datasets"
+    root = Path(default_datasets())
     if (root / "salsa").is_dir():
         salsa = reform.load_dataset(root / "salsa")
         train, _ = time_split(salsa.annotated())
@@ -116,15 +117,6 @@ def naive_predict(model: Reform, frame: Frame):
     return tuple(tuple(int(frame.ids[r]) for r in group) for group in rows)
 
 
-def median_seconds(call, items) -> float:
-    times = []
-    for item in items:
-        start = time.perf_counter()
-        call(item)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def bench(model: Reform, n: int, quick: bool) -> dict:
     rng = np.random.default_rng(SEED + n)
     k_naive = 15 if quick else 40
@@ -133,8 +125,8 @@ def bench(model: Reform, n: int, quick: bool) -> dict:
     model.predict(frames[:3])  # warm-up (the compiled classifier is built at fit)
 
     naive_out = [naive_predict(model, f) for f in frames[:k_naive]]
-    naive_s = median_seconds(lambda f: naive_predict(model, f), frames[:k_naive])
-    single_s = median_seconds(lambda f: model.predict([f]), frames[:k_single])
+    naive_s = timed_each(lambda f: naive_predict(model, f), frames[:k_naive]).median
+    single_s = timed_each(lambda f: model.predict([f]), frames[:k_single]).median
     fast_out = model.predict(frames[:k_naive])
     identical_frames = sum(a == b for a, b in zip(naive_out, fast_out, strict=True))
 

@@ -14,10 +14,10 @@ end to end (``run_stress("small", jobs=1)``).
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 
 import numpy as np
+from timing import median_seconds
 
 from reform import evaluate
 from reform.bootstrap import bootstrap_weights, frame_intervals
@@ -27,12 +27,8 @@ from sim.stress import DETECTORS, GRIDS, run_stress, train_detectors, training_f
 
 
 def _median(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.process_time()
-        function()
-        times.append(time.process_time() - start)
-    return statistics.median(times)
+    """Median CPU seconds of ``repeats`` calls."""
+    return median_seconds(function, repeats, clock=time.process_time)
 
 
 def main() -> None:
