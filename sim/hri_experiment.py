@@ -59,12 +59,14 @@ from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
 from sim.sensor import Sensor
 from sim.stress import (
-    GRIDS,
+    DETECTOR_LABELS,
+    THRESHOLDS,
     TRACKER_DROPOUT,
     TRACKER_POSITION_NOISE_M,
     TRACKER_YAW_NOISE_RAD,
     StressGrid,
     episode_seed,
+    resolve_grid,
     train_detectors,
     training_frames,
 )
@@ -76,10 +78,12 @@ __all__ = [
     "HriDetector",
     "HriExperiment",
     "HriRow",
+    "baseline_detectors",
     "hri_detectors",
     "hri_episodes",
     "hri_experiment",
     "record_scenes",
+    "reform_detectors",
 ]
 
 HRI_SCENARIOS = ("hri-conversation", "hri-robot-excluded", "hri-passing")
@@ -120,11 +124,11 @@ REFERENCE_MDL_M2 = 1.0  # square metres: the reference code's default mdl = 1000
 DEFAULT_SEEDS = 10  # episodes per scenario
 _ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.stress uses 0-3)
 _ROLE_HRI_BOOTSTRAP = 5
-THRESHOLDS = ("2/3", "1")
-_CLASSIFIER_TEXT = {
-    WEIGHTED_KNN: "weighted KNN",
-    BAGGED_TREES: "bagged trees",
-    LOGISTIC_REGRESSION: "logistic regression",
+CLASSIFIERS = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION)
+# Training data of REFORM: key suffix -> (label suffix, "trained on" column).
+_TRAINING = {
+    "salsa": ("SALSA-trained", "SALSA train"),
+    "synthetic": ("synthetic-trained", "synthetic"),
 }
 
 
@@ -136,6 +140,42 @@ class HriDetector:
     label: str
     training: str
     detector: Any
+
+
+def reform_detectors(fitted: Mapping[str, Any], *, training: str) -> list[HriDetector]:
+    """REFORM with each fitted classifier of ``fitted`` (classifier name -> fitted
+    ``reform.Reform``), trained on ``training`` (``"salsa"`` or ``"synthetic"``), in order."""
+    if training not in _TRAINING:
+        raise ValueError(f"training must be one of {tuple(_TRAINING)}, got {training!r}")
+    label, trained_on = _TRAINING[training]
+    return [
+        HriDetector(f"{name}@{training}", f"{DETECTOR_LABELS[name]}, {label}", trained_on, model)
+        for name, model in fitted.items()
+    ]
+
+
+def baseline_detectors(*, reference: bool = True) -> list[HriDetector]:
+    """The untrained detectors: GCFF at the paper's setting, at the reference code's default
+    (with ``reference``) and the majority baseline."""
+    out = [
+        HriDetector(
+            "gcff@paper",
+            "GCFF, paper setting (70 cm, 30000 cm²)",
+            "-",
+            Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
+        )
+    ]
+    if reference:
+        out.append(
+            HriDetector(
+                "gcff@reference",
+                "GCFF, reference default (70 cm, 10000 cm²)",
+                "-",
+                Gcff(stride=PAPER_STRIDE_M, mdl=REFERENCE_MDL_M2),
+            )
+        )
+    out.append(HriDetector("majority", "Majority (no groups)", "-", Majority()))
+    return out
 
 
 def hri_episodes(
@@ -204,30 +244,18 @@ def hri_detectors(
     say = progress or (lambda _line: None)
     detectors: list[HriDetector] = []
     info: dict[str, Any] = {}
-    classifiers = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION)
     if salsa is not None:
         annotated = [f for f in salsa if f.groups is not None]
         train, _ = time_split(annotated, train_fraction)
         say(f"training REFORM on the SALSA training split ({len(train)} frames)")
-        fitted = train_detectors(train, jobs=jobs, names=classifiers)
-        for name in classifiers:
-            detectors.append(
-                HriDetector(
-                    f"{name}@salsa",
-                    f"REFORM {_CLASSIFIER_TEXT[name]}, SALSA-trained",
-                    "SALSA train",
-                    fitted[name],
-                )
-            )
+        fitted = train_detectors(train, jobs=jobs, names=CLASSIFIERS)
+        detectors += reform_detectors(fitted, training="salsa")
         info["salsa"] = {
             "frames": len(train),
             "train_fraction": train_fraction,
             "pairs": fitted[WEIGHTED_KNN].training_summary_["pairs"],
         }
-    if isinstance(grid, str):
-        if grid not in GRIDS:
-            raise ValueError(f"grid must be one of {tuple(GRIDS)} or a StressGrid, got {grid!r}")
-        grid = GRIDS[grid]
+    _, grid = resolve_grid(grid)
     say(
         f"simulating the synthetic training set ({grid.train_episodes} episodes each of mingle "
         "and word-improv)"
@@ -240,16 +268,8 @@ def hri_detectors(
         jobs=jobs,
     )
     say(f"training REFORM on the synthetic training set ({len(synthetic)} frames)")
-    fitted = train_detectors(synthetic, jobs=jobs, names=classifiers)
-    for name in classifiers:
-        detectors.append(
-            HriDetector(
-                f"{name}@synthetic",
-                f"REFORM {_CLASSIFIER_TEXT[name]}, synthetic-trained",
-                "synthetic",
-                fitted[name],
-            )
-        )
+    fitted = train_detectors(synthetic, jobs=jobs, names=CLASSIFIERS)
+    detectors += reform_detectors(fitted, training="synthetic")
     info["synthetic"] = {
         "frames": len(synthetic),
         "episodes_per_scenario": grid.train_episodes,
@@ -258,21 +278,7 @@ def hri_detectors(
         "pairs": fitted[WEIGHTED_KNN].training_summary_["pairs"],
         "seed": seed,
     }
-    detectors += [
-        HriDetector(
-            "gcff@paper",
-            "GCFF, paper setting (70 cm, 30000 cm²)",
-            "-",
-            Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
-        ),
-        HriDetector(
-            "gcff@reference",
-            "GCFF, reference default (70 cm, 10000 cm²)",
-            "-",
-            Gcff(stride=PAPER_STRIDE_M, mdl=REFERENCE_MDL_M2),
-        ),
-        HriDetector("majority", "Majority (no groups)", "-", Majority()),
-    ]
+    detectors += baseline_detectors()
     return detectors, info
 
 
@@ -381,17 +387,17 @@ def _micro(evaluation: Evaluation, threshold: str) -> tuple[float, float, float]
 def _rows(
     detector: HriDetector,
     view: str,
-    episodes: Mapping[str, list[tuple[Frame, ...]]],
+    frames_by: Mapping[str, Sequence[Frame]],
     *,
     seed: int,
     resamples: int,
 ) -> list[HriRow]:
-    frames_by = {s: [f for e in episodes[s] for f in e] for s in HRI_SCENARIOS}
+    """The detector's rows on one view: each scene (``frames_by[scene]``) and all pooled."""
     predictions = {s: detector.detector.predict(frames_by[s]) for s in HRI_SCENARIOS}
     out = []
     for k, scenario in enumerate((*HRI_SCENARIOS, ALL)):
         if scenario == ALL:
-            frames = [f for s in HRI_SCENARIOS for f in frames_by[s]]
+            frames = frames_by[ALL]
             predicted = [p for s in HRI_SCENARIOS for p in predictions[s]]
         else:
             frames, predicted = frames_by[scenario], predictions[scenario]
@@ -478,18 +484,14 @@ def hri_experiment(
     rows: list[HriRow] = []
     data: dict[str, dict[str, dict[str, float]]] = {}
     for view in views:
-        by_scenario = {s: episodes[s, view] for s in HRI_SCENARIOS}
-        data[view] = {
-            s: _data_summary([f for e in by_scenario[s] for f in e], len(by_scenario[s]))
-            for s in HRI_SCENARIOS
-        }
-        data[view][ALL] = _data_summary(
-            [f for s in HRI_SCENARIOS for e in by_scenario[s] for f in e],
-            sum(len(by_scenario[s]) for s in HRI_SCENARIOS),
-        )
+        runs = {s: episodes[s, view] for s in HRI_SCENARIOS}
+        frames_by = {s: [f for e in runs[s] for f in e] for s in HRI_SCENARIOS}
+        frames_by[ALL] = [f for s in HRI_SCENARIOS for f in frames_by[s]]
+        data[view] = {s: _data_summary(frames_by[s], len(runs[s])) for s in HRI_SCENARIOS}
+        data[view][ALL] = _data_summary(frames_by[ALL], sum(map(len, runs.values())))
         say(f"scoring {len(detectors)} detectors on the {view} view")
         for detector in detectors:
-            rows += _rows(detector, view, by_scenario, seed=seed, resamples=resamples)
+            rows += _rows(detector, view, frames_by, seed=seed, resamples=resamples)
     timings["scoring"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - start
     return HriExperiment(

@@ -66,6 +66,7 @@ __all__ = [
     "StressPoint",
     "StressResults",
     "episode_seed",
+    "resolve_grid",
     "run_stress",
     "train_detectors",
     "training_frames",
@@ -347,6 +348,21 @@ GRIDS: Mapping[str, StressGrid] = MappingProxyType(
 )
 
 
+def resolve_grid(grid: StressGrid | str) -> tuple[str, StressGrid]:
+    """A grid and its name: ``grid`` itself or the grid of :data:`GRIDS` it names.
+
+    Returns:
+        The name (that of the equal grid of :data:`GRIDS`, else ``"custom"``) and the grid.
+    """
+    if isinstance(grid, str):
+        if grid not in GRIDS:
+            raise ValueError(f"grid must be one of {tuple(GRIDS)} or a StressGrid, got {grid!r}")
+        return grid, GRIDS[grid]
+    if not isinstance(grid, StressGrid):
+        raise ValueError(f"grid must be a StressGrid or a name, got {type(grid).__name__}")
+    return next((n for n, g in GRIDS.items() if g == grid), "custom"), grid
+
+
 def _check_axis(axis: str) -> str:
     if axis not in AXES:
         raise ValueError(f"axis must be one of {tuple(AXES)}, got {axis!r}")
@@ -404,7 +420,8 @@ def _room_side(people: int, density: float) -> float:
     return math.ceil(math.sqrt(people / density) * 1e6) / 1e6
 
 
-def _scene_spec(grid: StressGrid, axis: str, level: Any, seed: int) -> _EpisodeSpec:
+def _scene_spec(grid: StressGrid, axis: str | None, level: Any, seed: int) -> _EpisodeSpec:
+    """The test episode of level ``level`` of scene axis ``axis`` (None: the base party)."""
     options: dict[str, Any] = {"duration": grid.duration_s}
     sensor = "truth"
     if axis == "density":
@@ -418,16 +435,6 @@ def _scene_spec(grid: StressGrid, axis: str, level: Any, seed: int) -> _EpisodeS
         sensor = str(level)
     return _EpisodeSpec(
         TEST_SCENARIO, seed, tuple(sorted(options.items())), grid.duration_s, grid.rate_hz, sensor
-    )
-
-
-def _base_spec(grid: StressGrid, seed: int) -> _EpisodeSpec:
-    return _EpisodeSpec(
-        TEST_SCENARIO,
-        seed,
-        (("duration", grid.duration_s),),
-        grid.duration_s,
-        grid.rate_hz,
     )
 
 
@@ -457,7 +464,14 @@ def training_frames(
         The annotated frames, scenario by scenario, episode by episode.
     """
     specs = _training_specs(seed, episodes, duration, rate, scenarios)
-    return tuple(f for frames in _parallel(_simulate, specs, jobs=jobs) for f in frames)
+    return _simulate_all(specs, jobs=jobs)
+
+
+def _simulate_all(
+    specs: Sequence[_EpisodeSpec], *, jobs: int | None, cpu: list[float] | None = None
+) -> tuple[Frame, ...]:
+    """The frames of every episode of ``specs``, episode after episode."""
+    return tuple(f for frames in _parallel(_simulate, specs, jobs=jobs, cpu=cpu) for f in frames)
 
 
 def _training_specs(
@@ -507,7 +521,19 @@ def train_detectors(
     unknown = [n for n in names if n not in DETECTORS]
     if unknown:
         raise ValueError(f"names must be among {DETECTORS}, got {unknown}")
-    fitted = _parallel(_fit, [(name, frames, grid) for name in names], jobs=jobs, star=True)
+    return _fit_all(frames, grid, names, jobs=jobs)
+
+
+def _fit_all(
+    frames: Sequence[Frame],
+    grid: StressGrid,
+    names: Sequence[str],
+    *,
+    jobs: int | None,
+    cpu: list[float] | None = None,
+) -> dict[str, Any]:
+    """Detector name -> ``_fit(name, frames, grid)``, the fits on ``jobs`` processes."""
+    fitted = _parallel(_fit, [(n, frames, grid) for n in names], jobs=jobs, star=True, cpu=cpu)
     return dict(zip(names, fitted, strict=True))
 
 
@@ -929,15 +955,7 @@ def run_stress(
     Returns:
         The curves with their confidence intervals, the training summary and the timings.
     """
-    grid_name = "custom"
-    if isinstance(grid, str):
-        if grid not in GRIDS:
-            raise ValueError(f"grid must be one of {tuple(GRIDS)} or a StressGrid, got {grid!r}")
-        grid_name, grid = grid, GRIDS[grid]
-    elif not isinstance(grid, StressGrid):
-        raise ValueError(f"grid must be a StressGrid or a name, got {type(grid).__name__}")
-    else:
-        grid_name = next((n for n, g in GRIDS.items() if g == grid), "custom")
+    grid_name, grid = resolve_grid(grid)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
@@ -962,12 +980,10 @@ def run_stress(
         specs = _training_specs(
             seed, grid.train_episodes, grid.train_duration_s, grid.train_rate_hz, TRAINING_SCENARIOS
         )
-        train = tuple(
-            f for frames in _parallel(_simulate, specs, jobs=jobs, cpu=cpu) for f in frames
-        )
+        train = _simulate_all(specs, jobs=jobs, cpu=cpu)
         train_seeds = {
-            name: [episode_seed(seed, _ROLE_TRAIN, s, i) for i in range(grid.train_episodes)]
-            for s, name in enumerate(TRAINING_SCENARIOS)
+            name: [spec.seed for spec in specs if spec.scenario == name]
+            for name in TRAINING_SCENARIOS
         }
         overlap = set(test_seeds) & {x for seeds in train_seeds.values() for x in seeds}
         if overlap:  # pragma: no cover - 63-bit seeds from distinct spawn keys
@@ -975,19 +991,7 @@ def run_stress(
         timings["training set"] = time.perf_counter() - t0
         say(f"training REFORM (3 classifiers) and tuning GCFF on {len(train)} frames")
         t0 = time.perf_counter()
-        detectors = dict(
-            zip(
-                DETECTORS,
-                _parallel(
-                    _fit,
-                    [(name, train, grid) for name in DETECTORS],
-                    jobs=jobs,
-                    star=True,
-                    cpu=cpu,
-                ),
-                strict=True,
-            )
-        )
+        detectors = _fit_all(train, grid, DETECTORS, jobs=jobs, cpu=cpu)
         timings["training"] = time.perf_counter() - t0
         gcff = detectors[GCFF]
         training = {
@@ -1015,9 +1019,8 @@ def run_stress(
     t0 = time.perf_counter()
     if perturb_axes:
         say(f"simulating {grid.seeds} test episode(s) of {TEST_SCENARIO}")
-        base = _parallel(
-            _simulate_scene, [_base_spec(grid, s) for s in test_seeds], jobs=jobs, cpu=cpu
-        )
+        specs = [_scene_spec(grid, None, None, s) for s in test_seeds]
+        base = _parallel(_simulate_scene, specs, jobs=jobs, cpu=cpu)
     timings["test episodes"] = time.perf_counter() - t0
 
     axis_index = {name: list(AXES).index(name) for name in names}
