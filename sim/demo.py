@@ -289,7 +289,7 @@ def run_demo(
     from reform.gcff import Gcff
     from reform.majority import Majority
     from reform.persistence import save_model
-    from reform.splits import time_split
+    from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
     from sim.episode import simulate_episode
     from sim.recording import record_episode, record_evaluation
     from sim.sim2real import balance_pairs, calibrate_tracker_noise, count_pairs, generate_sources
@@ -330,7 +330,7 @@ def run_demo(
     salsa_train: tuple[Frame, ...] = ()
     salsa_test: tuple[Frame, ...] = ()
     if "salsa" in real:
-        salsa_train, salsa_test = time_split(real["salsa"].annotated(), 0.6)
+        salsa_train, salsa_test = time_split(real["salsa"].annotated(), DEFAULT_TRAIN_FRACTION)
     noise = None
     if salsa_train and any(s.tracker_noise for s in budget.train):
         noisy_sources = [s for s in budget.train if s.tracker_noise]
@@ -424,36 +424,26 @@ def run_demo(
 
     # 6. The HRI re-enactment.
     stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
-    from sim.hri_experiment import HriDetector, hri_experiment, record_scenes
+    from sim.hri_experiment import (
+        baseline_detectors,
+        hri_experiment,
+        record_scenes,
+        reform_detectors,
+    )
 
-    hri_detectors = [
-        HriDetector(
-            f"{SAVED_CLASSIFIER}@synthetic",
-            "REFORM bagged trees, synthetic-trained",
-            "synthetic",
-            models[SAVED_CLASSIFIER],
-        )
-    ]
+    hri_detectors = reform_detectors(
+        {SAVED_CLASSIFIER: models[SAVED_CLASSIFIER]}, training="synthetic"
+    )
     if salsa_model is not None:
-        hri_detectors.append(
-            HriDetector(
-                f"{SAVED_CLASSIFIER}@salsa",
-                "REFORM bagged trees, SALSA-trained",
-                "SALSA train",
-                salsa_model,
-            )
-        )
-    hri_detectors += [
-        HriDetector("gcff@paper", "GCFF, paper setting (70 cm, 30000 cm²)", "-", gcff),
-        HriDetector("majority", "Majority (no groups)", "-", Majority()),
-    ]
+        hri_detectors += reform_detectors({SAVED_CLASSIFIER: salsa_model}, training="salsa")
+    hri_detectors += baseline_detectors(reference=False)
     # What the HRI page says about the SALSA-trained model (the synthetic one is described in
     # the demo's report: its training set is not sim.stress's).
     hri_training: dict[str, Any] = {}
     if salsa_model is not None:
         hri_training["salsa"] = {
-            "frames": len(_even(salsa_train, budget.salsa_train_frames)),
-            "train_fraction": 0.6,
+            "frames": salsa_model.training_summary_["frames"],
+            "train_fraction": DEFAULT_TRAIN_FRACTION,
             "pairs": salsa_model.training_summary_["pairs"],
         }
     hri = hri_experiment(
