@@ -2,7 +2,6 @@
 
 * :func:`score_bars`: grouped bars (one group per test set, one bar per detector) with error
   bars, e.g. F1 at T = 2/3 with bootstrap intervals;
-* :func:`curves`: scores against a stressed parameter (position noise, dropout, ...);
 * :func:`top_view`: one frame from above: people as discs with facing arrows, groups as
   rings, truth and a detector side by side.
 
@@ -23,7 +22,7 @@ import numpy as np
 from reform.atomic import atomic_path
 from reform.frame import Frame, Group
 
-__all__ = ["Bar", "curves", "score_bars", "top_view"]
+__all__ = ["Bar", "score_bars", "top_view"]
 
 DPI = 110  # dots per inch of the PNG files
 WIDTH_IN = 8.0  # inches, figure width
@@ -121,51 +120,6 @@ def score_bars(
         unique.values(), unique.keys(), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0)
     )
     ax.grid(axis="y", alpha=0.3)
-    return _save(fig, path)
-
-
-def curves(
-    x: Sequence[float],
-    series: Mapping[str, Sequence[float]],
-    path: str | os.PathLike[str],
-    *,
-    xlabel: str,
-    ylabel: str,
-    title: str = "",
-    bands: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
-) -> Path:
-    """Lines of scores against a parameter, with optional shaded intervals.
-
-    Args:
-        x: (k,) parameter values.
-        series: name -> (k,) values.
-        path: the PNG file to write.
-        xlabel, ylabel: axis names with units.
-        title: figure title.
-        bands: name -> ((k,) low, (k,) high), shaded around that series.
-
-    Returns:
-        The path written.
-    """
-    xs = np.asarray(x, dtype=np.float64)
-    if xs.ndim != 1 or xs.size == 0:
-        raise ValueError(f"x must be a non-empty 1-D sequence, got shape {xs.shape}")
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(WIDTH_IN * 0.62, 3.4))
-    for name, values in series.items():
-        ys = np.asarray(values, dtype=np.float64)
-        if ys.shape != xs.shape:
-            raise ValueError(f"series[{name!r}] must have shape {xs.shape}, got {ys.shape}")
-        (line,) = ax.plot(xs, ys, marker="o", markersize=3, label=name)
-        if bands and name in bands:
-            low, high = (np.asarray(b, dtype=np.float64) for b in bands[name])
-            ax.fill_between(xs, low, high, color=line.get_color(), alpha=0.15, linewidth=0)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    if title:
-        ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
     return _save(fig, path)
 
 
