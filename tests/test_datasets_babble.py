@@ -166,54 +166,39 @@ def test_truncated_line(babble_dir, tmp_path):
         load_babble(folder)
 
 
-def test_nan_value(babble_dir, tmp_path):
-    folder, lines, annotations = _copy(babble_dir, tmp_path)
-    _set_field(lines, 4, 14, "NaN")  # participant 2, TorsoX
-    _write(folder, lines, annotations)
-    with pytest.raises(
-        DataFormatError,
-        match=(
+@pytest.mark.parametrize(
+    ("line", "field", "value", "message"),
+    [
+        pytest.param(
+            4,
+            14,
+            "NaN",
             r"line 4 \(frame 3\), participant 2"
-            r": field 'TorsoX': expected a finite number, found 'NaN'"
+            r": field 'TorsoX': expected a finite number, found 'NaN'",
+            id="nan-value",  # participant 2, TorsoX
         ),
-    ):
-        load_babble(folder)
-
-
-def test_angle_in_degrees(babble_dir, tmp_path):
-    folder, lines, annotations = _copy(babble_dir, tmp_path)
-    _set_field(lines, 3, 6, "-5.0")  # participant 1, TorsoRotation written in degrees
-    _write(folder, lines, annotations)
-    with pytest.raises(
-        DataFormatError,
-        match=(
+        pytest.param(
+            3,
+            6,
+            "-5.0",
             r"line 3 \(frame 2\), participant 1"
-            r": field 'TorsoRotation': expected an angle in radians.*degrees.*-5.0"
+            r": field 'TorsoRotation': expected an angle in radians.*degrees.*-5.0",
+            id="angle-in-degrees",  # participant 1, TorsoRotation written in degrees
         ),
-    ):
-        load_babble(folder)
-
-
-def test_duplicate_participant(babble_dir, tmp_path):
+        pytest.param(
+            2,
+            10,
+            "1",
+            r"line 2 \(frame 1\): field 'Name': .*found id 1 twice",
+            id="duplicate-participant",  # block 2 named participant 1
+        ),
+    ],
+)
+def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
     folder, lines, annotations = _copy(babble_dir, tmp_path)
-    _set_field(lines, 2, 10, "1")  # block 2 named participant 1
+    _set_field(lines, line, field, value)
     _write(folder, lines, annotations)
-    with pytest.raises(
-        DataFormatError, match=r"line 2 \(frame 1\): field 'Name': .*found id 1 twice"
-    ):
-        load_babble(folder)
-
-
-def test_conflicting_duplicate_annotation(babble_dir, tmp_path):
-    folder, lines, _ = _copy(babble_dir, tmp_path)
-    _write(folder, lines, ["16,{[1 2 3]}", "16,{[1 2]}"])
-    with pytest.raises(
-        DataFormatError,
-        match=(
-            r"annotated-frames.csv: line 2 \(frame 16\)"
-            r": field 'groups': expected the groups of line 1"
-        ),
-    ):
+    with pytest.raises(DataFormatError, match=message):
         load_babble(folder)
 
 
@@ -223,35 +208,36 @@ def test_identical_duplicate_annotation_is_counted(babble_dir, tmp_path):
     assert load_babble(folder).metadata["report"]["annotation_lines_duplicated"] == 1
 
 
-def test_group_member_absent(babble_dir, tmp_path):
-    folder, lines, _ = _copy(babble_dir, tmp_path)
-    _write(folder, lines, ["16,{[1 2 9]}"])
-    with pytest.raises(
-        DataFormatError,
-        match=(
-            r"line 1 \(frame 16\)"
-            r": field 'group 1': expected members present .*found participant 9"
+@pytest.mark.parametrize(
+    ("annotations", "message"),
+    [
+        pytest.param(
+            ["16,{[1 2 3]}", "16,{[1 2]}"],
+            r"annotated-frames.csv: line 2 \(frame 16\)"
+            r": field 'groups': expected the groups of line 1",
+            id="conflicting-duplicate",
         ),
-    ):
-        load_babble(folder)
-
-
-def test_annotation_of_a_frame_beyond_the_recording(babble_dir, tmp_path):
+        pytest.param(
+            ["16,{[1 2 9]}"],
+            r"line 1 \(frame 16\): field 'group 1': expected members present .*found participant 9",
+            id="group-member-absent",
+        ),
+        pytest.param(
+            ["16,{[1 2]}", "999,{[1 2]}"],
+            r"line 2 \(frame 999\): field 'frame': expected a frame number in 1..20",
+            id="frame-beyond-the-recording",
+        ),
+        pytest.param(
+            ["16,{[1 2 3"],
+            r"annotated-frames.csv: line 1: expected N,\{\[id id",
+            id="malformed-line",
+        ),
+    ],
+)
+def test_bad_annotations(babble_dir, tmp_path, annotations, message):
     folder, lines, _ = _copy(babble_dir, tmp_path)
-    _write(folder, lines, ["16,{[1 2]}", "999,{[1 2]}"])
-    with pytest.raises(
-        DataFormatError,
-        match=r"line 2 \(frame 999\): field 'frame': expected a frame number in 1..20",
-    ):
-        load_babble(folder)
-
-
-def test_malformed_annotation_line(babble_dir, tmp_path):
-    folder, lines, _ = _copy(babble_dir, tmp_path)
-    _write(folder, lines, ["16,{[1 2 3"])
-    with pytest.raises(
-        DataFormatError, match=r"annotated-frames.csv: line 1: expected N,\{\[id id"
-    ):
+    _write(folder, lines, annotations)
+    with pytest.raises(DataFormatError, match=message):
         load_babble(folder)
 
 

@@ -192,74 +192,75 @@ def test_wrong_column_count(tmp_path):
         load_gcff(folder)
 
 
-def test_nan_and_inf(tmp_path):
+@pytest.mark.parametrize(
+    ("row", "column", "value", "message"),
+    [
+        pytest.param(
+            1,
+            2,
+            np.nan,
+            r"frame 1, row 2: field 'y': expected a finite number, found nan",
+            id="nan",
+        ),
+        pytest.param(
+            2,
+            3,
+            np.inf,
+            r"frame 1, row 3: field 'θ': expected a finite number, found inf",
+            id="inf",
+        ),
+        pytest.param(
+            0,
+            3,
+            90.0,
+            r"frame 1, row 1 \(ID 1\): field 'θ': expected radians .*degrees.*found 90.0",
+            id="degrees",
+        ),
+        pytest.param(
+            2,
+            0,
+            2,
+            r"features.mat: frame 1: field 'ID': expected ids unique .*found id 2 twice",
+            id="duplicate-ids",
+        ),
+    ],
+)
+def test_bad_feature_value(tmp_path, row, column, value, message):
     bad = FEATURES[0].copy()
-    bad[1, 2] = np.nan
-    folder = _write(tmp_path / "nan", features=[bad, FEATURES[1], FEATURES[2]])
-    with pytest.raises(
-        DataFormatError, match=r"frame 1, row 2: field 'y': expected a finite number, found nan"
-    ):
-        load_gcff(folder)
-    bad[1, 2] = 0.0
-    bad[2, 3] = np.inf
-    folder = _write(tmp_path / "inf", features=[bad, FEATURES[1], FEATURES[2]])
-    with pytest.raises(
-        DataFormatError, match=r"frame 1, row 3: field 'θ': expected a finite number, found inf"
-    ):
+    bad[row, column] = value
+    folder = _write(tmp_path / "bad", features=[bad, FEATURES[1], FEATURES[2]])
+    with pytest.raises(DataFormatError, match=message):
         load_gcff(folder)
 
 
-def test_degrees(tmp_path):
-    bad = FEATURES[0].copy()
-    bad[0, 3] = 90.0
-    folder = _write(tmp_path / "deg", features=[bad, FEATURES[1], FEATURES[2]])
-    with pytest.raises(
-        DataFormatError,
-        match=r"frame 1, row 1 \(ID 1\): field 'θ': expected radians .*degrees.*found 90.0",
-    ):
-        load_gcff(folder)
-
-
-def test_duplicate_ids(tmp_path):
-    bad = FEATURES[0].copy()
-    bad[2, 0] = 2
-    folder = _write(tmp_path / "dup", features=[bad, FEATURES[1], FEATURES[2]])
-    with pytest.raises(
-        DataFormatError,
-        match=r"features.mat: frame 1: field 'ID': expected ids unique .*found id 2 twice",
-    ):
-        load_gcff(folder)
-
-
-def test_group_member_absent(tmp_path):
-    folder = _write(tmp_path / "absent", gt_groups=[_gt([1, 5])], gt_timestamps=[10])
-    with pytest.raises(
-        DataFormatError,
-        match=(
+@pytest.mark.parametrize(
+    ("gt_groups", "gt_timestamps", "message"),
+    [
+        pytest.param(
+            [_gt([1, 5])],
+            [10],
             r"groundtruth.mat: GT frame 1 \(GTtimestamp 10\)"
-            r": field 'group 1': expected members present .*found ID 5"
+            r": field 'group 1': expected members present .*found ID 5",
+            id="group-member-absent",
         ),
-    ):
-        load_gcff(folder)
-
-
-def test_person_in_two_groups(tmp_path):
-    folder = _write(tmp_path / "twice", gt_groups=[_gt([1, 2], [2, 7])], gt_timestamps=[10])
-    with pytest.raises(
-        DataFormatError, match=r"field 'group 2': expected disjoint groups, found ID 2"
-    ):
-        load_gcff(folder)
-
-
-def test_gt_timestamp_not_in_features(tmp_path):
-    folder = _write(tmp_path / "ts", gt_groups=[_gt([1, 2])], gt_timestamps=[15])
-    with pytest.raises(
-        DataFormatError,
-        match=(
+        pytest.param(
+            [_gt([1, 2], [2, 7])],
+            [10],
+            r"field 'group 2': expected disjoint groups, found ID 2",
+            id="person-in-two-groups",
+        ),
+        pytest.param(
+            [_gt([1, 2])],
+            [15],
             r"GT frame 1 \(GTtimestamp 15\)"
-            r": field 'GTtimestamp': expected a value of features.mat's timestamp"
+            r": field 'GTtimestamp': expected a value of features.mat's timestamp",
+            id="gt-timestamp-not-in-features",
         ),
-    ):
+    ],
+)
+def test_bad_ground_truth(tmp_path, gt_groups, gt_timestamps, message):
+    folder = _write(tmp_path / "gt", gt_groups=gt_groups, gt_timestamps=gt_timestamps)
+    with pytest.raises(DataFormatError, match=message):
         load_gcff(folder)
 
 

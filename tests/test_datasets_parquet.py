@@ -251,59 +251,57 @@ def test_wrong_column_type(tmp_path):
         read_parquet(_rewrite(tmp_path, change))
 
 
-def test_nan_and_inf_positions(tmp_path):
-    path = _rewrite(tmp_path / "nan", lambda t: _set(t, "x", 5, float("nan")))
-    with pytest.raises(
-        DataFormatError,
-        match=r"bad.parquet: frame 1 \(row 5\): field 'x': expected a finite number, found nan",
-    ):
-        read_parquet(path)
-    path = _rewrite(tmp_path / "inf", lambda t: _set(t, "head_y", 0, float("inf")))
-    with pytest.raises(
-        DataFormatError,
-        match=r"frame 0 \(row 0\): field 'head_y': expected a finite number or NaN, found inf",
-    ):
-        read_parquet(path)
-
-
-def test_yaw_in_degrees(tmp_path):
-    path = _rewrite(tmp_path, lambda t: _set(t, "yaw", 4, 90.0))
-    with pytest.raises(
-        DataFormatError,
-        match=(
-            r"frame 1 \(row 4\)"
-            r": field 'yaw': expected radians in \[-pi, pi\].*degrees.*found 90.0"
+@pytest.mark.parametrize(
+    ("column", "row", "value", "message"),
+    [
+        pytest.param(
+            "x",
+            5,
+            float("nan"),
+            r"bad.parquet: frame 1 \(row 5\): field 'x': expected a finite number, found nan",
+            id="nan-position",
         ),
-    ):
-        read_parquet(path)
-
-
-def test_duplicate_ids_in_a_frame(tmp_path):
-    path = _rewrite(tmp_path, lambda t: _set(t, "person_id", 1, 5))
-    with pytest.raises(
-        DataFormatError,
-        match=(
+        pytest.param(
+            "head_y",
+            0,
+            float("inf"),
+            r"frame 0 \(row 0\): field 'head_y': expected a finite number or NaN, found inf",
+            id="inf-head-position",
+        ),
+        pytest.param(
+            "yaw",
+            4,
+            90.0,
+            r"frame 1 \(row 4\): field 'yaw': expected radians in \[-pi, pi\].*degrees.*found 90.0",
+            id="yaw-in-degrees",
+        ),
+        pytest.param(
+            "person_id",
+            1,
+            5,
             r"bad.parquet: frame 0 \(rows 0..3\)"
-            r": field 'frame': .*ids must be unique within a frame"
+            r": field 'frame': .*ids must be unique within a frame",
+            id="duplicate-ids-in-a-frame",
         ),
-    ):
-        read_parquet(path)
-
-
-def test_null_in_a_required_column(tmp_path):
-    path = _rewrite(tmp_path, lambda t: _set(t, "x", 0, None))
-    with pytest.raises(
-        DataFormatError, match=r"frame 0 \(rows 0..3\): field 'x': expected a value on every row"
-    ):
-        read_parquet(path)
-
-
-def test_group_indices_with_a_gap(tmp_path):
-    path = _rewrite(tmp_path, lambda t: _set(t, "group", 3, 5))
-    with pytest.raises(
-        DataFormatError,
-        match=r"frame 0 \(rows 0..3\): field 'group': expected indices 0..5, each used",
-    ):
+        pytest.param(
+            "x",
+            0,
+            None,
+            r"frame 0 \(rows 0..3\): field 'x': expected a value on every row",
+            id="null-in-a-required-column",
+        ),
+        pytest.param(
+            "group",
+            3,
+            5,
+            r"frame 0 \(rows 0..3\): field 'group': expected indices 0..5, each used",
+            id="group-indices-with-a-gap",
+        ),
+    ],
+)
+def test_bad_value(tmp_path, column, row, value, message):
+    path = _rewrite(tmp_path, lambda t: _set(t, column, row, value))
+    with pytest.raises(DataFormatError, match=message):
         read_parquet(path)
 
 

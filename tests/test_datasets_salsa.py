@@ -149,75 +149,74 @@ def test_truncated_feature_line(salsa_dir, tmp_path):
         load_salsa(folder)
 
 
-def test_nan_and_inf_values(salsa_dir, tmp_path):
+@pytest.mark.parametrize(
+    ("line", "token", "value", "message"),
+    [
+        pytest.param(
+            3,
+            2,
+            "nan",
+            r"line 3, person 1: field 'x': expected a finite number, found 'nan'",
+            id="nan",
+        ),
+        pytest.param(3, 9, "inf", r"line 3, person 2: field 'body': .*found 'inf'", id="inf"),
+        pytest.param(
+            1,
+            4,
+            "135.0",
+            r"line 1, person 1: field 'body': expected an angle in radians.*degrees.*135",
+            id="angle-in-degrees",  # person 1's body angle written in degrees
+        ),
+    ],
+)
+def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
     features, groups = _copy_head(salsa_dir, tmp_path)
-    tokens = features[2].split(" ")
-    tokens[2] = "nan"
-    features[2] = " ".join(tokens)
-    folder = _write(tmp_path / "nan", features, groups)
-    with pytest.raises(
-        DataFormatError, match=r"line 3, person 1: field 'x': expected a finite number, found 'nan'"
-    ):
-        load_salsa(folder)
-    tokens[2] = "9.2"
-    tokens[9] = "inf"
-    features[2] = " ".join(tokens)
-    folder = _write(tmp_path / "inf", features, groups)
-    with pytest.raises(DataFormatError, match=r"line 3, person 2: field 'body': .*found 'inf'"):
-        load_salsa(folder)
-
-
-def test_non_numeric_token(tmp_path):
-    folder = _write(tmp_path, ["0.2 ID_001 1.0 abc 0.1 0.2"], ["0.2 < ID_001 >"])
-    with pytest.raises(
-        DataFormatError, match=r"line 1, person 1: field 'y': expected a number, found 'abc'"
-    ):
-        load_salsa(folder)
-
-
-def test_bad_id_token(tmp_path):
-    folder = _write(tmp_path, ["0.2 PERSON1 1.0 2.0 0.1 0.2"], ["0.2 < ID_001 >"])
-    with pytest.raises(
-        DataFormatError, match=r"line 1: field 'ID': expected a token ID_<number>, found 'PERSON1'"
-    ):
-        load_salsa(folder)
-
-
-def test_duplicate_ids_in_a_frame(tmp_path):
-    folder = _write(tmp_path, [f"0.2 {_person(1)} {_person(1)}"], ["0.2 < ID_001 >"])
-    with pytest.raises(
-        DataFormatError, match=r"features.txt: line 1: field 'ID': .*found id 1 twice"
-    ):
-        load_salsa(folder)
-
-
-def test_group_member_absent_from_frame(tmp_path):
-    folder = _write(tmp_path, [f"0.2 {_person(1)} {_person(2)}"], ["0.2 < ID_001 ID_007 >"])
-    with pytest.raises(
-        DataFormatError, match=r"group_names.txt: line 1 \(t=0.2\): field 'group 1': .*found ID 7"
-    ):
-        load_salsa(folder)
-
-
-def test_person_in_two_groups(tmp_path):
-    people = " ".join(_person(i) for i in (1, 2, 3))
-    folder = _write(tmp_path, [f"0.2 {people}"], ["0.2 < ID_001 ID_002 > < ID_002 ID_003 >"])
-    with pytest.raises(
-        DataFormatError, match=r"field 'group 2': expected disjoint groups, found ID 2"
-    ):
-        load_salsa(folder)
-
-
-def test_angles_in_degrees(salsa_dir, tmp_path):
-    features, groups = _copy_head(salsa_dir, tmp_path)
-    tokens = features[0].split(" ")
-    tokens[4] = "135.0"  # person 1's body angle written in degrees
-    features[0] = " ".join(tokens)
+    tokens = features[line - 1].split(" ")
+    tokens[token] = value
+    features[line - 1] = " ".join(tokens)
     folder = _write(tmp_path, features, groups)
-    with pytest.raises(
-        DataFormatError,
-        match=r"line 1, person 1: field 'body': expected an angle in radians.*degrees.*135",
-    ):
+    with pytest.raises(DataFormatError, match=message):
+        load_salsa(folder)
+
+
+@pytest.mark.parametrize(
+    ("features", "groups", "message"),
+    [
+        pytest.param(
+            ["0.2 ID_001 1.0 abc 0.1 0.2"],
+            ["0.2 < ID_001 >"],
+            r"line 1, person 1: field 'y': expected a number, found 'abc'",
+            id="non-numeric-token",
+        ),
+        pytest.param(
+            ["0.2 PERSON1 1.0 2.0 0.1 0.2"],
+            ["0.2 < ID_001 >"],
+            r"line 1: field 'ID': expected a token ID_<number>, found 'PERSON1'",
+            id="bad-id-token",
+        ),
+        pytest.param(
+            [f"0.2 {_person(1)} {_person(1)}"],
+            ["0.2 < ID_001 >"],
+            r"features.txt: line 1: field 'ID': .*found id 1 twice",
+            id="duplicate-ids-in-a-frame",
+        ),
+        pytest.param(
+            [f"0.2 {_person(1)} {_person(2)}"],
+            ["0.2 < ID_001 ID_007 >"],
+            r"group_names.txt: line 1 \(t=0.2\): field 'group 1': .*found ID 7",
+            id="group-member-absent-from-frame",
+        ),
+        pytest.param(
+            [f"0.2 {' '.join(_person(i) for i in (1, 2, 3))}"],
+            ["0.2 < ID_001 ID_002 > < ID_002 ID_003 >"],
+            r"field 'group 2': expected disjoint groups, found ID 2",
+            id="person-in-two-groups",
+        ),
+    ],
+)
+def test_bad_small_file(tmp_path, features, groups, message):
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(DataFormatError, match=message):
         load_salsa(folder)
 
 
