@@ -72,19 +72,11 @@ def salsa_frames(salsa_dataset):
 
 
 @pytest.fixture(scope="module")
-def reference_dir(shared_datasets) -> Path:
-    path = shared_datasets.parent / "reference" / "gcff-reference"
-    if not path.is_dir():
-        pytest.skip(f"GCFF reference partitions not found at {path}")
-    return path
-
-
-@pytest.fixture(scope="module")
-def reference_runs(salsa_frames, reference_dir):
+def reference_runs(salsa_frames, gcff_reference_dir):
     """Our predictions and the reference's, per reference file (computed once)."""
     runs = {}
     for name, spec in REFERENCE.items():
-        reference = read_reference(reference_dir / name)
+        reference = read_reference(gcff_reference_dir / name)
         predictions = Gcff(**spec["params"]).predict(salsa_frames)
         runs[name] = (reference, predictions)
     return runs
@@ -195,7 +187,11 @@ def test_someone_on_a_centre_gives_finite_costs():
     cap = gcff_module.VISIBILITY_BASE**gcff_module.MAX_VISIBILITY_EXPONENT
     assert costs[2, 0] == pytest.approx(cap)  # 225 cm² of distance vanish beside 1e200
     assert costs[0, 0] == pytest.approx(225.0)  # person 0 is in front: no penalty
-    assert len(label_sets(gcff_labels(position_cm, yaw, stride=35.0, mdl=1e6, units="cm"))) >= 1
+    # The run ends with everyone in one group, centred at (50, 11.7) cm: 1e6 cm² of label cost
+    # plus ~1,267 cm² of distances, and nobody hides anyone from there (cosines 0.23 and < 0);
+    # any split costs at least one more label, 1e6 cm².
+    labels = gcff_labels(position_cm, yaw, stride=35.0, mdl=1e6, units="cm")
+    assert label_sets(labels) == {frozenset({0, 1, 2})}
 
 
 def test_empty_and_single_person_frames():
@@ -246,12 +242,17 @@ def test_output_is_a_partition_and_energy_never_increases(scene):
         labels = renumbered
 
 
+def singleton_costs(frame, *, stride_cm: float, mdl_cm2: float):
+    """A frame's unary costs (centimetres) with everyone their own label, and those labels."""
+    position_cm = frame.position * 100
+    points = segment_points(position_cm, frame.yaw, stride=stride_cm)
+    labels = np.arange(frame.n_people)
+    return unary_costs(points, position_cm, labels, mdl=mdl_cm2), labels
+
+
 def test_energy_never_increases_on_salsa(salsa_frames):
     for frame in salsa_frames[::50]:
-        position_cm = frame.position * 100
-        points = segment_points(position_cm, frame.yaw, stride=70.0)
-        labels = np.arange(frame.n_people)
-        costs = unary_costs(points, position_cm, labels, mdl=10_000.0)
+        costs, labels = singleton_costs(frame, stride_cm=70.0, mdl_cm2=10_000.0)
         result = alpha_expansion(costs, labels, label_cost=10_000.0)
         assert len(result.energies) > 1  # singletons always merge on SALSA
         assert np.all(np.diff(result.energies) <= 0)
@@ -286,10 +287,7 @@ def sequential_expansion(costs, labels, cost):
 def test_alpha_expansion_matches_one_move_at_a_time(salsa_frames):
     """The windowed, vectorised sweep equals the plain sequential one (spec, step 4)."""
     for frame in salsa_frames[::40]:
-        position_cm = frame.position * 100
-        points = segment_points(position_cm, frame.yaw, stride=50.0)
-        labels = np.arange(frame.n_people)
-        costs = unary_costs(points, position_cm, labels, mdl=20_000.0)
+        costs, labels = singleton_costs(frame, stride_cm=50.0, mdl_cm2=20_000.0)
         fast = alpha_expansion(costs, labels, label_cost=20_000.0).labels
         np.testing.assert_array_equal(fast, sequential_expansion(costs, labels, 20_000.0))
 
