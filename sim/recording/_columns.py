@@ -146,30 +146,11 @@ class FrameColumns:
         ``sim.episode.episode_blocks`` yields them), equal to ``FrameColumns.of`` of the frames
         the blocks hold (``Poses.frames()``), without making those frames.
         """
-        from sim.world import restrict_groups
-
         parts: list[FrameColumns] = []
         for block in blocks:
             present = np.asarray(block.present, dtype=bool)
             rows, agents = np.nonzero(present)
             n_rows = present.shape[0]
-            changed = np.ones(n_rows, dtype=bool)
-            changed[1:] = np.any(present[1:] != present[:-1], axis=1)
-            groups: list[tuple[Group, ...] | None] = []
-            last: tuple[Any, tuple[Group, ...] | None] = (None, None)
-            for row, declared in enumerate(block.groups):
-                if declared is None:
-                    groups.append(None)
-                    last = (None, None)
-                    continue
-                if (
-                    changed[row]
-                    or last[0] is None
-                    or not (declared is last[0] or declared == last[0])
-                ):
-                    present_ids = set(block.ids[present[row]].tolist())
-                    last = (declared, restrict_groups(declared, present_ids))
-                groups.append(last[1])
             counts = present.sum(axis=1).astype(np.int64)
             robot = np.array([k == ROBOT for k in block.kinds], dtype=bool)
             parts.append(
@@ -184,7 +165,7 @@ class FrameColumns:
                     head_yaw=np.asarray(block.head_yaw, dtype=np.float64)[rows, agents],
                     time=np.asarray(block.time, dtype=np.float64),
                     sequence=(str(block.sequence),) * n_rows,
-                    groups=tuple(groups),
+                    groups=_present_groups(block, present),
                 )
             )
         return cls.concatenate(parts)
@@ -275,6 +256,30 @@ class FrameColumns:
             sequence=self.sequence,
             groups=self.groups,
         )
+
+
+def _present_groups(block: Any, present: np.ndarray) -> tuple[tuple[Group, ...] | None, ...]:
+    """Each row's declared groups of a pose block restricted to the agents present (None where
+    not annotated), worked out again only where the groups or the people present change."""
+    from sim.world import restrict_groups
+
+    changed = np.ones(present.shape[0], dtype=bool)
+    changed[1:] = np.any(present[1:] != present[:-1], axis=1)
+    groups: list[tuple[Group, ...] | None] = []
+    declared_before: Any = None
+    restricted: tuple[Group, ...] | None = None
+    for row, declared in enumerate(block.groups):
+        if declared is None:
+            restricted = None
+        elif (
+            changed[row]
+            or declared_before is None
+            or not (declared is declared_before or declared == declared_before)
+        ):
+            restricted = restrict_groups(declared, set(block.ids[present[row]].tolist()))
+        declared_before = declared
+        groups.append(restricted)
+    return tuple(groups)
 
 
 def _concatenate(arrays: Sequence[np.ndarray], empty: tuple[int, ...], dtype: Any) -> np.ndarray:

@@ -21,6 +21,7 @@ import rerun as rr
 
 from reform import T_TWO_THIRDS, Evaluation
 from sim.recording import _colours
+from sim.recording._columns import send_rows
 from sim.recording._groups import TRUTH, LoggedGroups, stretches
 from sim.recording._timeline import FRAME_TIMELINE, SIM_TIME_TIMELINE, Clock
 
@@ -36,7 +37,7 @@ __all__ = [
 
 METRICS_ROOT = "metrics"
 EVENTS_ENTITY = "events"
-SCORES = ("precision", "recall", "f1")
+SCORES = {"precision": "P̄", "recall": "R̄", "f1": "F1"}  # entity name -> label
 INFO = "INFO"
 
 
@@ -100,17 +101,17 @@ def log_running_scores(
         recall = np.cumsum(scores.frame_recall) / count
         total = precision + recall
         f1 = np.divide(2.0 * precision * recall, total, out=np.zeros_like(total), where=total > 0)
-        rows = clock.rows_at(evaluation.sequence, evaluation.time, what=f"{name} frames")
+        times = clock.columns(
+            clock.rows_at(evaluation.sequence, evaluation.time, what=f"{name} frames")
+        )
         colour = _colours.series_colour(index)
-        for score, values in zip(SCORES, (precision, recall, f1), strict=True):
-            entity = f"{METRICS_ROOT}/{score}/{name}"
-            label = {"precision": "P̄", "recall": "R̄", "f1": "F1"}[score]
-            rec.log(entity, rr.SeriesLines(colors=[colour], names=[f"{name} {label}"]), static=True)
-            rec.send_columns(
-                entity,
-                indexes=clock.columns(rows),
-                columns=rr.Scalars.columns(scalars=values),
-                strict=True,
+        for (score, label), values in zip(SCORES.items(), (precision, recall, f1), strict=True):
+            send_rows(
+                rec,
+                f"{METRICS_ROOT}/{score}/{name}",
+                rr.SeriesLines(colors=[colour], names=[f"{name} {label}"]),
+                times,
+                rr.Scalars.columns(scalars=values),
             )
 
 
@@ -123,17 +124,12 @@ def log_group_counts(
         has_partition = layout.counts > 0
         rows = tree.rows[has_partition]
         colour = _colours.TRUTH_SERIES if name == TRUTH else _colours.series_colour(index - 1)
-        entity = f"{METRICS_ROOT}/groups/{name}"
-        rec.log(
-            entity, rr.SeriesLines(colors=[colour], names=[f"{name} F-formations"]), static=True
-        )
-        rec.send_columns(
-            entity,
-            indexes=clock.columns(rows),
-            columns=rr.Scalars.columns(
-                scalars=layout.group_counts[has_partition].astype(np.float64)
-            ),
-            strict=True,
+        send_rows(
+            rec,
+            f"{METRICS_ROOT}/groups/{name}",
+            rr.SeriesLines(colors=[colour], names=[f"{name} F-formations"]),
+            clock.columns(rows),
+            rr.Scalars.columns(scalars=layout.group_counts[has_partition].astype(np.float64)),
         )
 
 
@@ -200,15 +196,16 @@ def log_events(rec: rr.RecordingStream, events: Iterable[object], *, clock: Cloc
         return 0
     order = np.argsort(np.asarray(sim_times), kind="stable")
     rows = np.asarray(rows_, dtype=np.int64)[order]
-    rec.send_columns(
+    send_rows(
+        rec,
         EVENTS_ENTITY,
-        indexes=[
+        None,
+        [
             rr.TimeColumn(FRAME_TIMELINE, sequence=rows),
             rr.TimeColumn(SIM_TIME_TIMELINE, duration=np.asarray(sim_times)[order]),
         ],
-        columns=rr.TextLog.columns(
+        rr.TextLog.columns(
             text=[texts[k] for k in order.tolist()], level=[levels[k] for k in order.tolist()]
         ),
-        strict=True,
     )
     return len(texts)

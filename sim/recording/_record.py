@@ -17,11 +17,7 @@ from sim.recording._blueprint import default_blueprint
 from sim.recording._columns import FrameColumns
 from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
 from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
-from sim.recording._groups import (
-    TRUTH,
-    LoggedGroups,
-    log_groups,
-)
+from sim.recording._groups import TRUTH, log_groups
 from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
 from sim.recording._scene import (
     BodyPoses,
@@ -69,14 +65,13 @@ def _with_truth(observed: FrameColumns, world: FrameColumns, clock: Clock) -> Fr
     missing = [f for f, groups in enumerate(observed.groups) if groups is None]
     if not missing:
         return observed
+    from sim.world import restrict_groups
+
     world_truth = dict(zip(clock.rows_of_columns(world).tolist(), world.groups, strict=True))
     rows = clock.rows_of_columns(observed, what="observed")
     groups = list(observed.groups)
     for f in missing:
-        truth = world_truth.get(int(rows[f]))
-        if truth is not None:
-            seen = set(observed.ids_of(f).tolist())
-            groups[f] = tuple(kept for g in truth if (kept := tuple(m for m in g if m in seen)))
+        groups[f] = restrict_groups(world_truth.get(int(rows[f])), set(observed.ids_of(f).tolist()))
     frames = observed.frames
     if frames is not None:
         frames = tuple(
@@ -86,21 +81,26 @@ def _with_truth(observed: FrameColumns, world: FrameColumns, clock: Clock) -> Fr
     return dataclasses.replace(observed, groups=tuple(groups), frames=frames)
 
 
-def _log_detectors(
+def _log_groups_and_scores(
     rec: rr.RecordingStream,
-    frames: FrameColumns,
+    world: FrameColumns,
+    detected_on: FrameColumns,
     detections: Mapping[str, Sequence[Partition]],
     evaluations: Mapping[str, Evaluation] | None,
+    events: Iterable[object],
     *,
     clock: Clock,
-    truth: LoggedGroups | None,
-) -> tuple[dict[str, LoggedGroups], dict[str, Evaluation]]:
-    trees: dict[str, LoggedGroups] = {}
-    scored: dict[str, Evaluation] = {}
+) -> dict[str, Evaluation]:
+    """The truth tree (where ``world`` is annotated), one tree per detector (on
+    ``detected_on``), group counts, running scores, and ``events`` with the true groups
+    forming and dissolving; returns the detectors' evaluations."""
+    annotated = any(groups is not None for groups in world.groups)
+    truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
+    trees = {} if truth is None else {TRUTH: truth}
     for index, (name, partitions) in enumerate(detections.items()):
         trees[name] = log_groups(
             rec,
-            frames,
+            detected_on,
             list(partitions),
             name=name,
             clock=clock,
@@ -108,9 +108,15 @@ def _log_detectors(
             truth=truth,
             layer=index + 1,
         )
-        if trees[name].evaluation is not None:
-            scored[name] = trees[name].evaluation
-    return trees, scored
+    scored = {
+        name: tree.evaluation
+        for name, tree in trees.items()
+        if name != TRUTH and tree.evaluation is not None
+    }
+    log_group_counts(rec, trees, clock=clock)
+    log_running_scores(rec, scored, clock=clock)
+    log_events(rec, [*events, *(() if truth is None else group_events(truth))], clock=clock)
+    return scored
 
 
 def record_episode(
@@ -192,18 +198,9 @@ def record_episode(
             log_room(rec, bounds)
         for camera in cameras:
             log_camera_images(rec, camera, clock=clock)
-        truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
-        trees, scored = _log_detectors(
-            rec, detected_on, detections, evaluations, clock=clock, truth=truth
+        scored = _log_groups_and_scores(
+            rec, world, detected_on, detections, evaluations, events or (), clock=clock
         )
-        if truth is not None:
-            trees = {TRUTH: truth, **trees}
-        log_group_counts(rec, trees, clock=clock)
-        log_running_scores(rec, scored, clock=clock)
-        all_events = list(events or ())
-        if truth is not None:
-            all_events.extend(group_events(truth))
-        log_events(rec, all_events, clock=clock)
     return Recorded(
         recording_id=recording_id(name, seed=seed), n_frames=len(world), evaluations=scored
     )
@@ -261,16 +258,9 @@ def record_evaluation(
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         clock = log_frames(rec, columns, field_of_view=None)
         log_room(rec, bounds)
-        truth = log_groups(rec, columns, name=TRUTH, clock=clock) if annotated else None
-        trees, scored = _log_detectors(
-            rec, columns, predictions, evaluations, clock=clock, truth=truth
+        scored = _log_groups_and_scores(
+            rec, columns, columns, predictions, evaluations, (), clock=clock
         )
-        if truth is not None:
-            trees = {TRUTH: truth, **trees}
-        log_group_counts(rec, trees, clock=clock)
-        log_running_scores(rec, scored, clock=clock)
-        if truth is not None:
-            log_events(rec, group_events(truth), clock=clock)
         if views:
             log_characterisation(rec, columns.frames, name=dataset)
             distance, effort, label = pair_scatter_data(columns.frames)

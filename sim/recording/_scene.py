@@ -16,13 +16,14 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import rerun as rr
 
 from reform import Frame
 from sim.recording import _colours
-from sim.recording._columns import FrameColumns
+from sim.recording._columns import FrameColumns, send_rows
 from sim.recording._timeline import Clock
 
 __all__ = [
@@ -153,86 +154,20 @@ def log_model(
         pos = np.asarray(model.geom_pos[geoms], dtype=np.float64)
         quat = np.asarray(model.geom_quat[geoms], dtype=np.float64)
         colours = _colours_of(model, geoms)
-        solid = rr.components.FillMode.Solid
-
-        pick = types == _CAPSULE
-        if np.any(pick):
-            half = size[pick, 1]
-            axis = _rotate(
-                quat[pick], np.column_stack([np.zeros_like(half), np.zeros_like(half), half])
-            )
+        for kind, pick, archetype, shape in _primitives(types, size, pos, quat):
+            if not np.any(pick):
+                continue
             rec.log(
-                f"{entity}/capsules",
-                rr.Capsules3D(
-                    lengths=2.0 * half,
-                    radii=size[pick, 0],
-                    translations=pos[pick] - axis,
+                f"{entity}/{kind}",
+                archetype(
+                    **shape,
                     quaternions=_xyzw(quat[pick]),
                     colors=colours[pick],
-                    fill_mode=solid,
+                    fill_mode=rr.components.FillMode.Solid,
                 ),
                 static=True,
             )
-            counts["capsules"] += int(pick.sum())
-        pick = types == _CYLINDER
-        if np.any(pick):
-            rec.log(
-                f"{entity}/cylinders",
-                rr.Cylinders3D(
-                    lengths=2.0 * size[pick, 1],
-                    radii=size[pick, 0],
-                    centers=pos[pick],
-                    quaternions=_xyzw(quat[pick]),
-                    colors=colours[pick],
-                    fill_mode=solid,
-                ),
-                static=True,
-            )
-            counts["cylinders"] += int(pick.sum())
-        pick = types == _BOX
-        if np.any(pick):
-            rec.log(
-                f"{entity}/boxes",
-                rr.Boxes3D(
-                    half_sizes=size[pick],
-                    centers=pos[pick],
-                    quaternions=_xyzw(quat[pick]),
-                    colors=colours[pick],
-                    fill_mode=solid,
-                ),
-                static=True,
-            )
-            counts["boxes"] += int(pick.sum())
-        pick = (types == _SPHERE) | (types == _ELLIPSOID)
-        if np.any(pick):
-            half_sizes = np.where((types[pick] == _SPHERE)[:, None], size[pick, :1], size[pick])
-            rec.log(
-                f"{entity}/spheres",
-                rr.Ellipsoids3D(
-                    half_sizes=half_sizes,
-                    centers=pos[pick],
-                    quaternions=_xyzw(quat[pick]),
-                    colors=colours[pick],
-                    fill_mode=solid,
-                ),
-                static=True,
-            )
-            counts["spheres"] += int(pick.sum())
-        pick = types == _PLANE
-        if np.any(pick):
-            half_xy = np.where(size[pick, :2] > 0, size[pick, :2], INFINITE_PLANE_HALF_M)
-            rec.log(
-                f"{entity}/planes",
-                rr.Boxes3D(
-                    half_sizes=np.column_stack([half_xy, np.zeros(half_xy.shape[0])]),
-                    centers=pos[pick],
-                    quaternions=_xyzw(quat[pick]),
-                    colors=colours[pick],
-                    fill_mode=solid,
-                ),
-                static=True,
-            )
-            counts["planes"] += int(pick.sum())
+            counts[kind] += int(pick.sum())
         meshes = geoms[types == _MESH]
         for k, geom in enumerate(meshes.tolist()):
             mesh = int(model.geom_dataid[geom])
@@ -253,6 +188,61 @@ def log_model(
         counts["meshes"] += int(meshes.size)
         counts["skipped"] += int(np.count_nonzero((types == _HFIELD) | (types == _SDF)))
     return counts
+
+
+def _primitives(
+    types: np.ndarray, size: np.ndarray, pos: np.ndarray, quat: np.ndarray
+) -> list[tuple[str, np.ndarray, Any, dict[str, np.ndarray]]]:
+    """One body's geoms by kind of primitive: (entity name, which geoms, the Rerun archetype,
+    its shape and position arguments). A capsule is placed by its bottom end, a sphere is an
+    ellipsoid with equal half sizes, a plane a flat box."""
+    capsule = types == _CAPSULE
+    half = size[capsule, 1]
+    axis = _rotate(quat[capsule], np.column_stack([np.zeros_like(half), np.zeros_like(half), half]))
+    cylinder = types == _CYLINDER
+    box = types == _BOX
+    ball = (types == _SPHERE) | (types == _ELLIPSOID)
+    plane = types == _PLANE
+    half_xy = np.where(size[plane, :2] > 0, size[plane, :2], INFINITE_PLANE_HALF_M)
+    return [
+        (
+            "capsules",
+            capsule,
+            rr.Capsules3D,
+            {"lengths": 2.0 * half, "radii": size[capsule, 0], "translations": pos[capsule] - axis},
+        ),
+        (
+            "cylinders",
+            cylinder,
+            rr.Cylinders3D,
+            {
+                "lengths": 2.0 * size[cylinder, 1],
+                "radii": size[cylinder, 0],
+                "centers": pos[cylinder],
+            },
+        ),
+        ("boxes", box, rr.Boxes3D, {"half_sizes": size[box], "centers": pos[box]}),
+        (
+            "spheres",
+            ball,
+            rr.Ellipsoids3D,
+            {
+                "half_sizes": np.where(
+                    (types[ball] == _SPHERE)[:, None], size[ball, :1], size[ball]
+                ),
+                "centers": pos[ball],
+            },
+        ),
+        (
+            "planes",
+            plane,
+            rr.Boxes3D,
+            {
+                "half_sizes": np.column_stack([half_xy, np.zeros(half_xy.shape[0])]),
+                "centers": pos[plane],
+            },
+        ),
+    ]
 
 
 @dataclass(frozen=True, eq=False)
@@ -324,10 +314,7 @@ def log_body_poses(
         raise ValueError(
             f"poses must hold the model's {model.nbody} bodies, got {poses.position.shape[1]}"
         )
-    if clock is None:
-        clock = Clock.from_times([poses.sequence] * poses.time.size, poses.time)
-    rows = clock.rows_at([poses.sequence] * poses.time.size, poses.time, what="poses.time")
-    times = clock.columns(rows)
+    times = _time_columns(clock, poses.sequence, poses.time, what="poses.time")
     moving = 0
     for body in range(1, model.nbody):
         entity = body_entity(model, body, root=root)
@@ -340,14 +327,29 @@ def log_body_poses(
                 static=True,
             )
             continue
-        rec.send_columns(
+        send_rows(
+            rec,
             entity,
-            indexes=times,
-            columns=rr.Transform3D.columns(translation=position, quaternion=quaternion),
-            strict=True,
+            None,
+            times,
+            rr.Transform3D.columns(translation=position, quaternion=quaternion),
         )
         moving += 1
     return moving
+
+
+def _time_columns(
+    clock: Clock | None, sequence: str, time: np.ndarray, *, what: str
+) -> list[rr.TimeColumn]:
+    """Time columns of one sequence's time stamps (seconds): placed on ``clock`` by (sequence,
+    time), or without a clock, row ``i`` at stamp ``i``.
+
+    Raises:
+        ValueError: naming ``what`` if a time stamp matches no frame of ``clock``.
+    """
+    sequences = [sequence] * time.size
+    clock = Clock.from_times(sequences, time) if clock is None else clock
+    return clock.columns(clock.rows_at(sequences, time, what=what))
 
 
 def room_bounds(
@@ -463,20 +465,17 @@ def log_camera_images(
 
     if not 1 <= jpeg_quality <= 100:
         raise ValueError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
-    if clock is None:
-        clock = Clock.from_times([camera.sequence] * camera.time.size, camera.time)
-    rows = clock.rows_at([camera.sequence] * camera.time.size, camera.time, what="camera.time")
+    times = _time_columns(clock, camera.sequence, camera.time, what="camera.time")
     blobs = []
     for image in camera.images:
         buffer = BytesIO()
         Image.fromarray(np.asarray(image)).save(buffer, format="JPEG", quality=jpeg_quality)
         blobs.append(buffer.getvalue())
-    entity = f"{CAMERA_ROOT}/{camera.name}"
-    rec.log(entity, rr.EncodedImage.from_fields(media_type="image/jpeg"), static=True)
-    rec.send_columns(
-        entity,
-        indexes=clock.columns(rows),
-        columns=rr.EncodedImage.columns(blob=blobs),
-        strict=True,
+    send_rows(
+        rec,
+        f"{CAMERA_ROOT}/{camera.name}",
+        rr.EncodedImage.from_fields(media_type="image/jpeg"),
+        times,
+        rr.EncodedImage.columns(blob=blobs),
     )
     return sum(len(b) for b in blobs)

@@ -18,7 +18,7 @@ import rerun as rr
 from reform import Frame
 from sim.recording._columns import FrameColumns
 
-__all__ = ["FRAME_TIMELINE", "SIM_TIME_TIMELINE", "Clock", "frame_keys", "time_keys"]
+__all__ = ["FRAME_TIMELINE", "SIM_TIME_TIMELINE", "Clock", "time_keys"]
 
 FRAME_TIMELINE = "frame"  # sequence timeline: index of the frame in the run
 SIM_TIME_TIMELINE = "sim_time"  # duration timeline: simulated seconds since the run started
@@ -32,12 +32,6 @@ _DEFAULT_STEP_S = 1.0  # seconds: gap after a one-frame sequence
 def time_keys(times: npt.ArrayLike) -> np.ndarray:
     """(n,) int64 time stamps in microseconds (rounded half to even)."""
     return np.rint(np.asarray(times, dtype=np.float64) * TIME_KEY_SCALE).astype(np.int64)
-
-
-def frame_keys(frames: Sequence[Frame]) -> tuple[tuple[str, int], ...]:
-    """(sequence, time in microseconds) of each frame: how streams of one run are matched."""
-    keys = time_keys([f.time for f in frames]).tolist()
-    return tuple(zip((f.sequence for f in frames), keys, strict=True))
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,15 +133,6 @@ class Clock:
     def __len__(self) -> int:
         return int(self.time.size)
 
-    def rows_of(self, frames: Iterable[Frame], *, what: str = "frames") -> np.ndarray:
-        """(n,) int64 row of each frame, found by (sequence, time).
-
-        Raises:
-            ValueError: naming the first frame whose (sequence, time) is not in the run.
-        """
-        frames = list(frames)
-        return self.rows_at([f.sequence for f in frames], [f.time for f in frames], what=what)
-
     def rows_at(
         self, sequences: Sequence[str], times: npt.ArrayLike, *, what: str = "times"
     ) -> np.ndarray:
@@ -166,11 +151,9 @@ class Clock:
         names = np.array(sequences, dtype=object)
         for name in dict.fromkeys(sequences):
             query = np.flatnonzero(names == name)
-            table_keys, table_rows = self._tables.get(
-                name, (np.zeros(0, np.int64), np.zeros(0, np.int64))
-            )
-            if table_keys.size == 0:
+            if name not in self._tables:
                 continue
+            table_keys, table_rows = self._tables[name]
             at = np.minimum(np.searchsorted(table_keys, keys[query]), table_keys.size - 1)
             hit = table_keys[at] == keys[query]
             rows[query[hit]] = table_rows[at[hit]]
