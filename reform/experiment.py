@@ -106,8 +106,14 @@ __all__ = [
     "Tuning",
     "classifier_params",
     "paper_experiment",
+    "split_json",
     "tune",
 ]
+
+
+def split_json(train_fraction: float, frames: Mapping[str, int]) -> dict[str, Any]:
+    """The ``"split"`` entry of an experiment's JSON: the share, the rule, frames per dataset."""
+    return {"train_fraction": train_fraction, "rule": SPLIT_RULE, "frames": dict(frames)}
 
 
 @dataclass(frozen=True)
@@ -311,11 +317,7 @@ class PaperExperiment:
             "reform_version": __version__,
             "command": command,
             "protocol": PROTOCOL,
-            "split": {
-                "train_fraction": self.train_fraction,
-                "rule": SPLIT_RULE,
-                "frames": dict(self.frames),
-            },
+            "split": split_json(self.train_fraction, self.frames),
             "features": list(DEFAULT_FEATURES),
             "reconstruction": "union",
             "tuning": [t.to_json() for t in self.tuning],

@@ -17,7 +17,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from reform.experiment import BABBLE, SALSA_TEST, SPLIT_RULE
+from reform.experiment import BABBLE, SALSA_TEST, split_json
 from reform.frame import Dataset, Frame
 from reform.gcff import (
     MDL_GRID_M2,
@@ -186,11 +186,7 @@ class GcffComparison:
             "reform_version": __version__,
             "command": command,
             "protocol": PROTOCOL,
-            "split": {
-                "train_fraction": self.train_fraction,
-                "rule": SPLIT_RULE,
-                "frames": dict(self.frames),
-            },
+            "split": split_json(self.train_fraction, self.frames),
             "units": {
                 "paper_setting": {
                     "as_stated": "stride = 0.7, MDL = 30000",
