@@ -26,6 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from reform.metrics import Evaluation
+from reform.report import json_float
 
 __all__ = [
     "DEFAULT_LEVEL",
@@ -56,7 +57,7 @@ class Interval:
     high: float
 
     def to_json(self) -> dict[str, float | None]:
-        return {k: _json_float(getattr(self, k)) for k in ("value", "low", "high")}
+        return {k: json_float(getattr(self, k)) for k in ("value", "low", "high")}
 
 
 @dataclass(frozen=True)
@@ -83,10 +84,6 @@ class ScoreIntervals:
             "frames": self.frames,
             "sequences": self.sequences,
         }
-
-
-def _json_float(value: float) -> float | None:
-    return None if not math.isfinite(value) else float(value)
 
 
 def bootstrap_weights(

@@ -36,6 +36,7 @@ from reform.features import DEFAULT_FEATURES
 from reform.frame import Dataset, Frame
 from reform.majority import Majority
 from reform.metrics import PROTOCOL, evaluate, pair_labels
+from reform.report import command_block, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_blocks, time_split
 
 SALSA_TRAIN = "salsa-train"  # dataset label of the SALSA training split
@@ -612,7 +613,7 @@ def _together_share(frames: Sequence[Frame]) -> dict[str, float]:
 
 
 def _pct(value: float | None) -> str:
-    return "—" if value is None or value != value else f"{100 * value:.1f}"
+    return percent(value, missing="—")
 
 
 def _cell(ours: float | None, paper: float | None) -> str:
@@ -631,13 +632,12 @@ def _markdown(experiment: PaperExperiment, *, command: str | None) -> str:
     import sklearn
 
     from reform import __version__
-    from reform.report import render_table
 
     frames = experiment.frames
     names = [MAJORITY] + [t.classifier for t in experiment.tuning]
     lines = ["# REFORM on SALSA and Babble: the paper's experiment", ""]
     if command:
-        lines += ["Produced by:", "", "```sh", command, "```", ""]
+        lines += command_block(command)
     lines += [
         f"reform-sim {__version__}, scikit-learn {sklearn.__version__}; "
         f"{experiment.seconds:.0f} s on the machine that produced it.",
@@ -760,8 +760,6 @@ def _markdown(experiment: PaperExperiment, *, command: str | None) -> str:
 
 
 def _diagnostic_lines(experiment: PaperExperiment) -> list[str]:
-    from reform.report import render_table
-
     if not experiment.diagnostics:
         return []
     lines = [

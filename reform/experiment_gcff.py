@@ -217,12 +217,12 @@ class GcffComparison:
 
     def to_markdown(self, *, command: str | None = None) -> str:
         """The comparison as a Markdown page: command, tables per dataset, tuning, notes."""
-        from reform.report import format_comparison, render_table
+        from reform.report import command_block, format_comparison, render_table
 
         search = self.tuning
         lines = ["# GCFF beside REFORM: SALSA test split and Babble", ""]
         if command:
-            lines += ["Produced by:", "", "```sh", command, "```", ""]
+            lines += command_block(command)
         lines += [
             f"Protocol: GCFF's `ff_evalgroups` (singletons dropped; P and R are means of the "
             f"per-frame values; F1 of those means), as `reform.metrics.evaluate` implements it. "

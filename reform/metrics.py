@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from reform.frame import Frame, Group
+from reform.report import json_float
 
 __all__ = [
     "JSON_SCHEMA_VERSION",
@@ -490,15 +491,15 @@ class Evaluation:
                 "true_together": int(self.pairs_true_together.sum()),
                 "predicted_together": int(self.pairs_predicted_together.sum()),
             },
-            "pairwise_accuracy": _json_float(self.pairwise_accuracy),
+            "pairwise_accuracy": json_float(self.pairwise_accuracy),
             "thresholds": [str(t) for t in self.thresholds],
         }
         scores = [self.at(t) for t in self.thresholds]
         for s in scores:
             result[str(s.threshold)] = {
-                "precision": _json_float(s.precision),
-                "recall": _json_float(s.recall),
-                "f1": _json_float(s.f1),
+                "precision": json_float(s.precision),
+                "recall": json_float(s.recall),
+                "f1": json_float(s.f1),
                 "micro": {
                     "precision": s.micro.precision,
                     "recall": s.micro.recall,
@@ -553,14 +554,14 @@ class Evaluation:
         """Frames, pairwise accuracy and frame-mean P/R/F1 per threshold, JSON-ready."""
         summary: dict[str, Any] = {
             "frames": evaluation.n_frames,
-            "pairwise_accuracy": _json_float(evaluation.pairwise_accuracy),
+            "pairwise_accuracy": json_float(evaluation.pairwise_accuracy),
         }
         for t in evaluation.thresholds:
             s = evaluation.at(t)
             summary[str(t)] = {
-                "precision": _json_float(s.precision),
-                "recall": _json_float(s.recall),
-                "f1": _json_float(s.f1),
+                "precision": json_float(s.precision),
+                "recall": json_float(s.recall),
+                "f1": json_float(s.f1),
             }
         return summary
 
@@ -570,10 +571,6 @@ def _count(items: Iterable[str]) -> dict[str, int]:
     for item in items:
         counts[item] = counts.get(item, 0) + 1
     return counts
-
-
-def _json_float(value: float) -> float | None:
-    return None if math.isnan(value) else float(value)
 
 
 def _describe(frame: Frame, index: int) -> str:

@@ -7,19 +7,43 @@ printed as percentages with one decimal, as in the REFORM paper's tables.
 
 from __future__ import annotations
 
+import math
 import textwrap
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["STYLES", "format_comparison", "format_report", "render_table"]
+__all__ = [
+    "MISSING",
+    "STYLES",
+    "command_block",
+    "format_comparison",
+    "format_report",
+    "json_float",
+    "percent",
+    "render_table",
+]
 
 STYLES = ("text", "markdown")
-_MISSING = "-"
+MISSING = "-"  # what a table shows for a score that does not exist
 _WIDTH = 100  # characters per line of prose
 
 
-def _percent(value: float | None) -> str:
-    return _MISSING if value is None else f"{100.0 * value:.1f}"
+def percent(value: float | None, *, missing: str = MISSING) -> str:
+    """A fraction as a percentage with one decimal (``0.8125`` -> ``"81.2"``); ``missing`` for
+    None, NaN or an infinity."""
+    if value is None or not math.isfinite(value):
+        return missing
+    return f"{100.0 * value:.1f}"
+
+
+def command_block(command: str) -> list[str]:
+    """Markdown lines naming the command that produced a results page (and regenerates it)."""
+    return ["Produced by:", "", "```sh", command, "```", ""]
+
+
+def json_float(value: float | None) -> float | None:
+    """``value`` as JSON can hold it: a float, or None (null) for None, NaN or an infinity."""
+    return None if value is None or not math.isfinite(value) else float(value)
 
 
 def _count(value: int) -> str:
@@ -90,7 +114,7 @@ def format_report(result: Mapping[str, Any], *, style: str = "text") -> str:
     thresholds = list(result["thresholds"])
     pairs = result["pairs"]
     accuracy = (
-        f"Pairwise accuracy: {_percent(result['pairwise_accuracy'])} % "
+        f"Pairwise accuracy: {percent(result['pairwise_accuracy'])} % "
         f"({_count(pairs['correct'])} of {_count(pairs['total'])} pairs labelled correctly; "
         f"{_count(pairs['true_together'])} pairs together in the ground truth, "
         f"{_count(pairs['predicted_together'])} predicted together)."
@@ -110,12 +134,12 @@ def format_report(result: Mapping[str, Any], *, style: str = "text") -> str:
         [
             [
                 t,
-                _percent(result[t]["precision"]),
-                _percent(result[t]["recall"]),
-                _percent(result[t]["f1"]),
-                _percent(result[t]["micro"]["precision"]),
-                _percent(result[t]["micro"]["recall"]),
-                _percent(result[t]["micro"]["f1"]),
+                percent(result[t]["precision"]),
+                percent(result[t]["recall"]),
+                percent(result[t]["f1"]),
+                percent(result[t]["micro"]["precision"]),
+                percent(result[t]["micro"]["recall"]),
+                percent(result[t]["micro"]["f1"]),
                 _count(result[t]["micro"]["tp"]),
                 _count(result[t]["micro"]["fp"]),
                 _count(result[t]["micro"]["fn"]),
@@ -133,9 +157,9 @@ def format_report(result: Mapping[str, Any], *, style: str = "text") -> str:
             headers += [f"P@{t}", f"R@{t}", f"F1@{t}"]
         rows = []
         for name, summary in by_sequence.items():
-            row = [name, _count(summary["frames"]), _percent(summary["pairwise_accuracy"])]
+            row = [name, _count(summary["frames"]), percent(summary["pairwise_accuracy"])]
             for t in thresholds:
-                row += [_percent(summary[t][k]) for k in ("precision", "recall", "f1")]
+                row += [percent(summary[t][k]) for k in ("precision", "recall", "f1")]
             rows.append(row)
         parts += [
             "",
@@ -153,9 +177,9 @@ def format_report(result: Mapping[str, Any], *, style: str = "text") -> str:
             [
                 str(size),
                 _count(entry.get("true_groups", 0)),
-                *(_percent(by_size[t].get(size, {}).get("recall")) for t in thresholds),
+                *(percent(by_size[t].get(size, {}).get("recall")) for t in thresholds),
                 _count(entry.get("detected_groups", 0)),
-                *(_percent(by_size[t].get(size, {}).get("precision")) for t in thresholds),
+                *(percent(by_size[t].get(size, {}).get("precision")) for t in thresholds),
             ]
         )
     size_note = (
@@ -195,14 +219,14 @@ def format_comparison(results: Sequence[Mapping[str, Any]], *, style: str = "tex
             str(result["detector"]),
             str(result["dataset"]),
             _count(result["frames"]),
-            _percent(result["pairwise_accuracy"]),
+            percent(result["pairwise_accuracy"]),
         ]
         for t in thresholds:
             scores = result.get(t)
             row += (
-                [_MISSING] * 3
+                [MISSING] * 3
                 if scores is None
-                else [_percent(scores[k]) for k in ("precision", "recall", "f1")]
+                else [percent(scores[k]) for k in ("precision", "recall", "f1")]
             )
         rows.append(row)
     return render_table(headers, rows, style=style) + "\n"

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from reform.report import render_table
+from reform.report import command_block, percent, render_table
 
 if TYPE_CHECKING:
     from sim.demo import DemoResult
@@ -25,10 +24,6 @@ _STAGE_TEXT = {
 }
 
 
-def _pct(value: float | None) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{100.0 * value:.1f}"
-
-
 def _rel(result: DemoResult, path: Any) -> str:
     from pathlib import Path
 
@@ -43,13 +38,8 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
     curves, the HRI re-enactment and where every file is."""
     budget = context["budget"]
     lines = ["# reform-sim demo", ""]
+    lines += command_block(context["command"])
     lines += [
-        "Produced by:",
-        "",
-        "```sh",
-        context["command"],
-        "```",
-        "",
         f"Budget `{budget.name}`, seed {context['seed']}, real datasets: "
         + (", ".join(result.datasets) if result.datasets else "none found")
         + f". Machine: {context['machine']['cores']} cores, {context['machine']['platform']}.",
@@ -78,8 +68,8 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
             str(s["people"]),
             f"{s['seconds']:g}",
             f"{s['fformations_per_frame']:.2f}",
-            _pct(s["reform_f1"]),
-            _pct(s["gcff_f1"]),
+            percent(s["reform_f1"]),
+            percent(s["gcff_f1"]),
             f"[{s['recording']}]({s['recording']})",
         ]
         for s in context["scenarios"]
@@ -157,11 +147,11 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
                 [
                     detector,
                     f"{dataset} ({count})",
-                    _pct(s["pairwise_accuracy"]),
-                    _pct(s["precision"]),
-                    _pct(s["recall"]),
-                    _pct(s["f1"]),
-                    _pct(s["f1_t1"]),
+                    percent(s["pairwise_accuracy"]),
+                    percent(s["precision"]),
+                    percent(s["recall"]),
+                    percent(s["f1"]),
+                    percent(s["f1_t1"]),
                 ]
             )
     lines += [
@@ -193,7 +183,7 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
                 [
                     axis.title,
                     "REFORM Bagged Trees" if detector == "bagged-trees" else "GCFF",
-                    " / ".join(_pct(v) for v in curve),
+                    " / ".join(percent(v) for v in curve),
                     " / ".join(p.label for p in axis.points),
                 ]
             )
@@ -224,9 +214,9 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
                 [
                     row.label,
                     view,
-                    _pct(s.precision.value),
-                    _pct(s.recall.value),
-                    _pct(s.f1.value),
+                    percent(s.precision.value),
+                    percent(s.recall.value),
+                    percent(s.f1.value),
                 ]
             )
     from sim.hri_experiment import PAPER_HRI

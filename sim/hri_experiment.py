@@ -54,7 +54,7 @@ from reform.frame import Frame
 from reform.gcff import Gcff
 from reform.majority import Majority
 from reform.metrics import Evaluation, evaluate
-from reform.report import render_table
+from reform.report import command_block, json_float, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
 from sim.sensor import Sensor
@@ -315,7 +315,7 @@ class HriRow:
             "scenario": self.scenario,
             "scores": {t: s.to_json() for t, s in self.scores.items()},
             "micro": {t: list(v) for t, v in self.micro.items()},
-            "pairwise_accuracy": _json_float(self.pairwise_accuracy),
+            "pairwise_accuracy": json_float(self.pairwise_accuracy),
         }
 
 
@@ -373,10 +373,6 @@ class HriExperiment:
 
     def to_markdown(self, *, command: str) -> str:
         return _markdown(self, command=command)
-
-
-def _json_float(value: float) -> float | None:
-    return None if not math.isfinite(value) else float(value)
 
 
 def _micro(evaluation: Evaluation, threshold: str) -> tuple[float, float, float]:
@@ -568,12 +564,8 @@ def record_scenes(
 # Markdown
 
 
-def _pct(value: float) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{100.0 * value:.1f}"
-
-
 def _ci(interval: Any) -> str:
-    return f"{_pct(interval.value)} [{_pct(interval.low)}, {_pct(interval.high)}]"
+    return f"{percent(interval.value)} [{percent(interval.low)}, {percent(interval.high)}]"
 
 
 def _main_table(experiment: HriExperiment, view: str) -> str:
@@ -586,10 +578,10 @@ def _main_table(experiment: HriExperiment, view: str) -> str:
             [
                 row.label,
                 row.training,
-                _pct(s.precision.value),
-                _pct(s.recall.value),
+                percent(s.precision.value),
+                percent(s.recall.value),
                 _ci(s.f1),
-                _pct(s1.f1.value),
+                percent(s1.f1.value),
             ]
         )
     for name, (p, r, f1) in PAPER_HRI.items():
@@ -613,7 +605,9 @@ def _scenario_table(experiment: HriExperiment, view: str) -> str:
         cells = []
         for scenario in HRI_SCENARIOS:
             s = experiment.row(key, view, scenario).scores["2/3"]
-            cells.append(f"{_pct(s.precision.value)} / {_pct(s.recall.value)} / {_pct(s.f1.value)}")
+            cells.append(
+                f"{percent(s.precision.value)} / {percent(s.recall.value)} / {percent(s.f1.value)}"
+            )
         rows.append([experiment.row(key, view).label, *cells])
     return render_table(headers, rows, style="markdown")
 
@@ -625,7 +619,7 @@ def _micro_table(experiment: HriExperiment, view: str) -> str:
         cells = []
         for scenario in (*HRI_SCENARIOS, ALL):
             p, r, _ = experiment.row(key, view, scenario).micro["2/3"]
-            cells.append(f"{_pct(p)} / {_pct(r)}")
+            cells.append(f"{percent(p)} / {percent(r)}")
         rows.append([experiment.row(key, view).label, *cells])
     return render_table(headers, rows, style="markdown")
 
@@ -661,12 +655,7 @@ def _markdown(experiment: HriExperiment, *, command: str) -> str:
     lines = [
         "# The paper's HRI proof of concept, re-enacted in simulation",
         "",
-        "Produced by:",
-        "",
-        "```sh",
-        command,
-        "```",
-        "",
+        *command_block(command),
         f"{experiment.seeds} episode(s) of each of {', '.join(f'`{s}`' for s in HRI_SCENARIOS)} "
         f"(master seed {experiment.seed}), every frame at {experiment.rate_hz:g} Hz, scored with "
         "the field's protocol (`reform.metrics.evaluate`: per-frame P and R of the groups of two "

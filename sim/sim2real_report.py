@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from reform.report import render_table
+from reform.report import command_block, percent, render_table
 
 if TYPE_CHECKING:
     from sim.sim2real import Row, SimToReal
@@ -17,10 +17,6 @@ _TRAINING_TEXT = {
     "salsa-train": "SALSA train",
     "none": "-",
 }
-
-
-def _pct(value: float | None) -> str:
-    return "-" if value is None else f"{100.0 * value:.1f}"
 
 
 def rows_table(rows: Sequence[Row]) -> str:
@@ -45,14 +41,14 @@ def rows_table(rows: Sequence[Row]) -> str:
             [
                 row.detector,
                 _TRAINING_TEXT.get(row.training, row.training),
-                _pct(result["pairwise_accuracy"]),
-                _pct(two_thirds["precision"]),
-                _pct(two_thirds["recall"]),
-                f"**{_pct(two_thirds['f1'])}**"
+                percent(result["pairwise_accuracy"]),
+                percent(two_thirds["precision"]),
+                percent(two_thirds["recall"]),
+                f"**{percent(two_thirds['f1'])}**"
                 if row.training == "synthetic"
-                else _pct(two_thirds["f1"]),
-                f"{_pct(low)}-{_pct(high)}",
-                _pct(one["f1"]),
+                else percent(two_thirds["f1"]),
+                f"{percent(low)}-{percent(high)}",
+                percent(one["f1"]),
             ]
         )
     return render_table(headers, body, style="markdown")
@@ -72,7 +68,7 @@ def sim2real_markdown(
     met = sum(g.met for g in result.goals)
     lines = ["# Sim-to-real: REFORM trained on synthetic crowds, tested on SALSA and Babble", ""]
     if command:
-        lines += ["Produced by:", "", "```sh", command, "```", ""]
+        lines += command_block(command)
     sources = " and ".join(f"`{s.scenario}`" for s in result.sources)
     lines += [
         f"REFORM trained only on simulated {sources} episodes, beside REFORM trained on SALSA's "
@@ -354,11 +350,11 @@ def _cross_period_section(result: SimToReal) -> list[str]:
             row_name(c.classifier),
             c.held_out,
             f"{c.frames:,}",
-            _pct(c.salsa),
-            _pct(c.synthetic),
+            percent(c.salsa),
+            percent(c.synthetic),
             f"{100 * c.difference[0]:+.1f} ({100 * c.difference[1]:+.1f} to "
             f"{100 * c.difference[2]:+.1f})",
-            f"{_pct(c.pairwise[0])} / {_pct(c.pairwise[1])}",
+            f"{percent(c.pairwise[0])} / {percent(c.pairwise[1])}",
         ]
         for c in result.cross_period
     ]

@@ -51,6 +51,7 @@ from reform.frame import Frame
 from reform.gcff import Gcff
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
+from reform.report import json_float
 from sim.episode import simulate_episode
 from sim.sensor import Sensor
 
@@ -704,14 +705,14 @@ class StressPoint:
             "label": self.label,
             "episodes": self.episodes,
             "frames": self.frames,
-            "people_per_frame": _json_float(self.people_per_frame),
-            "people_per_m2": _json_float(self.people_per_m2),
-            "fformations_per_frame": _json_float(self.fformations_per_frame),
-            "fformation_size": _json_float(self.fformation_size),
+            "people_per_frame": json_float(self.people_per_frame),
+            "people_per_m2": json_float(self.people_per_m2),
+            "fformations_per_frame": json_float(self.fformations_per_frame),
+            "fformation_size": json_float(self.fformation_size),
             "scores": {
                 d: {t: s.to_json() for t, s in by_t.items()} for d, by_t in self.scores.items()
             },
-            "pairwise_accuracy": {d: _json_float(v) for d, v in self.pairwise_accuracy.items()},
+            "pairwise_accuracy": {d: json_float(v) for d, v in self.pairwise_accuracy.items()},
             "notes": list(self.notes),
         }
 
@@ -797,10 +798,6 @@ class StressResults:
         }
 
 
-def _json_float(value: float) -> float | None:
-    return None if value is None or not math.isfinite(value) else float(value)
-
-
 def _jsonable(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {str(k): _jsonable(v) for k, v in value.items()}
@@ -809,7 +806,7 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, (np.integer,)):
         return int(value)
     if isinstance(value, (float, np.floating)):
-        return _json_float(float(value))
+        return json_float(float(value))
     return value
 
 

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
-from reform.report import render_table
+from reform.report import command_block, percent, render_table
 from sim.stress import DETECTOR_LABELS, THRESHOLDS, StressAxis, StressResults, sensor_description
 
 __all__ = [
@@ -40,14 +40,10 @@ PLOT_SIZE_IN = (10.0, 3.6)  # inches, one axis: two panels side by side
 _THRESHOLD_TEXT = {"2/3": "T = 2/3", "1": "T = 1"}
 
 
-def _pct(value: float) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{100.0 * value:.1f}"
-
-
 def _cell(interval: Any) -> str:
     if not math.isfinite(interval.value):
         return "-"
-    return f"{_pct(interval.value)} [{_pct(interval.low)}, {_pct(interval.high)}]"
+    return f"{percent(interval.value)} [{percent(interval.low)}, {percent(interval.high)}]"
 
 
 def plot_path(out_dir: str | Path, axis: str) -> Path:
@@ -164,7 +160,7 @@ def _summary(results: StressResults) -> list[str]:
                 cells.append("-")
                 continue
             cells.append(
-                f"{_pct(a.f1.value)} → {_pct(b.f1.value)} "
+                f"{percent(a.f1.value)} → {percent(b.f1.value)} "
                 f"({100.0 * (b.f1.value - a.f1.value):+.1f})"
             )
         lines.append(f"| {axis.title} | {first.label} → {last.label} | " + " | ".join(cells) + " |")
@@ -184,12 +180,7 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
     lines = [
         "# Stress tests: REFORM and GCFF under tracking errors, crowds and the robot's sensor",
         "",
-        "Produced by:",
-        "",
-        "```sh",
-        command,
-        "```",
-        "",
+        *command_block(command),
         f"Grid `{results.grid_name}`, master seed {results.seed}, {results.jobs} worker "
         f"process(es) on a {env.get('cores', '?')}-core machine (load average "
         f"{env.get('load_average_start', '?')} when the run started). Wall time "

@@ -461,3 +461,22 @@ def test_vectorised_protocol_equals_the_literal_reference(case):
         expected = pair_labels(f)
         assert ev.pairs[row] == expected.size
         assert ev.pairs_correct[row] == int(np.sum(expected == pair_labels(f, p)))
+
+
+def test_report_percent_json_float_and_command_block() -> None:
+    from reform.report import command_block, json_float, percent
+
+    assert percent(0.8125) == "81.2" and percent(1.0) == "100.0"
+    for missing in (None, math.nan, math.inf):
+        assert percent(missing) == "-"
+        assert percent(missing, missing="—") == "—"
+        assert json_float(missing) is None
+    assert json_float(np.float32(0.5)) == 0.5 and type(json_float(np.float32(0.5))) is float
+    assert command_block("reform-sim stress") == [
+        "Produced by:",
+        "",
+        "```sh",
+        "reform-sim stress",
+        "```",
+        "",
+    ]
