@@ -32,7 +32,9 @@ The experiment behind ``reform-sim experiment sim2real`` (results in
    cut in time into an earlier and a later half; a SALSA-trained model learns from one half and
    is scored on the other, beside the synthetic-trained model on the same half. It asks how
    much of the SALSA-trained model's lead on the test split comes from learning the same party
-   minutes earlier, without looking at any test frame.
+   minutes earlier, without looking at any test frame. The half models are then also scored on
+   the test sets, as diagnostic rows: how much a SALSA-trained model gains from the stretch of
+   the party just before the test frames. They are reported, never used to choose anything.
 
 No test score feeds any choice: the noise comes from calibration statistics of training data,
 the hyper-parameters from cross-validation on synthetic data.
@@ -76,6 +78,7 @@ __all__ = [
     "calibrate_tracker_noise",
     "count_pairs",
     "generate_sources",
+    "half_training",
     "joint_distances",
     "nearest_neighbour_quantiles",
     "sim_to_real",
@@ -482,7 +485,8 @@ class Row:
 
     Attributes:
         detector: the row's name, e.g. ``"REFORM Bagged Trees"`` or ``"GCFF, paper (...)"``.
-        training: what it learnt from: ``"synthetic"``, ``"salsa-train"`` or ``"none"``.
+        training: what it learnt from: ``"synthetic"``, ``"salsa-train"``, ``"none"``, or for a
+            diagnostic a description (:func:`half_training` for half of SALSA's training split).
         dataset: :data:`SALSA_TEST` or :data:`BABBLE`.
         result: the evaluation, :meth:`reform.Evaluation.to_json`.
         f1_interval: 95 % block-bootstrap interval of F1 at T = 2/3.
@@ -857,7 +861,9 @@ def sim_to_real(
         add(model, f"REFORM {label}", SALSA_TRAIN, name)
 
     say("across periods: SALSA's training split in halves, each scored by the other's model")
-    cross_period = _cross_period(train, synthetic_models, salsa_params, seed=seed)
+    cross_period, half_models = _cross_period(train, synthetic_models, salsa_params, seed=seed)
+    for (half, name), model in half_models.items():
+        add(model, f"REFORM {DISPLAY[name]}", half_training(half), name, diagnostic=True)
 
     say("GCFF: the paper's setting and a grid search on SALSA's training split")
     comparison = gcff_comparison(
@@ -944,32 +950,48 @@ def sim_to_real(
     )
 
 
+def half_training(half: str) -> str:
+    """Training label of a model trained on one half (``"earlier"`` or ``"later"``, in time) of
+    SALSA's training split."""
+    return f"{SALSA_TRAIN}: {half} half"
+
+
 def _cross_period(
     train: Sequence[Frame],
     synthetic_models: Mapping[str, Any],
     salsa_params: Mapping[str, Mapping[str, Any]],
     *,
     seed: int,
-) -> tuple[CrossPeriod, ...]:
+) -> tuple[tuple[CrossPeriod, ...], dict[tuple[str, str], Any]]:
     """Each half (in time) of SALSA's training split scored by a model trained on the other
-    half and by the synthetic model (see :class:`CrossPeriod`)."""
+    half and by the synthetic model (see :class:`CrossPeriod`).
+
+    Returns:
+        ``(cross_period, models)``: the comparisons, and ``(half, classifier) -> REFORM``
+        trained on that half (with the hyper-parameters tuned on the whole training split).
+    """
     from reform.bootstrap import bootstrap_weights
     from reform.splits import time_split
 
     earlier, later = time_split(train, 0.5)
     if not earlier or not later:
-        return ()
-    halves = {"earlier": (tuple(earlier), tuple(later)), "later": (tuple(later), tuple(earlier))}
+        return (), {}
+    halves = {"earlier": tuple(earlier), "later": tuple(later)}
+    models = {
+        (half, name): train_reform(name, frames, tune=False, params=salsa_params[name])[0]
+        for half, frames in halves.items()
+        for name in synthetic_models
+    }
+    other = {"earlier": "later", "later": "earlier"}
     out = []
-    for k, (held_out, (scored, other)) in enumerate(halves.items()):
+    for k, (held_out, scored) in enumerate(halves.items()):
         rng = np.random.default_rng([seed, 2000 + k])
         weights = bootstrap_weights(
             _block_labels(scored, BOOTSTRAP_BLOCKS), rng=rng, resamples=BOOTSTRAP_RESAMPLES
         )
         for name, synthetic_model in synthetic_models.items():
-            salsa_model, _ = train_reform(name, other, tune=False, params=salsa_params[name])
             a = _evaluate(synthetic_model, scored)
-            b = _evaluate(salsa_model, scored)
+            b = _evaluate(models[(other[held_out], name)], scored)
             diff = _resampled_f1(a, weights) - _resampled_f1(b, weights)
             point = a.at(T_TWO_THIRDS).f1 - b.at(T_TWO_THIRDS).f1
             out.append(
@@ -983,7 +1005,7 @@ def _cross_period(
                     pairwise=(float(b.pairwise_accuracy), float(a.pairwise_accuracy)),
                 )
             )
-    return tuple(out)
+    return tuple(out), models
 
 
 def _check_gcff_rows(rows: Sequence[Row], reference: Sequence[Mapping[str, Any]]) -> None:

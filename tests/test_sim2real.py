@@ -20,6 +20,7 @@ from sim.sim2real import (
     balance_pairs,
     calibrate_tracker_noise,
     count_pairs,
+    half_training,
     sim_to_real,
     train_reform,
 )
@@ -196,6 +197,14 @@ def test_cross_period_uses_training_halves_only(tiny, salsa_dataset) -> None:
     params = result.tuning["salsa-train"]["logistic-regression"]["best_params"]
     model, _ = train_reform("logistic-regression", earlier, tune=False, params=params)
     assert rows["later"].salsa == evaluate(later, model.predict(later)).at(T_TWO_THIRDS).f1
+    # The same model, scored on the test split, is a diagnostic row (never a main row).
+    _, test = time_split(salsa_dataset.annotated(), 0.6)
+    half_rows = [r for r in result.rows if r.training == half_training("earlier")]
+    assert {r.dataset for r in half_rows} == {SALSA_TEST, BABBLE}
+    assert all(r.diagnostic and r.classifier == "logistic-regression" for r in half_rows)
+    on_test = next(r for r in half_rows if r.dataset == SALSA_TEST)
+    assert on_test.f1() == evaluate(test, model.predict(test)).at(T_TWO_THIRDS).f1
+    assert not any(r.training == half_training("later") and not r.diagnostic for r in result.rows)
 
 
 def test_report_files(tiny, tmp_path) -> None:
@@ -217,6 +226,11 @@ def test_report_files(tiny, tmp_path) -> None:
     assert len(data["rows"]) == len(result.rows)
     assert len(data["goals"]) == 3
     assert len(data["cross_period"]) == 2
+    # The half models on the test split: one table row per classifier, whole split beside.
+    whole = result.row(classifier="logistic-regression", training="salsa-train", dataset=SALSA_TEST)
+    halves = markdown.split("The same half models scored on the SALSA test split")[1]
+    row = next(line for line in halves.splitlines() if line.startswith("| Logistic"))
+    assert f"{100 * whole.f1():.1f}" in row.split("|")[4]
 
 
 def test_deterministic_data(tiny, salsa_dataset) -> None:
