@@ -5,7 +5,10 @@ Measured in the same run, each a fresh interpreter (wall time, median of ``--rep
 * **python**: ``python -c pass``, the floor under any command;
 * **--help**: ``reform-sim --help``: the parser with each subcommand's name and help line only;
 * **data info --help**, **evaluate --help**: one subcommand's arguments added (evaluate's pull
-  in the Rerun flags of `sim.recording`, hence rerun and reform);
+  in the Rerun flags of `sim.recording`, which import neither rerun nor reform's modules);
+* **train --help**, **stress --help**: subcommands whose arguments list reform's classifiers
+  (scikit-learn) and the stress test's grids (`sim.stress`: scikit-learn, MuJoCo);
+* **import reform**: the package alone, its public names loaded on first use;
 * **every parser** (the baseline): gymnasium imported and every subcommand's arguments added, as
   building the parser did before subcommands were added on use.
 
@@ -42,6 +45,9 @@ CASES = {
     "--help": [*COMMAND, "--help"],
     "data info --help": [*COMMAND, "data", "info", "--help"],
     "evaluate --help": [*COMMAND, "evaluate", "--help"],
+    "train --help": [*COMMAND, "train", "--help"],
+    "stress --help": [*COMMAND, "stress", "--help"],
+    "import reform": [sys.executable, "-c", "import reform"],
     "every parser": [sys.executable, "-c", EVERY_PARSER],
 }
 

@@ -2,90 +2,65 @@
 
 Pure science: depends on numpy, scipy and scikit-learn only (Parquet and skops files are read
 through optional imports of pyarrow and skops, which the project installs).
+
+The public names below are loaded on first use (PEP 562), so that ``import reform`` stays light:
+``reform.evaluate`` imports `reform.metrics` the first time it is looked up.
 """
 
 from __future__ import annotations
 
-from reform.calibration import (
-    PAPER_CHARACTERISATION,
-    Characterisation,
-    Comparison,
-    characterise_dataset,
-    compare,
-)
-from reform.characterisation import GroupShapes, characterise, symmetry, tightness
-from reform.datasets import load_dataset, read_parquet, write_parquet
-from reform.datasets.errors import DataFormatError
-from reform.detector import Reform
-from reform.features import (
-    DEFAULT_FEATURES,
-    FEATURES,
-    batch_pair_features,
-    effort_angle,
-    frame_pair_features,
-    pair_indices,
-)
-from reform.frame import HUMAN, KINDS, ROBOT, Dataset, Frame, Group, complete_partition, wrap_angle
-from reform.gcff import Gcff
-from reform.majority import Majority
-from reform.metrics import T_ONE, T_TWO_THIRDS, THRESHOLDS, Evaluation, evaluate, pair_labels
-from reform.persistence import load_model, save_model
-from reform.reconstruction import (
-    RECONSTRUCTIONS,
-    batch_greedy_labels,
-    greedy_reconstruction,
-    partition_from_labels,
-    relation_matrix,
-)
-from reform.splits import time_blocks, time_split
+from reform._lazy import lazy_exports
+
+_EXPORTS = {
+    "PAPER_CHARACTERISATION": "reform.calibration",
+    "Characterisation": "reform.calibration",
+    "Comparison": "reform.calibration",
+    "characterise_dataset": "reform.calibration",
+    "compare": "reform.calibration",
+    "GroupShapes": "reform.characterisation",
+    "characterise": "reform.characterisation",
+    "symmetry": "reform.characterisation",
+    "tightness": "reform.characterisation",
+    "load_dataset": "reform.datasets",
+    "read_parquet": "reform.datasets",
+    "write_parquet": "reform.datasets",
+    "DataFormatError": "reform.datasets.errors",
+    "Reform": "reform.detector",
+    "DEFAULT_FEATURES": "reform.features",
+    "FEATURES": "reform.features",
+    "batch_pair_features": "reform.features",
+    "effort_angle": "reform.features",
+    "frame_pair_features": "reform.features",
+    "pair_indices": "reform.features",
+    "HUMAN": "reform.frame",
+    "KINDS": "reform.frame",
+    "ROBOT": "reform.frame",
+    "Dataset": "reform.frame",
+    "Frame": "reform.frame",
+    "Group": "reform.frame",
+    "complete_partition": "reform.frame",
+    "wrap_angle": "reform.frame",
+    "Gcff": "reform.gcff",
+    "Majority": "reform.majority",
+    "T_ONE": "reform.metrics",
+    "T_TWO_THIRDS": "reform.metrics",
+    "THRESHOLDS": "reform.metrics",
+    "Evaluation": "reform.metrics",
+    "evaluate": "reform.metrics",
+    "pair_labels": "reform.metrics",
+    "load_model": "reform.persistence",
+    "save_model": "reform.persistence",
+    "RECONSTRUCTIONS": "reform.reconstruction",
+    "batch_greedy_labels": "reform.reconstruction",
+    "greedy_reconstruction": "reform.reconstruction",
+    "partition_from_labels": "reform.reconstruction",
+    "relation_matrix": "reform.reconstruction",
+    "time_blocks": "reform.splits",
+    "time_split": "reform.splits",
+}
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "DEFAULT_FEATURES",
-    "FEATURES",
-    "HUMAN",
-    "KINDS",
-    "PAPER_CHARACTERISATION",
-    "RECONSTRUCTIONS",
-    "ROBOT",
-    "THRESHOLDS",
-    "T_ONE",
-    "T_TWO_THIRDS",
-    "Characterisation",
-    "Comparison",
-    "DataFormatError",
-    "Dataset",
-    "Evaluation",
-    "Frame",
-    "Gcff",
-    "Group",
-    "GroupShapes",
-    "Majority",
-    "Reform",
-    "__version__",
-    "batch_greedy_labels",
-    "batch_pair_features",
-    "characterise",
-    "characterise_dataset",
-    "compare",
-    "complete_partition",
-    "effort_angle",
-    "evaluate",
-    "frame_pair_features",
-    "greedy_reconstruction",
-    "load_dataset",
-    "load_model",
-    "pair_indices",
-    "pair_labels",
-    "partition_from_labels",
-    "read_parquet",
-    "relation_matrix",
-    "save_model",
-    "symmetry",
-    "tightness",
-    "time_blocks",
-    "time_split",
-    "wrap_angle",
-    "write_parquet",
-]
+__all__ = ["__version__", *sorted(_EXPORTS)]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -21,7 +21,7 @@ import os
 import sys
 from typing import Any
 
-from sim._lazy import lazy_exports
+from reform._lazy import lazy_exports
 
 # Offscreen rendering on a headless Linux machine needs EGL, chosen before mujoco is imported.
 if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):

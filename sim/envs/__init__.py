@@ -24,7 +24,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from sim._lazy import lazy_exports
+from reform._lazy import lazy_exports
 
 NAMESPACE = "ReformSim"
 ENTRY_POINT = "sim.envs.social:SocialEnv"

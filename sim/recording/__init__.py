@@ -33,7 +33,7 @@ with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, 
 
 from __future__ import annotations
 
-from sim._lazy import lazy_exports
+from reform._lazy import lazy_exports
 
 # Public name -> the module defining it; loaded on first use, so that declaring a command's
 # recording flags (`add_recording_arguments`) does not import Rerun.
