@@ -495,7 +495,7 @@ def _simulate_and_write(
 
 def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None:
     """One Rerun recording of the episode: the scene, everyone, the groups, the robot's view."""
-    from sim.recording import record_episode
+    from sim.recording import FieldOfView, record_episode
 
     # Rerun writes to a path ending in .rrd: a hidden scratch folder beside it, then a rename.
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -509,6 +509,7 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
             model=result.model,
             seed=episode_seed(spec.seed, episode),
             name=_sequence_name(spec.scenario, episode),
+            field_of_view=FieldOfView.of(spec.sensor),
         )
         os.replace(scratch / path.name, path)
     finally:

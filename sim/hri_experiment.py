@@ -518,7 +518,7 @@ def record_scenes(
     Returns:
         The paths written, ``out_dir/<scenario>.rrd``.
     """
-    from sim.recording import record_episode
+    from sim.recording import FieldOfView, record_episode
 
     if view not in VIEWS:
         raise ValueError(f"view must be one of {tuple(VIEWS)}, got {view!r}")
@@ -555,6 +555,7 @@ def record_scenes(
             model=run.model,
             seed=episode_seed_,
             name=f"{scenario} ({view} view)",
+            field_of_view=FieldOfView.of(sensor),
         )
         paths.append(path)
     return paths

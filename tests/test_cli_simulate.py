@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 
+import numpy as np
 import pytest
 from rerun.chunk import RrdReader
 
@@ -80,6 +81,48 @@ def test_simulate_save_records_the_episode(tmp_path):
     } <= entities
     assert any(t.startswith("approach:") for t in texts)
     assert any("forms" in t for t in texts) and any("leave:" in t for t in texts)
+
+
+def test_simulate_save_draws_the_sensors_own_field_of_view(tmp_path):
+    """The wedge in the recording is the sensor the frames were observed with."""
+    out, rrd = tmp_path / "seen.parquet", tmp_path / "seen.rrd"
+    argv = ["simulate", "--scenario", "hri-conversation", "--seed", "1", "--duration", "4"]
+    sensor = ["--view", "robot", "--fov-deg", "90", "--min-range", "0.3", "--max-range", "3"]
+    assert main([*argv, *sensor, "--out", str(out), "--save", str(rrd)]) == 0
+    batches = [
+        chunk.to_record_batch()
+        for chunk in RrdReader(rrd).stream()
+        if chunk.entity_path == "/world/robot/field_of_view"
+    ]
+    wedges = [
+        strip
+        for batch in batches
+        if "LineStrips3D:strips" in batch.schema.names
+        for row in batch.column("LineStrips3D:strips").to_pylist()
+        for strip in row
+    ]
+    assert wedges
+    first = read_parquet(out).frames[0]
+    robot = int(np.flatnonzero(first.is_robot)[0])
+    apex = first.head_position[robot] if first.head_position is not None else first.position[robot]
+    reach = np.linalg.norm(np.array(wedges[0])[:, :2] - apex, axis=1)
+    assert reach.max() == pytest.approx(3.0, rel=1e-5)
+    assert reach.min() == pytest.approx(0.3, rel=1e-5)
+    # The far arc spans 90 degrees as seen from the robot's head.
+    far = np.array(wedges[0])[:, :2] - apex
+    far = far[np.isclose(np.linalg.norm(far, axis=1), 3.0, rtol=1e-5)]
+    middle = far.mean(axis=0)
+    bearings = np.arctan2(far[:, 1], far[:, 0]) - np.arctan2(middle[1], middle[0])
+    bearings = (bearings + np.pi) % (2 * np.pi) - np.pi
+    assert np.degrees(np.ptp(bearings)) == pytest.approx(90.0, abs=1e-3)
+
+
+def test_field_of_view_defaults_are_the_sensors():
+    from sim.recording import FieldOfView
+    from sim.sensor import Sensor
+
+    assert FieldOfView() == FieldOfView.of(Sensor()) == FieldOfView.of(None)
+    assert FieldOfView.of(Sensor(fov_deg=120.0, max_range=6.0)) == FieldOfView(120.0, 0.5, 6.0)
 
 
 def test_scenarios_lists_names_and_typed_options(capsys):

@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--out {args.out} is a folder; give a file name ending in .parquet")
     from reform.datasets import write_parquet
     from sim.episode import simulate_episode
-    from sim.recording import record_episode, target_from_args
+    from sim.recording import FieldOfView, record_episode, target_from_args
 
     target = target_from_args(args)
     options = parse_overrides(args.scenario, args.overrides)
@@ -93,13 +93,14 @@ def run(args: argparse.Namespace) -> int:
         kwargs["rate"] = args.rate
     if args.dt is not None:
         kwargs["dt"] = args.dt
+    sensor = _sensor(args)
     start = time.perf_counter()
     episode = simulate_episode(
         args.scenario,
         seed=args.seed,
         duration=args.duration,
         view=args.view,
-        sensor=_sensor(args),
+        sensor=sensor,
         options=options,
         **kwargs,
     )
@@ -122,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
             events=episode.events,
             seed=args.seed,
             name=dataset.frames[0].sequence if dataset.frames else args.scenario,
+            field_of_view=FieldOfView.of(sensor),
         )
         if target.save is not None:
             print(f"wrote {target.save} (open it with `rerun {target.save}`)", file=sys.stderr)

@@ -744,7 +744,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     def _record(self, observed: list[Frame], partitions: list[tuple[Group, ...]]) -> Path:
         """Saves the episode's Rerun recording (written atomically by `sim.recording`)."""
-        from sim.recording import record_episode
+        from sim.recording import FieldOfView, record_episode
 
         assert self._record_dir is not None
         scenario = self._scenario
@@ -758,6 +758,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             events=scenario.events,
             seed=int(scenario.seed),
             name=self._sequence,
+            field_of_view=FieldOfView.of(self._sensor),
         )
         return path
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import rerun as rr
@@ -78,7 +79,8 @@ LABEL_RADIUS_M = 0.04  # metres
 
 @dataclass(frozen=True)
 class FieldOfView:
-    """The robot sensor's horizontal field of view, as drawn (defaults: a Kinect v1 camera).
+    """The robot sensor's horizontal field of view, as drawn (defaults: those of `sim.Sensor`,
+    the Directions Robot's head sensor).
 
     Attributes:
         horizontal_deg: full horizontal opening angle, degrees, in (0, 360].
@@ -87,8 +89,8 @@ class FieldOfView:
     """
 
     horizontal_deg: float = 57.0
-    min_range_m: float = 0.8
-    max_range_m: float = 4.0
+    min_range_m: float = 0.5
+    max_range_m: float = 4.5
 
     def __post_init__(self) -> None:
         if not 0.0 < self.horizontal_deg <= 360.0:
@@ -98,6 +100,18 @@ class FieldOfView:
                 "ranges must satisfy 0 <= min_range_m < max_range_m, "
                 f"got {self.min_range_m} and {self.max_range_m}"
             )
+
+    @classmethod
+    def of(cls, sensor: Any) -> FieldOfView:
+        """The field of view of a `sim.Sensor` (its ``fov_deg``, ``min_range``, ``max_range``);
+        None gives the default sensor's."""
+        if sensor is None:
+            return cls()
+        return cls(
+            horizontal_deg=float(sensor.fov_deg),
+            min_range_m=float(sensor.min_range),
+            max_range_m=float(sensor.max_range),
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,7 +159,7 @@ class PersonIndex:
         )
 
 
-KINECT_FIELD_OF_VIEW = FieldOfView()  # the Directions Robot's Kinect v1: 57 deg, 0.8-4 m
+KINECT_FIELD_OF_VIEW = FieldOfView()  # the Directions Robot's head sensor: 57 deg, 0.5-4.5 m
 
 
 def log_world_setup(rec: rr.RecordingStream) -> None:
