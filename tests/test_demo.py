@@ -149,3 +149,21 @@ def test_budgets() -> None:
 def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
     assert main(["demo", "--quick", "--out", str(tmp_path / "o"), *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_the_real_datasets_are_found_without_a_flag(tmp_path, monkeypatch, capsys) -> None:
+    """No --datasets: $REFORM_SIM_DATASETS, else ../shared/datasets beside the working folder."""
+    from sim.cli._common import default_datasets
+
+    clone = tmp_path / "clone"
+    clone.mkdir()
+    monkeypatch.chdir(clone)
+    monkeypatch.delenv("REFORM_SIM_DATASETS", raising=False)
+    assert default_datasets() is None
+    (tmp_path / "shared" / "datasets").mkdir(parents=True)
+    assert default_datasets() == "../shared/datasets"
+    monkeypatch.setenv("REFORM_SIM_DATASETS", "/elsewhere")
+    assert default_datasets() == "/elsewhere"
+    # The demo then reads that folder: a missing one is named in the error.
+    assert main(["demo", "--quick", "--out", str(tmp_path / "o")]) == 2
+    assert "/elsewhere is not a folder" in capsys.readouterr().err

@@ -9,9 +9,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from sim.cli._common import CliError
-
-DEFAULT_DATASETS = "../shared/datasets"
+from sim.cli._common import DEFAULT_DATASETS, CliError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

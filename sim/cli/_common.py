@@ -8,12 +8,25 @@ subcommand runs on are imported inside its handler.
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 FORMATS = ("salsa", "babble", "gcff", "parquet")
 # Default share of each sequence's annotated frames, by time, that trains (reform.time_split's).
 TRAIN_FRACTION = 0.6
+DEFAULT_DATASETS = "../shared/datasets"  # the real datasets beside a clone
+DATASETS_VARIABLE = "REFORM_SIM_DATASETS"  # environment variable naming them elsewhere
+
+
+def default_datasets() -> str | None:
+    """The real datasets' folder when none is given: ``$REFORM_SIM_DATASETS`` when set, else
+    ``../shared/datasets`` when that folder exists, else None."""
+    named = os.environ.get(DATASETS_VARIABLE)
+    if named:
+        return named
+    return DEFAULT_DATASETS if Path(DEFAULT_DATASETS).is_dir() else None
 
 
 class CliError(Exception):

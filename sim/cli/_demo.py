@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, default_datasets
 
 _DESCRIPTION = """\
 Simulates every registered scenario briefly, generates a synthetic training set (mingle and
@@ -34,7 +34,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
         "--datasets",
         metavar="DIR",
         default=None,
-        help="folder holding salsa/ and/or babble/ (e.g. ../shared/datasets); optional",
+        help="folder holding salsa/ and/or babble/ (default: $REFORM_SIM_DATASETS, else "
+        "../shared/datasets when it exists, else synthetic data only)",
     )
     parser.add_argument(
         "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder ({DEFAULT_OUT})"
@@ -60,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     result = run_demo(
         out_dir=args.out,
-        datasets=args.datasets,
+        datasets=args.datasets if args.datasets is not None else default_datasets(),
         seed=args.seed,
         jobs=args.jobs,
         quick=args.quick,
