@@ -11,6 +11,10 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-test: $(VENV)/.installed
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
@@ -19,13 +23,13 @@ demo: $(VENV)/.installed
 	$(BIN)/reform-sim demo --datasets $(DATASETS)
 
 ## test: install with the test extras, then run the whole test suite
-test: $(VENV)/.installed
+test: $(VENV)/.installed-test
 	REFORM_SIM_DATASETS=$${REFORM_SIM_DATASETS:-$(DATASETS)} $(BIN)/python -m pytest $(PYTEST_ARGS)
 
-lint: $(VENV)/.installed
+lint: $(VENV)/.installed-test
 	$(BIN)/ruff check reform sim scenarios tests benchmarks
 
-bench: $(VENV)/.installed
+bench: $(VENV)/.installed-test
 	for script in benchmarks/bench_*.py; do $(BIN)/python $$script || exit 1; done
 
 clean:
