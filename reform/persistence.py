@@ -5,7 +5,10 @@ it, what a reader wants to know without trusting the model first: the file forma
 of reform-sim and scikit-learn that wrote it, the features, the classifier and a summary of the
 training data. ``load_model`` lists the types the file would build and refuses any outside a
 fixed allow-list (scikit-learn's own estimators are trusted by skops already), so a file from
-someone else cannot run code; it also refuses a file written by another reform-sim version.
+someone else cannot run code; it also refuses a file written by another reform-sim version,
+and a model that is unfitted or whose parts disagree (its classifier fitted on another number of
+features than it names), so that a bad file fails when it is loaded, naming the file, rather than
+on first use.
 
 skops is imported only inside these functions.
 """
@@ -19,8 +22,11 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from reform.atomic import atomic_open
 from reform.detector import Reform
+from reform.features import check_features
 
 FORMAT = "reform-sim model"
 FORMAT_VERSION = 1
@@ -99,8 +105,12 @@ def save_model(model: Reform, path: str | os.PathLike[str]) -> Path:
 
 
 def _read(path: Path) -> bytes:
-    if not path.is_file():
+    if path.is_dir():
+        raise ValueError(f"model file {path} is a folder: expected a skops file (*.skops)")
+    if not path.exists():
         raise FileNotFoundError(f"model file {path} does not exist")
+    if not path.is_file():
+        raise ValueError(f"model file {path} is not a regular file: expected a skops file")
     data = path.read_bytes()
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
@@ -138,9 +148,11 @@ def load_model(path: str | os.PathLike[str], *, trusted: Iterable[str] = ()) -> 
 
     Raises:
         FileNotFoundError: if the file does not exist.
-        ValueError: if it is not a skops file, holds types outside the trusted list, is not a
-            REFORM model file, or was written by another version of reform-sim or a scikit-learn
-            of another minor version.
+        ValueError: if the path is a folder, the file is not a skops file, holds types outside
+            the trusted list, is not a REFORM model file, was written by another version of
+            reform-sim or a scikit-learn of another minor version, or holds a Reform that is
+            not fitted or whose parts disagree (features unknown, a classifier fitted on
+            another number of features than ``features_`` names, classes other than [0, 1]).
     """
     path = Path(path)
     data = _read(path)
@@ -187,4 +199,50 @@ def _unwrap(path: Path, payload: Any) -> Reform:
         raise ValueError(
             f"{path}: the file's model is a {type(model).__name__}, not a reform.Reform"
         )
+    _check_model(path, model, payload.get("features"))
     return model
+
+
+def _check_model(path: Path, model: Reform, listed: Any) -> None:
+    """Refuses a Reform that is not fitted or whose parts disagree, naming the file: such a
+    model would load and then fail on first use, far from its file."""
+    from sklearn.exceptions import NotFittedError
+    from sklearn.utils.validation import check_is_fitted
+
+    missing = [name for name in ("classifier_", "features_") if not hasattr(model, name)]
+    if missing:
+        raise ValueError(
+            f"{path}: expected a fitted reform.Reform, found an unfitted one (no "
+            f"{' or '.join(missing)}); save a model after fit, e.g. with `reform-sim train`"
+        )
+    try:
+        features = check_features(model.features_)
+    except ValueError as exc:
+        raise ValueError(f"{path}: the model's features_ are not valid: {exc}") from exc
+    if listed is not None and list(listed) != list(features):
+        raise ValueError(
+            f"{path}: the file lists features {list(listed)}, expected the model's own "
+            f"features_ {list(features)}"
+        )
+    classifier = model.classifier_
+    name = type(classifier).__name__
+    try:
+        check_is_fitted(classifier)
+    except (NotFittedError, TypeError) as exc:
+        raise ValueError(
+            f"{path}: expected a fitted pair classifier in the model, found an unfitted {name}"
+        ) from exc
+    n_in = getattr(classifier, "n_features_in_", None)
+    if n_in is not None and int(n_in) != len(features):
+        raise ValueError(
+            f"{path}: inconsistent model: features_ {list(features)} gives {len(features)} "
+            f"feature(s) per pair, expected the classifier to take as many, found a {name} "
+            f"fitted on {int(n_in)} (n_features_in_)"
+        )
+    classes = getattr(classifier, "classes_", None)
+    found = None if classes is None else np.asarray(classes).tolist()
+    if found != [0, 1]:
+        raise ValueError(
+            f"{path}: inconsistent model: expected a pair classifier of classes [0, 1] "
+            f"(apart, together), found a {name} with classes_ {found}"
+        )

@@ -6,6 +6,7 @@ import functools
 import zipfile
 from fractions import Fraction
 
+import numpy as np
 import pytest
 import sklearn
 import skops.io as sio
@@ -118,3 +119,107 @@ def test_only_fitted_reform_models_are_saved(tmp_path):
     with pytest.raises(TypeError, match="model must be a reform.Reform, got LogisticRegression"):
         save_model(LogisticRegression(), tmp_path / "m.skops")
     assert not (tmp_path / "m.skops").exists()
+
+
+def fresh(name: str = "logistic-regression") -> Reform:
+    """A fitted model of our own, free to be altered (``fitted`` is shared between tests)."""
+    return Reform(make_classifier(name)).fit(toy_frames(0, 60))
+
+
+def test_a_model_whose_features_disagree_with_its_classifier_is_refused(tmp_path):
+    model = fresh("bagged-trees")  # fitted on distance and effort_angle
+    model.features_ = ("distance",)
+    path = tmp_path / "inconsistent.skops"
+    sio.dump(payload(model), path)
+    with pytest.raises(
+        ValueError,
+        match=r"inconsistent\.skops: inconsistent model: features_ \['distance'\] gives 1 "
+        r"feature\(s\) per pair, expected the classifier to take as many, found a "
+        r"BaggingClassifier fitted on 2 \(n_features_in_\)",
+    ):
+        load_model(path)
+    with pytest.raises(ValueError, match="fitted on 2"):
+        model_info(path)
+
+
+def test_a_model_with_unknown_features_is_refused(tmp_path):
+    model = fresh()
+    model.features_ = ("distance", "loudness")
+    path = tmp_path / "unknown.skops"
+    sio.dump(payload(model), path)
+    with pytest.raises(
+        ValueError,
+        match=r"unknown\.skops: the model's features_ are not valid: features must be among "
+        r".*, got 'loudness'",
+    ):
+        load_model(path)
+
+
+def test_a_file_listing_other_features_than_its_model_is_refused(tmp_path):
+    path = tmp_path / "listed.skops"
+    sio.dump(payload(fresh(), features=["distance", "head_distance"]), path)
+    with pytest.raises(
+        ValueError,
+        match=r"listed\.skops: the file lists features \['distance', 'head_distance'\], "
+        r"expected the model's own features_ \['distance', 'effort_angle'\]",
+    ):
+        load_model(path)
+
+
+def test_a_model_whose_classifier_has_other_classes_is_refused(tmp_path):
+    model = fresh()
+    x = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]])
+    model.classifier_ = LogisticRegression().fit(x, np.array([0, 1, 2, 2]))
+    path = tmp_path / "classes.skops"
+    sio.dump(payload(model), path)
+    with pytest.raises(
+        ValueError,
+        match=r"classes\.skops: inconsistent model: expected a pair classifier of classes "
+        r"\[0, 1\] \(apart, together\), found a LogisticRegression with classes_ \[0, 1, 2\]",
+    ):
+        load_model(path)
+
+
+def test_an_unfitted_model_is_refused_naming_the_file(tmp_path):
+    path = tmp_path / "unfitted.skops"
+    sio.dump(payload(Reform()), path)
+    with pytest.raises(
+        ValueError,
+        match=r"unfitted\.skops: expected a fitted reform\.Reform, found an unfitted one "
+        r"\(no classifier_ or features_\)",
+    ):
+        load_model(path)
+
+
+def test_a_model_with_an_unfitted_classifier_is_refused(tmp_path):
+    model = fresh()
+    model.classifier_ = LogisticRegression()
+    path = tmp_path / "bare.skops"
+    sio.dump(payload(model), path)
+    with pytest.raises(
+        ValueError,
+        match=r"bare\.skops: expected a fitted pair classifier in the model, found an "
+        r"unfitted LogisticRegression",
+    ):
+        load_model(path)
+
+
+def test_a_folder_is_not_a_model_file(tmp_path):
+    folder = tmp_path / "model.skops"
+    folder.mkdir()
+    with pytest.raises(ValueError, match=r"model file .*model\.skops is a folder: expected a "):
+        load_model(folder)
+    with pytest.raises(ValueError, match="is a folder"):
+        model_info(folder)
+
+
+def test_the_command_line_says_the_model_is_a_folder(tmp_path, capsys):
+    from reform.datasets import write_parquet
+    from sim.cli import main
+
+    data = tmp_path / "toy.parquet"
+    write_parquet(reform.Dataset(frames=tuple(toy_frames(1, 4)), name="toy"), data)
+    folder = tmp_path / "model.skops"
+    folder.mkdir()
+    assert main(["evaluate", "--model", str(folder), "--data", str(data)]) == 2
+    assert "model.skops is a folder: expected a skops file" in capsys.readouterr().err
