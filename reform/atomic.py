@@ -1,6 +1,9 @@
 """Atomic file writes: a temporary file beside the target, then a rename.
 
 A reader never sees a half-written file, and an interrupted write leaves the old file (or none).
+A target that cannot be written (an existing folder, a path under a file, a folder that cannot be
+created) raises `OutputPathError` naming the path before anything is written;
+:func:`check_file_path` and :func:`check_folder_path` say so up front, before a long run.
 """
 
 from __future__ import annotations
@@ -12,7 +15,26 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
+__all__ = ["OutputPathError", "atomic_open", "atomic_path", "check_file_path", "check_folder_path"]
+
 _DEFAULT_FILE_MODE = 0o666
+
+
+class OutputPathError(ValueError):
+    """An output path that cannot be written, e.g.::
+
+        out/report.json: expected a file path, found an existing folder
+        notes.txt/out.json: expected a folder at notes.txt, found a file
+
+    Attributes:
+        path: the output path.
+        problem: what is wrong with it (the message after ``path: ``).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], problem: str) -> None:
+        self.path = Path(path)
+        self.problem = problem
+        super().__init__(f"{os.fspath(path)}: {problem}")
 
 
 def _current_umask() -> int:
@@ -21,16 +43,104 @@ def _current_umask() -> int:
     return mask
 
 
+def _nearest_existing(path: Path, target: str | os.PathLike[str]) -> Path:
+    """The nearest ancestor of ``path`` (itself included) that exists; it must be a folder."""
+    for folder in (path, *path.parents):
+        if folder.is_dir():
+            return folder
+        if folder.exists() or folder.is_symlink():
+            raise OutputPathError(target, f"expected a folder at {folder}, found a file")
+    return Path(".")  # pragma: no cover - a relative path's parents end at "."
+
+
+def _check_writable(folder: Path, existing: Path, target: str | os.PathLike[str]) -> None:
+    """Creates and removes a temporary file in ``existing``, the nearest existing ancestor of
+    ``folder``: the one way to know that a write there will succeed (root passes ``os.access``
+    on read-only and virtual file systems)."""
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as exc:
+        if folder == existing:
+            problem = f"cannot write in folder {folder} ({exc.strerror or exc})"
+        else:
+            problem = (
+                f"folder {folder} cannot be created: cannot write in {existing} "
+                f"({exc.strerror or exc})"
+            )
+        raise OutputPathError(target, problem) from exc
+
+
+def _check_file_kinds(path: str | os.PathLike[str]) -> tuple[Path, Path]:
+    """The checks that need no write (not a folder, not under a file): the target and the
+    nearest existing ancestor of its folder."""
+    target = Path(path)
+    if os.fspath(path).endswith(("/", os.sep)) or target.is_dir():
+        found = "an existing folder" if target.is_dir() else "a folder path ending in /"
+        raise OutputPathError(path, f"expected a file path, found {found}")
+    return target, _nearest_existing(target.parent, path)
+
+
+def check_file_path(path: str | os.PathLike[str]) -> Path:
+    """Checks that a file can be written at ``path`` (by `atomic_path`), without writing it.
+
+    Missing folders are not created; a temporary file is created and removed in the nearest
+    existing one to learn that they can be.
+
+    Returns:
+        ``path`` as a `Path`.
+
+    Raises:
+        OutputPathError: ``path`` is an existing folder, one of its folders is a file, or its
+            folder cannot be created or written in.
+    """
+    target, existing = _check_file_kinds(path)
+    _check_writable(target.parent, existing, path)
+    return target
+
+
+def check_folder_path(path: str | os.PathLike[str]) -> Path:
+    """Checks that ``path`` is a folder, or can be created as one, and written in.
+
+    Returns:
+        ``path`` as a `Path`.
+
+    Raises:
+        OutputPathError: ``path`` is an existing file, one of its parents is a file, or it cannot
+            be created or written in.
+    """
+    target = Path(path)
+    if target.exists() and not target.is_dir():
+        raise OutputPathError(path, "expected a folder path, found an existing file")
+    _check_writable(target, _nearest_existing(target, path), path)
+    return target
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yields a temporary path in the target's folder; renames it onto ``path`` on success.
 
     Use it with writers that take a path (``pyarrow.parquet.write_table``, ``skops.io.dump``).
-    On an exception the temporary file is removed and ``path`` is left untouched.
+    Missing folders are created. On an exception the temporary file is removed and ``path`` is
+    left untouched.
+
+    Raises:
+        OutputPathError: ``path`` is an existing folder, one of its folders is a file, or its
+            folder cannot be created or written in (raised before the caller writes anything).
     """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    target, _ = _check_file_kinds(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputPathError(
+            path, f"folder {target.parent} cannot be created ({exc.strerror or exc})"
+        ) from exc
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    except OSError as exc:
+        raise OutputPathError(
+            path, f"cannot write in folder {target.parent} ({exc.strerror or exc})"
+        ) from exc
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -45,7 +155,11 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 @contextlib.contextmanager
 def atomic_open(path: str | os.PathLike[str], mode: str = "w", **kwargs) -> Iterator[IO]:
-    """``open`` for writing, atomically: the file appears complete or not at all."""
+    """``open`` for writing, atomically: the file appears complete or not at all.
+
+    Raises:
+        OutputPathError: as `atomic_path`.
+    """
     if not mode.startswith("w"):
         raise ValueError(f"atomic_open writes only, mode must start with 'w', got {mode!r}")
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as handle:
