@@ -19,7 +19,14 @@ import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
 from reform.report import command_block, percent, render_table
-from sim.stress import DETECTOR_LABELS, THRESHOLDS, StressAxis, StressResults, sensor_description
+from sim.stress import (
+    AXES,
+    DETECTOR_LABELS,
+    THRESHOLDS,
+    StressAxis,
+    StressResults,
+    sensor_description,
+)
 
 __all__ = [
     "MARKDOWN_NAME",
@@ -230,26 +237,7 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
         "",
         *_summary(results),
         "",
-        "Reading the curves:",
-        "",
-        "- **Dropout** removes people and restricts the truth to those kept: a group that loses "
-        "members is still to be found, smaller, and a group left with one person is no longer "
-        "an F-formation. The detector is not blamed for people it never saw, so the curve "
-        "measures whether partial groups are still recognised (F1 at T = 1 can even rise: "
-        "smaller groups are easier to match exactly).",
-        "- **Sensor** levels change the question as well as the difficulty: the head sensor "
-        "sees a handful of the guests (see people per frame), so its frames hold fewer and "
-        "smaller groups, cut by the edge of the field of view.",
-        "- **Density** stops at 0.5 guests per m²: in a smaller room `mingle`'s planner cannot "
-        "lay out 18 guests (at 0.6 per m² no seed works). Near the limit some seeds fail and "
-        "are drawn again, so those points hold the parties that fit (the tables count the "
-        "redraws). **Number of groups** grows the party in a room sized for 0.4 guests per m², "
-        "and **group size** keeps 18 guests there; `mingle` enlarges a room a drawn party does "
-        "not fit, so read the density they ran at in the guests/m² column.",
-        "- Scene axes draw a new party per level with the same seeds, so their levels differ "
-        "in the whole party, not only in the option; perturbation axes change nothing but "
-        "the tracking errors.",
-        "",
+        *_reading_notes(results),
     ]
     for axis in results.axes:
         lines += [f"## {axis.title}", "", axis.description, ""]
@@ -257,6 +245,50 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
             lines += [f"![{axis.title}]({plots[axis.name]})", ""]
         lines += _axis_tables(axis)
     return "\n".join(lines).rstrip() + "\n"
+
+
+# Notes on reading the curves, each shown when one of its axes ran.
+_READING_NOTES = (
+    (
+        ("dropout",),
+        "**Dropout** removes people and restricts the truth to those kept: a group that loses "
+        "members is still to be found, smaller, and a group left with one person is no longer "
+        "an F-formation. The detector is not blamed for people it never saw, so the curve "
+        "measures whether partial groups are still recognised (F1 at T = 1 can even rise: "
+        "smaller groups are easier to match exactly).",
+    ),
+    (
+        ("sensor",),
+        "**Sensor** levels change the question as well as the difficulty: the head sensor "
+        "sees a handful of the guests (see people per frame), so its frames hold fewer and "
+        "smaller groups, cut by the edge of the field of view.",
+    ),
+    (
+        ("density",),
+        "**Density** stops at 0.5 guests per m²: in a smaller room `mingle`'s planner cannot "
+        "lay out 18 guests (at 0.6 per m² no seed works). Near the limit some seeds fail and "
+        "are drawn again, so those points hold the parties that fit (the tables count the "
+        "redraws).",
+    ),
+    (
+        ("groups", "group-size"),
+        "**Number of groups** grows the party in a room sized for 0.4 guests per m², and "
+        "**group size** keeps 18 guests there; `mingle` enlarges a room a drawn party does not "
+        "fit, so read the density they ran at in the guests/m² column.",
+    ),
+    (
+        tuple(name for name, info in AXES.items() if info.kind == "scene"),
+        "Scene axes draw a new party per level with the same seeds, so their levels differ "
+        "in the whole party, not only in the option; perturbation axes change nothing but "
+        "the tracking errors.",
+    ),
+)
+
+
+def _reading_notes(results: StressResults) -> list[str]:
+    ran = {axis.name for axis in results.axes}
+    notes = [f"- {text}" for axes, text in _READING_NOTES if ran.intersection(axes)]
+    return ["Reading the curves:", "", *notes, ""] if notes else []
 
 
 def recording_names(results: StressResults) -> list[str]:

@@ -126,6 +126,25 @@ def test_report_files(results, tmp_path) -> None:
         assert f"/dataset/stress/{name}/GCFF" in paths
 
 
+def test_reading_notes_follow_the_axes_that_ran(results, tmp_path) -> None:
+    every = write_report(results, tmp_path / "all", command="c")["markdown"].read_text()
+    for word in ("**Dropout**", "**Sensor**", "**Density**", "**Number of groups**", "Scene axes"):
+        assert word in every
+    noise = [a for a in results.axes if a.name == "position-noise"]
+    only = write_report(
+        dataclasses.replace(results, axes=tuple(noise)), tmp_path / "n", command="c"
+    )
+    text = only["markdown"].read_text()
+    assert "## Position noise" in text and "Reading the curves" not in text
+    dropout = [a for a in results.axes if a.name in ("position-noise", "dropout")]
+    two = write_report(
+        dataclasses.replace(results, axes=tuple(dropout)), tmp_path / "t", command="c"
+    )
+    text = two["markdown"].read_text()
+    assert "**Dropout**" in text
+    assert "**Density**" not in text and "**Sensor**" not in text and "Scene axes" not in text
+
+
 def test_grid_validation() -> None:
     with pytest.raises(ValueError, match=r"StressGrid.dropout values must lie in \[0, 1\], got 2"):
         StressGrid(dropout=(0.0, 2.0))
