@@ -37,8 +37,8 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
@@ -54,6 +54,15 @@ from reform.perturb import Perturbation
 from reform.report import json_float
 from sim.episode import simulate_episode
 from sim.sensor import Sensor
+from sim.stress_grid import (
+    AXES,
+    BASE_PEOPLE,
+    GRIDS,
+    SENSOR_NAMES,
+    StressGrid,
+    check_axis,
+    resolve_grid,
+)
 
 __all__ = [
     "AXES",
@@ -88,7 +97,6 @@ _THRESHOLD_VALUES = {"2/3": T_TWO_THIRDS, "1": T_ONE}
 
 TEST_SCENARIO = "mingle"  # the party every point is scored on
 TRAINING_SCENARIOS = ("mingle", "word-improv")
-BASE_PEOPLE = 18  # guests of the test party (SALSA: 18)
 BASE_DENSITY_PER_M2 = 0.4  # guests per m² of the test party (mingle's default, SALSA-like)
 
 # Kinect-like tracking errors of the "tracker" sensor level (skeleton tracking of the robot's
@@ -97,18 +105,24 @@ TRACKER_POSITION_NOISE_M = 0.05
 TRACKER_YAW_NOISE_RAD = math.radians(10.0)
 TRACKER_DROPOUT = 0.05
 
-# The sensor levels: None is the ground truth of everyone in the room.
+# The sensor levels (`SENSOR_NAMES`): None is the ground truth of everyone in the room.
 SENSORS: Mapping[str, Sensor | None] = MappingProxyType(
-    {
-        "truth": None,
-        "fov": Sensor(occlusion=False),
-        "occlusion": Sensor(),
-        "tracker": Sensor(
-            position_noise=TRACKER_POSITION_NOISE_M,
-            yaw_noise=TRACKER_YAW_NOISE_RAD,
-            dropout=TRACKER_DROPOUT,
-        ),
-    }
+    dict(
+        zip(
+            SENSOR_NAMES,
+            (
+                None,
+                Sensor(occlusion=False),
+                Sensor(),
+                Sensor(
+                    position_noise=TRACKER_POSITION_NOISE_M,
+                    yaw_noise=TRACKER_YAW_NOISE_RAD,
+                    dropout=TRACKER_DROPOUT,
+                ),
+            ),
+            strict=True,
+        )
+    )
 )
 _SENSOR_TEXT = {
     "truth": "ground truth, everyone in the room",
@@ -127,247 +141,6 @@ _SEED_BITS = 63  # bits of a scenario seed (a non-negative int64)
 # most this many times.
 MAX_REDRAWS = 5
 ROBOT_VIEW_COST = 4.0  # a robot-view episode costs about this many ground-truth ones (rays)
-
-
-@dataclass(frozen=True)
-class _AxisInfo:
-    name: str
-    title: str
-    x_label: str
-    kind: str  # "perturb" (applied to the base episodes) or "scene" (a new episode per level)
-    description: str
-
-
-AXES: Mapping[str, _AxisInfo] = MappingProxyType(
-    {
-        info.name: info
-        for info in (
-            _AxisInfo(
-                "position-noise",
-                "Position noise",
-                "position noise (m, sd per axis)",
-                "perturb",
-                "Gaussian noise on every person's position, standard deviation per axis.",
-            ),
-            _AxisInfo(
-                "orientation-noise",
-                "Orientation noise",
-                "orientation noise (deg, sd)",
-                "perturb",
-                "Gaussian noise on every person's body (and head) yaw.",
-            ),
-            _AxisInfo(
-                "dropout",
-                "Tracking dropout",
-                "dropout (share of people missed per frame)",
-                "perturb",
-                "Each person missing from each frame independently with this probability; the "
-                "truth is restricted to the people kept.",
-            ),
-            _AxisInfo(
-                "density",
-                "Crowd density",
-                "density (guests per m²)",
-                "scene",
-                f"{BASE_PEOPLE} guests in a square room whose side gives this density.",
-            ),
-            _AxisInfo(
-                "groups",
-                "Number of groups",
-                "guests (at 0.4 per m²)",
-                "scene",
-                "More guests at the default density: more groups at once (see F-formations "
-                "per frame).",
-            ),
-            _AxisInfo(
-                "group-size",
-                "Size of groups",
-                "largest group allowed (people)",
-                "scene",
-                "The party's largest group (mingle's max_group_size); see the mean F-formation "
-                "size.",
-            ),
-            _AxisInfo(
-                "sensor",
-                "Sensor",
-                "sensor (0 truth, 1 field of view, 2 + occlusion, 3 + tracking errors)",
-                "scene",
-                "The party with the robot watching from the west wall, seen from the ground "
-                "truth or by the robot's head sensor.",
-            ),
-        )
-    }
-)
-
-
-def _floats(name: str, values: Iterable[Any], *, low: float, high: float) -> tuple[float, ...]:
-    out = []
-    for value in values:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"StressGrid.{name} must hold numbers, got {value!r}")
-        if not (math.isfinite(value) and low <= value <= high):
-            raise ValueError(
-                f"StressGrid.{name} values must lie in [{low:g}, {high:g}], got {value}"
-            )
-        out.append(float(value))
-    return tuple(out)
-
-
-def _ints(name: str, values: Iterable[Any], *, low: int, high: int) -> tuple[int, ...]:
-    out = []
-    for value in values:
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-            raise ValueError(f"StressGrid.{name} must hold integers, got {value!r}")
-        if not low <= value <= high:
-            raise ValueError(f"StressGrid.{name} values must lie in [{low}, {high}], got {value}")
-        out.append(int(value))
-    return tuple(out)
-
-
-# StressGrid's fields: name, kind (a tuple of floats or ints, or one float or int), bounds.
-_GRID_FIELDS = (
-    ("position_noise_m", "floats", 0.0, 5.0),
-    ("orientation_noise_deg", "floats", 0.0, 360.0),
-    ("dropout", "floats", 0.0, 1.0),
-    ("density_per_m2", "floats", 0.01, 1.0),
-    ("people", "ints", 2, 100),
-    ("max_group_size", "ints", 2, 12),
-    ("seeds", "int", 1, 10**6),
-    ("duration_s", "float", 1e-3, 1e6),
-    ("rate_hz", "float", 1e-3, 1e3),
-    ("train_episodes", "int", 1, 10**6),
-    ("train_duration_s", "float", 1e-3, 1e6),
-    ("train_rate_hz", "float", 1e-3, 1e3),
-    ("resamples", "int", 1, 10**7),
-    ("gcff_stride_grid_m", "floats", 0.0, 10.0),
-    ("gcff_mdl_grid_m2", "floats", 1e-6, 1e3),
-    ("gcff_tuning_frames", "int", 1, 10**7),
-)
-
-
-@dataclass(frozen=True)
-class StressGrid:
-    """The levels of every axis and the size of the run.
-
-    Attributes:
-        position_noise_m: position noise levels, metres (0-0.5).
-        orientation_noise_deg: orientation noise levels, degrees (0-60).
-        dropout: dropout levels, shares (0-0.5).
-        density_per_m2: guests per m² (mingle's planner lays out 18 guests up to about 0.5).
-        people: numbers of guests at the default density.
-        max_group_size: largest groups allowed (2-12).
-        sensors: sensor levels, names of :data:`SENSORS`.
-        seeds: test episodes per point.
-        duration_s: length of a test episode, seconds.
-        rate_hz: frames per second scored.
-        train_episodes: training episodes per training scenario.
-        train_duration_s: length of a training episode, seconds.
-        train_rate_hz: frames per second of the training set.
-        resamples: bootstrap resamples per point.
-        gcff_stride_grid_m: strides GCFF is tuned over, metres.
-        gcff_mdl_grid_m2: mdl values GCFF is tuned over, square metres.
-        gcff_tuning_frames: training frames GCFF is tuned on at most (evenly subsampled).
-    """
-
-    position_noise_m: tuple[float, ...] = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
-    orientation_noise_deg: tuple[float, ...] = (0.0, 10.0, 20.0, 30.0, 45.0, 60.0)
-    dropout: tuple[float, ...] = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)
-    density_per_m2: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5)
-    people: tuple[int, ...] = (6, 12, 18, 30, 48)
-    max_group_size: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
-    sensors: tuple[str, ...] = ("truth", "fov", "occlusion", "tracker")
-    seeds: int = 5
-    duration_s: float = 600.0
-    rate_hz: float = 0.5
-    train_episodes: int = 4
-    train_duration_s: float = 600.0
-    train_rate_hz: float = 0.5
-    resamples: int = 1000
-    gcff_stride_grid_m: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8)
-    gcff_mdl_grid_m2: tuple[float, ...] = (0.5, 1.0, 2.0, 3.0)
-    gcff_tuning_frames: int = 600
-
-    def __post_init__(self) -> None:
-        for name, kind, low, high in _GRID_FIELDS:
-            value = getattr(self, name)
-            if kind == "floats":
-                value = _floats(name, value, low=low, high=high)
-            elif kind == "ints":
-                value = _ints(name, value, low=int(low), high=int(high))
-            elif kind == "int":
-                (value,) = _ints(name, [value], low=int(low), high=int(high))
-            else:
-                (value,) = _floats(name, [value], low=low, high=high)
-            if kind in ("floats", "ints") and not value:
-                raise ValueError(f"StressGrid.{name} must hold at least one level, got none")
-            object.__setattr__(self, name, value)
-        sensors = tuple(self.sensors)
-        unknown = [s for s in sensors if s not in SENSORS]
-        if unknown or not sensors:
-            raise ValueError(f"StressGrid.sensors must be names of {tuple(SENSORS)}, got {sensors}")
-        object.__setattr__(self, "sensors", sensors)
-
-    def levels(self, axis: str) -> tuple[Any, ...]:
-        """The levels of ``axis`` (one of :data:`AXES`)."""
-        return {
-            "position-noise": self.position_noise_m,
-            "orientation-noise": self.orientation_noise_deg,
-            "dropout": self.dropout,
-            "density": self.density_per_m2,
-            "groups": self.people,
-            "group-size": self.max_group_size,
-            "sensor": self.sensors,
-        }[_check_axis(axis)]
-
-    def to_json(self) -> dict[str, Any]:
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
-
-
-GRIDS: Mapping[str, StressGrid] = MappingProxyType(
-    {
-        "default": StressGrid(),
-        "small": StressGrid(
-            position_noise_m=(0.0, 0.25, 0.5),
-            orientation_noise_deg=(0.0, 30.0, 60.0),
-            dropout=(0.0, 0.25, 0.5),
-            density_per_m2=(0.2, 0.4),
-            people=(6, 18),
-            max_group_size=(3, 8),
-            sensors=("truth", "occlusion"),
-            seeds=2,
-            duration_s=40.0,
-            rate_hz=0.5,
-            train_episodes=1,
-            train_duration_s=120.0,
-            train_rate_hz=0.5,
-            resamples=200,
-            gcff_stride_grid_m=(0.7,),
-            gcff_mdl_grid_m2=(1.0,),
-            gcff_tuning_frames=60,
-        ),
-    }
-)
-
-
-def resolve_grid(grid: StressGrid | str) -> tuple[str, StressGrid]:
-    """A grid and its name: ``grid`` itself or the grid of :data:`GRIDS` it names.
-
-    Returns:
-        The name (that of the equal grid of :data:`GRIDS`, else ``"custom"``) and the grid.
-    """
-    if isinstance(grid, str):
-        if grid not in GRIDS:
-            raise ValueError(f"grid must be one of {tuple(GRIDS)} or a StressGrid, got {grid!r}")
-        return grid, GRIDS[grid]
-    if not isinstance(grid, StressGrid):
-        raise ValueError(f"grid must be a StressGrid or a name, got {type(grid).__name__}")
-    return next((n for n, g in GRIDS.items() if g == grid), "custom"), grid
-
-
-def _check_axis(axis: str) -> str:
-    if axis not in AXES:
-        raise ValueError(f"axis must be one of {tuple(AXES)}, got {axis!r}")
-    return axis
 
 
 def episode_seed(seed: int, role: int, *keys: int) -> int:
@@ -957,7 +730,7 @@ def run_stress(
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
         raise ValueError(f"jobs must be None or an int >= 1, got {jobs!r}")
-    names = tuple(AXES) if axes is None else tuple(_check_axis(a) for a in axes)
+    names = tuple(AXES) if axes is None else tuple(check_axis(a) for a in axes)
     workers = _cpu_count() if jobs is None else jobs
     say = progress if progress is not None else (lambda _line: None)
     timings: dict[str, float] = {}
