@@ -7,7 +7,8 @@ Measured in the same run, each a fresh interpreter (wall time, median of ``--rep
 * **data info --help**, **evaluate --help**: one subcommand's arguments added (evaluate's pull
   in the Rerun flags of `sim.recording`, which import neither rerun nor reform's modules);
 * **train --help**, **stress --help**: subcommands whose arguments list reform's classifiers
-  (scikit-learn) and the stress test's grids (`sim.stress`: scikit-learn, MuJoCo);
+  (`reform.classifiers`, which imports scikit-learn) and the stress tests' grids
+  (`sim.stress_grid`, which imports neither scikit-learn nor MuJoCo);
 * **import reform**: the package alone, its public names loaded on first use;
 * **every parser** (the baseline): gymnasium imported and every subcommand's arguments added, as
   building the parser did before subcommands were added on use.
