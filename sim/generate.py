@@ -23,7 +23,10 @@ dataset has. The same parameters therefore give byte-identical shards and cards.
 **Resuming.** A shard is written to a temporary file and renamed into place
 (`reform.atomic.atomic_path`), so it is either complete or absent: a run that is killed leaves no
 half-written shard, and the next run with the same parameters skips the episodes already
-written and simulates the rest. Asking for more episodes than a folder holds extends it. A folder
+written and simulates the rest. Each shard already there is first checked, from its footer alone,
+to be its episode's (the episode, seed, sequence and parameters in its metadata, the values of
+its ``sequence`` column): one copied or moved from another episode or dataset is refused, naming
+the file, and nothing is changed. Asking for more episodes than a folder holds extends it. A folder
 holding another dataset (a card with other parameters) or other files is refused before any work
 starts, and so is a folder another run is writing.
 
@@ -83,6 +86,7 @@ LOCK_FILE = ".generate.lock"
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
 SEED_BITS = 63  # bits of an episode seed (a non-negative int64)
+SHOWN_PROBLEMS = 3  # shards named in the error when several are not where they belong
 
 
 def episode_seed(seed: int, episode: int) -> int:
@@ -657,16 +661,63 @@ def _finished(out_dir: Path, spec: GenerationSpec, episode: int, save_recordings
     return not save_recordings or _recording_path(out_dir, episode).is_file()
 
 
-def _shard_summary_from_file(path: Path) -> ShardSummary:
-    """The summary a finished shard carries in its metadata (its schema, not its rows)."""
+def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict[int, ShardSummary]:
+    """The summaries of the shards already in the folder, each checked to be its episode's.
+
+    A shard copied or moved to another episode's place would otherwise be taken for that
+    episode, and the folder called complete while reading it fails. Nothing is changed when one
+    is wrong: the error lists the files, for the user to delete (to make them again) or put back.
+
+    Raises:
+        ValueError: a shard is not the one its place says (other episode, seed, sequence or
+            parameters), or not a shard of reform-sim generate; naming each such file.
+    """
+    from reform.datasets.errors import DataFormatError
+
+    shards: dict[int, ShardSummary] = {}
+    problems: list[DataFormatError] = []
+    for k in range(episodes):
+        path = shard_path(out_dir, spec.scenario, k)
+        if not path.is_file():
+            continue
+        try:
+            shards[k] = _checked_shard(path, spec, k)
+        except DataFormatError as exc:
+            problems.append(exc)
+    if problems:
+        shown = "; ".join(str(p) for p in problems[:SHOWN_PROBLEMS])
+        more = len(problems) - SHOWN_PROBLEMS
+        raise ValueError(
+            f"out_dir {out_dir}: {len(problems)} of the {len(problems) + len(shards)} shards "
+            f"already there {'is' if len(problems) == 1 else 'are'} not the episode "
+            f"{'its place says' if len(problems) == 1 else 'their places say'}: {shown}"
+            + (f"; and {more} more" if more > 0 else "")
+            + ". Nothing was changed: delete the file(s) named to have them made again, or "
+            "put the right ones back"
+        ) from problems[0]
+    return shards
+
+
+def _checked_shard(path: Path, spec: GenerationSpec, episode: int) -> ShardSummary:
+    """The summary a finished shard carries, after checking that it is episode ``episode`` of
+    this dataset: its metadata's episode, seed, sequence and parameters, and its ``sequence``
+    column. Only the footer is read (metadata and row-group statistics), plus the first row
+    group's sequence values when the file has no statistics; never the frames.
+
+    Raises:
+        DataFormatError: naming the file, what was expected and what was found.
+    """
     import pyarrow.parquet as pq
 
     from reform.datasets.errors import DataFormatError
     from reform.datasets.parquet import METADATA_KEY
 
     try:
-        raw = (pq.read_schema(path).metadata or {})[METADATA_KEY]
-        return ShardSummary.from_json(json.loads(raw)["metadata"]["episode"])
+        handle = pq.ParquetFile(path)
+        raw = (handle.schema_arrow.metadata or {})[METADATA_KEY]
+        metadata = json.loads(raw)["metadata"]
+        summary = ShardSummary.from_json(metadata["episode"])
+        parameters = metadata["parameters"]
     except Exception as exc:
         raise DataFormatError(
             path,
@@ -675,6 +726,66 @@ def _shard_summary_from_file(path: Path) -> ShardSummary:
             "a shard written by reform-sim generate (metadata.episode)",
             f"{type(exc).__name__}: {exc}",
         ) from exc
+    expected = _summary(spec, episode, 0, 0, 0, {})
+    if (summary.episode, summary.seed, summary.sequence) != (
+        expected.episode,
+        expected.seed,
+        expected.sequence,
+    ):
+        raise DataFormatError(
+            path,
+            None,
+            "metadata.episode",
+            f"the shard of {_episode_text(expected)}",
+            f"the shard of {_episode_text(summary)}",
+        )
+    wanted = spec.parameters()
+    differing = sorted(
+        k for k in set(parameters) | set(wanted) if parameters.get(k) != wanted.get(k)
+    )
+    if differing:
+        details = ", ".join(
+            f"{k} {json.dumps(parameters.get(k))} (expected {json.dumps(wanted.get(k))})"
+            for k in differing
+        )
+        raise DataFormatError(
+            path,
+            None,
+            "metadata.parameters",
+            f"the parameters of this dataset's {CARD_JSON}",
+            f"a shard of another dataset: {details}",
+        )
+    found = _sequences(handle)
+    if found != {expected.sequence}:
+        raise DataFormatError(
+            path,
+            None,
+            "sequence",
+            f"frames of sequence {expected.sequence!r} only ({_episode_text(expected)})",
+            f"sequence(s) {sorted(found)}",
+        )
+    return summary
+
+
+def _episode_text(summary: ShardSummary) -> str:
+    return f"episode {summary.episode} (sequence {summary.sequence!r}, seed {summary.seed})"
+
+
+def _sequences(handle: Any) -> set[str]:
+    """The values of a Parquet file's ``sequence`` column: from the statistics of every row
+    group when written, else the first row group's values."""
+    metadata = handle.metadata
+    column = handle.schema_arrow.get_field_index("sequence")
+    if column < 0:
+        return set()
+    values: set[str] = set()
+    for group in range(metadata.num_row_groups):
+        stats = metadata.row_group(group).column(column).statistics
+        if stats is None or not stats.has_min_max:
+            table = handle.read_row_group(0, columns=["sequence"])
+            return {str(v) for v in table.column("sequence").unique().to_pylist()}
+        values.update((str(stats.min), str(stats.max)))
+    return values
 
 
 # ------------------------------------------------------------------------------------------
@@ -1015,8 +1126,9 @@ def generate_dataset(
     with _folder_lock(out_dir):
         _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
         _remove_stale_temporaries(out_dir)
-        done = [k for k in range(episodes) if _finished(out_dir, spec, k, save_recordings)]
-        shards = {k: _shard_summary_from_file(shard_path(out_dir, scenario, k)) for k in done}
+        existing = _existing_shards(out_dir, spec, episodes)
+        done = [k for k in existing if _finished(out_dir, spec, k, save_recordings)]
+        shards = {k: existing[k] for k in done}
         todo = [k for k in range(episodes) if k not in shards]
         _write_cards(
             out_dir,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -15,7 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reform.datasets import load_dataset, read_parquet
+from reform.datasets import load_dataset, read_parquet, write_parquet
+from reform.frame import Dataset
 from sim.cli import main
 from sim.episode import simulate_episode
 from sim.generate import (
@@ -410,3 +412,88 @@ def test_shard_metadata_says_where_it_came_from(reference):
     assert meta["scenario"]["seed"] == episode_seed(SEED, 2)
     assert meta["scenario"]["options"]["radius"] == 0.6
     assert json.loads(json.dumps(dict(meta))) == dict(meta)
+
+
+def copy_of(reference: Path, out: Path) -> Path:
+    shutil.copytree(reference, out, ignore=shutil.ignore_patterns(".*"))
+    return out
+
+
+def test_a_shard_copied_to_another_episode_is_refused_on_resume(reference, tmp_path, capsys):
+    out = copy_of(reference, tmp_path / "data")
+    moved = shard_path(out, SCENARIO, 1)
+    shutil.copyfile(shard_path(out, SCENARIO, 2), moved)
+    before = contents(out)
+    expected = (
+        rf"out_dir .*: 1 of the 4 shards already there is not the episode its place says: "
+        rf".*episode=1/part\.parquet: field 'metadata\.episode': expected the shard of episode "
+        rf"1 \(sequence '{SCENARIO}-1', seed {episode_seed(SEED, 1)}\), found the shard of "
+        rf"episode 2 \(sequence '{SCENARIO}-2', seed {episode_seed(SEED, 2)}\)\. Nothing was "
+        r"changed: delete the file\(s\) named"
+    )
+    with pytest.raises(ValueError, match=expected):
+        generate(out)
+    assert main(["generate", *ARGS, "--out", str(out), "--no-progress"]) == 2
+    assert "episode=1/part.parquet: field 'metadata.episode'" in capsys.readouterr().err
+    assert contents(out) == before  # nothing regenerated, the card left as it was
+    moved.unlink()  # the user's say: the file goes, the next run makes it again
+    assert generate(out).generated == (1,)
+    assert contents(out) == contents(reference)
+
+
+def test_a_shard_of_another_dataset_is_refused_on_resume(reference, tmp_path):
+    short = tmp_path / "short"
+    generate(short, episodes=2, duration=5.0)  # same episodes and seeds, another duration
+    out = copy_of(reference, tmp_path / "data")
+    shutil.copyfile(shard_path(short, SCENARIO, 1), shard_path(out, SCENARIO, 1))
+    with pytest.raises(
+        ValueError,
+        match=r"episode=1/part\.parquet: field 'metadata\.parameters': expected the parameters "
+        r"of this dataset's dataset\.json, found a shard of another dataset: duration_s 5\.0 "
+        r"\(expected 300\.0\)",
+    ):
+        generate(out)
+
+
+@pytest.mark.parametrize("statistics", [True, False], ids=["statistics", "no-statistics"])
+def test_a_shard_whose_frames_are_another_sequence_is_refused_on_resume(
+    reference, tmp_path, statistics
+):
+    import pyarrow.parquet as pq
+
+    out = copy_of(reference, tmp_path / "data")
+    # Episode 1's metadata over episode 2's frames: only the sequence column tells.
+    path = shard_path(out, SCENARIO, 1)
+    shard = read_parquet(path)
+    frames = read_parquet(shard_path(out, SCENARIO, 2)).frames
+    write_parquet(
+        Dataset(frames=frames, name=shard.name, source=shard.source, metadata=shard.metadata),
+        path,
+    )
+    if not statistics:  # the check then reads the first row group's sequence values
+        for k in (0, 1):
+            table = pq.read_table(shard_path(out, SCENARIO, k))
+            pq.write_table(table, shard_path(out, SCENARIO, k), write_statistics=False)
+        assert not pq.ParquetFile(path).metadata.row_group(0).column(0).is_stats_set
+    with pytest.raises(
+        ValueError,
+        match=rf"1 of the 4 shards .*episode=1/part\.parquet: field 'sequence': expected frames "
+        rf"of sequence '{SCENARIO}-1' only \(episode 1 .*\), found sequence\(s\) "
+        rf"\['{SCENARIO}-2'\]",
+    ):
+        generate(out)
+
+
+def test_every_wrong_shard_is_named_on_resume(reference, tmp_path):
+    out = copy_of(reference, tmp_path / "data")
+    shard_path(out, SCENARIO, 1).write_bytes(b"not parquet")
+    shutil.copyfile(shard_path(out, SCENARIO, 0), shard_path(out, SCENARIO, 3))
+    with pytest.raises(ValueError, match=r"2 of the 4 shards already there are not") as caught:
+        generate(out)
+    message = str(caught.value)
+    assert (
+        "episode=1/part.parquet: field 'schema metadata': expected a shard written by "
+        "reform-sim generate" in message
+    )
+    assert "episode=3/part.parquet: field 'metadata.episode'" in message
+    assert "episode=0/" not in message and "episode=2/" not in message
