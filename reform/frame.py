@@ -30,6 +30,10 @@ KINDS = (HUMAN, ROBOT)
 # (Babble's -3.142) are accepted as wrapped. Radians.
 _YAW_TOLERANCE_RAD = 2e-3
 
+# Largest |x| or |y| of a position, metres (100 km): nothing on a floor is farther from the
+# origin; a larger value is a corrupt number or a unit mistake, and squaring it overflows.
+POSITION_LIMIT_M = 1e5
+
 Group = tuple[int, ...]
 
 
@@ -55,6 +59,16 @@ def _float_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
     return array
 
 
+def _check_extent(name: str, position: np.ndarray, ids: np.ndarray) -> None:
+    beyond = np.abs(position) > POSITION_LIMIT_M  # NaN (a missing head) compares False
+    if beyond.any():
+        row, column = np.argwhere(beyond)[0]
+        raise ValueError(
+            f"{name} must be metres with |x|, |y| <= {POSITION_LIMIT_M:g}, got "
+            f"{'xy'[column]} = {float(position[row, column])!r} for person {int(ids[row])}"
+        )
+
+
 def _check_yaw(name: str, yaw: np.ndarray) -> None:
     beyond = np.abs(yaw) > math.pi + _YAW_TOLERANCE_RAD  # NaN (a missing head) compares False
     if beyond.any():
@@ -72,7 +86,8 @@ class Frame:
     Attributes:
         ids: (n,) int64 person ids, unique within the frame.
         kinds: n strings, each ``"human"`` or ``"robot"``.
-        position: (n, 2) float64 body (torso) ground-plane position, metres. Finite.
+        position: (n, 2) float64 body (torso) ground-plane position, metres. Finite, with
+            ``|x|, |y| <=`` :data:`POSITION_LIMIT_M`.
         yaw: (n,) float64 body yaw, radians CCW from +x, within [-pi, pi]. Finite.
         head_position: optional (n, 2) float64 head ground-plane position, metres. A row of
             NaN means that person's head was not observed; a row is either all finite or NaN.
@@ -111,6 +126,7 @@ class Frame:
         position = _float_array("position", self.position, (n, 2))
         if not np.isfinite(position).all():
             raise ValueError("position must be finite, got NaN or inf")
+        _check_extent("position", position, ids)
         yaw = _float_array("yaw", self.yaw, (n,))
         if not np.isfinite(yaw).all():
             raise ValueError("yaw must be finite, got NaN or inf")
@@ -139,6 +155,7 @@ class Frame:
                 missing_pos[:, 0] != missing_yaw
             ).any():
                 raise ValueError("a head is either fully observed (x, y, yaw) or fully NaN")
+            _check_extent("head_position", head_position, ids)
             _check_yaw("head_yaw", head_yaw)
 
         groups = None
@@ -294,6 +311,19 @@ def check_frames(frames: Iterable[Any], *, caller: str | None = None) -> tuple[F
     return frames
 
 
+def _check_time_order(frames: Sequence[Frame]) -> None:
+    """Raises unless every sequence's times increase strictly in the order given."""
+    last: dict[str, tuple[int, float]] = {}
+    for k, frame in enumerate(frames):
+        previous = last.get(frame.sequence)
+        if previous is not None and not frame.time > previous[1]:
+            raise ValueError(
+                f"frames[{k}].time must increase within sequence {frame.sequence!r}: expected "
+                f"> {previous[1]!r} (frames[{previous[0]}]), got {frame.time!r}"
+            )
+        last[frame.sequence] = (k, frame.time)
+
+
 def complete_partition(groups: Iterable[Sequence[int]], ids: Iterable[int]) -> tuple[Group, ...]:
     """``groups`` plus a singleton for every id in no group (in ``ids`` order)."""
     groups = tuple(tuple(int(m) for m in g) for g in groups)
@@ -304,6 +334,9 @@ def complete_partition(groups: Iterable[Sequence[int]], ids: Iterable[int]) -> t
 @dataclass(frozen=True, eq=False)
 class Dataset:
     """An ordered sequence of frames with its provenance.
+
+    Within each sequence the frames' times increase strictly, in the order the frames are
+    given (frames of different sequences may interleave).
 
     Attributes:
         frames: the frames, in recording order (sequence by sequence, time increasing).
@@ -323,6 +356,7 @@ class Dataset:
         frames = check_frames(self.frames)
         if self.units != "m":
             raise ValueError(f"units must be 'm' (loaders convert to metres), got {self.units!r}")
+        _check_time_order(frames)
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "metadata", MappingProxyType(dict(self.metadata)))
 

@@ -762,7 +762,7 @@ def _checked_shard(path: Path, spec: GenerationSpec, episode: int) -> ShardSumma
             None,
             "sequence",
             f"frames of sequence {expected.sequence!r} only ({_episode_text(expected)})",
-            f"sequence(s) {sorted(found)}",
+            "no sequence column" if found is None else f"sequence(s) {sorted(found)}",
         )
     return summary
 
@@ -771,13 +771,14 @@ def _episode_text(summary: ShardSummary) -> str:
     return f"episode {summary.episode} (sequence {summary.sequence!r}, seed {summary.seed})"
 
 
-def _sequences(handle: Any) -> set[str]:
-    """The values of a Parquet file's ``sequence`` column: from the statistics of every row
-    group when written, else the first row group's values."""
+def _sequences(handle: Any) -> set[str] | None:
+    """The values of a Parquet file's ``sequence`` column (``None`` without one): from the
+    statistics of every row group when written, else the first row group's values."""
     metadata = handle.metadata
-    column = handle.schema_arrow.get_field_index("sequence")
-    if column < 0:
-        return set()
+    paths = [metadata.schema.column(i).path for i in range(metadata.num_columns)]
+    if "sequence" not in paths:
+        return None
+    column = paths.index("sequence")
     values: set[str] = set()
     for group in range(metadata.num_row_groups):
         stats = metadata.row_group(group).column(column).statistics

@@ -119,6 +119,14 @@ def test_arrays_are_read_only_copies():
         ({"groups": (3,)}, r"groups\[0\] must be a sequence of person ids, got 3"),
         ({"groups": ((True, 2),)}, r"groups\[0\] must hold integer person ids, got True"),
         ({"time": math.inf}, "time must be finite, got inf"),
+        (
+            {"position": [[0.0, 0.0], [1e200, 0.0], [0.0, 1.0]]},
+            r"position must be metres with \|x\|, \|y\| <= 100000, got x = 1e\+200 for person 1",
+        ),
+        (
+            {"head_position": [[0, 0], [1, 0], [0, -2e5]], "head_yaw": [0, 0, 0]},
+            r"head_position must be metres .*got y = -200000.0 for person 2",
+        ),
         ({"time": None}, "time must be a number of seconds, got None"),
     ],
     ids=lambda v: v if isinstance(v, str) and len(v) < 30 else None,
@@ -211,3 +219,16 @@ def test_dataset_validation():
         Dataset(frames=(), name="d", units="cm")
     with pytest.raises(TypeError, match=r"frames\[1\] must be a reform.Frame, got dict"):
         Dataset(frames=(_frame(), {}), name="d")  # type: ignore[arg-type]
+
+
+def test_dataset_times_increase_within_each_sequence():
+    a0, b0, a1 = _frame(time=0.0), _frame(sequence="b", time=9.0), _frame(time=0.5)
+    assert len(Dataset(frames=(a0, b0, a1), name="d")) == 3  # sequences may interleave
+    with pytest.raises(
+        ValueError,
+        match=r"frames\[2\].time must increase within sequence 's': expected > 0.5 "
+        r"\(frames\[0\]\), got 0.0",
+    ):
+        Dataset(frames=(a1, b0, a0), name="d")
+    with pytest.raises(ValueError, match=r"frames\[1\].time .*expected > 0.0 .*got 0.0"):
+        Dataset(frames=(a0, a0), name="d")

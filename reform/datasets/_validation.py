@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from reform.datasets.errors import DataFormatError
-from reform.frame import Frame
+from reform.frame import POSITION_LIMIT_M, Frame
 
 # Largest |angle| accepted from a file that stores wrapped radians (GCFF, Babble): pi plus the
 # rounding of values written with three decimals (Babble's -3.142). Radians.
@@ -55,6 +55,58 @@ def check_finite(value: float, *, path: Path, where: str, field: str) -> float:
     if not math.isfinite(value):
         raise DataFormatError(path, where, field, "a finite number", repr(value))
     return value
+
+
+def check_coordinate(
+    value: float, *, path: Path, where: str, field: str, per_metre: float = 1.0
+) -> float:
+    """``value`` (a position coordinate in file units) if finite and a plausible distance.
+
+    Args:
+        value: the coordinate as stored.
+        per_metre: file units per metre (100 for centimetres); the bound is
+            :data:`reform.frame.POSITION_LIMIT_M` metres.
+    """
+    check_finite(value, path=path, where=where, field=field)
+    limit = POSITION_LIMIT_M * per_metre
+    if abs(value) > limit:
+        unit = "m" if per_metre == 1.0 else "file units"
+        raise DataFormatError(
+            path,
+            where,
+            field,
+            f"a position with |value| <= {limit:g} {unit} (farther looks like a corrupt value)",
+            repr(value),
+        )
+    return value
+
+
+def check_time_increases(
+    time: float,
+    previous: float | None,
+    *,
+    path: Path,
+    where: str,
+    field: str,
+    previous_where: str | None,
+    found: str | None = None,
+) -> float:
+    """``time`` if it is later than ``previous`` (the sequence's last time; None at its start).
+
+    Args:
+        previous_where: where ``previous`` was read (``"line 3"``), for the message.
+        found: the value as the file writes it, for the message (default ``repr(time)``).
+    """
+    if previous is not None and not time > previous:
+        raise DataFormatError(
+            path,
+            where,
+            field,
+            f"a time > {previous!r} (that of the sequence's previous frame, {previous_where}): "
+            "time increases within a sequence",
+            repr(time) if found is None else found,
+        )
+    return time
 
 
 def check_angle(value: float, *, limit: float, path: Path, where: str, field: str) -> float:

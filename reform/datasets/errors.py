@@ -9,9 +9,9 @@ class DataFormatError(ValueError):
     """A data file does not hold what its format promises.
 
     The message names the file, where in it (line, frame, row), the field, what was expected
-    and what was found, e.g.::
+    and what was found, then what to do about it when there is something to do, e.g.::
 
-        features.txt: line 12: field 'x' of person 3: expected a finite number, found 'nan'
+        features.txt: line 12, person 3: field 'x': expected a finite number, found 'nan'
     """
 
     def __init__(
@@ -21,15 +21,18 @@ class DataFormatError(ValueError):
         field: str | None,
         expected: str,
         found: str,
+        hint: str | None = None,
     ) -> None:
         self.path = Path(path)
         self.where = where
         self.field = field
         self.expected = expected
         self.found = found
+        self.hint = hint
         parts = [str(self.path)]
         if where:
             parts.append(where)
         detail = f"field {field!r}: " if field else ""
         parts.append(f"{detail}expected {expected}, found {found}")
-        super().__init__(": ".join(parts))
+        message = ": ".join(parts)
+        super().__init__(f"{message}; {hint}" if hint else message)
