@@ -139,6 +139,27 @@ def test_new_session_on_time_decrease_and_gt_matched_by_string(tmp_path):
     assert [f.annotated for f in dataset] == [False, True, True]
 
 
+@pytest.mark.parametrize(
+    ("time", "found"),
+    [
+        pytest.param(None, r"'6.2'", id="line-duplicated"),
+        pytest.param("6.24", r"'6.24' \(t = 6.2\)", id="same-time-once-rounded"),
+    ],
+)
+def test_repeated_time_within_a_session(salsa_dir, tmp_path, time, found):
+    features, groups = _copy_head(salsa_dir, tmp_path, n=5)
+    assert features[2].startswith("6.2 ")
+    repeated = features[2] if time is None else time + features[2][len("6.2") :]
+    features.insert(3, repeated)  # two session1 frames at t = 6.2
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(
+        DataFormatError,
+        match=r"features.txt: line 4: field 't': expected a time > 6.2 \(that of the sequence's "
+        r"previous frame, line 3, t = 6.2\): time increases within a sequence, found " + found,
+    ):
+        load_salsa(folder)
+
+
 def test_truncated_feature_line(salsa_dir, tmp_path):
     features, groups = _copy_head(salsa_dir, tmp_path)
     features[1] = features[1].rsplit(" ", 3)[0]
@@ -166,6 +187,21 @@ def test_truncated_feature_line(salsa_dir, tmp_path):
             "135.0",
             r"line 1, person 1: field 'body': expected an angle in radians.*degrees.*135",
             id="angle-in-degrees",  # person 1's body angle written in degrees
+        ),
+        pytest.param(
+            2,
+            2,
+            "1e200",
+            r"line 2, person 1: field 'x': expected a position with \|value\| <= 100000 m"
+            r" \(farther looks like a corrupt value\), found 1e\+200",
+            id="huge-position",  # finite, but overflows once squared
+        ),
+        pytest.param(
+            3,
+            8,
+            "-3e5",
+            r"line 3, person 2: field 'y': expected a position .*found -300000.0",
+            id="far-position",
         ),
     ],
 )

@@ -10,7 +10,8 @@ A DANTE folder holds two files:
   time string identical to the matching ``features.txt`` line.
 
 The time restarts when a new session begins: every decrease of ``t`` opens a new sequence
-(``session1``, ``session2``, ...). SALSA's session-2 time strings carry a +2e-5 offset, so a frame's
+(``session1``, ``session2``, ...); within a session ``t`` increases (a repeated ``t`` is an
+error). SALSA's session-2 time strings carry a +2e-5 offset, so a frame's
 ``time`` is ``round(float(t), 1)`` and ground-truth lines are matched to feature lines by their
 exact time string, in file order.
 """
@@ -28,6 +29,8 @@ import numpy as np
 from reform.datasets._validation import (
     UNWRAPPED_ANGLE_LIMIT_RAD,
     check_angle,
+    check_coordinate,
+    check_time_increases,
     check_unique_ids,
     make_frame,
     parse_float,
@@ -206,8 +209,19 @@ def _read_features(path: Path) -> tuple[list[_Row], int]:
                     f"{len(tokens)} tokens (truncated line?)",
                 )
             time_value = parse_float(tokens[0], path=path, where=where, field="t")
+            time = round(time_value, _TIME_DECIMALS)
             if previous_time is not None and time_value < previous_time:
-                session += 1
+                session += 1  # the time restarts: a new session
+            elif rows:
+                check_time_increases(
+                    time,
+                    rows[-1].time,
+                    path=path,
+                    where=where,
+                    field="t",
+                    previous_where=f"line {rows[-1].line}, t = {rows[-1].time_string}",
+                    found=repr(tokens[0]) + (f" (t = {time!r})" if str(time) != tokens[0] else ""),
+                )
             previous_time = time_value
 
             ids: list[int] = []
@@ -229,6 +243,8 @@ def _read_features(path: Path) -> tuple[list[_Row], int]:
                 person_where = f"{where}, person {person}"
                 x = parse_float(block[1], path=path, where=person_where, field="x")
                 y = parse_float(block[2], path=path, where=person_where, field="y")
+                check_coordinate(x, path=path, where=person_where, field="x")
+                check_coordinate(y, path=path, where=person_where, field="y")
                 body = parse_float(block[3], path=path, where=person_where, field="body")
                 head = parse_float(block[4], path=path, where=person_where, field="head")
                 for name, angle in (("body", body), ("head", head)):
@@ -248,7 +264,7 @@ def _read_features(path: Path) -> tuple[list[_Row], int]:
                     line=line_number,
                     time_string=tokens[0],
                     sequence=f"session{session}",
-                    time=round(time_value, _TIME_DECIMALS),
+                    time=time,
                     ids=np.array(ids, dtype=np.int64),
                     position=array[:, :2],
                     yaw=wrap_angle(array[:, 2]),
