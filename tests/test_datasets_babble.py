@@ -192,6 +192,38 @@ def test_truncated_line(babble_dir, tmp_path):
             r"line 2 \(frame 1\): field 'Name': .*found id 1 twice",
             id="duplicate-participant",  # block 2 named participant 1
         ),
+        pytest.param(
+            3,
+            9,
+            "xx:yy",
+            r"line 3 \(frame 2\), participant 1"
+            r": field 'Time': expected a time like H:MM:SS, found 'xx:yy'",
+            id="bad-time-of-the-first-participant",
+        ),
+        pytest.param(
+            3,
+            19,
+            "5:48:51",
+            r"line 3 \(frame 2\), participant 2"
+            r": field 'Time': expected the line's Time, 5:48:50 \(participant 1\), found '5:48:51'",
+            id="time-differs-between-participants",
+        ),
+        pytest.param(
+            3,
+            8,
+            "283206.5",
+            r"line 3 \(frame 2\), participant 1"
+            r": field 'FrameNum': expected an integer Vicon frame number, found '283206.5'",
+            id="fractional-frame-number",
+        ),
+        pytest.param(
+            3,
+            14,
+            "1e200",
+            r"line 3 \(frame 2\), participant 2"
+            r": field 'TorsoX': expected a position with \|value\| <= 100000 m.*found 1e\+200",
+            id="huge-position",
+        ),
     ],
 )
 def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
@@ -199,6 +231,20 @@ def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
     _set_field(lines, line, field, value)
     _write(folder, lines, annotations)
     with pytest.raises(DataFormatError, match=message):
+        load_babble(folder)
+
+
+def test_repeated_frame_number(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    previous = lines[2].split(",")[8]
+    for block in range(7):  # every participant of line 4 carries line 3's FrameNum
+        _set_field(lines, 4, 10 * block + 8, previous)
+    _write(folder, lines, annotations)
+    with pytest.raises(
+        DataFormatError,
+        match=r"line 4 \(frame 3\): field 'FrameNum': expected a Vicon frame number above "
+        rf"{previous} \(line 3\): time increases, found {previous}",
+    ):
         load_babble(folder)
 
 

@@ -42,6 +42,7 @@ import numpy as np
 from reform.datasets._validation import (
     WRAPPED_ANGLE_LIMIT_RAD,
     check_angle,
+    check_coordinate,
     check_unique_ids,
     make_frame,
     parse_float,
@@ -264,7 +265,7 @@ def _place_heads(
 def _clock_seconds(text: str, *, path: Path, where: str) -> float:
     match = _CLOCK.match(text.strip())
     if match is None:
-        raise DataFormatError(path, where, "Time", "a wall clock h:mm:ss", repr(text))
+        raise DataFormatError(path, where, "Time", "a time like H:MM:SS", repr(text))
     hours, minutes, seconds = (int(g) for g in match.groups())
     return float(hours * 3600 + minutes * 60 + seconds)
 
@@ -307,7 +308,7 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
             )
         row_ids: list[int] = []
         row: list[float] = []
-        counter = clock_text = None
+        counter = clock_text = first = None
         for b in range(n_blocks):
             block = fields[b * _BLOCK : (b + 1) * _BLOCK]
             name = block[0].strip()
@@ -321,6 +322,8 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
             triple_values = []
             for k in range(1, 7):
                 value = parse_float(block[k], path=path, where=person_where, field=_FIELDS[k])
+                if k in (1, 2, 4, 5):
+                    check_coordinate(value, path=path, where=person_where, field=_FIELDS[k])
                 if k in (3, 6):
                     check_angle(
                         value,
@@ -332,15 +335,29 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
                 triple_values.append(value)
             row.extend(triple_values)
             block_counter = parse_float(block[8], path=path, where=person_where, field="FrameNum")
+            if not block_counter.is_integer():
+                raise DataFormatError(
+                    path, person_where, "FrameNum", "an integer Vicon frame number", repr(block[8])
+                )
+            block_clock = block[9].strip()
+            _clock_seconds(block_clock, path=path, where=person_where)
             if counter is None:
-                counter, clock_text = block_counter, block[9]
-            elif block_counter != counter or block[9].strip() != clock_text.strip():
+                counter, clock_text, first = block_counter, block_clock, person
+            elif block_counter != counter:
                 raise DataFormatError(
                     path,
                     person_where,
-                    "FrameNum/Time",
-                    f"the line's FrameNum {counter:g} and Time {clock_text.strip()}",
-                    f"{block_counter:g} and {block[9].strip()}",
+                    "FrameNum",
+                    f"the line's FrameNum, {counter:.0f} (participant {first})",
+                    repr(block[8].strip()),
+                )
+            elif block_clock != clock_text:
+                raise DataFormatError(
+                    path,
+                    person_where,
+                    "Time",
+                    f"the line's Time, {clock_text} (participant {first})",
+                    repr(block_clock),
                 )
         check_unique_ids(row_ids, path=path, where=where, field="Name")
         if ids is None:
@@ -354,8 +371,9 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
                 path,
                 where,
                 "FrameNum",
-                f"a Vicon frame number above {counters[-1]:g}",
-                f"{counter:g}",
+                f"a Vicon frame number above {counters[-1]:.0f} (line {line_number - 1}): "
+                "time increases",
+                f"{counter:.0f}",
             )
         clock = _clock_seconds(clock_text, path=path, where=where) + day_offset
         if clocks and clock < clocks[-1]:
