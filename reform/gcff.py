@@ -661,44 +661,12 @@ class Gcff(BaseEstimator):
             **kwargs: other parameters (``orientation``).
 
         Raises:
-            DataFormatError: the file is unreadable or ``stride`` / ``mdl`` is missing or not a
-                finite numeric scalar.
+            DataFormatError: the file is missing or unreadable, or ``stride`` / ``mdl`` is
+                missing, not a numeric scalar, or out of range (``stride >= 0``, ``mdl > 0``).
         """
-        from reform.datasets.errors import DataFormatError
+        from reform.datasets.gcff_mat import read_settings
 
-        path = Path(path)
-        try:
-            from scipy.io import loadmat
-
-            mat = loadmat(path, squeeze_me=False)
-        except FileNotFoundError:
-            raise DataFormatError(
-                path, None, None, "a settings_gc.mat file", "no such file"
-            ) from None
-        except Exception as exc:  # scipy raises ValueError, TypeError, OSError on bad files
-            raise DataFormatError(
-                path, None, None, "a readable MATLAB .mat file", f"{type(exc).__name__}: {exc}"
-            ) from exc
-        values = {}
-        for name in ("stride", "mdl"):
-            if name not in mat:
-                present = sorted(k for k in mat if not k.startswith("__"))
-                raise DataFormatError(
-                    path, None, name, f"a variable {name!r}", f"variables {present}"
-                )
-            array = np.asarray(mat[name])
-            if array.size != 1 or not np.issubdtype(array.dtype, np.number):
-                raise DataFormatError(
-                    path,
-                    None,
-                    name,
-                    "a numeric scalar",
-                    f"{array.dtype} array of shape {array.shape}",
-                )
-            value = float(array.ravel()[0])
-            if not np.isfinite(value) or value < 0:
-                raise DataFormatError(path, None, name, "a finite number >= 0", repr(value))
-            values[name] = value
+        values = read_settings(Path(path))
         return cls.from_settings(stride=values["stride"], mdl=values["mdl"], units=units, **kwargs)
 
     def _validate(self) -> None:

@@ -10,6 +10,7 @@ import scipy.io
 
 from reform import DataFormatError
 from reform.datasets import detect_format, load_dataset, load_gcff
+from reform.datasets.gcff_mat import read_settings
 
 
 def _cell(items) -> np.ndarray:
@@ -223,6 +224,14 @@ def test_wrong_column_count(tmp_path):
             r"features.mat: frame 1: field 'ID': expected ids unique .*found id 2 twice",
             id="duplicate-ids",
         ),
+        pytest.param(
+            0,
+            1,
+            1e200,
+            r"frame 1, row 1 \(ID 1\): field 'x': expected a position with \|value\| <= 1e\+07 "
+            r"file units \(100000 m; .*found 1e\+200",
+            id="huge-position",  # centimetres: the bound is 1e5 m = 1e7 cm
+        ),
     ],
 )
 def test_bad_feature_value(tmp_path, row, column, value, message):
@@ -279,3 +288,62 @@ def test_features_not_a_cell(tmp_path):
         DataFormatError, match=r"field 'features': expected a cell array, found a float64 array"
     ):
         load_gcff(folder)
+
+
+@pytest.mark.parametrize(
+    ("timestamps", "message"),
+    [
+        pytest.param(
+            [10, 5, 30],
+            r"features.mat: frame 2: field 'timestamp': expected a time > 10.0 \(that of the "
+            r"sequence's previous frame, frame 1\): time increases within a sequence, found 5.0",
+            id="backwards",
+        ),
+        pytest.param(
+            [10, 20, 20],
+            r"features.mat: frame 3: field 'timestamp': expected a time > 20.0 .*found 20.0",
+            id="repeated",
+        ),
+    ],
+)
+def test_time_must_increase(tmp_path, timestamps, message):
+    folder = _write(tmp_path / "t", timestamps=timestamps, gt_timestamps=[10, 20, 30])
+    with pytest.raises(DataFormatError, match=message):
+        load_gcff(folder)
+
+
+@pytest.mark.parametrize(
+    ("settings", "message"),
+    [
+        pytest.param(
+            {"stride": -70.0, "mdl": 10000.0},
+            r"settings_gc.mat: field 'stride': expected a finite length >= 0 .*found -70.0",
+            id="negative-stride",
+        ),
+        pytest.param(
+            {"stride": 70.0, "mdl": 0.0},
+            r"settings_gc.mat: field 'mdl': expected a finite squared length > 0 .*found 0.0",
+            id="zero-mdl",
+        ),
+        pytest.param(
+            {"stride": np.nan},
+            r"settings_gc.mat: field 'stride': expected a finite length >= 0 .*found nan",
+            id="nan-stride",
+        ),
+    ],
+)
+def test_bad_folder_settings_are_refused_at_load(tmp_path, settings, message):
+    folder = _write(tmp_path / "s", settings=settings)
+    with pytest.raises(DataFormatError, match=message):
+        load_gcff(folder)
+
+
+def test_settings_file_that_does_not_exist(tmp_path):
+    with pytest.raises(
+        DataFormatError, match=r"nope.mat: expected a MATLAB .mat file, found no such file"
+    ):
+        read_settings(tmp_path / "nope.mat")
+    with pytest.raises(DataFormatError, match=r"expected a MATLAB .mat file, found a folder"):
+        read_settings(tmp_path)
+    scipy.io.savemat(tmp_path / "settings_gc.mat", {"stride": 70.0, "mdl": 10000.0})
+    assert read_settings(tmp_path / "settings_gc.mat") == {"stride": 70.0, "mdl": 10000.0}

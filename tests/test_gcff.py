@@ -7,13 +7,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.io
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
 import reform.gcff as gcff_module
-from reform import T_ONE, T_TWO_THIRDS, Frame, Gcff, evaluate
+from reform import T_ONE, T_TWO_THIRDS, DataFormatError, Frame, Gcff, evaluate
 from reform.gcff import (
     alpha_expansion,
     energy,
@@ -459,6 +460,22 @@ def test_bad_parameters_are_named(params, match):
         Gcff(**params).fit([frame])
     with pytest.raises(ValueError, match=match):
         Gcff(**params).predict([frame])
+
+
+def test_settings_file_errors_name_the_file(tmp_path):
+    with pytest.raises(
+        DataFormatError, match=r"nope.mat: expected a MATLAB .mat file, found no such file"
+    ):
+        Gcff.from_settings_file(tmp_path / "nope.mat")
+    scipy.io.savemat(tmp_path / "settings_gc.mat", {"stride": -70.0, "mdl": 10000.0})
+    with pytest.raises(
+        DataFormatError,
+        match=r"settings_gc.mat: field 'stride': expected a finite length >= 0 .*found -70.0",
+    ):
+        Gcff.from_settings_file(tmp_path / "settings_gc.mat")
+    scipy.io.savemat(tmp_path / "settings_gc.mat", {"stride": 70.0, "mdl": 10000.0})
+    detector = Gcff.from_settings_file(tmp_path / "settings_gc.mat")
+    assert (detector.stride, detector.mdl) == (0.7, 1.0)
 
 
 def test_bad_inputs_are_named():

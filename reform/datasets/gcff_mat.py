@@ -24,11 +24,16 @@ from typing import Any
 
 import numpy as np
 
-from reform.datasets._validation import check_unique_ids, make_frame, require_file
+from reform.datasets._validation import (
+    check_time_increases,
+    check_unique_ids,
+    make_frame,
+    require_file,
+)
 from reform.datasets.errors import DataFormatError
-from reform.frame import Dataset, Frame, Group, wrap_angle
+from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
 
-__all__ = ["FEATURES_FILE", "GROUNDTRUTH_FILE", "SETTINGS_FILE", "load_gcff"]
+__all__ = ["FEATURES_FILE", "GROUNDTRUTH_FILE", "SETTINGS_FILE", "load_gcff", "read_settings"]
 
 FEATURES_FILE = "features.mat"
 GROUNDTRUTH_FILE = "groundtruth.mat"
@@ -93,16 +98,18 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
             f"{timestamps.size}",
         )
     order: dict[float, int] = {}
+    previous: float | None = None
     for t, value in enumerate(timestamps.tolist()):
-        if value in order:
-            raise DataFormatError(
-                features_path,
-                f"frame {t + 1}",
-                "timestamp",
-                "unique time stamps",
-                f"{value!r} again (frame {order[value] + 1})",
-            )
+        check_time_increases(
+            value,
+            previous,
+            path=features_path,
+            where=f"frame {t + 1}",
+            field="timestamp",
+            previous_where=f"frame {t}",
+        )
         order[value] = t
+        previous = value
 
     gt_mat = _loadmat(groundtruth_path)
     gt_cells = _cells(
@@ -122,7 +129,10 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
             f"{gt_times.size}",
         )
 
-    rows = [_frame_rows(cell, path=features_path, frame=t + 1) for t, cell in enumerate(features)]
+    rows = [
+        _frame_rows(cell, path=features_path, frame=t + 1, per_metre=per_metre)
+        for t, cell in enumerate(features)
+    ]
 
     listed_of_frame: dict[int, tuple[int, list[list[int]]]] = {}
     for g, (cell, stamp) in enumerate(zip(gt_cells, gt_times.tolist(), strict=True)):
@@ -196,6 +206,10 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
 def _loadmat(path: Path) -> dict[str, Any]:
     from scipy.io import loadmat
 
+    if not path.exists():
+        raise DataFormatError(path, None, None, "a MATLAB .mat file", "no such file")
+    if not path.is_file():
+        raise DataFormatError(path, None, None, "a MATLAB .mat file", "a folder")
     try:
         return loadmat(path, squeeze_me=False, struct_as_record=True)
     except NotImplementedError as exc:  # MATLAB v7.3 (HDF5)
@@ -242,7 +256,9 @@ def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
     return vector
 
 
-def _frame_rows(cell: Any, *, path: Path, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _frame_rows(
+    cell: Any, *, path: Path, frame: int, per_metre: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(ids, (n, 2) positions in file units, (n,) θ) of one ``features`` cell."""
     where = f"frame {frame}"
     array = np.asarray(cell)
@@ -279,6 +295,18 @@ def _frame_rows(cell: Any, *, path: Path, frame: int) -> tuple[np.ndarray, np.nd
         )
     ids = ids.astype(np.int64)
     check_unique_ids(ids.tolist(), path=path, where=where)
+    limit = POSITION_LIMIT_M * per_metre
+    far = np.argwhere(np.abs(array[:, 1:3]) > limit)
+    if far.size:
+        row, column = (int(v) for v in far[0])
+        raise DataFormatError(
+            path,
+            f"{where}, row {row + 1} (ID {ids[row]})",
+            "xy"[column],
+            f"a position with |value| <= {limit:g} file units ({POSITION_LIMIT_M:g} m; "
+            "farther looks like a corrupt value)",
+            repr(float(array[row, column + 1])),
+        )
     theta = array[:, 3]
     wild = np.flatnonzero(np.abs(theta) > _ANGLE_LIMIT_RAD)
     if wild.size:
@@ -358,10 +386,53 @@ def _canonical(
 
 
 def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
+    out: dict[str, Any] = {"units": units, **read_settings(path, required=())}
+    if "stride" in out:
+        out["stride_m"] = out["stride"] / per_metre
+    if "mdl" in out:
+        out["mdl_m2"] = out["mdl"] / per_metre**2
+    return out
+
+
+# What each GCFF parameter must be: (expected text, accepts the value).
+_SETTINGS_RULES = {
+    "stride": (
+        "a finite length >= 0 (the o-space centre's distance in front of each person)",
+        lambda v: math.isfinite(v) and v >= 0,
+    ),
+    "mdl": (
+        "a finite squared length > 0 (the cost of opening a group)",
+        lambda v: math.isfinite(v) and v > 0,
+    ),
+}
+
+
+def read_settings(
+    path: str | PathLike[str], *, required: tuple[str, ...] = ("stride", "mdl")
+) -> dict[str, float]:
+    """``stride`` and ``mdl`` of a GCFF ``settings_gc.mat``, as stored (file units).
+
+    Args:
+        path: the ``.mat`` file.
+        required: the variables that must be present; the others are read when present.
+
+    Returns:
+        ``{"stride": ..., "mdl": ...}`` (the ones present), floats in the file's units.
+
+    Raises:
+        DataFormatError: the file is missing or unreadable, a required variable is missing, or
+            a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``.
+    """
+    path = Path(path)
     mat = _loadmat(path)
-    out: dict[str, Any] = {"units": units}
-    for name in ("stride", "mdl"):
+    out: dict[str, float] = {}
+    for name, (expected, accepts) in _SETTINGS_RULES.items():
         if name not in mat:
+            if name in required:
+                present = sorted(k for k in mat if not k.startswith("__"))
+                raise DataFormatError(
+                    path, None, name, f"a variable {name!r}", f"variables {present}"
+                )
             continue
         array = np.asarray(mat[name])
         if array.dtype == object or not np.issubdtype(array.dtype, np.number) or array.size != 1:
@@ -373,11 +444,7 @@ def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
                 f"a {array.dtype} array of shape {array.shape}",
             )
         value = float(array.ravel()[0])
-        if not math.isfinite(value):
-            raise DataFormatError(path, None, name, "a finite number", repr(value))
+        if not accepts(value):
+            raise DataFormatError(path, None, name, expected, repr(value))
         out[name] = value
-    if "stride" in out:
-        out["stride_m"] = out["stride"] / per_metre
-    if "mdl" in out:
-        out["mdl_m2"] = out["mdl"] / per_metre**2
     return out
