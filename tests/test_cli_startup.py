@@ -117,11 +117,7 @@ def test_version_is_the_package_version(capsys) -> None:
 
 
 def test_import_sim_loads_neither_gymnasium_nor_mujoco() -> None:
-    out = _python(
-        "import sys\n"
-        "import sim\n"
-        f"print({LOADED})\n"
-    )
+    out = _python(f"import sys\nimport sim\nprint({LOADED})\n")
     assert out == "[]"
 
 

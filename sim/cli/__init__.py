@@ -25,7 +25,7 @@ from sim.cli import (
     _stress,
     _train,
 )
-from sim.cli._common import CliError, CommandParser
+from sim.cli._common import CliError, CommandParser, check_jobs
 
 # Each module exposes ``register(subparsers)``, adding its subcommand: a name and help line at
 # once, the arguments (and the ``handler`` default) when the subcommand is used.
@@ -82,6 +82,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        check_jobs(args)
         return int(args.handler(args) or 0)
     except (CliError, ValueError, FileNotFoundError, KeyError) as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc

@@ -9,7 +9,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from sim.cli._common import DEFAULT_DATASETS, CliError
+from sim.cli._common import DEFAULT_DATASETS, CliError, check_output
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -67,9 +67,8 @@ def run(args: argparse.Namespace) -> int:
     for name in ("salsa", "babble"):
         if not (root / name).is_dir():
             raise CliError(f"--datasets {args.datasets}: no {name}/ folder in it")
+    check_output("--out", args.out, folder=True)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CliError(f"--out {args.out} is a file; give a folder")
     report = calibrate_scenarios(
         load_salsa(root / "salsa"),
         load_babble(root / "babble"),

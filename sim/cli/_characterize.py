@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import FORMATS, CliError
+from sim.cli._common import FORMATS, CliError, check_output
 
 # Version of the JSON written by ``characterize --json``.
 CHARACTERISATION_SCHEMA_VERSION = 1
@@ -146,6 +146,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--min-groups must be >= 1, got {min_groups}")
     if not tolerance > 0.0:
         raise CliError(f"--tolerance must be a positive number of metres, got {tolerance:g}")
+    check_output("--json", args.json)
+    check_output("--markdown", args.markdown)
     notes = None
     if args.notes:
         if not args.markdown:
@@ -154,6 +156,11 @@ def run(args: argparse.Namespace) -> int:
             notes = Path(args.notes).read_text(encoding="utf-8")
         except OSError as exc:
             raise CliError(f"--notes {args.notes}: cannot read it ({exc.strerror})") from exc
+        except UnicodeDecodeError as exc:
+            raise CliError(
+                f"--notes {args.notes}: expected UTF-8 Markdown text, found byte "
+                f"0x{exc.object[exc.start]:02x} at offset {exc.start} that is not UTF-8"
+            ) from None
 
     datasets: list[dict[str, Any]] = []
     for path in args.data:

@@ -71,6 +71,47 @@ class CommandParser(argparse.ArgumentParser):
         return super().format_help()
 
 
+def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bool = False) -> None:
+    """Raises `CliError` unless ``path`` can be written: a file (or, with ``folder``, a folder
+    of outputs), checked before the command's work starts. Nothing is created.
+
+    Args:
+        option: the flag that named the path, e.g. ``"--json"``.
+        path: the path given; None (the option not given) passes.
+        folder: the command writes files into ``path`` rather than ``path`` itself.
+
+    Raises:
+        CliError: e.g. ``--json out: expected a file path, found an existing folder``.
+    """
+    if path is None:
+        return
+    from reform.atomic import OutputPathError, check_file_path, check_folder_path
+
+    try:
+        (check_folder_path if folder else check_file_path)(path)
+    except OutputPathError as exc:
+        raise CliError(f"{option} {exc}") from None
+
+
+def check_recording(args: argparse.Namespace) -> None:
+    """Checks the Rerun recording flags (``--save PATH.rrd``, ``--url`` with ``--connect``) up
+    front, as :func:`check_output` does the other outputs."""
+    from sim.recording import target_from_args
+
+    save = getattr(args, "save", None)
+    if save is not None and Path(save).suffix != ".rrd":
+        raise CliError(f"--save must be a path ending in .rrd, got {save!r}")
+    target_from_args(args)  # a ValueError naming the flag when --url comes without --connect
+    check_output("--save", save)
+
+
+def check_jobs(args: argparse.Namespace) -> None:
+    """Raises `CliError` unless ``--jobs`` (when the command has it and it is given) is >= 1."""
+    jobs = getattr(args, "jobs", None)
+    if jobs is not None and jobs < 1:
+        raise CliError(f"--jobs must be >= 1, got {jobs}")
+
+
 def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data") -> None:
     """``--data PATH [--format F] [--units cm|m]``: where a dataset is and how to read it.
 

@@ -7,7 +7,7 @@ import json
 import sys
 from typing import Any
 
-from sim.cli._common import add_data_arguments
+from sim.cli._common import add_data_arguments, check_output
 
 _INFO_DESCRIPTION = """\
 Loads a dataset (SALSA / DANTE text, Babble, a GCFF MATLAB folder, or the project's Parquet)
@@ -85,6 +85,7 @@ def run_info(args: argparse.Namespace) -> int:
 def run_convert(args: argparse.Namespace) -> int:
     from reform.datasets import write_parquet
 
+    check_output("--out", args.out)
     _, dataset = _load(args)
     write_parquet(dataset, args.out)
     print(f"wrote {args.out}: {len(dataset)} frames", file=sys.stderr)

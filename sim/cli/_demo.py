@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from sim.cli._common import CliError, default_datasets
+from sim.cli._common import CliError, check_output, default_datasets
 
 _DESCRIPTION = """\
 Simulates every registered scenario briefly, generates a synthetic training set (mingle and
@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     if args.jobs is not None and args.jobs < 1:
         raise CliError(f"--jobs must be >= 1, got {args.jobs}")
+    check_output("--out", args.out, folder=True)
     started = time.perf_counter()
     result = run_demo(
         out_dir=args.out,

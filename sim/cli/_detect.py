@@ -7,9 +7,9 @@ import json
 import sys
 from typing import Any
 
-from sim.cli._common import CliError, load_data
+from sim.cli._common import CliError, check_output, check_recording, load_data
 from sim.cli._detection import add_detection_arguments, record_detection, run_detector
-from sim.cli._detectors import detector_params
+from sim.cli._detectors import check_detector, detector_params
 
 # Version of the JSON written by ``detect`` (docs/json-schema.md).
 DETECTIONS_SCHEMA_VERSION = 1
@@ -86,6 +86,9 @@ def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
     from reform.metrics import check_partition
 
+    check_detector(args)
+    check_output("--out", args.out)
+    check_recording(args)
     dataset = load_data(args)
     indices = [i for i, f in enumerate(dataset.frames) if f.annotated or not args.annotated_only]
     frames = [dataset.frames[i] for i in indices]

@@ -13,7 +13,9 @@ them to the parser)::
 
 A builder returns a detector ready to ``predict(frames)`` (one full partition per frame); the
 CLI never fits it. Options of every registered detector are added to ``evaluate`` and
-``detect``; a builder reads the ones it needs and ignores the rest.
+``detect``; a builder reads its own. A detector's options default to None (not given), so that
+one given to another detector is an error naming both (``--model is an option of --detector
+reform, not of --detector majority``).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ __all__ = [
     "DetectorSpec",
     "add_detector_arguments",
     "build_detector",
+    "check_detector",
     "detector_params",
     "register_detector",
 ]
@@ -118,7 +121,7 @@ def _gcff_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--gcff-orientation",
         choices=("body", "head"),
-        default="body",
+        default=None,
         help="GCFF: orientation each person's o-space vote follows (default: body)",
     )
 
@@ -134,7 +137,7 @@ def _gcff(args: argparse.Namespace) -> Any:
     from reform import Gcff
     from reform.datasets import detect_format, load_dataset
 
-    orientation = args.gcff_orientation
+    orientation = args.gcff_orientation or "body"
     explicit = args.stride is not None or args.mdl is not None
     given = [
         name
@@ -218,13 +221,24 @@ def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help=choices + " (--model alone implies reform)",
     )
+    options: dict[str, tuple[tuple[str, str], ...]] = {}
     for spec in DETECTORS.values():
         if spec.add_arguments is not None:
+            known = len(parser._actions)
             spec.add_arguments(parser)
+            options[spec.name] = tuple(
+                (action.option_strings[0], action.dest) for action in parser._actions[known:]
+            )
+    parser.set_defaults(detector_options=options)
 
 
-def build_detector(args: argparse.Namespace) -> Any:
-    """The detector named by ``args.detector``, built from the parsed options."""
+def check_detector(args: argparse.Namespace) -> DetectorSpec:
+    """The detector the options name (``--model`` alone: reform), its options checked: called
+    up front, before the data are read.
+
+    Raises:
+        CliError: no detector named, or an option of another detector given.
+    """
     if args.detector is None:
         if getattr(args, "model", None) is None:
             raise CliError("give --detector NAME, or --model MODEL for a trained REFORM model")
@@ -232,7 +246,22 @@ def build_detector(args: argparse.Namespace) -> Any:
     spec = DETECTORS.get(args.detector)
     if spec is None:
         raise CliError(f"--detector must be one of {sorted(DETECTORS)}, got {args.detector!r}")
-    return spec.build(args)
+    for name, flags in getattr(args, "detector_options", {}).items():
+        if name == args.detector:
+            continue
+        given = [flag for flag, dest in flags if getattr(args, dest, None) is not None]
+        if given:
+            what = "is an option" if len(given) == 1 else "are options"
+            raise CliError(
+                f"{', '.join(given)} {what} of --detector {name}, not of --detector {args.detector}"
+            )
+    return spec
+
+
+def build_detector(args: argparse.Namespace) -> Any:
+    """The detector named by ``args.detector``, built from the parsed options (checked by
+    :func:`check_detector`)."""
+    return check_detector(args).build(args)
 
 
 def detector_params(detector: Any) -> dict[str, Any]:

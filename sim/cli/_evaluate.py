@@ -6,9 +6,9 @@ import argparse
 import json
 import sys
 
-from sim.cli._common import CliError, load_data
+from sim.cli._common import CliError, check_output, check_recording, load_data
 from sim.cli._detection import add_detection_arguments, record_detection, run_detector
-from sim.cli._detectors import detector_params
+from sim.cli._detectors import check_detector, detector_params
 
 _DESCRIPTION = """\
 Runs a detector on every annotated frame of a dataset and scores it with the field's protocol
@@ -50,6 +50,10 @@ def run(args: argparse.Namespace) -> int:
     from reform.metrics import evaluate
     from reform.report import format_report
 
+    check_detector(args)
+    check_output("--json", args.json)
+    check_output("--markdown", args.markdown)
+    check_recording(args)
     dataset = load_data(args)
     frames = dataset.annotated()
     if not frames:

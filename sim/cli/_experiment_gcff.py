@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.cli._common import CliError, add_train_fraction_argument, check_train_fraction
-from sim.cli._experiment_io import add_out_argument, publish
+from sim.cli._experiment_io import add_out_argument, check_report, publish, report_stem
 
 _DESCRIPTION = """\
 Scores GCFF with the REFORM paper's setting (stride 0.7 m, MDL 30000 read as 30000 cm² =
@@ -106,9 +106,14 @@ def _command(args: argparse.Namespace) -> str:
 
 def _read_results(path: str) -> list[dict[str, Any]]:
     try:
-        data = json.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise CliError(f"--with-results {path}: no such file") from None
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise CliError(f"--with-results {path}: cannot read it ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise CliError(
+            f"--with-results {path}: expected JSON text, found bytes that are not UTF-8 "
+            f"(offset {exc.start})"
+        ) from None
     except json.JSONDecodeError as exc:
         raise CliError(f"--with-results {path}: not JSON ({exc})") from None
     if isinstance(data, dict) and "results" in data:
@@ -129,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
     from reform.experiment_gcff import gcff_comparison
 
     check_train_fraction(args)
+    check_report(report_stem(args.out))
     extra = [result for path in args.with_results for result in _read_results(path)]
     print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
     grids = {

@@ -9,10 +9,11 @@ import sys
 import time
 from pathlib import Path
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, check_output
 from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
+    check_report,
     report_stem,
     write_report,
 )
@@ -100,12 +101,12 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--seeds must be >= 1, got {args.seeds}")
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
-    if args.jobs is not None and args.jobs < 1:
-        raise CliError(f"--jobs must be >= 1, got {args.jobs}")
     views = [v.strip() for v in args.views.split(",") if v.strip()]
     unknown = [v for v in views if v not in VIEWS]
     if unknown or not views:
         raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
+    check_report(report_stem(args.out))
+    check_output("--recordings", args.recordings, folder=True)
     salsa_path = args.salsa
     if salsa_path is None and args.datasets is not None:
         salsa_path = str(Path(args.datasets) / "salsa")

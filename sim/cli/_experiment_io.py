@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, check_output
 
 OUT_HELP = "output path without extension: writes OUT.md and OUT.json"
 REPORT_SUFFIXES = (".md", ".json")
@@ -53,6 +53,15 @@ def report_stem(out: str, *, suffixes: tuple[str, ...] = REPORT_SUFFIXES) -> Pat
     """``--out`` without its extension when it is one of ``suffixes``."""
     path = Path(out)
     return path.with_suffix("") if path.suffix in suffixes else path
+
+
+def check_report(
+    stem: Path, *, suffixes: tuple[str, ...] = REPORT_SUFFIXES, option: str = "--out"
+) -> None:
+    """Raises `CliError` unless STEM.md, STEM.json (``suffixes``) can be written: up front,
+    before the experiment runs."""
+    for suffix in suffixes:
+        check_output(option, stem.with_name(stem.name + suffix))
 
 
 def publish(result: Any, *, out: str, command: str) -> None:

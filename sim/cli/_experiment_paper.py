@@ -16,8 +16,10 @@ from sim.cli._common import (
 from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
+    check_report,
     dataset_words,
     publish,
+    report_stem,
     salsa_and_babble,
 )
 
@@ -79,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     if args.folds < 2:
         raise CliError(f"--folds must be at least 2, got {args.folds}")
     salsa, babble = salsa_and_babble(args)
+    check_report(report_stem(args.out))
     started = time.perf_counter()
 
     def progress(message: str) -> None:

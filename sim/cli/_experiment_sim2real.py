@@ -8,11 +8,12 @@ import sys
 import time
 from pathlib import Path
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, check_output
 from sim.cli._experiment_io import (
     REPORT_SUFFIXES,
     add_dataset_arguments,
     add_out_argument,
+    check_report,
     dataset_words,
     report_stem,
     salsa_and_babble,
@@ -127,6 +128,9 @@ def run(args: argparse.Namespace) -> int:
                 f"--classifiers must be among {','.join(CLASSIFIER_NAMES)}, "
                 f"got {args.classifiers!r}"
             )
+    out = _outputs(args.out)
+    check_report(out, suffixes=(*REPORT_SUFFIXES, ".png"))
+    check_output("--synthetic", args.synthetic, folder=True)
     sources = tuple(
         dataclasses.replace(s, episodes=max(1, round(s.episodes * args.episodes_scale)))
         for s in DEFAULT_SOURCES
@@ -150,7 +154,6 @@ def run(args: argparse.Namespace) -> int:
         progress_bars=not args.no_progress,
     )
     command = _command(args)
-    out = _outputs(args.out)
     figure = sim2real_figure(result, out.with_name(out.name + ".png"))
     markdown = result.to_markdown(command=command, figure=figure.name)
     write_report(out, markdown, result.to_json(command=command))

@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, check_output
 
 _DESCRIPTION = """\
 Runs the scripted baseline of the joining task (go to the gap in the detected o-space, face the
@@ -74,6 +74,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         raise CliError(f"--env: unknown environment {args.env!r}; the joining ones: {known}")
     if args.episodes < 1:
         raise CliError(f"--episodes must be a positive number, got {args.episodes}")
+    check_output("--json", args.json)
     kwargs = {}
     if args.detector is not None:
         if args.model is not None:

@@ -13,6 +13,8 @@ from sim.cli._common import (
     add_overrides_argument,
     add_sensor_arguments,
     add_view_argument,
+    check_output,
+    check_recording,
     parse_overrides,
     sensor_options,
 )
@@ -80,8 +82,8 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != ".parquet":
         raise CliError(f"--out must name a .parquet file, got {args.out}")
-    if out.is_dir():
-        raise CliError(f"--out {args.out} is a folder; give a file name ending in .parquet")
+    check_output("--out", out)
+    check_recording(args)
     from reform.datasets import write_parquet
     from sim.episode import simulate_episode
     from sim.recording import FieldOfView, record_episode, target_from_args

@@ -8,7 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, check_output
 
 _DESCRIPTION = """\
 F1 at T = 2/3 and T = 1 of REFORM (weighted KNN, bagged trees, logistic regression) and GCFF as
@@ -34,7 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.stress import AXES, GRIDS
+    from sim.stress_grid import AXES, GRIDS
 
     parser.add_argument(
         "--grid",
@@ -105,8 +105,6 @@ def run(args: argparse.Namespace) -> int:
         grid = dataclasses.replace(grid, seeds=args.seeds)
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
-    if args.jobs is not None and args.jobs < 1:
-        raise CliError(f"--jobs must be >= 1, got {args.jobs}")
     axes = None
     if args.axes is not None:
         axes = [a.strip() for a in args.axes.split(",") if a.strip()]
@@ -115,6 +113,8 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"--axes must name axes among {','.join(AXES)}, got {args.axes!r}")
     if args.save is not None and Path(args.save).suffix != ".rrd":
         raise CliError(f"--save must be a path ending in .rrd, got {args.save!r}")
+    check_output("--out", args.out, folder=True)
+    check_output("--save", args.save)
 
     def progress(line: str) -> None:
         print(line, file=sys.stderr, flush=True)

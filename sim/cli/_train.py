@@ -6,9 +6,11 @@ import argparse
 import sys
 
 from sim.cli._common import (
+    TRAIN_FRACTION,
     CliError,
     add_data_arguments,
     add_train_fraction_argument,
+    check_output,
     check_train_fraction,
     load_data,
 )
@@ -57,8 +59,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_train_fraction_argument(
         parser,
-        help="share of each sequence's annotated frames, by time, in the train part (0.6)",
+        help="with --frames train|test: share of each sequence's annotated frames, by time, in "
+        "the train part (0.6)",
     )
+    parser.set_defaults(train_fraction=None)  # None: not given (it needs --frames train|test)
     parser.add_argument(
         "--tune",
         action="store_true",
@@ -98,7 +102,16 @@ def run(args: argparse.Namespace) -> int:
     from reform.features import check_features
     from reform.persistence import save_model
 
-    check_train_fraction(args)
+    check_output("--out", args.out)
+    if args.train_fraction is None:
+        args.train_fraction = TRAIN_FRACTION
+    else:
+        check_train_fraction(args)
+        if args.frames == "all":
+            raise CliError(
+                f"--train-fraction {args.train_fraction:g} splits the frames for --frames "
+                "train|test; with --frames all every annotated frame trains"
+            )
     if args.threshold is not None and not 0.0 < args.threshold < 1.0:
         raise CliError(f"--threshold must be a probability in (0, 1), got {args.threshold}")
     features = check_features([name.strip() for name in args.features.split(",") if name.strip()])
