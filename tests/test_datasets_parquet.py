@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -284,8 +285,8 @@ def test_wrong_column_type(tmp_path):
             "person_id",
             1,
             5,
-            r"bad.parquet: frame 0 \(rows 0..3\)"
-            r": field 'frame': .*ids must be unique within a frame",
+            r"bad.parquet: frame 0 \(row 1\): field 'person_id'"
+            r": expected ids unique within the frame, found 5, already on row 0",
             id="duplicate-ids-in-a-frame",
         ),
         pytest.param(
@@ -301,6 +302,43 @@ def test_wrong_column_type(tmp_path):
             5,
             r"frame 0 \(rows 0..3\): field 'group': expected indices 0..5, each used",
             id="group-indices-with-a-gap",
+        ),
+        pytest.param(
+            "x",
+            4,
+            1e200,
+            r"frame 1 \(row 4\): field 'x'"
+            r": expected metres with \|value\| <= 100000 .*found 1e\+200",
+            id="huge-position",
+        ),
+        pytest.param(
+            "head_y",
+            0,
+            -2e5,
+            r"frame 0 \(row 0\): field 'head_y': expected metres .*found -200000.0",
+            id="far-head",
+        ),
+        pytest.param(
+            "head_x",
+            0,
+            float("nan"),
+            r"frame 0 \(row 0\): field 'head_x': expected a number, as head_y and head_yaw "
+            r"\(a head is observed in full or not at all\), found nan",
+            id="head-partly-nan",
+        ),
+        pytest.param(
+            "head_yaw",
+            1,
+            0.5,
+            r"frame 0 \(row 1\): field 'head_yaw': expected NaN, as head_x and head_y .*found 0.5",
+            id="head-partly-observed",
+        ),
+        pytest.param(
+            "time",
+            4,
+            0.0,
+            r"frame 1 \(rows 4..5\): field 'time': expected one value for all rows of the frame",
+            id="time-differs-within-a-frame",
         ),
     ],
 )
@@ -363,3 +401,144 @@ def test_empty_corrupt_and_missing(tmp_path):
         DataFormatError, match=r"folder: expected a folder holding .parquet files, found none"
     ):
         read_parquet(tmp_path / "folder")
+
+
+# --- row order, time order, unfinished folders, codecs ---------------------------------------
+
+
+@pytest.fixture
+def salsa_head(salsa_dataset, tmp_path) -> tuple[Path, Dataset]:
+    """SALSA's first three frames (18 people each: rows 0-17, 18-35, 36-53) as Parquet."""
+    head = salsa_dataset.subset(salsa_dataset.frames[:3], name="salsa-head")
+    return write_parquet(head, tmp_path / "salsa-head.parquet"), head
+
+
+def _reorder(path: Path, rows: list[int]) -> Path:
+    """The file's rows in the order ``rows``, written beside it."""
+    out = path.with_name("reordered.parquet")
+    pq.write_table(pq.read_table(path).take(rows), out)
+    return out
+
+
+@pytest.mark.parametrize(
+    ("swap", "message"),
+    [
+        pytest.param(
+            (0, 20),
+            r"reordered.parquet: row 0: field 'frame': expected frame 0 \(rows grouped by frame, "
+            r"frames 0, 1, 2, ... in order\), found 1",
+            id="rows-0-and-20-swapped",
+        ),
+        pytest.param(
+            (17, 18),
+            r"reordered.parquet: row 18: field 'frame': expected frame 1 or 2 .*found 0",
+            id="last-row-of-frame-0-after-frame-1-starts",
+        ),
+        pytest.param(
+            (18, 36),
+            r"reordered.parquet: row 18: field 'frame': expected frame 0 or 1 .*found 2",
+            id="frame-2-row-inside-frame-1",
+        ),
+    ],
+)
+def test_rows_not_grouped_by_frame_are_refused(salsa_head, swap, message):
+    path, head = salsa_head
+    assert read_parquet(path).frames == head.frames
+    rows = list(range(54))
+    rows[swap[0]], rows[swap[1]] = rows[swap[1]], rows[swap[0]]
+    with pytest.raises(DataFormatError, match=message):
+        read_parquet(_reorder(path, rows))
+
+
+@pytest.mark.parametrize(
+    ("time", "found"),
+    [pytest.param(0.2, "0.2", id="earlier"), pytest.param(3.2, "3.2", id="repeated")],
+)
+def test_time_must_increase_within_a_sequence(salsa_head, time, found):
+    path, head = salsa_head
+    assert [f.time for f in head] == [0.2, 3.2, 6.2]
+    table = pq.read_table(path)
+    times = table.column("time").to_numpy().copy()
+    times[36:54] = time  # frame 2 goes back to (or repeats) an earlier time
+    bad = table.set_column(
+        table.schema.get_field_index("time"), table.schema.field("time"), [times]
+    )
+    pq.write_table(bad, path.with_name("bad.parquet"))
+    with pytest.raises(
+        DataFormatError,
+        match=r"bad.parquet: frame 2 \(row 36\): field 'time': expected a time > 3.2 \(that of "
+        r"the sequence's previous frame, frame 1\): time increases within a sequence, "
+        rf"found {found}",
+    ):
+        read_parquet(path.with_name("bad.parquet"))
+
+
+def _generated_folder(root: Path, salsa_dataset, *, written: int, episodes: int, complete: bool):
+    """A folder shaped as ``reform-sim generate`` writes it: shards and a dataset card."""
+    for k in range(written):
+        frames = tuple(f.replace(sequence=f"walk-{k}") for f in salsa_dataset.frames[:2])
+        write_parquet(
+            Dataset(frames=frames, name="walk"),
+            root / "scenario=walk" / f"episode={k}" / "part.parquet",
+        )
+    card = {
+        "card_version": 1,
+        "kind": "reform-sim synthetic dataset",
+        "complete": complete,
+        "episodes": episodes,
+        "command": f"reform-sim generate --scenario walk --episodes {episodes} --seed 0 --out DIR",
+    }
+    (root / "dataset.json").write_text(json.dumps(card))
+    return root
+
+
+def test_an_unfinished_generated_folder_is_refused(tmp_path, salsa_dataset):
+    folder = _generated_folder(
+        tmp_path / "data", salsa_dataset, written=7, episodes=30, complete=False
+    )
+    message = (
+        r"data/dataset.json: field 'complete': expected true \(every episode of the run "
+        r"written\), found false: incomplete dataset \(7 of 30 episodes written\); run the same "
+        r"reform-sim generate command again to finish it \(reform-sim generate --scenario walk "
+        rf"--episodes 30 --seed 0 --out {re.escape(str(folder))}\), or pass allow_incomplete=True"
+    )
+    with pytest.raises(DataFormatError, match=message):
+        read_parquet(folder)
+    with pytest.raises(DataFormatError, match=message):
+        load_dataset(folder)
+    partial = read_parquet(folder, allow_incomplete=True)
+    assert partial.sequences() == tuple(f"walk-{k}" for k in range(7))
+    assert load_dataset(folder, allow_incomplete=True).frames == partial.frames
+    # One shard of it is an ordinary file.
+    assert len(read_parquet(folder / "scenario=walk" / "episode=0" / "part.parquet")) == 2
+
+
+def test_a_finished_generated_folder_reads(tmp_path, salsa_dataset):
+    folder = _generated_folder(
+        tmp_path / "data", salsa_dataset, written=3, episodes=3, complete=True
+    )
+    assert read_parquet(folder).sequences() == ("walk-0", "walk-1", "walk-2")
+
+
+def test_a_corrupt_card_is_named(tmp_path, salsa_dataset):
+    folder = _generated_folder(
+        tmp_path / "data", salsa_dataset, written=1, episodes=1, complete=True
+    )
+    (folder / "dataset.json").write_text('{"complete": fal')
+    with pytest.raises(
+        DataFormatError, match=r"dataset.json: expected a reform-sim dataset card \(JSON\)"
+    ):
+        read_parquet(folder)
+
+
+def test_unknown_compression_is_refused_before_writing(tmp_path):
+    with pytest.raises(
+        ValueError,
+        match=r"compression must be one of \('none', 'snappy', 'gzip', 'brotli', 'lz4', 'zstd'\)"
+        r", got 'bogus'",
+    ):
+        write_parquet(_mixed_dataset(), tmp_path / "d.parquet", compression="bogus")
+    assert list(tmp_path.iterdir()) == []
+    for codec in ("none", "snappy", "ZSTD"):
+        path = write_parquet(_mixed_dataset(), tmp_path / f"{codec}.parquet", compression=codec)
+        _same(read_parquet(path), _mixed_dataset())

@@ -112,6 +112,7 @@ def test_without_heads_and_without_frames(tmp_path):
         ({"kinds": ("human", "dog", "human", "robot")}, r"kinds must be 4 entries among"),
         ({"yaw": np.full((5, 4), 7.0)}, r"yaw must be radians wrapped"),
         ({"position": np.full((5, 4, 2), np.inf)}, r"position and yaw must be finite"),
+        ({"position": np.full((5, 4, 2), 1e200)}, r"position must be metres with \|x\|, \|y\|"),
         ({"present": np.ones((5, 3), dtype=bool)}, r"present must have shape \(5, 4\)"),
         ({"groups": [None] * 4}, r"groups must have 5 entries"),
         ({"groups": [((4, 7),)] + [None] * 4}, r"names person 7, who is not in the roster"),

@@ -36,11 +36,29 @@ def _holds_parquet(folder: Path) -> bool:
     return False
 
 
+def _folder_formats(folder: Path) -> dict[str, str]:
+    """Every format whose files ``folder`` holds: ``format -> the files that show it``."""
+    found = {}
+    if (folder / "features.txt").is_file() and (folder / "group_names.txt").is_file():
+        found["salsa"] = "features.txt, group_names.txt"
+    if (folder / "Motion-capture-data.csv").is_file():
+        found["babble"] = "Motion-capture-data.csv"
+    if (folder / "features.mat").is_file():
+        found["gcff"] = "features.mat"
+    if _holds_parquet(folder):
+        found["parquet"] = ".parquet files"
+    return found
+
+
 def detect_format(path: str | PathLike[str]) -> str:
     """The format of a dataset path: one of :data:`FORMATS`.
 
+    A folder holding the files of two formats (SALSA's and Babble's, say) is ambiguous: it is
+    refused, and the caller names the format (``format=``, ``--format`` on the command line).
+
     Raises:
-        DataFormatError: the path does not exist or matches no format (the message lists them).
+        DataFormatError: the path does not exist, matches no format (the message lists them),
+            or is a folder matching several.
     """
     path = Path(path)
     if not path.exists():
@@ -48,14 +66,20 @@ def detect_format(path: str | PathLike[str]) -> str:
             path, None, None, "an existing dataset file or folder", "no such file or folder"
         )
     if path.is_dir():
-        if (path / "features.txt").is_file() and (path / "group_names.txt").is_file():
-            return "salsa"
-        if (path / "Motion-capture-data.csv").is_file():
-            return "babble"
-        if (path / "features.mat").is_file():
-            return "gcff"
-        if _holds_parquet(path):
-            return "parquet"
+        found = _folder_formats(path)
+        if len(found) == 1:
+            return next(iter(found))
+        if len(found) > 1:
+            raise DataFormatError(
+                path,
+                None,
+                None,
+                "the files of one dataset format",
+                "; ".join(f"{name} ({files})" for name, files in found.items()),
+                hint="name the format to read: format='"
+                + "' or format='".join(found)
+                + "' (--format on the command line)",
+            )
     else:
         if path.suffix == ".parquet":
             return "parquet"
@@ -71,7 +95,11 @@ def detect_format(path: str | PathLike[str]) -> str:
 
 
 def load_dataset(
-    path: str | PathLike[str], *, format: str | None = None, units: str | None = None
+    path: str | PathLike[str],
+    *,
+    format: str | None = None,
+    units: str | None = None,
+    allow_incomplete: bool = False,
 ) -> Dataset:
     """Loads a dataset in any supported format; positions come back in metres.
 
@@ -81,6 +109,8 @@ def load_dataset(
         units: length unit of the file's positions, ``"cm"`` or ``"m"``. Only GCFF folders
             have a choice (default ``"cm"``, as the public GCFF datasets use); the other formats
             are always metres, and giving ``"cm"`` for them is an error.
+        allow_incomplete: Parquet only: read an unfinished ``reform-sim generate`` folder
+            (see :func:`~reform.datasets.parquet.read_parquet`).
 
     Raises:
         DataFormatError: the path is missing, matches no format, or a file is malformed.
@@ -117,4 +147,4 @@ def load_dataset(
         return load_gcff(path, units="cm" if units is None else units)
     from reform.datasets.parquet import read_parquet
 
-    return read_parquet(path)
+    return read_parquet(path, allow_incomplete=allow_incomplete)

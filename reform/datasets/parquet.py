@@ -33,11 +33,12 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_path
-from reform.datasets._validation import make_frame
+from reform.datasets._validation import check_time_increases, make_frame
 from reform.datasets.errors import DataFormatError
-from reform.frame import KINDS, Dataset, Frame, Group
+from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 
 __all__ = [
+    "CODECS",
     "COLUMNS",
     "FORMAT_VERSION",
     "METADATA_KEY",
@@ -49,6 +50,10 @@ __all__ = [
 FORMAT_VERSION = 1
 METADATA_KEY = b"reform_sim"
 _YAW_LIMIT_RAD = math.pi + 2e-3  # wrapped radians plus rounding; larger values look like degrees
+# Parquet codecs a file may be written with (``"none"``: uncompressed).
+CODECS = ("none", "snappy", "gzip", "brotli", "lz4", "zstd")
+# The card of a folder written by ``reform-sim generate`` (sim.generate.CARD_JSON).
+_CARD_JSON = "dataset.json"
 
 # name -> (arrow type name, nullable, unit, description). The README's column table is this.
 COLUMNS: dict[str, tuple[str, bool, str, str]] = {
@@ -138,8 +143,10 @@ def write_parquet(
         The path written.
 
     Raises:
-        ValueError: the metadata is not JSON-serialisable.
+        ValueError: the metadata is not JSON-serialisable, or ``compression`` is not one of
+            :data:`CODECS`: before anything is written.
     """
+    _check_compression(compression)
     header_json = _header_json(dataset.name, dataset.source, dataset.units, dataset.metadata)
     return _write_table(_columns(dataset.frames), header_json, Path(path), compression)
 
@@ -189,8 +196,10 @@ def write_parquet_arrays(
         The path written.
 
     Raises:
-        ValueError: shapes, values or groups that a `Frame` would refuse.
+        ValueError: shapes, values or groups that a `Frame` would refuse, or an unknown
+            ``compression``: before anything is written.
     """
+    _check_compression(compression)
     columns = _columns_from_arrays(
         time=time,
         ids=ids,
@@ -205,6 +214,18 @@ def write_parquet_arrays(
     )
     header_json = _header_json(name, source, "m", metadata or {})
     return _write_table(columns, header_json, Path(path), compression)
+
+
+def _check_compression(compression: Any) -> None:
+    """Raises unless ``compression`` names a codec of :data:`CODECS` this pyarrow can write."""
+    if not isinstance(compression, str) or compression.lower() not in CODECS:
+        raise ValueError(f"compression must be one of {CODECS}, got {compression!r}")
+    pa, _ = _pyarrow()
+    if compression.lower() != "none" and not pa.Codec.is_available(compression.lower()):
+        available = tuple(c for c in CODECS if c == "none" or pa.Codec.is_available(c))
+        raise ValueError(
+            f"compression {compression!r} is not built into this pyarrow; available: {available}"
+        )
 
 
 def _columns_from_arrays(
@@ -251,6 +272,11 @@ def _columns_from_arrays(
         raise ValueError("time must be finite, got NaN or inf")
     if not (np.all(np.isfinite(position[present])) and np.all(np.isfinite(yaw[present]))):
         raise ValueError("position and yaw must be finite where present, got NaN or inf")
+    if np.any(np.abs(position[present]) > POSITION_LIMIT_M):
+        raise ValueError(
+            f"position must be metres with |x|, |y| <= {POSITION_LIMIT_M:g} where present, "
+            f"got {float(np.max(np.abs(position[present]))):g}"
+        )
     if np.any(np.abs(yaw[present]) > _YAW_LIMIT_RAD):
         raise ValueError("yaw must be radians wrapped to [-pi, pi] (wrap with reform.wrap_angle)")
     has_head = head_position is not None
@@ -275,6 +301,10 @@ def _columns_from_arrays(
             raise ValueError("a head is either fully observed (x, y, yaw) or fully NaN, never inf")
         if np.any(np.abs(hy[~np.isnan(hy)]) > _YAW_LIMIT_RAD):
             raise ValueError("head_yaw must be radians wrapped to [-pi, pi]")
+        if np.any(np.abs(hp[~np.isnan(hp)]) > POSITION_LIMIT_M):
+            raise ValueError(
+                f"head_position must be metres with |x|, |y| <= {POSITION_LIMIT_M:g} where present"
+            )
 
     # Row order: frame by frame, the people present in roster order; an empty frame gets one
     # row in an extra column n (its person columns null).
@@ -478,7 +508,7 @@ def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarra
     }
 
 
-def read_parquet(path: str | PathLike[str]) -> Dataset:
+def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -> Dataset:
     """Reads a Parquet file written by :func:`write_parquet`, or a folder of them.
 
     A folder's files (``**/*.parquet``, hidden files and temporary files skipped) are read in
@@ -487,9 +517,20 @@ def read_parquet(path: str | PathLike[str]) -> Dataset:
     metadata holds one entry per file under ``"shards"``. A sequence name may not occur in two
     files (it would merge two recordings).
 
+    A file's rows come grouped by frame (a frame's rows together, frames ``0, 1, 2, ...`` in
+    order), and within each sequence the frames' times increase, as :func:`write_parquet`
+    writes them; anything else is refused rather than reordered.
+
+    Args:
+        path: a ``.parquet`` file or a folder of them.
+        allow_incomplete: read a folder of ``reform-sim generate`` whose card
+            (``dataset.json``) says the run has not finished, with the episodes written so far.
+            By default such a folder is refused.
+
     Raises:
         DataFormatError: a file is missing, empty, not written by this project, of a newer
-            format version, or malformed (the message names the file, frame, field).
+            format version, or malformed (the message names the file, frame, field), or the
+            folder is an unfinished generated dataset.
     """
     path = Path(path)
     if not path.exists():
@@ -513,6 +554,8 @@ def read_parquet(path: str | PathLike[str]) -> Dataset:
     ]
     if not files:
         raise DataFormatError(path, None, None, "a folder holding .parquet files", "none")
+    if not allow_incomplete:
+        _check_complete(path, len(files))
     files.sort(key=lambda p: _natural_key(p.relative_to(path)))
     frames: list[Frame] = []
     shards = []
@@ -550,6 +593,36 @@ def read_parquet(path: str | PathLike[str]) -> Dataset:
         source=str(path),
         units="m",
         metadata={"shards": shards},
+    )
+
+
+def _check_complete(folder: Path, n_files: int) -> None:
+    """Refuses a ``reform-sim generate`` folder whose card says the run has not finished."""
+    card_path = folder / _CARD_JSON
+    if not card_path.is_file():
+        return
+    try:
+        card = json.loads(card_path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DataFormatError(
+            card_path,
+            None,
+            None,
+            "a reform-sim dataset card (JSON)",
+            f"{type(exc).__name__}: {exc}",
+        ) from exc
+    if not isinstance(card, dict) or card.get("complete", True) is not False:
+        return
+    command = str(card.get("command", "")).replace("--out DIR", f"--out {folder}")
+    raise DataFormatError(
+        card_path,
+        None,
+        "complete",
+        "true (every episode of the run written)",
+        f"false: incomplete dataset ({n_files} of {card.get('episodes', '?')} episodes written)",
+        hint="run the same reform-sim generate command again to finish it"
+        + (f" ({command})" if command else "")
+        + ", or pass allow_incomplete=True to read the episodes written so far",
     )
 
 
@@ -621,23 +694,10 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
     n_rows = data["frame"].size
     if n_rows == 0:
         return []
-    order = np.argsort(data["frame"], kind="stable")
-    if not np.array_equal(order, np.arange(n_rows)):
-        data = {k: v[order] for k, v in data.items()}
-        null = {k: v[order] for k, v in null.items()}
     index = data["frame"]
+    _check_frame_runs(path, index)
     starts = np.concatenate([[0], np.flatnonzero(np.diff(index)) + 1])
     ends = np.concatenate([starts[1:], [n_rows]])
-    expected_index = np.arange(starts.size)
-    if not np.array_equal(index[starts], expected_index):
-        k = int(np.flatnonzero(index[starts] != expected_index)[0])
-        raise DataFormatError(
-            path,
-            f"row {int(order[starts[k]])}",
-            "frame",
-            f"frame index {k} (indices 0, 1, 2, ...)",
-            str(int(index[starts[k]])),
-        )
 
     for name in ("x", "y", "yaw", "head_x", "head_y", "head_yaw"):
         values = data[name]
@@ -646,38 +706,38 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
             bad |= ~null[name] & np.isnan(values)
         if name in ("yaw", "head_yaw"):
             bad |= ~null[name] & (np.abs(values) > _YAW_LIMIT_RAD)
+        else:
+            bad |= ~null[name] & (np.abs(values) > POSITION_LIMIT_M)
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            where = f"frame {int(index[row])} (row {int(order[row])})"
+            where = f"frame {int(index[row])} (row {row})"
             value = float(values[row])
-            if math.isfinite(value):
-                raise DataFormatError(
-                    path,
-                    where,
-                    name,
-                    "radians in [-pi, pi] (larger values look like degrees)",
-                    repr(value),
+            if not math.isfinite(value):
+                expected = "a finite number" + (" or NaN" if name.startswith("head") else "")
+            elif name.endswith("yaw"):
+                expected = "radians in [-pi, pi] (larger values look like degrees)"
+            else:
+                expected = (
+                    f"metres with |value| <= {POSITION_LIMIT_M:g} (farther looks like a corrupt "
+                    "value)"
                 )
-            raise DataFormatError(
-                path,
-                where,
-                name,
-                "a finite number" + (" or NaN" if name.startswith("head") else ""),
-                repr(value),
-            )
+            raise DataFormatError(path, where, name, expected, repr(value))
     if np.any(np.isnan(data["time"])) or np.any(np.isinf(data["time"])):
         row = int(np.flatnonzero(~np.isfinite(data["time"]))[0])
         raise DataFormatError(
             path,
-            f"frame {int(index[row])}",
+            f"frame {int(index[row])} (row {row})",
             "time",
             "a finite number",
             repr(float(data["time"][row])),
         )
+    _check_unique_ids(path, index, data["person_id"], null["person_id"])
+    _check_heads(path, index, data, null)
 
     frames = []
+    last_time: dict[str, tuple[int, float]] = {}  # sequence -> (frame, time) of its last frame
     for k, (a, b) in enumerate(zip(starts.tolist(), ends.tolist(), strict=True)):
-        where = f"frame {k} (rows {int(order[a])}..{int(order[b - 1])})"
+        where = f"frame {k} (rows {a}..{b - 1})"
         for name in ("sequence", "time", "annotated", "has_head"):
             column = data[name][a:b]
             if np.any(column != column[0]):
@@ -688,6 +748,17 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
                     "one value for all rows of the frame",
                     str(sorted(set(column.tolist()))),
                 )
+        sequence, time = str(data["sequence"][a]), float(data["time"][a])
+        previous = last_time.get(sequence)
+        check_time_increases(
+            time,
+            None if previous is None else previous[1],
+            path=path,
+            where=f"frame {k} (row {a})",
+            field="time",
+            previous_where=None if previous is None else f"frame {previous[0]}",
+        )
+        last_time[sequence] = (k, time)
         empty = null["person_id"][a:b]
         if empty.any():
             if b - a != 1:
@@ -705,8 +776,8 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
                     head_position=np.zeros((0, 2)) if data["has_head"][a] else None,
                     head_yaw=np.zeros(0) if data["has_head"][a] else None,
                     groups=() if data["annotated"][a] else None,
-                    time=float(data["time"][a]),
-                    sequence=str(data["sequence"][a]),
+                    time=time,
+                    sequence=sequence,
                 )
             )
             continue
@@ -754,11 +825,79 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
                 head_position=head_position,
                 head_yaw=head_yaw,
                 groups=groups,
-                time=float(data["time"][a]),
-                sequence=str(data["sequence"][a]),
+                time=time,
+                sequence=sequence,
             )
         )
     return frames
+
+
+def _check_frame_runs(path: Path, index: np.ndarray) -> None:
+    """Refuses rows not grouped by frame: each frame's rows together, frames 0, 1, 2, ..."""
+    rule = "rows grouped by frame, frames 0, 1, 2, ... in order"
+    if index[0] != 0:
+        raise DataFormatError(path, "row 0", "frame", f"frame 0 ({rule})", str(int(index[0])))
+    step = np.diff(index)
+    bad = np.flatnonzero((step != 0) & (step != 1))
+    if bad.size:
+        row = int(bad[0]) + 1
+        previous = int(index[row - 1])
+        raise DataFormatError(
+            path,
+            f"row {row}",
+            "frame",
+            f"frame {previous} or {previous + 1} ({rule})",
+            str(int(index[row])),
+        )
+
+
+def _check_unique_ids(
+    path: Path, index: np.ndarray, person_id: np.ndarray, empty: np.ndarray
+) -> None:
+    """Refuses a person id listed twice in one frame, naming the second row."""
+    rows = np.flatnonzero(~empty)
+    if rows.size < 2:
+        return
+    ordered = rows[np.lexsort((rows, person_id[rows], index[rows]))]
+    same = (index[ordered[1:]] == index[ordered[:-1]]) & (
+        person_id[ordered[1:]] == person_id[ordered[:-1]]
+    )
+    if not same.any():
+        return
+    pairs = np.flatnonzero(same)
+    k = pairs[np.argmin(ordered[1:][pairs])]  # the duplicate met first in the file
+    first, row = int(ordered[k]), int(ordered[k + 1])
+    raise DataFormatError(
+        path,
+        f"frame {int(index[row])} (row {row})",
+        "person_id",
+        "ids unique within the frame",
+        f"{int(person_id[row])}, already on row {first}",
+    )
+
+
+def _check_heads(
+    path: Path, index: np.ndarray, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
+) -> None:
+    """Refuses a head observed in part: head_x, head_y, head_yaw are all numbers or all NaN."""
+    names = ("head_x", "head_y", "head_yaw")
+    valued = ~(null["head_x"] | null["head_y"] | null["head_yaw"])
+    missing = np.column_stack([np.isnan(data[n]) for n in names])
+    partial = valued & missing.any(axis=1) & ~missing.all(axis=1)
+    if not partial.any():
+        return
+    row = int(np.flatnonzero(partial)[0])
+    odd_nan = missing[row].sum() == 1  # one NaN among numbers, else one number among NaNs
+    column = int(np.flatnonzero(missing[row] if odd_nan else ~missing[row])[0])
+    others = " and ".join(n for c, n in enumerate(names) if c != column)
+    raise DataFormatError(
+        path,
+        f"frame {int(index[row])} (row {row})",
+        names[column],
+        f"{'a number' if odd_nan else 'NaN'}, as {others} (a head is observed in full or not "
+        "at all)",
+        repr(float(data[names[column]][row])),
+    )
 
 
 def _groups(
