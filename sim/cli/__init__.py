@@ -26,6 +26,7 @@ from sim.cli import (
     _train,
 )
 from sim.cli._common import CliError, CommandParser, check_jobs
+from sim.cli._interrupt import sigint_to_main_only
 
 # Each module exposes ``register(subparsers)``, adding its subcommand: a name and help line at
 # once, the arguments (and the ``handler`` default) when the subcommand is used.
@@ -44,6 +45,13 @@ _COMMANDS = (
     _stress,
     _policy,
 )
+
+
+# Commands whose finished work survives an interruption (generated shards, the demo's steps, the
+# synthetic data of sim2real): run again, they carry on.
+_RESUMING = frozenset({"generate", "demo"})
+_RESUMING_EXPERIMENTS = frozenset({"sim2real"})
+INTERRUPTED = 130  # exit status after Ctrl-C: 128 + SIGINT, as a shell reports it
 
 
 class _VersionAction(argparse._VersionAction):
@@ -78,16 +86,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _resumes(args: argparse.Namespace) -> bool:
+    """Whether running the command again carries on where it was interrupted."""
+    if args.command == "experiment":
+        return getattr(args, "experiment", None) in _RESUMING_EXPERIMENTS
+    return args.command in _RESUMING
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         check_jobs(args)
-        return int(args.handler(args) or 0)
+        with sigint_to_main_only():
+            return int(args.handler(args) or 0)
     except (CliError, ValueError, FileNotFoundError, KeyError) as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         print(f"reform-sim {args.command}: error: {message}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        again = "; run the same command again to resume" if _resumes(args) else ""
+        print(f"reform-sim {args.command}: interrupted{again}", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":  # pragma: no cover

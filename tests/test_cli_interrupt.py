@@ -1,0 +1,89 @@
+"""Ctrl-C: one line, exit status 130, no traceback (from ``reform-sim`` or its workers)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from sim.cli import _resumes, build_parser
+
+ROOT = Path(__file__).resolve().parents[1]
+START = "import sys; from sim.cli import main; sys.argv[0] = 'reform-sim'; sys.exit(main())"
+WAIT_S = 60.0  # at most this long for the command to get going, and to stop
+
+pytestmark = pytest.mark.skipif(os.name != "posix", reason="sends SIGINT to a process group")
+
+
+def _interrupt(
+    argv: list[str], tmp_path: Path, *, started: Callable[[str], bool]
+) -> tuple[int, str]:
+    """Runs ``reform-sim argv`` in its own process group, waits until ``started(stderr so far)``
+    holds, and sends SIGINT to the whole group, as Ctrl-C in a terminal does.
+
+    Returns:
+        The exit status and the whole stderr.
+    """
+    log = tmp_path / "stderr.txt"
+    with log.open("w") as err:
+        process = subprocess.Popen(
+            [sys.executable, "-c", START, *argv],
+            cwd=ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=err,
+            start_new_session=True,
+        )
+    try:
+        deadline = time.monotonic() + WAIT_S
+        while process.poll() is None and not started(log.read_text()):
+            assert time.monotonic() < deadline, log.read_text()
+            time.sleep(0.05)
+        assert process.poll() is None, f"the command ended before Ctrl-C: {log.read_text()}"
+        os.killpg(process.pid, signal.SIGINT)
+        status = process.wait(timeout=WAIT_S)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    return status, log.read_text()
+
+
+def test_generate_interrupted_says_run_again_to_resume(tmp_path):
+    out = tmp_path / "synthetic"
+    argv = ["generate", "--scenario", "mingle", "--episodes", "400", "--seed", "0"]
+    argv += ["--duration", "20", "--jobs", "2", "--no-progress", "--out", str(out)]
+    status, err = _interrupt(argv, tmp_path, started=lambda _: any(out.rglob("part.parquet")))
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.strip().splitlines() == [
+        "reform-sim generate: interrupted; run the same command again to resume"
+    ]
+    assert status == 130
+
+
+def test_stress_interrupted_in_one_line(tmp_path):
+    argv = ["stress", "--grid", "small", "--jobs", "2", "--out", str(tmp_path / "s")]
+    status, err = _interrupt(argv, tmp_path, started=lambda err: "training REFORM" in err)
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.strip().splitlines()[-1] == "reform-sim stress: interrupted"
+    assert status == 130
+
+
+def test_which_commands_say_they_resume():
+    parser = build_parser()
+    argv = {
+        "generate": ["--scenario", "m", "--episodes", "1", "--seed", "0", "--out", "x"],
+        "demo": [],
+        "stress": [],
+        "simulate": ["--scenario", "m", "--seed", "0", "--out", "x.parquet"],
+    }
+    said = {name: _resumes(parser.parse_args([name, *words])) for name, words in argv.items()}
+    assert said == {"generate": True, "demo": True, "stress": False, "simulate": False}
+    sim2real = parser.parse_args(["experiment", "sim2real", "--out", "x"])
+    paper = parser.parse_args(["experiment", "paper", "--out", "x"])
+    assert (_resumes(sim2real), _resumes(paper)) == (True, False)
