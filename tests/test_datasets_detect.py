@@ -1,7 +1,8 @@
-"""Format detection: one format per folder, else the caller names it."""
+"""Format detection (one format per folder, else the caller names it) and DataFormatError."""
 
 from __future__ import annotations
 
+import pickle
 from pathlib import Path
 
 import pytest
@@ -49,3 +50,13 @@ def test_a_parquet_file_beside_salsa_is_ambiguous(salsa_dir, salsa_dataset, tmp_
     with pytest.raises(DataFormatError, match=r"format='salsa' or format='parquet'"):
         load_dataset(folder)
     assert load_dataset(folder, format="parquet").frames == salsa_dataset.frames
+
+
+def test_data_format_error_survives_pickling():
+    # Errors raised in worker processes travel back pickled.
+    error = DataFormatError("a.txt", "line 1", "x", "a number", "'q'", hint="fix it")
+    back = pickle.loads(pickle.dumps(error))
+    assert (
+        str(back) == str(error) == "a.txt: line 1: field 'x': expected a number, found 'q'; fix it"
+    )
+    assert (back.path, back.where, back.field, back.found) == (Path("a.txt"), "line 1", "x", "'q'")

@@ -36,3 +36,8 @@ class DataFormatError(ValueError):
         parts.append(f"{detail}expected {expected}, found {found}")
         message = ": ".join(parts)
         super().__init__(f"{message}; {hint}" if hint else message)
+
+    def __reduce__(self) -> tuple:
+        # Rebuilt from its fields, so that it survives pickling (errors of worker processes).
+        fields = (self.path, self.where, self.field, self.expected, self.found, self.hint)
+        return type(self), fields
