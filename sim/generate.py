@@ -879,7 +879,9 @@ def _markdown(card: Mapping[str, Any]) -> str:
         "",
         "```python",
         "from reform.datasets import read_parquet",
-        "dataset = read_parquet('DIR')",
+        "dataset = read_parquet('DIR')"
+        if card["complete"]
+        else "dataset = read_parquet('DIR', allow_incomplete=True)  # the episodes written so far",
         "```",
         "",
         "## Parameters",

@@ -197,6 +197,11 @@ def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference
     for path in written:  # every shard on disk is whole
         assert len(read_parquet(path)) == DURATION_S * 2
     assert read_card(out)["complete"] is False
+    # The unfinished folder reads only when asked for, as its card says.
+    assert "read_parquet('DIR', allow_incomplete=True)" in (out / CARD_MARKDOWN).read_text()
+    with pytest.raises(ValueError, match=r"field 'complete': expected true"):
+        read_parquet(out)
+    assert len(read_parquet(out, allow_incomplete=True)) == len(written) * DURATION_S * 2
 
     resumed = subprocess.run(
         [*command, "--jobs", "2", "--no-progress"],
