@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from cli_errors import cli_error
 from toy_scenes import toy_frames
 
 from reform import Dataset, write_parquet
@@ -17,14 +18,6 @@ def toy_dataset(tmp_path):
     path = tmp_path / "toy.parquet"
     write_parquet(Dataset(frames=tuple(toy_frames(0, 20)), name="toy", source="toy_scenes"), path)
     return path
-
-
-def _error(argv, capsys) -> str:
-    status = main([str(a) for a in argv])
-    err = capsys.readouterr().err
-    assert status == 2, err
-    assert len(err.strip().splitlines()) == 1, err
-    return err.strip()
 
 
 @pytest.mark.parametrize("command", ["evaluate", "detect"])
@@ -49,13 +42,13 @@ def _error(argv, capsys) -> str:
         ),
     ],
 )
-def test_an_option_of_another_detector_is_an_error(
+def test_an_option_of_another_detector_is_ancli_error(
     command, options, message, toy_dataset, tmp_path, capsys
 ):
     argv = [command, *options, "--data", toy_dataset]
     if command == "detect":
         argv += ["--out", tmp_path / "groups.json"]
-    assert _error(argv, capsys) == f"reform-sim {command}: error: {message}"
+    assert cli_error(argv, capsys) == f"reform-sim {command}: error: {message}"
     assert not (tmp_path / "groups.json").exists()
 
 
@@ -70,7 +63,7 @@ def test_gcff_options_still_reach_gcff(toy_dataset, tmp_path, capsys):
 def test_train_fraction_needs_a_split(toy_dataset, tmp_path, capsys):
     model = tmp_path / "m.skops"
     argv = ["train", "--data", toy_dataset, "--classifier", "logistic-regression", "--out", model]
-    err = _error([*argv, "--train-fraction", "0.3"], capsys)
+    err = cli_error([*argv, "--train-fraction", "0.3"], capsys)
     assert err == (
         "reform-sim train: error: --train-fraction 0.3 splits the frames for --frames "
         "train|test; with --frames all every annotated frame trains"
@@ -82,7 +75,7 @@ def test_train_fraction_needs_a_split(toy_dataset, tmp_path, capsys):
 
 def test_generate_rejects_jobs_with_ray(tmp_path, capsys):
     argv = ["generate", "--scenario", "mingle", "--episodes", "1", "--seed", "0"]
-    err = _error([*argv, "--out", tmp_path / "g", "--backend", "ray", "--jobs", "1"], capsys)
+    err = cli_error([*argv, "--out", tmp_path / "g", "--backend", "ray", "--jobs", "1"], capsys)
     assert err.startswith("reform-sim generate: error: --jobs sets local worker processes")
     assert "--backend ray" in err
     assert not (tmp_path / "g").exists()
@@ -103,7 +96,7 @@ JOBS_COMMANDS = [
 @pytest.mark.parametrize("argv", JOBS_COMMANDS, ids=lambda argv: "-".join(argv[:2]))
 def test_jobs_below_one_is_refused_up_front(argv, jobs, toy_dataset, tmp_path, capsys):
     argv = [a.replace("{data}", str(toy_dataset)).replace("{tmp}", str(tmp_path)) for a in argv]
-    err = _error([*argv, "--jobs", jobs], capsys)
+    err = cli_error([*argv, "--jobs", jobs], capsys)
     assert err == f"reform-sim {argv[0]}: error: --jobs must be >= 1, got {jobs}"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["toy.parquet"]
 
@@ -113,7 +106,7 @@ def test_notes_that_are_not_text_name_the_file(toy_dataset, tmp_path, capsys):
     notes.write_bytes(b"# Notes\n\xff\xfe binary")
     report = tmp_path / "report.md"
     argv = ["characterize", "--data", toy_dataset, "--markdown", report, "--notes", notes]
-    err = _error(argv, capsys)
+    err = cli_error(argv, capsys)
     assert err == (
         f"reform-sim characterize: error: --notes {notes}: expected UTF-8 Markdown text, "
         "found byte 0xff at offset 8 that is not UTF-8"
@@ -125,8 +118,8 @@ def test_with_results_that_are_not_text_name_the_file(tmp_path, capsys):
     results = tmp_path / "results.json"
     results.write_bytes(b"\x89PNG\r\n")
     argv = ["experiment", "gcff", "--salsa", "s", "--babble", "b", "--out", tmp_path / "x"]
-    err = _error([*argv, "--with-results", results], capsys)
+    err = cli_error([*argv, "--with-results", results], capsys)
     assert err == (
         f"reform-sim experiment: error: --with-results {results}: expected JSON text, found "
-        "bytes that are not UTF-8 (offset 0)"
+        "byte 0x89 at offset 0 that is not UTF-8"
     )

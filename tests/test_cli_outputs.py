@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from cli_errors import cli_error
 from toy_scenes import toy_frames
 
 from reform import Dataset, write_parquet
@@ -32,14 +33,6 @@ def places(tmp_path):
     return tmp_path
 
 
-def _error(argv, capsys) -> str:
-    status = main([str(a) for a in argv])
-    err = capsys.readouterr().err
-    assert status == 2, err
-    assert len(err.strip().splitlines()) == 1, err
-    return err.strip()
-
-
 def _tree(root: Path) -> list[str]:
     return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
 
@@ -63,7 +56,7 @@ FOLDER_AS_FILE = [
 def test_an_existing_folder_given_for_a_file(argv, option, name, places, toy_dataset, capsys):
     before = _tree(places)
     argv = [toy_dataset if a == DATA else a for a in argv]
-    err = _error([*argv, places / name], capsys)
+    err = cli_error([*argv, places / name], capsys)
     command = argv[0]
     assert err == (
         f"reform-sim {command}: error: {option} {places / name}: "
@@ -116,7 +109,7 @@ def test_a_path_under_a_file(argv, option, below, places, toy_dataset, capsys):
     before = _tree(places)
     argv = [toy_dataset if a == DATA else a.replace("{tmp}", str(places)) for a in argv]
     path = places / "afile" / below
-    err = _error([*argv, path], capsys)
+    err = cli_error([*argv, path], capsys)
     command = argv[0]
     assert err.startswith(f"reform-sim {command}: error: {option} {path}: "), err
     assert err.endswith(f"expected a folder at {places / 'afile'}, found a file"), err
@@ -135,7 +128,7 @@ def test_a_path_under_a_file(argv, option, below, places, toy_dataset, capsys):
 )
 def test_a_file_given_for_an_output_folder(argv, option, places, capsys):
     argv = [a.replace("{tmp}", str(places)) for a in argv]
-    err = _error([*argv, places / "afile"], capsys)
+    err = cli_error([*argv, places / "afile"], capsys)
     assert err == (
         f"reform-sim {argv[0]}: error: {option} {places / 'afile'}: "
         "expected a folder path, found an existing file"
@@ -143,7 +136,7 @@ def test_a_file_given_for_an_output_folder(argv, option, places, capsys):
 
 
 def test_an_experiment_report_that_is_a_folder(places, capsys):
-    err = _error(
+    err = cli_error(
         ["experiment", "paper", "--salsa", "s", "--babble", "b", "--out", places / "rep"], capsys
     )
     assert err == (
@@ -167,7 +160,7 @@ def test_train_fails_before_cross_validating_when_the_model_folder_cannot_be_mad
 
 def test_save_must_be_an_rrd_file_before_the_run(tmp_path, capsys):
     missing = tmp_path / "missing.parquet"  # never read: the flags are checked first
-    err = _error(
+    err = cli_error(
         ["evaluate", "--detector", "majority", "--data", missing, "--save", tmp_path / "x.txt"],
         capsys,
     )

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import FORMATS, CliError, check_output
+from sim.cli._common import FORMATS, CliError, check_output, read_text
 
 # Version of the JSON written by ``characterize --json``.
 CHARACTERISATION_SCHEMA_VERSION = 1
@@ -152,15 +152,7 @@ def run(args: argparse.Namespace) -> int:
     if args.notes:
         if not args.markdown:
             raise CliError("--notes is appended to the Markdown report: give --markdown OUT too")
-        try:
-            notes = Path(args.notes).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise CliError(f"--notes {args.notes}: cannot read it ({exc.strerror})") from exc
-        except UnicodeDecodeError as exc:
-            raise CliError(
-                f"--notes {args.notes}: expected UTF-8 Markdown text, found byte "
-                f"0x{exc.object[exc.start]:02x} at offset {exc.start} that is not UTF-8"
-            ) from None
+        notes = read_text("--notes", args.notes, expected="UTF-8 Markdown text")
 
     datasets: list[dict[str, Any]] = []
     for path in args.data:

@@ -20,6 +20,20 @@ DEFAULT_DATASETS = "../shared/datasets"  # the real datasets beside a clone
 DATASETS_VARIABLE = "REFORM_SIM_DATASETS"  # environment variable naming them elsewhere
 
 
+def read_text(option: str, path: str, *, expected: str) -> str:
+    """The UTF-8 text of the file ``option`` names; a `CliError` naming the option and the file
+    when it cannot be read or is not UTF-8 text (``expected`` says what it should hold)."""
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CliError(f"{option} {path}: cannot read it ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise CliError(
+            f"{option} {path}: expected {expected}, found byte 0x{exc.object[exc.start]:02x} "
+            f"at offset {exc.start} that is not UTF-8"
+        ) from None
+
+
 def default_datasets() -> str | None:
     """The real datasets' folder when none is given: ``$REFORM_SIM_DATASETS`` when set, else
     ``../shared/datasets`` when that folder exists, else None."""

@@ -6,10 +6,14 @@ import argparse
 import json
 import shlex
 import sys
-from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError, add_train_fraction_argument, check_train_fraction
+from sim.cli._common import (
+    CliError,
+    add_train_fraction_argument,
+    check_train_fraction,
+    read_text,
+)
 from sim.cli._experiment_io import add_out_argument, check_report, publish, report_stem
 
 _DESCRIPTION = """\
@@ -105,15 +109,9 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def _read_results(path: str) -> list[dict[str, Any]]:
+    text = read_text("--with-results", path, expected="JSON text")
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise CliError(f"--with-results {path}: cannot read it ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise CliError(
-            f"--with-results {path}: expected JSON text, found bytes that are not UTF-8 "
-            f"(offset {exc.start})"
-        ) from None
+        data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CliError(f"--with-results {path}: not JSON ({exc})") from None
     if isinstance(data, dict) and "results" in data:
