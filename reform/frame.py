@@ -30,9 +30,10 @@ KINDS = (HUMAN, ROBOT)
 # (Babble's -3.142) are accepted as wrapped. Radians.
 _YAW_TOLERANCE_RAD = 2e-3
 
-# Largest |x| or |y| of a position, metres (100 km): nothing on a floor is farther from the
-# origin; a larger value is a corrupt number or a unit mistake, and squaring it overflows.
-POSITION_LIMIT_M = 1e5
+# Largest |x| or |y| of a position, metres (100,000 km): beyond any georeferenced coordinate (UTM
+# northings reach 1e7 m), so a larger value is a corrupt number or a unit mistake; far larger
+# ones overflow the classifiers' float32 features and GCFF's squared distances.
+POSITION_LIMIT_M = 1e8
 
 Group = tuple[int, ...]
 

@@ -228,9 +228,9 @@ def test_wrong_column_count(tmp_path):
             0,
             1,
             1e200,
-            r"frame 1, row 1 \(ID 1\): field 'x': expected a position with \|value\| <= 1e\+07 "
-            r"file units \(100000 m; .*found 1e\+200",
-            id="huge-position",  # centimetres: the bound is 1e5 m = 1e7 cm
+            r"frame 1, row 1 \(ID 1\): field 'x': expected a position with \|value\| <= 1e\+10 "
+            r"file units \(1e\+08 m; .*found 1e\+200",
+            id="huge-position",  # centimetres: the bound is 1e8 m = 1e10 cm
         ),
     ],
 )

@@ -192,15 +192,15 @@ def test_truncated_feature_line(salsa_dir, tmp_path):
             2,
             2,
             "1e200",
-            r"line 2, person 1: field 'x': expected a position with \|value\| <= 100000 m"
+            r"line 2, person 1: field 'x': expected a position with \|value\| <= 1e\+08 m"
             r" \(farther looks like a corrupt value\), found 1e\+200",
             id="huge-position",  # finite, but overflows once squared
         ),
         pytest.param(
             3,
             8,
-            "-3e5",
-            r"line 3, person 2: field 'y': expected a position .*found -300000.0",
+            "-3e8",
+            r"line 3, person 2: field 'y': expected a position .*found -300000000.0",
             id="far-position",
         ),
     ],

@@ -121,11 +121,11 @@ def test_arrays_are_read_only_copies():
         ({"time": math.inf}, "time must be finite, got inf"),
         (
             {"position": [[0.0, 0.0], [1e200, 0.0], [0.0, 1.0]]},
-            r"position must be metres with \|x\|, \|y\| <= 100000, got x = 1e\+200 for person 1",
+            r"position must be metres with \|x\|, \|y\| <= 1e\+08, got x = 1e\+200 for person 1",
         ),
         (
-            {"head_position": [[0, 0], [1, 0], [0, -2e5]], "head_yaw": [0, 0, 0]},
-            r"head_position must be metres .*got y = -200000.0 for person 2",
+            {"head_position": [[0, 0], [1, 0], [0, -2e8]], "head_yaw": [0, 0, 0]},
+            r"head_position must be metres .*got y = -200000000.0 for person 2",
         ),
         ({"time": None}, "time must be a number of seconds, got None"),
     ],
