@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import sys
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -18,7 +19,8 @@ def lazy_exports(
     Args:
         package: the package's ``__name__``.
         exports: public name -> the module defining it; the module is imported the first time
-            the name is looked up, and the value is then cached on the package.
+            the name is looked up, and the value is then cached on the package. Any other name
+            that is a module of the package (``package.name``) is imported when looked up.
 
     Returns:
         ``(__getattr__, __dir__)``, to assign at the package's top level.
@@ -27,7 +29,11 @@ def lazy_exports(
     def __getattr__(name: str) -> Any:
         module = exports.get(name)
         if module is None:
-            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+            # A subpackage or module of the package (``reform.datasets``), as an eager
+            # ``__init__`` importing its modules would have made it an attribute.
+            if importlib.util.find_spec(f"{package}.{name}") is None:
+                raise AttributeError(f"module {package!r} has no attribute {name!r}")
+            return importlib.import_module(f"{package}.{name}")
         value = getattr(importlib.import_module(module), name)
         setattr(sys.modules[package], name, value)
         return value

@@ -16,10 +16,8 @@ fast.
 
 from __future__ import annotations
 
-import importlib
 import os
 import sys
-from typing import Any
 
 from reform._lazy import lazy_exports
 
@@ -50,10 +48,6 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
-_lazy_getattr, __dir__ = lazy_exports(__name__, _EXPORTS)
-
-
-def __getattr__(name: str) -> Any:
-    if name == "envs":  # the subpackage, imported on first use (it registers the environments)
-        return importlib.import_module("sim.envs")
-    return _lazy_getattr(name)
+# The names above, and the package's modules (``sim.envs`` registers the environments when
+# first looked up), are imported on first use.
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

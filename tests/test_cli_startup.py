@@ -59,6 +59,15 @@ def test_import_reform_is_light_until_a_name_is_used() -> None:
     assert used == "True"
 
 
+def test_the_packages_modules_are_attributes_on_first_use() -> None:
+    out = _python(
+        "import reform, sim\n"
+        "print(reform.datasets.read_parquet.__module__, reform.gcff.Gcff is reform.Gcff,\n"
+        "      sim.scene.__name__, hasattr(reform, 'no_such_module'))\n"
+    )
+    assert out == "reform.datasets.parquet True sim.scene False"
+
+
 @pytest.mark.parametrize("command", ["data info", "evaluate", "detect", "simulate"])
 def test_a_light_subcommand_imports_nothing_heavy_for_its_help(command: str) -> None:
     loaded = _python(
