@@ -15,14 +15,17 @@ import pytest
 from sim.cli import _resumes, build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
-START = "import sys; from sim.cli import main; sys.argv[0] = 'reform-sim'; sys.exit(main())"
+START = (
+    "import sys; from sim.cli import console_main; sys.argv[0] = 'reform-sim'; "
+    "sys.exit(console_main())"
+)
 WAIT_S = 60.0  # at most this long for the command to get going, and to stop
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="sends SIGINT to a process group")
 
 
 def _interrupt(
-    argv: list[str], tmp_path: Path, *, started: Callable[[str], bool]
+    argv: list[str], tmp_path: Path, *, started: Callable[[str], bool], start: str = START
 ) -> tuple[int, str]:
     """Runs ``reform-sim argv`` in its own process group, waits until ``started(stderr so far)``
     holds, and sends SIGINT to the whole group, as Ctrl-C in a terminal does.
@@ -33,7 +36,7 @@ def _interrupt(
     log = tmp_path / "stderr.txt"
     with log.open("w") as err:
         process = subprocess.Popen(
-            [sys.executable, "-c", START, *argv],
+            [sys.executable, "-c", start, *argv],
             cwd=ROOT,
             stdout=subprocess.DEVNULL,
             stderr=err,
@@ -72,6 +75,25 @@ def test_stress_interrupted_in_one_line(tmp_path):
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert err.strip().splitlines()[-1] == "reform-sim stress: interrupted"
     assert status == 130
+
+
+def test_main_called_from_python_lets_ctrl_c_reach_its_caller(tmp_path):
+    """A script calling `sim.cli.main` stops on Ctrl-C like on any call: KeyboardInterrupt."""
+    out = tmp_path / "synthetic"
+    script = (
+        "import sys\nfrom sim.cli import main\n"
+        "try:\n    main(sys.argv[1:])\n"
+        "except KeyboardInterrupt:\n"
+        "    print('KeyboardInterrupt reached the caller', file=sys.stderr)\n"
+        "    sys.exit(7)\n"
+        "print('the script went on', file=sys.stderr)\n"
+    )
+    argv = ["generate", "--scenario", "mingle", "--episodes", "400", "--seed", "0"]
+    argv += ["--duration", "20", "--jobs", "2", "--no-progress", "--out", str(out)]
+    started = lambda _: any(out.rglob("part.parquet"))  # noqa: E731
+    status, err = _interrupt(argv, tmp_path, started=started, start=script)
+    assert err.strip().splitlines()[-1] == "KeyboardInterrupt reached the caller", err
+    assert status == 7
 
 
 def test_which_commands_say_they_resume():

@@ -94,6 +94,19 @@ def _resumes(args: argparse.Namespace) -> bool:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Runs ``reform-sim argv``; returns the exit status (2 for bad input, reported in one
+    line on stderr). Ctrl-C raises KeyboardInterrupt to the caller, as any Python call does;
+    the console command (:func:`console_main`) reports it instead."""
+    return _run(argv, report_interrupt=False)
+
+
+def console_main() -> int:
+    """The ``reform-sim`` console command: :func:`main`, with Ctrl-C reported in one line
+    (exit status 130) rather than as a traceback."""
+    return _run(None, report_interrupt=True)
+
+
+def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
@@ -105,10 +118,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"reform-sim {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        if not report_interrupt:
+            raise
         again = "; run the same command again to resume" if _resumes(args) else ""
         print(f"reform-sim {args.command}: interrupted{again}", file=sys.stderr)
         return INTERRUPTED
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    sys.exit(console_main())
