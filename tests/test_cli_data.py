@@ -129,3 +129,19 @@ def test_help(capsys):
         main(["data", "info", "--help"])
     assert exit_info.value.code == 0
     assert "group-size" in capsys.readouterr().out
+
+
+def test_an_unfinished_generate_folder_needs_allow_incomplete(tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["generate", "--scenario", "hri-passing", "--episodes", "2", "--seed", "0"]
+    assert main([*argv, "--duration", "5", "--no-progress", "--out", str(out)]) == 0
+    card = out / "dataset.json"
+    data = json.loads(card.read_text())
+    data["complete"] = False  # as a run stopped before its last episode leaves it
+    card.write_text(json.dumps(data))
+    capsys.readouterr()
+    assert main(["data", "info", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "incomplete dataset (2 of 2 episodes written)" in err and "--allow-incomplete" in err
+    assert main(["data", "info", str(out), "--allow-incomplete"]) == 0
+    assert "frames" in capsys.readouterr().out

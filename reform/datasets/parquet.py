@@ -622,7 +622,8 @@ def _check_complete(folder: Path, n_files: int) -> None:
         f"false: incomplete dataset ({n_files} of {card.get('episodes', '?')} episodes written)",
         hint="run the same reform-sim generate command again to finish it"
         + (f" ({command})" if command else "")
-        + ", or pass allow_incomplete=True to read the episodes written so far",
+        + ", or pass allow_incomplete=True (--allow-incomplete on the command line) to read the "
+        "episodes written so far",
     )
 
 

@@ -149,6 +149,11 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data")
         default=None,
         help="length unit of the file's positions (GCFF folders: default cm; others are metres)",
     )
+    parser.add_argument(
+        "--allow-incomplete",
+        action="store_true",
+        help="read an unfinished `reform-sim generate` folder: the episodes written so far",
+    )
 
 
 def add_train_fraction_argument(parser: argparse.ArgumentParser, *, help: str) -> None:  # noqa: A002
@@ -169,7 +174,12 @@ def load_data(args: argparse.Namespace, *, attribute: str = "data"):
     """Loads the dataset named by :func:`add_data_arguments`."""
     from reform.datasets import load_dataset
 
-    return load_dataset(getattr(args, attribute), format=args.format, units=args.units)
+    return load_dataset(
+        getattr(args, attribute),
+        format=args.format,
+        units=args.units,
+        allow_incomplete=args.allow_incomplete,
+    )
 
 
 # Sensor flags: field of sim.Sensor -> (flag, unit shown in the help).

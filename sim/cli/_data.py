@@ -65,7 +65,9 @@ def _load(args: argparse.Namespace):
     from reform.datasets import detect_format, load_dataset
 
     format = args.format or detect_format(args.path)
-    return format, load_dataset(args.path, format=format, units=args.units)
+    return format, load_dataset(
+        args.path, format=format, units=args.units, allow_incomplete=args.allow_incomplete
+    )
 
 
 def run_info(args: argparse.Namespace) -> int:
