@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
+from reform.datasets.parquet import CARD_JSON
 from reform.frame import Dataset, Frame
 from sim.episode import DEFAULT_RATE_HZ
 
@@ -77,7 +78,6 @@ __all__ = [
 
 VIEWS = ("truth", "robot")  # ground truth, or what the robot's head sensor observes
 BACKENDS = ("local", "ray")
-CARD_JSON = "dataset.json"  # the dataset card, machine-readable
 CARD_MARKDOWN = "README.md"  # the dataset card, for people
 CARD_VERSION = 1
 SHARD_FILE = "part.parquet"
@@ -773,7 +773,7 @@ def _episode_text(summary: ShardSummary) -> str:
 
 def _sequences(handle: Any) -> set[str] | None:
     """The values of a Parquet file's ``sequence`` column (``None`` without one): from the
-    statistics of every row group when written, else the first row group's values."""
+    statistics of every row group when written, else from the column's values."""
     metadata = handle.metadata
     paths = [metadata.schema.column(i).path for i in range(metadata.num_columns)]
     if "sequence" not in paths:
@@ -783,7 +783,7 @@ def _sequences(handle: Any) -> set[str] | None:
     for group in range(metadata.num_row_groups):
         stats = metadata.row_group(group).column(column).statistics
         if stats is None or not stats.has_min_max:
-            table = handle.read_row_group(0, columns=["sequence"])
+            table = handle.read(columns=["sequence"])
             return {str(v) for v in table.column("sequence").unique().to_pylist()}
         values.update((str(stats.min), str(stats.max)))
     return values

@@ -176,7 +176,7 @@ class StressGrid:
     density_per_m2: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5)
     people: tuple[int, ...] = (6, 12, 18, 30, 48)
     max_group_size: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
-    sensors: tuple[str, ...] = ("truth", "fov", "occlusion", "tracker")
+    sensors: tuple[str, ...] = SENSOR_NAMES
     seeds: int = 5
     duration_s: float = 600.0
     rate_hz: float = 0.5

@@ -38,6 +38,7 @@ from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 
 __all__ = [
+    "CARD_JSON",
     "CODECS",
     "COLUMNS",
     "FORMAT_VERSION",
@@ -53,7 +54,7 @@ _YAW_LIMIT_RAD = math.pi + 2e-3  # wrapped radians plus rounding; larger values 
 # Parquet codecs a file may be written with (``"none"``: uncompressed).
 CODECS = ("none", "snappy", "gzip", "brotli", "lz4", "zstd")
 # The card of a folder written by ``reform-sim generate`` (sim.generate.CARD_JSON).
-_CARD_JSON = "dataset.json"
+CARD_JSON = "dataset.json"  # the card of a folder written by reform-sim generate
 
 # name -> (arrow type name, nullable, unit, description). The README's column table is this.
 COLUMNS: dict[str, tuple[str, bool, str, str]] = {
@@ -598,7 +599,7 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
 
 def _check_complete(folder: Path, n_files: int) -> None:
     """Refuses a ``reform-sim generate`` folder whose card says the run has not finished."""
-    card_path = folder / _CARD_JSON
+    card_path = folder / CARD_JSON
     if not card_path.is_file():
         return
     try:

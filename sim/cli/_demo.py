@@ -56,8 +56,6 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
-    if args.jobs is not None and args.jobs < 1:
-        raise CliError(f"--jobs must be >= 1, got {args.jobs}")
     check_output("--out", args.out, folder=True)
     started = time.perf_counter()
     result = run_demo(
