@@ -48,7 +48,10 @@ def _nearest_existing(path: Path, target: str | os.PathLike[str]) -> Path:
     for folder in (path, *path.parents):
         if folder.is_dir():
             return folder
-        if folder.exists() or folder.is_symlink():
+        if folder.is_symlink() and not folder.exists():
+            found = f"a link to nothing ({folder.readlink()})"
+            raise OutputPathError(target, f"expected a folder at {folder}, found {found}")
+        if folder.exists():
             raise OutputPathError(target, f"expected a folder at {folder}, found a file")
     return Path(".")  # pragma: no cover - a relative path's parents end at "."
 

@@ -320,7 +320,8 @@ def _check_time_order(frames: Sequence[Frame]) -> None:
         if previous is not None and not frame.time > previous[1]:
             raise ValueError(
                 f"frames[{k}].time must increase within sequence {frame.sequence!r}: expected "
-                f"> {previous[1]!r} (frames[{previous[0]}]), got {frame.time!r}"
+                f"> {previous[1]!r} (frames[{previous[0]}]), got {frame.time!r}; give each "
+                "Frame its time= (and frames of different recordings their own sequence=)"
             )
         last[frame.sequence] = (k, frame.time)
 

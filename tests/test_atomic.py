@@ -143,3 +143,12 @@ def test_write_parquet_names_an_unwritable_target(tmp_path):
         write_parquet(dataset, tmp_path / "folder.parquet")
     with pytest.raises(OutputPathError, match=r"expected a folder at .*afile, found a file"):
         write_parquet(dataset, tmp_path / "afile" / "x.parquet")
+
+
+def test_a_dangling_link_is_named_as_such(tmp_path):
+    from reform.atomic import OutputPathError, check_file_path
+
+    link = tmp_path / "gone"
+    link.symlink_to(tmp_path / "missing-folder")
+    with pytest.raises(OutputPathError, match=r"expected a folder at .*gone, found a link to"):
+        check_file_path(link / "out.json")

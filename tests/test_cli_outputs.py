@@ -168,3 +168,11 @@ def test_save_must_be_an_rrd_file_before_the_run(tmp_path, capsys):
         f"reform-sim evaluate: error: --save must be a path ending in .rrd, got "
         f"'{tmp_path / 'x.txt'}'"
     )
+
+
+def test_an_empty_output_path_is_refused(toy_dataset, capsys):
+    argv = ["evaluate", "--detector", "majority", "--data", toy_dataset, "--json", ""]
+    assert (
+        cli_error(argv, capsys)
+        == "reform-sim evaluate: error: --json: expected a path, found an empty one"
+    )

@@ -99,6 +99,8 @@ def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bo
     """
     if path is None:
         return
+    if not str(path):
+        raise CliError(f"{option}: expected a path, found an empty one")
     from reform.atomic import OutputPathError, check_file_path, check_folder_path
 
     try:
