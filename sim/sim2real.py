@@ -586,7 +586,9 @@ class SimToReal:
     """Results of :func:`sim_to_real`.
 
     Attributes:
-        rows: every detector on every test set (main rows, then diagnostics).
+        rows: every detector on every test set; diagnostic rows are flagged
+            (:attr:`Row.diagnostic`): the half models of :attr:`cross_period` (both test sets;
+            the page shows the SALSA test split) and the synthetic variants.
         differences: ``(classifier, dataset) -> (difference, low, high)``: F1 at T = 2/3 of the
             synthetic-trained minus the SALSA-trained model, with its bootstrap interval.
         goals: the goals, checked (for each classifier).
