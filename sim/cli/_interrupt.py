@@ -32,7 +32,8 @@ def _park() -> None:
 @contextlib.contextmanager
 def sigint_to_main_only() -> Iterator[None]:
     """Within: Ctrl-C raises KeyboardInterrupt in this (the main) thread, and the processes
-    started here do not see it. Elsewhere than in the main thread of a POSIX process, a no-op."""
+    started here do not see it. A no-op outside the main thread, where signal masks cannot be
+    set (not POSIX), and when SIGINT has a handler of the caller's (not Python's default)."""
     if (
         not hasattr(signal, "pthread_sigmask")
         or threading.current_thread() is not threading.main_thread()
