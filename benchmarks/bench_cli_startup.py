@@ -9,6 +9,7 @@ Measured in the same run, each a fresh interpreter (wall time, median of ``--rep
 * **train --help**, **stress --help**: subcommands whose arguments list reform's classifiers
   (`reform.classifiers`, which imports scikit-learn) and the stress tests' grids
   (`sim.stress_grid`, which imports neither scikit-learn nor MuJoCo);
+* **experiment hri --help**: its views and default size come from `sim.hri_views` (light too);
 * **import reform**: the package alone, its public names loaded on first use;
 * **every parser** (the baseline): gymnasium imported and every subcommand's arguments added, as
   building the parser did before subcommands were added on use.
@@ -48,6 +49,7 @@ CASES = {
     "evaluate --help": [*COMMAND, "evaluate", "--help"],
     "train --help": [*COMMAND, "train", "--help"],
     "stress --help": [*COMMAND, "stress", "--help"],
+    "experiment hri --help": [*COMMAND, "experiment", "hri", "--help"],
     "import reform": [sys.executable, "-c", "import reform"],
     "every parser": [sys.executable, "-c", EVERY_PARSER],
 }
@@ -70,7 +72,7 @@ def main() -> None:
         for name, argv in CASES.items():
             times[name].append(_seconds(argv))
     for name, values in times.items():
-        print(f"{name:<18} median {statistics.median(values):6.3f} s  best {min(values):6.3f} s")
+        print(f"{name:<22} median {statistics.median(values):6.3f} s  best {min(values):6.3f} s")
     ratios = [e / h for e, h in zip(times["every parser"], times["--help"], strict=True)]
     print(f"every parser / --help: {statistics.median(ratios):.1f}x")
 

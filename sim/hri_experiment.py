@@ -57,6 +57,7 @@ from reform.metrics import Evaluation, evaluate
 from reform.report import command_block, json_float, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
+from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 from sim.sensor import Sensor
 from sim.stress import (
     DETECTOR_LABELS,
@@ -90,20 +91,26 @@ HRI_SCENARIOS = ("hri-conversation", "hri-robot-excluded", "hri-passing")
 ALL = "all"  # the three scenes pooled, as the paper's 100 frames were
 WIDE_FOV_DEG = 180.0  # degrees, the robot-wide view's field of view
 VIEWS: Mapping[str, Sensor | None] = MappingProxyType(
-    {
-        "truth": None,
-        "robot": Sensor(
-            position_noise=TRACKER_POSITION_NOISE_M,
-            yaw_noise=TRACKER_YAW_NOISE_RAD,
-            dropout=TRACKER_DROPOUT,
-        ),
-        "robot-wide": Sensor(
-            fov_deg=WIDE_FOV_DEG,
-            position_noise=TRACKER_POSITION_NOISE_M,
-            yaw_noise=TRACKER_YAW_NOISE_RAD,
-            dropout=TRACKER_DROPOUT,
-        ),
-    }
+    dict(
+        zip(
+            VIEW_NAMES,
+            (
+                None,
+                Sensor(
+                    position_noise=TRACKER_POSITION_NOISE_M,
+                    yaw_noise=TRACKER_YAW_NOISE_RAD,
+                    dropout=TRACKER_DROPOUT,
+                ),
+                Sensor(
+                    fov_deg=WIDE_FOV_DEG,
+                    position_noise=TRACKER_POSITION_NOISE_M,
+                    yaw_noise=TRACKER_YAW_NOISE_RAD,
+                    dropout=TRACKER_DROPOUT,
+                ),
+            ),
+            strict=True,
+        )
+    )
 )
 VIEW_TEXT = {
     "truth": "ground truth of everyone in the room",
@@ -121,7 +128,6 @@ PAPER_HRI: Mapping[str, tuple[float, float, float]] = MappingProxyType(
 PAPER_STRIDE_M = 0.7  # metres: the paper's "stride = 0.7"
 PAPER_MDL_M2 = 3.0  # square metres: the paper's "MDL = 30000", read as cm²
 REFERENCE_MDL_M2 = 1.0  # square metres: the reference code's default mdl = 10000 cm²
-DEFAULT_SEEDS = 10  # episodes per scenario
 _ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.stress uses 0-3)
 _ROLE_HRI_BOOTSTRAP = 5
 CLASSIFIERS = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION)

@@ -68,7 +68,9 @@ def test_the_packages_modules_are_attributes_on_first_use() -> None:
     assert out == "reform.datasets.parquet True sim.scene False"
 
 
-@pytest.mark.parametrize("command", ["data info", "evaluate", "detect", "simulate"])
+@pytest.mark.parametrize(
+    "command", ["data info", "evaluate", "detect", "simulate", "stress", "experiment hri"]
+)
 def test_a_light_subcommand_imports_nothing_heavy_for_its_help(command: str) -> None:
     loaded = _python(
         "import sys\n"

@@ -41,7 +41,7 @@ def register(experiments: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.hri_experiment import DEFAULT_SEEDS, VIEWS
+    from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
     add_dataset_arguments(parser, babble=False)
     add_out_argument(parser)
@@ -55,9 +55,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     parser.add_argument(
         "--views",
-        default=",".join(VIEWS),
+        default=",".join(VIEW_NAMES),
         metavar="V1,V2",
-        help=f"views to score (default {','.join(VIEWS)})",
+        help=f"views to score (default {','.join(VIEW_NAMES)})",
     )
     parser.add_argument(
         "--jobs", type=int, default=None, metavar="N", help="worker processes for training"
@@ -72,7 +72,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command(args: argparse.Namespace) -> str:
-    from sim.hri_experiment import DEFAULT_SEEDS, VIEWS
+    from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
     words = ["reform-sim", "experiment", "hri"]
     if args.datasets is not None:
@@ -83,7 +83,7 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--seeds", str(args.seeds)]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
-    if args.views != ",".join(VIEWS):
+    if args.views != ",".join(VIEW_NAMES):
         words += ["--views", args.views]
     if args.jobs is not None:
         words += ["--jobs", str(args.jobs)]
