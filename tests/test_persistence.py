@@ -126,82 +126,79 @@ def fresh(name: str = "logistic-regression") -> Reform:
     return Reform(make_classifier(name)).fit(toy_frames(0, 60))
 
 
-def test_a_model_whose_features_disagree_with_its_classifier_is_refused(tmp_path):
+def _features_disagree() -> dict:
     model = fresh("bagged-trees")  # fitted on distance and effort_angle
     model.features_ = ("distance",)
-    path = tmp_path / "inconsistent.skops"
-    sio.dump(payload(model), path)
-    with pytest.raises(
-        ValueError,
-        match=r"inconsistent\.skops: inconsistent model: features_ \['distance'\] gives 1 "
-        r"feature\(s\) per pair, expected the classifier to take as many, found a "
-        r"BaggingClassifier fitted on 2 \(n_features_in_\)",
-    ):
-        load_model(path)
-    with pytest.raises(ValueError, match="fitted on 2"):
-        model_info(path)
+    return payload(model)
 
 
-def test_a_model_with_unknown_features_is_refused(tmp_path):
+def _unknown_features() -> dict:
     model = fresh()
     model.features_ = ("distance", "loudness")
-    path = tmp_path / "unknown.skops"
-    sio.dump(payload(model), path)
-    with pytest.raises(
-        ValueError,
-        match=r"unknown\.skops: the model's features_ are not valid: features must be among "
-        r".*, got 'loudness'",
-    ):
-        load_model(path)
+    return payload(model)
 
 
-def test_a_file_listing_other_features_than_its_model_is_refused(tmp_path):
-    path = tmp_path / "listed.skops"
-    sio.dump(payload(fresh(), features=["distance", "head_distance"]), path)
-    with pytest.raises(
-        ValueError,
-        match=r"listed\.skops: the file lists features \['distance', 'head_distance'\], "
-        r"expected the model's own features_ \['distance', 'effort_angle'\]",
-    ):
-        load_model(path)
-
-
-def test_a_model_whose_classifier_has_other_classes_is_refused(tmp_path):
+def _other_classes() -> dict:
     model = fresh()
     x = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]])
     model.classifier_ = LogisticRegression().fit(x, np.array([0, 1, 2, 2]))
-    path = tmp_path / "classes.skops"
-    sio.dump(payload(model), path)
-    with pytest.raises(
-        ValueError,
-        match=r"classes\.skops: inconsistent model: expected a pair classifier of classes "
-        r"\[0, 1\] \(apart, together\), found a LogisticRegression with classes_ \[0, 1, 2\]",
-    ):
-        load_model(path)
+    return payload(model)
 
 
-def test_an_unfitted_model_is_refused_naming_the_file(tmp_path):
-    path = tmp_path / "unfitted.skops"
-    sio.dump(payload(Reform()), path)
-    with pytest.raises(
-        ValueError,
-        match=r"unfitted\.skops: expected a fitted reform\.Reform, found an unfitted one "
-        r"\(no classifier_ or features_\)",
-    ):
-        load_model(path)
-
-
-def test_a_model_with_an_unfitted_classifier_is_refused(tmp_path):
+def _unfitted_classifier() -> dict:
     model = fresh()
     model.classifier_ = LogisticRegression()
-    path = tmp_path / "bare.skops"
-    sio.dump(payload(model), path)
-    with pytest.raises(
-        ValueError,
-        match=r"bare\.skops: expected a fitted pair classifier in the model, found an "
-        r"unfitted LogisticRegression",
-    ):
+    return payload(model)
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        pytest.param(
+            _features_disagree,
+            r"inconsistent model: features_ \['distance'\] gives 1 feature\(s\) per pair, "
+            r"expected the classifier to take as many, found a BaggingClassifier fitted on 2 "
+            r"\(n_features_in_\)",
+            id="features-disagree-with-classifier",
+        ),
+        pytest.param(
+            _unknown_features,
+            r"the model's features_ are not valid: features must be among .*, got 'loudness'",
+            id="unknown-features",
+        ),
+        pytest.param(
+            lambda: payload(fresh(), features=["distance", "head_distance"]),
+            r"the file lists features \['distance', 'head_distance'\], expected the model's own "
+            r"features_ \['distance', 'effort_angle'\]",
+            id="file-lists-other-features",
+        ),
+        pytest.param(
+            _other_classes,
+            r"inconsistent model: expected a pair classifier of classes \[0, 1\] \(apart, "
+            r"together\), found a LogisticRegression with classes_ \[0, 1, 2\]",
+            id="other-classes",
+        ),
+        pytest.param(
+            lambda: payload(Reform()),
+            r"expected a fitted reform\.Reform, found an unfitted one \(no classifier_ or "
+            r"features_\)",
+            id="unfitted-model",
+        ),
+        pytest.param(
+            _unfitted_classifier,
+            r"expected a fitted pair classifier in the model, found an unfitted "
+            r"LogisticRegression",
+            id="unfitted-classifier",
+        ),
+    ],
+)
+def test_a_broken_model_file_is_refused_naming_it(make, message, tmp_path):
+    path = tmp_path / "broken.skops"
+    sio.dump(make(), path)
+    with pytest.raises(ValueError, match=r"broken\.skops: " + message):
         load_model(path)
+    with pytest.raises(ValueError, match=message):
+        model_info(path)
 
 
 def test_a_folder_is_not_a_model_file(tmp_path):
