@@ -176,3 +176,9 @@ def test_calibrate_bad_input(tmp_path, capsys):
     assert "no salsa/ folder in it" in capsys.readouterr().err
     assert main(["calibrate", "--out", str(tmp_path), "--seeds", "0"]) == 2
     assert "--seeds must be >= 1, got 0" in capsys.readouterr().err
+
+
+def test_calibrate_reads_the_datasets_named_by_the_environment(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "elsewhere"))
+    assert main(["calibrate", "--out", str(tmp_path / "out")]) == 2
+    assert f"--datasets {tmp_path / 'elsewhere'}: no salsa/ folder in it" in capsys.readouterr().err

@@ -9,7 +9,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from sim.cli._common import DEFAULT_DATASETS, CliError, check_output
+from sim.cli._common import DEFAULT_DATASETS, CliError, check_output, default_datasets
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -31,9 +31,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="folder for the report")
     parser.add_argument(
         "--datasets",
-        default=DEFAULT_DATASETS,
+        default=None,
         metavar="DIR",
-        help=f"folder holding salsa/ and babble/ (default {DEFAULT_DATASETS})",
+        help="folder holding salsa/ and babble/ (default: $REFORM_SIM_DATASETS, else "
+        f"{DEFAULT_DATASETS})",
     )
     parser.add_argument(
         "--seeds", type=int, default=None, metavar="N", help="episodes per scenario (default 8)"
@@ -46,7 +47,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 def _command(args: argparse.Namespace) -> str:
     words = ["reform-sim", "calibrate", "--out", args.out]
-    if args.datasets != DEFAULT_DATASETS:
+    if args.datasets is not None:
         words += ["--datasets", args.datasets]
     if args.seeds is not None:
         words += ["--seeds", str(args.seeds)]
@@ -63,10 +64,11 @@ def run(args: argparse.Namespace) -> int:
     seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
     if seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {seeds}")
-    root = Path(args.datasets)
+    given = args.datasets or default_datasets() or DEFAULT_DATASETS
+    root = Path(given)
     for name in ("salsa", "babble"):
         if not (root / name).is_dir():
-            raise CliError(f"--datasets {args.datasets}: no {name}/ folder in it")
+            raise CliError(f"--datasets {given}: no {name}/ folder in it")
     check_output("--out", args.out, folder=True)
     out = Path(args.out)
     report = calibrate_scenarios(
