@@ -701,8 +701,8 @@ def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict
 def _checked_shard(path: Path, spec: GenerationSpec, episode: int) -> ShardSummary:
     """The summary a finished shard carries, after checking that it is episode ``episode`` of
     this dataset: its metadata's episode, seed, sequence and parameters, and its ``sequence``
-    column. Only the footer is read (metadata and row-group statistics), plus the first row
-    group's sequence values when the file has no statistics; never the frames.
+    column. Only the footer is read (metadata and row-group statistics), plus the sequence
+    column when the file has no statistics; never the frames.
 
     Raises:
         DataFormatError: naming the file, what was expected and what was found.

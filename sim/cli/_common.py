@@ -114,11 +114,8 @@ def check_recording(args: argparse.Namespace) -> None:
     front, as :func:`check_output` does the other outputs."""
     from sim.recording import target_from_args
 
-    save = getattr(args, "save", None)
-    if save is not None and Path(save).suffix != ".rrd":
-        raise CliError(f"--save must be a path ending in .rrd, got {save!r}")
-    target_from_args(args)  # a ValueError naming the flag when --url comes without --connect
-    check_output("--save", save)
+    target_from_args(args)  # a ValueError naming the flag: not .rrd, --url without --connect
+    check_output("--save", getattr(args, "save", None))
 
 
 def check_jobs(args: argparse.Namespace) -> None:
@@ -158,12 +155,15 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data")
     )
 
 
-def add_train_fraction_argument(parser: argparse.ArgumentParser, *, help: str) -> None:  # noqa: A002
+def add_train_fraction_argument(
+    parser: argparse.ArgumentParser,
+    *,
+    help: str,  # noqa: A002
+    default: float | None = TRAIN_FRACTION,
+) -> None:
     """``--train-fraction F``: the training share of `reform.time_split`, checked by
-    :func:`check_train_fraction`."""
-    parser.add_argument(
-        "--train-fraction", type=float, default=TRAIN_FRACTION, metavar="F", help=help
-    )
+    :func:`check_train_fraction` (``default`` None: tell "not given" from the default)."""
+    parser.add_argument("--train-fraction", type=float, default=default, metavar="F", help=help)
 
 
 def check_train_fraction(args: argparse.Namespace) -> None:

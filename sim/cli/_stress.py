@@ -6,9 +6,8 @@ import argparse
 import dataclasses
 import shlex
 import sys
-from pathlib import Path
 
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_output, check_recording
 
 _DESCRIPTION = """\
 F1 at T = 2/3 and T = 1 of REFORM (weighted KNN, bagged trees, logistic regression) and GCFF as
@@ -111,10 +110,8 @@ def run(args: argparse.Namespace) -> int:
         unknown = [a for a in axes if a not in AXES]
         if unknown or not axes:
             raise CliError(f"--axes must name axes among {','.join(AXES)}, got {args.axes!r}")
-    if args.save is not None and Path(args.save).suffix != ".rrd":
-        raise CliError(f"--save must be a path ending in .rrd, got {args.save!r}")
     check_output("--out", args.out, folder=True)
-    check_output("--save", args.save)
+    check_recording(args)
 
     def progress(line: str) -> None:
         print(line, file=sys.stderr, flush=True)

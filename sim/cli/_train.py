@@ -61,8 +61,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
         parser,
         help="with --frames train|test: share of each sequence's annotated frames, by time, in "
         "the train part (0.6)",
+        default=None,  # not given: it needs --frames train|test
     )
-    parser.set_defaults(train_fraction=None)  # None: not given (it needs --frames train|test)
     parser.add_argument(
         "--tune",
         action="store_true",

@@ -90,6 +90,8 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
 def target_from_args(args: argparse.Namespace) -> RecordingTarget | None:
     """The target named by :func:`add_recording_arguments`' flags, or None when none is given."""
     save = getattr(args, "save", None)
+    if save is not None and Path(save).suffix != ".rrd":
+        raise ValueError(f"--save must be a path ending in .rrd, got {save!r}")
     connect = (args.url or "") if getattr(args, "connect", False) else None
     serve = bool(getattr(args, "serve", False))
     if getattr(args, "url", None) and connect is None:
