@@ -96,6 +96,14 @@ class Frame:
             ``head_position`` is NaN. Given together with ``head_position`` or not at all.
         groups: optional ground truth: disjoint groups (tuples of ids of this frame). People in
             no group are singletons. ``None`` means the frame is not annotated.
+        listed_groups: optional ground-truth F-formations exactly as the annotation lists them
+            when it names people who are not in this frame (the annotators saw someone the
+            tracker did not): disjoint groups of two or more ids, some of them not in ``ids``.
+            Their members present in the frame must make up ``groups``' F-formations. The
+            evaluation scores against them, as the field's protocol does (an absent member
+            can never be detected and counts against the match); detectors, features and
+            training see only ``groups``. ``None`` (the usual case): every listed member is
+            present and the ground truth is ``groups``.
         time: time stamp, seconds from the start of its sequence.
         sequence: name of the recording (session, episode) the frame belongs to.
     """
@@ -109,6 +117,7 @@ class Frame:
     groups: tuple[Group, ...] | None = None
     time: float = 0.0
     sequence: str = ""
+    listed_groups: tuple[Group, ...] | None = None
 
     def __post_init__(self) -> None:
         ids = np.asarray(self.ids)
@@ -162,6 +171,11 @@ class Frame:
         groups = None
         if self.groups is not None:
             groups = _validate_groups(self.groups, ids)
+        listed = None
+        if self.listed_groups is not None:
+            if groups is None:
+                raise ValueError("listed_groups needs groups: the frame is not annotated")
+            listed = _validate_listed(self.listed_groups, groups, ids)
 
         object.__setattr__(self, "ids", _readonly(ids))
         object.__setattr__(self, "position", _readonly(position))
@@ -172,6 +186,7 @@ class Frame:
         object.__setattr__(self, "head_position", head_position)
         object.__setattr__(self, "head_yaw", head_yaw)
         object.__setattr__(self, "groups", groups)
+        object.__setattr__(self, "listed_groups", listed)
         try:
             object.__setattr__(self, "time", float(self.time))
         except (TypeError, ValueError) as exc:
@@ -210,6 +225,21 @@ class Frame:
             raise ValueError("frame is not annotated: it has no ground-truth groups")
         return tuple(g for g in self.groups if len(g) >= 2)
 
+    def truth_fformations(self) -> tuple[Group, ...]:
+        """The F-formations the evaluation scores against: ``listed_groups`` when the annotation
+        names people absent from the frame, else :meth:`fformations`."""
+        if self.listed_groups is not None:
+            return self.listed_groups
+        return self.fformations()
+
+    @property
+    def unseen_members(self) -> tuple[int, ...]:
+        """Ids the ground truth names that are not among the frame's people (sorted)."""
+        if self.listed_groups is None:
+            return ()
+        present = set(self.ids.tolist())
+        return tuple(sorted({m for g in self.listed_groups for m in g} - present))
+
     def index_of(self, person_id: int) -> int:
         """Row of ``person_id`` in this frame's arrays."""
         hits = np.flatnonzero(self.ids == person_id)
@@ -229,6 +259,7 @@ class Frame:
             "groups": self.groups,
             "time": self.time,
             "sequence": self.sequence,
+            "listed_groups": self.listed_groups,
         }
         fields.update(changes)
         return Frame(**fields)
@@ -246,6 +277,7 @@ class Frame:
             and self.groups == other.groups
             and self.time == other.time
             and self.sequence == other.sequence
+            and self.listed_groups == other.listed_groups
         )
 
     __hash__ = None  # type: ignore[assignment]
@@ -276,6 +308,39 @@ def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[
                 raise ValueError(f"groups must be disjoint, person {m} appears twice (groups[{g}])")
             seen.add(m)
         out.append(members)
+    return tuple(out)
+
+
+def _validate_listed(
+    listed: Iterable[Iterable[int]], groups: tuple[Group, ...], ids: np.ndarray
+) -> tuple[Group, ...]:
+    """``listed_groups`` checked: disjoint groups of two or more whose present members are
+    ``groups``' F-formations."""
+    present = set(ids.tolist())
+    seen: set[int] = set()
+    out = []
+    for g, group in enumerate(listed):
+        if isinstance(group, (str, bytes)) or not isinstance(group, Iterable):
+            raise ValueError(f"listed_groups[{g}] must be a sequence of person ids, got {group!r}")
+        members = tuple(_person_id(m, f"listed_groups[{g}]") for m in group)
+        if len(members) < 2:
+            raise ValueError(f"listed_groups[{g}] must have two or more members, got {members}")
+        for m in members:
+            if m in seen:
+                raise ValueError(
+                    f"listed_groups must be disjoint, person {m} appears twice (listed_groups[{g}])"
+                )
+            seen.add(m)
+        out.append(members)
+    observed = sorted(
+        sorted(kept) for kept in ([m for m in g if m in present] for g in out) if len(kept) >= 2
+    )
+    fformations = sorted(sorted(g) for g in groups if len(g) >= 2)
+    if observed != fformations:
+        raise ValueError(
+            "listed_groups' members present in the frame must be groups' F-formations: "
+            f"expected {fformations}, got {observed}"
+        )
     return tuple(out)
 
 

@@ -663,6 +663,37 @@ def _group_ids(
     return gid, group_frame
 
 
+def _unseen_members(
+    frames: Sequence[Frame], true_gid: np.ndarray, true_frame: np.ndarray, n_people: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Members of each true group who are absent from their frame, and the true groups' frames
+    with one true group appended per listed group that has no member present.
+
+    Returns:
+        ``unseen`` (n_groups',) absent members per true group and ``true_frame`` (n_groups',).
+    """
+    start = np.concatenate([[0], np.cumsum(n_people)[:-1]]).astype(np.int64)
+    extra_unseen: list[int] = []
+    extra_frame: list[int] = []
+    unseen = np.zeros(true_frame.size, dtype=np.int64)
+    for index, frame in enumerate(frames):
+        if frame.listed_groups is None or frame.groups is None:
+            continue
+        row_of = {int(person): row for row, person in enumerate(frame.ids.tolist())}
+        for group in frame.listed_groups:
+            rows = [row_of[m] for m in group if m in row_of]
+            absent = len(group) - len(rows)
+            if rows:
+                unseen[true_gid[start[index] + rows[0]]] += absent
+            else:
+                extra_unseen.append(absent)
+                extra_frame.append(index)
+    if extra_unseen:
+        unseen = np.concatenate([unseen, np.array(extra_unseen, dtype=np.int64)])
+        true_frame = np.concatenate([true_frame, np.array(extra_frame, dtype=np.int64)])
+    return unseen, true_frame
+
+
 def _pairs(size: np.ndarray) -> np.ndarray:
     return size * (size - 1) // 2
 
@@ -722,11 +753,15 @@ def evaluate(
         )
     truth = [frame.groups if frame.groups is not None else () for frame in frames]
     true_gid, true_frame = _group_ids(truth, frames, strict=False, **coding)
+    # Ground-truth members absent from their frame (``Frame.listed_groups``) count in the size
+    # of their true group, and a listed group with no one present is a true group of its own.
+    unseen, true_frame = _unseen_members(frames, true_gid, true_frame, n_people)
 
     # Only the annotated frames' people count; groups of other frames end up of size 0.
     keep = annotated[person_frame]
     true_gid, pred_gid = true_gid[keep], pred_gid[keep]
-    true_size = np.bincount(true_gid, minlength=true_frame.size)
+    present_size = np.bincount(true_gid, minlength=true_frame.size)
+    true_size = present_size + unseen
     pred_size = np.bincount(pred_gid, minlength=pred_frame.size)
     # Non-empty cells of the contingency table (true group x detected group): |G ∩ D|.
     cell, overlap = np.unique(true_gid * max(pred_frame.size, 1) + pred_gid, return_counts=True)
@@ -749,8 +784,9 @@ def evaluate(
     pairs = _pairs(n_people[annotated])
     true_in = annotated[true_frame]
     pred_in = annotated[pred_frame]
+    # Pairs are the frame's people's: absent members form none.
     true_together = np.bincount(
-        row_of_frame[true_frame[true_in]], weights=_pairs(true_size[true_in]), minlength=n_rows
+        row_of_frame[true_frame[true_in]], weights=_pairs(present_size[true_in]), minlength=n_rows
     ).astype(np.int64)
     pred_together = np.bincount(
         row_of_frame[pred_frame[pred_in]], weights=_pairs(pred_size[pred_in]), minlength=n_rows

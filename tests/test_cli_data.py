@@ -110,7 +110,7 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
         (["data", "info", "{tmp}"], "expected a dataset in one of the formats: salsa"),
         (
             ["data", "info", "{salsa}", "--format", "gcff"],
-            "features.mat: expected the GCFF features file",
+            "salsa: expected a GCFF folder (features.mat, groundtruth.mat) or a folder of them",
         ),
     ],
     ids=["missing-path", "units-contradict-format", "unknown-format", "wrong-format"],

@@ -36,7 +36,7 @@ def test_a_folder_of_two_formats_is_refused(salsa_dir, babble_dir, tmp_path):
         detect_format(folder)
     with pytest.raises(DataFormatError, match=message):
         load_dataset(folder)
-    assert load_dataset(folder, format="salsa").name == "salsa"
+    assert load_dataset(folder, format="salsa").name == "both"  # named after its folder
     assert len(load_dataset(folder, format="babble")) == 20
 
 

@@ -143,7 +143,7 @@ def test_new_session_on_time_decrease_and_gt_matched_by_string(tmp_path):
     ("time", "found"),
     [
         pytest.param(None, r"'6.2'", id="line-duplicated"),
-        pytest.param("6.24", r"'6.24' \(t = 6.2\)", id="same-time-once-rounded"),
+        pytest.param("6.20002", r"'6.20002' \(t = 6.2\)", id="same-time-once-rounded"),
     ],
 )
 def test_repeated_time_within_a_session(salsa_dir, tmp_path, time, found):
@@ -173,13 +173,6 @@ def test_truncated_feature_line(salsa_dir, tmp_path):
 @pytest.mark.parametrize(
     ("line", "token", "value", "message"),
     [
-        pytest.param(
-            3,
-            2,
-            "nan",
-            r"line 3, person 1: field 'x': expected a finite number, found 'nan'",
-            id="nan",
-        ),
         pytest.param(3, 9, "inf", r"line 3, person 2: field 'body': .*found 'inf'", id="inf"),
         pytest.param(
             1,
@@ -227,7 +220,8 @@ def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
         pytest.param(
             ["0.2 PERSON1 1.0 2.0 0.1 0.2"],
             ["0.2 < ID_001 >"],
-            r"line 1: field 'ID': expected a token ID_<number>, found 'PERSON1'",
+            r"line 1: field 'ID': expected a token ID_<number> \(or 'fake'\) after the time, "
+            r"found 'PERSON1'",
             id="bad-id-token",
         ),
         pytest.param(
@@ -235,12 +229,6 @@ def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
             ["0.2 < ID_001 >"],
             r"features.txt: line 1: field 'ID': .*found id 1 twice",
             id="duplicate-ids-in-a-frame",
-        ),
-        pytest.param(
-            [f"0.2 {_person(1)} {_person(2)}"],
-            ["0.2 < ID_001 ID_007 >"],
-            r"group_names.txt: line 1 \(t=0.2\): field 'group 1': .*found ID 7",
-            id="group-member-absent-from-frame",
         ),
         pytest.param(
             [f"0.2 {' '.join(_person(i) for i in (1, 2, 3))}"],

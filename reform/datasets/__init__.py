@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from reform.datasets.babble import load_babble
+from reform.datasets.dante import load_dante, load_salsa
 from reform.datasets.detect import FORMATS, LENGTH_UNITS, detect_format, load_dataset
 from reform.datasets.errors import DataFormatError
 from reform.datasets.gcff_mat import load_gcff
 from reform.datasets.parquet import read_parquet, write_parquet
-from reform.datasets.salsa import load_salsa
 from reform.datasets.summary import summarise
 
 __all__ = [
@@ -16,6 +16,7 @@ __all__ = [
     "DataFormatError",
     "detect_format",
     "load_babble",
+    "load_dante",
     "load_dataset",
     "load_gcff",
     "load_salsa",

@@ -140,3 +140,42 @@ def make_frame(*, path: Path, where: str, **fields: Any) -> Frame:
         return Frame(**fields)
     except ValueError as exc:
         raise DataFormatError(path, where, "frame", "a valid frame", str(exc)) from exc
+
+
+class Repairs:
+    """The load report's count of every repair a loader makes to a file's ordinary quirks.
+
+    Real annotation files carry quirks their authors lived with (a ground-truth member the
+    tracker lost, a person whose pose is NaN). A loader repairs them as the field's protocol
+    does and counts each kind here; with ``strict`` it refuses the first one instead, naming
+    the file, where, the field, what was expected and what was found.
+    """
+
+    def __init__(self, *, strict: bool = False) -> None:
+        self.strict = strict
+        self.counts: dict[str, int] = {}
+        self.first: dict[str, str] = {}
+
+    def note(
+        self,
+        kind: str,
+        *,
+        path: Path,
+        where: str | None,
+        field: str | None,
+        expected: str,
+        found: str,
+        count: int = 1,
+    ) -> None:
+        """Counts ``count`` repairs of ``kind``; raises instead when strict."""
+        error = DataFormatError(
+            path, where, field, expected, found, hint="refused by --strict (strict=True)"
+        )
+        if self.strict:
+            raise error
+        self.counts[kind] = self.counts.get(kind, 0) + count
+        self.first.setdefault(kind, str(error).removesuffix("; refused by --strict (strict=True)"))
+
+    def report(self) -> dict[str, Any]:
+        """``{"repairs": {kind: count}, "first_repair": {kind: message}}`` (empty when none)."""
+        return {"repairs": dict(self.counts), "first_repair": dict(self.first)}

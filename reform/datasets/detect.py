@@ -8,11 +8,14 @@ from pathlib import Path
 from reform.datasets.errors import DataFormatError
 from reform.frame import Dataset
 
-__all__ = ["FORMATS", "LENGTH_UNITS", "detect_format", "load_dataset"]
+__all__ = ["FORMATS", "FORMAT_ALIASES", "LENGTH_UNITS", "detect_format", "load_dataset"]
 
 FORMATS = ("salsa", "babble", "gcff", "parquet")
-# Length units a GCFF folder may be written in (the other formats are always metres).
-LENGTH_UNITS = ("cm", "m")
+# Other names of the formats: "dante" is the DANTE text format that SALSA's packaging uses.
+FORMAT_ALIASES = {"dante": "salsa"}
+# Length units a GCFF folder may be written in (the other formats are always metres); "px"
+# (image pixels) needs its scale, metres_per_pixel.
+LENGTH_UNITS = ("cm", "m", "px")
 # Formats whose files have one fixed length unit.
 _FIXED_UNITS = {"salsa": "m", "babble": "m", "parquet": "m"}
 
@@ -20,9 +23,9 @@ _FIXED_UNITS = {"salsa": "m", "babble": "m", "parquet": "m"}
 _PARQUET_DEPTH = 4
 
 _DESCRIPTION = (
-    "salsa (a folder with features.txt and group_names.txt), "
+    "salsa, alias dante (a folder with the DANTE text files features.txt and group_names.txt), "
     "babble (a folder with Motion-capture-data.csv), "
-    "gcff (a folder with features.mat), "
+    "gcff (a folder with features.mat, or a folder of such folders), "
     "parquet (a .parquet file or a folder of them)"
 )
 
@@ -45,6 +48,12 @@ def _folder_formats(folder: Path) -> dict[str, str]:
         found["babble"] = "Motion-capture-data.csv"
     if (folder / "features.mat").is_file():
         found["gcff"] = "features.mat"
+    else:
+        from reform.datasets.gcff_mat import sequence_folders
+
+        sequences = sequence_folders(folder)
+        if sequences:
+            found["gcff"] = ", ".join(f"{s.name}/features.mat" for s in sequences)
     if _holds_parquet(folder):
         found["parquet"] = ".parquet files"
     return found
@@ -99,28 +108,39 @@ def load_dataset(
     *,
     format: str | None = None,
     units: str | None = None,
+    metres_per_pixel: float | None = None,
+    strict: bool = False,
     allow_incomplete: bool = False,
 ) -> Dataset:
     """Loads a dataset in any supported format; positions come back in metres.
 
     Args:
         path: a dataset file or folder.
-        format: one of :data:`FORMATS`; detected from ``path`` when None.
-        units: length unit of the file's positions, ``"cm"`` or ``"m"``. Only GCFF folders
-            have a choice (default ``"cm"``, as the public GCFF datasets use); the other formats
-            are always metres, and giving ``"cm"`` for them is an error.
+        format: one of :data:`FORMATS` (or an alias, ``"dante"``); detected from ``path`` when
+            None.
+        units: length unit of the file's positions, ``"cm"``, ``"m"`` or ``"px"``. Only GCFF
+            folders have a choice (default ``"cm"``, as the public GCFF datasets use; ``"px"``
+            for sets derived from pose estimation, with ``metres_per_pixel``); the other
+            formats are always metres, and giving another unit for them is an error.
+        metres_per_pixel: the scale of ``units="px"``.
+        strict: refuse the quirks a loader otherwise repairs and counts in
+            ``metadata["report"]["repairs"]`` (ground-truth members absent from the features,
+            NaN poses, ...), naming file, frame, field, expected and found.
         allow_incomplete: Parquet only: read an unfinished ``reform-sim generate`` folder
             (see :func:`~reform.datasets.parquet.read_parquet`).
 
     Raises:
         DataFormatError: the path is missing, matches no format, or a file is malformed.
-        ValueError: unknown ``format`` or ``units``, or units that contradict the format.
+        ValueError: unknown ``format`` or ``units``, units that contradict the format, or
+            pixels without their scale.
     """
     path = Path(path)
     if format is None:
         format = detect_format(path)
-    elif format not in FORMATS:
-        raise ValueError(f"format must be one of {FORMATS}, got {format!r}")
+    format = FORMAT_ALIASES.get(format, format)
+    if format not in FORMATS:
+        known = (*FORMATS, *FORMAT_ALIASES)
+        raise ValueError(f"format must be one of {known}, got {format!r}")
     if units is not None and units not in LENGTH_UNITS:
         raise ValueError(f"units must be one of {LENGTH_UNITS}, got {units!r}")
     fixed = _FIXED_UNITS.get(format)
@@ -128,15 +148,19 @@ def load_dataset(
         raise ValueError(
             f"units: the {format} format stores positions in {fixed!r}, got units={units!r}"
         )
+    if metres_per_pixel is not None and units != "px":
+        raise ValueError(
+            f"metres_per_pixel is the scale of units='px', got it with units={units!r}"
+        )
     if not path.exists():
         raise DataFormatError(
             path, None, None, f"an existing {format} file or folder", "no such file or folder"
         )
 
     if format == "salsa":
-        from reform.datasets.salsa import load_salsa
+        from reform.datasets.dante import load_dante
 
-        return load_salsa(path)
+        return load_dante(path, strict=strict)
     if format == "babble":
         from reform.datasets.babble import load_babble
 
@@ -144,7 +168,12 @@ def load_dataset(
     if format == "gcff":
         from reform.datasets.gcff_mat import load_gcff
 
-        return load_gcff(path, units="cm" if units is None else units)
+        return load_gcff(
+            path,
+            units="cm" if units is None else units,
+            metres_per_pixel=metres_per_pixel,
+            strict=strict,
+        )
     from reform.datasets.parquet import read_parquet
 
     return read_parquet(path, allow_incomplete=allow_incomplete)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from reform.datasets._validation import (
+    Repairs,
     check_time_increases,
     check_unique_ids,
     make_frame,
@@ -33,7 +34,15 @@ from reform.datasets._validation import (
 from reform.datasets.errors import DataFormatError
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
 
-__all__ = ["FEATURES_FILE", "GROUNDTRUTH_FILE", "SETTINGS_FILE", "load_gcff", "read_settings"]
+__all__ = [
+    "FEATURES_FILE",
+    "GROUNDTRUTH_FILE",
+    "SETTINGS_FILE",
+    "load_gcff",
+    "read_settings",
+    "sequence_folders",
+    "units_per_metre",
+]
 
 FEATURES_FILE = "features.mat"
 GROUNDTRUTH_FILE = "groundtruth.mat"
@@ -47,8 +56,14 @@ _ANGLE_LIMIT_RAD = 2.0 * math.pi + 1e-3
 _TIMESTAMP_RTOL = 1e-9  # relative tolerance matching GTtimestamp to timestamp
 
 
-def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
-    """Loads a GCFF MATLAB folder.
+def load_gcff(
+    path: str | PathLike[str],
+    *,
+    units: str = "cm",
+    metres_per_pixel: float | None = None,
+    strict: bool = False,
+) -> Dataset:
+    """Loads a GCFF MATLAB folder, or a folder of them (one sequence each).
 
     Frames carry the body only (``head_position`` and ``head_yaw`` are None): GCFF's θ is one
     orientation per person. ``time`` is the frame's ``timestamp`` as stored (its unit is the
@@ -56,29 +71,141 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
     groups of two or more as listed, everyone else a singleton; frames whose timestamp is not
     in ``GTtimestamp`` have ``groups=None``.
 
+    The field's files carry quirks that are repaired as the field's protocol does, each counted
+    in ``metadata["report"]["repairs"]`` (``strict=True`` refuses them instead):
+
+    * ``groundtruth_members_absent``: a ground-truth member who is not in that frame's
+      features (the annotators saw someone the tracker did not) stays in the ground truth
+      (``Frame.listed_groups``), so that they count as a missed member exactly as the original
+      evaluation code (``ff_evalgroups.m``) counts them; the detectors see only who is in the
+      features.
+    * ``people_dropped_nan``: a row whose x, y or θ is NaN (a pose the estimator did not find)
+      is dropped from that frame; if the annotation names that person, they are an absent
+      member as above.
+
+    A folder without ``features.mat`` whose subfolders hold GCFF folders (CoffeeBreak's
+    ``Seq1``, ``Seq2``; GDet's ``S1`` … ``S6``) is read as one dataset, a sequence per
+    subfolder in name order, each with its own ``settings_gc.mat``.
+
     Args:
-        path: the folder (or its ``features.mat``).
+        path: the folder (or its ``features.mat``), or a folder of such folders.
         units: length unit of the files' positions, ``"cm"`` (default, as the public sets
-            use) or ``"m"``. Positions are converted to metres.
+            use), ``"m"``, or ``"px"`` (image pixels, sets derived from pose estimation; needs
+            ``metres_per_pixel``). Positions are converted to metres.
+        metres_per_pixel: the scale of ``units="px"``; refused with other units.
+        strict: refuse the quirks listed above instead of repairing them.
 
     Returns:
-        The dataset, named and sequenced after the folder. ``metadata["settings_gc"]`` holds
-        ``stride`` and ``mdl`` as stored (file units) and converted (``stride_m``, ``mdl_m2``)
-        when ``settings_gc.mat`` exists.
+        The dataset, named after the folder, a sequence per folder. ``metadata["settings_gc"]``
+        holds ``stride`` and ``mdl`` as stored (file units) and converted (``stride_m``,
+        ``mdl_m2``) when ``settings_gc.mat`` exists (one folder);
+        ``metadata["settings_gc_by_sequence"]`` holds them per sequence (always).
 
     Raises:
-        ValueError: ``units`` is not ``"cm"`` or ``"m"``.
+        ValueError: ``units`` is unknown, or ``metres_per_pixel`` is missing for pixels, given
+            for another unit, or not a positive finite number.
         DataFormatError: a file is missing, unreadable or malformed.
     """
-    if units not in _UNITS_PER_M:
-        raise ValueError(f"units must be one of {tuple(_UNITS_PER_M)}, got {units!r}")
-    per_metre = _UNITS_PER_M[units]
+    per_metre = units_per_metre(units, metres_per_pixel)
     path = Path(path)
     folder = path.parent if path.is_file() else path
     if not folder.is_dir():
         raise DataFormatError(
             folder, None, None, "a GCFF folder (features.mat, groundtruth.mat)", "no such folder"
         )
+    sequences = [folder] if (folder / FEATURES_FILE).exists() else sequence_folders(folder)
+    if not sequences:
+        raise DataFormatError(
+            folder,
+            None,
+            None,
+            "a GCFF folder (features.mat, groundtruth.mat) or a folder of them",
+            "no features.mat in it or in its subfolders",
+        )
+    repairs = Repairs(strict=strict)
+    frames: list[Frame] = []
+    reports: dict[str, dict[str, Any]] = {}
+    settings: dict[str, dict[str, Any]] = {}
+    for sequence_folder in sequences:
+        sequence_frames, report = _load_sequence(
+            sequence_folder, units=units, per_metre=per_metre, repairs=repairs
+        )
+        frames.extend(sequence_frames)
+        reports[sequence_folder.name] = report
+        settings_path = sequence_folder / SETTINGS_FILE
+        if settings_path.exists():
+            settings[sequence_folder.name] = _settings(
+                settings_path, units=units, per_metre=per_metre
+            )
+
+    totals = Counter()
+    for report in reports.values():
+        totals.update(report)
+    report_out: dict[str, Any] = dict(totals)
+    if len(reports) > 1:
+        report_out["by_sequence"] = reports
+    report_out.update(repairs.report())
+    metadata: dict[str, Any] = {
+        "format": "gcff",
+        "file_units": units,
+        "time": "timestamp as stored in features.mat",
+        "report": report_out,
+        "settings_gc_by_sequence": settings,
+    }
+    if units == "px":
+        metadata["metres_per_pixel"] = metres_per_pixel
+    if len(sequences) == 1 and settings:
+        metadata["settings_gc"] = next(iter(settings.values()))
+    return Dataset(
+        frames=tuple(frames), name=folder.name, source=str(folder), units="m", metadata=metadata
+    )
+
+
+def units_per_metre(units: str, metres_per_pixel: float | None) -> float:
+    """File units per metre of ``units`` (``"px"`` with its ``metres_per_pixel``).
+
+    Raises:
+        ValueError: an unknown unit, pixels without a scale, a scale for another unit, or a
+            scale that is not a positive finite number.
+    """
+    if units not in (*_UNITS_PER_M, "px"):
+        raise ValueError(f"units must be one of {(*_UNITS_PER_M, 'px')}, got {units!r}")
+    if units != "px":
+        if metres_per_pixel is not None:
+            raise ValueError(
+                f"metres_per_pixel is the scale of units='px', got it with units={units!r}"
+            )
+        return _UNITS_PER_M[units]
+    if metres_per_pixel is None:
+        raise ValueError(
+            "units='px' needs metres_per_pixel (--metres-per-pixel M): pixel positions are "
+            "never read as metres"
+        )
+    if (
+        isinstance(metres_per_pixel, bool)
+        or not isinstance(metres_per_pixel, (int, float))
+        or not math.isfinite(metres_per_pixel)
+        or metres_per_pixel <= 0
+    ):
+        raise ValueError(f"metres_per_pixel must be a positive number, got {metres_per_pixel!r}")
+    return 1.0 / float(metres_per_pixel)
+
+
+def sequence_folders(folder: Path) -> list[Path]:
+    """The subfolders of ``folder`` holding a ``features.mat``, in name order."""
+    try:
+        children = sorted(folder.iterdir())
+    except OSError as exc:
+        raise DataFormatError(
+            folder, None, None, "a readable folder", f"{type(exc).__name__}: {exc.strerror}"
+        ) from None
+    return [child for child in children if child.is_dir() and (child / FEATURES_FILE).is_file()]
+
+
+def _load_sequence(
+    folder: Path, *, units: str, per_metre: float, repairs: Repairs
+) -> tuple[list[Frame], dict[str, int]]:
+    """The frames of one GCFF folder and its report counts."""
     features_path = require_file(folder / FEATURES_FILE, what="the GCFF features file")
     groundtruth_path = require_file(folder / GROUNDTRUTH_FILE, what="the GCFF ground-truth file")
 
@@ -130,7 +257,7 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
         )
 
     rows = [
-        _frame_rows(cell, path=features_path, frame=t + 1, per_metre=per_metre)
+        _frame_rows(cell, path=features_path, frame=t + 1, per_metre=per_metre, repairs=repairs)
         for t, cell in enumerate(features)
     ]
 
@@ -158,17 +285,18 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
 
     frames: list[Frame] = []
     report: Counter[str] = Counter()
-    sequence = folder.name
     for t, (ids, position, yaw) in enumerate(rows):
         groups: tuple[Group, ...] | None = None
+        listed_groups: tuple[Group, ...] | None = None
         if t in listed_of_frame:
             g, listed = listed_of_frame[t]
-            groups = _canonical(
+            groups, listed_groups = _canonical(
                 listed,
                 ids,
                 path=groundtruth_path,
                 where=f"GT frame {g + 1} (GTtimestamp {gt_times[g]:g})",
                 report=report,
+                repairs=repairs,
             )
         frames.append(
             make_frame(
@@ -178,29 +306,20 @@ def load_gcff(path: str | PathLike[str], *, units: str = "cm") -> Dataset:
                 position=position / per_metre,
                 yaw=wrap_angle(yaw),
                 groups=groups,
+                listed_groups=listed_groups,
                 time=float(timestamps[t]),
-                sequence=sequence,
+                sequence=folder.name,
             )
         )
-
-    metadata: dict[str, Any] = {
-        "format": "gcff",
-        "file_units": units,
-        "time": "timestamp as stored in features.mat",
-        "report": {
-            "frames": len(frames),
-            "annotated_frames": len(listed_of_frame),
-            "groundtruth_singletons_listed": report["singletons_listed"],
-            "duplicate_singletons": report["duplicate_singletons"],
-            "people_in_no_group": report["people_in_no_group"],
-        },
+    counts = {
+        "frames": len(frames),
+        "annotated_frames": len(listed_of_frame),
+        "groundtruth_singletons_listed": report["singletons_listed"],
+        "duplicate_singletons": report["duplicate_singletons"],
+        "people_in_no_group": report["people_in_no_group"],
+        "groundtruth_frames_with_absent_members": report["frames_with_absent"],
     }
-    settings_path = folder / SETTINGS_FILE
-    if settings_path.exists():
-        metadata["settings_gc"] = _settings(settings_path, units=units, per_metre=per_metre)
-    return Dataset(
-        frames=tuple(frames), name=folder.name, source=str(folder), units="m", metadata=metadata
-    )
+    return frames, counts
 
 
 def _loadmat(path: Path) -> dict[str, Any]:
@@ -257,9 +376,10 @@ def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
 
 
 def _frame_rows(
-    cell: Any, *, path: Path, frame: int, per_metre: float
+    cell: Any, *, path: Path, frame: int, per_metre: float, repairs: Repairs
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(ids, (n, 2) positions in file units, (n,) θ) of one ``features`` cell."""
+    """(ids, (n, 2) positions in file units, (n,) θ) of one ``features`` cell; rows whose x, y
+    or θ is NaN (a pose not found) are dropped, counted in ``repairs``."""
     where = f"frame {frame}"
     array = np.asarray(cell)
     if array.dtype == object or not (array.size == 0 or np.issubdtype(array.dtype, np.number)):
@@ -273,7 +393,30 @@ def _frame_rows(
             path, where, "features", "an N×4 matrix [ID, x, y, θ]", f"shape {array.shape}"
         )
     array = array.astype(np.float64)
-    for column, name in enumerate(("ID", "x", "y", "θ")):
+    bad_id = np.flatnonzero(~np.isfinite(array[:, 0]))
+    if bad_id.size:
+        raise DataFormatError(
+            path,
+            f"{where}, row {bad_id[0] + 1}",
+            "ID",
+            "a finite number",
+            repr(array[bad_id[0], 0]),
+        )
+    unposed = np.isnan(array[:, 1:]).any(axis=1)
+    if unposed.any():
+        row = int(np.flatnonzero(unposed)[0])
+        column = int(np.flatnonzero(np.isnan(array[row, 1:]))[0])
+        repairs.note(
+            "people_dropped_nan",
+            path=path,
+            where=f"{where}, row {row + 1} (ID {array[row, 0]:g})",
+            field=("x", "y", "θ")[column],
+            expected="a number (a NaN pose: that person is dropped from the frame)",
+            found="NaN",
+            count=int(unposed.sum()),
+        )
+        array = array[~unposed]
+    for column, name in enumerate(("x", "y", "θ"), start=1):
         bad = np.flatnonzero(~np.isfinite(array[:, column]))
         if bad.size:
             raise DataFormatError(
@@ -353,23 +496,39 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
 
 
 def _canonical(
-    listed: list[list[int]], ids: np.ndarray, *, path: Path, where: str, report: Counter[str]
-) -> tuple[Group, ...]:
+    listed: list[list[int]],
+    ids: np.ndarray,
+    *,
+    path: Path,
+    where: str,
+    report: Counter[str],
+    repairs: Repairs,
+) -> tuple[tuple[Group, ...], tuple[Group, ...] | None]:
+    """The frame's ``groups`` (present members of the listed groups of two or more) and, when
+    some listed member is absent from the features, the F-formations as listed."""
     present = set(ids.tolist())
     grouped: set[int] = set()
     groups: list[Group] = []
+    fformations: list[Group] = []
+    absent_total = 0
     for k, members in enumerate(listed, start=1):
-        absent = [m for m in members if m not in present]
-        if absent:
-            raise DataFormatError(
-                path,
-                where,
-                f"group {k}",
-                f"members present in the frame (IDs {sorted(present)})",
-                f"ID {absent[0]}",
-            )
         if len(set(members)) != len(members):
             raise DataFormatError(path, where, f"group {k}", "distinct members", str(members))
+        absent = [m for m in members if m not in present]
+        if absent:
+            # Listed alone, an absent person changes no score (singletons are not scored).
+            repairs.note(
+                "groundtruth_members_absent",
+                path=path,
+                where=where,
+                field=f"group {k}",
+                expected=f"members present in the frame's features (IDs {sorted(present)}); "
+                "an absent member stays in the ground truth and counts as missed",
+                found=f"ID {absent[0]}",
+                count=len(absent),
+            )
+            if len(members) >= 2:
+                absent_total += len(absent)
         if len(members) >= 2:
             clash = grouped.intersection(members)
             if clash:
@@ -377,12 +536,18 @@ def _canonical(
                     path, where, f"group {k}", "disjoint groups", f"ID {min(clash)} in two groups"
                 )
             grouped.update(members)
-            groups.append(tuple(members))
+            fformations.append(tuple(members))
+            kept = tuple(m for m in members if m in present)
+            if kept:
+                groups.append(kept)
     singletons = [m[0] for m in listed if len(m) == 1]
     report["singletons_listed"] += len(singletons)
     report["duplicate_singletons"] += sum(1 for s in singletons if s in grouped)
     report["people_in_no_group"] += len(present - grouped - set(singletons))
-    return tuple(groups)
+    if absent_total:
+        report["frames_with_absent"] += 1
+        return tuple(g for g in groups if len(g) >= 2), tuple(fformations)
+    return tuple(groups), None
 
 
 def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:

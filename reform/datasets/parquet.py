@@ -148,7 +148,14 @@ def write_parquet(
             :data:`CODECS`: before anything is written.
     """
     _check_compression(compression)
-    header_json = _header_json(dataset.name, dataset.source, dataset.units, dataset.metadata)
+    listed = {
+        str(k): [list(g) for g in frame.listed_groups]
+        for k, frame in enumerate(dataset.frames)
+        if frame.listed_groups is not None
+    }
+    header_json = _header_json(
+        dataset.name, dataset.source, dataset.units, dataset.metadata, listed_groups=listed
+    )
     return _write_table(_columns(dataset.frames), header_json, Path(path), compression)
 
 
@@ -402,7 +409,14 @@ def _place_groups(
             g += 1
 
 
-def _header_json(name: str, source: str, units: str, metadata: Any) -> str:
+def _header_json(
+    name: str,
+    source: str,
+    units: str,
+    metadata: Any,
+    *,
+    listed_groups: Mapping[str, list[list[int]]] | None = None,
+) -> str:
     from reform import __version__
 
     header = {
@@ -413,6 +427,9 @@ def _header_json(name: str, source: str, units: str, metadata: Any) -> str:
         "units": units,
         "metadata": dict(metadata),
     }
+    if listed_groups:
+        # Frame.listed_groups (ground truth naming people absent from the frame), by frame.
+        header["listed_groups"] = dict(listed_groups)
     try:
         return json.dumps(header, allow_nan=False, sort_keys=False)
     except (TypeError, ValueError) as exc:
@@ -689,7 +706,32 @@ def _read_file(path: Path) -> tuple[list[Frame], dict[str, Any]]:
         else:
             filled = column.fill_null(False if type_name == "bool" else 0) if mask.any() else column
             data[name] = filled.to_numpy()
-    return _frames(path, data, null), header
+    frames = _frames(path, data, null)
+    return _with_listed_groups(path, frames, header.get("listed_groups")), header
+
+
+def _with_listed_groups(path: Path, frames: list[Frame], listed: Any) -> list[Frame]:
+    """``frames`` with the header's ``listed_groups`` (frame index -> groups) set."""
+    if listed is None:
+        return frames
+    if not isinstance(listed, dict):
+        raise DataFormatError(
+            path, None, "listed_groups", "an object: frame index -> groups", type(listed).__name__
+        )
+    frames = list(frames)
+    for key, groups in listed.items():
+        if not (isinstance(key, str) and key.isdigit() and int(key) < len(frames)):
+            raise DataFormatError(
+                path, None, "listed_groups", f"frame indices below {len(frames)}", repr(key)
+            )
+        k = int(key)
+        try:
+            frames[k] = frames[k].replace(listed_groups=groups)
+        except (TypeError, ValueError) as exc:
+            raise DataFormatError(
+                path, f"frame {k}", "listed_groups", "groups agreeing with the frame", str(exc)
+            ) from None
+    return frames
 
 
 def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]) -> list[Frame]:

@@ -1,0 +1,551 @@
+"""The DANTE text format (Swofford et al. 2020): SALSA, Cocktail Party, CoffeeBreak and others.
+
+A DANTE folder holds two files:
+
+* ``features.txt``: one line per instant, ``<t> ID_a <fields> ID_b <fields> ...`` (tokens
+  separated by spaces). Two layouts exist, detected from the file (and reported): **5 fields per
+  person**, ``ID x y body head`` (SALSA's packaging), and **4**, ``ID x y θ`` (the other
+  datasets). The token count alone is ambiguous (21 = 1 + 5×4 = 1 + 4×5), so the layout is the
+  stride between the person tokens. ``x``, ``y`` are metres; angles are radians,
+  counter-clockwise from +x, possibly *unwrapped* (SALSA's reach -65 rad). Person tokens are
+  ``"ID_00" + str(n)`` (person 10 is ``ID_0010``). Blocks of a missing person are padded with the
+  token ``fake`` (one per slot) and skipped. A person whose x, y or an angle is NaN is dropped
+  from that frame (counted in the report).
+* ``group_names.txt``: one line per annotated instant, ``<t> < ID_a ID_b > < ID_c > ...``, the
+  time string identical to the matching ``features.txt`` line.
+
+The time restarts when a new session begins: every decrease of ``t`` opens a new sequence
+(``session1``, ``session2``, ...); within a session ``t`` increases (a repeated ``t`` is an
+error). Ground-truth lines are matched to feature lines by their exact time string, in file
+order. SALSA's session-2 time strings carry a +2e-5 offset, so when every time of a file lies
+within 1e-4 s of a multiple of 0.1 s, a frame's ``time`` is ``round(float(t), 1)``; otherwise
+(Cocktail Party's Unix times, files sampled faster than 10 Hz) it is ``float(t)``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import Counter
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+
+from reform.datasets._validation import (
+    UNWRAPPED_ANGLE_LIMIT_RAD,
+    Repairs,
+    check_angle,
+    check_coordinate,
+    check_time_increases,
+    check_unique_ids,
+    make_frame,
+    parse_float,
+    require_file,
+)
+from reform.datasets.errors import DataFormatError
+from reform.frame import Dataset, Frame, Group, wrap_angle
+
+__all__ = ["FEATURES_FILE", "FIELDS_PER_PERSON", "GROUPS_FILE", "load_dante", "load_salsa"]
+
+FEATURES_FILE = "features.txt"
+GROUPS_FILE = "group_names.txt"
+
+# Tokens per person block of each layout, and what its fields are.
+FIELDS_PER_PERSON = {5: "ID x y body head", 4: "ID x y θ"}
+_FAKE = "fake"
+_ID_PATTERN = re.compile(r"ID_(\d+)")
+_TIME_DECIMALS = 1  # SALSA is sampled every 3 s at t = 0.2 + 3k
+_TIME_GRID_TOLERANCE_S = 1e-4  # SALSA's session-2 offset is 2e-5 s
+_NAN_TOKENS = frozenset({"nan", "NaN", "NAN", "-nan", "-NaN"})
+
+
+@dataclass(frozen=True)
+class _Row:
+    line: int
+    time_string: str
+    sequence: str
+    time: float
+    ids: np.ndarray
+    position: np.ndarray
+    yaw: np.ndarray
+    head_yaw: np.ndarray | None
+
+
+def load_dante(
+    path: str | PathLike[str],
+    *,
+    groups_path: str | PathLike[str] | None = None,
+    strict: bool = False,
+    name: str | None = None,
+) -> Dataset:
+    """Loads a dataset in the DANTE text format (SALSA, Cocktail Party, ...).
+
+    With 5 fields per person, ``yaw`` is the body (field 4) and ``head_yaw`` the head (field
+    5), both wrapped to [-pi, pi); the format has no head position, so ``head_position`` equals
+    the body position. With 4 fields, θ is the one orientation and the frames carry no head.
+    ``metadata["fields_per_person"]`` says which layout the file has.
+
+    Ground truth is canonicalised: the groups of two or more people are kept as listed (group
+    order and member order of the file); every other person is a singleton and is not stored
+    in ``Frame.groups``. The field's quirks are repaired and counted in
+    ``metadata["report"]["repairs"]`` (``strict=True`` refuses them instead, naming file, line,
+    field, expected and found):
+
+    * ``people_missing_from_groundtruth``: people of the frame listed in no group (the file
+      should be a full partition) are singletons;
+    * ``duplicate_singletons``: a one-person group naming someone already in a larger group is
+      dropped;
+    * ``groundtruth_members_absent``: a member of a group who is not in that line's features
+      stays in the ground truth (``Frame.listed_groups``), so they count as missed as the
+      field's evaluation code counts them; detectors see only who is in the features;
+    * ``people_dropped_nan``: a person whose x, y or an angle is NaN is dropped from the frame.
+
+    Feature lines without a ground-truth line become frames with ``groups=None``.
+
+    Args:
+        path: a folder holding ``features.txt`` and ``group_names.txt``, or the path of the
+            features file itself.
+        groups_path: the ground-truth file when ``path`` is a features file (default: the
+            ``group_names.txt`` beside it).
+        strict: refuse the quirks above instead of repairing them.
+        name: the dataset's name (default: the folder's name).
+
+    Returns:
+        The dataset, positions in metres, one sequence per session.
+
+    Raises:
+        DataFormatError: a file is missing, empty or malformed (the message names the file,
+            line, field, what was expected and what was found).
+    """
+    path = Path(path)
+    if path.is_dir():
+        features_path = path / FEATURES_FILE
+        groups_file = path / GROUPS_FILE if groups_path is None else Path(groups_path)
+    else:
+        features_path = path
+        groups_file = path.parent / GROUPS_FILE if groups_path is None else Path(groups_path)
+    require_file(features_path, what="a DANTE features file")
+    require_file(groups_file, what="a DANTE group file")
+    repairs = Repairs(strict=strict)
+
+    rows, fake_blocks, width, rounded = _read_features(features_path, repairs=repairs)
+    gt_lines = _read_groups(groups_file)
+
+    # Match ground-truth lines to feature lines by their exact time string, in file order.
+    groups_of_row: dict[int, tuple[int, list[list[int]]]] = {}
+    cursor = 0
+    for gt_line, time_string, listed in gt_lines:
+        while cursor < len(rows) and rows[cursor].time_string != time_string:
+            cursor += 1
+        if cursor == len(rows):
+            raise DataFormatError(
+                groups_file,
+                f"line {gt_line}",
+                "time",
+                f"a time string of {features_path.name} (in file order)",
+                repr(time_string),
+            )
+        groups_of_row[cursor] = (gt_line, listed)
+        cursor += 1
+
+    frames: list[Frame] = []
+    missing_lines = set()
+    absent_lines = set()
+    for index, row in enumerate(rows):
+        groups: tuple[Group, ...] | None = None
+        listed_groups: tuple[Group, ...] | None = None
+        if index in groups_of_row:
+            gt_line, listed = groups_of_row[index]
+            groups, listed_groups, n_missing = _canonical_groups(
+                listed,
+                row.ids,
+                path=groups_file,
+                where=f"line {gt_line} (t={row.time_string})",
+                repairs=repairs,
+            )
+            if n_missing:
+                missing_lines.add(gt_line)
+            if listed_groups is not None:
+                absent_lines.add(gt_line)
+        heads = {}
+        if row.head_yaw is not None:
+            heads = {"head_position": row.position, "head_yaw": row.head_yaw}
+        frames.append(
+            make_frame(
+                path=features_path,
+                where=f"line {row.line}",
+                ids=row.ids,
+                position=row.position,
+                yaw=row.yaw,
+                groups=groups,
+                listed_groups=listed_groups,
+                time=row.time,
+                sequence=row.sequence,
+                **heads,
+            )
+        )
+
+    per_sequence = Counter(f.sequence for f in frames)
+    annotated = Counter(f.sequence for f in frames if f.groups is not None)
+    counts = repairs.counts
+    report = {
+        "fields_per_person": width,
+        "feature_lines": len(rows),
+        "groundtruth_lines": len(gt_lines),
+        "frames_per_sequence": dict(per_sequence),
+        "annotated_per_sequence": {s: annotated.get(s, 0) for s in per_sequence},
+        "unannotated_feature_lines": [r.line for i, r in enumerate(rows) if i not in groups_of_row],
+        "fake_blocks_skipped": fake_blocks,
+        "missing_from_groundtruth": counts.get("people_missing_from_groundtruth", 0),
+        "groundtruth_lines_with_missing": len(missing_lines),
+        "duplicate_singletons": counts.get("duplicate_singletons", 0),
+        "groundtruth_lines_with_absent_members": len(absent_lines),
+        "time": "round(float(t), 1)" if rounded else "float(t)",
+        **repairs.report(),
+    }
+    folder = features_path.parent
+    metadata = {
+        "format": "salsa",
+        "fields_per_person": width,
+        "fields": FIELDS_PER_PERSON[width],
+        "features_file": str(features_path),
+        "groups_file": str(groups_file),
+        "report": report,
+    }
+    if width == 5:
+        metadata["head_position"] = "equal to the body position (the format has none)"
+    return Dataset(
+        frames=tuple(frames),
+        name=folder.name if name is None else name,
+        source=str(path),
+        units="m",
+        metadata=metadata,
+    )
+
+
+def load_salsa(
+    path: str | PathLike[str],
+    *,
+    groups_path: str | PathLike[str] | None = None,
+    strict: bool = False,
+) -> Dataset:
+    """SALSA in its DANTE packaging: :func:`load_dante` named ``"salsa"``."""
+    return load_dante(path, groups_path=groups_path, strict=strict, name="salsa")
+
+
+def _parse_id(token: str, *, path: Path, where: str) -> int:
+    match = _ID_PATTERN.fullmatch(token)
+    if match is None:
+        raise DataFormatError(path, where, "ID", "a token ID_<number>", repr(token))
+    return int(match.group(1))
+
+
+def _is_person_token(token: str) -> bool:
+    return token == _FAKE or _ID_PATTERN.fullmatch(token) is not None
+
+
+def _widths_of(tokens: list[str]) -> set[int]:
+    """The layouts (fields per person) a line's tokens agree with."""
+    fits = set()
+    for width in FIELDS_PER_PERSON:
+        if (len(tokens) - 1) % width:
+            continue
+        starts = range(1, len(tokens), width)
+        if not all(_is_person_token(tokens[i]) for i in starts):
+            continue
+        inside = (i for i in range(1, len(tokens)) if (i - 1) % width)
+        if any(_ID_PATTERN.fullmatch(tokens[i]) for i in inside):
+            continue
+        fits.add(width)
+    return fits
+
+
+def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
+    """Fields per person of the file: the one layout its lines agree with."""
+    expected = "1 time token + blocks of 4 (ID x y θ) or 5 (ID x y body head) tokens per person"
+    candidates = set(FIELDS_PER_PERSON)
+    for line_number, tokens in lines:
+        fits = _widths_of(tokens)
+        if not fits and len(tokens) > 1 and not _is_person_token(tokens[1]):
+            raise DataFormatError(
+                path,
+                f"line {line_number}",
+                "ID",
+                "a token ID_<number> (or 'fake') after the time",
+                repr(tokens[1]),
+            )
+        if not fits:
+            raise DataFormatError(
+                path,
+                f"line {line_number}",
+                "tokens",
+                expected,
+                f"{len(tokens)} tokens that fit neither (truncated line?)",
+            )
+        candidates &= fits
+        if not candidates:
+            raise DataFormatError(
+                path,
+                f"line {line_number}",
+                "tokens",
+                "the same layout on every line",
+                f"{sorted(fits)} fields per person where earlier lines have another",
+            )
+        if len(candidates) == 1:
+            return candidates.pop()
+    raise DataFormatError(
+        path, None, "tokens", expected, "no line with a person telling the layout apart"
+    )
+
+
+def _read_lines(path: Path) -> list[tuple[int, list[str]]]:
+    lines = []
+    with open(path, encoding="ascii", errors="replace") as handle:
+        for line_number, line in enumerate(handle, start=1):
+            tokens = line.split()
+            if not tokens:
+                raise DataFormatError(
+                    path,
+                    f"line {line_number}",
+                    None,
+                    "<t> followed by a block of tokens per person",
+                    "an empty line",
+                )
+            lines.append((line_number, tokens))
+    if not lines:
+        raise DataFormatError(path, None, None, "at least one feature line", "none")
+    return lines
+
+
+def _number(token: str, *, path: Path, where: str, field: str, nan: list[str]) -> float:
+    """A finite float; a NaN token is noted in ``nan`` (the person is dropped) and read as 0."""
+    if token in _NAN_TOKENS:
+        nan.append(field)
+        return 0.0
+    return parse_float(token, path=path, where=where, field=field)
+
+
+def _read_features(path: Path, *, repairs: Repairs) -> tuple[list[_Row], int, int, bool]:
+    """The rows, the ``fake`` blocks skipped, the fields per person, and whether times are
+    rounded to 0.1 s."""
+    lines = _read_lines(path)
+    width = _layout(path, lines)
+    times = [parse_float(tokens[0], path=path, where=f"line {n}", field="t") for n, tokens in lines]
+    rounded = all(abs(t - round(t, _TIME_DECIMALS)) <= _TIME_GRID_TOLERANCE_S for t in times)
+    angle_fields = ("body", "head") if width == 5 else ("θ",)
+    rows: list[_Row] = []
+    fake_blocks = 0
+    session = 1
+    previous_time: float | None = None
+    for (line_number, tokens), time_value in zip(lines, times, strict=True):
+        where = f"line {line_number}"
+        n_blocks, extra = divmod(len(tokens) - 1, width)
+        if extra:
+            raise DataFormatError(
+                path,
+                where,
+                "tokens",
+                f"1 time token + a multiple of {width} ({FIELDS_PER_PERSON[width]} per person, "
+                "the file's layout)",
+                f"{len(tokens)} tokens (truncated line?)",
+            )
+        time = round(time_value, _TIME_DECIMALS) if rounded else time_value
+        if previous_time is not None and time_value < previous_time:
+            session += 1  # the time restarts: a new session
+        elif rows:
+            check_time_increases(
+                time,
+                rows[-1].time,
+                path=path,
+                where=where,
+                field="t",
+                previous_where=f"line {rows[-1].line}, t = {rows[-1].time_string}",
+                found=repr(tokens[0]) + (f" (t = {time!r})" if str(time) != tokens[0] else ""),
+            )
+        previous_time = time_value
+
+        ids: list[int] = []
+        values: list[tuple[float, ...]] = []
+        for b in range(n_blocks):
+            block = tokens[1 + b * width : 1 + (b + 1) * width]
+            if block[0] == _FAKE or block[1] == _FAKE:
+                if any(t != _FAKE for t in block[1:]):
+                    raise DataFormatError(
+                        path,
+                        where,
+                        f"block {b + 1}",
+                        f"a person block or {width} 'fake' tokens",
+                        " ".join(block),
+                    )
+                fake_blocks += 1
+                continue
+            person = _parse_id(block[0], path=path, where=where)
+            person_where = f"{where}, person {person}"
+            nan: list[str] = []
+            x = _number(block[1], path=path, where=person_where, field="x", nan=nan)
+            y = _number(block[2], path=path, where=person_where, field="y", nan=nan)
+            check_coordinate(x, path=path, where=person_where, field="x")
+            check_coordinate(y, path=path, where=person_where, field="y")
+            angles = [
+                _number(token, path=path, where=person_where, field=field, nan=nan)
+                for token, field in zip(block[3:], angle_fields, strict=True)
+            ]
+            for field, angle in zip(angle_fields, angles, strict=True):
+                check_angle(
+                    angle,
+                    limit=UNWRAPPED_ANGLE_LIMIT_RAD,
+                    path=path,
+                    where=person_where,
+                    field=field,
+                )
+            if nan:
+                repairs.note(
+                    "people_dropped_nan",
+                    path=path,
+                    where=person_where,
+                    field=nan[0],
+                    expected="a number (a NaN pose: that person is dropped from the frame)",
+                    found="NaN",
+                )
+                continue
+            ids.append(person)
+            values.append((x, y, *angles))
+        check_unique_ids(ids, path=path, where=where)
+        array = np.array(values, dtype=np.float64).reshape(-1, 2 + len(angle_fields))
+        rows.append(
+            _Row(
+                line=line_number,
+                time_string=tokens[0],
+                sequence=f"session{session}",
+                time=time,
+                ids=np.array(ids, dtype=np.int64),
+                position=array[:, :2],
+                yaw=wrap_angle(array[:, 2]),
+                head_yaw=wrap_angle(array[:, 3]) if width == 5 else None,
+            )
+        )
+    return rows, fake_blocks, width, rounded
+
+
+def _read_groups(path: Path) -> list[tuple[int, str, list[list[int]]]]:
+    out: list[tuple[int, str, list[list[int]]]] = []
+    with open(path, encoding="ascii", errors="replace") as handle:
+        for line_number, line in enumerate(handle, start=1):
+            text = line.rstrip("\n").rstrip("\r")
+            where = f"line {line_number}"
+            tokens = text.split()
+            if not tokens:
+                raise DataFormatError(path, where, None, "<t> < ID ... > ...", "an empty line")
+            parse_float(tokens[0], path=path, where=where, field="t")
+            groups: list[list[int]] = []
+            current: list[int] | None = None
+            for position, token in enumerate(tokens[1:], start=2):
+                if token == "<":
+                    if current is not None:
+                        raise DataFormatError(
+                            path, where, f"token {position}", "'>' closing the group", "'<'"
+                        )
+                    current = []
+                elif token == ">":
+                    if not current:
+                        raise DataFormatError(
+                            path,
+                            where,
+                            f"token {position}",
+                            "'<' then at least one ID before '>'",
+                            "'>'",
+                        )
+                    groups.append(current)
+                    current = None
+                else:
+                    if current is None:
+                        raise DataFormatError(
+                            path, where, f"token {position}", "'<' opening a group", repr(token)
+                        )
+                    current.append(_parse_id(token, path=path, where=where))
+            if current is not None:
+                raise DataFormatError(
+                    path, where, "groups", "'>' closing the last group", "end of line (truncated?)"
+                )
+            if not groups:
+                raise DataFormatError(
+                    path, where, "groups", "at least one group '< ID ... >'", "none"
+                )
+            out.append((line_number, tokens[0], groups))
+    if not out:
+        raise DataFormatError(path, None, None, "at least one ground-truth line", "none")
+    return out
+
+
+def _canonical_groups(
+    listed: list[list[int]], ids: np.ndarray, *, path: Path, where: str, repairs: Repairs
+) -> tuple[tuple[Group, ...], tuple[Group, ...] | None, int]:
+    """The frame's ``groups`` (present members of the listed groups of two or more), the
+    F-formations as listed when some member is absent from the features (else None), and the
+    number of people listed in no group."""
+    present = set(ids.tolist())
+    grouped: set[int] = set()
+    fformations: list[Group] = []
+    absent_in_groups = 0
+    for g, members in enumerate(listed, start=1):
+        if len(set(members)) != len(members):
+            raise DataFormatError(
+                path, where, f"group {g}", "distinct members", " ".join(map(str, members))
+            )
+        absent = [person for person in members if person not in present]
+        if absent:
+            # Listed alone, an absent person changes no score (singletons are not scored).
+            repairs.note(
+                "groundtruth_members_absent",
+                path=path,
+                where=where,
+                field=f"group {g}",
+                expected=f"members present in the frame's features (ids {sorted(present)}); "
+                "an absent member stays in the ground truth and counts as missed",
+                found=f"ID {absent[0]}",
+                count=len(absent),
+            )
+        if len(members) >= 2:
+            clash = grouped.intersection(members)
+            if clash:
+                raise DataFormatError(
+                    path,
+                    where,
+                    f"group {g}",
+                    "disjoint groups",
+                    f"ID {min(clash)} in two groups of 2 or more",
+                )
+            grouped.update(members)
+            fformations.append(tuple(members))
+            absent_in_groups += len(absent)
+    singletons = [m[0] for m in listed if len(m) == 1]
+    duplicates = [s for s in singletons if s in grouped]
+    if duplicates:
+        repairs.note(
+            "duplicate_singletons",
+            path=path,
+            where=where,
+            field="groups",
+            expected="each person in one group (a one-person group naming someone already in "
+            "a larger group is dropped)",
+            found=f"ID {duplicates[0]} alone and in a group",
+            count=len(duplicates),
+        )
+    missing = sorted(present - grouped - set(singletons))
+    if missing:
+        repairs.note(
+            "people_missing_from_groundtruth",
+            path=path,
+            where=where,
+            field="groups",
+            expected="a full partition of the frame's people (someone listed in no group is alone)",
+            found=f"ID {missing[0]} in no group",
+            count=len(missing),
+        )
+    groups = tuple(
+        kept
+        for kept in (tuple(m for m in group if m in present) for group in fformations)
+        if len(kept) >= 2
+    )
+    return groups, (tuple(fformations) if absent_in_groups else None), len(missing)
