@@ -1,0 +1,510 @@
+"""The detector protocol and the one registry of detectors: built-ins, plugins, entry points.
+
+**The protocol.** A detector is any object with ``predict(frames)`` returning one partition per
+frame, in order: a sequence of groups, each a tuple of person ids of that frame, that together
+hold every id of the frame exactly once (people alone are groups of one). It may also have
+``fit(frames)`` (annotated frames; it trains in place and returns ``self``, as a scikit-learn
+estimator does). :class:`Detector` states it as a `typing.Protocol`; nothing needs to inherit
+from it.
+
+**The registry.** Every detector the command line, the experiments and the benchmarks run is
+looked up by name here::
+
+    make_detector("gcff", stride=0.6)            # a registered name, with its options
+    make_detector("reform", model="m.skops")     # a model written by `reform-sim train`
+    make_detector("mylab.detectors:make")        # a plugin: module path and factory, imported
+
+Names come from :func:`register_detector` (the built-ins ``majority``, ``gcff`` and
+``reform``) and from the entry-point group :data:`ENTRY_POINT_GROUP` of installed packages
+(``[project.entry-points."reform_sim.detectors"] mine = "mylab.detectors:make"``), read the
+first time a name is looked up that is not registered; nothing is imported until a detector is
+made. A factory is called with the options and must return an object with a callable
+``predict``; an object that already has one is used as it is.
+
+**Checked runs.** :func:`run_detector` calls ``predict`` and :func:`check_predictions` checks
+what came back; whatever goes wrong inside a detector becomes one :class:`DetectorError` line
+naming the detector and, where it can, the frame.
+
+Pure Python and numpy: the built-in detectors (scikit-learn) are imported when one is made, so
+that importing this module to list the names stays light.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib
+import importlib.metadata
+import inspect
+import os
+import reprlib
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+from reform.metrics import check_partition
+
+if TYPE_CHECKING:
+    from reform.detector import Reform
+    from reform.frame import Frame, Group
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "Detector",
+    "DetectorError",
+    "DetectorInfo",
+    "check_predictions",
+    "detector_info",
+    "detector_names",
+    "fit_detector",
+    "make_detector",
+    "register_detector",
+    "run_detector",
+]
+
+ENTRY_POINT_GROUP = "reform_sim.detectors"  # installed packages add detectors by name here
+_SPEC_FORM = "package.module:factory"
+
+
+class DetectorError(ValueError):
+    """A detector that cannot be found, made or run, or that broke the protocol; one line."""
+
+
+@runtime_checkable
+class Detector(Protocol):
+    """What every detector is: ``predict(frames)`` -> one partition per frame.
+
+    ``predict`` takes a sequence of `reform.Frame` and returns, for each frame in order, a
+    sequence of groups (tuples of person ids) holding every id of that frame exactly once,
+    singletons included. A detector that learns also has ``fit(frames)``, training in place on
+    annotated frames and returning ``self``; the protocol does not require it, and callers that
+    train (`fit_detector`) skip detectors without one.
+    """
+
+    def predict(self, frames: Sequence[Frame]) -> Sequence[Sequence[Group]]:
+        """One partition of each frame's ids, in the frames' order."""
+        ...
+
+
+@dataclass(frozen=True)
+class DetectorInfo:
+    """One detector the registry knows.
+
+    Attributes:
+        name: the name it is looked up by (a ``package.module:factory`` spec for a plugin named
+            by its path).
+        help: one line on what it is.
+        factory: ``factory(**options) -> detector``, or where to import it from
+            (``"package.module:attribute"``), imported when the detector is made.
+        source: where the name comes from: ``"built-in"``, ``"registered"``, ``"import path"``
+            or the entry point and the package that declares it.
+    """
+
+    name: str
+    help: str
+    factory: Callable[..., Any] | str
+    source: str
+
+
+_REGISTRY: dict[str, DetectorInfo] = {}
+
+
+def _check_name(name: Any) -> str:
+    if not isinstance(name, str) or not name or ":" in name or name != "".join(name.split()):
+        raise DetectorError(
+            f"a detector name must be a non-empty word without ':' or spaces (':' marks "
+            f"{_SPEC_FORM}), got {name!r}"
+        )
+    return name
+
+
+def _parse_spec(spec: str) -> tuple[str, str]:
+    """``"package.module:attribute"`` -> (module, attribute); DetectorError when malformed."""
+    module, _, attribute = spec.partition(":")
+    parts = [*module.split("."), *attribute.split(".")]
+    if not all(part.isidentifier() for part in parts):
+        raise DetectorError(f"a detector path must read {_SPEC_FORM}, got {spec!r}")
+    return module, attribute
+
+
+def _register(name: str, factory: Any, *, help: str, source: str) -> None:  # noqa: A002
+    _check_name(name)
+    if not isinstance(help, str) or not help.strip() or "\n" in help.strip():
+        raise DetectorError(f"detector {name!r}: help must be one line of text, got {help!r}")
+    if isinstance(factory, str):
+        _parse_spec(factory)
+    elif not callable(factory):
+        raise DetectorError(
+            f"detector {name!r}: the factory must be callable or a {_SPEC_FORM} path, "
+            f"got {_describe(factory)}"
+        )
+    if name in _REGISTRY:
+        raise DetectorError(
+            f"detector {name!r} is registered twice (it is already {_REGISTRY[name].source})"
+        )
+    _REGISTRY[name] = DetectorInfo(name=name, help=help.strip(), factory=factory, source=source)
+
+
+def register_detector(
+    name: str,
+    factory: Callable[..., Any] | str | None = None,
+    *,
+    help: str,  # noqa: A002 - argparse's word
+) -> Any:
+    """Registers ``factory(**options) -> detector`` under ``name``; also a decorator.
+
+    ``register_detector("pairs", make_pairs, help="...")``, or ``@register_detector("pairs",
+    help="...")`` above the factory. The factory's keyword parameters are the detector's
+    options (`make_detector` checks them against its signature); a ``"package.module:attr"``
+    string is imported when the detector is first made.
+
+    Args:
+        name: a word without ``:`` or spaces.
+        factory: the factory (omitted: returns a decorator).
+        help: one line on the detector.
+
+    Returns:
+        The factory (or, without one, the decorator that registers and returns it).
+
+    Raises:
+        DetectorError: a name registered twice, a malformed name, help or factory.
+    """
+    if factory is None:
+
+        def decorate(function: Callable[..., Any]) -> Callable[..., Any]:
+            _register(name, function, help=help, source="registered")
+            return function
+
+        return decorate
+    _register(name, factory, help=help, source="registered")
+    return factory
+
+
+def _entry_points() -> dict[str, list[importlib.metadata.EntryPoint]]:
+    """The installed packages' detectors by name (read now: a package installed since the last
+    lookup is seen). Names with ``:`` could never be looked up and are left out."""
+    found: dict[str, list[importlib.metadata.EntryPoint]] = {}
+    for entry in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+        if ":" not in entry.name:
+            found.setdefault(entry.name, []).append(entry)
+    return found
+
+
+def _entry_source(entry: importlib.metadata.EntryPoint) -> str:
+    dist = getattr(entry, "dist", None)
+    package = f" of {dist.name} {dist.version}" if dist is not None else ""
+    return f"entry point {entry.name} = {entry.value}{package}"
+
+
+def detector_names() -> tuple[str, ...]:
+    """Every detector name: the registered ones and those of installed packages, sorted."""
+    return tuple(sorted(set(_REGISTRY) | set(_entry_points())))
+
+
+def detector_info(name_or_path: str) -> DetectorInfo:
+    """What ``name_or_path`` names: a registered detector, an installed package's, or a plugin
+    given by its ``package.module:factory`` path (not imported yet).
+
+    Raises:
+        DetectorError: an unknown name (listing the known ones), a name that two sources
+            register, or a malformed path.
+    """
+    if not isinstance(name_or_path, str):
+        raise DetectorError(
+            f"a detector is named by a string (a name or {_SPEC_FORM}), got "
+            f"{_describe(name_or_path)}"
+        )
+    if ":" in name_or_path:
+        _parse_spec(name_or_path)
+        return DetectorInfo(
+            name=name_or_path,
+            help=f"plugin {name_or_path}",
+            factory=name_or_path,
+            source="import path",
+        )
+    registered = _REGISTRY.get(name_or_path)
+    installed = _entry_points().get(name_or_path, [])
+    sources = ([registered.source] if registered else []) + [_entry_source(e) for e in installed]
+    if len(sources) > 1:
+        raise DetectorError(
+            f"detector {name_or_path!r} is registered twice: {'; '.join(sources)} "
+            "(uninstall one of the packages)"
+        )
+    if registered is not None:
+        return registered
+    if installed:
+        (entry,) = installed
+        return DetectorInfo(
+            name=name_or_path,
+            help=f"from {_entry_source(entry)}",
+            factory=entry.value.split("[", 1)[0].strip(),  # extras ("mod:attr [extra]") unused
+            source=_entry_source(entry),
+        )
+    raise DetectorError(
+        f"unknown detector {name_or_path!r}; known detectors: {', '.join(detector_names())} "
+        f"(or give a plugin as {_SPEC_FORM})"
+    )
+
+
+def _one_line(exc: BaseException) -> str:
+    """``"Type: message"`` of an exception, its message on one line."""
+    message = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {message}" if message else type(exc).__name__
+
+
+def _describe(value: Any) -> str:
+    if value is None:
+        return "None"
+    return f"a {type(value).__name__} ({reprlib.repr(value)})"
+
+
+def _import(name: str, spec: str) -> Any:
+    """The object ``spec`` (``package.module:attribute``) names, imported."""
+    module_name, attribute = _parse_spec(spec)
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as exc:  # the plugin's own code runs here: any error of it is its own
+        hint = ""
+        if isinstance(exc, ModuleNotFoundError) and module_name.startswith(str(exc.name)):
+            hint = " (is the package installed, or its folder on PYTHONPATH?)"
+        raise DetectorError(
+            f"detector {name!r}: cannot import module {module_name!r}: {_one_line(exc)}{hint}"
+        ) from exc
+    value: Any = module
+    for part in attribute.split("."):
+        try:
+            value = getattr(value, part)
+        except AttributeError:
+            raise DetectorError(
+                f"detector {name!r}: module {module_name!r} has no attribute {attribute!r}"
+            ) from None
+    return value
+
+
+def _has_predict(value: Any) -> bool:
+    return not isinstance(value, type) and callable(getattr(value, "predict", None))
+
+
+def _check_options(name: str, factory: Callable[..., Any], options: Mapping[str, Any]) -> None:
+    """The options against the factory's signature: none unknown, none required missing."""
+    try:
+        parameters = list(inspect.signature(factory).parameters.values())
+    except (TypeError, ValueError):  # no signature to read (a builtin): the call will tell
+        return
+    named = [
+        p
+        for p in parameters
+        if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    ]
+    accepted = ", ".join(p.name for p in named) or "none"
+    if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
+        unknown = [key for key in options if key not in {p.name for p in named}]
+        if unknown:
+            raise DetectorError(
+                f"detector {name!r} has no option {unknown[0]!r}; its options: {accepted}"
+            )
+    missing = [
+        p.name for p in named if p.default is inspect.Parameter.empty and p.name not in options
+    ]
+    if missing:
+        raise DetectorError(
+            f"detector {name!r} needs the option {missing[0]}= (its options: {accepted})"
+        )
+
+
+def make_detector(name_or_path: str, **options: Any) -> Detector:
+    """A detector ready to ``predict`` (or to ``fit``), made by the factory its name names.
+
+    Args:
+        name_or_path: a name of :func:`detector_names` or a plugin's
+            ``package.module:factory`` path (imported now).
+        **options: the factory's keyword arguments, e.g. ``stride=0.6`` for ``gcff``
+            (metres), ``model="m.skops"`` for ``reform``.
+
+    Returns:
+        What the factory returned: an object with a callable ``predict``. An object the name
+        points at that already has one (a detector rather than a factory) is returned as it is.
+
+    Raises:
+        DetectorError: one line: an unknown name, a plugin that does not import or has no such
+            attribute, an unknown or missing option, a factory that raises, an object without
+            a callable ``predict``.
+    """
+    info = detector_info(name_or_path)
+    name = info.name
+    if isinstance(info.factory, str):
+        label, target = info.factory, _import(name, info.factory)
+    else:
+        label, target = getattr(info.factory, "__qualname__", repr(info.factory)), info.factory
+    if _has_predict(target):
+        if options:
+            raise DetectorError(
+                f"detector {name!r}: {label} is a detector, not a factory, so it takes no "
+                f"options (got {', '.join(options)})"
+            )
+        return target
+    if not callable(target):
+        raise DetectorError(
+            f"detector {name!r}: {label} is {_describe(target)}, neither a factory nor an "
+            "object with a callable predict(frames)"
+        )
+    _check_options(name, target, options)
+    try:
+        detector = target(**options)
+    except DetectorError:
+        raise
+    except Exception as exc:  # the factory is the plugin's code
+        raise DetectorError(f"detector {name!r} could not be made: {_one_line(exc)}") from exc
+    if not _has_predict(detector):
+        raise DetectorError(
+            f"detector {name!r}: its factory {label} returned {_describe(detector)}, which has "
+            "no callable predict(frames)"
+        )
+    return detector
+
+
+def _frame_text(index: int, frame: Any) -> str:
+    sequence = getattr(frame, "sequence", "")
+    time = getattr(frame, "time", None)
+    when = f"t={time:g} s" if isinstance(time, (int, float)) else ""
+    inside = " ".join(part for part in (sequence, when) if part)
+    return f"frame {index} ({inside})" if inside else f"frame {index}"
+
+
+def check_predictions(name: str, frames: Sequence[Frame], partitions: Any) -> list[Sequence[Group]]:
+    """Checks that ``partitions`` holds one partition of each frame's people, in order.
+
+    Args:
+        name: the detector's name, for the message.
+        frames: the frames it was given.
+        partitions: what its ``predict`` returned.
+
+    Returns:
+        The partitions, as a list (the groups as the detector gave them).
+
+    Raises:
+        DetectorError: naming the detector and the frame (its index in ``frames``, sequence and
+            time): not a sequence, the wrong number of partitions, or a partition naming
+            someone not in the frame, someone twice, someone in no group, a non-integer id or
+            an empty group.
+    """
+    frames = list(frames)
+    if isinstance(partitions, (str, bytes, Mapping)) or not isinstance(partitions, Iterable):
+        raise DetectorError(
+            f"{name}: detector returned {_describe(partitions)}, expected one partition per "
+            f"frame ({len(frames)} frames)"
+        )
+    partitions = list(partitions)
+    if len(partitions) != len(frames):
+        raise DetectorError(
+            f"{name}: detector returned {len(partitions)} partitions for {len(frames)} frames"
+        )
+    for index, (frame, partition) in enumerate(zip(frames, partitions, strict=True)):
+        try:
+            check_partition(
+                partition, frame, where=f"{name}: detector output for {_frame_text(index, frame)}"
+            )
+        except ValueError as exc:
+            raise DetectorError(str(exc)) from None
+    return partitions
+
+
+def _culprit(
+    predict: Callable[..., Any], frames: Sequence[Frame]
+) -> tuple[str, BaseException | None]:
+    """The first frame that makes ``predict`` raise on its own, and what it raised; ``("", None)``
+    when none does (the detector fails on the batch only)."""
+    if len(frames) == 1:
+        return _frame_text(0, frames[0]), None
+    for index, frame in enumerate(frames):
+        try:
+            predict([frame])
+        except Exception as exc:  # noqa: BLE001 - looking for the frame, whatever it raises
+            return _frame_text(index, frame), exc
+    return "", None
+
+
+def run_detector(name: str, detector: Any, frames: Sequence[Frame]) -> list[Sequence[Group]]:
+    """``detector.predict(frames)``, checked by :func:`check_predictions`.
+
+    An exception raised inside the detector becomes one line naming the detector, the
+    exception's type and message, and the first frame that raises on its own (found by
+    predicting the frames one at a time again, only after a failure).
+
+    Args:
+        name: the detector's name, for messages.
+        detector: an object with ``predict`` (:class:`Detector`).
+        frames: the frames to partition.
+
+    Returns:
+        One partition per frame, as a list.
+
+    Raises:
+        DetectorError: the detector has no callable ``predict``, raised, or returned something
+            that is not one partition per frame.
+    """
+    predict = getattr(detector, "predict", None)
+    if not callable(predict):
+        raise DetectorError(f"{name}: {_describe(detector)} has no callable predict(frames)")
+    try:
+        partitions = predict(frames)
+    except Exception as exc:  # the detector is someone's code: report it in one line
+        where, alone = _culprit(predict, frames)
+        where = where or f"a batch of {len(frames)} frames (no frame alone)"
+        raised = alone or exc
+        message = " ".join(str(raised).split())
+        raise DetectorError(
+            f"{name}: detector raised {type(raised).__name__} on {where}"
+            + (f": {message}" if message else "")
+        ) from exc
+    return check_predictions(name, frames, partitions)
+
+
+def fit_detector(name: str, detector: Any, frames: Sequence[Frame]) -> Any:
+    """A copy of ``detector`` fitted on ``frames`` when it has ``fit``, else ``detector`` itself.
+
+    The detector passed in is left as it was (it is copied with `copy.deepcopy` first).
+
+    Raises:
+        DetectorError: one line naming the detector when its ``fit`` raises or is not callable.
+    """
+    fit = getattr(detector, "fit", None)
+    if fit is None:
+        return detector
+    if not callable(fit):
+        raise DetectorError(f"{name}: the detector's fit is {_describe(fit)}, not a method")
+    fitted = copy.deepcopy(detector)
+    try:
+        fitted.fit(frames)
+    except Exception as exc:  # the detector is someone's code: report it in one line
+        raise DetectorError(
+            f"{name}: detector's fit raised {_one_line(exc)} (on {len(frames)} frames)"
+        ) from exc
+    return fitted
+
+
+def _reform(*, model: str | os.PathLike[str], trusted: Iterable[str] = ()) -> Reform:
+    """REFORM from a model file written by `reform-sim train` (`reform.persistence.load_model`)."""
+    # Imported here: scikit-learn and skops load only when a REFORM model is made.
+    from reform.persistence import load_model
+
+    return load_model(model, trusted=trusted)
+
+
+_register(
+    "majority",
+    "reform.majority:Majority",
+    help="majority baseline: everyone alone, every pair 'not together'",
+    source="built-in",
+)
+_register(
+    "gcff",
+    "reform.gcff:Gcff",
+    help="GCFF graph-cut baseline (Setti et al. 2015); options stride (m), mdl (m²), orientation",
+    source="built-in",
+)
+_register(
+    "reform",
+    _reform,
+    help="REFORM (Hedayati et al. 2020) from a model file: option model (`reform-sim train`)",
+    source="built-in",
+)

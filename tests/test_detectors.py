@@ -1,0 +1,517 @@
+"""The detector registry (reform.detectors): names, plugins, entry points, every error message,
+and one contract test over every registered detector."""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from toy_scenes import toy_frames
+
+import reform.detectors
+from reform import (
+    DetectorError,
+    Gcff,
+    Majority,
+    Reform,
+    check_predictions,
+    detector_info,
+    detector_names,
+    fit_detector,
+    make_detector,
+    register_detector,
+    run_detector,
+    save_model,
+    wrap_angle,
+)
+from reform.classifiers import make_classifier
+from reform.detectors import ENTRY_POINT_GROUP, Detector
+
+BUILT_IN = ("gcff", "majority", "reform")
+
+
+def as_sets(partition) -> set[frozenset[int]]:
+    return {frozenset(int(m) for m in group) for group in partition}
+
+
+@pytest.fixture
+def registry(monkeypatch):
+    """A registry of its own for the test: what it registers is gone afterwards."""
+    monkeypatch.setattr(reform.detectors, "_REGISTRY", dict(reform.detectors._REGISTRY))
+
+
+@pytest.fixture(scope="module")
+def model_path(tmp_path_factory) -> Path:
+    model = Reform(make_classifier("logistic-regression")).fit(toy_frames(0, 30))
+    return save_model(model, tmp_path_factory.mktemp("model") / "model.skops")
+
+
+@pytest.fixture
+def plugins(tmp_path, monkeypatch) -> Path:
+    """A folder on sys.path holding the module ``labplugin`` (good and broken detectors)."""
+    (tmp_path / "labplugin.py").write_text(
+        textwrap.dedent(
+            """
+            class Alone:
+                def __init__(self, *, scale=1.0):
+                    self.scale = scale
+                    self.fitted_on = None
+
+                def fit(self, frames):
+                    self.fitted_on = len(frames)
+                    return self
+
+                def predict(self, frames):
+                    return [[(int(i),) for i in f.ids] for f in frames]
+
+            def make(*, scale=1.0):
+                return Alone(scale=scale)
+
+            def make_nothing():
+                return None
+
+            def make_broken():
+                raise RuntimeError("no licence\\nfound")
+
+            detector = Alone()
+            number = 3
+            """
+        )
+    )
+    (tmp_path / "badimport.py").write_text("import numpy\n1 / 0\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return tmp_path
+
+
+def dist_info(folder: Path, name: str, entry_points: dict[str, str]) -> None:
+    """Installed-package metadata declaring ``entry_points`` in the detectors' group."""
+    info = folder / f"{name}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
+    lines = "".join(f"{key} = {value}\n" for key, value in entry_points.items())
+    (info / "entry_points.txt").write_text(f"[{ENTRY_POINT_GROUP}]\n{lines}")
+
+
+# ------------------------------------------------------------------------------------------------
+# The registry
+
+
+def test_the_built_ins_are_registered():
+    assert set(BUILT_IN) <= set(detector_names())
+    assert detector_names() == tuple(sorted(detector_names()))
+    assert {detector_info(name).source for name in BUILT_IN} == {"built-in"}
+    assert isinstance(make_detector("majority"), Majority)
+
+
+def test_gcff_options_are_in_metres():
+    detector = make_detector("gcff", stride=0.6, mdl=2.0, orientation="head")
+    assert isinstance(detector, Gcff)
+    assert (detector.stride, detector.mdl, detector.orientation) == (0.6, 2.0, "head")
+
+
+def test_reform_loads_a_model_file(model_path):
+    detector = make_detector("reform", model=model_path)
+    assert isinstance(detector, Reform)
+    frames = toy_frames(1, 3)
+    assert detector.predict(frames) == Reform(make_classifier("logistic-regression")).fit(
+        toy_frames(0, 30)
+    ).predict(frames)
+
+
+def test_register_a_factory_and_a_decorated_one(registry):
+    def make_alone():
+        return Majority()
+
+    assert register_detector("alone", make_alone, help="everyone alone") is make_alone
+
+    @register_detector("alone-too", help="everyone alone, again")
+    def make_alone_too(*, note: str = ""):
+        return Majority()
+
+    assert make_alone_too(note="x").predict(toy_frames(0, 1))
+    assert {"alone", "alone-too"} <= set(detector_names())
+    assert isinstance(make_detector("alone-too", note="hi"), Majority)
+    info = detector_info("alone")
+    assert (info.help, info.source, info.factory) == ("everyone alone", "registered", make_alone)
+
+
+def test_register_a_factory_by_its_import_path(registry, plugins):
+    register_detector("lab", "labplugin:make", help="the lab's detector")
+    detector = make_detector("lab", scale=2.0)
+    assert type(detector).__name__ == "Alone" and detector.scale == 2.0
+
+
+def test_a_plugin_by_its_path(plugins):
+    detector = make_detector("labplugin:make", scale=3.0)
+    assert (type(detector).__name__, detector.scale) == ("Alone", 3.0)
+    assert isinstance(detector, Detector)
+    assert type(make_detector("labplugin:Alone")).__name__ == "Alone"  # a class is a factory
+    instance = make_detector("labplugin:detector")  # a detector object is used as it is
+    assert instance is __import__("labplugin").detector
+
+
+def test_an_installed_packages_entry_point(tmp_path, monkeypatch, plugins):
+    dist_info(tmp_path, "labplugin", {"lab-alone": "labplugin:make"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "lab-alone" in detector_names()
+    info = detector_info("lab-alone")
+    assert info.source == "entry point lab-alone = labplugin:make of labplugin 0.1"
+    assert info.factory == "labplugin:make"
+    assert make_detector("lab-alone", scale=5.0).scale == 5.0
+
+
+def test_entry_points_are_read_on_lookup_and_loaded_when_made(tmp_path, monkeypatch):
+    # The entry point's module does not exist: listing and looking up the name import nothing,
+    # making the detector does.
+    dist_info(tmp_path, "ghost", {"ghost": "ghost_module_that_is_not_there:make"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "ghost" in detector_names()
+    assert detector_info("ghost").factory == "ghost_module_that_is_not_there:make"
+    with pytest.raises(DetectorError, match="^detector 'ghost': cannot import module"):
+        make_detector("ghost")
+
+
+# ------------------------------------------------------------------------------------------------
+# Every error, one line each
+
+
+@pytest.mark.parametrize(
+    ("name", "options", "message"),
+    [
+        pytest.param(
+            "oracle",
+            {},
+            r"^unknown detector 'oracle'; known detectors: gcff, majority, reform"
+            r"(, .*)? \(or give a plugin as package\.module:factory\)$",
+            id="unknown-name",
+        ),
+        pytest.param(
+            "no_such_lab_module:make",
+            {},
+            r"^detector 'no_such_lab_module:make': cannot import module 'no_such_lab_module': "
+            r"ModuleNotFoundError: No module named 'no_such_lab_module' \(is the package "
+            r"installed, or its folder on PYTHONPATH\?\)$",
+            id="module-not-found",
+        ),
+        pytest.param(
+            "badimport:make",
+            {},
+            r"^detector 'badimport:make': cannot import module 'badimport': "
+            r"ZeroDivisionError: division by zero$",
+            id="module-raises-on-import",
+        ),
+        pytest.param(
+            "labplugin:nothing_here",
+            {},
+            r"^detector 'labplugin:nothing_here': module 'labplugin' has no attribute "
+            r"'nothing_here'$",
+            id="no-such-attribute",
+        ),
+        pytest.param(
+            "labplugin:number",
+            {},
+            r"^detector 'labplugin:number': labplugin:number is a int \(3\), neither a factory "
+            r"nor an object with a callable predict\(frames\)$",
+            id="object-without-predict",
+        ),
+        pytest.param(
+            "labplugin:make_nothing",
+            {},
+            r"^detector 'labplugin:make_nothing': its factory labplugin:make_nothing returned "
+            r"None, which has no callable predict\(frames\)$",
+            id="factory-returns-no-detector",
+        ),
+        pytest.param(
+            "labplugin:make_broken",
+            {},
+            r"^detector 'labplugin:make_broken' could not be made: RuntimeError: no licence "
+            r"found$",
+            id="factory-raises",
+        ),
+        pytest.param(
+            "labplugin:make",
+            {"colour": "red"},
+            r"^detector 'labplugin:make' has no option 'colour'; its options: scale$",
+            id="unknown-option",
+        ),
+        pytest.param(
+            "labplugin:detector",
+            {"scale": 2},
+            r"^detector 'labplugin:detector': labplugin:detector is a detector, not a factory, "
+            r"so it takes no options \(got scale\)$",
+            id="options-to-a-detector-object",
+        ),
+        pytest.param(
+            "reform",
+            {},
+            r"^detector 'reform' needs the option model= \(its options: model, trusted\)$",
+            id="missing-option",
+        ),
+        pytest.param(
+            "gcff",
+            {"stride_cm": 70},
+            r"^detector 'gcff' has no option 'stride_cm'; its options: stride, mdl, orientation, "
+            "tune, stride_grid, mdl_grid, threshold$",
+            id="unknown-option-of-a-built-in",
+        ),
+        pytest.param(
+            "reform",
+            {"model": "/no/such/model.skops"},
+            r"^detector 'reform' could not be made: FileNotFoundError: .*model\.skops",
+            id="built-in-factory-raises",
+        ),
+        pytest.param(
+            "labplugin:",
+            {},
+            r"^a detector path must read package\.module:factory, got 'labplugin:'$",
+            id="malformed-path",
+        ),
+        pytest.param(
+            "lab plugin:make",
+            {},
+            r"^a detector path must read package\.module:factory, got 'lab plugin:make'$",
+            id="path-with-a-space",
+        ),
+    ],
+)
+def test_make_detector_errors(name, options, message, plugins):
+    with pytest.raises(DetectorError, match=message) as caught:
+        make_detector(name, **options)
+    assert "\n" not in str(caught.value)
+
+
+def test_a_name_registered_twice(registry):
+    with pytest.raises(
+        DetectorError, match=r"^detector 'gcff' is registered twice \(it is already built-in\)$"
+    ):
+        register_detector("gcff", Gcff, help="another GCFF")
+    register_detector("mine", Majority, help="mine")
+    with pytest.raises(DetectorError, match=r"^detector 'mine' is registered twice"):
+        register_detector("mine", Majority, help="mine again")
+
+
+def test_an_entry_point_named_as_a_built_in_is_registered_twice(tmp_path, monkeypatch):
+    dist_info(tmp_path, "rival", {"gcff": "rival:make"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(
+        DetectorError,
+        match=r"^detector 'gcff' is registered twice: built-in; entry point gcff = rival:make "
+        r"of rival 0\.1 \(uninstall one of the packages\)$",
+    ):
+        make_detector("gcff")
+    assert detector_names().count("gcff") == 1
+
+
+@pytest.mark.parametrize(
+    ("name", "factory", "help", "message"),
+    [
+        ("a:b", Majority, "x", r"^a detector name must be a non-empty word without ':'"),
+        ("", Majority, "x", r"^a detector name must be a non-empty word"),
+        ("two words", Majority, "x", r"^a detector name must be a non-empty word"),
+        ("ok", Majority, "", r"^detector 'ok': help must be one line of text, got ''$"),
+        ("ok", Majority, "one\ntwo", r"^detector 'ok': help must be one line of text"),
+        (
+            "ok",
+            3,
+            "x",
+            r"^detector 'ok': the factory must be callable or a package\.module:factory path, "
+            r"got a int \(3\)$",
+        ),
+        ("ok", "not a path", "x", r"^a detector path must read package\.module:factory"),
+    ],
+    ids=["colon", "empty", "space", "no-help", "two-lines", "not-callable", "bad-path"],
+)
+def test_register_detector_refuses(name, factory, help, message, registry):  # noqa: A002
+    with pytest.raises(DetectorError, match=message):
+        register_detector(name, factory, help=help)
+    assert name not in reform.detectors._REGISTRY
+
+
+def test_detector_info_wants_a_string():
+    with pytest.raises(DetectorError, match=r"^a detector is named by a string .*got a int \(3\)"):
+        detector_info(3)
+
+
+# ------------------------------------------------------------------------------------------------
+# Checked runs
+
+
+FRAMES = toy_frames(3, 3, sizes=(2, 3), loners=1)  # ids 1-6, sequence "toy", times 0, 1, 2 s
+
+
+class Returns:
+    """A detector returning ``output`` whatever the frames."""
+
+    def __init__(self, output):
+        self.output = output
+
+    def predict(self, frames):
+        return self.output
+
+
+def alone(frame):
+    return [(int(i),) for i in frame.ids]
+
+
+@pytest.mark.parametrize(
+    ("output", "message"),
+    [
+        pytest.param(
+            None,
+            r"^lab: detector returned None, expected one partition per frame \(3 frames\)$",
+            id="none",
+        ),
+        pytest.param(
+            [alone(f) for f in FRAMES[:2]],
+            r"^lab: detector returned 2 partitions for 3 frames$",
+            id="too-few",
+        ),
+        pytest.param(
+            [alone(FRAMES[0]), [*alone(FRAMES[1]), (99,)], alone(FRAMES[2])],
+            r"^lab: detector output for frame 1 \(toy t=1 s\): person 99 \(group 6\) is not in "
+            r"the frame \(ids \[1, 2, 3, 4, 5, 6\]\)$",
+            id="unknown-person",
+        ),
+        pytest.param(
+            [alone(FRAMES[0]), alone(FRAMES[1]), [(1, 2), (2, 3), (4,), (5,), (6,)]],
+            r"^lab: detector output for frame 2 \(toy t=2 s\): person 2 appears twice "
+            r"\(again in group 1\)$",
+            id="someone-twice",
+        ),
+        pytest.param(
+            [[(1, 2), (3,)], alone(FRAMES[1]), alone(FRAMES[2])],
+            r"^lab: detector output for frame 0 \(toy t=0 s\): person 4 is in no group; a "
+            r"prediction must be a full partition of the frame's ids, singletons included$",
+            id="someone-missing",
+        ),
+        pytest.param(
+            [alone(FRAMES[0]), [(1.5,), *alone(FRAMES[1])], alone(FRAMES[2])],
+            r"^lab: detector output for frame 1 \(toy t=1 s\): group 0 holds 1\.5, expected an "
+            r"integer person id$",
+            id="non-integer-id",
+        ),
+        pytest.param(
+            [[(), *alone(FRAMES[0])], alone(FRAMES[1]), alone(FRAMES[2])],
+            r"^lab: detector output for frame 0 \(toy t=0 s\): group 0 is empty$",
+            id="empty-group",
+        ),
+        pytest.param(
+            [np.arange(1, 7) for _ in FRAMES],
+            r"^lab: detector output for frame 0 \(toy t=0 s\): group 0 must be a sequence of "
+            r"person ids, found ",
+            id="labels-not-groups",
+        ),
+    ],
+)
+def test_check_predictions_names_the_detector_and_the_frame(output, message):
+    with pytest.raises(DetectorError, match=message):
+        check_predictions("lab", FRAMES, output)
+    with pytest.raises(DetectorError, match=message):
+        run_detector("lab", Returns(output), FRAMES)
+
+
+def test_check_predictions_returns_the_partitions_as_a_list():
+    output = (tuple(alone(f)) for f in FRAMES)  # a generator is a sequence of partitions too
+    assert check_predictions("lab", FRAMES, output) == [tuple(alone(f)) for f in FRAMES]
+    assert run_detector("majority", Majority(), FRAMES) == Majority().predict(FRAMES)
+
+
+class RaisesAt:
+    """Raises on the frame at time ``when`` (or only on batches of two or more frames)."""
+
+    def __init__(self, when=None):
+        self.when = when
+
+    def predict(self, frames):
+        if self.when is None and len(frames) > 1:
+            raise MemoryError
+        for frame in frames:
+            if frame.time == self.when:
+                raise LookupError("heading\nmissing")
+        return [alone(f) for f in frames]
+
+
+def test_run_detector_names_the_frame_that_raises():
+    with pytest.raises(
+        DetectorError,
+        match=r"^lab: detector raised LookupError on frame 2 \(toy t=2 s\): heading missing$",
+    ) as caught:
+        run_detector("lab", RaisesAt(2.0), FRAMES)
+    assert isinstance(caught.value.__cause__, LookupError)
+
+
+def test_run_detector_on_a_batch_that_raises_only_together():
+    with pytest.raises(
+        DetectorError,
+        match=r"^lab: detector raised MemoryError on a batch of 3 frames \(no frame alone\)$",
+    ):
+        run_detector("lab", RaisesAt(None), FRAMES)
+
+
+def test_run_detector_wants_a_callable_predict():
+    with pytest.raises(DetectorError, match=r"^lab: a str \('x'\) has no callable predict"):
+        run_detector("lab", "x", FRAMES)
+
+
+def test_fit_detector_fits_a_copy(plugins):
+    detector = make_detector("labplugin:make")
+    fitted = fit_detector("lab", detector, FRAMES)
+    assert (fitted.fitted_on, detector.fitted_on) == (3, None)
+    assert fit_detector("lab", Returns([]), FRAMES).output == []  # no fit: itself
+
+    class FitRaises(Returns):
+        def fit(self, frames):
+            raise ValueError("needs head poses")
+
+    with pytest.raises(
+        DetectorError,
+        match=r"^lab: detector's fit raised ValueError: needs head poses \(on 3 frames\)$",
+    ):
+        fit_detector("lab", FitRaises(None), FRAMES)
+
+
+# ------------------------------------------------------------------------------------------------
+# The contract, for every registered detector
+
+
+def options_for(name: str, model_path: Path) -> dict:
+    """What each built-in needs to be made; a new built-in that needs options fails here."""
+    return {"reform": {"model": model_path}}.get(name, {})
+
+
+@pytest.mark.parametrize("name", detector_names())
+def test_every_detector_returns_a_partition_per_frame(name, model_path):
+    detector = make_detector(name, **options_for(name, model_path))
+    frames = toy_frames(7, 4, sizes=(3, 2), loners=2) + toy_frames(8, 1, sizes=(), loners=1)
+    partitions = run_detector(name, detector, frames)
+    assert len(partitions) == len(frames)
+    for frame, partition in zip(frames, partitions, strict=True):
+        assert sorted(m for group in partition for m in group) == sorted(frame.ids.tolist())
+    assert run_detector(name, detector, []) == []
+
+
+def moved(frame, *, shift: tuple[float, float], turn: float):
+    rotation = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+    return frame.replace(
+        position=frame.position @ rotation.T + shift, yaw=wrap_angle(frame.yaw + turn)
+    )
+
+
+@pytest.mark.parametrize("name", ["majority", "gcff"])
+@pytest.mark.parametrize(
+    ("shift", "turn"),
+    [((0.0, 0.0), math.pi / 2), ((12.5, -40.0), 0.0), ((-3.0, 7.0), 2.0), ((100.0, 0.5), -2.9)],
+    ids=["quarter-turn", "translation", "both", "far-and-back"],
+)
+def test_partition_does_not_depend_on_where_the_scene_is(name, shift, turn):
+    detector = make_detector(name)
+    frames = toy_frames(11, 6, sizes=(3, 2, 4), loners=2)
+    before = [as_sets(p) for p in detector.predict(frames)]
+    after = [
+        as_sets(p) for p in detector.predict([moved(f, shift=shift, turn=turn) for f in frames])
+    ]
+    assert after == before
+    assert any(len(group) > 1 for partition in before for group in partition) or name == "majority"
