@@ -3,16 +3,21 @@ and one contract test over every registered detector."""
 
 from __future__ import annotations
 
+import json
 import math
+import sys
 import textwrap
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_errors import cli_error
 from toy_scenes import toy_frames
 
 import reform.detectors
 from reform import (
+    Dataset,
     DetectorError,
     Gcff,
     Majority,
@@ -26,9 +31,11 @@ from reform import (
     run_detector,
     save_model,
     wrap_angle,
+    write_parquet,
 )
 from reform.classifiers import make_classifier
 from reform.detectors import ENTRY_POINT_GROUP, Detector
+from sim.cli import main
 
 BUILT_IN = ("gcff", "majority", "reform")
 
@@ -50,7 +57,7 @@ def model_path(tmp_path_factory) -> Path:
 
 
 @pytest.fixture
-def plugins(tmp_path, monkeypatch) -> Path:
+def plugins(tmp_path, monkeypatch) -> Iterator[Path]:
     """A folder on sys.path holding the module ``labplugin`` (good and broken detectors)."""
     (tmp_path / "labplugin.py").write_text(
         textwrap.dedent(
@@ -76,6 +83,16 @@ def plugins(tmp_path, monkeypatch) -> Path:
             def make_broken():
                 raise RuntimeError("no licence\\nfound")
 
+            class RaisesLate(Alone):
+                def predict(self, frames):
+                    if any(f.time >= 3 for f in frames):
+                        1 / 0
+                    return super().predict(frames)
+
+            class Forgets(Alone):
+                def predict(self, frames):
+                    return [[(int(f.ids[0]),)] for f in frames]
+
             detector = Alone()
             number = 3
             """
@@ -83,7 +100,9 @@ def plugins(tmp_path, monkeypatch) -> Path:
     )
     (tmp_path / "badimport.py").write_text("import numpy\n1 / 0\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    return tmp_path
+    yield tmp_path
+    for module in ("labplugin", "badimport"):
+        sys.modules.pop(module, None)
 
 
 def dist_info(folder: Path, name: str, entry_points: dict[str, str]) -> None:
@@ -515,3 +534,87 @@ def test_partition_does_not_depend_on_where_the_scene_is(name, shift, turn):
     ]
     assert after == before
     assert any(len(group) > 1 for partition in before for group in partition) or name == "majority"
+
+
+def test_the_command_lines_built_ins_are_registered_names():
+    from sim.cli import _detectors
+
+    assert set(_detectors.DETECTORS) <= set(detector_names())
+    assert _detectors._ENTRY_POINT_GROUP == ENTRY_POINT_GROUP
+
+
+# ------------------------------------------------------------------------------------------------
+# The command line: any registered name or plugin path
+
+
+@pytest.fixture
+def toy_dataset(tmp_path) -> Path:
+    path = tmp_path / "toy.parquet"
+    frames = toy_frames(0, 6, sizes=(2, 3), loners=1)
+    write_parquet(Dataset(frames=tuple(frames), name="toy", source="toy_scenes"), path)
+    return path
+
+
+def test_evaluate_and_detect_run_a_plugin(plugins, toy_dataset, tmp_path, capsys):
+    out = tmp_path / "r.json"
+    argv = ["evaluate", "--detector", "labplugin:make", "--data", toy_dataset, "--json", out]
+    assert main([str(a) for a in argv]) == 0, capsys.readouterr().err
+    result = json.loads(out.read_text())
+    assert (result["detector"], result["frames"]) == ("labplugin:make", 6)
+    groups = tmp_path / "groups.json"
+    argv = ["detect", "--detector", "labplugin:make", "--data", toy_dataset, "--out", groups]
+    assert main([str(a) for a in argv]) == 0, capsys.readouterr().err
+    assert [r["groups"] for r in json.loads(groups.read_text())["frames"]] == [[]] * 6
+
+
+@pytest.mark.parametrize("command", ["evaluate", "detect"])
+@pytest.mark.parametrize(
+    ("plugin", "message"),
+    [
+        (
+            "labplugin:nothing_here",
+            "detector 'labplugin:nothing_here': module 'labplugin' has no attribute 'nothing_here'",
+        ),
+        (
+            "labplugin:make_nothing",
+            "detector 'labplugin:make_nothing': its factory labplugin:make_nothing returned "
+            "None, which has no callable predict(frames)",
+        ),
+        (
+            "no_such_lab_module:make",
+            "detector 'no_such_lab_module:make': cannot import module 'no_such_lab_module': "
+            "ModuleNotFoundError: No module named 'no_such_lab_module' (is the package "
+            "installed, or its folder on PYTHONPATH?)",
+        ),
+        (
+            "labplugin:RaisesLate",
+            "labplugin:RaisesLate: detector raised ZeroDivisionError on frame 3 (toy t=3 s): "
+            "division by zero",
+        ),
+        (
+            "labplugin:Forgets",
+            "labplugin:Forgets: detector output for frame 0 (toy t=0 s): person 2 is in no "
+            "group; a prediction must be a full partition of the frame's ids, singletons "
+            "included",
+        ),
+    ],
+    ids=["no-attribute", "no-predict", "no-module", "raises", "not-a-partition"],
+)
+def test_a_broken_plugin_is_one_line(
+    command, plugin, message, plugins, toy_dataset, tmp_path, capsys
+):
+    argv = [command, "--detector", plugin, "--data", toy_dataset]
+    if command == "detect":
+        argv += ["--out", tmp_path / "groups.json"]
+    assert cli_error(argv, capsys) == f"reform-sim {command}: error: {message}"
+    assert not (tmp_path / "groups.json").exists()
+
+
+def test_an_unknown_name_is_an_argparse_error_listing_the_names(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["evaluate", "--detector", "oracle", "--data", "x"])
+    assert exc.value.code == 2
+    assert (
+        "argument --detector: invalid choice: 'oracle' (choose from gcff, majority, reform"
+        in capsys.readouterr().err
+    )

@@ -8,7 +8,7 @@ import sys
 from typing import Any
 
 from sim.cli._common import CliError, check_output, check_recording, load_data
-from sim.cli._detection import add_detection_arguments, record_detection, run_detector
+from sim.cli._detection import add_detection_arguments, detect_frames, record_detection
 from sim.cli._detectors import check_detector, detector_params
 
 # Version of the JSON written by ``detect`` (docs/json-schema.md).
@@ -84,9 +84,8 @@ def _dumps(result: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
-    from reform.metrics import check_partition
 
-    check_detector(args)
+    spec = check_detector(args)
     check_output("--out", args.out)
     check_recording(args)
     dataset = load_data(args)
@@ -94,18 +93,7 @@ def run(args: argparse.Namespace) -> int:
     frames = [dataset.frames[i] for i in indices]
     if not frames:
         raise CliError(f"{args.data}: no frames to run the detector on")
-    detector, predictions = run_detector(args, frames)
-    if len(predictions) != len(frames):
-        raise CliError(
-            f"detector {args.detector!r} returned {len(predictions)} partitions "
-            f"for {len(frames)} frames"
-        )
-    for index, frame, partition in zip(indices, frames, predictions, strict=True):
-        check_partition(
-            partition,
-            frame,
-            where=f"detector output for frame {index} ({frame.sequence} t={frame.time:g} s)",
-        )
+    detector, predictions = detect_frames(args, spec, frames)
     result = detections_json(
         frames,
         predictions,

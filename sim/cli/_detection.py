@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from sim.cli._common import add_data_arguments
-from sim.cli._detectors import add_detector_arguments, build_detector
+from sim.cli._detectors import DetectorSpec, add_detector_arguments
 
 
 def add_detection_arguments(parser: argparse.ArgumentParser) -> None:
@@ -17,10 +17,16 @@ def add_detection_arguments(parser: argparse.ArgumentParser) -> None:
     add_data_arguments(parser)
 
 
-def run_detector(args: argparse.Namespace, frames: Sequence[Any]) -> tuple[Any, list[Any]]:
-    """The detector the flags name, and its partition of every frame."""
-    detector = build_detector(args)
-    return detector, detector.predict(frames)
+def detect_frames(
+    args: argparse.Namespace, spec: DetectorSpec, frames: Sequence[Any]
+) -> tuple[Any, list[Any]]:
+    """The detector ``spec`` builds from the flags, and its partition of every frame, checked
+    (`reform.detectors.run_detector`: a detector that raises or returns something that is not
+    a partition of each frame's people is one line naming it and the frame)."""
+    from reform.detectors import run_detector
+
+    detector = spec.build(args)
+    return detector, run_detector(args.detector, detector, frames)
 
 
 def record_detection(

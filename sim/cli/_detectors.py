@@ -1,27 +1,35 @@
-"""Detectors the CLI can build from its arguments: a small registry, one entry per detector.
+"""Detectors the CLI can build: the built-ins from their options, any other from the registry.
 
-Adding a detector is one decorated function (and, when it takes options, one function adding
-them to the parser)::
+``--detector`` takes any name of the detector registry (`reform.detectors`: the built-ins, an
+installed package's entry point) or a plugin's ``package.module:factory`` path. The built-in
+detectors that take options on the command line have a builder here, one entry per detector
+(and, when it takes options, one function adding them to the parser)::
 
     def _gcff_arguments(parser):
-        parser.add_argument("--stride", type=float, default=0.7, help="metres")
+        parser.add_argument("--stride", type=float, help="metres")
 
-    @register_detector("gcff", help="GCFF graph-cut baseline", add_arguments=_gcff_arguments)
+    @cli_detector("gcff", help="GCFF graph-cut baseline", add_arguments=_gcff_arguments)
     def _gcff(args):
-        from reform import GCFF
-        return GCFF(stride=args.stride)
+        from reform import Gcff
+        return Gcff(stride=args.stride)
 
-A builder returns a detector ready to ``predict(frames)`` (one full partition per frame); the
-CLI never fits it. Options of every registered detector are added to ``evaluate`` and
-``detect``; a builder reads its own. A detector's options default to None (not given), so that
-one given to another detector is an error naming both (``--model is an option of --detector
-reform, not of --detector majority``).
+Every other detector is made by `reform.detectors.make_detector` with no options. A builder
+returns a detector ready to ``predict(frames)`` (one full partition per frame); the CLI never
+fits it. Options of every builder are added to ``evaluate`` and ``detect``; a builder reads its
+own. A detector's options default to None (not given), so that one given to another detector is
+an error naming both (``--model is an option of --detector reform, not of --detector
+majority``).
+
+Building the parser imports nothing of `reform` (``--help`` stays light): the registry is asked
+when a ``--detector`` value is parsed.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -34,9 +42,15 @@ __all__ = [
     "add_detector_arguments",
     "build_detector",
     "check_detector",
+    "cli_detector",
+    "detector_name",
     "detector_params",
-    "register_detector",
+    "make_plugin",
 ]
+
+# Where installed packages declare detectors (`reform.detectors.ENTRY_POINT_GROUP`; a test
+# checks the two agree, the CLI's help must not import reform).
+_ENTRY_POINT_GROUP = "reform_sim.detectors"
 
 
 @dataclass(frozen=True)
@@ -56,20 +70,21 @@ class DetectorSpec:
     add_arguments: Callable[[argparse.ArgumentParser], None] | None = None
 
 
+# The built-in detectors the CLI builds from its own options (names of the registry).
 DETECTORS: dict[str, DetectorSpec] = {}
 
 
-def register_detector(
+def cli_detector(
     name: str,
     *,
     help: str,  # noqa: A002 - argparse's word
     add_arguments: Callable[[argparse.ArgumentParser], None] | None = None,
 ) -> Callable[[Callable[[argparse.Namespace], Any]], Callable[[argparse.Namespace], Any]]:
-    """Decorator registering ``build(args) -> detector`` under ``name``."""
+    """Decorator registering ``build(args) -> detector`` for the registry's detector ``name``."""
 
     def decorate(build: Callable[[argparse.Namespace], Any]) -> Callable[[argparse.Namespace], Any]:
         if name in DETECTORS:
-            raise ValueError(f"detector {name!r} is already registered")
+            raise ValueError(f"detector {name!r} already has a command-line builder")
         DETECTORS[name] = DetectorSpec(
             name=name, help=help, build=build, add_arguments=add_arguments
         )
@@ -78,11 +93,11 @@ def register_detector(
     return decorate
 
 
-@register_detector("majority", help="majority baseline: everyone alone, every pair 'not together'")
+@cli_detector("majority", help="majority baseline: everyone alone, every pair 'not together'")
 def _majority(args: argparse.Namespace) -> Any:  # noqa: ARG001
-    from reform import Majority
+    from reform.detectors import make_detector
 
-    return Majority()
+    return make_detector("majority")
 
 
 def _gcff_arguments(parser: argparse.ArgumentParser) -> None:
@@ -126,7 +141,7 @@ def _gcff_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-@register_detector(
+@cli_detector(
     "gcff",
     help="GCFF graph-cut baseline (Setti et al. 2015), faithful to the reference code",
     add_arguments=_gcff_arguments,
@@ -199,7 +214,7 @@ def _reform_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-@register_detector(
+@cli_detector(
     "reform",
     help="REFORM (Hedayati et al. 2020) from a model trained with `reform-sim train` (--model)",
     add_arguments=_reform_arguments,
@@ -212,14 +227,35 @@ def _reform(args: argparse.Namespace) -> Any:
     return load_model(args.model)
 
 
+def detector_name(text: str) -> str:
+    """``--detector``'s type: a registry name or a plugin's ``package.module:factory`` path.
+
+    A path is only read here (imported when the detector is made); a name that is neither
+    built in nor installed is an argparse error listing the known ones.
+    """
+    if ":" in text or text in DETECTORS:
+        return text
+    from reform.detectors import detector_names
+
+    known = detector_names()
+    if text not in known:
+        raise argparse.ArgumentTypeError(
+            f"invalid choice: {text!r} (choose from {', '.join(known)}, or give "
+            "package.module:factory)"
+        )
+    return text
+
+
 def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--detector NAME`` plus the options of every registered detector."""
+    """``--detector NAME`` plus the options of every built-in detector."""
     choices = "; ".join(f"{spec.name}: {spec.help}" for spec in DETECTORS.values())
     parser.add_argument(
         "--detector",
-        choices=tuple(DETECTORS),
+        type=detector_name,
         metavar="NAME",
-        help=choices + " (--model alone implies reform)",
+        help=f"{choices}; or the name an installed package gives in the entry-point group "
+        f"{_ENTRY_POINT_GROUP}; or package.module:factory, a detector of your own (the "
+        "current folder is searched too) (--model alone implies reform)",
     )
     options: dict[str, tuple[tuple[str, str], ...]] = {}
     for spec in DETECTORS.values():
@@ -232,20 +268,33 @@ def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
     parser.set_defaults(detector_options=options)
 
 
+def make_plugin(name: str) -> Any:
+    """The registry's detector ``name`` (a plugin: no options), the current folder searched
+    for a ``module:factory`` path after the installed packages, as ``python -m`` would.
+
+    Raises:
+        reform.detectors.DetectorError: one line, if it cannot be found or made.
+    """
+    from reform.detectors import make_detector
+
+    if ":" in name and os.getcwd() not in sys.path and "" not in sys.path:
+        sys.path.append(os.getcwd())
+    return make_detector(name)
+
+
 def check_detector(args: argparse.Namespace) -> DetectorSpec:
     """The detector the options name (``--model`` alone: reform), its options checked: called
-    up front, before the data are read.
+    up front, before the data are read. A detector without a builder here is made now (a
+    plugin that does not import or has no ``predict`` fails before any data are read).
 
     Raises:
         CliError: no detector named, or an option of another detector given.
+        reform.detectors.DetectorError: a plugin that cannot be made.
     """
     if args.detector is None:
         if getattr(args, "model", None) is None:
             raise CliError("give --detector NAME, or --model MODEL for a trained REFORM model")
         args.detector = "reform"
-    spec = DETECTORS.get(args.detector)
-    if spec is None:
-        raise CliError(f"--detector must be one of {sorted(DETECTORS)}, got {args.detector!r}")
     for name, flags in getattr(args, "detector_options", {}).items():
         if name == args.detector:
             continue
@@ -255,7 +304,11 @@ def check_detector(args: argparse.Namespace) -> DetectorSpec:
             raise CliError(
                 f"{', '.join(given)} {what} of --detector {name}, not of --detector {args.detector}"
             )
-    return spec
+    spec = DETECTORS.get(args.detector)
+    if spec is not None:
+        return spec
+    detector = make_plugin(args.detector)
+    return DetectorSpec(name=args.detector, help="plugin", build=lambda _args: detector)
 
 
 def build_detector(args: argparse.Namespace) -> Any:

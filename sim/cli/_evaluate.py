@@ -7,7 +7,7 @@ import json
 import sys
 
 from sim.cli._common import CliError, check_output, check_recording, load_data
-from sim.cli._detection import add_detection_arguments, record_detection, run_detector
+from sim.cli._detection import add_detection_arguments, detect_frames, record_detection
 from sim.cli._detectors import check_detector, detector_params
 
 _DESCRIPTION = """\
@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from reform.metrics import evaluate
     from reform.report import format_report
 
-    check_detector(args)
+    spec = check_detector(args)
     check_output("--json", args.json)
     check_output("--markdown", args.markdown)
     check_recording(args)
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     frames = dataset.annotated()
     if not frames:
         raise CliError(f"{args.data}: the dataset has no annotated frames, nothing to evaluate")
-    detector, predictions = run_detector(args, frames)
+    detector, predictions = detect_frames(args, spec, frames)
     evaluation = evaluate(frames, predictions)
     result = evaluation.to_json(
         detector=args.detector,
