@@ -6,6 +6,17 @@ from reform.datasets.babble import load_babble
 from reform.datasets.dante import load_dante, load_salsa
 from reform.datasets.detect import FORMATS, LENGTH_UNITS, detect_format, load_dataset
 from reform.datasets.errors import DataFormatError
+from reform.datasets.fetch import (
+    DatasetFile,
+    FetchError,
+    PublicDataset,
+    cache_dir,
+    fetch,
+    is_fetched,
+    local_datasets_dir,
+    registry,
+    resolve,
+)
 from reform.datasets.gcff_mat import load_gcff
 from reform.datasets.parquet import read_parquet, write_parquet
 from reform.datasets.summary import summarise
@@ -14,13 +25,22 @@ __all__ = [
     "FORMATS",
     "LENGTH_UNITS",
     "DataFormatError",
+    "DatasetFile",
+    "FetchError",
+    "PublicDataset",
+    "cache_dir",
     "detect_format",
+    "fetch",
+    "is_fetched",
     "load_babble",
     "load_dante",
     "load_dataset",
     "load_gcff",
     "load_salsa",
+    "local_datasets_dir",
     "read_parquet",
+    "registry",
+    "resolve",
     "summarise",
     "write_parquet",
 ]

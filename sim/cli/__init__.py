@@ -14,6 +14,7 @@ from sim.cli import (
     _calibrate,
     _characterize,
     _data,
+    _datasets,
     _demo,
     _detect,
     _evaluate,
@@ -33,6 +34,7 @@ from sim.cli._interrupt import sigint_to_main_only
 _COMMANDS = (
     _demo,
     _data,
+    _datasets,
     _evaluate,
     _detect,
     _experiment,
