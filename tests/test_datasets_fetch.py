@@ -714,6 +714,15 @@ def test_cli_fetch_errors(argv, message, http_mirror, cache, registry_file, caps
     _assert_nothing_looks_complete(cache, "tiny", registry_file)
 
 
+def test_cli_data_takes_a_fetched_name(http_mirror, cache, registry_file, capsys, monkeypatch):
+    """``--data NAME``: an unfetched public dataset is named with the command that fetches it."""
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(cache / "no-datasets"))
+    error = cli_error(["evaluate", "--data", "salsa", "--detector", "gcff"], capsys)
+    assert error.endswith(
+        f"dataset 'salsa' is not fetched (cache {cache}); run `reform-sim datasets fetch salsa`"
+    )
+
+
 def test_datasets_help_imports_nothing_heavy():
     code = (
         "import sys\n"
@@ -758,3 +767,16 @@ def test_a_fetched_dataset_loads_as_the_shared_copy(name, shared_datasets, tmp_p
     assert len(server.requests) == len(dataset.files)
     assert resolve(name) == folder == cache / name
     assert load_dataset(folder).frames == load_dataset(shared_datasets / name).frames
+
+
+def test_cli_fetch_then_data_name(shared_datasets, tmp_path, cache, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "no-datasets"))
+    mirror = _real_mirror(shared_datasets, tmp_path / "mirror", ("synth",))
+    assert main(["datasets", "fetch", "synth", "--mirror", mirror.as_uri()]) == 0
+    assert capsys.readouterr().out == f"synth: {cache / 'synth'}\n"
+    argv = ["evaluate", "--data", "synth", "--detector", "majority", "--json", "synth.json"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    result = json.loads((tmp_path / "synth.json").read_text())
+    assert result["dataset"] == load_dataset(shared_datasets / "synth").name

@@ -126,16 +126,23 @@ def check_jobs(args: argparse.Namespace) -> None:
 
 
 def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data") -> None:
-    """``--data PATH [--format F] [--units cm|m]``: where a dataset is and how to read it.
+    """``--data PATH|NAME [--format F] [--units cm|m]``: where a dataset is and how to read it.
+
+    The dataset is a path, or a name that :func:`load_data` resolves (`reform.datasets.resolve`):
+    a fetched public dataset (``reform-sim datasets list``) or a folder among the real datasets.
 
     Args:
         parser: the subcommand's parser.
         flag: ``"--data"`` (a required option) or a name without dashes (a positional).
     """
+    text = (
+        "dataset file or folder, or a dataset's name: a fetched public dataset "
+        f"(reform-sim datasets list) or a folder in ${DATASETS_VARIABLE} (else {DEFAULT_DATASETS})"
+    )
     if flag.startswith("-"):
-        parser.add_argument(flag, required=True, metavar="PATH", help="dataset file or folder")
+        parser.add_argument(flag, required=True, metavar="PATH|NAME", help=text)
     else:
-        parser.add_argument(flag, metavar="PATH", help="dataset file or folder")
+        parser.add_argument(flag, metavar="PATH|NAME", help=text)
     parser.add_argument(
         "--format",
         choices=FORMATS,
@@ -173,11 +180,12 @@ def check_train_fraction(args: argparse.Namespace) -> None:
 
 
 def load_data(args: argparse.Namespace, *, attribute: str = "data"):
-    """Loads the dataset named by :func:`add_data_arguments`."""
-    from reform.datasets import load_dataset
+    """Loads the dataset named by :func:`add_data_arguments`: a path, or a dataset's name
+    (`reform.datasets.resolve`; an unfetched public dataset's error says how to fetch it)."""
+    from reform.datasets import load_dataset, resolve
 
     return load_dataset(
-        getattr(args, attribute),
+        resolve(getattr(args, attribute)),
         format=args.format,
         units=args.units,
         allow_incomplete=args.allow_incomplete,
