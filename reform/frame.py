@@ -45,7 +45,7 @@ def wrap_angle(theta: npt.ArrayLike) -> np.ndarray:
 
 
 def _readonly(array: np.ndarray) -> np.ndarray:
-    array = np.array(array, copy=True)
+    array = np.array(array, copy=True, order="C")  # C order: loadmat gives Fortran order
     array.flags.writeable = False
     return array
 

@@ -55,7 +55,7 @@ Example:
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from decimal import Decimal
 from fractions import Fraction
@@ -83,6 +83,7 @@ __all__ = [
     "VISIBILITY_COSINE",
     "Expansion",
     "Gcff",
+    "GcffBySequence",
     "GridSearch",
     "alpha_expansion",
     "energy",
@@ -721,3 +722,82 @@ class Gcff(BaseEstimator):
 
     def __sklearn_is_fitted__(self) -> bool:
         return not self.tune or hasattr(self, "stride_")
+
+
+class GcffBySequence(BaseEstimator):
+    """GCFF with each sequence's own settings: the field's per-dataset protocol.
+
+    The GCFF authors tuned ``stride`` and ``mdl`` for every dataset and shipped them beside it
+    (``settings_gc.mat``, one per sequence in CoffeeBreak and GDet). This detector runs
+    :class:`Gcff` on every frame with the settings of the frame's ``sequence``.
+
+    Args:
+        settings: sequence name -> ``(stride, mdl)`` in metres and square metres.
+        orientation: as :class:`Gcff`.
+    """
+
+    def __init__(
+        self, *, settings: Mapping[str, tuple[float, float]], orientation: str = "body"
+    ) -> None:
+        self.settings = settings
+        self.orientation = orientation
+
+    @classmethod
+    def from_dataset(cls, dataset: Any, **kwargs: Any) -> GcffBySequence:
+        """The settings a loaded GCFF dataset ships (``metadata["settings_gc_by_sequence"]``).
+
+        Raises:
+            ValueError: a sequence of the dataset ships no settings (naming it).
+        """
+        shipped = dict(dataset.metadata.get("settings_gc_by_sequence") or {})
+        settings = {}
+        for sequence in dataset.sequences():
+            entry = shipped.get(sequence)
+            if not entry or "stride_m" not in entry or "mdl_m2" not in entry:
+                raise ValueError(
+                    f"dataset {dataset.name!r}: sequence {sequence!r} ships no GCFF settings "
+                    "(settings_gc.mat with stride and mdl)"
+                )
+            settings[sequence] = (float(entry["stride_m"]), float(entry["mdl_m2"]))
+        return cls(settings=settings, **kwargs)
+
+    def fit(self, frames: Sequence[Frame]) -> GcffBySequence:
+        """Nothing to learn: validates the settings."""
+        self._detectors()
+        check_frames(frames)
+        return self
+
+    def _detectors(self) -> dict[str, Gcff]:
+        detectors = {}
+        for sequence, (stride, mdl) in dict(self.settings).items():
+            detector = Gcff(stride=stride, mdl=mdl, orientation=self.orientation)
+            detector._validate()
+            detectors[str(sequence)] = detector
+        return detectors
+
+    def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
+        """One full partition per frame, each with its sequence's settings.
+
+        Raises:
+            ValueError: a frame's sequence has no settings.
+        """
+        frames = check_frames(frames)
+        detectors = self._detectors()
+        out: list[tuple[Group, ...] | None] = [None] * len(frames)
+        by_sequence: dict[str, list[int]] = {}
+        for k, frame in enumerate(frames):
+            by_sequence.setdefault(frame.sequence, []).append(k)
+        for sequence, rows in by_sequence.items():
+            if sequence not in detectors:
+                raise ValueError(
+                    f"frames[{rows[0]}] is of sequence {sequence!r}, which has no GCFF settings "
+                    f"(settings for {sorted(detectors)})"
+                )
+            for k, partition in zip(
+                rows, detectors[sequence].predict([frames[k] for k in rows]), strict=True
+            ):
+                out[k] = partition
+        return out  # type: ignore[return-value]
+
+    def __sklearn_is_fitted__(self) -> bool:
+        return True

@@ -11,6 +11,7 @@ import sys
 from collections.abc import Sequence
 
 from sim.cli import (
+    _benchmark,
     _calibrate,
     _characterize,
     _data,
@@ -37,6 +38,7 @@ _COMMANDS = (
     _datasets,
     _evaluate,
     _detect,
+    _benchmark,
     _experiment,
     _train,
     _characterize,

@@ -1,0 +1,456 @@
+"""The field's benchmark: every detector on every dataset, scored as the field reports it.
+
+One cell per (detector, dataset): the detector predicts every annotated frame the dataset holds
+(a dataset named in ``test_split`` only its test part of :func:`reform.time_split`, the frames
+``reform-sim train --frames train`` leaves out), and the frames are scored with the field's
+protocol (:func:`reform.evaluate`: precision and recall means over frames, F1 of the means, at
+T = 2/3 and T = 1), for the dataset and for each of its sequences. The mean over datasets is the
+plain mean of the per-dataset figures, over the datasets a detector was scored on.
+
+Detectors are named by the specs :func:`reform.detectors.make_detector` takes (a registered
+name, an installed plugin's name, ``package.module:factory``), plus two of this module's own:
+
+* ``gcff``: GCFF with one setting for every dataset, the REFORM paper's (stride 0.7 m,
+  mdl 30,000 cm²);
+* ``gcff-own``: GCFF with each dataset's own shipped settings (``settings_gc.mat`` per
+  sequence), the protocol of the GCFF paper; a dataset that ships none is skipped, and says so;
+
+and REFORM models given as files (``reform-sim train``'s ``.skops``).
+
+Cells are independent units of work: they run in this process (``jobs=1``), on local worker
+processes (joblib's loky), or as Ray tasks (``backend="ray"``); the results are the same, and
+in the same order, whichever runs them. This module imports no Rerun and no MuJoCo; the report
+(Markdown, JSON, plot, ``.rrd``) is :mod:`sim.benchmark_report`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
+from reform.frame import Dataset, Frame, Group
+from reform.splits import DEFAULT_TRAIN_FRACTION
+
+__all__ = [
+    "BACKENDS",
+    "GCFF_ONE",
+    "GCFF_OWN",
+    "PUBLISHED",
+    "THRESHOLDS",
+    "Benchmark",
+    "Cell",
+    "DatasetSpec",
+    "DetectorSpec",
+    "dataset_spec",
+    "detector_spec",
+    "run_benchmark",
+]
+
+BACKENDS = ("local", "ray")
+THRESHOLDS = ("2/3", "1")
+GCFF_ONE = "gcff"
+GCFF_OWN = "gcff-own"
+REFORM_PREFIX = "reform:"  # a DetectorSpec.spec naming a model file
+
+# Published figures, (P, R, F1) in % at T = 2/3, keyed by (dataset, what was run); each with
+# its source. The REFORM paper (Hedayati et al. 2020, definitions.md "The paper's numbers"):
+# SALSA's test split, trained on ~60 % of SALSA; Babble, trained on SALSA only.
+PUBLISHED: dict[tuple[str, str], tuple[float, float, float, str]] = {
+    ("salsa", "gcff"): (63.8, 64.2, 64.2, "REFORM paper, GCFF at stride 0.7, MDL 30000"),
+    ("salsa", "weighted-knn"): (78.1, 82.7, 80.3, "REFORM paper"),
+    ("salsa", "bagged-trees"): (78.3, 84.3, 81.2, "REFORM paper"),
+    ("salsa", "logistic-regression"): (71.3, 78.6, 74.8, "REFORM paper"),
+    ("babble", "gcff"): (65.0, 75.0, 69.6, "REFORM paper, GCFF at stride 0.7, MDL 30000"),
+    ("babble", "weighted-knn"): (74.3, 87.5, 80.4, "REFORM paper"),
+    ("babble", "bagged-trees"): (75.6, 90.0, 82.1, "REFORM paper"),
+    ("babble", "logistic-regression"): (65.6, 80.0, 72.1, "REFORM paper"),
+}
+# The original GCFF code with each sequence's own settings, run under GNU Octave (F1 in % at
+# T = 2/3 and T = 1; the READMEs of the GCFF packagings in the shared datasets folder).
+ORIGINAL_GCFF_OWN: dict[tuple[str, str], tuple[float, float, float, float, str]] = {
+    ("coffeebreak", "Seq1"): (74.9, 79.3, 77.0, 45.1, "original GCFF code, coffeebreak README"),
+    ("coffeebreak", "Seq2"): (91.3, 97.9, 94.4, 73.1, "original GCFF code, coffeebreak README"),
+    ("synth", "synth"): (96.7, 98.0, 97.3, 90.9, "original GCFF code, synth README"),
+}
+
+
+@dataclass(frozen=True)
+class DatasetSpec:
+    """A dataset to score on: how to load it, and which of its frames count.
+
+    Attributes:
+        name: the name in the tables (the registry's name, else the folder's).
+        path: the local file or folder.
+        format: the format, or None to detect it.
+        units: the file's length unit, or None for the format's default.
+        metres_per_pixel: the scale of ``units="px"``.
+        split: ``"all"`` (every annotated frame) or ``"test"`` (the test part of
+            :func:`reform.time_split`, for a dataset that detectors were trained on).
+        train_fraction: the split's training share.
+    """
+
+    name: str
+    path: str
+    format: str | None = None
+    units: str | None = None
+    metres_per_pixel: float | None = None
+    split: str = "all"
+    train_fraction: float = DEFAULT_TRAIN_FRACTION
+
+    def __post_init__(self) -> None:
+        if self.split not in ("all", "test"):
+            raise ValueError(f"split must be 'all' or 'test', got {self.split!r}")
+
+    @property
+    def label(self) -> str:
+        return f"{self.name} (test split)" if self.split == "test" else self.name
+
+    def load(self) -> Dataset:
+        from reform.datasets import load_dataset
+
+        return load_dataset(
+            self.path,
+            format=self.format,
+            units=self.units,
+            metres_per_pixel=self.metres_per_pixel,
+        )
+
+    def frames(self, dataset: Dataset) -> tuple[Frame, ...]:
+        """The annotated frames scored: all of them, or the test part of the time split."""
+        if self.split == "test":
+            from reform.splits import time_split
+
+            _, test = time_split(dataset.frames, self.train_fraction)
+            return tuple(f for f in test if f.groups is not None)
+        return dataset.annotated()
+
+
+@dataclass(frozen=True)
+class DetectorSpec:
+    """A detector to run: a row of the table.
+
+    Attributes:
+        label: the row's name.
+        spec: :data:`GCFF_ONE`, :data:`GCFF_OWN`, ``"reform:<model file>"``, or anything
+            :func:`reform.detectors.make_detector` builds (a registered or installed name, or
+            ``package.module:factory``).
+        kind: what was run, for the published figures: ``"gcff"``, a REFORM classifier's name
+            (``"bagged-trees"``), or the spec.
+    """
+
+    label: str
+    spec: str
+    kind: str = ""
+
+    @property
+    def key(self) -> str:
+        """A short name without spaces or slashes: the detector's entity in the recordings."""
+        if self.spec.startswith(REFORM_PREFIX):
+            stem = Path(self.spec[len(REFORM_PREFIX) :]).stem
+            text = f"reform-{stem}"
+        else:
+            text = self.spec
+        return (
+            "".join(c if c.isalnum() or c in "-_" else "-" for c in text).strip("-") or "detector"
+        )
+
+    def build(self, dataset: Dataset) -> tuple[Any, str | None]:
+        """``(detector, None)``, or ``(None, reason)`` when it does not apply to ``dataset``."""
+        if self.spec == GCFF_ONE:
+            from reform.gcff import Gcff
+
+            return Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2), None
+        if self.spec == GCFF_OWN:
+            from reform.gcff import GcffBySequence
+
+            try:
+                return GcffBySequence.from_dataset(dataset), None
+            except ValueError as exc:
+                return None, str(exc)
+        if self.spec.startswith(REFORM_PREFIX):
+            from reform.persistence import load_model
+
+            return load_model(self.spec[len(REFORM_PREFIX) :]), None
+        from reform.detectors import make_detector
+
+        return make_detector(self.spec), None
+
+
+def detector_spec(spec: str) -> DetectorSpec:
+    """The row for a ``--detector`` value (``gcff``, ``gcff-own``, ``majority``, a plugin)."""
+    if spec == GCFF_ONE:
+        label = f"GCFF, one setting ({PAPER_STRIDE_M:g} m, {PAPER_MDL_M2 * 1e4:,.0f} cm²)"
+        return DetectorSpec(label=label, spec=spec, kind="gcff")
+    if spec == GCFF_OWN:
+        return DetectorSpec(label="GCFF, each dataset's own settings", spec=spec, kind=GCFF_OWN)
+    return DetectorSpec(label=spec, spec=spec, kind=spec)
+
+
+def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:
+    """The row for a REFORM model file: labelled with its classifier and file name."""
+    from reform.persistence import model_info
+
+    info = model_info(path)
+    kind = _classifier_kind(str(info.get("classifier_repr", "")))
+    name = Path(path).stem
+    label = f"REFORM {kind}" if kind == name else f"REFORM {kind or 'model'} ({name})"
+    return DetectorSpec(label=label, spec=f"{REFORM_PREFIX}{path}", kind=kind)
+
+
+_CLASSIFIER_KINDS = {
+    "KNeighborsClassifier": "weighted-knn",
+    "BaggingClassifier": "bagged-trees",
+    "LogisticRegression": "logistic-regression",
+}
+
+
+def _classifier_kind(representation: str) -> str:
+    for marker, kind in _CLASSIFIER_KINDS.items():
+        if marker in representation:
+            return kind
+    return ""
+
+
+def dataset_spec(
+    data: str,
+    *,
+    test_split: Sequence[str] = ("salsa",),
+    train_fraction: float = DEFAULT_TRAIN_FRACTION,
+    format: str | None = None,  # noqa: A002
+    units: str | None = None,
+    metres_per_pixel: float | None = None,
+) -> DatasetSpec:
+    """The dataset a ``--data`` value names: a path, or a fetched or local dataset's name."""
+    from reform.datasets import resolve
+
+    path = resolve(data)
+    name = Path(data).name if Path(data).exists() else data
+    return DatasetSpec(
+        name=name,
+        path=str(path),
+        format=format,
+        units=units,
+        metres_per_pixel=metres_per_pixel,
+        split="test" if name in test_split else "all",
+        train_fraction=train_fraction,
+    )
+
+
+@dataclass(frozen=True)
+class Scores:
+    """Precision, recall and F1 (fractions) at each threshold, and the frames scored."""
+
+    frames: int
+    at: Mapping[str, tuple[float, float, float]]
+
+    @classmethod
+    def of(cls, evaluation: Any) -> Scores:
+        at = {}
+        for t in THRESHOLDS:
+            s = evaluation.at(t)
+            at[t] = (float(s.precision), float(s.recall), float(s.f1))
+        return cls(frames=int(evaluation.n_frames), at=at)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "frames": self.frames,
+            **{
+                f"T={t}": {"precision": p, "recall": r, "f1": f} for t, (p, r, f) in self.at.items()
+            },
+        }
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One detector on one dataset.
+
+    Attributes:
+        dataset: the dataset's label; ``detector`` the detector's.
+        scores: over the dataset's scored frames (None when skipped).
+        by_sequence: sequence -> scores.
+        skipped: why the detector did not run on this dataset, or None.
+        seconds: the wall time of the prediction.
+        predictions: one partition per scored frame (for the recording).
+    """
+
+    dataset: str
+    detector: str
+    scores: Scores | None
+    by_sequence: Mapping[str, Scores] = field(default_factory=dict)
+    skipped: str | None = None
+    seconds: float = 0.0
+    predictions: tuple[tuple[Group, ...], ...] = ()
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """Every cell, and the specs that made them."""
+
+    datasets: tuple[DatasetSpec, ...]
+    detectors: tuple[DetectorSpec, ...]
+    cells: tuple[Cell, ...]
+    seconds: float
+
+    def cell(self, dataset: DatasetSpec, detector: DetectorSpec) -> Cell:
+        for cell in self.cells:
+            if cell.dataset == dataset.label and cell.detector == detector.label:
+                return cell
+        raise KeyError((dataset.label, detector.label))
+
+    def means(self) -> dict[str, dict[str, Any]]:
+        """Detector label -> mean P, R, F1 over the datasets it was scored on, per threshold."""
+        out: dict[str, dict[str, Any]] = {}
+        for detector in self.detectors:
+            scored = [c.scores for c in self.cells if c.detector == detector.label and c.scores]
+            entry: dict[str, Any] = {"datasets": len(scored)}
+            for t in THRESHOLDS:
+                values = [s.at[t] for s in scored]
+                entry[t] = (
+                    tuple(sum(v[k] for v in values) / len(values) for k in range(3))
+                    if values
+                    else None
+                )
+            out[detector.label] = entry
+        return out
+
+    def published(self, dataset: DatasetSpec, detector: DetectorSpec) -> tuple | None:
+        """The published (P, R, F1, source) for this row, where the field has one."""
+        if detector.spec == GCFF_ONE or detector.spec.startswith(REFORM_PREFIX):
+            return PUBLISHED.get((dataset.name, detector.kind))
+        return None
+
+
+def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
+    """One cell: load, build, predict (checked), evaluate."""
+    from reform.detectors import run_detector
+    from reform.metrics import evaluate
+
+    dataset = dataset_spec.load()
+    frames = dataset_spec.frames(dataset)
+    label = dataset_spec.label
+    if not frames:
+        return Cell(label, detector_spec.label, None, skipped="no annotated frames to score")
+    detector, reason = detector_spec.build(dataset)
+    if detector is None:
+        return Cell(label, detector_spec.label, None, skipped=reason)
+    start = time.perf_counter()
+    predictions = run_detector(detector_spec.label, detector, frames)
+    seconds = time.perf_counter() - start
+    evaluation = evaluate(frames, predictions)
+    by_sequence = {
+        sequence: Scores.of(evaluation.select(sequence=sequence))
+        for sequence in dict.fromkeys(f.sequence for f in frames)
+    }
+    return Cell(
+        dataset=label,
+        detector=detector_spec.label,
+        scores=Scores.of(evaluation),
+        by_sequence=by_sequence,
+        seconds=seconds,
+        predictions=tuple(tuple(tuple(int(m) for m in g) for g in p) for p in predictions),
+    )
+
+
+def _local(units: list[tuple[DatasetSpec, DetectorSpec]], jobs: int) -> Iterator[tuple[int, Cell]]:
+    if jobs == 1:
+        for k, (d, m) in enumerate(units):
+            yield k, _score(d, m)
+        return
+    from joblib import Parallel, delayed
+
+    parallel = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")
+    yield from parallel(delayed(_indexed)(k, d, m) for k, (d, m) in enumerate(units))
+
+
+def _indexed(k: int, dataset: DatasetSpec, detector: DetectorSpec) -> tuple[int, Cell]:
+    return k, _score(dataset, detector)
+
+
+def _ray(
+    units: list[tuple[DatasetSpec, DetectorSpec]], address: str | None
+) -> Iterator[tuple[int, Cell]]:
+    from sim.generate import _import_ray
+
+    ray = _import_ray()
+    owned = not ray.is_initialized()
+    if owned:
+        ray.init(address=address, log_to_driver=False, include_dashboard=False)
+    try:
+        task = ray.remote(num_cpus=1, max_retries=2)(_indexed)
+        pending = [task.remote(k, d, m) for k, (d, m) in enumerate(units)]
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            yield ray.get(done[0])
+    finally:
+        if owned:
+            ray.shutdown()
+
+
+def run_benchmark(
+    datasets: Sequence[DatasetSpec],
+    detectors: Sequence[DetectorSpec],
+    *,
+    jobs: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    progress: Callable[[int, int, Cell], None] | None = None,
+) -> Benchmark:
+    """Runs every detector on every dataset.
+
+    Args:
+        datasets: the datasets, in table order.
+        detectors: the detectors, in table order; labels must be unique.
+        jobs: local worker processes (``backend="local"``).
+        backend: ``"local"`` or ``"ray"``.
+        address: the Ray cluster's address (``backend="ray"``); None starts a local instance.
+        progress: called as ``progress(done, total, cell)`` as each cell finishes.
+
+    Raises:
+        ValueError: no dataset or detector, a repeated label, an unknown backend, jobs < 1.
+        reform.detectors.DetectorError: a detector raised, or returned something that is not a
+            partition of a frame's people (naming the detector and the frame).
+        DataFormatError: a dataset file is malformed.
+    """
+    datasets, detectors = tuple(datasets), tuple(detectors)
+    if not datasets:
+        raise ValueError("datasets must name at least one dataset, got none")
+    if not detectors:
+        raise ValueError("detectors must name at least one detector, got none")
+    for what, labels in (
+        ("datasets", [d.label for d in datasets]),
+        ("detectors", [d.label for d in detectors]),
+    ):
+        twice = sorted({x for x in labels if labels.count(x) > 1})
+        if twice:
+            raise ValueError(f"{what} must be distinct, got {twice} twice")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
+    units = [(d, m) for d in datasets for m in detectors]
+    start = time.perf_counter()
+    results: list[Cell | None] = [None] * len(units)
+    stream = _ray(units, address) if backend == "ray" else _local(units, jobs)
+    for done, (k, cell) in enumerate(stream, start=1):
+        results[k] = cell
+        if progress is not None:
+            progress(done, len(units), cell)
+    return Benchmark(
+        datasets=datasets,
+        detectors=detectors,
+        cells=tuple(c for c in results if c is not None),
+        seconds=time.perf_counter() - start,
+    )
+
+
+def percent(value: float | None) -> str:
+    """A fraction as a percentage with one decimal, or a dash."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "–"
+    return f"{100 * value:.1f}"

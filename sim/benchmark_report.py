@@ -1,0 +1,310 @@
+"""The benchmark's report: a Markdown table as the field reports it, JSON, a plot, recordings.
+
+Imports the run (:mod:`sim.benchmark`); the run never imports its report.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.atomic import atomic_open, atomic_path
+from sim.benchmark import (
+    ORIGINAL_GCFF_OWN,
+    THRESHOLDS,
+    Benchmark,
+    Cell,
+    percent,
+)
+
+__all__ = [
+    "JSON_NAME",
+    "MARKDOWN_NAME",
+    "PLOT_NAME",
+    "RECORDINGS",
+    "plot",
+    "record",
+    "to_json",
+    "to_markdown",
+    "write_report",
+]
+
+MARKDOWN_NAME = "benchmark.md"
+JSON_NAME = "benchmark.json"
+PLOT_NAME = "benchmark.png"
+RECORDINGS = "recordings"  # the folder of the per-dataset .rrd files
+PLOT_DPI = 120
+JSON_SCHEMA_VERSION = 1
+
+
+def _row(values: tuple[float, float, float] | None) -> list[str]:
+    return [percent(v) for v in values] if values else ["–", "–", "–"]
+
+
+def _published_text(entry: tuple | None) -> str:
+    if entry is None:
+        return ""
+    p, r, f, source = entry
+    return f"{p:.1f} / {r:.1f} / {f:.1f} ({source})"
+
+
+def _numeric(text: str) -> bool:
+    return text in ("", "–") or text.replace(".", "", 1).isdigit()
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |"]
+    numeric = [all(_numeric(row[k]) for row in rows if k < len(row)) for k in range(len(header))]
+    out.append("|" + "|".join("---:" if n else "---" for n in numeric) + "|")
+    out.extend("| " + " | ".join(row) + " |" for row in rows)
+    return out
+
+
+def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = None) -> str:
+    """The tables: per dataset P/R/F1 at T = 2/3 and 1, the mean over datasets, by sequence."""
+    lines = [
+        "# Benchmark: F-formation detectors on the field's datasets",
+        "",
+        f"Command: `{command}`",
+        "",
+        "Protocol: the field's (GCFF's `ff_evalgroups`): per frame, singletons dropped, a true "
+        "group matched by a detected group with |G∩D| / max(|G|, |D|) >= T; P and R are means "
+        "over frames, F1 is the F1 of those means. Ground-truth members absent from a frame's "
+        "features count as missed. Figures in %.",
+        "",
+    ]
+    splits = [d for d in benchmark.datasets if d.split == "test"]
+    if splits:
+        names = ", ".join(d.name for d in splits)
+        lines += [
+            f"{names}: only the test part of `reform.time_split` (train fraction "
+            f"{splits[0].train_fraction:g}) is scored, the frames `reform-sim train --frames "
+            "train` leaves out.",
+            "",
+        ]
+    header = ["dataset", "frames", "detector", "P 2/3", "R 2/3", "F1 2/3", "P 1", "R 1", "F1 1"]
+    header.append("published P / R / F1 at 2/3")
+    rows = []
+    for dataset in benchmark.datasets:
+        for detector in benchmark.detectors:
+            cell = benchmark.cell(dataset, detector)
+            if cell.scores is None:
+                rows.append([dataset.label, "", detector.label, f"skipped: {cell.skipped}"])
+                rows[-1] += [""] * (len(header) - len(rows[-1]))
+                continue
+            rows.append(
+                [dataset.label, str(cell.scores.frames), detector.label]
+                + _row(cell.scores.at["2/3"])
+                + _row(cell.scores.at["1"])
+                + [_published_text(benchmark.published(dataset, detector))]
+            )
+    lines += ["## Per dataset", "", *_table(header, rows), ""]
+
+    mean_rows = []
+    for detector in benchmark.detectors:
+        entry = benchmark.means()[detector.label]
+        mean_rows.append(
+            [detector.label, str(entry["datasets"])] + _row(entry["2/3"]) + _row(entry["1"])
+        )
+    lines += [
+        "## Mean over datasets",
+        "",
+        "The plain mean of the per-dataset figures, over the datasets each detector ran on.",
+        "",
+        *_table(
+            ["detector", "datasets", "P 2/3", "R 2/3", "F1 2/3", "P 1", "R 1", "F1 1"], mean_rows
+        ),
+        "",
+    ]
+
+    sequence_rows = []
+    for dataset in benchmark.datasets:
+        for detector in benchmark.detectors:
+            cell = benchmark.cell(dataset, detector)
+            if cell.scores is None or len(cell.by_sequence) < 2 and not _original(dataset, cell):
+                continue
+            for sequence, scores in cell.by_sequence.items():
+                original = ""
+                if detector.spec == "gcff-own":
+                    known = ORIGINAL_GCFF_OWN.get((dataset.name, sequence))
+                    if known:
+                        original = f"{known[2]:.1f} / {known[3]:.1f} ({known[4]})"
+                sequence_rows.append(
+                    [dataset.label, sequence, str(scores.frames), detector.label]
+                    + _row(scores.at["2/3"])
+                    + [percent(scores.at["1"][2]), original]
+                )
+    if sequence_rows:
+        lines += [
+            "## By sequence",
+            "",
+            "Datasets of several sequences, and the sequences whose original-code scores are "
+            "known (GCFF with the sequence's own settings, the original MATLAB code under GNU "
+            "Octave).",
+            "",
+            *_table(
+                [
+                    "dataset",
+                    "sequence",
+                    "frames",
+                    "detector",
+                    "P 2/3",
+                    "R 2/3",
+                    "F1 2/3",
+                    "F1 1",
+                    "original code F1 2/3 / F1 1",
+                ],
+                sequence_rows,
+            ),
+            "",
+        ]
+    if plot_name:
+        lines += [f"![F1 at T = 2/3 and T = 1 per dataset]({plot_name})", ""]
+    lines.append(f"Ran in {benchmark.seconds:.1f} s.")
+    return "\n".join(lines) + "\n"
+
+
+def _original(dataset: Any, cell: Cell) -> bool:
+    return any((dataset.name, s) in ORIGINAL_GCFF_OWN for s in cell.by_sequence)
+
+
+def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
+    """Every number of the report."""
+    cells = []
+    for dataset in benchmark.datasets:
+        for detector in benchmark.detectors:
+            cell = benchmark.cell(dataset, detector)
+            published = benchmark.published(dataset, detector)
+            cells.append(
+                {
+                    "dataset": dataset.label,
+                    "detector": detector.label,
+                    "skipped": cell.skipped,
+                    "scores": None if cell.scores is None else cell.scores.to_json(),
+                    "by_sequence": {s: v.to_json() for s, v in cell.by_sequence.items()},
+                    "seconds": round(cell.seconds, 3),
+                    "published_at_2/3": None
+                    if published is None
+                    else dict(zip(("precision", "recall", "f1", "source"), published, strict=True)),
+                }
+            )
+    means = {}
+    for label, entry in benchmark.means().items():
+        means[label] = {"datasets": entry["datasets"]}
+        for t in THRESHOLDS:
+            values = entry[t]
+            means[label][f"T={t}"] = (
+                None
+                if values is None
+                else dict(zip(("precision", "recall", "f1"), values, strict=True))
+            )
+    return {
+        "schema_version": JSON_SCHEMA_VERSION,
+        "command": command,
+        "datasets": [
+            {
+                "name": d.name,
+                "label": d.label,
+                "path": d.path,
+                "split": d.split,
+                "train_fraction": d.train_fraction if d.split == "test" else None,
+            }
+            for d in benchmark.datasets
+        ],
+        "detectors": [
+            {"label": m.label, "spec": m.spec, "kind": m.kind} for m in benchmark.detectors
+        ],
+        "cells": cells,
+        "mean_over_datasets": means,
+        "seconds": round(benchmark.seconds, 3),
+    }
+
+
+def plot(benchmark: Benchmark, path: str | Path) -> Path:
+    """F1 at T = 2/3 and T = 1, a bar per detector for every dataset, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    datasets = [d.label for d in benchmark.datasets]
+    n = len(benchmark.detectors)
+    width = 0.8 / n
+    x = np.arange(len(datasets))
+    figure, panels = plt.subplots(
+        1, len(THRESHOLDS), figsize=(max(6.0, 1.2 * len(datasets) + 2), 4.0), sharey=True
+    )
+    for panel, threshold in zip(np.atleast_1d(panels), THRESHOLDS, strict=True):
+        for k, detector in enumerate(benchmark.detectors):
+            values = []
+            for dataset in benchmark.datasets:
+                cell = benchmark.cell(dataset, detector)
+                values.append(np.nan if cell.scores is None else cell.scores.at[threshold][2])
+            panel.bar(x + (k - (n - 1) / 2) * width, values, width, label=detector.label)
+        panel.set_xticks(x, datasets, rotation=30, ha="right", fontsize=8)
+        panel.set_title(f"F1 at T = {threshold}")
+        panel.set_ylim(0.0, 1.0)
+        panel.grid(axis="y", alpha=0.3)
+    np.atleast_1d(panels)[0].set_ylabel("F1 (frame-mean protocol)")
+    np.atleast_1d(panels)[-1].legend(fontsize=7, loc="lower left")
+    figure.tight_layout()
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        figure.savefig(tmp, dpi=PLOT_DPI, format="png")
+    plt.close(figure)
+    return path
+
+
+def _slug(label: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_" else "-" for c in label).strip("-")
+
+
+def record(benchmark: Benchmark, folder: str | Path) -> dict[str, Path]:
+    """One ``.rrd`` per dataset: its scored frames, the ground truth and every detector's groups
+    with their mistakes, and the running scores. Returns dataset label -> path."""
+    from sim.recording import record_evaluation
+
+    folder = Path(folder)
+    written = {}
+    for dataset in benchmark.datasets:
+        predictions = {}
+        for detector in benchmark.detectors:
+            cell = benchmark.cell(dataset, detector)
+            if cell.scores is not None:
+                predictions[detector.key] = list(cell.predictions)
+        if not predictions:
+            continue
+        frames = dataset.frames(dataset.load())
+        path = folder / f"{_slug(dataset.name)}.rrd"
+        record_evaluation(
+            path, frames, predictions, name=f"benchmark-{dataset.name}", dataset=dataset.name
+        )
+        written[dataset.label] = path
+    return written
+
+
+def write_report(
+    benchmark: Benchmark, out_dir: str | Path, *, command: str, recordings: bool = True
+) -> Mapping[str, Path]:
+    """Writes ``benchmark.md``, ``benchmark.json``, ``benchmark.png`` and, with ``recordings``,
+    ``recordings/<dataset>.rrd`` into ``out_dir`` (atomically). Returns what was written."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, Path] = {"plot": plot(benchmark, out / PLOT_NAME)}
+    markdown = out / MARKDOWN_NAME
+    with atomic_open(markdown) as handle:
+        handle.write(to_markdown(benchmark, command=command, plot_name=PLOT_NAME))
+    written["markdown"] = markdown
+    data = out / JSON_NAME
+    with atomic_open(data) as handle:
+        json.dump(to_json(benchmark, command=command), handle, indent=1, allow_nan=False)
+        handle.write("\n")
+    written["json"] = data
+    if recordings:
+        for label, path in record(benchmark, out / RECORDINGS).items():
+            written[f"recording:{label}"] = path
+    return written

@@ -1,0 +1,211 @@
+"""``reform-sim benchmark``: every detector on every dataset, scored as the field reports it."""
+
+from __future__ import annotations
+
+import json
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+
+from reform.detectors import DetectorError
+from sim.benchmark import (
+    DatasetSpec,
+    detector_spec,
+    run_benchmark,
+)
+from sim.cli import main
+
+
+def _cell(items) -> np.ndarray:
+    array = np.empty((1, len(items)), dtype=object)
+    for k, item in enumerate(items):
+        array[0, k] = item
+    return array
+
+
+def _gcff(folder: Path, frames, *, settings=None) -> Path:
+    """A GCFF folder (centimetres) from ``[(people rows, groups), ...]``, every frame annotated."""
+    folder.mkdir(parents=True, exist_ok=True)
+    stamps = np.arange(1, len(frames) + 1, dtype=np.float64)[None, :]
+    features = _cell([np.asarray(people, dtype=np.float64) for people, _ in frames])
+    scipy.io.savemat(folder / "features.mat", {"features": features, "timestamp": stamps})
+    gt = _cell([_cell([np.array([g], dtype=np.float64) for g in groups]) for _, groups in frames])
+    scipy.io.savemat(folder / "groundtruth.mat", {"GTgroups": gt, "GTtimestamp": stamps})
+    if settings is not None:
+        scipy.io.savemat(folder / "settings_gc.mat", settings)
+    return folder
+
+
+# Two people 1 m apart facing each other, a third far away facing off: GCFF (stride 0.5 m)
+# finds the pair; the ground truth lists the pair, and once a member (42) the tracker lost.
+PAIR = [[1, 0.0, 0.0, 0.0], [2, 100.0, 0.0, np.pi], [3, 900.0, 900.0, 1.0]]
+FRAMES = [(PAIR, [[1, 2]]), (PAIR, [[1, 2, 42]])]
+
+
+@pytest.fixture
+def small(tmp_path) -> tuple[DatasetSpec, DatasetSpec]:
+    shipped = _gcff(tmp_path / "shipped", FRAMES, settings={"stride": 50.0, "mdl": 10000.0})
+    bare = _gcff(tmp_path / "bare", FRAMES)
+    return (
+        DatasetSpec(name="shipped", path=str(shipped)),
+        DatasetSpec(name="bare", path=str(bare)),
+    )
+
+
+def test_every_detector_on_every_dataset(small):
+    detectors = [detector_spec(s) for s in ("gcff", "gcff-own", "majority")]
+    result = run_benchmark(small, detectors)
+    shipped, bare = small
+    own = result.cell(shipped, detectors[1])
+    # Frame 1: {1, 2} found exactly; frame 2: {1, 2} against {1, 2, 42}: 2/3 matches, 1 misses.
+    assert own.scores.at["2/3"] == (1.0, 1.0, 1.0)
+    assert own.scores.at["1"] == (0.5, 0.5, 0.5)
+    skipped = result.cell(bare, detectors[1])
+    assert skipped.scores is None
+    assert skipped.skipped == (
+        "dataset 'bare': sequence 'bare' ships no GCFF settings (settings_gc.mat with stride and "
+        "mdl)"
+    )
+    majority = result.cell(bare, detectors[2])
+    assert majority.scores.at["2/3"] == (1.0, 0.0, 0.0)  # nothing detected: P = 1, R = 0
+    means = result.means()
+    assert means[detectors[1].label]["datasets"] == 1
+    assert means[detectors[2].label]["2/3"] == (1.0, 0.0, 0.0)
+
+
+def test_local_workers_give_the_same_cells(small):
+    detectors = [detector_spec(s) for s in ("gcff", "gcff-own", "majority")]
+    one = run_benchmark(small, detectors)
+    two = run_benchmark(small, detectors, jobs=2)
+    strip = [(c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in one.cells]
+    assert strip == [(c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in two.cells]
+
+
+def test_test_split_scores_only_the_frames_training_leaves_out(tmp_path):
+    folder = _gcff(tmp_path / "d", [(PAIR, [[1, 2]])] * 10)
+    spec = DatasetSpec(name="d", path=str(folder), split="test", train_fraction=0.6)
+    (cell,) = run_benchmark([spec], [detector_spec("majority")]).cells
+    assert cell.dataset == "d (test split)" and cell.scores.frames == 4
+
+
+def test_bad_arguments(small):
+    with pytest.raises(ValueError, match=r"detectors must be distinct, got \['majority'\] twice"):
+        run_benchmark(small, [detector_spec("majority")] * 2)
+    with pytest.raises(ValueError, match=r"backend must be one of \('local', 'ray'\)"):
+        run_benchmark(small, [detector_spec("majority")], backend="dask")
+    with pytest.raises(ValueError, match=r"split must be 'all' or 'test', got 'train'"):
+        DatasetSpec(name="x", path="x", split="train")
+
+
+def test_own_settings_reproduce_the_original_gcff_code(shared_datasets):
+    # The READMEs of coffeebreak/ and synth/: the original GCFF code with each sequence's own
+    # settings, frame-mean protocol, F1 at T = 2/3 and T = 1.
+    original = {
+        ("coffeebreak", "Seq1"): (0.770, 0.451),
+        ("coffeebreak", "Seq2"): (0.944, 0.731),
+        ("synth", "synth"): (0.973, 0.909),
+    }
+    specs = [DatasetSpec(name=n, path=str(shared_datasets / n)) for n in ("coffeebreak", "synth")]
+    result = run_benchmark(specs, [detector_spec("gcff-own")])
+    for (dataset, sequence), (f1, f1_exact) in original.items():
+        (cell,) = [c for c in result.cells if c.dataset == dataset]
+        scores = cell.by_sequence[sequence]
+        assert round(scores.at["2/3"][2], 3) == f1
+        assert round(scores.at["1"][2], 3) == f1_exact
+
+
+def _plugin(tmp_path: Path, monkeypatch, body: str) -> str:
+    (tmp_path / "bench_plugin.py").write_text(textwrap.dedent(body))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    sys.modules.pop("bench_plugin", None)
+    return "bench_plugin:make"
+
+
+def test_a_plugin_detector_runs_and_a_broken_one_is_named(small, tmp_path, monkeypatch):
+    spec = _plugin(
+        tmp_path,
+        monkeypatch,
+        """
+        class Everyone:
+            def predict(self, frames):
+                return [(tuple(int(i) for i in f.ids),) for f in frames]
+
+        class Forgetful:
+            def predict(self, frames):
+                return [(int(f.ids[0]),) for f in frames]  # the others are in no group
+
+        def make():
+            return Everyone()
+
+        def broken():
+            return Forgetful()
+        """,
+    )
+    result = run_benchmark(small[:1], [detector_spec(spec)])
+    # Everyone in one group: {1, 2, 3} against {1, 2}: 2/3 matches at T = 2/3.
+    assert result.cells[0].scores.at["2/3"][2] == 1.0
+    with pytest.raises(DetectorError, match=r"bench_plugin:broken.*frame"):
+        run_benchmark(small[:1], [detector_spec("bench_plugin:broken")])
+
+
+def test_cli_writes_the_tables_the_plot_and_the_recordings(small, tmp_path, capsys):
+    from rerun.chunk import RrdReader
+
+    shipped, bare = small
+    out = tmp_path / "out"
+    argv = ["benchmark", "--data", shipped.path, "--data", bare.path, "--out", str(out)]
+    assert main([*argv, "--no-progress"]) == 0
+    printed = capsys.readouterr().out
+    assert "## Per dataset" in printed and "## Mean over datasets" in printed
+    assert "skipped: dataset 'bare'" in printed
+    data = json.loads((out / "benchmark.json").read_text())
+    assert [d["name"] for d in data["datasets"]] == ["shipped", "bare"]
+    own = data["mean_over_datasets"]["GCFF, each dataset's own settings"]
+    assert own["datasets"] == 1 and own["T=2/3"]["f1"] == 1.0
+    assert (out / "benchmark.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    entities = {c.entity_path for c in RrdReader(out / "recordings" / "shipped.rrd").stream()}
+    assert any(e.startswith("/world/groups/gcff-own") for e in entities)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["--data", "no-such-dataset"],
+            "no-such-dataset: no such file or folder, nor a dataset name; the public datasets "
+            "are: coffeebreak, cocktail-party",
+        ),
+        (["--detector", "nowhere.module:make"], "nowhere.module"),
+        (["--backend", "local", "--address", "x"], "--address needs --backend ray"),
+    ],
+    ids=["unknown-dataset", "plugin-that-does-not-import", "address-without-ray"],
+)
+def test_cli_bad_input_is_one_line(small, tmp_path, capsys, argv, message):
+    if "--data" not in argv:
+        argv = ["--data", small[0].path, *argv]
+    assert main(["benchmark", *argv, "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("reform-sim benchmark: error: ") and message in err
+    assert err.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_ray_backend_gives_the_local_cells(small):
+    ray = pytest.importorskip("ray")
+    detectors = [detector_spec(s) for s in ("gcff", "gcff-own", "majority")]
+    local = run_benchmark(small, detectors)
+    ray.init(
+        num_cpus=2, object_store_memory=100 * 2**20, include_dashboard=False, log_to_driver=False
+    )
+    try:
+        remote = run_benchmark(small, detectors, backend="ray")
+    finally:
+        ray.shutdown()
+    key = [(c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in local.cells]
+    assert key == [
+        (c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in remote.cells
+    ]
