@@ -2,7 +2,9 @@
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
-DATASETS ?= ../shared/datasets
+# The real datasets' folder; empty: $REFORM_SIM_DATASETS, else ../shared/datasets when it exists,
+# else the datasets fetched with `reform-sim datasets fetch`, else simulation only.
+DATASETS ?=
 
 .PHONY: demo test lint bench clean
 
@@ -20,7 +22,7 @@ $(VENV)/.installed-test: $(VENV)/.installed
 
 ## demo: install, then run the main job on the embedded default
 demo: $(VENV)/.installed
-	$(BIN)/reform-sim demo --datasets $(DATASETS)
+	$(BIN)/reform-sim demo $(if $(DATASETS),--datasets $(DATASETS))
 
 ## test: install with the test extras, then run the whole test suite
 test: $(VENV)/.installed-test

@@ -218,11 +218,15 @@ def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = Tru
 
 
 def _find_datasets(datasets: str | os.PathLike[str] | None) -> dict[str, Dataset]:
-    """SALSA and Babble under ``datasets`` (``salsa/``, ``babble/``), those present."""
-    from reform.datasets import load_babble, load_salsa
+    """SALSA and Babble under ``datasets`` (``salsa/``, ``babble/``), those present; with
+    ``datasets`` None, the ones fetched with ``reform-sim datasets fetch``."""
+    from reform.datasets import fetch, is_fetched, load_babble, load_salsa
 
     found: dict[str, Dataset] = {}
     if datasets is None:
+        for name, load in (("salsa", load_salsa), ("babble", load_babble)):
+            if is_fetched(name):
+                found[name] = load(fetch(name))
         return found
     root = Path(datasets)
     if not root.is_dir():

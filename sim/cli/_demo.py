@@ -76,5 +76,13 @@ def run(args: argparse.Namespace) -> int:
     for path in result.recordings:
         print(f"    rerun {path}")
     print(f"  figures:    {len(result.figures)} PNG files")
+    missing = [name for name in ("salsa", "babble") if name not in result.datasets]
+    if missing:
+        print(
+            f"real datasets: {' and '.join(missing)} not found, so this run scored simulated "
+            "data only. Add them with `reform-sim datasets fetch salsa babble` (or give "
+            "--datasets DIR, a folder holding salsa/ and babble/) and run again for the "
+            "SALSA and Babble evaluations."
+        )
     sys.stdout.flush()
     return 0
