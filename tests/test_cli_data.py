@@ -105,7 +105,7 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["data", "info", "/nonexistent/place"], "expected an existing dataset file or folder"),
+        (["data", "info", "/nonexistent/place"], "no such file or folder, nor a dataset name"),
         (["data", "info", "{salsa}", "--units", "cm"], "salsa format stores positions in 'm'"),
         (["data", "info", "{tmp}"], "expected a dataset in one of the formats: salsa"),
         (
@@ -145,3 +145,41 @@ def test_an_unfinished_generate_folder_needs_allow_incomplete(tmp_path, capsys):
     assert "incomplete dataset (2 of 2 episodes written)" in err and "--allow-incomplete" in err
     assert main(["data", "info", str(out), "--allow-incomplete"]) == 0
     assert "frames" in capsys.readouterr().out
+
+
+def _gcff_with_absent_member(folder):
+    folder.mkdir(parents=True)
+    features = np.empty((1, 1), dtype=object)
+    features[0, 0] = np.array([[1, 0.0, 0.0, 0.0], [2, 100.0, 0.0, 3.1], [3, np.nan, 0, 0]])
+    groups = np.empty((1, 1), dtype=object)
+    members = np.empty((1, 1), dtype=object)
+    members[0, 0] = np.array([[1.0, 2.0, 42.0]])
+    groups[0, 0] = members
+    scipy.io.savemat(folder / "features.mat", {"features": features, "timestamp": [[1.0]]})
+    scipy.io.savemat(folder / "groundtruth.mat", {"GTgroups": groups, "GTtimestamp": [[1.0]]})
+    return folder
+
+
+def test_info_counts_the_repairs_and_strict_refuses(tmp_path, capsys):
+    folder = _gcff_with_absent_member(tmp_path / "quirks")
+    assert main(["data", "info", str(folder), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)["report"]
+    assert report["repairs"] == {"people_dropped_nan": 1, "groundtruth_members_absent": 1}
+    assert main(["data", "info", str(folder), "--strict"]) == 2
+    err = capsys.readouterr().err
+    assert "frame 1, row 3 (ID 3): field 'x'" in err and "refused by --strict" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--units", "px"], "--units px needs --metres-per-pixel M"),
+        (["--metres-per-pixel", "0.01"], "--metres-per-pixel is the scale of --units px"),
+    ],
+    ids=["pixels-without-scale", "scale-without-pixels"],
+)
+def test_pixel_units_need_their_scale(tmp_path, capsys, argv, message):
+    folder = _gcff_with_absent_member(tmp_path / "px")
+    assert main(["data", "info", str(folder), *argv]) == 2
+    assert message in capsys.readouterr().err
+    assert main(["data", "info", str(folder), "--units", "px", "--metres-per-pixel", "0.01"]) == 0

@@ -123,3 +123,12 @@ def test_with_results_that_are_not_text_name_the_file(tmp_path, capsys):
         f"reform-sim experiment: error: --with-results {results}: expected JSON text, found "
         "byte 0x89 at offset 0 that is not UTF-8"
     )
+
+
+def test_the_parsers_formats_and_units_are_the_loaders():
+    from reform.datasets import FORMATS, LENGTH_UNITS
+    from reform.datasets.detect import FORMAT_ALIASES
+    from sim.cli import _common
+
+    assert set(_common.FORMATS) == set(FORMATS) | set(FORMAT_ALIASES)
+    assert _common.LENGTH_UNITS == LENGTH_UNITS

@@ -13,7 +13,10 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-FORMATS = ("salsa", "babble", "gcff", "parquet")
+# reform.datasets' FORMATS and their aliases, and LENGTH_UNITS, kept here so that building the
+# parser imports nothing heavy (tests/test_cli_options.py checks that they agree).
+FORMATS = ("salsa", "dante", "babble", "gcff", "parquet")
+LENGTH_UNITS = ("cm", "m", "px")
 # Default share of each sequence's annotated frames, by time, that trains (reform.time_split's).
 TRAIN_FRACTION = 0.6
 DEFAULT_DATASETS = "../shared/datasets"  # the real datasets beside a clone
@@ -36,11 +39,12 @@ def read_text(option: str, path: str, *, expected: str) -> str:
 
 def default_datasets() -> str | None:
     """The real datasets' folder when none is given: ``$REFORM_SIM_DATASETS`` when set, else
-    ``../shared/datasets`` when that folder exists, else None."""
-    named = os.environ.get(DATASETS_VARIABLE)
-    if named:
-        return named
-    return DEFAULT_DATASETS if Path(DEFAULT_DATASETS).is_dir() else None
+    ``../shared/datasets`` when that folder exists, else None
+    (`reform.datasets.local_datasets_dir`)."""
+    from reform.datasets import local_datasets_dir
+
+    folder = local_datasets_dir()
+    return None if folder is None else str(folder)
 
 
 class CliError(Exception):
@@ -151,9 +155,23 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data")
     )
     parser.add_argument(
         "--units",
-        choices=("cm", "m"),
+        choices=LENGTH_UNITS,
         default=None,
-        help="length unit of the file's positions (GCFF folders: default cm; others are metres)",
+        help="length unit of the file's positions (GCFF folders: default cm, or px for image "
+        "pixels with --metres-per-pixel; the other formats are metres)",
+    )
+    parser.add_argument(
+        "--metres-per-pixel",
+        type=float,
+        default=None,
+        metavar="M",
+        help="with --units px: the scale of the pixel positions, metres per pixel",
+    )
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse the quirks a loader otherwise repairs and counts in its report (ground truth "
+        "naming people absent from the features, NaN poses, ...)",
     )
     parser.add_argument(
         "--allow-incomplete",
@@ -184,10 +202,16 @@ def load_data(args: argparse.Namespace, *, attribute: str = "data"):
     (`reform.datasets.resolve`; an unfetched public dataset's error says how to fetch it)."""
     from reform.datasets import load_dataset, resolve
 
+    if args.units == "px" and args.metres_per_pixel is None:
+        raise CliError("--units px needs --metres-per-pixel M: pixels are never read as metres")
+    if args.metres_per_pixel is not None and args.units != "px":
+        raise CliError(f"--metres-per-pixel is the scale of --units px, got --units {args.units}")
     return load_dataset(
         resolve(getattr(args, attribute)),
         format=args.format,
         units=args.units,
+        metres_per_pixel=args.metres_per_pixel,
+        strict=args.strict,
         allow_incomplete=args.allow_incomplete,
     )
 

@@ -7,7 +7,7 @@ import json
 import sys
 from typing import Any
 
-from sim.cli._common import add_data_arguments, check_output
+from sim.cli._common import add_data_arguments, check_output, load_data
 
 _INFO_DESCRIPTION = """\
 Loads a dataset (SALSA / DANTE text, Babble, a GCFF MATLAB folder, or the project's Parquet)
@@ -62,12 +62,10 @@ def _convert_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _load(args: argparse.Namespace):
-    from reform.datasets import detect_format, load_dataset
+    from reform.datasets import detect_format, resolve
 
-    format = args.format or detect_format(args.path)
-    return format, load_dataset(
-        args.path, format=format, units=args.units, allow_incomplete=args.allow_incomplete
-    )
+    dataset = load_data(args, attribute="path")
+    return args.format or detect_format(resolve(args.path)), dataset
 
 
 def run_info(args: argparse.Namespace) -> int:
