@@ -24,6 +24,10 @@ the truth restricted to the people it holds. Perturbations at every level of an 
 same random numbers (common random numbers), so a curve's steps come from the level, not from
 the draw.
 
+Detectors of your own (``plugins``: any object with ``predict``, see `reform.detectors`) run
+beside these on the same frames, fitted on the same training frames when they have ``fit``;
+``reform-sim stress --detector NAME|package.module:factory`` adds them from the command line.
+
 Confidence intervals: two-stage bootstrap (episodes, then frames within each;
 :mod:`reform.bootstrap`), percentile intervals, the same resamples for every detector at a point.
 
@@ -47,6 +51,7 @@ import numpy as np
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, frame_intervals
 from reform.classifiers import BAGGED_TREES, LOGISTIC_REGRESSION, WEIGHTED_KNN, make_classifier
 from reform.detector import Reform
+from reform.detectors import fit_detector, run_detector
 from reform.frame import Frame
 from reform.gcff import Gcff
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
@@ -340,7 +345,7 @@ def _score(frames: Sequence[Frame], detectors: Mapping[str, Any], density: float
     sequence: tuple[str, ...] = ()
     pairs = 0
     for name, detector in detectors.items():
-        evaluation = evaluate(frames, detector.predict(frames))
+        evaluation = evaluate(frames, run_detector(name, detector, frames))
         for key in THRESHOLDS:
             scores = evaluation.at(_THRESHOLD_VALUES[key])
             precision[name, key] = np.asarray(scores.frame_precision)
@@ -536,6 +541,8 @@ class StressResults:
         training: what the detectors were trained on, and GCFF's tuned setting.
         timings: wall-clock seconds per stage and in total.
         environment: the machine: ``cores`` and ``load_average_start`` (1, 5, 15 minutes).
+        detectors: every detector run, name -> label: :data:`DETECTOR_LABELS`, then the
+            plugins (labelled by their names).
     """
 
     grid: StressGrid
@@ -546,6 +553,7 @@ class StressResults:
     training: Mapping[str, Any]
     timings: Mapping[str, float] = field(default_factory=dict)
     environment: Mapping[str, Any] = field(default_factory=dict)
+    detectors: Mapping[str, str] = field(default_factory=lambda: dict(DETECTOR_LABELS))
 
     def axis(self, name: str) -> StressAxis:
         for axis in self.axes:
@@ -562,7 +570,7 @@ class StressResults:
             "grid": self.grid.to_json(),
             "seed": self.seed,
             "jobs": self.jobs,
-            "detectors": dict(DETECTOR_LABELS),
+            "detectors": dict(self.detectors),
             "sensors": dict(_SENSOR_TEXT),
             "training": _jsonable(self.training),
             "timings_s": {k: round(v, 2) for k, v in self.timings.items()},
@@ -604,7 +612,7 @@ def _point(
     weights = bootstrap_weights(
         sequence, rng=_rng(seed, _ROLE_BOOTSTRAP, axis_index, k), resamples=resamples
     )
-    detectors = [d for d in DETECTORS if (d, THRESHOLDS[0]) in scored[0].precision]
+    detectors = list(dict.fromkeys(d for d, _ in scored[0].precision))  # in the run's order
     n_sequences = len(set(sequence))
     scores = {
         d: {
@@ -709,6 +717,7 @@ def run_stress(
     jobs: int | None = None,
     axes: Sequence[str] | None = None,
     detectors: Mapping[str, Any] | None = None,
+    plugins: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> StressResults:
     """Runs the stress tests.
@@ -720,6 +729,13 @@ def run_stress(
         axes: axes to run (names of :data:`AXES`), default all.
         detectors: fitted detectors by name (:data:`DETECTORS` keys) instead of training them
             on the synthetic training set; e.g. REFORM trained on SALSA.
+        plugins: detectors of your own by name, run beside the built-in ones: any object with
+            ``predict(frames)`` (`reform.detectors.Detector`), e.g. from
+            `reform.detectors.make_detector`. One with ``fit`` is fitted on a copy of the
+            synthetic training set's frames (the caller's object is left as it was). Their
+            output is checked (`reform.detectors.run_detector`): a plugin that raises or
+            returns something that is not a partition fails the run with one line naming it
+            and the frame.
         progress: called with one line of text as stages start and tasks finish.
 
     Returns:
@@ -738,9 +754,22 @@ def run_stress(
     environment: dict[str, Any] = {"cores": _cpu_count(), "load_average_start": _load_average()}
     cpu: list[float] = []
 
+    plugins = dict(plugins or {})
+    clash = [name for name in plugins if name in DETECTORS]
+    if clash:
+        raise ValueError(
+            f"plugins must be named apart from the built-in detectors {DETECTORS}, got {clash}"
+        )
+    if detectors is not None:
+        missing = [d for d in DETECTORS if d not in detectors]
+        if missing:
+            raise ValueError(f"detectors must hold {DETECTORS}, missing {missing}")
+    learners = [name for name, plugin in plugins.items() if getattr(plugin, "fit", None)]
+
     test_seeds = [episode_seed(seed, _ROLE_TEST, i) for i in range(grid.seeds)]
     training: dict[str, Any] = {}
-    if detectors is None:
+    train: tuple[Frame, ...] = ()
+    if detectors is None or learners:
         say(
             f"training set: {grid.train_episodes} episode(s) each of "
             f"{', '.join(TRAINING_SCENARIOS)} ({grid.train_duration_s:g} s at "
@@ -759,6 +788,7 @@ def run_stress(
         if overlap:  # pragma: no cover - 63-bit seeds from distinct spawn keys
             raise RuntimeError(f"test and training seeds overlap: {sorted(overlap)}")
         timings["training set"] = time.perf_counter() - t0
+    if detectors is None:
         say(f"training REFORM (3 classifiers) and tuning GCFF on {len(train)} frames")
         t0 = time.perf_counter()
         detectors = _fit_all(train, grid, DETECTORS, jobs=jobs, cpu=cpu)
@@ -777,10 +807,23 @@ def run_stress(
             "gcff_tuning_f1": gcff.grid_search_.best_f1,
         }
     else:
-        missing = [d for d in DETECTORS if d not in detectors]
-        if missing:
-            raise ValueError(f"detectors must hold {DETECTORS}, missing {missing}")
         training = {"source": "given"}
+    if learners:
+        say(f"fitting {', '.join(learners)} on {len(train)} frames")
+        t0 = time.perf_counter()
+        plugins = {name: fit_detector(name, plugin, train) for name, plugin in plugins.items()}
+        timings["fitting plugins"] = time.perf_counter() - t0
+    if plugins:
+        training["plugins"] = {
+            name: (
+                f"fitted on the {len(train)} synthetic training frames"
+                if name in learners
+                else "no fit: run as given"
+            )
+            for name in plugins
+        }
+    labels = {name: DETECTOR_LABELS.get(name, name) for name in [*detectors, *plugins]}
+    detectors = {**detectors, **plugins}
     training["test_seeds"] = test_seeds
 
     perturb_axes = [a for a in names if AXES[a].kind == "perturb"]
@@ -854,6 +897,7 @@ def run_stress(
         training=training,
         timings=timings,
         environment=environment,
+        detectors=labels,
     )
 
 

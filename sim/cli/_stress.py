@@ -8,6 +8,7 @@ import shlex
 import sys
 
 from sim.cli._common import CliError, check_output, check_recording
+from sim.cli._detectors import detector_name, make_plugin
 
 _DESCRIPTION = """\
 F1 at T = 2/3 and T = 1 of REFORM (weighted KNN, bagged trees, logistic regression) and GCFF as
@@ -19,6 +20,11 @@ episodes'); no real data is needed. Writes DIR/stress.md (tables and plots), DIR
 DIR/stress-<axis>.png, and with --save a Rerun recording of the curves.
 
 Grids: 'default' (the documented run, a few minutes on two cores) and 'small' (seconds).
+
+--detector NAME|package.module:factory (repeatable) runs detectors of your own beside these: a
+name of the detector registry (majority, an installed package's entry point in the group
+reform_sim.detectors) or a plugin's path. One with fit() is fitted on the same training frames.
+Their scores are in stress.json.
 """
 
 
@@ -63,6 +69,17 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
         help="worker processes (default: every core); results do not depend on it",
     )
     parser.add_argument(
+        "--detector",
+        action="append",
+        dest="detectors",
+        type=detector_name,
+        default=None,
+        metavar="NAME|module:factory",
+        help="also run this detector (repeatable): a registered name such as majority, an "
+        "installed package's (entry-point group reform_sim.detectors), or package.module:factory "
+        "(the current folder is searched too); fitted on the training frames when it has fit()",
+    )
+    parser.add_argument(
         "--out",
         default="stress",
         metavar="DIR",
@@ -87,6 +104,8 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--axes", args.axes]
     if args.jobs is not None:
         words += ["--jobs", str(args.jobs)]
+    for name in args.detectors or ():
+        words += ["--detector", name]
     words += ["--out", args.out]
     if args.save is not None:
         words += ["--save", args.save]
@@ -94,7 +113,7 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from sim.stress import AXES, GRIDS, run_stress
+    from sim.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
     from sim.stress_report import write_report
 
     grid = GRIDS[args.grid]
@@ -112,11 +131,23 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"--axes must name axes among {','.join(AXES)}, got {args.axes!r}")
     check_output("--out", args.out, folder=True)
     check_recording(args)
+    plugins = {}
+    for name in args.detectors or ():
+        if name in DETECTOR_LABELS:
+            raise CliError(
+                f"--detector {name}: stress always runs {DETECTOR_LABELS[name]} (trained on its "
+                "synthetic training set); --detector adds detectors of your own"
+            )
+        if name in plugins:
+            raise CliError(f"--detector {name} is given twice")
+        plugins[name] = make_plugin(name)
 
     def progress(line: str) -> None:
         print(line, file=sys.stderr, flush=True)
 
-    results = run_stress(grid, seed=args.seed, jobs=args.jobs, axes=axes, progress=progress)
+    results = run_stress(
+        grid, seed=args.seed, jobs=args.jobs, axes=axes, plugins=plugins, progress=progress
+    )
     if results.grid_name == "custom":
         results = dataclasses.replace(results, grid_name=f"{args.grid} (--seeds {args.seeds})")
     written = write_report(results, args.out, command=_command(args), save=args.save)
