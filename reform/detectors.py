@@ -7,8 +7,8 @@ hold every id of the frame exactly once (people alone are groups of one). It may
 estimator does). :class:`Detector` states it as a `typing.Protocol`; nothing needs to inherit
 from it.
 
-**The registry.** Every detector the command line, the experiments and the benchmarks run is
-looked up by name here::
+**The registry.** One table of detectors by name, for the command line (``--detector``), the
+stress tests, the benchmarks and your code::
 
     make_detector("gcff", stride=0.6)            # a registered name, with its options
     make_detector("reform", model="m.skops")     # a model written by `reform-sim train`
@@ -16,10 +16,10 @@ looked up by name here::
 
 Names come from :func:`register_detector` (the built-ins ``majority``, ``gcff`` and
 ``reform``) and from the entry-point group :data:`ENTRY_POINT_GROUP` of installed packages
-(``[project.entry-points."reform_sim.detectors"] mine = "mylab.detectors:make"``), read the
-first time a name is looked up that is not registered; nothing is imported until a detector is
-made. A factory is called with the options and must return an object with a callable
-``predict``; an object that already has one is used as it is.
+(``[project.entry-points."reform_sim.detectors"] mine = "mylab.detectors:make"``), read when a
+name is looked up (a package installed meanwhile is seen); nothing of theirs is imported until
+their detector is made. A factory is called with the options and must return an object with a
+callable ``predict``; an object that already has one is used as it is.
 
 **Checked runs.** :func:`run_detector` calls ``predict`` and :func:`check_predictions` checks
 what came back; whatever goes wrong inside a detector becomes one :class:`DetectorError` line
