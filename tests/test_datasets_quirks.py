@@ -289,3 +289,10 @@ def test_absent_members_survive_the_parquet_round_trip(tmp_path):
     back = read_parquet(write_parquet(dataset, tmp_path / "set.parquet"))
     assert back.frames == dataset.frames
     assert [f.listed_groups for f in back] == [((1, 2, 42),), None]
+
+
+def test_gcff_angles_a_little_beyond_a_turn_are_wrapped(tmp_path):
+    # Cocktail Party's tracker-derived orientations run to 6.8 rad, past [0, 2π).
+    people = [[1, 0.0, 0.0, 6.77], [2, 100.0, 0.0, -7.0]]
+    (frame,) = load_gcff(_gcff(tmp_path / "set", [people], [[[1, 2]]])).frames
+    np.testing.assert_allclose(frame.yaw, [6.77 - 2 * np.pi, -7.0 + 2 * np.pi])

@@ -50,9 +50,10 @@ SETTINGS_FILE = "settings_gc.mat"
 
 # Units of the files' positions per metre (positions are divided by it).
 _UNITS_PER_M = {"cm": 100.0, "m": 1.0}
-# GCFF files store radians; some sets use [0, 2pi) rather than [-pi, pi], so anything up to one
-# full turn (plus rounding) is accepted and wrapped; beyond that the values look like degrees.
-_ANGLE_LIMIT_RAD = 2.0 * math.pi + 1e-3
+# GCFF files store radians, in [-pi, pi] in some sets and [0, 2pi) in others, and a little
+# beyond in sets derived from tracker output (Cocktail Party's run to 6.8 rad); anything up to
+# two full turns is accepted and wrapped. Beyond that the values look like degrees. Radians.
+_ANGLE_LIMIT_RAD = 4.0 * math.pi
 _TIMESTAMP_RTOL = 1e-9  # relative tolerance matching GTtimestamp to timestamp
 
 
@@ -458,7 +459,7 @@ def _frame_rows(
             path,
             f"{where}, row {row + 1} (ID {ids[row]})",
             "θ",
-            "radians with |θ| <= 2π (values beyond look like degrees)",
+            "radians with |θ| <= 4π (values beyond look like degrees)",
             repr(float(theta[row])),
         )
     return ids, array[:, 1:3], theta
