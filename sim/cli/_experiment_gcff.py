@@ -37,8 +37,12 @@ def register(experiments: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--salsa", required=True, metavar="PATH", help="SALSA (DANTE folder)")
-    parser.add_argument("--babble", required=True, metavar="PATH", help="Babble folder")
+    parser.add_argument(
+        "--salsa", required=True, metavar="PATH|NAME", help="SALSA (DANTE folder or dataset name)"
+    )
+    parser.add_argument(
+        "--babble", required=True, metavar="PATH|NAME", help="Babble (folder or dataset name)"
+    )
     add_out_argument(parser)
     add_train_fraction_argument(
         parser,
@@ -128,7 +132,7 @@ def _read_results(path: str) -> list[dict[str, Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from reform.datasets import load_babble, load_salsa
+    from reform.datasets import load_babble, load_salsa, resolve
     from reform.experiment_gcff import gcff_comparison
 
     check_train_fraction(args)
@@ -141,8 +145,8 @@ def run(args: argparse.Namespace) -> int:
         if value is not None
     }
     comparison = gcff_comparison(
-        load_salsa(args.salsa),
-        load_babble(args.babble),
+        load_salsa(resolve(args.salsa)),
+        load_babble(resolve(args.babble)),
         train_fraction=args.train_fraction,
         orientation=args.gcff_orientation,
         **grids,

@@ -112,8 +112,14 @@ def run(args: argparse.Namespace) -> int:
         salsa_path = str(Path(args.datasets) / "salsa")
     salsa = None
     if salsa_path is not None:
-        if not Path(salsa_path).exists():
-            raise CliError(f"SALSA not found at {salsa_path} (give --salsa PATH or --datasets DIR)")
+        from reform.datasets import resolve
+
+        try:
+            salsa_path = str(resolve(salsa_path))
+        except FileNotFoundError:
+            raise CliError(
+                f"SALSA not found at {salsa_path} (give --salsa PATH|NAME or --datasets DIR)"
+            ) from None
         print(f"loading SALSA from {salsa_path}", file=sys.stderr)
         salsa = load_salsa(salsa_path).frames
     else:

@@ -16,22 +16,38 @@ REPORT_SUFFIXES = (".md", ".json")
 
 
 def add_dataset_arguments(parser: argparse.ArgumentParser, *, babble: bool = True) -> None:
-    """``--datasets DIR``, ``--salsa PATH`` and, with ``babble``, ``--babble PATH``."""
+    """``--datasets DIR``, ``--salsa PATH|NAME`` and, with ``babble``, ``--babble PATH|NAME``."""
     held = "salsa/ and babble/" if babble else "salsa/"
     parser.add_argument(
         "--datasets", metavar="DIR", help=f"folder holding {held} (e.g. ../shared/datasets)"
     )
-    parser.add_argument("--salsa", metavar="PATH", help="SALSA folder (default: DIR/salsa)")
+    parser.add_argument(
+        "--salsa",
+        metavar="PATH|NAME",
+        help="SALSA folder or dataset name (default: DIR/salsa, else the fetched or local salsa)",
+    )
     if babble:
-        parser.add_argument("--babble", metavar="PATH", help="Babble folder (default: DIR/babble)")
+        parser.add_argument(
+            "--babble",
+            metavar="PATH|NAME",
+            help="Babble folder or dataset name (default: DIR/babble, else the fetched or local "
+            "babble)",
+        )
 
 
 def salsa_and_babble(args: argparse.Namespace) -> tuple[str, str]:
-    """The SALSA and Babble folders: ``--salsa`` / ``--babble``, else under ``--datasets``."""
+    """The SALSA and Babble folders: ``--salsa`` / ``--babble``, else under ``--datasets``.
+
+    ``--salsa`` and ``--babble`` may name a dataset (a fetched one, or a folder of the real
+    datasets'): the caller loads them through `reform.datasets.resolve`, after checking its
+    outputs."""
     salsa = args.salsa or (args.datasets and str(Path(args.datasets) / "salsa"))
     babble = args.babble or (args.datasets and str(Path(args.datasets) / "babble"))
     if not salsa or not babble:
-        raise CliError("give --datasets DIR (holding salsa/ and babble/) or --salsa and --babble")
+        raise CliError(
+            "give --datasets DIR (holding salsa/ and babble/) or --salsa and --babble (paths, or "
+            "the names of fetched datasets: reform-sim datasets fetch salsa babble)"
+        )
     return salsa, babble
 
 

@@ -74,7 +74,7 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from reform.datasets import load_babble, load_salsa
+    from reform.datasets import load_babble, load_salsa, resolve
     from reform.experiment import paper_experiment
 
     check_train_fraction(args)
@@ -88,8 +88,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr)
 
     experiment = paper_experiment(
-        load_salsa(salsa),
-        load_babble(babble),
+        load_salsa(resolve(salsa)),
+        load_babble(resolve(babble)),
         train_fraction=args.train_fraction,
         n_folds=args.folds,
         n_jobs=args.jobs,

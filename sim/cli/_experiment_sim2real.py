@@ -110,7 +110,7 @@ def _outputs(out: str) -> Path:
 def run(args: argparse.Namespace) -> int:
     import dataclasses
 
-    from reform.datasets import load_babble, load_salsa
+    from reform.datasets import load_babble, load_salsa, resolve
     from sim.sim2real import CLASSIFIER_NAMES, DEFAULT_SOURCES, RANDOMISED_SOURCES, sim_to_real
     from sim.sim2real_report import sim2real_figure
 
@@ -141,8 +141,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True)
 
     result = sim_to_real(
-        load_salsa(salsa),
-        load_babble(babble),
+        load_salsa(resolve(salsa)),
+        load_babble(resolve(babble)),
         synthetic_root=args.synthetic,
         sources=sources,
         seed=args.seed,
