@@ -58,7 +58,7 @@ def test_folder_settings_used_when_no_parameters_given(tmp_path, capsys):
     groups, result = detect(tmp_path, "--data", str(folder))
     assert groups == NONE
     assert result["detector_params"]["mdl"] == pytest.approx(0.01)  # 100 cm² in m²
-    assert "settings_gc.mat: stride 0.7 m, mdl 0.01 m²" in capsys.readouterr().err
+    assert "settings_gc.mat (Scene: stride 0.7 m, mdl 0.01 m²)" in capsys.readouterr().err
 
 
 def test_explicit_parameters_override_the_folder_settings(tmp_path):
@@ -142,3 +142,17 @@ def test_bad_settings_file_is_named(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert "broken.mat" in err and "expected a variable 'mdl'" in err
+
+
+def test_a_folder_of_sequences_uses_each_sequences_own_settings(shared_datasets, tmp_path, capsys):
+    # coffeebreak/README.md: Seq1 ships 50 cm / 8000 cm², Seq2 20 cm / 7000 cm², and the
+    # original GCFF code scores F1 .770 and .944 with them (T = 2/3).
+    out = tmp_path / "scores.json"
+    argv = ["evaluate", "--data", str(shared_datasets / "coffeebreak"), "--detector", "gcff"]
+    assert main([*argv, "--json", str(out)]) == 0
+    assert (
+        "Seq1: stride 0.5 m, mdl 0.8 m²; Seq2: stride 0.2 m, mdl 0.7 m²" in capsys.readouterr().err
+    )
+    by_sequence = json.loads(out.read_text())["by_sequence"]
+    assert round(by_sequence["Seq1"]["2/3"]["f1"], 3) == 0.770
+    assert round(by_sequence["Seq2"]["2/3"]["f1"], 3) == 0.944

@@ -34,7 +34,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, load_data
 
 __all__ = [
     "DETECTORS",
@@ -150,7 +150,7 @@ def _gcff(args: argparse.Namespace) -> Any:
     import sys
 
     from reform import Gcff
-    from reform.datasets import detect_format, load_dataset
+    from reform.datasets import detect_format, load_dataset, resolve
 
     orientation = args.gcff_orientation or "body"
     explicit = args.stride is not None or args.mdl is not None
@@ -186,22 +186,23 @@ def _gcff(args: argparse.Namespace) -> Any:
         stride = defaults.stride if args.stride is None else args.stride
         mdl = defaults.mdl if args.mdl is None else args.mdl
         return Gcff(stride=stride, mdl=mdl, orientation=orientation)
-    if (args.format or detect_format(args.data)) == "gcff":
-        settings = load_dataset(args.data, format="gcff", units=args.units).metadata.get(
-            "settings_gc"
-        )
-        if settings and "stride" in settings and "mdl" in settings:
-            detector = Gcff.from_settings(
-                stride=settings["stride"],
-                mdl=settings["mdl"],
-                units=settings.get("units", "cm"),
-                orientation=orientation,
+    if (args.format or detect_format(resolve(args.data))) == "gcff":
+        from reform.gcff import GcffBySequence
+
+        dataset = load_data(args)
+        try:
+            detector = GcffBySequence.from_dataset(dataset, orientation=orientation)
+        except ValueError:
+            detector = None  # a sequence ships no settings_gc.mat: the reference's defaults
+        if detector is not None:
+            shipped = "; ".join(
+                f"{sequence}: stride {stride:g} m, mdl {mdl:g} m²"
+                for sequence, (stride, mdl) in detector.settings.items()
             )
-            print(
-                f"gcff: the folder's settings_gc.mat: stride {detector.stride:g} m, "
-                f"mdl {detector.mdl:g} m²",
-                file=sys.stderr,
-            )
+            print(f"gcff: the dataset's own settings_gc.mat ({shipped})", file=sys.stderr)
+            if len(detector.settings) == 1:
+                ((stride, mdl),) = detector.settings.values()
+                return Gcff(stride=stride, mdl=mdl, orientation=orientation)
             return detector
     return Gcff(orientation=orientation)
 
