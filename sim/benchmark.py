@@ -303,11 +303,26 @@ class Benchmark:
                 return cell
         raise KeyError((dataset.label, detector.label))
 
-    def means(self) -> dict[str, dict[str, Any]]:
-        """Detector label -> mean P, R, F1 over the datasets it was scored on, per threshold."""
+    def common_datasets(self) -> tuple[str, ...]:
+        """The labels of the datasets every detector was scored on."""
+        return tuple(
+            d.label
+            for d in self.datasets
+            if all(self.cell(d, m).scores is not None for m in self.detectors)
+        )
+
+    def means(self, datasets: Sequence[str] | None = None) -> dict[str, dict[str, Any]]:
+        """Detector label -> mean P, R, F1 over the datasets it was scored on (or over
+        ``datasets``, labels), per threshold."""
         out: dict[str, dict[str, Any]] = {}
         for detector in self.detectors:
-            scored = [c.scores for c in self.cells if c.detector == detector.label and c.scores]
+            scored = [
+                c.scores
+                for c in self.cells
+                if c.detector == detector.label
+                and c.scores
+                and (datasets is None or c.dataset in datasets)
+            ]
             entry: dict[str, Any] = {"datasets": len(scored)}
             for t in THRESHOLDS:
                 values = [s.at[t] for s in scored]

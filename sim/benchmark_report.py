@@ -53,7 +53,7 @@ def _published_text(entry: tuple | None) -> str:
 
 
 def _numeric(text: str) -> bool:
-    return text in ("", "–") or text.replace(".", "", 1).isdigit()
+    return text in ("", "–") or text.startswith("skipped") or text.replace(".", "", 1).isdigit()
 
 
 def _table(header: list[str], rows: list[list[str]]) -> list[str]:
@@ -104,6 +104,7 @@ def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = N
             )
     lines += ["## Per dataset", "", *_table(header, rows), ""]
 
+    mean_header = ["detector", "datasets", "P 2/3", "R 2/3", "F1 2/3", "P 1", "R 1", "F1 1"]
     mean_rows = []
     for detector in benchmark.detectors:
         entry = benchmark.means()[detector.label]
@@ -115,11 +116,25 @@ def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = N
         "",
         "The plain mean of the per-dataset figures, over the datasets each detector ran on.",
         "",
-        *_table(
-            ["detector", "datasets", "P 2/3", "R 2/3", "F1 2/3", "P 1", "R 1", "F1 1"], mean_rows
-        ),
+        *_table(mean_header, mean_rows),
         "",
     ]
+    common = benchmark.common_datasets()
+    if common and len(common) < len(benchmark.datasets):
+        means = benchmark.means(common)
+        rows = [
+            [d.label, str(means[d.label]["datasets"])]
+            + _row(means[d.label]["2/3"])
+            + _row(means[d.label]["1"])
+            for d in benchmark.detectors
+        ]
+        lines += [
+            f"Over the datasets every detector ran on ({', '.join(common)}), comparable across "
+            "rows:",
+            "",
+            *_table(mean_header, rows),
+            "",
+        ]
 
     sequence_rows = []
     for dataset in benchmark.datasets:
@@ -192,6 +207,8 @@ def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
                     else dict(zip(("precision", "recall", "f1", "source"), published, strict=True)),
                 }
             )
+    common = benchmark.common_datasets()
+    means_common = benchmark.means(common)
     means = {}
     for label, entry in benchmark.means().items():
         means[label] = {"datasets": entry["datasets"]}
@@ -220,6 +237,19 @@ def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
         ],
         "cells": cells,
         "mean_over_datasets": means,
+        "common_datasets": list(common),
+        "mean_over_common_datasets": {
+            label: {
+                "datasets": entry["datasets"],
+                **{
+                    f"T={t}": None
+                    if entry[t] is None
+                    else dict(zip(("precision", "recall", "f1"), entry[t], strict=True))
+                    for t in THRESHOLDS
+                },
+            }
+            for label, entry in means_common.items()
+        },
         "seconds": round(benchmark.seconds, 3),
     }
 

@@ -209,3 +209,12 @@ def test_ray_backend_gives_the_local_cells(small):
     assert key == [
         (c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in remote.cells
     ]
+
+
+def test_the_mean_over_common_datasets_compares_like_with_like(small):
+    detectors = [detector_spec(s) for s in ("gcff-own", "majority")]
+    result = run_benchmark(small, detectors)
+    assert result.common_datasets() == ("shipped",)  # bare ships no settings
+    common = result.means(result.common_datasets())
+    assert common[detectors[1].label]["datasets"] == 1
+    assert result.means()[detectors[1].label]["datasets"] == 2

@@ -196,4 +196,6 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--train-fraction", f"{args.train_fraction:g}"]
     if args.out != DEFAULT_OUT:
         words += ["--out", args.out]
+    if args.no_recordings:
+        words.append("--no-recordings")
     return " ".join(shlex.quote(w) for w in words)
