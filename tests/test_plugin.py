@@ -328,3 +328,43 @@ def test_run_stress_keeps_the_built_in_names_for_the_built_ins():
 
     with pytest.raises(ValueError, match=r"^plugins must be named apart from the built-in"):
         run_stress("small", plugins={"gcff": Majority()})
+
+
+@pytest.mark.slow
+def test_benchmark_runs_an_installed_plugin_beside_the_built_ins(lab):
+    out = lab["root"] / "benchmark"
+    run = reform_sim(
+        "benchmark",
+        "--data",
+        lab["data"],
+        "--detector",
+        "pairs",
+        "--detector",
+        "gcff",
+        "--out",
+        out,
+        "--no-progress",
+        lab=lab,
+    )
+    assert run.returncode == 0, run.stderr
+    data = json.loads((out / "benchmark.json").read_text())
+    (cell,) = [c for c in data["cells"] if c["detector"] == "pairs"]
+    assert cell["dataset"] == "lab.parquet" and cell["scores"]["T=1"]["f1"] == 1.0
+    assert (out / "recordings" / "lab-parquet.rrd").is_file()
+
+
+def test_benchmark_stops_on_a_broken_plugin_in_one_line(lab):
+    run = reform_sim(
+        "benchmark",
+        "--data",
+        lab["data"],
+        "--detector",
+        "pairs-raises",
+        "--out",
+        lab["root"] / "b2",
+        "--no-progress",
+        lab=lab,
+    )
+    assert run.returncode == 2
+    assert run.stderr.startswith("reform-sim benchmark: error: pairs-raises: detector raised ")
+    assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr
