@@ -58,22 +58,31 @@ def _command(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
-    from reform.datasets import load_babble, load_salsa
+    from reform.datasets import fetch, is_fetched, load_babble, load_salsa
     from sim.scenario_calibration import DEFAULT_SEEDS, calibrate_scenarios
 
     seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
     if seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {seeds}")
-    given = args.datasets or default_datasets() or DEFAULT_DATASETS
-    root = Path(given)
+    given = args.datasets or default_datasets()
+    folders = {}
     for name in ("salsa", "babble"):
-        if not (root / name).is_dir():
-            raise CliError(f"--datasets {given}: no {name}/ folder in it")
+        if given is not None:
+            folders[name] = Path(given) / name
+            if not folders[name].is_dir():
+                raise CliError(f"--datasets {given}: no {name}/ folder in it")
+        elif is_fetched(name):
+            folders[name] = fetch(name)
+        else:
+            raise CliError(
+                f"{name} not found: give --datasets DIR (holding salsa/ and babble/; default "
+                f"{DEFAULT_DATASETS}) or fetch it with `reform-sim datasets fetch {name}`"
+            )
     check_output("--out", args.out, folder=True)
     out = Path(args.out)
     report = calibrate_scenarios(
-        load_salsa(root / "salsa"),
-        load_babble(root / "babble"),
+        load_salsa(folders["salsa"]),
+        load_babble(folders["babble"]),
         seeds=seeds,
         command=_command(args),
     )

@@ -41,7 +41,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--data", required=True, nargs="+", metavar="PATH", help="dataset file(s) or folder(s)"
+        "--data",
+        required=True,
+        nargs="+",
+        metavar="PATH|NAME",
+        help="dataset file(s) or folder(s), or dataset names (fetched or local)",
     )
     parser.add_argument(
         "--format",
@@ -138,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
     from reform.calibration_report import (
         characterisation_summary,
     )
-    from reform.datasets import detect_format, load_dataset
+    from reform.datasets import detect_format, load_dataset, resolve
 
     min_groups = MIN_GROUPS if args.min_groups is None else args.min_groups
     tolerance = TIGHTNESS_TOLERANCE_M if args.tolerance is None else args.tolerance
@@ -156,8 +160,9 @@ def run(args: argparse.Namespace) -> int:
 
     datasets: list[dict[str, Any]] = []
     for path in args.data:
-        format = args.format or detect_format(path)
-        dataset = load_dataset(path, format=format, units=args.units)
+        location = resolve(path)
+        format = args.format or detect_format(location)
+        dataset = load_dataset(location, format=format, units=args.units)
         measured = characterise_dataset(dataset)
         if measured.frames == 0:
             raise CliError(f"{path}: the dataset has no annotated frames, nothing to characterise")
@@ -178,7 +183,7 @@ def run(args: argparse.Namespace) -> int:
 
     comparisons: list[dict[str, Any]] = []
     for ref_path in args.compare_to:
-        reference = load_dataset(ref_path)
+        reference = load_dataset(resolve(ref_path))
         measured_ref = characterise_dataset(reference)
         if measured_ref.frames == 0:
             raise CliError(f"{ref_path}: the reference has no annotated frames")
