@@ -305,3 +305,15 @@ def test_empty_and_missing_files(babble_dir, tmp_path):
         DataFormatError, match=r"Motion-capture-data.csv: expected at least one data line"
     ):
         load_babble(folder)
+
+
+def test_an_annotated_member_tracked_nowhere_stays_in_the_ground_truth(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    for field in range(41, 48):  # participant 5 of frame 16 (line 17): head, torso, height
+        _set_field(lines, 17, field, "0")
+    dataset = load_babble(_write(folder, lines, annotations))
+    frame = dataset.frames[15]
+    assert 5 not in frame.ids.tolist()
+    assert frame.groups == ((1, 2, 3, 4, 6, 7),)
+    assert frame.listed_groups == ((1, 2, 3, 4, 5, 6, 7),)  # missed, as ff_evalgroups counts it
+    assert dataset.metadata["report"]["members_dropped"] == [[16, 5]]

@@ -20,7 +20,8 @@ How the loader handles the recording's quirks (each case is counted in
 * **Untracked torso.** The participant is absent from that frame (not in ``ids``), except when
   the annotation names them as a group member: then their tracked head stands in for the body
   (position and yaw) in that frame (``torso_from_head``). A member with neither torso nor a
-  trustworthy head is removed from the group (``members_dropped``).
+  trustworthy head is not in the frame but stays in its ground truth (``Frame.listed_groups``),
+  counted as a missed member as the field's protocol counts it (``members_dropped``).
 * **Untracked head.** The participant's head is NaN (``heads_untracked``).
 * **Misplaced heads.** A head more than :data:`HEAD_TORSO_MAX_M` from its own torso and within
   that distance of another participant's torso is that participant's head (participants 3 and 4
@@ -135,8 +136,10 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
         body = torso.copy()
         present = torso_tracked.copy()
         groups: tuple[Group, ...] | None = None
+        listed_groups: tuple[Group, ...] | None = None
         if groups_listed is not None:
             kept_groups: list[Group] = []
+            absent = False
             for group in groups_listed:
                 kept: list[int] = []
                 for person in group:
@@ -152,11 +155,14 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
                             torso_from_head.append([number, person])
                         else:
                             members_dropped.append([number, person])
+                            absent = True
                             continue
                     kept.append(person)
                 if len(kept) >= 2:
                     kept_groups.append(tuple(kept))
             groups = tuple(kept_groups)
+            if absent:  # they stay in the ground truth, missed as the field's protocol counts
+                listed_groups = tuple(tuple(g) for g in groups_listed if len(g) >= 2)
         report["heads_without_torso_ignored"] += int(np.sum(head_tracked & ~present))
 
         rows = np.flatnonzero(present)
@@ -172,6 +178,7 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
                 head_position=head_position,
                 head_yaw=head_yaw,
                 groups=groups,
+                listed_groups=listed_groups,
                 time=float(times[index]),
                 sequence="babble",
             )
