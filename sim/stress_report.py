@@ -5,6 +5,10 @@ the protocol, a summary and, per axis, a plot and tables of F1 with 95 % bootstr
 ``stress.json`` (every number) and ``stress-<axis>.png`` (F1 against the axis at T = 2/3 and
 T = 1, intervals shaded). :func:`log_results` puts the curves into a Rerun recording
 (``sim.recording.log_stress_curves``), one bar chart per axis and threshold.
+
+Every detector of the run is reported (``StressResults.detectors``): the built-in ones in the
+order of :data:`sim.stress.DETECTOR_LABELS`, then the plugins given to ``reform-sim stress
+--detector`` in the order they were given, labelled by their names.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from reform.report import command_block, percent, render_table
 from sim.stress import (
     AXES,
     DETECTOR_LABELS,
+    GCFF,
     THRESHOLDS,
     StressAxis,
     StressResults,
@@ -58,8 +63,40 @@ def plot_path(out_dir: str | Path, axis: str) -> Path:
     return Path(out_dir) / f"stress-{axis}.png"
 
 
-def plot_axis(axis: StressAxis, path: str | Path) -> Path:
-    """F1 of every detector along ``axis`` at T = 2/3 and T = 1, intervals shaded, as a PNG."""
+def _report_labels(detectors: Mapping[str, str] | None = None) -> dict[str, str]:
+    """The detectors a report shows, name -> label, in its order.
+
+    The built-in detectors of :data:`DETECTOR_LABELS` always, first and in that order (labelled
+    as ``detectors`` labels them, else as there); then every other detector of ``detectors``
+    (plugins), in its order. A plugin whose label another detector already has is told apart
+    by its name.
+
+    Args:
+        detectors: the run's detectors, name -> label (`StressResults.detectors`); None: the
+            built-in ones.
+    """
+    given = dict(detectors or {})
+    labels = {name: given.get(name, label) for name, label in DETECTOR_LABELS.items()}
+    for name, label in given.items():
+        if name in labels:
+            continue
+        taken = set(labels.values())
+        labels[name] = label if label not in taken else f"{label} ({name})"
+    return labels
+
+
+def plot_axis(
+    axis: StressAxis, path: str | Path, *, detectors: Mapping[str, str] | None = None
+) -> Path:
+    """F1 of every detector along ``axis`` at T = 2/3 and T = 1, intervals shaded, as a PNG.
+
+    Args:
+        axis: the axis's points.
+        path: the PNG to write.
+        detectors: the detectors to draw, name -> label (`StressResults.detectors`): the
+            built-in ones first, in their colours, then the others (plugins, dash-dotted);
+            None: the built-in ones. Those without scores on the axis are left out.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -68,14 +105,15 @@ def plot_axis(axis: StressAxis, path: str | Path) -> Path:
     x = axis.x
     categorical = axis.name == "sensor"
     positions = np.arange(x.size) if categorical else x
+    labels = _report_labels(detectors)
     figure, panels = plt.subplots(1, len(THRESHOLDS), figsize=PLOT_SIZE_IN, sharey=True)
     for panel, threshold in zip(np.atleast_1d(panels), THRESHOLDS, strict=True):
-        for index, detector in enumerate(DETECTOR_LABELS):
+        for index, detector in enumerate(labels):
             value, low, high = axis.curve(detector, threshold)
             if np.all(np.isnan(value)):
                 continue
             colour = f"C{index}"
-            style = "--" if detector == "gcff" else "-"
+            style = _line_style(detector)
             panel.plot(
                 positions,
                 value,
@@ -83,7 +121,7 @@ def plot_axis(axis: StressAxis, path: str | Path) -> Path:
                 marker="o",
                 ms=3,
                 color=colour,
-                label=DETECTOR_LABELS[detector],
+                label=labels[detector],
             )
             panel.fill_between(positions, low, high, color=colour, alpha=0.15, linewidth=0)
         panel.set_title(f"{axis.title}: F1 at {_THRESHOLD_TEXT[threshold]}")
@@ -102,8 +140,15 @@ def plot_axis(axis: StressAxis, path: str | Path) -> Path:
     return path
 
 
-def _axis_tables(axis: StressAxis) -> list[str]:
-    detectors = [d for d in DETECTOR_LABELS if any(d in p.scores for p in axis.points)]
+def _line_style(detector: str) -> str:
+    """GCFF dashed, REFORM solid, plugins dash-dotted."""
+    if detector == GCFF:
+        return "--"
+    return "-" if detector in DETECTOR_LABELS else "-."
+
+
+def _axis_tables(axis: StressAxis, labels: Mapping[str, str]) -> list[str]:
+    detectors = [d for d in labels if any(d in p.scores for p in axis.points)]
     context = [
         "level",
         "episodes",
@@ -128,7 +173,7 @@ def _axis_tables(axis: StressAxis) -> list[str]:
     ]
     lines += [render_table(context, rows, style="markdown"), ""]
     for threshold in THRESHOLDS:
-        headers = ["level", *(DETECTOR_LABELS[d] for d in detectors)]
+        headers = ["level", *(labels[d] for d in detectors)]
         rows = [
             [
                 p.label,
@@ -153,14 +198,15 @@ def _axis_tables(axis: StressAxis) -> list[str]:
 
 
 def _summary(results: StressResults) -> list[str]:
+    labels = _report_labels(results.detectors)
     lines = [
-        "| axis | from → to | " + " | ".join(DETECTOR_LABELS[d] for d in DETECTOR_LABELS) + " |",
-        "|:--|:--|" + "--:|" * len(DETECTOR_LABELS),
+        "| axis | from → to | " + " | ".join(labels.values()) + " |",
+        "|:--|:--|" + "--:|" * len(labels),
     ]
     for axis in results.axes:
         first, last = axis.points[0], axis.points[-1]
         cells = []
-        for detector in DETECTOR_LABELS:
+        for detector in labels:
             a = first.scores.get(detector, {}).get("2/3")
             b = last.scores.get(detector, {}).get("2/3")
             if a is None or b is None:
@@ -243,7 +289,7 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
         lines += [f"## {axis.title}", "", axis.description, ""]
         if axis.name in plots:
             lines += [f"![{axis.title}]({plots[axis.name]})", ""]
-        lines += _axis_tables(axis)
+        lines += _axis_tables(axis, _report_labels(results.detectors))
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -304,11 +350,12 @@ def log_results(rec: Any, results: StressResults) -> None:
     """Every axis's F1 curves, at each threshold, as stress bar charts in ``rec``."""
     from sim.recording import log_stress_curves
 
+    labels = _report_labels(results.detectors)
     for axis in results.axes:
         for threshold in THRESHOLDS:
             curves = {
-                DETECTOR_LABELS[d]: np.nan_to_num(axis.curve(d, threshold)[0], nan=0.0)
-                for d in DETECTOR_LABELS
+                label: np.nan_to_num(axis.curve(d, threshold)[0], nan=0.0)
+                for d, label in labels.items()
             }
             log_stress_curves(
                 rec,
@@ -336,7 +383,7 @@ def write_report(
     written: dict[str, Path] = {}
     plots = {}
     for axis in results.axes:
-        path = plot_axis(axis, plot_path(out, axis.name))
+        path = plot_axis(axis, plot_path(out, axis.name), detectors=results.detectors)
         written[f"plot:{axis.name}"] = path
         plots[axis.name] = path.name
     markdown = out / MARKDOWN_NAME

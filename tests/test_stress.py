@@ -126,6 +126,46 @@ def test_report_files(results, tmp_path) -> None:
         assert f"/dataset/stress/{name}/GCFF" in paths
 
 
+class Alone:
+    """A plugin detector: everyone alone (F1 0 wherever there is a true F-formation)."""
+
+    def predict(self, frames):
+        return [tuple((int(i),) for i in frame.ids) for frame in frames]
+
+
+def test_a_plugin_is_reported_plotted_and_recorded_beside_the_built_ins(detectors, tmp_path):
+    from rerun.chunk import RrdReader
+
+    name = "myplugin:make"  # as `reform-sim stress --detector myplugin:make` names it
+    results = run_stress(
+        TINY, seed=0, jobs=1, detectors=detectors, plugins={name: Alone()}, axes=["dropout"]
+    )
+    assert list(results.detectors)[-1] == name
+    written = write_report(results, tmp_path, command="c", save=tmp_path / "s.rrd")
+    markdown = written["markdown"].read_text()
+    builtins = ["REFORM weighted KNN", "REFORM bagged trees", "REFORM logistic regression", "GCFF"]
+    headers = [
+        [cell.strip() for cell in line.strip("|").split("|")]
+        for line in markdown.splitlines()
+        if line.startswith(("| axis ", "| level "))
+    ]
+    # The summary, then per threshold the axis's F1 table (the first "level" table is context).
+    assert headers[0] == ["axis", "from → to", *builtins, name]
+    assert headers[2:] == [["level", *builtins, name]] * 2
+    clean = results.axis("dropout").points[0].scores[name]["2/3"].f1.value
+    assert clean == 0.0  # the test parties hold groups; everyone alone finds none
+    image = matplotlib.image.imread(written["plot:dropout"])
+    assert image.ndim == 3 and image.shape[0] > 100
+    paths = {str(chunk.entity_path) for chunk in RrdReader(written["recording"]).stream()}
+    for curves in recording_names(results):
+        root = f"/dataset/stress/{curves}/"
+        assert {f"{root}GCFF", f"{root}REFORM_bagged_trees"} <= paths
+        # Rerun escapes the ':' of a module:factory name in entity paths.
+        assert {p for p in paths if p.startswith(root) and "myplugin" in p} == {
+            f"{root}myplugin\\:make"
+        }
+
+
 def test_reading_notes_follow_the_axes_that_ran(results, tmp_path) -> None:
     every = write_report(results, tmp_path / "all", command="c")["markdown"].read_text()
     for word in ("**Dropout**", "**Sensor**", "**Density**", "**Number of groups**", "Scene axes"):
