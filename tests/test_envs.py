@@ -17,6 +17,7 @@ from gymnasium.error import InvalidAction, ResetNeeded
 from gymnasium.utils.env_checker import check_env, data_equivalence
 
 import sim.envs  # noqa: F401  (registers the environments)
+from reform.detectors import DetectorError
 from scenarios import RobotPlace, Role, Scenario, Stage, TimelineBuilder
 from sim import Sensor
 from sim.envs import (
@@ -379,6 +380,114 @@ def test_record_dir_saves_a_readable_recording(tmp_path: Path) -> None:
     assert any("groups" in e for e in entities)
 
 
+def _run_out(env: SocialEnv) -> dict:
+    """Steps ``env`` (reset) standing still to the end of its episode; the last info."""
+    done = False
+    while not done:
+        *_, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+        done = terminated or truncated
+    return info
+
+
+# A lab's own detectors, in a module of their own (not installed): SocialEnv(detector=
+# "envplugin:make") imports it from sys.path.
+ENV_PLUGIN = '''
+def make():
+    return Alone()
+
+
+class Alone:
+    """Everyone alone."""
+
+    def predict(self, frames):
+        return [tuple((int(i),) for i in frame.ids) for frame in frames]
+
+
+class Forgets:
+    """Puts the frame's first agent in a group, forgets the others."""
+
+    def predict(self, frames):
+        return [((int(frame.ids[0]),),) for frame in frames]
+
+
+class Raises:
+    def predict(self, frames):
+        raise RuntimeError("no model loaded")
+'''
+
+
+@pytest.fixture
+def env_plugin(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    folder = tmp_path / "plugin"
+    folder.mkdir()
+    (folder / "envplugin.py").write_text(ENV_PLUGIN)
+    monkeypatch.syspath_prepend(str(folder))
+    yield "envplugin"
+    sys.modules.pop("envplugin", None)
+
+
+def test_a_plugin_detector_by_its_module_and_factory(env_plugin: str, tmp_path: Path) -> None:
+    env = toy_env(
+        detector=f"{env_plugin}:make", task="observe", episode_seconds=1.0, record_dir=tmp_path
+    )
+    assert env.detector_name == "envplugin:make"
+    _, info = env.reset(seed=0)
+    assert sorted(info["detected_groups"]) == [(0,), (1,), (2,)]
+    assert info["metrics"]["f1"] == 0.0  # the pair stands together; everyone alone misses it
+    episode = _run_out(env)["episode"]
+    assert episode["detector"] == "envplugin:make" and episode["f1"] == 0.0
+    assert Path(episode["recording"]).is_file()
+
+
+def test_a_registered_detector_by_its_name() -> None:
+    env = toy_env(detector="majority")
+    assert env.detector_name == "majority"
+    _, info = env.reset(seed=0)
+    assert sorted(info["detected_groups"]) == [(0,), (1,), (2,)]
+
+
+@pytest.mark.parametrize(
+    ("factory", "message"),
+    [
+        (
+            "Forgets",
+            r"^envplugin:Forgets: detector output for frame 0 \(toy-pair-\d+ t=0 s\): person \d "
+            r"is in no group; a prediction must be a full partition",
+        ),
+        (
+            "Raises",
+            r"^envplugin:Raises: detector raised RuntimeError on frame 0 \(toy-pair-\d+ t=0 s\): "
+            r"no model loaded$",
+        ),
+    ],
+    ids=["forgets-people", "raises"],
+)
+def test_a_broken_plugin_detector_is_one_line_naming_it(
+    env_plugin: str, factory: str, message: str
+) -> None:
+    env = toy_env(detector=f"{env_plugin}:{factory}")
+    with pytest.raises(DetectorError, match=message):
+        env.reset(seed=0)
+
+
+def test_a_plugin_that_is_not_there_fails_when_the_env_is_made(env_plugin: str) -> None:
+    with pytest.raises(
+        DetectorError, match=r"^detector 'envplugin:nothing': module 'envplugin' has no attribute"
+    ):
+        toy_env(detector=f"{env_plugin}:nothing")
+
+
+def test_the_truth_detector_s_episode_is_recorded(tmp_path: Path) -> None:
+    from rerun.chunk import RrdReader
+
+    env = toy_env(detector="truth", task="observe", episode_seconds=1.0, record_dir=tmp_path)
+    env.reset(seed=0)
+    path = Path(_run_out(env)["episode"]["recording"])
+    entities = {str(chunk.entity_path) for chunk in RrdReader(path).stream()}
+    # The recording's ground truth and the truth detector's detections, side by side.
+    assert {"/world/groups/truth/members", "/world/groups/truth-detector/members"} <= entities
+
+
 # ---------------------------------------------------------------------------------------------
 # The task's geometry (hand-worked scenes)
 
@@ -543,7 +652,13 @@ def test_detectors_truth_gcff_and_a_reform_model_file(tmp_path: Path) -> None:
     assert reform.detector_name == "reform"
     _, info = reform.reset(seed=0)
     assert sorted(m for g in info["detected_groups"] for m in g) == [0, 1, 2]
-    with pytest.raises(ValueError, match="detector must be 'gcff', 'truth' or an object"):
+    with pytest.raises(
+        DetectorError,
+        match=r"^detector must be 'truth', a detector's name \(gcff, majority, reform\), a "
+        r"plugin's package\.module:factory or an object with predict\(frames\), got 'oracle'$",
+    ):
         toy_env(detector="oracle")
+    with pytest.raises(DetectorError, match=r"^detector 'reform' needs the option model="):
+        toy_env(detector="reform")
     with pytest.raises(ValueError, match="give a detector or a model file, not both"):
         toy_env(detector="truth", model=path)

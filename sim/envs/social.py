@@ -72,6 +72,7 @@ from gymnasium import spaces
 from gymnasium.error import InvalidAction, ResetNeeded
 
 import scenarios
+from reform.detectors import DetectorError, detector_names, make_detector, run_detector
 from reform.frame import Frame, Group
 from reform.metrics import T_TWO_THIRDS, evaluate
 from scenarios import PlannedGroup, Scenario, Stage
@@ -98,6 +99,8 @@ __all__ = [
 
 CONTROL_RATE_HZ = 10.0  # Hz, agent decisions (the world moves at 100 Hz in between)
 DETECT_RATE_HZ = 2.0  # Hz, detector runs on the robot's view
+DEFAULT_DETECTOR = "gcff"  # the registry's detector an environment detects with by default
+TRUTH = "truth"  # the detector option naming `TruthDetector`
 JOIN_EPISODE_S = 40.0  # seconds, time limit of a joining episode
 VIEW_MARGIN_M = 1.0  # metres beyond the sensor's range that observed positions may reach
 ROOM_MARGIN_M = 0.5  # metres beyond the walls in the bounds of the robot's position
@@ -154,10 +157,18 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         control_rate: agent decisions per second (a divisor of the world's 100 Hz).
         detect_rate: detector runs per second (a divisor of ``control_rate``).
         sensor: the robot's head sensor (default: `sim.Sensor()`, a Kinect's view).
-        detector: an F-formation detector with ``predict(frames)`` (fitted), ``"gcff"`` (the
-            default, `reform.Gcff` with the reference settings) or ``"truth"`` (`TruthDetector`:
-            the ground truth of what the robot sees, an upper bound).
-        model: path to a REFORM model file (`reform.persistence.save_model`) to detect with.
+        detector: the F-formation detector: a name of the detector registry
+            (`reform.detectors.detector_names`: ``"gcff"``, the default, is `reform.Gcff` with
+            the reference settings; ``"majority"``; an installed package's detector), a
+            plugin's ``"package.module:factory"`` path (imported from ``sys.path``), each made
+            by `reform.detectors.make_detector` without options; ``"truth"``
+            (`TruthDetector`: the ground truth of what the robot sees, an upper bound); or an
+            object with ``predict(frames)``, fitted. Every detection is checked
+            (`reform.detectors.run_detector`): a detector that raises or returns no partition
+            of the frame's agents stops the step with one `reform.detectors.DetectorError`
+            line naming it (``detector_name``) and the frame.
+        model: path to a REFORM model file (`reform.persistence.save_model`) to detect with
+            (``make_detector("reform", model=model)``).
         observe_groups: whether the observation holds ``people_group``.
         robot_start: default start of the robot, ``"random"`` or ``"scenario"``; default:
             random for joining, the scenario's for observing.
@@ -603,7 +614,8 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     def _detect(self, truth: Truth, view: View, groups: tuple[Group, ...]) -> None:
         frame = self._eyes.observed_frame(truth, view, groups, sequence=self._sequence)
-        partition = tuple(self._detector.predict([frame])[0])
+        (partition,) = run_detector(self.detector_name, self._detector, [frame])
+        partition = tuple(partition)
         self._detections.append((frame, partition))
         self._detected = partition
         self._detected_at = truth.time
@@ -754,7 +766,8 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             path,
             self._recorded,
             observed=observed,
-            detections={self.detector_name: partitions},
+            # The recording's ground-truth tree is "truth": the TruthDetector's is named apart.
+            detections={_recorded_name(self.detector_name): partitions},
             events=scenario.events,
             seed=int(scenario.seed),
             name=self._sequence,
@@ -823,27 +836,28 @@ class TruthDetector:
         return [frame.partition() for frame in frames]
 
 
+def _recorded_name(name: str) -> str:
+    return f"{name}-detector" if name == TRUTH else name
+
+
 def _detector(detector: Any, model: str | os.PathLike[str] | None) -> tuple[Any, str]:
+    """The detector the options name, and its name (for messages, summaries, recordings)."""
     if detector is not None and model is not None:
         raise ValueError("give a detector or a model file, not both")
+    if model is not None:
+        return make_detector("reform", model=model), "reform"
+    if detector is None:
+        detector = DEFAULT_DETECTOR
     if isinstance(detector, str):
-        if detector == "gcff":
-            detector = None
-        elif detector == "truth":
-            return TruthDetector(), "truth"
-        else:
-            raise ValueError(
-                f"detector must be 'gcff', 'truth' or an object with predict(frames), got "
+        if detector == TRUTH:
+            return TruthDetector(), TRUTH
+        if ":" not in detector and detector not in detector_names():
+            raise DetectorError(
+                f"detector must be {TRUTH!r}, a detector's name ({', '.join(detector_names())}), "
+                f"a plugin's package.module:factory or an object with predict(frames), got "
                 f"{detector!r}"
             )
-    if model is not None:
-        from reform.persistence import load_model
-
-        return load_model(model), "reform"
-    if detector is None:
-        from reform.gcff import Gcff
-
-        return Gcff(), "gcff"
+        return make_detector(detector), detector
     if not callable(getattr(detector, "predict", None)):
         raise ValueError(
             f"detector must have predict(frames) (a fitted reform.Reform, reform.Gcff, ...), "
