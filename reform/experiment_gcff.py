@@ -17,6 +17,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from reform.detectors import make_detector, run_detector
 from reform.experiment import BABBLE, SALSA_TEST, split_json
 from reform.frame import Dataset, Frame
 from reform.gcff import (
@@ -29,7 +30,6 @@ from reform.gcff import (
     gcff_labels,
     labels_to_partition,
 )
-from reform.majority import Majority
 from reform.metrics import PROTOCOL
 
 __all__ = [
@@ -304,11 +304,12 @@ class _UnitsIgnored:
 def _evaluate(
     name: str, detector: Any, frames: Sequence[Frame], dataset: str, source: str
 ) -> dict[str, Any]:
+    """The detector's scores on ``frames``, its output checked (`reform.detectors.run_detector`)."""
     from reform.metrics import evaluate
 
     params = detector.get_params(deep=False) if hasattr(detector, "get_params") else {}
     params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
-    return evaluate(frames, detector.predict(frames)).to_json(
+    return evaluate(frames, run_detector(name, detector, frames)).to_json(
         detector=name, dataset=dataset, detector_params=params, source=source
     )
 
@@ -354,17 +355,23 @@ def gcff_comparison(
         tune=True, stride_grid=stride_grid, mdl_grid=mdl_grid, orientation=orientation
     ).fit(train)
     detectors = [
-        ("GCFF, paper (70 cm, 30000 cm²)", Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)),
-        ("GCFF, reference default (70 cm, 10000 cm²)", Gcff(stride=STRIDE_M, mdl=MDL_M2)),
+        (
+            "GCFF, paper (70 cm, 30000 cm²)",
+            make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2, orientation=orientation),
+        ),
+        (
+            "GCFF, reference default (70 cm, 10000 cm²)",
+            make_detector("gcff", stride=STRIDE_M, mdl=MDL_M2, orientation=orientation),
+        ),
         (
             f"GCFF, tuned on SALSA train ({100 * tuned.stride_:g} cm, {1e4 * tuned.mdl_:g} cm²)",
-            Gcff(stride=tuned.stride_, mdl=tuned.mdl_, orientation=orientation),
+            make_detector("gcff", stride=tuned.stride_, mdl=tuned.mdl_, orientation=orientation),
         ),
         (
             "GCFF, paper numbers with units ignored (0.7, 30000 on metres)",
             _UnitsIgnored(stride=PAPER_STRIDE_M, mdl=30000.0),
         ),
-        ("Majority", Majority()),
+        ("Majority", make_detector("majority")),
     ]
     results = []
     for frames, dataset, source in (
@@ -372,8 +379,6 @@ def gcff_comparison(
         (babble_frames, BABBLE, babble.source),
     ):
         for name, detector in detectors:
-            if isinstance(detector, Gcff):
-                detector.set_params(orientation=orientation)
             results.append(_evaluate(name, detector, frames, dataset, source))
     return GcffComparison(
         results=tuple(results),
