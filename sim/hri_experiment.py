@@ -50,9 +50,10 @@ import numpy as np
 
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, score_intervals
 from reform.classifiers import BAGGED_TREES, LOGISTIC_REGRESSION, WEIGHTED_KNN
+from reform.detectors import make_detector, run_detector
+from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from reform.frame import Frame
-from reform.gcff import Gcff
-from reform.majority import Majority
+from reform.gcff import MDL_M2, STRIDE_M
 from reform.metrics import Evaluation, evaluate
 from reform.report import command_block, json_float, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
@@ -125,9 +126,6 @@ VIEW_TEXT = {
 PAPER_HRI: Mapping[str, tuple[float, float, float]] = MappingProxyType(
     {"REFORM (each of the three classifiers)": (75.7, 100.0, 86.2), "GCFF": (51.5, 63.6, 56.9)}
 )
-PAPER_STRIDE_M = 0.7  # metres: the paper's "stride = 0.7"
-PAPER_MDL_M2 = 3.0  # square metres: the paper's "MDL = 30000", read as cm²
-REFERENCE_MDL_M2 = 1.0  # square metres: the reference code's default mdl = 10000 cm²
 _ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.stress uses 0-3)
 _ROLE_HRI_BOOTSTRAP = 5
 CLASSIFIERS = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION)
@@ -161,14 +159,16 @@ def reform_detectors(fitted: Mapping[str, Any], *, training: str) -> list[HriDet
 
 
 def baseline_detectors(*, reference: bool = True) -> list[HriDetector]:
-    """The untrained detectors: GCFF at the paper's setting, at the reference code's default
-    (with ``reference``) and the majority baseline."""
+    """The untrained detectors, from the detector registry (`reform.detectors.make_detector`):
+    GCFF at the paper's setting (`reform.experiment_gcff.PAPER_STRIDE_M`, ``PAPER_MDL_M2``), at
+    the reference code's default (`reform.gcff.STRIDE_M`, ``MDL_M2``; with ``reference``) and
+    the majority baseline."""
     out = [
         HriDetector(
             "gcff@paper",
             "GCFF, paper setting (70 cm, 30000 cm²)",
             "-",
-            Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
+            make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
         )
     ]
     if reference:
@@ -177,10 +177,10 @@ def baseline_detectors(*, reference: bool = True) -> list[HriDetector]:
                 "gcff@reference",
                 "GCFF, reference default (70 cm, 10000 cm²)",
                 "-",
-                Gcff(stride=PAPER_STRIDE_M, mdl=REFERENCE_MDL_M2),
+                make_detector("gcff", stride=STRIDE_M, mdl=MDL_M2),
             )
         )
-    out.append(HriDetector("majority", "Majority (no groups)", "-", Majority()))
+    out.append(HriDetector("majority", "Majority (no groups)", "-", make_detector("majority")))
     return out
 
 
@@ -394,8 +394,14 @@ def _rows(
     seed: int,
     resamples: int,
 ) -> list[HriRow]:
-    """The detector's rows on one view: each scene (``frames_by[scene]``) and all pooled."""
-    predictions = {s: detector.detector.predict(frames_by[s]) for s in HRI_SCENARIOS}
+    """The detector's rows on one view: each scene (``frames_by[scene]``) and all pooled.
+
+    Raises:
+        reform.detectors.DetectorError: one line naming the detector (its label), the view and
+            the frame, when the detector raises or returns no partition of a frame.
+    """
+    name = f"{detector.label} ({view} view)"
+    predictions = {s: run_detector(name, detector.detector, frames_by[s]) for s in HRI_SCENARIOS}
     out = []
     for k, scenario in enumerate((*HRI_SCENARIOS, ALL)):
         if scenario == ALL:
@@ -556,7 +562,9 @@ def record_scenes(
             path,
             run.truth,
             observed=None if sensor is None else seen,
-            detections={name: d.detector.predict(seen) for name, d in chosen.items()},
+            detections={
+                name: run_detector(d.label, d.detector, seen) for name, d in chosen.items()
+            },
             events=run.events,
             model=run.model,
             seed=episode_seed_,

@@ -8,6 +8,7 @@ import pytest
 
 from reform import Reform, time_split
 from reform.classifiers import make_classifier
+from reform.detectors import DetectorError
 from sim.cli import main
 from sim.hri_experiment import (
     HRI_SCENARIOS,
@@ -118,6 +119,27 @@ def test_recordings(detectors, tmp_path) -> None:
     entities = {chunk.entity_path for chunk in store.stream()}
     assert any(path.startswith("/world") for path in entities)
     assert any("reform" in path for path in entities) and any("gcff" in path for path in entities)
+
+
+class Forgets:
+    """A broken detector: puts each frame's first agent in a group and forgets the others."""
+
+    def predict(self, frames):
+        return [((int(frame.ids[0]),),) for frame in frames]
+
+
+def test_a_broken_detector_is_one_line_naming_it_the_view_and_the_frame() -> None:
+    broken = HriDetector("forgets", "Forgets everyone", "-", Forgets())
+    # One line (no '.' matches a newline): the detector's label and view, then the frame.
+    with pytest.raises(
+        DetectorError,
+        match=r"^Forgets everyone \(truth view\): detector output for frame 0 "
+        r"\(hri-conversation-\d+ t=\d+ s\): person \d+ is in no group; a prediction must be a "
+        r"full partition of the frame's ids, singletons included$",
+    ):
+        hri_experiment(
+            seed=0, seeds=1, views=("truth",), detectors=[broken], resamples=10, rate=1.0
+        )
 
 
 @pytest.mark.parametrize(
