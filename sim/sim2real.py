@@ -57,6 +57,7 @@ from typing import Any
 
 import numpy as np
 
+from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import PROTOCOL, T_TWO_THIRDS, Evaluation, evaluate
 
@@ -685,8 +686,10 @@ class SimToReal:
         return sim2real_markdown(self, command=command, figure=figure)
 
 
-def _evaluate(detector: Any, frames: Sequence[Frame]) -> Evaluation:
-    return evaluate(frames, detector.predict(frames))
+def _evaluate(name: str, detector: Any, frames: Sequence[Frame]) -> Evaluation:
+    """The detector's evaluation on ``frames``, its output checked (one `DetectorError` line
+    naming ``name`` and the frame when it raises or returns no partition)."""
+    return evaluate(frames, run_detector(name, detector, frames))
 
 
 def sim_to_real(
@@ -730,8 +733,6 @@ def sim_to_real(
     from reform.calibration import compare
     from reform.classifiers import CLASSIFIERS
     from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M, gcff_comparison
-    from reform.gcff import Gcff
-    from reform.majority import Majority
     from reform.splits import time_split
 
     started = time.perf_counter()
@@ -825,8 +826,9 @@ def sim_to_real(
         *,
         diagnostic: bool = False,
     ) -> None:
+        who = name if training_label == NONE else f"{name} (trained on {training_label})"
         for dataset, frames in tests.items():
-            evaluation = _evaluate(detector, frames)
+            evaluation = _evaluate(who, detector, frames)
             samples = _resampled_f1(evaluation, weights[dataset])
             source = salsa.source if dataset == SALSA_TEST else babble.source
             result = evaluation.to_json(detector=name, dataset=dataset, source=source)
@@ -880,9 +882,11 @@ def sim_to_real(
     names = {r["detector"] for r in comparison.results if r["detector"].startswith(GCFF_ROWS)}
     paper_name = next(n for n in sorted(names) if n.startswith(GCFF_ROWS[0]))
     tuned_name = next(n for n in sorted(names) if n.startswith(GCFF_ROWS[1]))
-    add(Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2), paper_name, NONE, None)
-    add(Gcff(stride=search.best_stride, mdl=search.best_mdl), tuned_name, SALSA_TRAIN, None)
-    add(Majority(), "Majority", NONE, None)
+    paper = make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)
+    add(paper, paper_name, NONE, None)
+    tuned = make_detector("gcff", stride=search.best_stride, mdl=search.best_mdl)
+    add(tuned, tuned_name, SALSA_TRAIN, None)
+    add(make_detector("majority"), "Majority", NONE, None)
     _check_gcff_rows(rows, comparison.results)
 
     if diagnostics and "bagged-trees" in classifiers:
@@ -992,8 +996,13 @@ def _cross_period(
             _block_labels(scored, BOOTSTRAP_BLOCKS), rng=rng, resamples=BOOTSTRAP_RESAMPLES
         )
         for name, synthetic_model in synthetic_models.items():
-            a = _evaluate(synthetic_model, scored)
-            b = _evaluate(models[(other[held_out], name)], scored)
+            label = f"REFORM {DISPLAY[name]}"
+            a = _evaluate(f"{label} (trained on {SYNTHETIC})", synthetic_model, scored)
+            b = _evaluate(
+                f"{label} (trained on {half_training(other[held_out])})",
+                models[(other[held_out], name)],
+                scored,
+            )
             diff = _resampled_f1(a, weights) - _resampled_f1(b, weights)
             point = a.at(T_TWO_THIRDS).f1 - b.at(T_TWO_THIRDS).f1
             out.append(
