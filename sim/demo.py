@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
 from sim.sim2real import SyntheticSource
@@ -63,6 +64,7 @@ HELD_BACK_SEED_OFFSET = 1_000_003  # held-back episodes: master seed + this (nev
 CLASSIFIERS = ("bagged-trees", "weighted-knn", "logistic-regression")
 SAVED_CLASSIFIER = "bagged-trees"  # the paper's best; saved as model.skops
 GCFF_LABEL = "GCFF (paper: 70 cm, 30000 cm²)"
+MAJORITY_LABEL = "Majority"
 CLASSIFIER_TEXT = {
     "bagged-trees": "Bagged Trees",
     "weighted-knn": "Weighted KNN",
@@ -290,8 +292,6 @@ def run_demo(
     import scenarios
     from reform.detector import Reform
     from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
-    from reform.gcff import Gcff
-    from reform.majority import Majority
     from reform.persistence import save_model
     from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
     from sim.episode import simulate_episode
@@ -386,21 +386,21 @@ def run_demo(
         tests["SALSA test split"] = _even(salsa_test, budget.real_frames)
     if "babble" in real:
         tests["Babble"] = _even(real["babble"].annotated(), budget.real_frames)
-    gcff = Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)
+    gcff = make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)
     detectors: dict[str, Any] = {
         f"REFORM {CLASSIFIER_TEXT[n]} (synthetic)": models[n] for n in CLASSIFIERS
     }
     if salsa_model is not None:
         detectors[f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (SALSA train)"] = salsa_model
     detectors[GCFF_LABEL] = gcff
-    detectors["Majority"] = Majority()
+    detectors[MAJORITY_LABEL] = make_detector("majority")
     scores: dict[tuple[str, str], dict[str, Any]] = {}
     evaluations: dict[tuple[str, str], Evaluation] = {}
     predictions: dict[tuple[str, str], list[Any]] = {}
     work = [(d, t) for t in tests for d in detectors]
     for detector, dataset in _bar(work, desc="scoring", show=progress_bars):
         frames = tests[dataset]
-        predicted = detectors[detector].predict(frames)
+        predicted = run_detector(detector, detectors[detector], frames)
         evaluation = evaluate(frames, predicted)
         predictions[(detector, dataset)] = predicted
         evaluations[(detector, dataset)] = evaluation
@@ -467,12 +467,13 @@ def run_demo(
     from sim.figures import Bar, score_bars, top_view
 
     reform_main = models[SAVED_CLASSIFIER]
+    main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
     scenario_rows = []
     for name in _bar(names, desc="recordings", show=progress_bars):
         episode = episodes[name]
         frames = episode.truth
-        reform_parts = reform_main.predict(frames)
-        gcff_parts = gcff.predict(frames)
+        reform_parts = run_detector(main_label, reform_main, frames)
+        gcff_parts = run_detector(GCFF_LABEL, gcff, frames)
         path = out / RECORDINGS / f"scenario-{name}.rrd"
         recorded = record_episode(
             path,
@@ -513,7 +514,6 @@ def run_demo(
                 "figure": f"{FIGURES}/scenario-{name}.png",
             }
         )
-    main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
     for dataset, frames in tests.items():
         slug = dataset.lower().replace(" ", "-")
         path = out / RECORDINGS / f"evaluation-{slug}.rrd"
@@ -538,7 +538,7 @@ def run_demo(
         dataset: [
             Bar(detector, 100 * evaluations[(detector, dataset)].at(T_TWO_THIRDS).f1)
             for detector in detectors
-            if detector != "Majority"
+            if detector != MAJORITY_LABEL
         ]
         for dataset in tests
     }
