@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from reform.atomic import atomic_open, atomic_path
+from reform.atomic import atomic_open
 from sim.benchmark import (
     ORIGINAL_GCFF_OWN,
     THRESHOLDS,
@@ -20,6 +20,7 @@ from sim.benchmark import (
     Cell,
     percent,
 )
+from sim.figures import pyplot, save_png
 
 __all__ = [
     "JSON_NAME",
@@ -256,11 +257,7 @@ def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
 
 def plot(benchmark: Benchmark, path: str | Path) -> Path:
     """F1 at T = 2/3 and T = 1, a bar per detector for every dataset, as a PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     datasets = [d.label for d in benchmark.datasets]
     n = len(benchmark.detectors)
     width = 0.8 / n
@@ -282,11 +279,7 @@ def plot(benchmark: Benchmark, path: str | Path) -> Path:
     np.atleast_1d(panels)[0].set_ylabel("F1 (frame-mean protocol)")
     np.atleast_1d(panels)[-1].legend(fontsize=7, loc="lower left")
     figure.tight_layout()
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        figure.savefig(tmp, dpi=PLOT_DPI, format="png")
-    plt.close(figure)
-    return path
+    return save_png(figure, path, dpi=PLOT_DPI)
 
 
 def _slug(label: str) -> str:

@@ -22,7 +22,7 @@ import numpy as np
 from reform.atomic import atomic_path
 from reform.frame import Frame, Group
 
-__all__ = ["Bar", "score_bars", "top_view"]
+__all__ = ["Bar", "pyplot", "save_png", "score_bars", "top_view"]
 
 DPI = 110  # dots per inch of the PNG files
 WIDTH_IN = 8.0  # inches, figure width
@@ -45,7 +45,8 @@ class Bar:
     high: float | None = None
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib.pyplot on the file-only Agg backend (no screen needed)."""
     import matplotlib
 
     matplotlib.use("Agg", force=True)
@@ -54,11 +55,12 @@ def _pyplot() -> Any:
     return plt
 
 
-def _save(fig: Any, path: str | os.PathLike[str]) -> Path:
-    plt = _pyplot()
+def save_png(fig: Any, path: str | os.PathLike[str], *, dpi: int = DPI) -> Path:
+    """Writes ``fig`` to ``path`` as a PNG, atomically, and closes it."""
+    plt = pyplot()
     target = Path(path)
     with atomic_path(target) as tmp:
-        fig.savefig(tmp, format="png", dpi=DPI, bbox_inches="tight")
+        fig.savefig(tmp, format="png", dpi=dpi, bbox_inches="tight")
     plt.close(fig)
     return target
 
@@ -85,7 +87,7 @@ def score_bars(
     """
     if not groups or not any(groups.values()):
         raise ValueError("groups must hold at least one bar, got none")
-    plt = _pyplot()
+    plt = pyplot()
     labels = list(dict.fromkeys(bar.label for bars in groups.values() for bar in bars))
     width = 0.8 / len(labels)
     fig, ax = plt.subplots(figsize=(WIDTH_IN, 3.8))
@@ -120,7 +122,7 @@ def score_bars(
         unique.values(), unique.keys(), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0)
     )
     ax.grid(axis="y", alpha=0.3)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def top_view(
@@ -146,7 +148,7 @@ def top_view(
     """
     if not partitions:
         raise ValueError("partitions must hold at least one partition, got none")
-    plt = _pyplot()
+    plt = pyplot()
     panels = len(partitions)
     fig, axes = plt.subplots(1, panels, figsize=(3.3 * panels, 3.4), squeeze=False)
     colours = plt.get_cmap("tab10")
@@ -183,4 +185,4 @@ def top_view(
         ax.tick_params(labelsize=7)
     if title:
         fig.suptitle(title, fontsize=10)
-    return _save(fig, path)
+    return save_png(fig, path)

@@ -179,3 +179,30 @@ class Repairs:
     def report(self) -> dict[str, Any]:
         """``{"repairs": {kind: count}, "first_repair": {kind: message}}`` (empty when none)."""
         return {"repairs": dict(self.counts), "first_repair": dict(self.first)}
+
+
+def note_absent_members(
+    repairs: Repairs,
+    members: Iterable[int],
+    present: set[int],
+    *,
+    path: Path,
+    where: str,
+    field: str,
+    id_word: str = "ID",
+) -> list[int]:
+    """The listed ``members`` absent from the frame's features, each counted as the repair
+    ``groundtruth_members_absent`` (they stay in the ground truth and count as missed)."""
+    absent = [m for m in members if m not in present]
+    if absent:
+        repairs.note(
+            "groundtruth_members_absent",
+            path=path,
+            where=where,
+            field=field,
+            expected=f"members present in the frame's features ({id_word}s {sorted(present)}); "
+            "an absent member stays in the ground truth and counts as missed",
+            found=f"ID {absent[0]}",
+            count=len(absent),
+        )
+    return absent

@@ -40,6 +40,7 @@ from reform.datasets._validation import (
     check_time_increases,
     check_unique_ids,
     make_frame,
+    note_absent_members,
     parse_float,
     require_file,
 )
@@ -493,19 +494,10 @@ def _canonical_groups(
             raise DataFormatError(
                 path, where, f"group {g}", "distinct members", " ".join(map(str, members))
             )
-        absent = [person for person in members if person not in present]
-        if absent:
-            # Listed alone, an absent person changes no score (singletons are not scored).
-            repairs.note(
-                "groundtruth_members_absent",
-                path=path,
-                where=where,
-                field=f"group {g}",
-                expected=f"members present in the frame's features (ids {sorted(present)}); "
-                "an absent member stays in the ground truth and counts as missed",
-                found=f"ID {absent[0]}",
-                count=len(absent),
-            )
+        # Listed alone, an absent person changes no score (singletons are not scored).
+        absent = note_absent_members(
+            repairs, members, present, path=path, where=where, field=f"group {g}", id_word="id"
+        )
         if len(members) >= 2:
             clash = grouped.intersection(members)
             if clash:

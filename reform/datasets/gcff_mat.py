@@ -29,6 +29,7 @@ from reform.datasets._validation import (
     check_time_increases,
     check_unique_ids,
     make_frame,
+    note_absent_members,
     require_file,
 )
 from reform.datasets.errors import DataFormatError
@@ -515,22 +516,12 @@ def _canonical(
     for k, members in enumerate(listed, start=1):
         if len(set(members)) != len(members):
             raise DataFormatError(path, where, f"group {k}", "distinct members", str(members))
-        absent = [m for m in members if m not in present]
-        if absent:
-            # Listed alone, an absent person changes no score (singletons are not scored).
-            repairs.note(
-                "groundtruth_members_absent",
-                path=path,
-                where=where,
-                field=f"group {k}",
-                expected=f"members present in the frame's features (IDs {sorted(present)}); "
-                "an absent member stays in the ground truth and counts as missed",
-                found=f"ID {absent[0]}",
-                count=len(absent),
-            )
-            if len(members) >= 2:
-                absent_total += len(absent)
+        # Listed alone, an absent person changes no score (singletons are not scored).
+        absent = note_absent_members(
+            repairs, members, present, path=path, where=where, field=f"group {k}", id_word="ID"
+        )
         if len(members) >= 2:
+            absent_total += len(absent)
             clash = grouped.intersection(members)
             if clash:
                 raise DataFormatError(

@@ -6,7 +6,13 @@ import argparse
 import shlex
 import sys
 
-from sim.cli._common import CliError, add_train_fraction_argument, check_output
+from sim.cli._common import (
+    CliError,
+    add_backend_arguments,
+    add_train_fraction_argument,
+    check_backend,
+    check_output,
+)
 
 DEFAULT_OUT = "benchmark-output"
 DEFAULT_DETECTORS = ("gcff", "gcff-own", "majority")
@@ -77,19 +83,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--no-recordings", action="store_true", help="do not write the per-dataset .rrd files"
     )
-    parser.add_argument(
-        "--jobs", type=int, default=None, metavar="N", help="worker processes (default: 1)"
-    )
-    parser.add_argument(
-        "--backend",
-        choices=("local", "ray"),
-        default="local",
-        help="local: worker processes on this machine (--jobs); ray: Ray tasks on the cluster at "
-        "--address, or on a Ray instance started on this machine without it",
-    )
-    parser.add_argument(
-        "--address", default=None, metavar="ADDR", help="Ray cluster address (with --backend ray)"
-    )
+    add_backend_arguments(parser, jobs_default="1")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=_run)
 
@@ -118,10 +112,7 @@ def _run(args: argparse.Namespace) -> int:
     from sim.benchmark import dataset_spec, detector_spec, model_spec, run_benchmark
     from sim.benchmark_report import write_report
 
-    if args.address is not None and args.backend != "ray":
-        raise CliError(f"--address needs --backend ray, got --backend {args.backend}")
-    if args.jobs is not None and args.backend == "ray":
-        raise CliError("--jobs sets local worker processes; with --backend ray the cluster works")
+    check_backend(args)
     check_output("--out", args.out, folder=True)
     names = args.data or _found_datasets()
     if not names:

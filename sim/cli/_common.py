@@ -180,6 +180,43 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data")
     )
 
 
+def add_backend_arguments(parser: argparse.ArgumentParser, *, jobs_default: str) -> None:
+    """``--jobs N``, ``--backend local|ray`` and ``--address ADDR``, checked by
+    :func:`check_backend`.
+
+    Args:
+        jobs_default: what ``--jobs`` defaults to, for the help (``"all cores"``).
+    """
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"worker processes with --backend local (default: {jobs_default})",
+    )
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local: worker processes on this machine (--jobs); ray: Ray tasks on every CPU of "
+        "the cluster at --address, or of a Ray instance started on this machine without it",
+    )
+    parser.add_argument(
+        "--address", default=None, metavar="ADDR", help="Ray cluster address (with --backend ray)"
+    )
+
+
+def check_backend(args: argparse.Namespace) -> None:
+    """Raises `CliError` for ``--address`` without Ray, or ``--jobs`` with it."""
+    if args.address is not None and args.backend != "ray":
+        raise CliError(f"--address needs --backend ray, got --backend {args.backend}")
+    if args.jobs is not None and args.backend == "ray":
+        raise CliError(
+            "--jobs sets local worker processes (--backend local); with --backend ray every CPU "
+            "of the Ray cluster works (a local one when --address is not given)"
+        )
+
+
 def add_train_fraction_argument(
     parser: argparse.ArgumentParser,
     *,

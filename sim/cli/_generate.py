@@ -6,10 +6,11 @@ import argparse
 import sys
 
 from sim.cli._common import (
-    CliError,
+    add_backend_arguments,
     add_overrides_argument,
     add_sensor_arguments,
     add_view_argument,
+    check_backend,
     check_output,
     parse_overrides,
     sensor_options,
@@ -44,23 +45,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_view_argument(parser)
     add_sensor_arguments(parser)
-    parser.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        metavar="N",
-        help="worker processes with --backend local (default: all cores)",
-    )
-    parser.add_argument(
-        "--backend",
-        choices=("local", "ray"),
-        default="local",
-        help="local: worker processes on this machine (--jobs); ray: Ray tasks on every CPU of "
-        "the cluster at --address, or of a Ray instance started on this machine without it",
-    )
-    parser.add_argument(
-        "--address", default=None, metavar="ADDR", help="Ray cluster address (with --backend ray)"
-    )
+    add_backend_arguments(parser, jobs_default="all cores")
     parser.add_argument(
         "--save-recordings",
         action="store_true",
@@ -73,13 +58,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     from sim.generate import generate_dataset
 
-    if args.address is not None and args.backend != "ray":
-        raise CliError(f"--address needs --backend ray, got --backend {args.backend}")
-    if args.jobs is not None and args.backend == "ray":
-        raise CliError(
-            "--jobs sets local worker processes (--backend local); with --backend ray every CPU "
-            "of the Ray cluster works (a local one when --address is not given)"
-        )
+    check_backend(args)
     check_output("--out", args.out, folder=True)
     report = generate_dataset(
         args.scenario,
