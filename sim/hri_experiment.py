@@ -48,8 +48,9 @@ from typing import Any
 
 import numpy as np
 
+import reform.classifiers
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, score_intervals
-from reform.classifiers import BAGGED_TREES, LOGISTIC_REGRESSION, WEIGHTED_KNN
+from reform.classifiers import BAGGED_TREES, WEIGHTED_KNN
 from reform.detectors import make_detector, run_detector
 from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from reform.frame import Frame
@@ -128,7 +129,9 @@ PAPER_HRI: Mapping[str, tuple[float, float, float]] = MappingProxyType(
 )
 _ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.stress uses 0-3)
 _ROLE_HRI_BOOTSTRAP = 5
-CLASSIFIERS = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION)
+CLASSIFIERS = tuple(
+    reform.classifiers.CLASSIFIERS
+)  # the paper's three, as reform.classifiers names them
 # Training data of REFORM: key suffix -> (label suffix, "trained on" column).
 _TRAINING = {
     "salsa": ("SALSA-trained", "SALSA train"),
