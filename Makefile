@@ -31,8 +31,13 @@ test: $(VENV)/.installed-test
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check reform sim scenarios tests benchmarks
 
+## bench: every benchmark in full (figures beside a same-run baseline); stops at the first failure
 bench: $(VENV)/.installed-test
-	for script in benchmarks/bench_*.py; do $(BIN)/python $$script || exit 1; done
+	@for script in benchmarks/bench_*.py; do \
+		echo "== $$script"; \
+		REFORM_SIM_DATASETS=$${REFORM_SIM_DATASETS:-$(DATASETS)} $(BIN)/python $$script \
+			|| { status=$$?; echo "make bench: $$script failed (exit status $$status)" >&2; exit 1; }; \
+	done
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -7,21 +7,23 @@ over frames with the same number of people) against a loop of ``frame_pair_featu
 ``pair_labels`` per frame. Prints medians and ratios (baseline / vectorised).
 
     python benchmarks/bench_characterisation.py [--datasets ../shared/datasets] [--repeats 5]
+        [--quick]
+
+``--quick``: the first 60 annotated frames, one repeat.
 """
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
-from timing import default_datasets, median_seconds
+from timing import BenchmarkParser, datasets_folder, median_seconds
 
 from reform.calibration import PAIR_FEATURES, pair_feature_samples
 from reform.characterisation import characterise, symmetry, tightness
 from reform.datasets import load_salsa
 from reform.features import frame_pair_features
 from reform.metrics import pair_labels
+
+QUICK_FRAMES = 60  # annotated frames of a --quick run
 
 
 def loop_characterise(frames) -> tuple[np.ndarray, np.ndarray]:
@@ -41,11 +43,12 @@ def loop_pairs(frames) -> tuple[np.ndarray, np.ndarray]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--datasets", default=default_datasets())
-    parser.add_argument("--repeats", type=int, default=5)
+    parser = BenchmarkParser(__doc__, repeats=5)
+    parser.add_datasets_argument()
     args = parser.parse_args()
-    frames = load_salsa(Path(args.datasets) / "salsa").annotated()
+    frames = load_salsa(datasets_folder(args.datasets, "salsa") / "salsa").annotated()
+    if args.quick:
+        frames = frames[:QUICK_FRAMES]
 
     shapes = characterise(frames)
     tight, sym = loop_characterise(frames)

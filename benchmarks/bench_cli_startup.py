@@ -17,17 +17,19 @@ Measured in the same run, each a fresh interpreter (wall time, median of ``--rep
 The ratio every parser / --help is the median of the ratios of runs made one after the other,
 so that a change of load on the machine hits both alike.
 
-Run: ``python benchmarks/bench_cli_startup.py [--repeats 7]``.
+Run: ``python benchmarks/bench_cli_startup.py [--repeats 7] [--quick]`` (``--quick``: one run
+per case, the file cache not warmed first).
 """
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+from timing import BenchmarkParser
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMAND = [sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())"]
@@ -62,11 +64,11 @@ def _seconds(argv: list[str]) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=7, help="runs per case (default 7)")
-    repeats = parser.parse_args().repeats
-    for argv in CASES.values():  # warm the file cache
-        _seconds(argv)
+    args = BenchmarkParser(__doc__, repeats=7).parse_args()
+    repeats = args.repeats
+    if not args.quick:
+        for argv in CASES.values():  # warm the file cache
+            _seconds(argv)
     times: dict[str, list[float]] = {name: [] for name in CASES}
     for _ in range(repeats):
         for name, argv in CASES.items():

@@ -9,33 +9,38 @@ the same run on the same scenes:
   ground-truth rule, takes the robot's view (field of view, ray-cast occlusion, noise draws),
   builds the observation, the task's geometry and reward terms, and every fifth step (2 Hz)
   runs GCFF on what the robot sees and scores it;
-* **world**: ``World.step(10)`` on a world built from the same scenario, seed and script, and
-  nothing else: the cost of moving the scene itself, the floor under any environment step.
+* **world**: ``World.step(10)`` on a world built from the same scenario, seed and script (the
+  scenario's intents as the world's script, ``sim.episode.ScenarioScript``, as the environment
+  builds it), and nothing else: the cost of moving the scene itself, the floor under any
+  environment step.
 
 Resets (making the scenario and the MuJoCo model) are timed apart. Prints medians over
 ``--repeats`` runs (and the best run, the least disturbed by other load on the machine); the
 ratio env / world is the median of the ratios of runs made one after the other, so that a
 change of load hits both alike. Target (issue 8): >= 2,000 env steps/s for 7 people.
 
-Run: ``python benchmarks/bench_envs.py [--steps 600] [--repeats 5]``.
+Run: ``python benchmarks/bench_envs.py [--steps 600] [--repeats 5] [--quick]`` (``--quick``:
+runs of 20 steps, one repeat).
 """
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
 
 import gymnasium as gym
+from timing import BenchmarkParser
 
 import sim.envs  # noqa: F401  (registers the environments)
-from sim.envs.social import _Intents  # the env's own script adapter (intents, no groups)
-from sim.episode import scene_spec
-from sim.world import World
+from sim import World
+from sim.episode import ScenarioScript, scene_spec
 
 SCENES = {7: "ReformSim/WordImprov-v0", 18: "ReformSim/Mingle-v0"}  # people -> environment
 SEED = 20200915
 TARGET_STEPS_PER_S = 2000.0  # env steps per second, 7 people
+STEPS = 600  # control steps per timed run
+QUICK_STEPS = 20  # control steps per timed run with --quick
+WARM_UP_STEPS = 50  # control steps before timing (compiled kernels, caches)
 
 
 def _env_run(env: gym.Env, seed: int, steps: int) -> tuple[float, float]:
@@ -63,7 +68,7 @@ def _world_run(env: gym.Env, seed: int, steps: int) -> float:
     world = World(
         scene_spec(scenario.stage, name=scenario.name),
         seed=seed,
-        script=_Intents(scenario),
+        script=ScenarioScript(scenario),
     )
     world.step(10)  # compiled kernels warm
     start = time.perf_counter()
@@ -73,12 +78,17 @@ def _world_run(env: gym.Env, seed: int, steps: int) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--steps", type=int, default=600, help="env steps per timed run")
-    parser.add_argument("--repeats", type=int, default=5, help="timed runs per measure")
+    parser = BenchmarkParser(__doc__, repeats=5)
+    parser.add_argument(
+        "--steps",
+        type=int,
+        default=None,
+        help=f"env steps per timed run (default {STEPS}; {QUICK_STEPS} with --quick)",
+    )
     args = parser.parse_args()
+    steps = args.steps or (QUICK_STEPS if args.quick else STEPS)
 
-    print(f"{args.steps} control steps (10 Hz) per run, {args.repeats} runs, median (best)")
+    print(f"{steps} control steps (10 Hz) per run, {args.repeats} runs, median (best)")
     print(
         f"{'people':>6} {'environment':<26} {'env steps/s':>18} {'World.step/s':>18} "
         f"{'env/world':>10} {'reset ms':>9}"
@@ -86,13 +96,13 @@ def main() -> None:
     results = {}
     for people, env_id in SCENES.items():
         env = gym.make(env_id, disable_env_checker=True)
-        _env_run(env, SEED, 50)  # warm-up: compiled kernels, caches
+        _env_run(env, SEED, QUICK_STEPS if args.quick else WARM_UP_STEPS)  # warm-up
         env_rates, world_rates, ratios, resets = [], [], [], []
         for k in range(args.repeats):
-            reset_s, env_s = _env_run(env, SEED + k, args.steps)
-            world_s = _world_run(env, SEED + k, args.steps)
-            env_rates.append(args.steps / env_s)
-            world_rates.append(args.steps / world_s)
+            reset_s, env_s = _env_run(env, SEED + k, steps)
+            world_s = _world_run(env, SEED + k, steps)
+            env_rates.append(steps / env_s)
+            world_rates.append(steps / world_s)
             ratios.append(env_s / world_s)
             resets.append(reset_s)
         env.close()

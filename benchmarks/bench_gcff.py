@@ -6,18 +6,18 @@ reference ``gc.m`` writes them, alpha-moves tried one at a time with a loop over
 must return the same labels (checked). Scenes are conversational circles of 1-5 people laid
 out on a grid 3.5 m apart (seeded).
 
-Run: ``python benchmarks/bench_gcff.py [--quick]``. Target: at most 1 ms per frame for 18 people.
+Run: ``python benchmarks/bench_gcff.py [--repeats 7] [--quick]`` (``--quick``: two scenes per
+size, one of 200 people, best of 2). Target: at most 1 ms per frame for 18 people.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import statistics
 
 import numpy as np
 from circles import circle, wrap_yaws
-from timing import timed
+from timing import BenchmarkParser, timed
 
 from reform.gcff import MAX_REFITS, VISIBILITY_BASE, VISIBILITY_COSINE, energy, gcff_labels
 
@@ -27,6 +27,8 @@ STRIDE_CM = 70.0  # centimetres (the reference code's setting)
 MDL_CM2 = 10_000.0  # square centimetres
 GRID_SPACING_M = 3.5  # metres between circle centres
 TARGET_MS_18 = 1.0  # milliseconds per frame for 18 people
+SCENES = 15  # scenes per size below 200 people (3 of 200)
+QUICK_SCENES = 2  # scenes per size below 200 people with --quick (1 of 200)
 
 
 def scene(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -114,9 +116,7 @@ def per_frame_seconds(fn, scenes, repeats: int) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer scenes and repeats")
-    args = parser.parse_args()
+    args = BenchmarkParser(__doc__, repeats=7, quick_repeats=2).parse_args()
     rng = np.random.default_rng(SEED)
 
     def vectorised(position, yaw):
@@ -125,13 +125,13 @@ def main() -> None:
     print(f"GCFF per-frame time, stride {STRIDE_CM:g} cm, mdl {MDL_CM2:g} cm² (medians)")
     print(f"{'people':>6}  {'reform.gcff':>12}  {'loop baseline':>14}  {'speed-up':>8}  scenes")
     for n in SIZES:
-        count = (3 if args.quick else 15) if n < 200 else (1 if args.quick else 3)
+        count = (QUICK_SCENES if args.quick else SCENES) if n < 200 else (1 if args.quick else 3)
         scenes = [scene(n, rng) for _ in range(count)]
         for position, yaw in scenes:
             fast, slow = vectorised(position, yaw), loop_gcff(position, yaw)
             if not np.array_equal(fast, slow):
                 raise SystemExit(f"{n} people: vectorised and loop labels differ")
-        repeats = 3 if args.quick else 7
+        repeats = args.repeats
         fast = per_frame_seconds(vectorised, scenes, repeats)
         slow = per_frame_seconds(loop_gcff, scenes, 1 if n >= 200 else max(1, repeats // 2))
         print(

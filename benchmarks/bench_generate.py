@@ -9,11 +9,13 @@ scenario's natural length (600 s, 1,200 frames), ground-truth view. Measured in 
   stands on), the shard written from the pose arrays (``write_parquet_arrays``, the path
   ``generate`` takes for the truth view), and for comparison the Frame path (one validated
   `reform.Frame` per instant, then ``write_parquet``), which the robot view and recordings take;
+  the two shards must be the same file, byte for byte (checked);
 * **end to end**: ``generate_dataset`` (simulation, shards written atomically, the card) with one
   process, then with ``--jobs`` processes (joblib/loky, the pool warmed up first; the cold start
   is printed too), medians over ``--repeats`` runs: frames per wall-clock second and per CPU
   second (this process and its workers), the ratio parallel / serial, the ratio to the poses
-  floor, and the time one million annotated frames would take.
+  floor, and the time one million annotated frames would take. Every run must write the same
+  number of annotated frames (checked).
 
 The machine's load average is printed: on a machine shared with other work the wall-clock
 figures fall behind the CPU figures; "on free cores" divides the CPU cost by the cores.
@@ -21,12 +23,13 @@ figures fall behind the CPU figures; "on free cores" divides the CPU cost by the
 Target (issue 6): one million annotated 18-person frames in <= 10 minutes on the 2-core machine.
 
 Run: ``python benchmarks/bench_generate.py [--episodes 8] [--repeats 3] [--jobs 2] [--seed 1]
-[--quick]``.
+[--quick]`` (``--quick``: two episodes cut to their first 30 s, one repeat, the cold start of
+the workers as the parallel run).
 """
 
 from __future__ import annotations
 
-import argparse
+import filecmp
 import os
 import shutil
 import statistics
@@ -35,6 +38,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from timing import BenchmarkParser
 
 import scenarios
 from reform import Dataset
@@ -50,10 +54,17 @@ SEED = 1  # master seed (--seed)
 MILLION = 1_000_000  # annotated frames
 TARGET_MINUTES = 10.0
 CLOCK = time.process_time  # stages are single-threaded: CPU time, blind to other load
+EPISODES = 8  # episodes per timed run
+QUICK_EPISODES = 2  # episodes per timed run with --quick
+QUICK_DURATION_S = 30.0  # seconds: each episode cut to this with --quick (60 annotated frames)
 
 
-def stages(episodes: int, seed: int) -> dict[str, float]:
-    """Seconds per annotated frame of each stage, medians over ``episodes`` episodes."""
+def stages(episodes: int, seed: int, duration: float | None) -> dict[str, float]:
+    """Seconds per annotated frame of each stage, medians over ``episodes`` episodes.
+
+    Also checks that the shard written from the pose arrays is the Frame path's file, byte for
+    byte. ``duration``: seconds of each episode (None: the scenario's own length).
+    """
     times: dict[str, list[float]] = {
         "scenario": [],
         "poses": [],
@@ -67,11 +78,12 @@ def stages(episodes: int, seed: int) -> dict[str, float]:
             made = scenarios.make(SCENARIO, seed=episode_seed(seed, k), people=PEOPLE)
             made_s = CLOCK() - start
             start = CLOCK()
-            blocks = list(episode_blocks(made, rate=RATE_HZ))
+            blocks = list(episode_blocks(made, rate=RATE_HZ, duration=duration, sequence="bench"))
             poses_s = CLOCK() - start
             start = CLOCK()
+            columns_path = Path(scratch) / f"{k}-columns.parquet"
             write_parquet_arrays(
-                Path(scratch) / f"{k}-columns.parquet",
+                columns_path,
                 time=np.concatenate([b.time for b in blocks]),
                 ids=blocks[0].ids,
                 kinds=blocks[0].kinds,
@@ -89,8 +101,13 @@ def stages(episodes: int, seed: int) -> dict[str, float]:
             frames = tuple(f for b in blocks for f in b.frames())
             frames_s = CLOCK() - start
             start = CLOCK()
-            write_parquet(Dataset(frames=frames, name=SCENARIO), Path(scratch) / f"{k}.parquet")
+            frames_path = Path(scratch) / f"{k}.parquet"
+            write_parquet(Dataset(frames=frames, name=SCENARIO), frames_path)
             parquet_s = CLOCK() - start
+            if not filecmp.cmp(columns_path, frames_path, shallow=False):
+                raise SystemExit(
+                    f"episode {k}: the shard from the pose arrays differs from the Frame path's"
+                )
             count = len(frames)
             for name, seconds in (
                 ("scenario", made_s),
@@ -119,7 +136,9 @@ def _children_cpu_s() -> float:
     return total
 
 
-def end_to_end(episodes: int, n_jobs: int, seed: int) -> tuple[float, float, int]:
+def end_to_end(
+    episodes: int, n_jobs: int, seed: int, duration: float | None = None
+) -> tuple[float, float, int]:
     """(wall seconds, CPU seconds of this process and its workers, annotated frames) of one
     ``generate_dataset`` run into a fresh folder."""
     scratch = Path(tempfile.mkdtemp(prefix="bench-generate-"))
@@ -132,6 +151,7 @@ def end_to_end(episodes: int, n_jobs: int, seed: int) -> tuple[float, float, int
             out_dir=scratch / "data",
             options={"people": PEOPLE},
             rate=RATE_HZ,
+            duration=duration,
             n_jobs=n_jobs,
             progress=False,
         )
@@ -142,28 +162,33 @@ def end_to_end(episodes: int, n_jobs: int, seed: int) -> tuple[float, float, int
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--episodes", type=int, default=8, help="episodes per timed run")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser = BenchmarkParser(__doc__, repeats=3)
+    parser.add_argument(
+        "--episodes",
+        type=int,
+        default=None,
+        help=f"episodes per timed run (default {EPISODES}; {QUICK_EPISODES} with --quick)",
+    )
     parser.add_argument("--jobs", type=int, default=2, help="processes of the parallel runs")
-    parser.add_argument("--quick", action="store_true", help="4 episodes, 1 repeat")
     parser.add_argument("--seed", type=int, default=SEED, help="master seed")
     args = parser.parse_args()
     seed = args.seed
-    episodes = 4 if args.quick else args.episodes
-    repeats = 1 if args.quick else args.repeats
+    episodes = args.episodes or (QUICK_EPISODES if args.quick else EPISODES)
+    repeats = args.repeats
+    duration = QUICK_DURATION_S if args.quick else None
 
     start = time.perf_counter()
-    end_to_end(1, 1, seed)  # the motion kernel compiled or loaded from numba's cache
+    end_to_end(1, 1, seed, duration)  # the motion kernel compiled or loaded from numba's cache
     print(f"warm-up (motion kernel, imports) {time.perf_counter() - start:.2f} s")
     made = scenarios.make(SCENARIO, seed=episode_seed(seed, 0), people=PEOPLE)
+    seconds = made.duration if duration is None else min(duration, made.duration)
     print(
-        f"{SCENARIO}: {PEOPLE} people, {made.duration:g} s episodes at {RATE_HZ:g} Hz "
-        f"({round(made.duration * RATE_HZ)} annotated frames each), {episodes} episodes per "
+        f"{SCENARIO}: {PEOPLE} people, {seconds:g} s episodes at {RATE_HZ:g} Hz "
+        f"({round(seconds * RATE_HZ)} annotated frames each), {episodes} episodes per "
         f"run, median of {repeats}"
     )
 
-    per_frame = stages(min(episodes, 4), seed)
+    per_frame = stages(min(episodes, 4), seed, duration)
     fast = per_frame["scenario"] + per_frame["poses"] + per_frame["columns"]
     slow = per_frame["scenario"] + per_frame["poses"] + per_frame["frames"] + per_frame["parquet"]
     print("\none episode, serially, CPU time per annotated frame:")
@@ -177,16 +202,23 @@ def main() -> None:
     )
 
     start = time.perf_counter()
-    cold_s, _, cold_frames = end_to_end(episodes, args.jobs, seed)
+    cold = end_to_end(episodes, args.jobs, seed, duration)
+    cold_s, _, cold_frames = cold
     print(
         f"\ncold start of {args.jobs} workers included: {cold_frames / cold_s:,.0f} frames/s "
         f"({time.perf_counter() - start:.1f} s)"
     )
     load_before = os.getloadavg()[0]
-    serial = [end_to_end(episodes, 1, seed) for _ in range(repeats)]
-    parallel = [end_to_end(episodes, args.jobs, seed) for _ in range(repeats)]
+    serial = [end_to_end(episodes, 1, seed, duration) for _ in range(repeats)]
+    if args.quick:  # the cold start stands for the parallel runs
+        parallel = [cold]
+    else:
+        parallel = [end_to_end(episodes, args.jobs, seed, duration) for _ in range(repeats)]
     load_after = os.getloadavg()[0]
     frames = serial[0][2]
+    written = {cold_frames, *(f for _, _, f in serial + parallel)}
+    if written != {frames}:
+        raise SystemExit(f"runs wrote different numbers of annotated frames: {sorted(written)}")
     serial_wall = frames / statistics.median(w for w, _, _ in serial)
     parallel_wall = frames / statistics.median(w for w, _, _ in parallel)
     serial_cpu = frames / statistics.median(c for _, c, _ in serial)

@@ -2,19 +2,21 @@
 
 Baselines, run in the same process: SALSA and Babble - read the file and convert every numeric
 token with ``float()`` (no validation, no frames); Parquet - ``pyarrow.parquet.read_table`` of the
-same file (raw columnar read, no frames), and ``write_table`` of that table for writing.
-Prints medians and ratios (loader / baseline).
+same file (raw columnar read, no frames), and ``write_table`` of that table for writing; the
+frames read back must equal SALSA's (checked). Prints medians and ratios (loader / baseline).
 
-    python benchmarks/bench_loaders.py [--datasets ../shared/datasets] [--repeats 5]
+    python benchmarks/bench_loaders.py [--datasets ../shared/datasets] [--repeats 5] [--quick]
+
+``--quick``: one run of each.
 """
 
 from __future__ import annotations
 
-import argparse
 import tempfile
 from pathlib import Path
 
-from timing import default_datasets, median_seconds
+import pyarrow.parquet as pq
+from timing import BenchmarkParser, datasets_folder, median_seconds
 
 from reform.datasets import load_babble, load_salsa, read_parquet, write_parquet
 
@@ -38,16 +40,16 @@ def parse_floor_babble(folder: Path) -> int:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--datasets", default=default_datasets())
-    parser.add_argument("--repeats", type=int, default=5)
+    parser = BenchmarkParser(__doc__, repeats=5)
+    parser.add_datasets_argument()
     args = parser.parse_args()
-    root = Path(args.datasets)
-    import pyarrow.parquet as pq
+    root = datasets_folder(args.datasets, "salsa", "babble")
 
     salsa = load_salsa(root / "salsa")
     with tempfile.TemporaryDirectory() as tmp:
         parquet = write_parquet(salsa, Path(tmp) / "salsa.parquet")
+        if read_parquet(parquet).frames != salsa.frames:
+            raise SystemExit("read_parquet: the frames read back differ from SALSA's")
         table = pq.read_table(parquet)
         rows = [
             (
@@ -71,7 +73,7 @@ def main() -> None:
         for name, loader, baseline in rows:
             measured = median_seconds(loader, args.repeats)
             floor = median_seconds(baseline, args.repeats)
-            print(f"{name:<22} {measured:9.3f} {floor:11.3f} {measured / floor:7.1f}")
+            print(f"{name:<22} {measured:9.3f} {floor:11.3f} {measured / floor:6.1f}x")
 
 
 if __name__ == "__main__":

@@ -24,7 +24,9 @@ Also printed: the time of each logging stage, the file size per simulated minute
 positions logged with one ``rec.log`` per frame against one ``send_columns`` (why logging is in
 bulk).
 
-    python benchmarks/bench_recording.py [--rates 2 10] [--repeats 5] [--seed 0]
+    python benchmarks/bench_recording.py [--rates 2 10] [--repeats 5] [--seed 0] [--quick]
+
+``--quick``: a 2-minute session at 2 Hz, REFORM trained on one minute, one repeat.
 
 Results (2 cores, load average 1.0-1.2 from another process, rerun-sdk 0.41, medians of 5):
 
@@ -50,7 +52,6 @@ session took 0.086 s (2 Hz, ratio 0.20) and 0.374 s (10 Hz, ratio 0.30) in the s
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import tempfile
@@ -61,7 +62,7 @@ from typing import Any
 
 import numpy as np
 import rerun as rr
-from timing import timed
+from timing import BenchmarkParser, timed
 
 from reform import Frame, Gcff, Reform, evaluate
 from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
@@ -84,6 +85,10 @@ from sim.recording import (
 SCENARIO = "word-improv"  # Babble's game: a moderator and six players
 DURATION_S = 2100.0  # seconds: 35 minutes
 TRAIN_DURATION_S = 600.0  # seconds of another seed's episode REFORM learns from
+QUICK_DURATION_S = 120.0  # seconds of the session with --quick
+QUICK_TRAIN_DURATION_S = 60.0  # seconds of the training episode with --quick
+RATES_HZ = (2.0, 10.0)  # frame rates of the session
+QUICK_RATES_HZ = (2.0,)  # frame rates of the session with --quick
 TRAIN_RATE_HZ = 2.0  # frames per second of the training episode
 GOAL = 0.20  # logging may cost at most this fraction of simulating
 ROBOT_OPTIONS = {"robot": "watch"}  # the Directions Robot watches from a corner
@@ -193,10 +198,17 @@ def verdict(ratio: float) -> str:
 
 
 def bench_rate(
-    rate: float, *, seed: int, repeats: int, reform: Reform, tmp: Path, per_frame: bool
+    rate: float,
+    *,
+    seed: int,
+    duration: float,
+    repeats: int,
+    reform: Reform,
+    tmp: Path,
+    per_frame: bool,
 ) -> dict[str, float]:
     """Prints the figures of one frame rate; returns the ratios that have a goal."""
-    kwargs = {"seed": seed, "duration": DURATION_S, "rate": rate}
+    kwargs = {"seed": seed, "duration": duration, "rate": rate}
     simulated = timed(lambda: simulate_episode(SCENARIO, **kwargs), repeats)
     rolled = timed(lambda: list(episode_blocks(SCENARIO, **kwargs)), repeats)
     t_sim, episode = simulated.median, simulated.result
@@ -329,44 +341,54 @@ def bench_rate(
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rates", type=float, nargs="+", default=[2.0, 10.0], help="Hz")
-    parser.add_argument("--repeats", type=int, default=5)
+    parser = BenchmarkParser(__doc__, repeats=5)
+    parser.add_argument(
+        "--rates",
+        type=float,
+        nargs="+",
+        default=None,
+        help=f"frame rates, Hz (default {' '.join(f'{r:g}' for r in RATES_HZ)}; "
+        f"{' '.join(f'{r:g}' for r in QUICK_RATES_HZ)} with --quick)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
+    rates = args.rates or list(QUICK_RATES_HZ if args.quick else RATES_HZ)
+    duration = QUICK_DURATION_S if args.quick else DURATION_S
+    train_duration = QUICK_TRAIN_DURATION_S if args.quick else TRAIN_DURATION_S
 
     load = os.getloadavg()[0]
     print(
-        f"{SCENARIO}, seed {args.seed}, {DURATION_S / 60:g} simulated minutes; medians of "
+        f"{SCENARIO}, seed {args.seed}, {duration / 60:g} simulated minutes; medians of "
         f"{args.repeats}; load average {load:.2f} at the start"
     )
     start = time.perf_counter()
     training = simulate_episode(
-        SCENARIO, seed=args.seed + 1, duration=TRAIN_DURATION_S, rate=TRAIN_RATE_HZ
+        SCENARIO, seed=args.seed + 1, duration=train_duration, rate=TRAIN_RATE_HZ
     )
     reform = Reform().fit(training.truth)
     print(
-        f"REFORM (bagged trees) trained on seed {args.seed + 1}'s {TRAIN_DURATION_S / 60:g} "
+        f"REFORM (bagged trees) trained on seed {args.seed + 1}'s {train_duration / 60:g} "
         f"minutes at {TRAIN_RATE_HZ:g} Hz in {time.perf_counter() - start:.1f} s"
     )
     ratios: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for rate in args.rates:
+        for rate in rates:
             ratios.update(
                 bench_rate(
                     rate,
                     seed=args.seed,
+                    duration=duration,
                     repeats=args.repeats,
                     reform=reform,
                     tmp=Path(tmp),
-                    per_frame=rate == max(args.rates),
+                    per_frame=rate == max(rates),
                 )
             )
     session = {k: v for k, v in ratios.items() if "truth view" not in k}
     extra = {k: v for k, v in ratios.items() if "truth view" in k}
     print(
-        f"\nGoal: logging a simulated 35-minute, 7-person session costs at most {GOAL:.0%} of "
-        "simulating it (logging / simulate_episode):"
+        f"\nGoal: logging a simulated {duration / 60:g}-minute, 7-person session costs at most "
+        f"{GOAL:.0%} of simulating it (logging / simulate_episode):"
     )
     for label, ratio in sorted(session.items(), key=lambda kv: "robot" in kv[0]):
         print(f"  {label:72s} {ratio:.3f}  {'met' if ratio <= GOAL else 'NOT met'}")
@@ -376,8 +398,8 @@ def main() -> None:
     for label, ratio in extra.items():
         print(f"  {label:72s} {ratio:.3f}  {'met' if ratio <= GOAL else 'NOT met'}")
     met = all(r <= GOAL for r in session.values())
-    rates = " and ".join(f"{r:g} Hz" for r in args.rates)
-    print(f"The goal is {'met' if met else 'NOT met'} at {rates}.")
+    at = " and ".join(f"{r:g} Hz" for r in rates)
+    print(f"The goal is {'met' if met else 'NOT met'} at {at}.")
 
 
 if __name__ == "__main__":

@@ -24,12 +24,12 @@ the machine); the ratio harness / bare (lower is better) is the median
 of the ratios of runs made one after the other, so that a change of load hits both alike.
 Target (issue 5): 18 people at >= 1,000x real time, harness <= 3x the bare loop.
 
-Run: ``python benchmarks/bench_sim.py [--quick] [--repeats 5] [--threads 2] [--no-hour]``.
+Run: ``python benchmarks/bench_sim.py [--quick] [--repeats 5] [--threads 2] [--no-hour]``
+(``--quick``: 2 s runs, two repeats, no hour run).
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import statistics
 import time
@@ -38,6 +38,7 @@ from collections.abc import Mapping
 
 import mujoco
 import numpy as np
+from timing import BenchmarkParser
 
 from sim import Intent, PersonSpec, RobotSpec, SceneSpec, World, build_scene
 
@@ -45,6 +46,7 @@ SIZES = (7, 18, 50)  # people per scene (plus the robot)
 ROOMS_M = {7: 5.0, 18: 7.0, 50: 11.0}  # metres, side of the square room per size
 SEED = 20200915
 SIM_SECONDS = 60.0  # simulated seconds per timed run
+QUICK_SIM_SECONDS = 2.0  # simulated seconds per timed run with --quick
 RATE_HZ = 100.0  # pose output rate
 HOUR_S = 3600.0  # seconds
 TARGET_SPEED_18 = 1000.0  # x real time
@@ -176,15 +178,13 @@ def hour_run(n: int) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="shorter runs, no hour run")
-    parser.add_argument("--repeats", type=int, default=5)
+    parser = BenchmarkParser(__doc__, repeats=5, quick_repeats=2)
     parser.add_argument("--threads", type=int, default=1, help="also time the rollout on N threads")
     parser.add_argument("--no-hour", action="store_true", help="skip the one-hour 50-person run")
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), choices=SIZES)
     args = parser.parse_args()
-    seconds = 10.0 if args.quick else SIM_SECONDS
-    repeats = 2 if args.quick else args.repeats
+    seconds = QUICK_SIM_SECONDS if args.quick else SIM_SECONDS
+    repeats = args.repeats
     steps = round(seconds * RATE_HZ)
 
     start = time.perf_counter()

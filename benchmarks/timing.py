@@ -1,4 +1,9 @@
-"""What every benchmark script shares: timing a call over repeats, and where the datasets are.
+"""What every benchmark script shares: its command line, timing a call over repeats, and where
+the datasets are.
+
+Every script's command line starts from :class:`BenchmarkParser`: ``--quick`` (a smoke run that
+``tests/test_benchmarks.py`` runs: tiny sizes, one or two repeats, every equality check of the
+full run, no timing threshold) and, where the script repeats its timings, ``--repeats``.
 
 A plain module beside the scripts: ``python benchmarks/bench_x.py`` puts ``benchmarks/`` first
 on ``sys.path``, so each script imports it as ``from timing import ...``.
@@ -6,16 +11,93 @@ on ``sys.path``, so each script imports it as ``from timing import ...``.
 
 from __future__ import annotations
 
+import argparse
 import os
 import statistics
+import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 DATASETS_VARIABLE = "REFORM_SIM_DATASETS"  # environment variable naming the datasets folder
 REPO = Path(__file__).resolve().parents[1]  # the repository's root
+DATASETS_MISSING = 3  # exit status of a script whose datasets are not found (tests skip on it)
+QUICK_HELP = (
+    "smoke run: tiny sizes and one or two repeats, every equality check still made; the "
+    "figures mean little"
+)
+
+
+class BenchmarkParser(argparse.ArgumentParser):
+    """A benchmark's command line: ``--quick``, and ``--repeats`` when it repeats its timings.
+
+    ``--repeats`` defaults to ``repeats``, or to ``quick_repeats`` with ``--quick``; given
+    explicitly it wins over both.
+
+    Args:
+        doc: The script's docstring; its first paragraph is the description.
+        repeats: Default number of timed runs per measure; None: the script takes no
+            ``--repeats``.
+        quick_repeats: Timed runs per measure with ``--quick``, 1 or 2.
+    """
+
+    def __init__(self, doc: str, *, repeats: int | None = None, quick_repeats: int = 1) -> None:
+        super().__init__(description=doc.split("\n\n")[0])
+        self._repeats = repeats
+        self._quick_repeats = quick_repeats
+        self.add_argument("--quick", action="store_true", help=QUICK_HELP)
+        if repeats is not None:
+            self.add_argument(
+                "--repeats",
+                type=_at_least_one,
+                default=None,
+                help=f"timed runs per measure (default {repeats}; {quick_repeats} with --quick)",
+            )
+
+    def add_datasets_argument(self) -> None:
+        """Adds ``--datasets DIR``: the real datasets' folder (see :func:`datasets_folder`)."""
+        self.add_argument(
+            "--datasets",
+            type=Path,
+            default=Path(default_datasets()),
+            help=f"folder holding salsa/ and babble/ (default ${DATASETS_VARIABLE}, else "
+            "../shared/datasets)",
+        )
+
+    def parse_args(
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        """Parses the command line; fills ``repeats`` from ``--quick`` when not given."""
+        parsed = super().parse_args(args, namespace)
+        if self._repeats is not None and parsed.repeats is None:
+            parsed.repeats = self._quick_repeats if parsed.quick else self._repeats
+        return parsed
+
+
+def _at_least_one(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text}")
+    return value
+
+
+def datasets_folder(folder: Path, *names: str) -> Path:
+    """``folder`` when it holds every dataset of ``names`` (``"salsa"``, ``"babble"``).
+
+    Otherwise prints which is missing and how to point at them, and exits with status
+    :data:`DATASETS_MISSING`.
+    """
+    missing = [name for name in names if not (folder / name).is_dir()]
+    if missing:
+        print(
+            f"datasets not found: {', '.join(missing)} in {folder} (pass --datasets DIR or set "
+            f"{DATASETS_VARIABLE} to the folder holding them)",
+            file=sys.stderr,
+        )
+        raise SystemExit(DATASETS_MISSING)
+    return folder
 
 
 @dataclass(frozen=True)
