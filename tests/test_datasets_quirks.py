@@ -296,3 +296,16 @@ def test_gcff_angles_a_little_beyond_a_turn_are_wrapped(tmp_path):
     people = [[1, 0.0, 0.0, 6.77], [2, 100.0, 0.0, -7.0]]
     (frame,) = load_gcff(_gcff(tmp_path / "set", [people], [[[1, 2]]])).frames
     np.testing.assert_allclose(frame.yaw, [6.77 - 2 * np.pi, -7.0 + 2 * np.pi])
+
+
+def test_a_mat_file_that_crashes_the_reader_is_one_clean_error(tmp_path):
+    # Four zero bytes at offset 232 of this small file make scipy's compiled MATLAB reader
+    # crash the process (SIGSEGV, found by tests/test_datasets_fuzz.py): read in a child
+    # process, it is one error naming the file.
+    folder = _gcff(tmp_path / "set", [PEOPLE[:2]], [[[1, 2]]])
+    data = (folder / "features.mat").read_bytes()
+    (folder / "features.mat").write_bytes(data[:232] + b"\0\0\0\0" + data[236:])
+    with pytest.raises(
+        DataFormatError, match=r"features.mat: expected a readable MATLAB .mat file, found"
+    ):
+        load_gcff(folder)

@@ -4,6 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+# Longest offending value a message quotes whole, characters; longer ones are cut, saying so.
+FOUND_LIMIT = 120
+
+
+def shorten(text: str, limit: int = FOUND_LIMIT) -> str:
+    """``text`` on one line, cut to about ``limit`` characters, its full length said."""
+    text = str(text).replace("\n", "\\n").replace("\r", "\\r")
+    if len(text) <= limit:
+        return text
+    return f"{text[: limit - 20]}… ({len(text):,} characters)"
+
 
 class DataFormatError(ValueError):
     """A data file does not hold what its format promises.
@@ -33,7 +44,7 @@ class DataFormatError(ValueError):
         if where:
             parts.append(where)
         detail = f"field {field!r}: " if field else ""
-        parts.append(f"{detail}expected {expected}, found {found}")
+        parts.append(f"{detail}expected {expected}, found {shorten(found)}")
         message = ": ".join(parts)
         super().__init__(f"{message}; {hint}" if hint else message)
 

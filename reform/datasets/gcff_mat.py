@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from reform.datasets._isolated import IsolatedFailure, run_isolated
 from reform.datasets._validation import (
     Repairs,
     check_time_increases,
@@ -55,6 +56,7 @@ _UNITS_PER_M = {"cm": 100.0, "m": 1.0}
 # beyond in sets derived from tracker output (Cocktail Party's run to 6.8 rad); anything up to
 # two full turns is accepted and wrapped. Beyond that the values look like degrees. Radians.
 _ANGLE_LIMIT_RAD = 4.0 * math.pi
+_ID_LIMIT = 2.0**53  # largest |ID| a double holds exactly
 _TIMESTAMP_RTOL = 1e-9  # relative tolerance matching GTtimestamp to timestamp
 
 
@@ -325,22 +327,29 @@ def _load_sequence(
 
 
 def _loadmat(path: Path) -> dict[str, Any]:
-    from scipy.io import loadmat
-
     if not path.exists():
         raise DataFormatError(path, None, None, "a MATLAB .mat file", "no such file")
     if not path.is_file():
         raise DataFormatError(path, None, None, "a MATLAB .mat file", "a folder")
+    import scipy.io  # noqa: F401 - imported here, so that no child imports it again
+
     try:
-        return loadmat(path, squeeze_me=False, struct_as_record=True)
-    except NotImplementedError as exc:  # MATLAB v7.3 (HDF5)
-        raise DataFormatError(
-            path, None, None, "a MATLAB file of version 7.2 or older", f"{exc}"
-        ) from exc
-    except Exception as exc:  # scipy raises ValueError, TypeError, OSError... on corrupt files
-        raise DataFormatError(
-            path, None, None, "a readable MATLAB .mat file", f"{type(exc).__name__}: {exc}"
-        ) from exc
+        # In a child process: a corrupt file can crash scipy's compiled reader.
+        return run_isolated(_read_mat, str(path))
+    except IsolatedFailure as exc:
+        if exc.kind == "NotImplementedError":  # MATLAB v7.3 (HDF5)
+            raise DataFormatError(
+                path, None, None, "a MATLAB file of version 7.2 or older", exc.message
+            ) from None
+        # scipy raises ValueError, TypeError, OSError, MemoryError... on corrupt files
+        found = exc.message if exc.kind == "crash" else f"{exc.kind}: {exc.message}"
+        raise DataFormatError(path, None, None, "a readable MATLAB .mat file", found) from None
+
+
+def _read_mat(path: str) -> dict[str, Any]:
+    from scipy.io import loadmat
+
+    return loadmat(path, squeeze_me=False, struct_as_record=True)
 
 
 def _variable(mat: dict[str, Any], name: str, path: Path) -> Any:
@@ -429,6 +438,15 @@ def _frame_rows(
                 repr(float(array[bad[0], column])),
             )
     ids = array[:, 0]
+    huge = np.flatnonzero(np.abs(ids) > _ID_LIMIT)
+    if huge.size:
+        raise DataFormatError(
+            path,
+            f"{where}, row {huge[0] + 1}",
+            "ID",
+            f"an integer with |ID| <= 2^53 ({_ID_LIMIT:g})",
+            repr(float(ids[huge[0]])),
+        )
     fractional = np.flatnonzero(ids != np.round(ids))
     if fractional.size:
         raise DataFormatError(
@@ -491,7 +509,11 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
                 path, where, f"group {k}", "a numeric vector of IDs", f"a {vector.dtype} array"
             )
         values = vector.astype(np.float64).ravel()
-        if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
+        if (
+            not np.all(np.isfinite(values))
+            or np.any(values != np.round(values))
+            or np.any(np.abs(values) > _ID_LIMIT)
+        ):
             raise DataFormatError(path, where, f"group {k}", "integer IDs", str(values.tolist()))
         groups.append([int(v) for v in values])
     return groups
