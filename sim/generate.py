@@ -800,7 +800,11 @@ def _card(
     *,
     complete: bool,
     resolved_options: Mapping[str, Any] | None,
+    files: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> dict[str, Any]:
+    """The card; ``files`` (shard path -> ``bytes`` and ``sha256``) are listed with each shard,
+    so that a reader can tell a missing, truncated or altered shard (the final card has them)."""
+    files = files or {}
     sizes: Counter[int] = Counter()
     for shard in shards:
         sizes.update(shard.group_sizes)
@@ -822,8 +826,26 @@ def _card(
             "simulated_seconds": sum(s.duration for s in shards),
             "group_sizes": {str(k): v for k, v in sorted(sizes.items())},
         },
-        "shards": [s.to_json() for s in sorted(shards, key=lambda s: s.episode)],
+        "shards": [
+            {**s.to_json(), **files.get(s.path, {})}
+            for s in sorted(shards, key=lambda s: s.episode)
+        ],
     }
+
+
+def _shard_files(out_dir: Path, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
+    """Each shard's size and sha256, for the card."""
+    import hashlib
+
+    files = {}
+    for shard in shards:
+        path = out_dir / shard.path
+        digest = hashlib.sha256()
+        with open(path, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
+        files[shard.path] = {"bytes": path.stat().st_size, "sha256": digest.hexdigest()}
+    return files
 
 
 def _command(spec: GenerationSpec, episodes: int) -> str:
@@ -1157,9 +1179,15 @@ def generate_dataset(
                 ray.shutdown()
         summaries = [shards[k] for k in range(episodes)]
         card_path = out_dir / CARD_JSON
-        _write_cards(
-            out_dir, _card(spec, episodes, summaries, complete=True, resolved_options=resolved)
+        card = _card(
+            spec,
+            episodes,
+            summaries,
+            complete=True,
+            resolved_options=resolved,
+            files=_shard_files(out_dir, summaries),
         )
+        _write_cards(out_dir, card)
     return GenerationReport(
         out_dir=out_dir,
         spec=spec,

@@ -39,6 +39,7 @@ from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 
 __all__ = [
     "CARD_JSON",
+    "verify_folder",
     "CODECS",
     "COLUMNS",
     "FORMAT_VERSION",
@@ -570,17 +571,27 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
         if p.is_file()
         and not any(part.startswith((".", "_")) for part in p.relative_to(path).parts)
     ]
-    if not files:
+    card = _read_card(path)
+    problems: list[DataFormatError] = []
+    if card is not None:
+        if not allow_incomplete:
+            _check_complete(path, card, len(files))
+        files, problems = _check_shards(path, card, files, allow_incomplete=allow_incomplete)
+    if not files and not problems:
         raise DataFormatError(path, None, None, "a folder holding .parquet files", "none")
-    if not allow_incomplete:
-        _check_complete(path, len(files))
     files.sort(key=lambda p: _natural_key(p.relative_to(path)))
     frames: list[Frame] = []
     shards = []
     names = []
     sequence_file: dict[str, Path] = {}
     for file in files:
-        shard_frames, header = _read_file(file)
+        try:
+            shard_frames, header = _read_file(file)
+        except DataFormatError as exc:
+            if not allow_incomplete:
+                raise
+            problems.append(exc)
+            continue
         relative = file.relative_to(path).as_posix()
         for sequence in dict.fromkeys(f.sequence for f in shard_frames):
             if sequence in sequence_file:
@@ -604,21 +615,25 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
                 "metadata": header.get("metadata", {}),
             }
         )
-    name = names[0] if len(set(names)) == 1 and names[0] else path.name
+    name = names[0] if names and len(set(names)) == 1 and names[0] else path.name
+    metadata: dict[str, Any] = {"shards": shards}
+    if problems:
+        # Read on purpose (allow_incomplete): what is missing is said, never left out silently.
+        metadata["incomplete"] = [str(p) for p in problems]
     return Dataset(
         frames=tuple(frames),
         name=name,
         source=str(path),
         units="m",
-        metadata={"shards": shards},
+        metadata=metadata,
     )
 
 
-def _check_complete(folder: Path, n_files: int) -> None:
-    """Refuses a ``reform-sim generate`` folder whose card says the run has not finished."""
+def _read_card(folder: Path) -> dict[str, Any] | None:
+    """The card of a ``reform-sim generate`` folder (``dataset.json``), or None without one."""
     card_path = folder / CARD_JSON
     if not card_path.is_file():
-        return
+        return None
     try:
         card = json.loads(card_path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -629,6 +644,111 @@ def _check_complete(folder: Path, n_files: int) -> None:
             "a reform-sim dataset card (JSON)",
             f"{type(exc).__name__}: {exc}",
         ) from exc
+    if not isinstance(card, dict):
+        raise DataFormatError(
+            card_path, None, None, "a reform-sim dataset card (a JSON object)", type(card).__name__
+        )
+    return card
+
+
+def _sha256(path: Path) -> str:
+    import hashlib
+
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _check_shards(
+    folder: Path, card: Mapping[str, Any], files: list[Path], *, allow_incomplete: bool
+) -> tuple[list[Path], list[DataFormatError]]:
+    """The card's shards, each checked: listed files that are missing, unreadable, or whose
+    size or sha256 differs from the card's, and Parquet files the card does not list.
+
+    Returns:
+        The files to read and, with ``allow_incomplete``, the problems found (else the first
+        problem is raised).
+    """
+    listed = card.get("shards")
+    if card.get("complete") is not True or not isinstance(listed, list):
+        return files, []
+    card_path = folder / CARD_JSON
+    problems: list[DataFormatError] = []
+    keep: list[Path] = []
+    names: set[str] = set()
+    for k, entry in enumerate(listed):
+        if not isinstance(entry, dict) or not isinstance(entry.get("path"), str):
+            raise DataFormatError(
+                card_path, f"shards[{k}]", "path", "a shard's relative path", repr(entry)
+            )
+        relative = entry["path"]
+        names.add(relative)
+        shard = folder / relative
+        where = f"shard {relative} (shards[{k}] of {CARD_JSON})"
+        try:
+            size = shard.stat().st_size if shard.is_file() else None
+        except OSError as exc:
+            size, error = None, exc
+        else:
+            error = None
+        if size is None:
+            found = "no such file" if error is None else f"{type(error).__name__}: {error}"
+            problems.append(DataFormatError(shard, None, None, f"the {where}", found))
+            continue
+        expected_size = entry.get("bytes")
+        if isinstance(expected_size, int) and size != expected_size:
+            problems.append(
+                DataFormatError(
+                    shard, None, "bytes", f"{expected_size} bytes ({where})", f"{size} bytes"
+                )
+            )
+            continue
+        expected_digest = entry.get("sha256")
+        if isinstance(expected_digest, str):
+            try:
+                digest = _sha256(shard)
+            except OSError as exc:
+                problems.append(DataFormatError(shard, None, None, f"a readable {where}", f"{exc}"))
+                continue
+            if digest != expected_digest:
+                problems.append(
+                    DataFormatError(
+                        shard, None, "sha256", f"{expected_digest} ({where})", f"{digest} (altered)"
+                    )
+                )
+                continue
+        keep.append(shard)
+    strays = [r for r in sorted(f.relative_to(folder).as_posix() for f in files) if r not in names]
+    for relative in strays:
+        problems.append(
+            DataFormatError(
+                folder / relative,
+                None,
+                None,
+                f"only the shards {CARD_JSON} lists ({len(listed)})",
+                "a Parquet file it does not list (from another dataset?)",
+            )
+        )
+    if problems and not allow_incomplete:
+        first = problems[0]
+        more = f"; {len(problems) - 1} more problem(s)" if len(problems) > 1 else ""
+        raise DataFormatError(
+            first.path,
+            first.where,
+            first.field,
+            first.expected,
+            first.found,
+            hint=f"the dataset is not whole{more}; `reform-sim data verify {folder}` lists every "
+            "problem, allow_incomplete=True (--allow-incomplete) reads the shards that are",
+        )
+    return keep, problems
+
+
+def _check_complete(folder: Path, card: Mapping[str, Any], n_files: int) -> None:
+    """Refuses a ``reform-sim generate`` folder whose card says the run has not finished."""
+    card_path = folder / CARD_JSON
     if not isinstance(card, dict) or card.get("complete", True) is not False:
         return
     command = str(card.get("command", "")).replace("--out DIR", f"--out {folder}")
@@ -996,3 +1116,40 @@ def _groups(
             )
         out.append(tuple(int(p) for p in person[in_group][np.argsort(positions)]))
     return tuple(out)
+
+
+def verify_folder(path: str | PathLike[str]) -> list[str]:
+    """Every problem of a ``reform-sim generate`` folder, one line each (empty when whole).
+
+    Checks what :func:`read_parquet` checks, without stopping at the first problem: the card
+    says the run finished; each shard it lists is there, of its size and sha256; no Parquet
+    file is there that it does not list; every shard reads.
+
+    Raises:
+        DataFormatError: ``path`` is not a folder with a card (``dataset.json``).
+    """
+    folder = Path(path)
+    card = _read_card(folder) if folder.is_dir() else None
+    if card is None:
+        raise DataFormatError(
+            folder, None, None, f"a reform-sim generate folder (with {CARD_JSON})", "none"
+        )
+    problems: list[str] = []
+    files = [
+        p
+        for p in folder.rglob("*.parquet")
+        if p.is_file()
+        and not any(part.startswith((".", "_")) for part in p.relative_to(folder).parts)
+    ]
+    try:
+        _check_complete(folder, card, len(files))
+    except DataFormatError as exc:
+        problems.append(str(exc))
+    keep, found = _check_shards(folder, card, files, allow_incomplete=True)
+    problems += [str(p) for p in found]
+    for file in sorted(keep, key=lambda p: _natural_key(p.relative_to(folder))):
+        try:
+            _read_file(file)
+        except DataFormatError as exc:
+            problems.append(str(exc))
+    return problems

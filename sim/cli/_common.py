@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -243,7 +244,7 @@ def load_data(args: argparse.Namespace, *, attribute: str = "data"):
         raise CliError("--units px needs --metres-per-pixel M: pixels are never read as metres")
     if args.metres_per_pixel is not None and args.units != "px":
         raise CliError(f"--metres-per-pixel is the scale of --units px, got --units {args.units}")
-    return load_dataset(
+    dataset = load_dataset(
         resolve(getattr(args, attribute)),
         format=args.format,
         units=args.units,
@@ -251,6 +252,14 @@ def load_data(args: argparse.Namespace, *, attribute: str = "data"):
         strict=args.strict,
         allow_incomplete=args.allow_incomplete,
     )
+    missing = dataset.metadata.get("incomplete")
+    if missing:  # read on purpose (--allow-incomplete): say what is left out
+        print(
+            f"warning: {getattr(args, attribute)}: {len(missing)} shard(s) left out "
+            f"(--allow-incomplete): {missing[0]}" + (" …" if len(missing) > 1 else ""),
+            file=sys.stderr,
+        )
+    return dataset
 
 
 # Sensor flags: field of sim.Sensor -> (flag, unit shown in the help).

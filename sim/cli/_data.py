@@ -41,6 +41,15 @@ def _actions(parser: argparse.ArgumentParser) -> None:
         arguments=_info_arguments,
     )
     actions.add_parser(
+        "verify",
+        help="check that a generated dataset folder is whole: every shard there, unaltered",
+        description="Checks a `reform-sim generate` folder against its card (dataset.json): the "
+        "run finished, every shard it lists is there with its size and sha256, no other Parquet "
+        "file is there, every shard reads. Prints each problem on a line; exit status 1 when "
+        "there is one.",
+        arguments=_verify_arguments,
+    )
+    actions.add_parser(
         "convert",
         help="write a dataset in the project's Parquet format",
         description=_CONVERT_DESCRIPTION,
@@ -53,6 +62,24 @@ def _info_arguments(parser: argparse.ArgumentParser) -> None:
     add_data_arguments(parser, flag="path")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.set_defaults(handler=run_info)
+
+
+def _verify_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("path", metavar="DIR", help="a folder written by reform-sim generate")
+    parser.set_defaults(handler=run_verify)
+
+
+def run_verify(args: argparse.Namespace) -> int:
+    from reform.datasets.parquet import verify_folder
+
+    problems = verify_folder(args.path)
+    for problem in problems:
+        print(problem)
+    if problems:
+        print(f"{args.path}: {len(problems)} problem(s); the dataset is not whole", file=sys.stderr)
+        return 1
+    print(f"{args.path}: whole (every shard its card lists is there, unaltered)")
+    return 0
 
 
 def _convert_arguments(parser: argparse.ArgumentParser) -> None:

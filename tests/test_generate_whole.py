@@ -1,0 +1,117 @@
+"""A generated dataset folder is whole or refused: its card lists every shard with its size and
+sha256, and a missing, truncated, altered or foreign shard is named, never silently dropped."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from reform.datasets import DataFormatError, read_parquet
+from reform.datasets.parquet import verify_folder
+from sim.cli import main
+from sim.generate import CARD_JSON, generate_dataset
+
+EPISODES = 3
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("whole") / "ds"
+    generate_dataset(
+        "hri-conversation",
+        episodes=EPISODES,
+        seed=5,
+        out_dir=out,
+        duration=5.0,
+        n_jobs=1,
+        progress=False,
+    )
+    return out
+
+
+@pytest.fixture
+def folder(reference, tmp_path) -> Path:
+    copy = tmp_path / "ds"
+    shutil.copytree(reference, copy)
+    return copy
+
+
+def _shards(folder: Path) -> list[dict]:
+    return json.loads((folder / CARD_JSON).read_text())["shards"]
+
+
+def test_the_card_lists_every_shard_with_its_size_and_checksum(reference):
+    shards = _shards(reference)
+    assert len(shards) == EPISODES
+    for shard in shards:
+        path = reference / shard["path"]
+        assert shard["bytes"] == path.stat().st_size
+        assert len(shard["sha256"]) == 64
+    assert verify_folder(reference) == []
+    assert len({f.sequence for f in read_parquet(reference)}) == EPISODES
+
+
+def _delete(folder: Path, shard: str) -> None:
+    (folder / shard).unlink()
+
+
+def _truncate(folder: Path, shard: str) -> None:
+    path = folder / shard
+    path.write_bytes(path.read_bytes()[:-100])
+
+
+def _alter(folder: Path, shard: str) -> None:
+    path = folder / shard
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize(
+    ("damage", "message"),
+    [
+        (_delete, r"expected the shard .*, found no such file"),
+        (_truncate, r"field 'bytes': expected \d+ bytes .*found \d+ bytes"),
+        (_alter, r"field 'sha256': expected [0-9a-f]{64} .*\(altered\)"),
+    ],
+    ids=["missing", "truncated", "altered"],
+)
+def test_a_damaged_shard_is_named_unless_asked_for_what_is_there(folder, damage, message):
+    shard = _shards(folder)[1]["path"]
+    damage(folder, shard)
+    with pytest.raises(DataFormatError, match=message) as caught:
+        read_parquet(folder)
+    assert shard in str(caught.value) and "data verify" in str(caught.value)
+    partial = read_parquet(folder, allow_incomplete=True)
+    assert len({f.sequence for f in partial}) == EPISODES - 1
+    (problem,) = partial.metadata["incomplete"]
+    assert shard in problem
+    (reported,) = verify_folder(folder)
+    assert shard in reported
+
+
+def test_a_parquet_file_the_card_does_not_list_is_refused(folder):
+    first = _shards(folder)[0]["path"]
+    stray = folder / "scenario=hri-conversation" / "episode=99" / "part.parquet"
+    stray.parent.mkdir()
+    shutil.copy(folder / first, stray)
+    with pytest.raises(DataFormatError, match=r"episode=99/part.parquet: expected only the shards"):
+        read_parquet(folder)
+
+
+def test_data_verify_and_the_commands_say_what_is_left_out(folder, capsys):
+    assert main(["data", "verify", str(folder)]) == 0
+    assert "whole" in capsys.readouterr().out
+    shard = _shards(folder)[2]["path"]
+    _delete(folder, shard)
+    assert main(["data", "verify", str(folder)]) == 1
+    captured = capsys.readouterr()
+    assert shard in captured.out and "1 problem(s)" in captured.err
+    assert main(["data", "info", str(folder)]) == 2
+    assert "the dataset is not whole" in capsys.readouterr().err
+    assert main(["data", "info", str(folder), "--allow-incomplete"]) == 0
+    err = capsys.readouterr().err
+    assert "1 shard(s) left out (--allow-incomplete)" in err and shard in err
