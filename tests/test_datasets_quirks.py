@@ -309,3 +309,34 @@ def test_a_mat_file_that_crashes_the_reader_is_one_clean_error(tmp_path):
         DataFormatError, match=r"features.mat: expected a readable MATLAB .mat file, found"
     ):
         load_gcff(folder)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "folder", "loop", "device"])
+def test_a_file_that_is_not_a_regular_file_is_named_for_what_it_is(tmp_path, kind):
+    import os
+
+    folder = tmp_path / "set"
+    folder.mkdir()
+    (folder / "group_names.txt").write_text("0.2 < ID_001 >\n")
+    target = folder / "features.txt"
+    if kind == "fifo":
+        os.mkfifo(target)  # opening it would wait for a writer forever
+    elif kind == "folder":
+        target.mkdir()
+    elif kind == "loop":
+        os.symlink(folder / "b", folder / "a")
+        os.symlink(folder / "a", folder / "b")
+        os.symlink(folder / "a", target)
+    else:
+        os.symlink("/dev/zero", target)  # endless
+    found = {
+        "fifo": r"a FIFO \(named pipe\)",
+        "folder": "a folder",
+        "loop": "a symbolic link loop",
+        "device": "a character device",
+    }[kind]
+    with pytest.raises(
+        DataFormatError,
+        match=rf"features.txt: expected a DANTE features file \(a file\), found {found}",
+    ):
+        load_dataset(folder, format="dante")

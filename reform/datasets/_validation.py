@@ -7,6 +7,7 @@ Each check raises :class:`~reform.datasets.errors.DataFormatError` naming the fi
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -24,16 +25,47 @@ WRAPPED_ANGLE_LIMIT_RAD = math.pi + 2e-3
 UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
 
 
+def file_kind(path: Path) -> str:
+    """What is at ``path``, for a message: ``"no such file"``, ``"a folder"``, ``"a FIFO (named
+    pipe)"``, ``"a socket"``, ``"a character device"``, ``"a symbolic link loop"``, ..."""
+    import errno
+    import stat
+
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a symbolic link loop"
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            return "a dangling symbolic link" if path.is_symlink() else "no such file"
+        return f"a path that cannot be read ({exc.strerror})"
+    for test, kind in (
+        (stat.S_ISREG, "a file"),
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISSOCK, "a socket"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+    ):
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
 def require_file(path: Path, *, what: str) -> Path:
-    """``path`` if it is an existing, non-empty file.
+    """``path`` if it is an existing, non-empty, readable regular file.
 
     Raises:
-        DataFormatError: if it is missing, a folder, or empty.
+        DataFormatError: if it is missing, a folder, a FIFO, a socket, a device, a link loop,
+            unreadable, or empty.
     """
-    if not path.exists():
-        raise DataFormatError(path, None, None, f"{what} (an existing file)", "no such file")
-    if not path.is_file():
-        raise DataFormatError(path, None, None, f"{what} (a file)", "a folder")
+    kind = file_kind(path)
+    if kind in ("no such file", "a dangling symbolic link"):
+        raise DataFormatError(path, None, None, f"{what} (an existing file)", kind)
+    if kind != "a file":
+        raise DataFormatError(path, None, None, f"{what} (a file)", kind)
+    if not os.access(path, os.R_OK):
+        raise DataFormatError(path, None, None, f"{what} (a readable file)", "permission denied")
     if path.stat().st_size == 0:
         raise DataFormatError(path, None, None, f"{what} (a non-empty file)", "an empty file")
     return path

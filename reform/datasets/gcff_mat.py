@@ -29,6 +29,7 @@ from reform.datasets._validation import (
     Repairs,
     check_time_increases,
     check_unique_ids,
+    file_kind,
     make_frame,
     note_absent_members,
     require_file,
@@ -327,10 +328,9 @@ def _load_sequence(
 
 
 def _loadmat(path: Path) -> dict[str, Any]:
-    if not path.exists():
-        raise DataFormatError(path, None, None, "a MATLAB .mat file", "no such file")
-    if not path.is_file():
-        raise DataFormatError(path, None, None, "a MATLAB .mat file", "a folder")
+    kind = file_kind(path)
+    if kind != "a file":
+        raise DataFormatError(path, None, None, "a MATLAB .mat file", kind)
     import scipy.io  # noqa: F401 - imported here, so that no child imports it again
 
     try:

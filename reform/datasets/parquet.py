@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_path
-from reform.datasets._validation import check_time_increases, make_frame
+from reform.datasets._validation import check_time_increases, file_kind, make_frame
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 
@@ -556,7 +556,10 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
         raise DataFormatError(
             path, None, None, "a Parquet file or a folder of them", "no such file or folder"
         )
-    if path.is_file():
+    if not path.is_dir():
+        kind = file_kind(path)
+        if kind != "a file":
+            raise DataFormatError(path, None, None, "a Parquet file or a folder of them", kind)
         frames, header = _read_file(path)
         return Dataset(
             frames=tuple(frames),
