@@ -1,4 +1,4 @@
-"""Tracking errors on frames: reform.perturb.Perturbation."""
+"""Tracking errors on frames: reform.TrackerNoise, the one noise model, and reform.Perturbation."""
 
 from __future__ import annotations
 
@@ -7,8 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from reform import ROBOT, Frame
-from reform.perturb import Perturbation, restrict_groups
+from reform import ROBOT, Frame, Perturbation, TrackerNoise, restrict_groups, wrap_angle
 
 
 def _frame(n: int = 6, *, robot: bool = True) -> Frame:
@@ -141,3 +140,154 @@ def test_bad_arguments() -> None:
         Perturbation().apply(_frame(), 3)
     with pytest.raises(ValueError, match="frame must be a reform.Frame, got dict"):
         Perturbation().apply({}, np.random.default_rng(0))
+
+
+def _documented_draws(seed: int, n: int) -> tuple[dict[str, np.ndarray], np.random.Generator]:
+    """The draws of reform.perturb's module docstring, made by hand in its order, and the
+    generator after them."""
+    rng = np.random.default_rng(seed)
+    draws = {
+        "position": rng.standard_normal((n, 2)),
+        "head_position": rng.standard_normal((n, 2)),
+        "yaw": rng.standard_normal(n),
+        "head_yaw": rng.standard_normal(n),
+        "uniform": rng.random(n),
+    }
+    return draws, rng
+
+
+def test_the_draws_follow_the_documented_order() -> None:
+    # Expected values made from a fresh generator with the same seed, drawing in the order the
+    # module docstring states: every noisy number is the truth plus the level times its draw.
+    frame = _frame()
+    noise = TrackerNoise(position_std=0.2, yaw_std=0.1, dropout=0.4)
+    rng = np.random.default_rng(11)
+    out = noise.apply(frame, rng)
+    z, after = _documented_draws(11, frame.n_people)
+    human = ~frame.is_robot
+    keep = ~(human & (z["uniform"] < 0.4))
+    assert out.ids.tolist() == frame.ids[keep].tolist()
+    on = human[:, None]
+    np.testing.assert_array_equal(
+        out.position, (frame.position + np.where(on, 0.2 * z["position"], 0.0))[keep]
+    )
+    np.testing.assert_array_equal(
+        out.yaw, wrap_angle(frame.yaw + np.where(human, 0.1 * z["yaw"], 0.0))[keep]
+    )
+    np.testing.assert_array_equal(
+        out.head_position,
+        (frame.head_position + np.where(on, 0.2 * z["head_position"], 0.0))[keep],
+    )
+    np.testing.assert_array_equal(
+        out.head_yaw, wrap_angle(frame.head_yaw + np.where(human, 0.1 * z["head_yaw"], 0.0))[keep]
+    )
+    # Those draws and no others, whatever the levels: the generator is where the hand-made one
+    # is.
+    assert rng.random() == after.random()
+    quiet = np.random.default_rng(11)
+    TrackerNoise().apply(frame, quiet)
+    assert quiet.random() == _documented_draws(11, frame.n_people)[1].random()
+
+
+def test_exact_noisy_values() -> None:
+    # Golden numbers: what default_rng(2030) (numpy's PCG64 stream) gives in the documented
+    # order (position normals first, dropout uniforms last). This is the order Perturbation has
+    # always drawn in, so they are also its numbers from before the sensor's and the
+    # environments' copies were merged into TrackerNoise. Person 1 is dropped, and person 2's
+    # yaw crosses pi and is wrapped.
+    frame = Frame(
+        ids=[1, 2, 3], position=[[0.0, 0.0], [1.0, 1.0], [2.0, -1.0]], yaw=[0.0, 3.0, -1.0]
+    )
+    out = Perturbation(position_noise=0.1, yaw_noise=0.2, dropout=0.3).apply(
+        frame, np.random.default_rng(2030)
+    )
+    assert out.ids.tolist() == [2, 3]
+    np.testing.assert_allclose(
+        out.position,
+        [[0.8633605309657189, 1.2601257679481148], [1.952287228148989, -1.0535418936682752]],
+        rtol=0,
+        atol=1e-15,
+    )
+    np.testing.assert_allclose(
+        out.yaw, [-3.0512893561907948, -1.3178682573713512], rtol=0, atol=1e-15
+    )
+
+
+def test_perturbation_is_the_tracker_noise_on_whole_frames() -> None:
+    frame = _frame()
+    perturbation = Perturbation(position_noise=0.2, yaw_noise=0.3, dropout=0.3)
+    assert perturbation.noise == TrackerNoise(position_std=0.2, yaw_std=0.3, dropout=0.3)
+    for seed in range(5):
+        assert perturbation.apply(frame, np.random.default_rng(seed)) == perturbation.noise.apply(
+            frame, np.random.default_rng(seed)
+        )
+
+
+def test_tracked_affected_and_hidden_heads() -> None:
+    frame = _frame()  # the last entry is a robot
+    n = frame.n_people
+    tracked = np.array([True, True, False, True, True, True])
+    hidden = np.array([False, False, False, True, False, False])
+    out = TrackerNoise(position_std=0.3).apply(
+        frame, np.random.default_rng(0), tracked=tracked, hidden_heads=hidden
+    )
+    assert out.ids.tolist() == frame.ids[tracked].tolist()  # no dropout asked
+    assert out.groups == ((10, 20), (40, 50))
+    row = out.index_of(40)
+    assert np.all(np.isnan(out.head_position[row])) and np.isnan(out.head_yaw[row])
+    robot = out.index_of(60)
+    np.testing.assert_array_equal(out.position[robot], frame.position[n - 1])  # not affected
+    untouched = TrackerNoise(position_std=0.3).apply(
+        frame, np.random.default_rng(0), affected=np.zeros(n, dtype=bool)
+    )
+    np.testing.assert_array_equal(untouched.position, frame.position)
+
+
+def test_listed_groups_keep_the_people_dropped() -> None:
+    # The annotation names person 99, whom the tracker never had; people the noise model drops
+    # join them in listed_groups, and groups hold who remains.
+    base = _frame(robot=False)
+    frame = base.replace(listed_groups=((10, 20, 30, 99), (40, 50)))
+    for seed in range(20):
+        out = Perturbation(dropout=0.5).apply(frame, np.random.default_rng(seed))
+        kept = set(out.ids.tolist())
+        assert out.listed_groups == frame.listed_groups
+        assert out.groups == restrict_groups(frame.groups, kept)
+        assert set(out.unseen_members) == {10, 20, 30, 40, 50, 99} - kept
+    # A frame with no listed_groups keeps none: the truth is restricted to who remains.
+    out = Perturbation(dropout=0.5).apply(base, np.random.default_rng(0))
+    assert out.listed_groups is None and out.groups == restrict_groups(base.groups, out.ids)
+
+
+def test_restrict_groups() -> None:
+    groups = ((1, 2, 3), (4, 5), (6,))
+    assert restrict_groups(groups, {1, 3, 6}) == ((1, 3), (6,))
+    assert restrict_groups(groups, np.array([4])) == ((4,),)
+    assert restrict_groups(groups, []) == ()
+    assert restrict_groups(None, [1]) is None
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"dropout": -0.1}, r"TrackerNoise.dropout must be in \[0, 1\], got -0.1"),
+        ({"position_std": math.nan}, r"TrackerNoise.position_std must be >= 0 and finite"),
+        ({"yaw_std": None}, r"TrackerNoise.yaw_std must be a number, got None"),
+    ],
+)
+def test_bad_tracker_noise(kwargs, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        TrackerNoise(**kwargs)
+
+
+def test_bad_masks() -> None:
+    frame = _frame()
+    noise = TrackerNoise(position_std=0.1)
+    with pytest.raises(ValueError, match=r"tracked must be a bool array of shape \(6,\), got"):
+        noise.apply(frame, np.random.default_rng(0), tracked=np.ones(5, dtype=bool))
+    with pytest.raises(ValueError, match=r"affected must be a bool array of shape \(6,\), got int"):
+        noise.apply(frame, np.random.default_rng(0), affected=np.ones(6, dtype=int))
+    with pytest.raises(ValueError, match=r"position must have shape \(2, 2\) and affected \(2,\)"):
+        noise.perturb_poses(
+            np.random.default_rng(0), np.zeros((3, 2)), np.zeros(2), affected=np.ones(2, bool)
+        )
