@@ -44,6 +44,7 @@ import numpy as np
 from mujoco import batch as mj_batch
 
 from reform.frame import ROBOT, Frame, Group, wrap_angle
+from reform.perturb import restrict_groups
 from scenarios.script import WALK_SPEED_M_S, Intent, Point, Script
 from sim import _native, motion
 from sim.motion import (
@@ -106,20 +107,6 @@ def yaw_from_quat(quat: np.ndarray) -> np.ndarray:
     """
     w, x, y, z = quat[..., 0], quat[..., 1], quat[..., 2], quat[..., 3]
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-def restrict_groups(
-    groups: tuple[Group, ...] | None, present_ids: set[int]
-) -> tuple[Group, ...] | None:
-    """``groups`` with only the members in ``present_ids``; groups left empty are dropped."""
-    if groups is None:
-        return None
-    out = []
-    for group in groups:
-        kept = tuple(m for m in group if m in present_ids)
-        if kept:
-            out.append(kept)
-    return tuple(out)
 
 
 @dataclass(frozen=True, eq=False)
