@@ -13,18 +13,20 @@ A `Sensor` turns the ground truth into an observed `reform.Frame`:
    their head pose is reported only when the head ray is clear (else NaN). From a bare Frame,
    with no MuJoCo scene at hand, occlusion is approximated on the ground plane: a nearer person
    within ``occluder_radius`` of the line of sight to a torso hides it.
-3. **Dropouts**: each seen person is missed with probability ``dropout``.
-4. **Noise**: Gaussian noise of ``position_noise`` metres per axis on body and head positions,
-   ``yaw_noise`` radians on body and head yaws (yaws wrapped again).
+3. **Noise and dropouts** on the people seen: the tracker's error model,
+   `reform.perturb.TrackerNoise` (`Sensor.tracker_noise`), the one the stress tests'
+   `reform.perturb.Perturbation` applies: Gaussian noise of ``position_noise`` metres per axis on
+   body and head positions, ``yaw_noise`` radians on body and head yaws (yaws wrapped again), and
+   each seen person missed with probability ``dropout``.
 
 The robot itself is kept in the observed frame at its true pose (it knows where it is), unless
 ``include_robot`` is False. The observed frame's groups are the ground-truth groups restricted to
-the people it holds: a group of which one member is seen becomes that member alone; groups with
-no member seen disappear.
+the people it holds (`reform.perturb.restrict_groups`): a group of which one member is seen
+becomes that member alone; groups with no member seen disappear.
 
-Random draws come from the ``rng`` passed in and are made for every person of the frame, seen or
-not, so that the draws do not depend on what is visible: the same rng state gives the same
-observation.
+Random draws come from the ``rng`` passed in, in `reform.perturb`'s one documented order, and are
+made for every person of the frame, seen or not, so that the draws do not depend on what is
+visible: the same rng state gives the same observation.
 """
 
 from __future__ import annotations
@@ -36,8 +38,9 @@ import mujoco
 import numpy as np
 
 from reform.frame import Frame, wrap_angle
+from reform.perturb import TrackerNoise
 from sim.scene import GEOM_GROUP_PEOPLE, GEOM_GROUP_ROOM
-from sim.world import World, restrict_groups
+from sim.world import World
 
 KINECT_FOV_DEG = 57.0  # degrees, horizontal field of view of the head sensor
 KINECT_MIN_RANGE_M = 0.5  # metres
@@ -100,6 +103,13 @@ class Sensor:
             raise ValueError(f"Sensor.dropout must be a probability in [0, 1], got {self.dropout}")
         object.__setattr__(self, "occlusion", bool(self.occlusion))
         object.__setattr__(self, "include_robot", bool(self.include_robot))
+
+    @property
+    def tracker_noise(self) -> TrackerNoise:
+        """The noise and dropouts on the people seen (`reform.perturb.TrackerNoise`)."""
+        return TrackerNoise(
+            position_std=self.position_noise, yaw_std=self.yaw_noise, dropout=self.dropout
+        )
 
     def in_view(self, origin: np.ndarray, heading: float, points: np.ndarray) -> np.ndarray:
         """Which ground-plane ``points`` (k, 2) are within the field of view and range.
@@ -172,37 +182,13 @@ class Sensor:
             truth, body_seen, head_seen = self._visibility_2d(source)
         else:
             raise ValueError(f"source must be a World or a Frame, got {type(source).__name__}")
-        n = truth.n_people
-        missed = rng.random(n) < self.dropout
-        position_noise = rng.normal(0.0, 1.0, size=(n, 2)) * self.position_noise
-        head_noise = rng.normal(0.0, 1.0, size=(n, 2)) * self.position_noise
-        yaw_noise = rng.normal(0.0, 1.0, size=n) * self.yaw_noise
-        head_yaw_noise = rng.normal(0.0, 1.0, size=n) * self.yaw_noise
-
         robot = truth.is_robot
-        seen = body_seen & ~missed & ~robot
-        position = truth.position + np.where(seen[:, None], position_noise, 0.0)
-        yaw = wrap_angle(truth.yaw + np.where(seen, yaw_noise, 0.0))
-        head_position = np.full((n, 2), np.nan)
-        head_yaw = np.full(n, np.nan)
-        if truth.head_position is not None:
-            head_position = truth.head_position + np.where(seen[:, None], head_noise, 0.0)
-            head_yaw = wrap_angle(truth.head_yaw + np.where(seen, head_yaw_noise, 0.0))
-            hidden_head = seen & ~head_seen
-            head_position[hidden_head] = np.nan
-            head_yaw[hidden_head] = np.nan
-        keep = seen | (robot & self.include_robot)
-        ids = truth.ids[keep]
-        return Frame(
-            ids=ids,
-            kinds=tuple(k for k, kept in zip(truth.kinds, keep, strict=True) if kept),
-            position=position[keep],
-            yaw=yaw[keep],
-            head_position=head_position[keep],
-            head_yaw=head_yaw[keep],
-            groups=restrict_groups(truth.groups, set(ids.tolist())),
-            time=truth.time,
-            sequence=truth.sequence,
+        return self.tracker_noise.apply(
+            truth,
+            rng,
+            tracked=body_seen | (robot & self.include_robot),
+            affected=body_seen & ~robot,
+            hidden_heads=body_seen & ~head_seen,
         )
 
     def _visibility_2d(self, frame: Frame) -> tuple[Frame, np.ndarray, np.ndarray]:

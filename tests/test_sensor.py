@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from reform import wrap_angle
+from reform import Perturbation, TrackerNoise, wrap_angle
 from sim import HeadCamera, PersonSpec, RobotSpec, SceneSpec, Sensor, World
+from sim.envs.view import Eyes
 
 
 def _world(people: list[PersonSpec], *, room: tuple[float, float] = (12.0, 12.0)) -> World:
@@ -112,6 +113,81 @@ def test_observing_a_bare_frame_matches_the_world_in_simple_cases() -> None:
     from_world = Sensor().observe(world, rng)
     from_frame = Sensor().observe(world.frame(), np.random.default_rng(0))
     assert from_world.ids.tolist() == from_frame.ids.tolist() == [1, 3, 0]
+
+
+def test_noisy_values_are_the_noise_models_draws() -> None:
+    # Exact values: the truth plus the levels times default_rng(10)'s draws, made by hand in
+    # reform.perturb's documented order for every entry of the frame (people, then the robot):
+    # position normals (n, 2), head position normals (n, 2), yaw normals (n,), head yaw
+    # normals (n,), dropout uniforms (n,). Before the sensor called reform.TrackerNoise it drew
+    # the uniforms first, so the same seed gave other numbers (it kept person 3, dropped 2).
+    world = _world([_at(1, 2.0, 0), _at(2, 2.5, 15), _at(3, 2.0, -20)])
+    sensor = Sensor(position_noise=0.05, yaw_noise=0.1, dropout=0.3)
+    assert sensor.tracker_noise == TrackerNoise(position_std=0.05, yaw_std=0.1, dropout=0.3)
+    observed = sensor.observe(world, np.random.default_rng(10))
+    truth = world.frame()
+    rng = np.random.default_rng(10)
+    n = truth.n_people
+    z_position = rng.standard_normal((n, 2))
+    z_head_position = rng.standard_normal((n, 2))
+    z_yaw = rng.standard_normal(n)
+    z_head_yaw = rng.standard_normal(n)
+    uniform = rng.random(n)
+    assert (uniform[:3] < 0.3).tolist() == [False, False, True]  # person 3 is missed
+    assert observed.ids.tolist() == [1, 2, 0]
+    rows = [0, 1]
+    np.testing.assert_array_equal(
+        observed.position[:2], truth.position[rows] + 0.05 * z_position[rows]
+    )
+    np.testing.assert_array_equal(
+        observed.head_position[:2], truth.head_position[rows] + 0.05 * z_head_position[rows]
+    )
+    np.testing.assert_array_equal(observed.yaw[:2], wrap_angle(truth.yaw[rows] + 0.1 * z_yaw[rows]))
+    np.testing.assert_array_equal(
+        observed.head_yaw[:2], wrap_angle(truth.head_yaw[rows] + 0.1 * z_head_yaw[rows])
+    )
+    np.testing.assert_array_equal(observed.position[2], truth.position[3])  # the robot, exact
+    assert observed.groups == ((1, 2, 0),)
+
+
+def test_sensor_eyes_and_perturbation_give_the_same_noisy_frame() -> None:
+    # A sensor that sees everyone (all round, no occlusion, the whole room in range) reports
+    # what the perturbation makes of the ground truth, and the environment's eyes report the
+    # same: one noise model, one order of draws.
+    world = _world([_at(1, 2.0, 0), _at(2, 2.5, 100), _at(3, 1.5, -140), _at(4, 3.0, 200)])
+    levels = {"position_noise": 0.08, "yaw_noise": 0.3, "dropout": 0.35}
+    sensor = Sensor(fov_deg=360.0, min_range=0.0, max_range=20.0, occlusion=False, **levels)
+    perturbation = Perturbation(**levels)
+    eyes = Eyes(world, sensor)
+    truth = world.frame()
+    sizes = set()
+    for seed in range(12):
+        from_sensor = sensor.observe(world, np.random.default_rng(seed))
+        from_truth = perturbation.apply(truth, np.random.default_rng(seed))
+        arrays = eyes.truth()
+        view = eyes.look(arrays, np.random.default_rng(seed))
+        from_eyes = eyes.observed_frame(arrays, view, truth.groups, sequence=truth.sequence)
+        assert from_sensor == from_truth == from_eyes, seed
+        sizes.add(from_sensor.n_people)
+    assert len(sizes) > 2  # the dropouts did drop people, differently from seed to seed
+
+
+def test_observing_a_bare_frame_keeps_its_listed_groups() -> None:
+    # The annotation names person 9, whom the tracker never had: people the sensor does not
+    # see, or drops, stay in listed_groups with them; groups hold who is reported.
+    world = _world([_at(1, 2.0, 0), _at(2, 2.0, 90), _at(3, 2.5, 10)])
+    truth = world.frame()
+    frame = truth.replace(groups=((1, 2, 3), (0,)), listed_groups=((1, 2, 3, 9),))
+    for seed in range(5):
+        observed = Sensor(dropout=0.3).observe(frame, np.random.default_rng(seed))
+        assert 2 not in observed.ids.tolist()  # out of the field of view
+        assert observed.listed_groups == ((1, 2, 3, 9),)
+        held = set(observed.ids.tolist())
+        assert observed.groups == tuple(
+            kept for kept in (tuple(m for m in g if m in held) for g in frame.groups) if kept
+        )
+    plain = Sensor().observe(truth, np.random.default_rng(0))
+    assert plain.listed_groups is None and plain.groups == ((1, 3, 0),)
 
 
 @pytest.mark.parametrize(

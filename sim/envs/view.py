@@ -6,10 +6,10 @@ sensor's view) at 10 Hz: building one costs more than moving the whole world by 
 arrays over every agent of the scene (people in scene order, then the robot), and builds Frames
 only when asked (for the detector, a few times a second, and for recordings).
 
-`Eyes.look` follows `sim.Sensor.observe` exactly (field of view and range from the head sensor,
-MuJoCo ray casts for occlusion, then dropouts and noise drawn from the generator passed in, the
-same draws in the same order), so the view equals ``Sensor.observe(world, rng)`` for the same
-generator state; the tests check that.
+`Eyes.look` sees as `sim.Sensor.observe` does (field of view and range from the head sensor,
+MuJoCo ray casts for occlusion) in compiled kernels, then applies the sensor's tracker errors
+through the one model, `reform.perturb.TrackerNoise` (the same draws in the same order), so the
+view equals ``Sensor.observe(world, rng)`` for the same generator state; the tests check that.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from reform.frame import ROBOT, Frame, Group
+from reform.perturb import restrict_groups
 from sim.sensor import Sensor, rays_clear
 from sim.world import World, yaw_from_quat
 
@@ -97,6 +98,7 @@ class Eyes:
         self._human = ~self._is_robot
         self._all = np.arange(self.ids.size, dtype=np.int64)
         self._half_fov = math.radians(sensor.fov_deg) / 2.0
+        self._noise = sensor.tracker_noise
         model = world.model
         self._pan_adr = int(model.jnt_qposadr[model.joint("robot/head_pan").id])
 
@@ -131,8 +133,8 @@ class Eyes:
         """
         world, sensor = self.world, self.sensor
         data = world.data
+        # The agents of World.frame, in its order: the rows the noise model draws for.
         rows = self._all if truth.present.all() else np.flatnonzero(truth.present)
-        n = rows.size  # the agents of World.frame, in its order
         origin = data.site_xpos[world.sensor_site].copy()
         xmat = data.site_xmat[world.sensor_site]
         seen = np.empty(self.ids.size, dtype=np.bool_)
@@ -157,27 +159,24 @@ class Eyes:
             k = cand.size
             seen[cand] = clear[:k] | clear[k:]
             head_seen[cand] = clear[k:]
-        # Sensor.observe's draws, in its order: dropouts, then 6 n normals in one call (the
-        # same numbers as its four calls).
-        missed = rng.random(n) < sensor.dropout
-        normal = rng.normal(0.0, 1.0, size=6 * n)
-        position = truth.position.copy()
-        yaw = truth.yaw.copy()
-        head_position = truth.head_position.copy()
-        head_yaw = truth.head_yaw.copy()
-        _report(
-            rows,
-            missed,
-            normal,
-            sensor.position_noise,
-            sensor.yaw_noise,
-            seen,
-            head_seen,
-            position,
-            yaw,
-            head_position,
-            head_yaw,
+        # The tracker's noise and dropouts on the seen: the one model `Sensor.observe` applies,
+        # with the same draws.
+        noisy = self._noise.perturb_poses(
+            rng,
+            truth.position[rows],
+            truth.yaw[rows],
+            truth.head_position[rows],
+            truth.head_yaw[rows],
+            affected=seen[rows],
         )
+        seen[rows] &= noisy.kept
+        head_seen &= seen
+        position, yaw = truth.position.copy(), truth.yaw.copy()
+        head_position, head_yaw = truth.head_position.copy(), truth.head_yaw.copy()
+        position[rows] = noisy.position
+        yaw[rows] = noisy.yaw
+        head_position[rows] = noisy.head_position
+        head_yaw[rows] = noisy.head_yaw
         return View(
             seen=seen,
             head_seen=head_seen,
@@ -239,11 +238,6 @@ class Eyes:
         sequence: str,
     ) -> Frame:
         ids = self.ids[keep]
-        if groups is not None:
-            held = set(ids.tolist())
-            groups = tuple(
-                kept for kept in (tuple(m for m in g if m in held) for g in groups) if kept
-            )
         return Frame(
             ids=ids,
             kinds=tuple(k for k, kept in zip(self.kinds, keep, strict=True) if kept),
@@ -251,15 +245,16 @@ class Eyes:
             yaw=yaw,
             head_position=head_position,
             head_yaw=head_yaw,
-            groups=groups,
+            groups=restrict_groups(groups, set(ids.tolist())),
             time=time,
             sequence=sequence,
         )
 
 
 # ---------------------------------------------------------------------------------------------
-# Compiled kernels: the same arithmetic as `sim.Sensor` (numpy there), per agent, without the
-# overhead of a dozen small array operations per control step.
+# Compiled kernels: the same arithmetic as `sim.Sensor.in_view` (numpy there), per agent, and
+# the robot-centred observation, without the overhead of many small array operations per
+# control step.
 
 
 @numba.njit(cache=True)
@@ -288,40 +283,6 @@ def _in_view(
             and distance <= max_range
             and abs(bearing) <= half_fov
         )
-
-
-@numba.njit(cache=True)
-def _report(
-    rows: np.ndarray,
-    missed: np.ndarray,
-    normal: np.ndarray,
-    position_noise: float,
-    yaw_noise: float,
-    seen: np.ndarray,
-    head_seen: np.ndarray,
-    position: np.ndarray,
-    yaw: np.ndarray,
-    head_position: np.ndarray,
-    head_yaw: np.ndarray,
-) -> None:
-    """Dropouts and noise on the seen, in place; every yaw wrapped (as `Sensor.observe`)."""
-    n = rows.size
-    for k in range(n):
-        i = rows[k]
-        if missed[k]:
-            seen[i] = False
-        if not seen[i]:
-            head_seen[i] = False
-            continue
-        position[i, 0] += normal[2 * k] * position_noise
-        position[i, 1] += normal[2 * k + 1] * position_noise
-        head_position[i, 0] += normal[2 * n + 2 * k] * position_noise
-        head_position[i, 1] += normal[2 * n + 2 * k + 1] * position_noise
-        yaw[i] += normal[4 * n + k] * yaw_noise
-        head_yaw[i] += normal[5 * n + k] * yaw_noise
-    for i in range(yaw.size):
-        yaw[i] = (yaw[i] + math.pi) % (2.0 * math.pi) - math.pi
-        head_yaw[i] = (head_yaw[i] + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @numba.njit(cache=True)
