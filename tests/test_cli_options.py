@@ -132,3 +132,13 @@ def test_the_parsers_formats_and_units_are_the_loaders():
 
     assert set(_common.FORMATS) == set(FORMATS) | set(FORMAT_ALIASES)
     assert _common.LENGTH_UNITS == LENGTH_UNITS
+
+
+def test_a_system_error_is_one_line_naming_the_path(tmp_path, capsys):
+    from sim.cli import main
+
+    # A path whose name is too long for the file system: the system refuses it (OSError).
+    long = tmp_path / ("x" * 300)
+    assert main(["data", "info", str(long / "features.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("reform-sim data: error: ") and err.count("\n") == 1

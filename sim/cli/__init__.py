@@ -117,9 +117,18 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
         check_jobs(args)
         with sigint_to_main_only():
             return int(args.handler(args) or 0)
-    except (CliError, ValueError, FileNotFoundError, KeyError) as exc:
+    except (CliError, ValueError, OSError, KeyError) as exc:
+        # OSError: a file the command reads or writes that the system refuses (permissions, a
+        # full disk, a path too long), named by the system's own message.
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"reform-sim {args.command}: error: {message}", file=sys.stderr)
+        print(f"reform-sim {args.command}: error: {_one_line(message)}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(
+            f"reform-sim {args.command}: error: out of memory (this machine could not hold the "
+            "request; ask for less, or use a machine with more memory)",
+            file=sys.stderr,
+        )
         return 2
     except KeyboardInterrupt:
         if not report_interrupt:
@@ -127,6 +136,12 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
         again = "; run the same command again to resume" if _resumes(args) else ""
         print(f"reform-sim {args.command}: interrupted{again}", file=sys.stderr)
         return INTERRUPTED
+
+
+def _one_line(message: object) -> str:
+    """An error message on one line, cut to a readable length."""
+    text = " ".join(str(message).split("\n"))
+    return text if len(text) <= 2000 else text[:1980] + f"… ({len(text):,} characters)"
 
 
 if __name__ == "__main__":  # pragma: no cover
