@@ -636,9 +636,18 @@ def test_cli_list_shows_what_is_fetched_and_where(http_mirror, cache, registry_f
     assert main(["datasets", "list", "--registry", str(registry_file)]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0] == f"cache: {cache} (set $REFORM_SIM_DATA or --cache to change)"
-    assert lines[1].split() == ["name", "title", "format", "size", "licence", "fetched"]
+    assert lines[1].split() == [
+        "name",
+        "title",
+        "format",
+        "size",
+        "licence",
+        "on",
+        "this",
+        "machine",
+    ]
     assert re.fullmatch(
-        rf"tiny +The tiny set +dante-txt +670 B +- +yes, {re.escape(str(cache / 'tiny'))}",
+        rf"tiny +The tiny set +dante-txt +670 B +- +fetched, {re.escape(str(cache / 'tiny'))}",
         lines[2],
     )
     assert re.fullmatch(r"flat +The flat set +dante-txt +16 B +licence CC0 +no", lines[3])
@@ -780,3 +789,17 @@ def test_cli_fetch_then_data_name(shared_datasets, tmp_path, cache, capsys, monk
     capsys.readouterr()
     result = json.loads((tmp_path / "synth.json").read_text())
     assert result["dataset"] == load_dataset(shared_datasets / "synth").name
+
+
+def test_cli_list_shows_a_dataset_in_the_real_datasets_folder(
+    registry_file, tmp_path, capsys, monkeypatch
+):
+    local = tmp_path / "datasets"
+    (local / "flat").mkdir(parents=True)
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(local))
+    assert (
+        main(["datasets", "list", "--registry", str(registry_file), "--cache", str(tmp_path / "c")])
+        == 0
+    )
+    (flat,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("flat ")]
+    assert flat.endswith(f"in {local / 'flat'}")

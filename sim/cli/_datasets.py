@@ -107,12 +107,14 @@ def format_size(n_bytes: int) -> str:
 
 
 def _rows(args: argparse.Namespace) -> tuple[Path, list[dict[str, Any]]]:
-    from reform.datasets import cache_dir, is_fetched, registry
+    from reform.datasets import cache_dir, is_fetched, local_datasets_dir, registry
 
     cache = Path(args.cache) if args.cache is not None else cache_dir()
+    local = local_datasets_dir()
     rows = []
     for dataset in registry(args.registry):
         fetched = is_fetched(dataset.name, cache, registry=args.registry)
+        here = local / dataset.name if local is not None else None
         rows.append(
             {
                 "name": dataset.name,
@@ -126,6 +128,7 @@ def _rows(args: argparse.Namespace) -> tuple[Path, list[dict[str, Any]]]:
                 "citation": dataset.citation,
                 "fetched": fetched,
                 "path": str(cache / dataset.name) if fetched else None,
+                "local": str(here) if here is not None and here.is_dir() else None,
             }
         )
     return cache, rows
@@ -143,7 +146,7 @@ def run_list(args: argparse.Namespace) -> int:
 
 def format_table(rows: list[dict[str, Any]], *, cache: Path) -> str:
     """The datasets as an aligned table, the cache folder above it."""
-    header = ("name", "title", "format", "size", "licence", "fetched")
+    header = ("name", "title", "format", "size", "licence", "on this machine")
     table = [header] + [
         (
             row["name"],
@@ -151,7 +154,11 @@ def format_table(rows: list[dict[str, Any]], *, cache: Path) -> str:
             row["format"],
             format_size(row["bytes"]),
             row["licence"] or "-",
-            f"yes, {row['path']}" if row["fetched"] else "no",
+            f"fetched, {row['path']}"
+            if row["fetched"]
+            else f"in {row['local']}"
+            if row.get("local")
+            else "no",
         )
         for row in rows
     ]
