@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from reform.json_values import json_float
 from reform.metrics import Evaluation
-from reform.report import json_float
 
 __all__ = [
     "DEFAULT_LEVEL",

@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from reform.frame import Frame, Group
-from reform.report import json_float
+from reform.json_values import json_float
 
 __all__ = [
     "JSON_SCHEMA_VERSION",

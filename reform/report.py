@@ -18,7 +18,6 @@ __all__ = [
     "command_block",
     "format_comparison",
     "format_report",
-    "json_float",
     "percent",
     "render_table",
 ]
@@ -39,11 +38,6 @@ def percent(value: float | None, *, missing: str = MISSING) -> str:
 def command_block(command: str) -> list[str]:
     """Markdown lines naming the command that produced a results page (and regenerates it)."""
     return ["Produced by:", "", "```sh", command, "```", ""]
-
-
-def json_float(value: float | None) -> float | None:
-    """``value`` as JSON can hold it: a float, or None (null) for None, NaN or an infinity."""
-    return None if value is None or not math.isfinite(value) else float(value)
 
 
 def _count(value: int) -> str:

@@ -55,8 +55,9 @@ from reform.detectors import make_detector, run_detector
 from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from reform.frame import Frame
 from reform.gcff import MDL_M2, STRIDE_M
+from reform.json_values import json_float
 from reform.metrics import Evaluation, evaluate
-from reform.report import command_block, json_float, percent, render_table
+from reform.report import command_block, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
 from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES

@@ -54,9 +54,9 @@ from reform.detector import Reform
 from reform.detectors import fit_detector, run_detector
 from reform.frame import Frame
 from reform.gcff import Gcff
+from reform.json_values import json_float
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
-from reform.report import json_float
 from sim.episode import simulate_episode
 from sim.sensor import Sensor
 from sim.stress_grid import (

@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from reform import T_ONE, T_TWO_THIRDS, Frame, evaluate
 from reform.datasets import load_salsa
+from reform.json_values import json_float
 from reform.metrics import MicroScores, f1_score, pair_labels
 
 
@@ -463,15 +464,19 @@ def test_vectorised_protocol_equals_the_literal_reference(case):
         assert ev.pairs_correct[row] == int(np.sum(expected == pair_labels(f, p)))
 
 
-def test_report_percent_json_float_and_command_block() -> None:
-    from reform.report import command_block, json_float, percent
+def test_json_float_is_a_float_or_null() -> None:
+    for missing in (None, math.nan, math.inf, -math.inf):
+        assert json_float(missing) is None
+    assert json_float(np.float32(0.5)) == 0.5 and type(json_float(np.float32(0.5))) is float
+
+
+def test_report_percent_and_command_block() -> None:
+    from reform.report import command_block, percent
 
     assert percent(0.8125) == "81.2" and percent(1.0) == "100.0"
     for missing in (None, math.nan, math.inf):
         assert percent(missing) == "-"
         assert percent(missing, missing="—") == "—"
-        assert json_float(missing) is None
-    assert json_float(np.float32(0.5)) == 0.5 and type(json_float(np.float32(0.5))) is float
     assert command_block("reform-sim stress") == [
         "Produced by:",
         "",
