@@ -8,8 +8,9 @@ Measured in the same run, each a fresh interpreter (wall time, median of ``--rep
   in the Rerun flags of `sim.recording`, which import neither rerun nor reform's modules);
 * **train --help**, **stress --help**: subcommands whose arguments list reform's classifiers
   (`reform.classifiers`, which imports scikit-learn) and the stress tests' grids
-  (`sim.stress_grid`, which imports neither scikit-learn nor MuJoCo);
-* **experiment hri --help**: its views and default size come from `sim.hri_views` (light too);
+  (`sim.experiments.stress_grid`, which imports neither scikit-learn nor MuJoCo);
+* **experiment hri --help**: its views and default size come from `sim.experiments.hri_views`
+  (light too);
 * **import reform**: the package alone, its public names loaded on first use;
 * **every parser** (the baseline): gymnasium imported and every subcommand's arguments added, as
   building the parser did before subcommands were added on use.

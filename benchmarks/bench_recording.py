@@ -65,8 +65,8 @@ import rerun as rr
 from timing import BenchmarkParser, timed
 
 from reform import Frame, Gcff, Reform, evaluate
-from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from sim.episode import episode_blocks, simulate_episode
+from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from sim.recording import (
     FrameColumns,
     default_blueprint,

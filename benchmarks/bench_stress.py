@@ -26,7 +26,7 @@ from reform import evaluate
 from reform.bootstrap import bootstrap_weights, frame_intervals
 from reform.perturb import Perturbation
 from sim.episode import simulate_episode
-from sim.stress import DETECTORS, GRIDS, run_stress, train_detectors, training_frames
+from sim.experiments.stress import DETECTORS, GRIDS, run_stress, train_detectors, training_frames
 
 EPISODE_S = 600.0  # seconds of the timed test episode
 TRAINING_S = 300.0  # seconds of the training episode

@@ -10,6 +10,9 @@ Public surface (loaded on first use, so that the command line starts fast):
 
 The Gymnasium environments (``ReformSim/...``) live in `sim.envs`: ``import sim.envs`` registers
 them, or name the module in the id, ``gymnasium.make("sim.envs:ReformSim/Mingle-v0")``.
+The documented studies (the demo, sim-to-real, the HRI re-enactment, the stress tests, the
+calibration, the paper's experiment, the GCFF comparison, the benchmark), each a run and its
+report, live in `sim.experiments`, built on this core; nothing here imports them.
 ``import sim`` alone loads neither gymnasium nor MuJoCo, so the ``reform-sim`` command starts
 fast.
 """

@@ -12,12 +12,12 @@ import pytest
 import scipy.io
 
 from reform.detectors import DetectorError
-from sim.benchmark import (
+from sim.cli import main
+from sim.experiments.benchmark import (
     DatasetSpec,
     detector_spec,
     run_benchmark,
 )
-from sim.cli import main
 
 
 def _cell(items) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from reform.calibration import MIN_GROUPS, TIGHTNESS, TIGHTNESS_TOLERANCE_M
-from sim.scenario_calibration import (
+from sim.experiments.calibration import (
     CALIBRATED,
     DEFAULT_SEEDS,
     RANDOMISED,

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from reform import Dataset, Frame
-from reform.calibration_report import format_calibration, format_characterisation
 from reform.datasets import write_parquet
 from sim.cli import main
+from sim.experiments.characterisation_report import format_calibration, format_characterisation
 
 
 def run(argv, capsys):

@@ -8,7 +8,6 @@ import json
 import pytest
 
 from reform.datasets import load_dataset
-from reform.report import format_comparison, format_report
 from sim.cli import main
 from sim.cli._detectors import (
     DETECTORS,
@@ -17,6 +16,7 @@ from sim.cli._detectors import (
     build_detector,
     detector_params,
 )
+from sim.experiments.tables import format_comparison, format_report
 
 
 def run(argv, capsys):

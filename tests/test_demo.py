@@ -13,7 +13,7 @@ from reform.datasets import read_parquet
 from reform.metrics import T_TWO_THIRDS
 from reform.persistence import load_model
 from sim.cli import main
-from sim.demo import FULL, QUICK, run_demo
+from sim.experiments.demo import FULL, QUICK, run_demo
 
 
 @pytest.fixture(scope="module")

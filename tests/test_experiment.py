@@ -10,7 +10,8 @@ from toy_scenes import toy_frames
 
 from reform import Dataset, Frame, time_blocks, time_split, write_parquet
 from reform.datasets import load_babble, load_salsa
-from reform.experiment import (
+from sim.cli import main
+from sim.experiments.paper import (
     BABBLE,
     PAPER_BABBLE,
     PAPER_TABLE_I,
@@ -21,7 +22,6 @@ from reform.experiment import (
     random_split,
     tune,
 )
-from sim.cli import main
 
 
 def frame(t: float, sequence: str, annotated: bool = True) -> Frame:

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from reform import Gcff, evaluate, time_split
-from reform.experiment_gcff import BABBLE, SALSA_TEST, gcff_comparison
+from sim.experiments.gcff import BABBLE, SALSA_TEST, gcff_comparison
 
 GRID = {"stride_grid": (0.7,), "mdl_grid": (1.0, 3.0)}
 

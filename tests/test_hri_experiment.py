@@ -1,4 +1,4 @@
-"""The paper's HRI proof of concept re-enacted (sim.hri_experiment, reform-sim experiment hri)."""
+"""The paper's HRI proof of concept re-enacted (sim.experiments.hri, reform-sim experiment hri)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from reform import Reform, time_split
 from reform.classifiers import make_classifier
 from reform.detectors import DetectorError
 from sim.cli import main
-from sim.hri_experiment import (
+from sim.experiments.hri import (
     HRI_SCENARIOS,
     PAPER_HRI,
     VIEWS,

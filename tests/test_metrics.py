@@ -468,20 +468,3 @@ def test_json_float_is_a_float_or_null() -> None:
     for missing in (None, math.nan, math.inf, -math.inf):
         assert json_float(missing) is None
     assert json_float(np.float32(0.5)) == 0.5 and type(json_float(np.float32(0.5))) is float
-
-
-def test_report_percent_and_command_block() -> None:
-    from reform.report import command_block, percent
-
-    assert percent(0.8125) == "81.2" and percent(1.0) == "100.0"
-    for missing in (None, math.nan, math.inf):
-        assert percent(missing) == "-"
-        assert percent(missing, missing="—") == "—"
-    assert command_block("reform-sim stress") == [
-        "Produced by:",
-        "",
-        "```sh",
-        "reform-sim stress",
-        "```",
-        "",
-    ]

@@ -324,7 +324,7 @@ def test_the_plugins_rule_is_what_the_test_data_assume():
 
 def test_run_stress_keeps_the_built_in_names_for_the_built_ins():
     from reform import Majority
-    from sim.stress import run_stress
+    from sim.experiments.stress import run_stress
 
     with pytest.raises(ValueError, match=r"^plugins must be named apart from the built-in"):
         run_stress("small", plugins={"gcff": Majority()})

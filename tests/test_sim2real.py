@@ -12,7 +12,7 @@ from reform.metrics import T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
 from sim.cli import main
 from sim.episode import simulate_episode
-from sim.sim2real import (
+from sim.experiments.sim2real import (
     BABBLE,
     PAPER_BABBLE_F1,
     SALSA_TEST,
@@ -24,7 +24,7 @@ from sim.sim2real import (
     sim_to_real,
     train_reform,
 )
-from sim.sim2real_report import sim2real_figure
+from sim.experiments.sim2real_report import sim2real_figure
 
 
 @pytest.fixture(scope="module")
@@ -236,7 +236,7 @@ def test_report_files(tiny, tmp_path) -> None:
 def test_deterministic_data(tiny, salsa_dataset) -> None:
     """The same seed gives the same calibration on the cached data."""
     result, root = tiny
-    from sim.sim2real import generate_sources
+    from sim.experiments.sim2real import generate_sources
 
     frames = generate_sources(result.sources, root=root, seed=2, progress=False)
     from reform import time_split
@@ -254,7 +254,7 @@ def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
     with pytest.raises(ValueError, match="classifiers must be among"):
         sim_to_real(salsa_dataset, babble_dataset, synthetic_root=tmp_path, classifiers=("svm",))
     with pytest.raises(ValueError, match="sources must name each scenario once"):
-        from sim.sim2real import generate_sources
+        from sim.experiments.sim2real import generate_sources
 
         source = SyntheticSource("mingle", episodes=1)
         generate_sources([source, dataclasses.replace(source)], root=tmp_path, seed=0)
@@ -276,7 +276,7 @@ def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
 
 def test_nearest_neighbour_quantiles() -> None:
     from reform import Frame
-    from sim.sim2real import nearest_neighbour_quantiles
+    from sim.experiments.sim2real import nearest_neighbour_quantiles
 
     # Hand-computed: people at x = 0, 1, 3 m; nearest neighbours 1, 1, 2 m.
     frame = Frame(
@@ -292,7 +292,7 @@ def test_nearest_neighbour_quantiles() -> None:
 
 
 def test_joint_distances(party) -> None:
-    from sim.sim2real import joint_distances
+    from sim.experiments.sim2real import joint_distances
 
     assert joint_distances(party, party) == (0.0, 0.0)
     spread = [f.replace(position=f.position * 10.0) for f in party]  # every pair 10 x apart

@@ -1,4 +1,4 @@
-"""Stress tests (sim.stress, sim.stress_report, reform-sim stress) on a tiny grid."""
+"""Stress tests (sim.experiments.stress and stress_report, reform-sim stress) on a tiny grid."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import matplotlib.image
 import pytest
 
 from sim.cli import main
-from sim.stress import (
+from sim.experiments.stress import (
     AXES,
     DETECTORS,
     GRIDS,
@@ -19,7 +19,7 @@ from sim.stress import (
     train_detectors,
     training_frames,
 )
-from sim.stress_report import recording_names, write_report
+from sim.experiments.stress_report import recording_names, write_report
 
 # Two levels per axis, short episodes: every code path, a few seconds of work.
 TINY = dataclasses.replace(

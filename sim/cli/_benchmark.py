@@ -109,8 +109,8 @@ def _found_datasets() -> list[str]:
 
 def _run(args: argparse.Namespace) -> int:
     from reform.splits import DEFAULT_TRAIN_FRACTION
-    from sim.benchmark import dataset_spec, detector_spec, model_spec, run_benchmark
-    from sim.benchmark_report import write_report
+    from sim.experiments.benchmark import dataset_spec, detector_spec, model_spec, run_benchmark
+    from sim.experiments.benchmark_report import write_report
 
     check_backend(args)
     check_output("--out", args.out, folder=True)

@@ -59,7 +59,7 @@ def _command(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
     from reform.datasets import fetch, is_fetched, load_babble, load_salsa
-    from sim.scenario_calibration import DEFAULT_SEEDS, calibrate_scenarios
+    from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
 
     seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
     if seeds < 1:

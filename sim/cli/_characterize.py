@@ -139,10 +139,10 @@ def run(args: argparse.Namespace) -> int:
         characterise_dataset,
         compare,
     )
-    from reform.calibration_report import (
+    from reform.datasets import detect_format, load_dataset, resolve
+    from sim.experiments.characterisation_report import (
         characterisation_summary,
     )
-    from reform.datasets import detect_format, load_dataset, resolve
 
     min_groups = MIN_GROUPS if args.min_groups is None else args.min_groups
     tolerance = TIGHTNESS_TOLERANCE_M if args.tolerance is None else args.tolerance
@@ -235,7 +235,7 @@ def _report(
     command: str,
     style: str,
 ) -> str:
-    from reform.calibration_report import format_calibration, format_characterisation
+    from sim.experiments.characterisation_report import format_calibration, format_characterisation
 
     parts = []
     if style == "markdown":

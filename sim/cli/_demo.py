@@ -28,7 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.demo import DEFAULT_OUT
+    from sim.experiments.demo import DEFAULT_OUT
 
     parser.add_argument(
         "--datasets",
@@ -52,7 +52,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from sim.demo import run_demo
+    from sim.experiments.demo import run_demo
 
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")

@@ -48,7 +48,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
     from reform.metrics import evaluate
-    from reform.report import format_report
+    from sim.experiments.tables import format_report
 
     spec = check_detector(args)
     check_output("--json", args.json)

@@ -133,7 +133,7 @@ def _read_results(path: str) -> list[dict[str, Any]]:
 
 def run(args: argparse.Namespace) -> int:
     from reform.datasets import load_babble, load_salsa, resolve
-    from reform.experiment_gcff import gcff_comparison
+    from sim.experiments.gcff import gcff_comparison
 
     check_train_fraction(args)
     check_report(report_stem(args.out))

@@ -41,7 +41,7 @@ def register(experiments: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES
+    from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
     add_dataset_arguments(parser, babble=False)
     add_out_argument(parser)
@@ -72,7 +72,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command(args: argparse.Namespace) -> str:
-    from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES
+    from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
     words = ["reform-sim", "experiment", "hri"]
     if args.datasets is not None:
@@ -95,7 +95,7 @@ def _command(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from reform.datasets import load_salsa
-    from sim.hri_experiment import VIEWS, hri_detectors, hri_experiment, record_scenes
+    from sim.experiments.hri import VIEWS, hri_detectors, hri_experiment, record_scenes
 
     if args.seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {args.seeds}")

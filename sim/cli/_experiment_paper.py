@@ -75,7 +75,7 @@ def _command(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from reform.datasets import load_babble, load_salsa, resolve
-    from reform.experiment import paper_experiment
+    from sim.experiments.paper import paper_experiment
 
     check_train_fraction(args)
     if args.folds < 2:

@@ -111,8 +111,13 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
 
     from reform.datasets import load_babble, load_salsa, resolve
-    from sim.sim2real import CLASSIFIER_NAMES, DEFAULT_SOURCES, RANDOMISED_SOURCES, sim_to_real
-    from sim.sim2real_report import sim2real_figure
+    from sim.experiments.sim2real import (
+        CLASSIFIER_NAMES,
+        DEFAULT_SOURCES,
+        RANDOMISED_SOURCES,
+        sim_to_real,
+    )
+    from sim.experiments.sim2real_report import sim2real_figure
 
     salsa, babble = salsa_and_babble(args)
     if not args.episodes_scale > 0:

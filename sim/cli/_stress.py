@@ -39,7 +39,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.stress_grid import AXES, GRIDS
+    from sim.experiments.stress_grid import AXES, GRIDS
 
     parser.add_argument(
         "--grid",
@@ -113,8 +113,8 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from sim.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
-    from sim.stress_report import write_report
+    from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
+    from sim.experiments.stress_report import write_report
 
     grid = GRIDS[args.grid]
     if args.seeds is not None:

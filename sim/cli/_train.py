@@ -98,9 +98,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from reform import Reform, time_split
     from reform.classifiers import make_classifier
-    from reform.experiment import classifier_params, tune
     from reform.features import check_features
     from reform.persistence import save_model
+    from sim.experiments.paper import classifier_params, tune
 
     check_output("--out", args.out)
     if args.train_fraction is None:

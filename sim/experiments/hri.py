@@ -12,7 +12,7 @@ from three views of the same episodes:
 * ``truth``: the ground truth of everyone in the room (robot included);
 * ``robot``: the robot's head sensor (`sim.sensor.Sensor`: Kinect field of view 57 degrees,
   0.5-4.5 m, occlusion by MuJoCo rays) with Kinect-like tracking errors (the ``tracker`` level
-  of :mod:`sim.stress`);
+  of :mod:`sim.experiments.stress`);
 * ``robot-wide``: the same with a 180-degree field of view, standing in for the wide-angle
   camera the paper's robot also carried.
 
@@ -22,10 +22,10 @@ observed frame is the truth restricted to the people observed.
 Detectors: REFORM with each of the paper's classifiers trained on the SALSA training split
 (``reform.time_split``, the first 60 % of each session by time; default hyper-parameters of
 ``reform.classifiers``), as the paper trained on SALSA only, when SALSA is given; REFORM with the
-same classifiers trained on the synthetic training set of :func:`sim.stress.training_frames`
-(``mingle`` and ``word-improv``, seeds disjoint from the HRI episodes'); GCFF at the paper's
-setting (stride 0.7 m, mdl 30,000 cm² = 3 m²) and at the reference code's default (0.7 m, 1 m²);
-and the majority baseline (no groups).
+same classifiers trained on the synthetic training set of
+:func:`sim.experiments.stress.training_frames` (``mingle`` and ``word-improv``, seeds disjoint from
+the HRI episodes'); GCFF at the paper's setting (stride 0.7 m, mdl 30,000 cm² = 3 m²) and at the
+reference code's default (0.7 m, 1 m²); and the majority baseline (no groups).
 
 Degenerate frames (the protocol of :mod:`reform.metrics`): a frame with no true F-formation has
 recall 1 whatever is detected, and precision 1 if nothing is detected, else 0. Every frame of
@@ -52,17 +52,15 @@ import reform.classifiers
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, score_intervals
 from reform.classifiers import BAGGED_TREES, WEIGHTED_KNN
 from reform.detectors import make_detector, run_detector
-from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from reform.frame import Frame
 from reform.gcff import MDL_M2, STRIDE_M
 from reform.json_values import json_float
 from reform.metrics import Evaluation, evaluate
-from reform.report import command_block, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
-from sim.hri_views import DEFAULT_SEEDS, VIEW_NAMES
-from sim.sensor import Sensor
-from sim.stress import (
+from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
+from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
+from sim.experiments.stress import (
     DETECTOR_LABELS,
     THRESHOLDS,
     TRACKER_DROPOUT,
@@ -74,6 +72,8 @@ from sim.stress import (
     train_detectors,
     training_frames,
 )
+from sim.experiments.tables import command_block, percent, render_table
+from sim.sensor import Sensor
 
 __all__ = [
     "HRI_SCENARIOS",
@@ -128,7 +128,7 @@ VIEW_TEXT = {
 PAPER_HRI: Mapping[str, tuple[float, float, float]] = MappingProxyType(
     {"REFORM (each of the three classifiers)": (75.7, 100.0, 86.2), "GCFF": (51.5, 63.6, 56.9)}
 )
-_ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.stress uses 0-3)
+_ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.experiments.stress uses 0-3)
 _ROLE_HRI_BOOTSTRAP = 5
 CLASSIFIERS = tuple(
     reform.classifiers.CLASSIFIERS
@@ -164,7 +164,7 @@ def reform_detectors(fitted: Mapping[str, Any], *, training: str) -> list[HriDet
 
 def baseline_detectors(*, reference: bool = True) -> list[HriDetector]:
     """The untrained detectors, from the detector registry (`reform.detectors.make_detector`):
-    GCFF at the paper's setting (`reform.experiment_gcff.PAPER_STRIDE_M`, ``PAPER_MDL_M2``), at
+    GCFF at the paper's setting (`sim.experiments.gcff.PAPER_STRIDE_M`, ``PAPER_MDL_M2``), at
     the reference code's default (`reform.gcff.STRIDE_M`, ``MDL_M2``; with ``reference``) and
     the majority baseline."""
     out = [
@@ -243,7 +243,8 @@ def hri_detectors(
         seed: master seed of the synthetic training set.
         train_fraction: share of each SALSA session's annotated frames, by time, for training.
         grid: the size of the synthetic training set (``train_*`` fields of a
-            :class:`sim.stress.StressGrid`, or a name of :data:`sim.stress.GRIDS`).
+            :class:`sim.experiments.stress.StressGrid`, or a name of
+            :data:`sim.experiments.stress.GRIDS`).
         jobs: worker processes (None: every core).
         progress: called with one line of text per stage.
 
@@ -700,7 +701,8 @@ def _markdown(experiment: HriExperiment, *, command: str) -> str:
             f"- **synthetic-trained**: each classifier fitted on {s['frames']} simulated frames "
             f"({s['pairs']:,} pairs) of {s['episodes_per_scenario']} episodes each of `mingle` "
             f"and `word-improv` ({s['duration_s']:g} s at {s['rate_hz']:g} Hz, "
-            "`sim.stress.training_frames`, seeds disjoint from the HRI episodes'). No real data."
+            "`sim.experiments.stress.training_frames`, seeds disjoint from the HRI episodes'). "
+            "No real data."
         )
     untrained = [
         experiment.row(key, experiment.views[0]).label

@@ -1,6 +1,6 @@
 """The HRI experiment's views and default size: what `reform-sim experiment hri` can score.
 
-Kept apart from :mod:`sim.hri_experiment` (which builds the views' sensor models and runs the
+Kept apart from :mod:`sim.experiments.hri` (which builds the views' sensor models and runs the
 experiment) so that the command line can list them without loading MuJoCo or scikit-learn.
 """
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 __all__ = ["DEFAULT_SEEDS", "VIEW_NAMES"]
 
-# The views, in order (`sim.hri_experiment.VIEWS` holds their sensor models): the ground truth
+# The views, in order (`sim.experiments.hri.VIEWS` holds their sensor models): the ground truth
 # of everyone in the room, the robot's head sensor with tracking errors, and the same with a
 # wide field of view.
 VIEW_NAMES = ("truth", "robot", "robot-wide")

@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from reform.report import command_block, percent, render_table
+from sim.experiments.tables import command_block, percent, render_table
 
 if TYPE_CHECKING:
-    from sim.sim2real import Row, SimToReal
+    from sim.experiments.sim2real import Row, SimToReal
 
 __all__ = ["rows_table", "sim2real_figure", "sim2real_markdown"]
 
@@ -63,7 +63,7 @@ def sim2real_markdown(
 ) -> str:
     """The page: command, summary, goals, tables per test set, training data, calibration,
     tuning, diagnostics."""
-    from sim.sim2real import BABBLE, BABBLE_EMPTY, PAPER_BABBLE_F1, SALSA_TEST
+    from sim.experiments.sim2real import BABBLE, BABBLE_EMPTY, PAPER_BABBLE_F1, SALSA_TEST
 
     met = sum(g.met for g in result.goals)
     lines = ["# Sim-to-real: REFORM trained on synthetic crowds, tested on SALSA and Babble", ""]
@@ -251,10 +251,10 @@ def sim2real_markdown(
             style="markdown",
         ),
         "",
-        "Cross-validation: `reform.experiment.tune`, folds that are stretches of time of every "
+        "Cross-validation: `sim.experiments.paper.tune`, folds that are stretches of time of every "
         "sequence (episode or session).",
         "",
-        "GCFF tuned on SALSA's training split (`reform.experiment_gcff.gcff_comparison`): "
+        "GCFF tuned on SALSA's training split (`sim.experiments.gcff.gcff_comparison`): "
         f"stride {result.gcff_tuning['stride_m']:g} m, mdl {result.gcff_tuning['mdl_m2']:g} m² "
         f"(training F1 {100 * result.gcff_tuning['training_f1']:.1f}).",
         "",
@@ -280,7 +280,7 @@ def sim2real_markdown(
 
 def _reading(result: SimToReal) -> list[str]:
     """The goals in words, from the numbers."""
-    from sim.sim2real import BABBLE, SALSA_TEST, SALSA_TRAIN
+    from sim.experiments.sim2real import BABBLE, SALSA_TEST, SALSA_TRAIN
 
     salsa = {c: v for (c, d), v in result.differences.items() if d == SALSA_TEST}
     babble = {c: v for (c, d), v in result.differences.items() if d == BABBLE}
@@ -341,7 +341,7 @@ def _reading(result: SimToReal) -> list[str]:
 
 def _cross_period_section(result: SimToReal) -> list[str]:
     """The synthetic model beside SALSA-trained models across periods of the training split."""
-    from sim.sim2real import SALSA_WITHIN_F1
+    from sim.experiments.sim2real import SALSA_WITHIN_F1
 
     if not result.cross_period:
         return []
@@ -390,14 +390,14 @@ def _cross_period_section(result: SimToReal) -> list[str]:
 
 
 def _is_half(row: Row) -> bool:
-    from sim.sim2real import half_training
+    from sim.experiments.sim2real import half_training
 
     return row.training in (half_training("earlier"), half_training("later"))
 
 
 def _halves_on_test(result: SimToReal) -> list[str]:
     """The half models on the SALSA test split beside the whole split's and the synthetic."""
-    from sim.sim2real import SALSA_TEST, SALSA_TRAIN, SYNTHETIC, half_training
+    from sim.experiments.sim2real import SALSA_TEST, SALSA_TRAIN, SYNTHETIC, half_training
 
     def f1(classifier: str, training: str) -> float | None:
         for row in result.rows:
@@ -451,7 +451,7 @@ def _span(values: list[float]) -> str:
 
 def _realism_section(result: SimToReal) -> list[str]:
     """Where the SALSA-like synthetic data still differ from SALSA's training split."""
-    from sim.sim2real import NEIGHBOUR_QUANTILES, SALSA_TRAIN
+    from sim.experiments.sim2real import NEIGHBOUR_QUANTILES, SALSA_TRAIN
 
     realism = result.realism
     if SALSA_TRAIN not in realism or len(realism) < 2:
@@ -512,7 +512,7 @@ def _m3(value: float | None) -> str:
 
 
 def row_name(classifier: str) -> str:
-    from sim.sim2real import DISPLAY
+    from sim.experiments.sim2real import DISPLAY
 
     return DISPLAY.get(classifier, classifier)
 
@@ -527,8 +527,8 @@ def _on_grid(noise: Any, position: float, yaw: float) -> bool:
 
 def sim2real_figure(result: SimToReal, path: Any) -> Any:
     """F1 at T = 2/3 with bootstrap intervals: every main row, grouped by test set (PNG)."""
-    from sim.figures import Bar, score_bars
-    from sim.sim2real import BABBLE, PAPER_BABBLE_F1, SALSA_TEST
+    from sim.experiments.figures import Bar, score_bars
+    from sim.experiments.sim2real import BABBLE, PAPER_BABBLE_F1, SALSA_TEST
 
     groups = {}
     for dataset, title in ((SALSA_TEST, "SALSA test split"), (BABBLE, "Babble")):

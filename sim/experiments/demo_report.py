@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from reform.report import command_block, percent, render_table
+from sim.experiments.tables import command_block, percent, render_table
 
 if TYPE_CHECKING:
-    from sim.demo import DemoResult
+    from sim.experiments.demo import DemoResult
 
 __all__ = ["demo_json", "demo_markdown"]
 
@@ -112,14 +112,16 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         "",
         "Hive-partitioned Parquet under `synthetic/train` (read it with "
         "`reform.datasets.read_parquet`); held-back episodes, from another master seed, under "
-        "`synthetic/held-back`. The sources are balanced by pairs (`sim.sim2real.balance_pairs`).",
+        "`synthetic/held-back`. The sources are balanced by pairs "
+        "(`sim.experiments.sim2real.balance_pairs`).",
         "",
     ]
     noise = context["noise"]
     if noise is not None:
         lines += [
             f"Tracker noise on `mingle`, calibrated on SALSA's training split "
-            f"(`sim.sim2real.calibrate_tracker_noise`): {noise.position_noise:g} m per axis, "
+            "(`sim.experiments.sim2real.calibrate_tracker_noise`): "
+            f"{noise.position_noise:g} m per axis, "
             f"{noise.yaw_noise:g} rad of yaw (sum of KS statistics {noise.objective:.3f}).",
             "",
         ]
@@ -170,7 +172,7 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         "## Stress tests (small grid)",
         "",
         "F1 of the demo's REFORM models and GCFF as tracking gets worse and crowds change, "
-        "scored on held-out `mingle` parties (`sim.stress.run_stress`). Full tables: "
+        "scored on held-out `mingle` parties (`sim.experiments.stress.run_stress`). Full tables: "
         "[`stress/stress.md`](stress/stress.md); curves also in `recordings/stress.rrd`.",
         "",
     ]
@@ -219,7 +221,7 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
                     percent(s.f1.value),
                 ]
             )
-    from sim.hri_experiment import PAPER_HRI
+    from sim.experiments.hri import PAPER_HRI
 
     for name, (p, r, f1) in PAPER_HRI.items():
         rows.append([f"paper: {name}", "Kinect", f"{p:.1f}", f"{r:.1f}", f"{f1:.1f}"])

@@ -58,8 +58,7 @@ from reform.json_values import json_float
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
 from sim.episode import simulate_episode
-from sim.sensor import Sensor
-from sim.stress_grid import (
+from sim.experiments.stress_grid import (
     AXES,
     BASE_PEOPLE,
     GRIDS,
@@ -68,6 +67,7 @@ from sim.stress_grid import (
     check_axis,
     resolve_grid,
 )
+from sim.sensor import Sensor
 
 __all__ = [
     "AXES",

@@ -36,8 +36,8 @@ from reform.features import DEFAULT_FEATURES
 from reform.frame import Dataset, Frame
 from reform.majority import Majority
 from reform.metrics import PROTOCOL, evaluate, pair_labels
-from reform.report import command_block, percent, render_table
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_blocks, time_split
+from sim.experiments.tables import command_block, percent, render_table
 
 SALSA_TRAIN = "salsa-train"  # dataset label of the SALSA training split
 SALSA_TEST = "salsa-test"  # dataset label of the SALSA test split

@@ -20,7 +20,7 @@ and REFORM models given as files (``reform-sim train``'s ``.skops``).
 Cells are independent units of work: they run in this process (``jobs=1``), on local worker
 processes (joblib's loky), or as Ray tasks (``backend="ray"``); the results are the same, and
 in the same order, whichever runs them. This module imports no Rerun and no MuJoCo; the report
-(Markdown, JSON, plot, ``.rrd``) is :mod:`sim.benchmark_report`.
+(Markdown, JSON, plot, ``.rrd``) is :mod:`sim.experiments.benchmark_report`.
 """
 
 from __future__ import annotations
@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from reform.frame import Dataset, Frame, Group
 from reform.splits import DEFAULT_TRAIN_FRACTION
+from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 
 __all__ = [
     "BACKENDS",

@@ -6,16 +6,17 @@ Stages, each announced on stderr:
    MuJoCo (ground truth).
 2. **Synthetic training set.** ``mingle`` and ``word-improv`` episodes generated as
    hive-partitioned Parquet (:func:`sim.generate.generate_dataset`) under ``OUT/synthetic``,
-   with the sim-to-real recipe of :mod:`sim.sim2real`: tracker noise on ``mingle`` calibrated on
-   SALSA's training split when SALSA is at hand, sources balanced by pairs.
+   with the sim-to-real recipe of :mod:`sim.experiments.sim2real`: tracker noise on ``mingle``
+   calibrated on SALSA's training split when SALSA is at hand, sources balanced by pairs.
 3. **Training.** REFORM with the paper's three classifiers on the synthetic set (their
    ready-made hyper-parameters); Bagged Trees is saved as ``OUT/model.skops``. With SALSA at
    hand, Bagged Trees trained on SALSA's training split is added for reference.
 4. **Evaluation.** REFORM and GCFF (the paper's setting) on held-back synthetic episodes (seeds
    never trained on) and, when the datasets are found, on the SALSA test split and every
    annotated Babble frame.
-5. **Stress tests** on the small grid (:func:`sim.stress.run_stress`) with the demo's models.
-6. **The paper's HRI experiment re-enacted** (:func:`sim.hri_experiment.hri_experiment`).
+5. **Stress tests** on the small grid (:func:`sim.experiments.stress.run_stress`) with the demo's
+   models.
+6. **The paper's HRI experiment re-enacted** (:func:`sim.experiments.hri.hri_experiment`).
 7. **Recordings and report.** One Rerun ``.rrd`` per scenario (people, groups, REFORM's and
    GCFF's detections, events), one per evaluation, the stress curves and the HRI scenes; a
    Markdown report with tables and PNG plots (``OUT/report.md``) and every number in
@@ -42,7 +43,7 @@ import numpy as np
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
-from sim.sim2real import SyntheticSource
+from sim.experiments.sim2real import SyntheticSource
 
 __all__ = [
     "DEFAULT_OUT",
@@ -83,7 +84,7 @@ class DemoBudget:
         held_back: the held-back synthetic sources (another master seed).
         noise_position_grid: tracker-noise position levels calibrated over, metres.
         noise_yaw_grid: tracker-noise yaw levels, radians.
-        stress_grid: a name of :data:`sim.stress.GRIDS` or a ``StressGrid``.
+        stress_grid: a name of :data:`sim.experiments.stress.GRIDS` or a ``StressGrid``.
         stress_axes: stress axes run (None: all).
         hri_seeds: episodes per HRI scene.
         hri_views: views of the HRI experiment.
@@ -120,7 +121,7 @@ FULL = DemoBudget(
         SyntheticSource("mingle", episodes=2, duration=300.0),
         SyntheticSource("word-improv", episodes=2),
     ),
-    # A coarser grid than the documented experiment's (sim.sim2real), for time.
+    # A coarser grid than the documented experiment's (sim.experiments.sim2real), for time.
     noise_position_grid=(0.0, 0.1, 0.2, 0.3),
     noise_yaw_grid=(0.0, 0.3, 0.6, 0.9),
     stress_grid="small",
@@ -291,12 +292,17 @@ def run_demo(
     """
     import scenarios
     from reform.detector import Reform
-    from reform.experiment_gcff import PAPER_MDL_M2, PAPER_STRIDE_M
     from reform.persistence import save_model
     from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
     from sim.episode import simulate_episode
+    from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
+    from sim.experiments.sim2real import (
+        balance_pairs,
+        calibrate_tracker_noise,
+        count_pairs,
+        generate_sources,
+    )
     from sim.recording import record_episode, record_evaluation
-    from sim.sim2real import balance_pairs, calibrate_tracker_noise, count_pairs, generate_sources
 
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
@@ -408,10 +414,10 @@ def run_demo(
 
     # 5. Stress tests.
     stages.begin("stress", "stress tests on the small grid (noise, dropouts, crowds, sensor)")
-    from sim.stress import GCFF as STRESS_GCFF
-    from sim.stress import run_stress
-    from sim.stress_report import record as record_stress
-    from sim.stress_report import write_report as write_stress
+    from sim.experiments.stress import GCFF as STRESS_GCFF
+    from sim.experiments.stress import run_stress
+    from sim.experiments.stress_report import record as record_stress
+    from sim.experiments.stress_report import write_report as write_stress
 
     stress = run_stress(
         _stress_grid(budget.stress_grid),
@@ -428,7 +434,7 @@ def run_demo(
 
     # 6. The HRI re-enactment.
     stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
-    from sim.hri_experiment import (
+    from sim.experiments.hri import (
         baseline_detectors,
         hri_experiment,
         record_scenes,
@@ -442,7 +448,7 @@ def run_demo(
         hri_detectors += reform_detectors({SAVED_CLASSIFIER: salsa_model}, training="salsa")
     hri_detectors += baseline_detectors(reference=False)
     # What the HRI page says about the SALSA-trained model (the synthetic one is described in
-    # the demo's report: its training set is not sim.stress's).
+    # the demo's report: its training set is not sim.experiments.stress's).
     hri_training: dict[str, Any] = {}
     if salsa_model is not None:
         hri_training["salsa"] = {
@@ -464,7 +470,7 @@ def run_demo(
 
     # 7. Recordings, figures, report.
     stages.begin("report", "writing recordings (.rrd), figures (PNG) and the report")
-    from sim.figures import Bar, score_bars, top_view
+    from sim.experiments.figures import Bar, score_bars, top_view
 
     reform_main = models[SAVED_CLASSIFIER]
     main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
@@ -564,7 +570,7 @@ def run_demo(
         timings=timings,
         datasets=tuple(sorted(real)),
     )
-    from sim.demo_report import demo_json, demo_markdown
+    from sim.experiments.demo_report import demo_json, demo_markdown
 
     context = {
         "budget": budget,
@@ -595,7 +601,7 @@ def run_demo(
 
 def _stress_grid(name: str) -> Any:
     """``"quick"``: the small grid cut to two levels, one short episode; else a grid's name."""
-    from sim.stress import GRIDS
+    from sim.experiments.stress import GRIDS
 
     if name != "quick":
         return name

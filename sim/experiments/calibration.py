@@ -41,8 +41,8 @@ from reform.calibration import (
     compare,
 )
 from reform.frame import Dataset, Frame
-from reform.report import render_table
 from sim.episode import simulate_episode
+from sim.experiments.tables import render_table
 
 __all__ = [
     "CALIBRATED",

@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from reform.detectors import make_detector, run_detector
-from reform.experiment import BABBLE, SALSA_TEST, split_json
 from reform.frame import Dataset, Frame
 from reform.gcff import (
     MDL_GRID_M2,
@@ -31,6 +30,7 @@ from reform.gcff import (
     labels_to_partition,
 )
 from reform.metrics import PROTOCOL
+from sim.experiments.paper import BABBLE, SALSA_TEST, split_json
 
 __all__ = [
     "PAPER_MDL_M2",
@@ -217,7 +217,7 @@ class GcffComparison:
 
     def to_markdown(self, *, command: str | None = None) -> str:
         """The comparison as a Markdown page: command, tables per dataset, tuning, notes."""
-        from reform.report import command_block, format_comparison, render_table
+        from sim.experiments.tables import command_block, format_comparison, render_table
 
         search = self.tuning
         lines = ["# GCFF beside REFORM: SALSA test split and Babble", ""]

@@ -30,7 +30,7 @@ from reform.calibration import (
     paper_characterisation_for,
     tukey_by_size,
 )
-from reform.report import STYLES, render_table
+from sim.experiments.tables import STYLES, render_table
 
 __all__ = ["characterisation_summary", "format_calibration", "format_characterisation"]
 

@@ -1,6 +1,6 @@
 """The benchmark's report: a Markdown table as the field reports it, JSON, a plot, recordings.
 
-Imports the run (:mod:`sim.benchmark`); the run never imports its report.
+Imports the run (:mod:`sim.experiments.benchmark`); the run never imports its report.
 """
 
 from __future__ import annotations
@@ -13,14 +13,14 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_open
-from sim.benchmark import (
+from sim.experiments.benchmark import (
     ORIGINAL_GCFF_OWN,
     THRESHOLDS,
     Benchmark,
     Cell,
     percent,
 )
-from sim.figures import pyplot, save_png
+from sim.experiments.figures import pyplot, save_png
 
 __all__ = [
     "JSON_NAME",

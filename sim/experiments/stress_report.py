@@ -7,8 +7,8 @@ T = 1, intervals shaded). :func:`log_results` puts the curves into a Rerun recor
 (``sim.recording.log_stress_curves``), one bar chart per axis and threshold.
 
 Every detector of the run is reported (``StressResults.detectors``): the built-in ones in the
-order of :data:`sim.stress.DETECTOR_LABELS`, then the plugins given to ``reform-sim stress
---detector`` in the order they were given, labelled by their names.
+order of :data:`sim.experiments.stress.DETECTOR_LABELS`, then the plugins given to
+``reform-sim stress --detector`` in the order they were given, labelled by their names.
 """
 
 from __future__ import annotations
@@ -22,8 +22,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
-from reform.report import command_block, percent, render_table
-from sim.stress import (
+from sim.experiments.stress import (
     AXES,
     DETECTOR_LABELS,
     GCFF,
@@ -32,6 +31,7 @@ from sim.stress import (
     StressResults,
     sensor_description,
 )
+from sim.experiments.tables import command_block, percent, render_table
 
 __all__ = [
     "MARKDOWN_NAME",
@@ -258,7 +258,8 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
             f"strides {list(grid.gcff_stride_grid_m)} m, mdl {list(grid.gcff_mdl_grid_m2)} m²): "
             f"stride {training['gcff_stride_m']:g} m, mdl {training['gcff_mdl_m2']:g} m². "
             "No real data is used. Training and test episodes take their seeds from different "
-            "spawn keys of the master seed (`sim.stress.episode_seed`), so they never share one.",
+            "spawn keys of the master seed (`sim.experiments.stress.episode_seed`), so they never "
+            "share one.",
         ]
     else:
         lines += ["- **Detectors** were given, already fitted."]

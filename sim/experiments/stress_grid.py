@@ -1,7 +1,7 @@
 """The stress tests' axes and grids: what `reform-sim stress` can vary, and by how much.
 
-Kept apart from :mod:`sim.stress` (which runs the tests) so that the command line can list the
-axes and grids without loading MuJoCo or scikit-learn.
+Kept apart from :mod:`sim.experiments.stress` (which runs the tests) so that the command line can
+list the axes and grids without loading MuJoCo or scikit-learn.
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ __all__ = [
 ]
 
 BASE_PEOPLE = 18  # guests of the test party (SALSA: 18)
-# The sensor levels, in order (`sim.stress.SENSORS` holds their sensor models): the ground truth
-# of everyone in the room, then the robot's head sensor with field of view and range only, with
-# occlusion, and with occlusion and tracking errors.
+# The sensor levels, in order (`sim.experiments.stress.SENSORS` holds their sensor models): the
+# ground truth of everyone in the room, then the robot's head sensor with field of view and range
+# only, with occlusion, and with occlusion and tracking errors.
 SENSOR_NAMES = ("truth", "fov", "occlusion", "tracker")
 
 
