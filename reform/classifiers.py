@@ -13,7 +13,7 @@ category it stands for:
   (:mod:`reform.fast`).
 * ``"logistic-regression"`` — logistic regression on standardised features.
 
-:data:`PARAM_GRIDS` holds, per classifier, the grid :func:`sim.experiments.paper.tune` searches with
+:data:`PARAM_GRIDS` holds, per classifier, the grid :func:`reform.tuning.tune` searches with
 cross-validation on training frames only.
 """
 

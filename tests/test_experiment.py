@@ -1,4 +1,4 @@
-"""Splits by time, time-blocked tuning, the paper's experiment, and the REFORM commands."""
+"""Splits by time, the paper's experiment, and the REFORM commands."""
 
 from __future__ import annotations
 
@@ -17,10 +17,8 @@ from sim.experiments.paper import (
     PAPER_TABLE_I,
     SALSA_TEST,
     SALSA_TRAIN,
-    classifier_params,
     paper_experiment,
     random_split,
-    tune,
 )
 
 
@@ -79,21 +77,6 @@ def test_random_split_is_seeded():
     assert first == random_split(frames, 0.6, seed=3)
     assert len(first[0]) == 12 and len(first[1]) == 8
     assert {f.time for f in first[0]} | {f.time for f in first[1]} == set(range(20))
-
-
-def test_tune_uses_time_blocks_and_its_grid():
-    frames = toy_frames(0, 40)
-    tuning = tune("logistic-regression", frames, grid={"logreg__C": (0.01, 1.0)}, n_folds=4)
-    assert [c["logreg__C"] for c in tuning.candidates] == [0.01, 1.0]
-    assert tuning.best_params["logreg__C"] in (0.01, 1.0)
-    assert all(0.5 < m <= 1.0 for m in tuning.mean_score)
-    assert tuning.n_folds == 4 and tuning.frames == 40 and tuning.pairs == 40 * 55
-    assert classifier_params("logistic-regression", tuning.best_params) == {
-        "C": tuning.best_params["logreg__C"]
-    }
-    json.dumps(tuning.to_json())
-    with pytest.raises(ValueError, match="cannot map grid parameter 'knn__p'"):
-        classifier_params("weighted-knn", {"knn__p": 1})
 
 
 SMALL_GRIDS = {

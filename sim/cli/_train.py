@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     from reform.classifiers import make_classifier
     from reform.features import check_features
     from reform.persistence import save_model
-    from sim.experiments.paper import classifier_params, tune
+    from reform.tuning import classifier_params, tune
 
     check_output("--out", args.out)
     if args.train_fraction is None:

@@ -19,7 +19,7 @@ The experiment behind ``reform-sim experiment sim2real`` (results in
 3. **Balance.** Each source contributes (nearly) the same number of training pairs, an even
    subset of its frames in time, so neither scene's geometry outweighs the other's.
 4. **Training.** REFORM with each of the paper's classifiers; hyper-parameters chosen by
-   time-blocked cross-validation on the synthetic frames only (:func:`sim.experiments.paper.tune`,
+   time-blocked cross-validation on the synthetic frames only (:func:`reform.tuning.tune`,
    the same procedure that tunes the SALSA-trained models on SALSA's training split).
 5. **Beside it**: REFORM trained on SALSA's training split (tuned the same way), GCFF with the
    paper's setting and tuned on SALSA's training split (:func:`sim.experiments.gcff.
@@ -425,7 +425,7 @@ def train_reform(
         classifier: one of the paper's classifiers (:data:`reform.classifiers.CLASSIFIERS`).
         frames: annotated training frames.
         tune: choose hyper-parameters by time-blocked cross-validation on ``frames``
-            (:func:`sim.experiments.paper.tune`).
+            (:func:`reform.tuning.tune`).
         params: hyper-parameters in the classifier's own names (e.g.
             ``{"estimator__min_samples_leaf": 20}``), used when not tuning.
         n_jobs: parallel cross-validation fits.
@@ -439,7 +439,7 @@ def train_reform(
     tuning = None
     chosen = dict(params or {})
     if tune:
-        from sim.experiments.paper import tune as cross_validate
+        from reform.tuning import tune as cross_validate
 
         tuning = cross_validate(classifier, frames, n_jobs=n_jobs)
         chosen = dict(tuning.best_params)
@@ -601,7 +601,7 @@ class SimToReal:
         realism: per data set compared with SALSA's training split (the SALSA-like sources,
             plain and with tracker noise): nearest-neighbour distance quantiles and the joint
             pair-feature distances (:func:`joint_distances`), SALSA's own quantiles beside.
-        tuning: per training set and classifier, :meth:`sim.experiments.paper.Tuning.to_json`.
+        tuning: per training set and classifier, :meth:`reform.tuning.Tuning.to_json`.
         gcff_tuning: the tuned GCFF setting (stride m, mdl m², training F1).
         cross_period: per classifier and half of SALSA's training split, the synthetic-trained
             model beside one trained on the other half (training data only).

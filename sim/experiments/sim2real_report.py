@@ -251,7 +251,7 @@ def sim2real_markdown(
             style="markdown",
         ),
         "",
-        "Cross-validation: `sim.experiments.paper.tune`, folds that are stretches of time of every "
+        "Cross-validation: `reform.tuning.tune`, folds that are stretches of time of every "
         "sequence (episode or session).",
         "",
         "GCFF tuned on SALSA's training split (`sim.experiments.gcff.gcff_comparison`): "
