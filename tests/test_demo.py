@@ -14,6 +14,7 @@ from reform.metrics import T_TWO_THIRDS
 from reform.persistence import load_model
 from sim.cli import main
 from sim.experiments.demo import FULL, QUICK, run_demo
+from sim.experiments.demo_report import write_report
 
 
 @pytest.fixture(scope="module")
@@ -126,10 +127,17 @@ def test_without_real_data(tmp_path) -> None:
     )
     assert result.datasets == ()
     assert {d for _, d in result.scores} == {"held-back synthetic"}
-    data = json.loads(result.results.read_text())
-    assert data["tracker_noise"] is None
-    assert "No tracker noise" in result.report.read_text()
     assert result.model.is_file()
+    assert not (tmp_path / "out" / "report.md").exists()  # the run writes no report
+    written = write_report(result)
+    assert written == {
+        "markdown": tmp_path / "out" / "report.md",
+        "json": tmp_path / "out" / "results.json",
+    }
+    data = json.loads(written["json"].read_text())
+    assert data["tracker_noise"] is None
+    assert data["files"]["report"] == "report.md"
+    assert "No tracker noise" in written["markdown"].read_text()
 
 
 def test_budgets() -> None:

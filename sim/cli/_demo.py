@@ -28,7 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.experiments.demo import DEFAULT_OUT
+    from sim.experiments.demo_files import DEFAULT_OUT
 
     parser.add_argument(
         "--datasets",
@@ -53,6 +53,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from sim.experiments.demo import run_demo
+    from sim.experiments.demo_report import write_report
 
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
@@ -66,11 +67,12 @@ def run(args: argparse.Namespace) -> int:
         quick=args.quick,
         progress_bars=not args.no_progress,
     )
+    written = write_report(result)
     seconds = time.perf_counter() - started
     out = result.out_dir
     print(f"demo finished in {seconds / 60:.1f} min; everything is in {out}/:")
-    print(f"  report:     {result.report}")
-    print(f"  numbers:    {result.results}")
+    print(f"  report:     {written['markdown']}")
+    print(f"  numbers:    {written['json']}")
     print(f"  model:      {result.model}")
     print(f"  recordings: {len(result.recordings)} .rrd files in {out / 'recordings'}/")
     for path in result.recordings:

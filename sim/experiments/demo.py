@@ -22,28 +22,61 @@ Stages, each announced on stderr:
    Markdown report with tables and PNG plots (``OUT/report.md``) and every number in
    ``OUT/results.json``.
 
-The same seed gives the same numbers; a second run in the same folder reuses the generated
-episodes. ``quick=True`` shrinks every budget (for tests).
+The run returns a :class:`DemoResult` holding everything measured; its report
+(:func:`sim.experiments.demo_report.write_report`) writes ``report.md`` and ``results.json``
+from it. The same seed gives the same numbers; a second run in the same folder reuses the
+generated episodes. ``quick=True`` shrinks every budget (for tests).
 """
 
 from __future__ import annotations
 
-import json
 import os
 import platform
+import shlex
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
+import scenarios
+from reform.atomic import atomic_open
+from reform.classifiers import BAGGED_TREES, make_classifier
+from reform.datasets import fetch, is_fetched, load_babble, load_salsa
+from reform.detector import Reform
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
-from sim.experiments.sim2real import SyntheticSource
+from reform.persistence import save_model
+from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
+from sim.episode import simulate_episode
+from sim.experiments.demo_files import DEFAULT_OUT, FIGURES, MODEL, RECORDINGS, SYNTHETIC
+from sim.experiments.figures import Bar, score_bars, top_view
+from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
+from sim.experiments.hri import (
+    HriExperiment,
+    baseline_detectors,
+    hri_experiment,
+    record_scenes,
+    reform_detectors,
+)
+from sim.experiments.sim2real import (
+    NoiseCalibration,
+    SyntheticSource,
+    balance_pairs,
+    calibrate_tracker_noise,
+    count_pairs,
+    generate_sources,
+)
+from sim.experiments.stress import GCFF as STRESS_GCFF
+from sim.experiments.stress import GRIDS, StressResults, run_stress
+from sim.experiments.stress_report import record as record_stress
+from sim.experiments.stress_report import write_report as write_stress
+from sim.recording import record_episode, record_evaluation
 
 __all__ = [
     "DEFAULT_OUT",
@@ -54,13 +87,6 @@ __all__ = [
     "run_demo",
 ]
 
-DEFAULT_OUT = "demo-output"  # the output folder, relative to the working directory
-REPORT = "report.md"
-RESULTS = "results.json"
-MODEL = "model.skops"
-RECORDINGS = "recordings"
-FIGURES = "figures"
-SYNTHETIC = "synthetic"
 HELD_BACK_SEED_OFFSET = 1_000_003  # held-back episodes: master seed + this (never trained on)
 CLASSIFIERS = ("bagged-trees", "weighted-knn", "logistic-regression")
 SAVED_CLASSIFIER = "bagged-trees"  # the paper's best; saved as model.skops
@@ -156,29 +182,53 @@ QUICK = DemoBudget(
 
 @dataclass(frozen=True)
 class DemoResult:
-    """What the demo did and wrote.
+    """What the demo did, measured and wrote: everything its report
+    (:mod:`sim.experiments.demo_report`) puts in ``report.md`` and ``results.json``.
 
     Attributes:
         out_dir: the output folder.
-        report: the Markdown report.
-        results: the JSON of every number.
         model: the saved REFORM model (skops).
         recordings: every ``.rrd`` written.
         figures: every PNG written.
         scores: ``(detector, dataset) -> Evaluation.to_json`` of every detector scored.
         timings: seconds per stage and in total.
         datasets: the real datasets found (``"salsa"``, ``"babble"``).
+        budget: the budget run.
+        seed: the master seed.
+        command: the command line that reproduces the run.
+        scenarios: per registered scenario, what its recording and figure show (people,
+            seconds, groups per frame, REFORM's and GCFF's F1, the files).
+        training: per synthetic source, the frames and pairs kept after balancing.
+        noise: the tracker noise calibrated on SALSA's training split (None without SALSA).
+        tests: frames per test set.
+        detectors: the detectors scored, in order.
+        evaluations: ``(detector, test set) ->`` the scores the report tabulates.
+        stress: the stress tests' results.
+        stress_plots: per stress axis, its plot (relative to ``out_dir``).
+        hri: the HRI re-enactment's results.
+        machine: cores and platform of the machine that ran it.
     """
 
     out_dir: Path
-    report: Path
-    results: Path
     model: Path
     recordings: tuple[Path, ...]
     figures: tuple[Path, ...]
     scores: Mapping[tuple[str, str], Mapping[str, Any]]
     timings: Mapping[str, float]
-    datasets: tuple[str, ...] = field(default=())
+    datasets: tuple[str, ...]
+    budget: DemoBudget
+    seed: int
+    command: str
+    scenarios: tuple[Mapping[str, Any], ...]
+    training: Mapping[str, Mapping[str, int]]
+    noise: NoiseCalibration | None
+    tests: Mapping[str, int]
+    detectors: tuple[str, ...]
+    evaluations: Mapping[tuple[str, str], Mapping[str, float]]
+    stress: StressResults
+    stress_plots: Mapping[str, str]
+    hri: HriExperiment
+    machine: Mapping[str, Any]
 
 
 class _Stages:
@@ -207,8 +257,6 @@ class _Stages:
 
 
 def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = True) -> Any:
-    from tqdm import tqdm
-
     return tqdm(
         iterable,
         desc=desc,
@@ -223,8 +271,6 @@ def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = Tru
 def _find_datasets(datasets: str | os.PathLike[str] | None) -> dict[str, Dataset]:
     """SALSA and Babble under ``datasets`` (``salsa/``, ``babble/``), those present; with
     ``datasets`` None, the ones fetched with ``reform-sim datasets fetch``."""
-    from reform.datasets import fetch, is_fetched, load_babble, load_salsa
-
     found: dict[str, Dataset] = {}
     if datasets is None:
         for name, load in (("salsa", load_salsa), ("babble", load_babble)):
@@ -275,7 +321,10 @@ def run_demo(
     progress: Callable[[str], None] | None = None,
     progress_bars: bool = True,
 ) -> DemoResult:
-    """Runs the demo and writes its report, recordings, model and figures into ``out_dir``.
+    """Runs the demo and writes its episodes, model, recordings and figures into ``out_dir``.
+
+    The report (``report.md``, ``results.json``) is written from the result by
+    :func:`sim.experiments.demo_report.write_report`.
 
     Args:
         out_dir: the output folder (created; generated episodes in it are reused).
@@ -290,20 +339,6 @@ def run_demo(
     Returns:
         The :class:`DemoResult`.
     """
-    import scenarios
-    from reform.detector import Reform
-    from reform.persistence import save_model
-    from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
-    from sim.episode import simulate_episode
-    from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
-    from sim.experiments.sim2real import (
-        balance_pairs,
-        calibrate_tracker_noise,
-        count_pairs,
-        generate_sources,
-    )
-    from sim.recording import record_episode, record_evaluation
-
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
@@ -414,10 +449,6 @@ def run_demo(
 
     # 5. Stress tests.
     stages.begin("stress", "stress tests on the small grid (noise, dropouts, crowds, sensor)")
-    from sim.experiments.stress import GCFF as STRESS_GCFF
-    from sim.experiments.stress import run_stress
-    from sim.experiments.stress_report import record as record_stress
-    from sim.experiments.stress_report import write_report as write_stress
 
     stress = run_stress(
         _stress_grid(budget.stress_grid),
@@ -434,12 +465,6 @@ def run_demo(
 
     # 6. The HRI re-enactment.
     stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
-    from sim.experiments.hri import (
-        baseline_detectors,
-        hri_experiment,
-        record_scenes,
-        reform_detectors,
-    )
 
     hri_detectors = reform_detectors(
         {SAVED_CLASSIFIER: models[SAVED_CLASSIFIER]}, training="synthetic"
@@ -464,13 +489,12 @@ def run_demo(
         detectors=hri_detectors,
         training=hri_training,
     )
-    with _atomic_text(out / "hri.md") as handle:
+    with atomic_open(out / "hri.md") as handle:
         handle.write(hri.to_markdown(command=command))
     recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
 
     # 7. Recordings, figures, report.
     stages.begin("report", "writing recordings (.rrd), figures (PNG) and the report")
-    from sim.experiments.figures import Bar, score_bars, top_view
 
     reform_main = models[SAVED_CLASSIFIER]
     main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
@@ -559,50 +583,36 @@ def run_demo(
     stages.end()
     timings = dict(stages.timings)
     timings["total"] = time.perf_counter() - stages.started
-    result = DemoResult(
+    return DemoResult(
         out_dir=out,
-        report=out / REPORT,
-        results=out / RESULTS,
         model=model_path,
         recordings=tuple(recordings),
         figures=tuple(figures),
         scores=scores,
         timings=timings,
         datasets=tuple(sorted(real)),
-    )
-    from sim.experiments.demo_report import demo_json, demo_markdown
-
-    context = {
-        "budget": budget,
-        "seed": seed,
-        "command": command,
-        "scenarios": scenario_rows,
-        "training": training_summary,
-        "noise": noise,
-        "tests": {d: len(f) for d, f in tests.items()},
-        "detectors": list(detectors),
-        "evaluations": {k: _scores_row(v) for k, v in evaluations.items()},
-        "stress": stress,
-        "stress_plots": {
+        budget=budget,
+        seed=seed,
+        command=command,
+        scenarios=tuple(scenario_rows),
+        training=training_summary,
+        noise=noise,
+        tests={d: len(f) for d, f in tests.items()},
+        detectors=tuple(detectors),
+        evaluations={k: _scores_row(v) for k, v in evaluations.items()},
+        stress=stress,
+        stress_plots={
             k.split(":", 1)[1]: str(p.relative_to(out))
             for k, p in stress_files.items()
             if k.startswith("plot:")
         },
-        "hri": hri,
-        "machine": {"cores": os.cpu_count(), "platform": platform.platform()},
-    }
-    with _atomic_text(result.report) as handle:
-        handle.write(demo_markdown(result, context))
-    with _atomic_text(result.results) as handle:
-        json.dump(demo_json(result, context), handle, indent=1, allow_nan=False)
-        handle.write("\n")
-    return replace(result, timings={**timings, "total": time.perf_counter() - stages.started})
+        hri=hri,
+        machine={"cores": os.cpu_count(), "platform": platform.platform()},
+    )
 
 
 def _stress_grid(name: str) -> Any:
     """``"quick"``: the small grid cut to two levels, one short episode; else a grid's name."""
-    from sim.experiments.stress import GRIDS
-
     if name != "quick":
         return name
     return replace(
@@ -614,8 +624,6 @@ def _classifier(name: str, jobs: int | None) -> Any:
     """A ready-made classifier; bagged trees grow their trees on ``jobs`` processes (the same
     trees whatever the number: scikit-learn draws every tree's seed before splitting the
     work)."""
-    from reform.classifiers import BAGGED_TREES, make_classifier
-
     estimator = make_classifier(name)
     if name == BAGGED_TREES:
         estimator.set_params(n_jobs=jobs if jobs is not None else -1)
@@ -628,17 +636,9 @@ def _f1(evaluation: Evaluation | None) -> float | None:
     return float(evaluation.at(T_TWO_THIRDS).f1)
 
 
-def _atomic_text(path: Path) -> Any:
-    from reform.atomic import atomic_open
-
-    return atomic_open(path)
-
-
 def _command(
     out: Path, datasets: str | os.PathLike[str] | None, seed: int, *, quick: bool = False
 ) -> str:
-    import shlex
-
     words = ["reform-sim", "demo"]
     if datasets is not None:
         words += ["--datasets", str(datasets)]

@@ -1,16 +1,20 @@
-"""The demo's report: Markdown with tables and plots (``report.md``) and every number as JSON."""
+"""The demo's report: Markdown with tables and plots (``report.md``) and every number as JSON
+(``results.json``), written from the run's :class:`sim.experiments.demo.DemoResult`."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+import json
+from pathlib import Path
+from typing import Any
 
+from reform import __version__
+from reform.atomic import atomic_open
+from sim.experiments.demo import DemoResult
+from sim.experiments.demo_files import REPORT, RESULTS
+from sim.experiments.hri import PAPER_HRI
 from sim.experiments.tables import command_block, percent, render_table
 
-if TYPE_CHECKING:
-    from sim.experiments.demo import DemoResult
-
-__all__ = ["demo_json", "demo_markdown"]
+__all__ = ["to_json", "to_markdown", "write_report"]
 
 _STAGE_TEXT = {
     "scenarios": "simulate every registered scenario",
@@ -25,24 +29,22 @@ _STAGE_TEXT = {
 
 
 def _rel(result: DemoResult, path: Any) -> str:
-    from pathlib import Path
-
     try:
         return str(Path(path).relative_to(result.out_dir))
     except ValueError:
         return str(path)
 
 
-def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
+def to_markdown(result: DemoResult) -> str:
     """The report page: what ran, the scenarios, the training set, the scores, the stress
     curves, the HRI re-enactment and where every file is."""
-    budget = context["budget"]
+    budget = result.budget
     lines = ["# reform-sim demo", ""]
-    lines += command_block(context["command"])
+    lines += command_block(result.command)
     lines += [
-        f"Budget `{budget.name}`, seed {context['seed']}, real datasets: "
+        f"Budget `{budget.name}`, seed {result.seed}, real datasets: "
         + (", ".join(result.datasets) if result.datasets else "none found")
-        + f". Machine: {context['machine']['cores']} cores, {context['machine']['platform']}.",
+        + f". Machine: {result.machine['cores']} cores, {result.machine['platform']}.",
         "",
         "## What ran",
         "",
@@ -72,7 +74,7 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
             percent(s["gcff_f1"]),
             f"[{s['recording']}]({s['recording']})",
         ]
-        for s in context["scenarios"]
+        for s in result.scenarios
     ]
     lines += [
         render_table(
@@ -91,10 +93,10 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         ),
         "",
     ]
-    for s in context["scenarios"]:
+    for s in result.scenarios:
         lines += [f"![{s['scenario']}]({s['figure']})", ""]
     lines += ["## Synthetic training set", ""]
-    training = context["training"]
+    training = result.training
     lines += [
         render_table(
             ["scenario", "episodes", "frames kept", "pairs kept"],
@@ -116,7 +118,7 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         "(`sim.experiments.sim2real.balance_pairs`).",
         "",
     ]
-    noise = context["noise"]
+    noise = result.noise
     if noise is not None:
         lines += [
             f"Tracker noise on `mingle`, calibrated on SALSA's training split "
@@ -138,10 +140,10 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         "`reform.time_split` (per session, the last 40 % of annotated frames by time).",
         "",
     ]
-    evaluations = context["evaluations"]
+    evaluations = result.evaluations
     rows = []
-    for dataset, count in context["tests"].items():
-        for detector in context["detectors"]:
+    for dataset, count in result.tests.items():
+        for detector in result.detectors:
             s = evaluations.get((detector, dataset))
             if s is None:
                 continue
@@ -176,7 +178,7 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         "[`stress/stress.md`](stress/stress.md); curves also in `recordings/stress.rrd`.",
         "",
     ]
-    stress = context["stress"]
+    stress = result.stress
     rows = []
     for axis in stress.axes:
         for detector in ("bagged-trees", "gcff"):
@@ -195,9 +197,9 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
         ),
         "",
     ]
-    for axis, plot in context["stress_plots"].items():
+    for axis, plot in result.stress_plots.items():
         lines += [f"![{axis}]({plot})", ""]
-    hri = context["hri"]
+    hri = result.hri
     lines += [
         "## The paper's HRI experiment, re-enacted",
         "",
@@ -221,7 +223,6 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
                     percent(s.f1.value),
                 ]
             )
-    from sim.experiments.hri import PAPER_HRI
 
     for name, (p, r, f1) in PAPER_HRI.items():
         rows.append([f"paper: {name}", "Kinect", f"{p:.1f}", f"{r:.1f}", f"{f1:.1f}"])
@@ -243,31 +244,44 @@ def demo_markdown(result: DemoResult, context: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def demo_json(result: DemoResult, context: Mapping[str, Any]) -> dict[str, Any]:
+def to_json(result: DemoResult) -> dict[str, Any]:
     """Every number of the demo, JSON-ready."""
-    from reform import __version__
-
-    noise = context["noise"]
+    noise = result.noise
     return {
         "kind": "reform-sim/demo",
         "schema_version": 1,
         "reform_version": __version__,
-        "command": context["command"],
-        "budget": context["budget"].name,
-        "seed": context["seed"],
+        "command": result.command,
+        "budget": result.budget.name,
+        "seed": result.seed,
         "datasets": list(result.datasets),
         "timings_s": {k: round(v, 2) for k, v in result.timings.items()},
-        "scenarios": list(context["scenarios"]),
-        "training": {k: dict(v) for k, v in context["training"].items()},
+        "scenarios": list(result.scenarios),
+        "training": {k: dict(v) for k, v in result.training.items()},
         "tracker_noise": None if noise is None else noise.to_json(),
-        "tests": dict(context["tests"]),
+        "tests": dict(result.tests),
         "scores": [dict(v) for v in result.scores.values()],
-        "stress": context["stress"].to_json(command=context["command"]),
-        "hri": context["hri"].to_json(command=context["command"]),
+        "stress": result.stress.to_json(command=result.command),
+        "hri": result.hri.to_json(command=result.command),
         "files": {
-            "report": _rel(result, result.report),
+            "report": REPORT,
             "model": _rel(result, result.model),
             "recordings": [_rel(result, p) for p in result.recordings],
             "figures": [_rel(result, p) for p in result.figures],
         },
     }
+
+
+def write_report(result: DemoResult) -> dict[str, Path]:
+    """Writes ``report.md`` and ``results.json`` into the demo's folder (atomically).
+
+    Returns:
+        What was written: ``"markdown"`` and ``"json"``.
+    """
+    written = {"markdown": result.out_dir / REPORT, "json": result.out_dir / RESULTS}
+    with atomic_open(written["markdown"]) as handle:
+        handle.write(to_markdown(result))
+    with atomic_open(written["json"]) as handle:
+        json.dump(to_json(result), handle, indent=1, allow_nan=False)
+        handle.write("\n")
+    return written
