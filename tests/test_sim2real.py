@@ -24,7 +24,7 @@ from sim.experiments.sim2real import (
     sim_to_real,
     train_reform,
 )
-from sim.experiments.sim2real_report import sim2real_figure
+from sim.experiments.sim2real_report import sim2real_figure, to_markdown
 
 
 @pytest.fixture(scope="module")
@@ -211,7 +211,7 @@ def test_report_files(tiny, tmp_path) -> None:
     result, _ = tiny
     figure = sim2real_figure(result, tmp_path / "s.png")
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    markdown = result.to_markdown(command="reform-sim experiment sim2real --out x", figure="s.png")
+    markdown = to_markdown(result, command="reform-sim experiment sim2real --out x", figure="s.png")
     assert "reform-sim experiment sim2real --out x" in markdown
     for heading in (
         "## Goals",

@@ -117,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
         RANDOMISED_SOURCES,
         sim_to_real,
     )
-    from sim.experiments.sim2real_report import sim2real_figure
+    from sim.experiments.sim2real_report import sim2real_figure, to_markdown
 
     salsa, babble = salsa_and_babble(args)
     if not args.episodes_scale > 0:
@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
     )
     command = _command(args)
     figure = sim2real_figure(result, out.with_name(out.name + ".png"))
-    markdown = result.to_markdown(command=command, figure=figure.name)
+    markdown = to_markdown(result, command=command, figure=figure.name)
     write_report(out, markdown, result.to_json(command=command))
     print(markdown, end="")
     print(f"wrote {out}.md, {out}.json and {out}.png", file=sys.stderr)

@@ -57,9 +57,20 @@ from typing import Any
 
 import numpy as np
 
+from reform import __version__
+from reform.bootstrap import bootstrap_weights
+from reform.calibration import characterise_dataset, compare
+from reform.classifiers import CLASSIFIERS, make_classifier
+from reform.datasets import read_parquet
+from reform.detector import Reform, training_pairs
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import PROTOCOL, T_TWO_THIRDS, Evaluation, evaluate
+from reform.perturb import Perturbation
+from reform.splits import time_blocks, time_split
+from reform.tuning import tune as cross_validate
+from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M, gcff_comparison
+from sim.generate import generate_dataset
 
 __all__ = [
     "BABBLE",
@@ -201,9 +212,6 @@ def generate_sources(
     Returns:
         ``scenario -> annotated frames``, in the order of ``sources``.
     """
-    from reform.datasets import read_parquet
-    from sim.generate import generate_dataset
-
     names = [s.scenario for s in sources]
     if len(set(names)) != len(names):
         raise ValueError(f"sources must name each scenario once, got {names}")
@@ -288,8 +296,6 @@ class NoiseCalibration:
         raise ValueError(f"({position_noise}, {yaw_noise}) is not on the calibration grid")
 
     def perturbation(self) -> Any:
-        from reform.perturb import Perturbation
-
         return Perturbation(position_noise=self.position_noise, yaw_noise=self.yaw_noise)
 
     def to_json(self) -> dict[str, Any]:
@@ -336,9 +342,6 @@ def calibrate_tracker_noise(
         position_grid: position noise levels tried, metres.
         yaw_grid: yaw noise levels tried, radians.
     """
-    from reform.calibration import characterise_dataset, compare
-    from reform.perturb import Perturbation
-
     if not frames or not reference:
         raise ValueError(
             f"calibration needs synthetic and reference frames, got {len(frames)} and "
@@ -389,8 +392,6 @@ def joint_distances(frames: Sequence[Frame], reference: Sequence[Frame]) -> tupl
     datasets' pairs: in-group pairs, then out-of-group pairs (0: same shares in every bin, 1:
     disjoint). The marginals compared by KS can agree while the joint, which a pair classifier
     learns, does not."""
-    from reform.detector import training_pairs
-
     edges = (
         np.asarray(JOINT_DISTANCE_EDGES_M),
         np.linspace(0.0, 2.0 * math.pi, JOINT_EFFORT_BINS + 1),
@@ -433,14 +434,9 @@ def train_reform(
     Returns:
         ``(model, tuning)``: the fitted :class:`reform.Reform` and the tuning (None without).
     """
-    from reform.classifiers import make_classifier
-    from reform.detector import Reform
-
     tuning = None
     chosen = dict(params or {})
     if tune:
-        from reform.tuning import tune as cross_validate
-
         tuning = cross_validate(classifier, frames, n_jobs=n_jobs)
         chosen = dict(tuning.best_params)
     estimator = make_classifier(classifier)
@@ -451,8 +447,6 @@ def train_reform(
 
 def _block_labels(frames: Sequence[Frame], blocks: int) -> list[str]:
     """Cluster label per frame: its sequence and its stretch of time."""
-    from reform.splits import time_blocks
-
     per_sequence = min(blocks, max(2, min(_sequence_sizes(frames).values())))
     index = time_blocks(frames, per_sequence)
     return [f"{f.sequence}#{int(b)}" for f, b in zip(frames, index, strict=True)]
@@ -640,8 +634,6 @@ class SimToReal:
         raise KeyError(f"no row for {classifier!r} trained on {training!r}, tested on {dataset!r}")
 
     def to_json(self, *, command: str | None = None) -> dict[str, Any]:
-        from reform import __version__
-
         return {
             "schema_version": SCHEMA_VERSION,
             "kind": "reform-sim/sim2real",
@@ -678,12 +670,6 @@ class SimToReal:
             "cross_period": [c.to_json() for c in self.cross_period],
             "seconds": self.seconds,
         }
-
-    def to_markdown(self, *, command: str | None = None, figure: str | None = None) -> str:
-        """The results as a Markdown page (``figure``: a PNG path to show, relative)."""
-        from sim.experiments.sim2real_report import sim2real_markdown
-
-        return sim2real_markdown(self, command=command, figure=figure)
 
 
 def _evaluate(name: str, detector: Any, frames: Sequence[Frame]) -> Evaluation:
@@ -730,11 +716,6 @@ def sim_to_real(
     Returns:
         The :class:`SimToReal` results.
     """
-    from reform.calibration import compare
-    from reform.classifiers import CLASSIFIERS
-    from reform.splits import time_split
-    from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M, gcff_comparison
-
     started = time.perf_counter()
     say = progress or (lambda message: None)
     for name in classifiers:
@@ -810,8 +791,6 @@ def sim_to_real(
     groups = {d: _block_labels(frames, BOOTSTRAP_BLOCKS) for d, frames in tests.items()}
     weights = {}
     for k, (dataset, labels) in enumerate(groups.items()):
-        from reform.bootstrap import bootstrap_weights
-
         rng = np.random.default_rng([seed, 1000 + k])
         weights[dataset] = bootstrap_weights(labels, rng=rng, resamples=BOOTSTRAP_RESAMPLES)
 
@@ -976,9 +955,6 @@ def _cross_period(
         ``(cross_period, models)``: the comparisons, and ``(half, classifier) -> REFORM``
         trained on that half (with the hyper-parameters tuned on the whole training split).
     """
-    from reform.bootstrap import bootstrap_weights
-    from reform.splits import time_split
-
     earlier, later = time_split(train, 0.5)
     if not earlier or not later:
         return (), {}

@@ -1,16 +1,29 @@
-"""The sim-to-real results as a Markdown page (``docs/results/sim2real.md``)."""
+"""The sim-to-real results (:class:`sim.experiments.sim2real.SimToReal`) as a Markdown page and
+a figure (``docs/results/sim2real.md``, ``sim2real.png``)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from sim.experiments.figures import Bar, score_bars
+from sim.experiments.sim2real import (
+    BABBLE,
+    BABBLE_EMPTY,
+    DISPLAY,
+    NEIGHBOUR_QUANTILES,
+    PAPER_BABBLE_F1,
+    SALSA_TEST,
+    SALSA_TRAIN,
+    SALSA_WITHIN_F1,
+    SYNTHETIC,
+    Row,
+    SimToReal,
+    half_training,
+)
 from sim.experiments.tables import command_block, percent, render_table
 
-if TYPE_CHECKING:
-    from sim.experiments.sim2real import Row, SimToReal
-
-__all__ = ["rows_table", "sim2real_figure", "sim2real_markdown"]
+__all__ = ["rows_table", "sim2real_figure", "to_markdown"]
 
 _TRAINING_TEXT = {
     "synthetic": "synthetic only",
@@ -58,13 +71,9 @@ def _options(options: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v}" for k, v in sorted(options.items())) or "defaults"
 
 
-def sim2real_markdown(
-    result: SimToReal, *, command: str | None = None, figure: str | None = None
-) -> str:
+def to_markdown(result: SimToReal, *, command: str | None = None, figure: str | None = None) -> str:
     """The page: command, summary, goals, tables per test set, training data, calibration,
     tuning, diagnostics."""
-    from sim.experiments.sim2real import BABBLE, BABBLE_EMPTY, PAPER_BABBLE_F1, SALSA_TEST
-
     met = sum(g.met for g in result.goals)
     lines = ["# Sim-to-real: REFORM trained on synthetic crowds, tested on SALSA and Babble", ""]
     if command:
@@ -280,8 +289,6 @@ def sim2real_markdown(
 
 def _reading(result: SimToReal) -> list[str]:
     """The goals in words, from the numbers."""
-    from sim.experiments.sim2real import BABBLE, SALSA_TEST, SALSA_TRAIN
-
     salsa = {c: v for (c, d), v in result.differences.items() if d == SALSA_TEST}
     babble = {c: v for (c, d), v in result.differences.items() if d == BABBLE}
     if not salsa:
@@ -341,8 +348,6 @@ def _reading(result: SimToReal) -> list[str]:
 
 def _cross_period_section(result: SimToReal) -> list[str]:
     """The synthetic model beside SALSA-trained models across periods of the training split."""
-    from sim.experiments.sim2real import SALSA_WITHIN_F1
-
     if not result.cross_period:
         return []
     body = [
@@ -390,14 +395,11 @@ def _cross_period_section(result: SimToReal) -> list[str]:
 
 
 def _is_half(row: Row) -> bool:
-    from sim.experiments.sim2real import half_training
-
     return row.training in (half_training("earlier"), half_training("later"))
 
 
 def _halves_on_test(result: SimToReal) -> list[str]:
     """The half models on the SALSA test split beside the whole split's and the synthetic."""
-    from sim.experiments.sim2real import SALSA_TEST, SALSA_TRAIN, SYNTHETIC, half_training
 
     def f1(classifier: str, training: str) -> float | None:
         for row in result.rows:
@@ -451,8 +453,6 @@ def _span(values: list[float]) -> str:
 
 def _realism_section(result: SimToReal) -> list[str]:
     """Where the SALSA-like synthetic data still differ from SALSA's training split."""
-    from sim.experiments.sim2real import NEIGHBOUR_QUANTILES, SALSA_TRAIN
-
     realism = result.realism
     if SALSA_TRAIN not in realism or len(realism) < 2:
         return []
@@ -512,8 +512,6 @@ def _m3(value: float | None) -> str:
 
 
 def row_name(classifier: str) -> str:
-    from sim.experiments.sim2real import DISPLAY
-
     return DISPLAY.get(classifier, classifier)
 
 
@@ -527,9 +525,6 @@ def _on_grid(noise: Any, position: float, yaw: float) -> bool:
 
 def sim2real_figure(result: SimToReal, path: Any) -> Any:
     """F1 at T = 2/3 with bootstrap intervals: every main row, grouped by test set (PNG)."""
-    from sim.experiments.figures import Bar, score_bars
-    from sim.experiments.sim2real import BABBLE, PAPER_BABBLE_F1, SALSA_TEST
-
     groups = {}
     for dataset, title in ((SALSA_TEST, "SALSA test split"), (BABBLE, "Babble")):
         bars = []
