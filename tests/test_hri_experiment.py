@@ -20,6 +20,7 @@ from sim.experiments.hri import (
     hri_experiment,
     record_scenes,
 )
+from sim.experiments.hri_report import to_markdown
 
 SEEDS = 2
 
@@ -92,7 +93,7 @@ def test_reform_finds_the_conversations_from_the_ground_truth(experiment) -> Non
 
 
 def test_report(experiment) -> None:
-    markdown = experiment.to_markdown(command="reform-sim experiment hri --out hri")
+    markdown = to_markdown(experiment, command="reform-sim experiment hri --out hri")
     assert "reform-sim experiment hri --out hri" in markdown
     for name, (_, _, f1) in PAPER_HRI.items():
         assert f"paper: {name}" in markdown and f"{f1:.1f}" in markdown

@@ -96,6 +96,7 @@ def _command(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     from reform.datasets import load_salsa
     from sim.experiments.hri import VIEWS, hri_detectors, hri_experiment, record_scenes
+    from sim.experiments.hri_report import to_markdown
 
     if args.seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {args.seeds}")
@@ -147,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     command = _command(args)
     out = report_stem(args.out)
     write_report(
-        out, experiment.to_markdown(command=command), experiment.to_json(command=command), indent=1
+        out, to_markdown(experiment, command=command), experiment.to_json(command=command), indent=1
     )
     print(f"wrote {out}.md and {out}.json")
     if args.recordings is not None:

@@ -3,9 +3,9 @@
 Built on the science (`reform`), the scenarios (`scenarios`) and the simulator core (`sim`);
 nothing below imports this package, and only the command line (`sim.cli`) sits above it:
 
-* ``reform-sim demo``: `demo`, `demo_report`;
-* ``reform-sim experiment sim2real``: `sim2real`, `sim2real_report`;
-* ``reform-sim experiment hri``: `hri` (the views it can score in `hri_views`);
+* ``reform-sim demo``: `demo` (its output folder's names in `demo_files`) → `demo_report`;
+* ``reform-sim experiment sim2real``: `sim2real` → `sim2real_report`;
+* ``reform-sim experiment hri``: `hri` (the views it can score in `hri_views`) → `hri_report`;
 * ``reform-sim stress``: `stress` (its axes and grids in `stress_grid`) → `stress_report`;
 * ``reform-sim calibrate``: `calibration`;
 * ``reform-sim characterize``: `reform.calibration` (the science) → `characterisation_report`;
@@ -14,8 +14,8 @@ nothing below imports this package, and only the command line (`sim.cli`) sits a
 * ``reform-sim benchmark``: `benchmark` → `benchmark_report`;
 
 and what the reports share: `tables` (Markdown and text tables, percentages) and `figures`
-(matplotlib plots). `hri_views` and `stress_grid` import neither MuJoCo nor scikit-learn, so
-that the command line lists their choices fast.
+(matplotlib plots). `demo_files`, `hri_views` and `stress_grid` import neither MuJoCo nor
+scikit-learn, so that the command line's help lists their choices fast.
 
 The names below (each study's run and its result) are loaded on first use, so that
 ``import sim.experiments`` stays light; a study's report is imported from its module.

@@ -64,6 +64,7 @@ from sim.experiments.hri import (
     record_scenes,
     reform_detectors,
 )
+from sim.experiments.hri_report import to_markdown as hri_markdown
 from sim.experiments.sim2real import (
     NoiseCalibration,
     SyntheticSource,
@@ -490,7 +491,7 @@ def run_demo(
         training=hri_training,
     )
     with atomic_open(out / "hri.md") as handle:
-        handle.write(hri.to_markdown(command=command))
+        handle.write(hri_markdown(hri, command=command))
     recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
 
     # 7. Recordings, figures, report.
