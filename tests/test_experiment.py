@@ -20,6 +20,7 @@ from sim.experiments.paper import (
     paper_experiment,
     random_split,
 )
+from sim.experiments.paper_report import to_markdown
 
 
 def frame(t: float, sequence: str, annotated: bool = True) -> Frame:
@@ -133,7 +134,7 @@ def test_paper_experiment_scores_every_detector_on_every_part(small_experiment):
 
 
 def test_paper_experiment_writes_markdown_and_json(small_experiment):
-    markdown = small_experiment.to_markdown(command="reform-sim experiment paper --out x")
+    markdown = to_markdown(small_experiment, command="reform-sim experiment paper --out x")
     assert "reform-sim experiment paper --out x" in markdown
     assert "## SALSA (Table I), T = 2/3" in markdown
     assert "## Babble (trained on SALSA only)" in markdown

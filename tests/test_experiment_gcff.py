@@ -8,6 +8,7 @@ import pytest
 
 from reform import Gcff, evaluate, time_split
 from sim.experiments.gcff import BABBLE, SALSA_TEST, gcff_comparison
+from sim.experiments.gcff_report import to_markdown
 
 GRID = {"stride_grid": (0.7,), "mdl_grid": (1.0, 3.0)}
 
@@ -78,7 +79,7 @@ def test_added_results_must_share_the_frames(comparison):
 
 def test_markdown_and_json(comparison):
     command = "reform-sim experiment gcff --salsa S --babble B --out X"
-    markdown = comparison.to_markdown(command=command)
+    markdown = to_markdown(comparison, command=command)
     assert command in markdown
     assert "## SALSA test split" in markdown and "## Babble" in markdown
     assert "30,000 cm² = 3.0 m²" in markdown

@@ -134,6 +134,7 @@ def _read_results(path: str) -> list[dict[str, Any]]:
 def run(args: argparse.Namespace) -> int:
     from reform.datasets import load_babble, load_salsa, resolve
     from sim.experiments.gcff import gcff_comparison
+    from sim.experiments.gcff_report import to_markdown
 
     check_train_fraction(args)
     check_report(report_stem(args.out))
@@ -153,5 +154,8 @@ def run(args: argparse.Namespace) -> int:
     )
     if extra:
         comparison = comparison.with_results(extra)
-    publish(comparison, out=args.out, command=_command(args))
+    command = _command(args)
+    publish(
+        to_markdown(comparison, command=command), comparison.to_json(command=command), out=args.out
+    )
     return 0

@@ -80,12 +80,11 @@ def check_report(
         check_output(option, stem.with_name(stem.name + suffix))
 
 
-def publish(result: Any, *, out: str, command: str) -> None:
-    """Writes ``result``'s report (``to_markdown``, ``to_json``) to OUT.md and OUT.json and prints
+def publish(markdown: str, document: dict[str, Any], *, out: str) -> None:
+    """Writes an experiment's report (its page and its JSON) to OUT.md and OUT.json and prints
     the Markdown."""
-    markdown = result.to_markdown(command=command)
     stem = report_stem(out)
-    write_report(stem, markdown, result.to_json(command=command))
+    write_report(stem, markdown, document)
     print(markdown, end="")
     print(f"wrote {stem}.md and {stem}.json", file=sys.stderr)
 

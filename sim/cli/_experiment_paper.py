@@ -76,6 +76,7 @@ def _command(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     from reform.datasets import load_babble, load_salsa, resolve
     from sim.experiments.paper import paper_experiment
+    from sim.experiments.paper_report import to_markdown
 
     check_train_fraction(args)
     if args.folds < 2:
@@ -96,5 +97,8 @@ def run(args: argparse.Namespace) -> int:
         diagnostics=not args.no_diagnostics,
         progress=progress,
     )
-    publish(experiment, out=args.out, command=_command(args))
+    command = _command(args)
+    publish(
+        to_markdown(experiment, command=command), experiment.to_json(command=command), out=args.out
+    )
     return 0

@@ -9,8 +9,8 @@ nothing below imports this package, and only the command line (`sim.cli`) sits a
 * ``reform-sim stress``: `stress` (its axes and grids in `stress_grid`) → `stress_report`;
 * ``reform-sim calibrate``: `calibration`;
 * ``reform-sim characterize``: `reform.calibration` (the science) → `characterisation_report`;
-* ``reform-sim experiment paper``: `paper`;
-* ``reform-sim experiment gcff``: `gcff`;
+* ``reform-sim experiment paper``: `paper` → `paper_report`;
+* ``reform-sim experiment gcff``: `gcff` → `gcff_report`;
 * ``reform-sim benchmark``: `benchmark` → `benchmark_report`;
 
 and what the reports share: `tables` (Markdown and text tables, percentages) and `figures`

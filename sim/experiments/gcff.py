@@ -17,6 +17,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from reform import __version__
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.gcff import (
@@ -29,7 +30,8 @@ from reform.gcff import (
     gcff_labels,
     labels_to_partition,
 )
-from reform.metrics import PROTOCOL
+from reform.metrics import PROTOCOL, evaluate
+from reform.splits import time_split
 from sim.experiments.paper import BABBLE, SALSA_TEST, split_json
 
 __all__ = [
@@ -177,8 +179,6 @@ class GcffComparison:
 
     def to_json(self, *, command: str | None = None) -> dict[str, Any]:
         """A JSON-ready dict: the command, the split, the tuning and every evaluation."""
-        from reform import __version__
-
         search = self.tuning
         return {
             "schema_version": SCHEMA_VERSION,
@@ -215,67 +215,6 @@ class GcffComparison:
             "notes": list(self.all_notes()),
         }
 
-    def to_markdown(self, *, command: str | None = None) -> str:
-        """The comparison as a Markdown page: command, tables per dataset, tuning, notes."""
-        from sim.experiments.tables import command_block, format_comparison, render_table
-
-        search = self.tuning
-        lines = ["# GCFF beside REFORM: SALSA test split and Babble", ""]
-        if command:
-            lines += command_block(command)
-        lines += [
-            f"Protocol: GCFF's `ff_evalgroups` (singletons dropped; P and R are means of the "
-            f"per-frame values; F1 of those means), as `reform.metrics.evaluate` implements it. "
-            f"Split: `reform.time_split` with train fraction {self.train_fraction:g} — per SALSA "
-            f"session, the first annotated frames by time train "
-            f"({self.frames['salsa-train']} frames), the rest test "
-            f"({self.frames['salsa-test']} frames). Babble ({self.frames['babble']} frames) is "
-            "never trained on. Scores in %.",
-            "",
-            'GCFF settings. *Paper*: the REFORM paper\'s "stride = 0.7, MDL = 30000", read as '
-            "stride 70 cm = 0.7 m and mdl 30,000 cm² = 3.0 m² (GCFF's published settings are "
-            "centimetres; GCFF computes in centimetres, see `reform.gcff`). *Reference default*: "
-            f"the original code's stride 70 cm, mdl 10,000 cm² ({STRIDE_M:g} m, {MDL_M2:g} m²). "
-            f"*Tuned*: grid search on the SALSA training split, objective F1 at "
-            f"T = {search.threshold}: stride {search.best_stride:g} m, mdl {search.best_mdl:g} m² "
-            f"(training F1 {100 * search.best_f1:.1f}).",
-            "",
-        ]
-        for dataset, title in ((SALSA_TEST, "SALSA test split"), (BABBLE, "Babble")):
-            rows = [r for r in self.results if r["dataset"] == dataset]
-            if not rows:
-                continue
-            lines += [f"## {title}", "", format_comparison(rows, style="markdown").rstrip(), ""]
-            paper = PAPER_SCORES[dataset]
-            lines += [
-                "The paper's figures on this data (T = 2/3, P / R / F1): "
-                + "; ".join(
-                    f"{name} {p:.1f} / {r:.1f} / {f:.1f}" for name, (p, r, f) in paper.items()
-                )
-                + ".",
-                "",
-            ]
-        summary = self.summary()
-        if summary:
-            lines += ["## Summary (F1 at T = 2/3)", ""] + [f"- {line}" for line in summary] + [""]
-        lines += ["## Tuning grid (SALSA training split, F1 at T = 2/3, %)", ""]
-        strides = sorted({float(s) for s in search.stride})
-        mdls = sorted({float(m) for m in search.mdl})
-        score = {
-            (float(s), float(m)): float(f)
-            for s, m, f in zip(search.stride, search.mdl, search.f1, strict=True)
-        }
-        table = [
-            [f"{s:g}"] + [f"{100 * score[(s, m)]:.1f}" if (s, m) in score else "-" for m in mdls]
-            for s in strides
-        ]
-        headers = ["stride (m) \\ mdl (m²)"] + [f"{m:g}" for m in mdls]
-        lines += [render_table(headers, table, style="markdown"), ""]
-        notes = self.all_notes()
-        if notes:
-            lines += ["## Notes", ""] + [f"- {note}" for note in notes] + [""]
-        return "\n".join(lines)
-
 
 class _UnitsIgnored:
     """GCFF fed metre positions with the paper's numbers as if they were centimetres.
@@ -305,8 +244,6 @@ def _evaluate(
     name: str, detector: Any, frames: Sequence[Frame], dataset: str, source: str
 ) -> dict[str, Any]:
     """The detector's scores on ``frames``, its output checked (`reform.detectors.run_detector`)."""
-    from reform.metrics import evaluate
-
     params = detector.get_params(deep=False) if hasattr(detector, "get_params") else {}
     params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
     return evaluate(frames, run_detector(name, detector, frames)).to_json(
@@ -341,8 +278,6 @@ def gcff_comparison(
     Returns:
         The evaluations, the tuning and the frame counts.
     """
-    from reform import time_split
-
     train, test = time_split(salsa.annotated(), train_fraction=train_fraction)
     train, test = tuple(train), tuple(test)
     babble_frames = babble.annotated()
