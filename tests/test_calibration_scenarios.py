@@ -23,6 +23,7 @@ from sim.experiments.calibration import (
     calibrate_scenarios,
     scenario_frames,
 )
+from sim.experiments.calibration_report import to_markdown
 
 TEST_SEEDS = 4  # episodes per scenario here; docs/results/calibration.md uses DEFAULT_SEEDS
 
@@ -68,6 +69,16 @@ def test_pair_feature_ks_below_the_real_datas_own_bound(report, scenario):
     assert cal.ks_failures() == ()
     reported = cal.to_json()["ks"]
     assert all("bound" in entry and entry["below_bound"] for entry in reported)
+
+
+def test_the_page_has_a_section_per_calibrated_scenario_and_none_for_parts_not_run(report):
+    page = to_markdown(report)
+    assert page.startswith("# Calibration of the scenarios against SALSA and Babble\n")
+    for scenario, (reference, _) in CALIBRATED.items():
+        assert f"## {scenario} against {reference}" in page
+    assert "## Notes" in page
+    # The fixture runs neither the randomised mode nor the HRI scenes.
+    assert f"## {RANDOMISED}" not in page and "## The HRI scenes" not in page
 
 
 def test_the_bounds_come_from_the_real_data(report, salsa_dataset, babble_dataset):

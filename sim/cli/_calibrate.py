@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from reform.atomic import atomic_open
     from reform.datasets import fetch, is_fetched, load_babble, load_salsa
     from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
+    from sim.experiments.calibration_report import to_markdown
 
     seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
     if seeds < 1:
@@ -89,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     markdown = out / "calibration.md"
     with atomic_open(markdown) as handle:
-        handle.write(report.to_markdown())
+        handle.write(to_markdown(report))
     with atomic_open(out / "calibration.json") as handle:
         json.dump(report.to_json(), handle, indent=2, allow_nan=False)
         handle.write("\n")

@@ -7,7 +7,7 @@ nothing below imports this package, and only the command line (`sim.cli`) sits a
 * ``reform-sim experiment sim2real``: `sim2real` → `sim2real_report`;
 * ``reform-sim experiment hri``: `hri` (the views it can score in `hri_views`) → `hri_report`;
 * ``reform-sim stress``: `stress` (its axes and grids in `stress_grid`) → `stress_report`;
-* ``reform-sim calibrate``: `calibration`;
+* ``reform-sim calibrate``: `calibration` → `calibration_report`;
 * ``reform-sim characterize``: `reform.calibration` (the science) → `characterisation_report`;
 * ``reform-sim experiment paper``: `paper` → `paper_report`;
 * ``reform-sim experiment gcff``: `gcff` → `gcff_report`;
