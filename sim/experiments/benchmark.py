@@ -33,8 +33,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from joblib import Parallel, delayed
+
+from reform.datasets import load_dataset, resolve
+from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame, Group
-from reform.splits import DEFAULT_TRAIN_FRACTION
+from reform.gcff import Gcff, GcffBySequence
+from reform.metrics import evaluate
+from reform.persistence import load_model, model_info
+from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 
 __all__ = [
@@ -112,8 +119,6 @@ class DatasetSpec:
         return f"{self.name} (test split)" if self.split == "test" else self.name
 
     def load(self) -> Dataset:
-        from reform.datasets import load_dataset
-
         return load_dataset(
             self.path,
             format=self.format,
@@ -124,8 +129,6 @@ class DatasetSpec:
     def frames(self, dataset: Dataset) -> tuple[Frame, ...]:
         """The annotated frames scored: all of them, or the test part of the time split."""
         if self.split == "test":
-            from reform.splits import time_split
-
             _, test = time_split(dataset.frames, self.train_fraction)
             return tuple(f for f in test if f.groups is not None)
         return dataset.annotated()
@@ -163,21 +166,14 @@ class DetectorSpec:
     def build(self, dataset: Dataset) -> tuple[Any, str | None]:
         """``(detector, None)``, or ``(None, reason)`` when it does not apply to ``dataset``."""
         if self.spec == GCFF_ONE:
-            from reform.gcff import Gcff
-
             return Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2), None
         if self.spec == GCFF_OWN:
-            from reform.gcff import GcffBySequence
-
             try:
                 return GcffBySequence.from_dataset(dataset), None
             except ValueError as exc:
                 return None, str(exc)
         if self.spec.startswith(REFORM_PREFIX):
-            from reform.persistence import load_model
-
             return load_model(self.spec[len(REFORM_PREFIX) :]), None
-        from reform.detectors import make_detector
 
         return make_detector(self.spec), None
 
@@ -194,8 +190,6 @@ def detector_spec(spec: str) -> DetectorSpec:
 
 def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:
     """The row for a REFORM model file: labelled with its classifier and file name."""
-    from reform.persistence import model_info
-
     info = model_info(path)
     kind = _classifier_kind(str(info.get("classifier_repr", "")))
     name = Path(path).stem
@@ -227,8 +221,6 @@ def dataset_spec(
     metres_per_pixel: float | None = None,
 ) -> DatasetSpec:
     """The dataset a ``--data`` value names: a path, or a fetched or local dataset's name."""
-    from reform.datasets import resolve
-
     path = resolve(data)
     name = Path(data).name if Path(data).exists() else data
     return DatasetSpec(
@@ -343,9 +335,6 @@ class Benchmark:
 
 def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
     """One cell: load, build, predict (checked), evaluate."""
-    from reform.detectors import run_detector
-    from reform.metrics import evaluate
-
     dataset = dataset_spec.load()
     frames = dataset_spec.frames(dataset)
     label = dataset_spec.label
@@ -377,7 +366,6 @@ def _local(units: list[tuple[DatasetSpec, DetectorSpec]], jobs: int) -> Iterator
         for k, (d, m) in enumerate(units):
             yield k, _score(d, m)
         return
-    from joblib import Parallel, delayed
 
     parallel = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")
     yield from parallel(delayed(_indexed)(k, d, m) for k, (d, m) in enumerate(units))

@@ -21,6 +21,7 @@ from sim.experiments.benchmark import (
     percent,
 )
 from sim.experiments.figures import pyplot, save_png
+from sim.recording import record_evaluation
 
 __all__ = [
     "JSON_NAME",
@@ -289,8 +290,6 @@ def _slug(label: str) -> str:
 def record(benchmark: Benchmark, folder: str | Path) -> dict[str, Path]:
     """One ``.rrd`` per dataset: its scored frames, the ground truth and every detector's groups
     with their mistakes, and the running scores. Returns dataset label -> path."""
-    from sim.recording import record_evaluation
-
     folder = Path(folder)
     written = {}
     for dataset in benchmark.datasets:

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -47,6 +48,7 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
+from joblib import Parallel, delayed
 
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, frame_intervals
 from reform.classifiers import BAGGED_TREES, LOGISTIC_REGRESSION, WEIGHTED_KNN, make_classifier
@@ -652,16 +654,12 @@ def _point(
 
 
 def _cpu_count() -> int:
-    import os
-
     return max(
         1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     )
 
 
 def _load_average() -> list[float] | None:
-    import os
-
     try:
         return [round(v, 2) for v in os.getloadavg()]
     except OSError:  # pragma: no cover - not every platform has one
@@ -692,8 +690,6 @@ def _parallel(
     if workers <= 1 or len(items) <= 1:
         results = (_timed(function, star, item) for item in items)
     else:
-        from joblib import Parallel, delayed
-
         runner = Parallel(n_jobs=min(workers, len(items)), return_as="generator")
         results = runner(delayed(_timed)(function, star, item) for item in items)
     out = []

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import atomic_open, atomic_path
+from sim.experiments.figures import pyplot
 from sim.experiments.stress import (
     AXES,
     DETECTOR_LABELS,
@@ -32,6 +33,7 @@ from sim.experiments.stress import (
     sensor_description,
 )
 from sim.experiments.tables import command_block, percent, render_table
+from sim.recording import default_blueprint, log_stress_curves, open_recording
 
 __all__ = [
     "MARKDOWN_NAME",
@@ -97,11 +99,7 @@ def plot_axis(
             built-in ones first, in their colours, then the others (plugins, dash-dotted);
             None: the built-in ones. Those without scores on the axis are left out.
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     x = axis.x
     categorical = axis.name == "sensor"
     positions = np.arange(x.size) if categorical else x
@@ -349,8 +347,6 @@ def _slug(threshold: str) -> str:
 
 def log_results(rec: Any, results: StressResults) -> None:
     """Every axis's F1 curves, at each threshold, as stress bar charts in ``rec``."""
-    from sim.recording import log_stress_curves
-
     labels = _report_labels(results.detectors)
     for axis in results.axes:
         for threshold in THRESHOLDS:
@@ -403,8 +399,6 @@ def write_report(
 
 def record(results: StressResults, path: str | Path) -> Path:
     """The curves as a Rerun recording at ``path`` (``.rrd``)."""
-    from sim.recording import default_blueprint, open_recording
-
     blueprint = default_blueprint(scores=False, stress=recording_names(results))
     with open_recording(path, name="stress", seed=results.seed, blueprint=blueprint) as rec:
         log_results(rec, results)
