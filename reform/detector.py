@@ -36,10 +36,18 @@ from reform.metrics import pair_labels
 from reform.reconstruction import UNION, batch_greedy_labels, check_reconstruction
 
 CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
+MAX_FRAME_BYTES = 8 * 2**30  # bytes: the most predicting (or fitting on) one frame may take; a
+# frame whose pairs would take more is refused, naming it, before anything is allocated
+# Memory per pair, measured with tracemalloc at the peak of predict and training_pairs on frames
+# of 64 to 2,000 people (a frame of n people has n(n-1)/2 pairs):
+PAIR_BYTES = 40  # bytes per pair predicted: indices, features, labels, temporaries
+PAIR_WORD_BYTES = 40  # bytes per pair predicted per 64 people of the frame: Greedy
+# Reconstruction compares the two members' belief sets (reform.reconstruction), a bit a person
+TRAINING_PAIR_BYTES = 88  # bytes per pair of training_pairs: features, labels, indices
 
 Partition = tuple[Group, ...]
 
-__all__ = ["Reform", "training_pairs"]
+__all__ = ["MAX_FRAME_BYTES", "Reform", "frame_bytes", "training_pairs"]
 
 
 class Reform(BaseEstimator):
@@ -113,6 +121,7 @@ class Reform(BaseEstimator):
                 f"time {first.time:g} s); "
                 "pass only annotated frames, e.g. dataset.annotated()"
             )
+        _check_frame_sizes(frames, predict=False)
         x, y_all, _ = training_pairs(frames, features=features)
         if y_all.size == 0:
             raise ValueError(
@@ -143,6 +152,10 @@ class Reform(BaseEstimator):
         Returns:
             One partition per frame: tuples of person ids, groups ordered by their smallest id,
             members ascending, singletons included.
+
+        Raises:
+            ValueError: a frame whose pairs would take more than `MAX_FRAME_BYTES` to classify
+                and reconstruct (:func:`frame_bytes`), naming it, before any frame is predicted.
         """
         check_is_fitted(self, "classifier_")
         return self._run(check_frames(frames, caller="predict"), partitions=True, pairs=False)[0]
@@ -167,6 +180,7 @@ class Reform(BaseEstimator):
         self, frames: Sequence[Frame], *, partitions: bool, pairs: bool
     ) -> tuple[list[Partition], list[np.ndarray]]:
         """Partitions and/or pair labels of frames, classified once, in chunks of one size."""
+        _check_frame_sizes(frames, predict=True)
         out: list[Partition] = [()] * len(frames) if partitions else []
         out_pairs: list[np.ndarray] = [np.zeros(0, dtype=bool)] * len(frames) if pairs else []
         for n, positions in _by_size(frames).items():
@@ -279,8 +293,12 @@ def training_pairs(
     Returns:
         ``(x, y, frame)``: (m, k) float64 features, (m,) int64 labels (1 = same F-formation),
         (m,) int64 index of each pair's frame in ``frames``.
+
+    Raises:
+        ValueError: a frame whose pairs would take more than `MAX_FRAME_BYTES`, naming it.
     """
     features = check_features(features)
+    _check_frame_sizes(frames, predict=False)
     x_parts, y_parts, frame_parts = [], [], []
     for k, frame in enumerate(frames):
         order = _id_order(frame)
@@ -303,6 +321,34 @@ def _frame_order(labels: np.ndarray, ids: np.ndarray, i: np.ndarray, j: np.ndarr
     matrix[order[i], order[j]] = labels
     matrix |= matrix.T
     return matrix[i, j]
+
+
+def frame_bytes(n_people: int, *, predict: bool = True) -> int:
+    """Bytes of memory REFORM takes at its peak on one frame of ``n_people``: predicting it
+    (pair features, labels and Greedy Reconstruction), or with ``predict=False`` turning it
+    into training pairs."""
+    pairs = n_people * (n_people - 1) // 2
+    if not predict:
+        return pairs * TRAINING_PAIR_BYTES
+    return pairs * (PAIR_BYTES + PAIR_WORD_BYTES * -(-n_people // 64))
+
+
+def _check_frame_sizes(frames: Sequence[Frame], *, predict: bool) -> None:
+    """Refuses the first frame whose pairs would take more than `MAX_FRAME_BYTES`, before any
+    of them is deconstructed."""
+    for size in sorted({frame.n_people for frame in frames}, reverse=True):
+        needed = frame_bytes(size, predict=predict)
+        if needed <= MAX_FRAME_BYTES:
+            return
+        frame = next(f for f in frames if f.n_people == size)
+        sequence = f" of sequence {frame.sequence!r}" if frame.sequence else ""
+        work = "classify and reconstruct" if predict else "deconstruct"
+        raise ValueError(
+            f"the frame at time {frame.time:g} s{sequence} holds {size:,} people: "
+            f"{size * (size - 1) // 2:,} pairs, which would take about {needed / 2**30:,.1f} GiB "
+            f"to {work}, more than reform.detector.MAX_FRAME_BYTES = {MAX_FRAME_BYTES / 2**30:g} "
+            "GiB"
+        )
 
 
 def _check_threshold(threshold: float | None, classifier: Any) -> None:

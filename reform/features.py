@@ -34,6 +34,8 @@ INVOLVES_ROBOT = "involves_robot"  # 1.0 when either member of the pair is a rob
 
 FEATURES = (DISTANCE, EFFORT_ANGLE, HEAD_DISTANCE, HEAD_EFFORT_ANGLE, INVOLVES_ROBOT)
 DEFAULT_FEATURES = (DISTANCE, EFFORT_ANGLE)
+MAX_PAIRS = 2**30  # pairs of one frame (46,341 people): pair_indices refuses more before any
+# array is made, as their two index arrays alone would take 16 GiB
 
 __all__ = [
     "DEFAULT_FEATURES",
@@ -43,6 +45,7 @@ __all__ = [
     "HEAD_DISTANCE",
     "HEAD_EFFORT_ANGLE",
     "INVOLVES_ROBOT",
+    "MAX_PAIRS",
     "batch_pair_features",
     "check_features",
     "effort_angle",
@@ -94,10 +97,19 @@ def pair_indices(n: int) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         Two read-only (n(n-1)/2,) intp arrays.
+
+    Raises:
+        ValueError: ``n < 0``, or more than :data:`MAX_PAIRS` pairs (before any allocation).
     """
     n = int(n)
     if n < 0:
         raise ValueError(f"n must be >= 0, got {n}")
+    pairs = n * (n - 1) // 2
+    if pairs > MAX_PAIRS:
+        raise ValueError(
+            f"a frame of {n:,} people has {pairs:,} pairs, more than reform.features.MAX_PAIRS "
+            f"= {MAX_PAIRS:,}: their indices alone would take {pairs * 16 / 2**30:,.0f} GiB"
+        )
     return _pair_indices(n)
 
 

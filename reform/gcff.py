@@ -71,6 +71,8 @@ from reform.frame import Frame, Group, check_frames
 
 __all__ = [
     "CM_PER_M",
+    "CELL_BYTES",
+    "MAX_FRAME_BYTES",
     "MAX_REFITS",
     "MAX_VISIBILITY_EXPONENT",
     "MDL_GRID_M2",
@@ -78,6 +80,7 @@ __all__ = [
     "ORIENTATIONS",
     "STRIDE_GRID_M",
     "STRIDE_M",
+    "TRIPLE_BYTES",
     "UNITS",
     "VISIBILITY_BASE",
     "VISIBILITY_COSINE",
@@ -102,6 +105,12 @@ VISIBILITY_COSINE = 0.75  # cosine above which one person hides another from the
 VISIBILITY_BASE = 100.0  # the penalty is VISIBILITY_BASE ** (cos * r_i / r_j), in cm²
 MAX_VISIBILITY_EXPONENT = 100.0  # cap on cos * r_i / r_j: penalty <= 1e200 cm²
 MAX_REFITS = 10  # expansion + refit rounds, as the reference code's MAX_ITER
+MAX_FRAME_BYTES = 8 * 2**30  # bytes: the most GCFF may take on one frame; a frame that would
+# take more is refused, naming it, before the arrays are allocated
+# Memory at the peak of one round, measured with tracemalloc on frames of 200 to 1,000 people:
+CELL_BYTES = 32  # bytes per (person, candidate group) cell: the unary costs and the moves
+TRIPLE_BYTES = 64  # bytes per (group, person, person) triple of the visibility penalty: every
+# ordered pair of people within a group's neighbourhood, O(K·N²) in a dense crowd
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
 _MATMUL_MAX_PEOPLE = 64  # up to this many people, per-label sums by a (small) matrix product
 ORIENTATIONS = ("body", "head")
@@ -134,6 +143,24 @@ def segment_points(position: npt.ArrayLike, yaw: npt.ArrayLike, *, stride: float
     return points
 
 
+class _TooLarge(ValueError):
+    """A frame whose costs would take more than `MAX_FRAME_BYTES`."""
+
+
+def _check_memory(n: int, n_groups: int, triples: int = 0) -> None:
+    """Raises `_TooLarge` when ``n`` people, ``n_groups`` candidate groups and ``triples``
+    visibility triples would take more than `MAX_FRAME_BYTES`."""
+    needed = n * n_groups * CELL_BYTES + triples * TRIPLE_BYTES
+    if needed > MAX_FRAME_BYTES:
+        what = f"{n:,} people and {n_groups:,} candidate groups"
+        if triples:
+            what += f" with {triples:,} (group, person, person) visibility triples"
+        raise _TooLarge(
+            f"GCFF's costs for {what} would take about {needed / 2**30:,.1f} GiB, more than "
+            f"reform.gcff.MAX_FRAME_BYTES = {MAX_FRAME_BYTES / 2**30:g} GiB"
+        )
+
+
 def _renumber(labels: np.ndarray) -> np.ndarray:
     """Labels renamed 0..K-1 in increasing order of the old label."""
     _, inverse = np.unique(labels, return_inverse=True)
@@ -162,11 +189,16 @@ def unary_costs(
 
     Returns:
         (n, K) float64 costs, in the squared unit.
+
+    Raises:
+        ValueError: costs that would take more than :data:`MAX_FRAME_BYTES`, before they are
+            allocated (the (n, K) cells, then the neighbourhoods' triples).
     """
     points = np.asarray(points, dtype=np.float64)
     position = np.asarray(position, dtype=np.float64)
     labels = np.asarray(labels, dtype=np.int64)
     n_groups = int(labels.max()) + 1 if labels.size else 0
+    _check_memory(labels.size, n_groups)
     counts = np.bincount(labels, minlength=n_groups).astype(np.float64)
     centre_x = np.bincount(labels, weights=points[:, 0], minlength=n_groups) / counts
     centre_y = np.bincount(labels, weights=points[:, 1], minlength=n_groups) / counts
@@ -184,6 +216,7 @@ def unary_costs(
     # Every ordered pair (behind, front) of entries of the same group, behind-major, front
     # ascending: the order in which the reference adds the penalties.
     size = np.bincount(group, minlength=n_groups)
+    _check_memory(labels.size, n_groups, int(np.dot(size, size)))
     start = np.concatenate(([0], np.cumsum(size)[:-1]))
     repeats = size[group]
     behind = np.repeat(np.arange(group.size), repeats)
@@ -412,6 +445,10 @@ def gcff_labels(
     Returns:
         (n,) int64 labels 0..K-1 (renumbered as the reference code does); people sharing a label
         form a group, a label of its own is a singleton.
+
+    Raises:
+        ValueError: bad arrays or parameters, or a frame whose costs would take more than
+            :data:`MAX_FRAME_BYTES` (checked before they are allocated).
     """
     if units not in UNITS:
         raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
@@ -433,6 +470,7 @@ def gcff_labels(
     labels = np.arange(n, dtype=np.int64)
     if n <= 1:
         return labels
+    _check_memory(n, n)  # every person starts as a candidate group
     points = segment_points(position_cm, yaw, stride=stride_cm)
     for _ in range(MAX_REFITS):
         unary = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
@@ -491,19 +529,31 @@ def _orientation(frame: Frame, orientation: str) -> np.ndarray:
 def _predict(
     frames: Sequence[Frame], *, stride: float, mdl: float, orientation: str
 ) -> list[tuple[Group, ...]]:
-    return [
-        labels_to_partition(
-            frame.ids,
-            gcff_labels(
+    for frame in frames:  # the largest frames refused before any is computed
+        try:
+            _check_memory(frame.n_people, frame.n_people)
+        except _TooLarge as exc:
+            raise ValueError(f"{_frame_text(frame)}: {exc}") from None
+    partitions = []
+    for frame in frames:
+        try:
+            labels = gcff_labels(
                 frame.position,
                 _orientation(frame, orientation),
                 stride=stride,
                 mdl=mdl,
                 units="m",
-            ),
-        )
-        for frame in frames
-    ]
+            )
+        except _TooLarge as exc:  # a crowd too dense for the visibility penalty
+            raise ValueError(f"{_frame_text(frame)}: {exc}") from None
+        partitions.append(labels_to_partition(frame.ids, labels))
+    return partitions
+
+
+def _frame_text(frame: Frame) -> str:
+    """``the frame at time 3.5 s of sequence 'x' (2,000 people)``, for messages."""
+    sequence = f" of sequence {frame.sequence!r}" if frame.sequence else ""
+    return f"the frame at time {frame.time:g} s{sequence} ({frame.n_people:,} people)"
 
 
 @dataclass(frozen=True)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import functools
 import math
+import re
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -15,6 +17,8 @@ from sklearn.linear_model import Perceptron
 from sklearn.tree import DecisionTreeClassifier
 from toy_scenes import toy_frame, toy_frames
 
+import reform.detector
+import reform.gcff
 from reform import (
     Dataset,
     Frame,
@@ -34,6 +38,9 @@ from reform.classifiers import (
     make_classifier,
     weighted_knn,
 )
+from reform.detector import frame_bytes, training_pairs
+from reform.features import pair_indices
+from reform.gcff import Gcff, gcff_labels
 
 
 @functools.cache
@@ -305,3 +312,116 @@ def test_threshold_moves_the_decision():
     together_low = sum(p.sum() for p in low.predict_pairs(frames))
     together_high = sum(p.sum() for p in high.predict_pairs(frames))
     assert together_low > together_high
+
+
+# --------------------------------------------------------------------------------------------
+# Frames too large: REFORM and GCFF refuse them, naming them, before allocating
+
+CROWD = 2_000_000  # people in one frame: 1,999,999,000,000 pairs
+REFUSAL_PEAK_BYTES = 20 * 2**20  # bytes: what a refused frame may allocate while refused
+
+
+@functools.cache
+def crowd() -> Frame:
+    rng = np.random.default_rng(0)
+    return Frame(
+        ids=np.arange(CROWD),
+        position=rng.uniform(0.0, 2_000.0, (CROWD, 2)),
+        yaw=rng.uniform(-np.pi, np.pi, CROWD),
+        groups=(),
+        time=12.5,
+        sequence="stadium",
+    )
+
+
+def traced_peak(call) -> tuple[ValueError, int]:
+    """The ValueError ``call`` raises and the bytes it allocated at the peak (traced)."""
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError) as info:
+            call()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return info.value, peak
+
+
+def test_frame_bytes_follow_the_measured_costs():
+    # Hand-computed: 64 people make 2,016 pairs, one word of beliefs; 65 make 2,080, two words.
+    assert frame_bytes(64) == 2_016 * (40 + 40)
+    assert frame_bytes(65) == 2_080 * (40 + 2 * 40)
+    assert frame_bytes(64, predict=False) == 2_016 * 88
+    assert frame_bytes(1) == frame_bytes(0) == 0
+
+
+@pytest.mark.parametrize(
+    ("call", "work"),
+    [
+        (lambda: fitted().predict([held_out_frames()[0], crowd()]), "classify and reconstruct"),
+        (lambda: fitted().predict_pairs([crowd()]), "classify and reconstruct"),
+        (lambda: Reform().fit([*training_frames()[:5], crowd()]), "deconstruct"),
+        (lambda: training_pairs([crowd()]), "deconstruct"),
+    ],
+    ids=["predict", "predict_pairs", "fit", "training_pairs"],
+)
+def test_reform_refuses_a_frame_whose_pairs_cannot_fit(call, work):
+    crowd()
+    fitted()
+    error, peak = traced_peak(call)
+    assert re.fullmatch(
+        r"the frame at time 12.5 s of sequence 'stadium' holds 2,000,000 people: "
+        r"1,999,999,000,000 pairs, which would take about [\d,.]+ GiB to " + work + r", more "
+        r"than reform.detector.MAX_FRAME_BYTES = 8 GiB",
+        str(error),
+    ), str(error)
+    assert peak < REFUSAL_PEAK_BYTES
+
+
+def test_the_bound_is_the_module_constant(monkeypatch):
+    model = fitted()
+    frames = held_out_frames()
+    largest = max(f.n_people for f in frames)
+    monkeypatch.setattr(reform.detector, "MAX_FRAME_BYTES", frame_bytes(largest))
+    assert len(model.predict(frames)) == len(frames)  # at the bound: predicted as before
+    monkeypatch.setattr(reform.detector, "MAX_FRAME_BYTES", frame_bytes(largest) - 1)
+    with pytest.raises(ValueError, match=f"holds {largest} people: .* more than reform.detector"):
+        model.predict(frames)
+
+
+def test_pair_indices_refuse_more_than_max_pairs():
+    with pytest.raises(
+        ValueError,
+        match=r"a frame of 2,000,000 people has 1,999,999,000,000 pairs, more than "
+        r"reform.features.MAX_PAIRS = 1,073,741,824: their indices alone would take 29,802 GiB",
+    ):
+        pair_indices(CROWD)
+
+
+def test_gcff_refuses_a_frame_whose_costs_cannot_fit():
+    crowd()
+    error, peak = traced_peak(lambda: Gcff().predict([held_out_frames()[0], crowd()]))
+    assert str(error) == (
+        "the frame at time 12.5 s of sequence 'stadium' (2,000,000 people): GCFF's costs for "
+        "2,000,000 people and 2,000,000 candidate groups would take about 119,209.3 GiB, more "
+        "than reform.gcff.MAX_FRAME_BYTES = 8 GiB"
+    )  # 2e6 * 2e6 cells of 32 bytes
+    assert peak < REFUSAL_PEAK_BYTES
+
+
+def test_gcff_refuses_a_crowd_too_dense_for_its_visibility_penalty(monkeypatch):
+    # 300 people within half a metre: every centre's neighbourhood holds everyone.
+    rng = np.random.default_rng(1)
+    dense = Frame(
+        ids=np.arange(300), position=rng.uniform(0, 0.5, (300, 2)), yaw=rng.uniform(-3, 3, 300)
+    )
+    monkeypatch.setattr(reform.gcff, "MAX_FRAME_BYTES", 300 * 300 * reform.gcff.CELL_BYTES)
+    with pytest.raises(ValueError) as info:
+        Gcff().predict([dense])
+    assert re.fullmatch(
+        r"the frame at time 0 s \(300 people\): GCFF's costs for 300 people and 300 candidate "
+        r"groups with [\d,]+ \(group, person, person\) visibility triples would take about "
+        r"[\d.]+ GiB, more than reform.gcff.MAX_FRAME_BYTES = 0.00268221 GiB",
+        str(info.value),
+    ), str(info.value)
+    with pytest.raises(ValueError, match=r"GCFF's costs for 300 people and 300 candidate groups"):
+        gcff_labels(dense.position, dense.yaw, stride=0.7, mdl=1.0)
