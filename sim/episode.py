@@ -16,7 +16,13 @@ and options, or a made `scenarios.Scenario`) into frames:
 
 `episode_blocks` is the fast ground-truth path (blocks of `Poses`, MuJoCo kinematics batched per
 block) and `stream_episode` yields frames one at a time; `simulate_episode` collects them into a
-`reform.Dataset` with the scenario's events beside it.
+`reform.Dataset` with the scenario's events beside it, and `write_episode` writes them to a
+Parquet file as they come, in bounded memory, however long the episode.
+
+Sizes: every entry point sizes its request first (`estimate_episode`, `sim.sizing`) and refuses,
+before anything is simulated, what this machine can never hold or finish (more memory than it
+has with its swap, a run beyond `sim.sizing.MAX_RUN_SECONDS`); commands check the estimate
+against the memory available and the free disk as well.
 
 Seeds: the scenario is drawn from ``seed``; the world's idle sway and the sensor's noise come
 from two children of ``numpy.random.SeedSequence(seed)``. The same scenario, seed and options
@@ -26,19 +32,26 @@ give identical frames. The frame at ``t`` is the state after ``t`` seconds; the 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
-from collections.abc import Iterator, Mapping
+import os
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
 import mujoco
 import numpy as np
 
 import scenarios
+from reform.atomic import atomic_path
+from reform.datasets import write_parquet
 from reform.frame import Dataset, Frame
 from scenarios import Scenario, ScenarioEvent, Stage
 from scenarios.script import Intent
+from sim import sizing
 from sim.scene import PersonSpec, RobotSpec, SceneSpec
 from sim.sensor import Sensor
 from sim.world import (
@@ -52,19 +65,30 @@ from sim.world import (
 
 __all__ = [
     "DEFAULT_RATE_HZ",
+    "SCHEDULE_BYTES",
+    "STREAM_CHUNK_BYTES",
     "VIEWS",
     "Episode",
     "ScenarioScript",
+    "WrittenEpisode",
     "episode_blocks",
+    "estimate_episode",
     "prepare",
     "scene_spec",
     "simulate_episode",
     "stream_episode",
+    "write_episode",
 ]
 
 DEFAULT_RATE_HZ = 2.0  # Hz, frames per second written (SALSA-like annotation rate)
 VIEWS = ("truth", "robot")
+STREAM_CHUNK_BYTES = 64 * 2**20  # bytes of frames write_episode holds before it writes them
+SCHEDULE_BYTES = 64 * 2**20  # bytes: the world's step schedule of one block of frames at most
+# (stream_episode and write_episode take fewer frames per block when a frame spans many steps)
 _FRAME_SLACK = 1e-9  # periods: a duration this close to a whole number of frames counts as it
+_MAX_STEPS_PER_FRAME = 2.0**62  # steps: more are sized as this many (an int64 still holds it)
+# What makes an episode smaller, as sizing's messages name it.
+_SHRINK = "a shorter {duration}, a lower {rate} or a larger {dt}"
 
 View = Literal["truth", "robot"]
 
@@ -162,6 +186,32 @@ class _Plan:
     world_seed: np.random.SeedSequence
     sensor_seed: np.random.SeedSequence
 
+    @property
+    def agents(self) -> int:
+        """People and robot of the scene."""
+        stage = self.scenario.stage
+        return len(stage.people) + (stage.robot is not None)
+
+    @property
+    def steps_per_frame(self) -> int:
+        """Control steps of ``dt`` between two frames (the world checks it is whole)."""
+        steps = 1.0 / (self.rate * self.dt)  # inf for a dt near the smallest float
+        return max(1, round(min(steps, _MAX_STEPS_PER_FRAME)))
+
+    @property
+    def block_rows(self) -> int:
+        """Frames per block of the world's rollout: `DEFAULT_BLOCK_ROWS`, fewer when their step
+        schedule would take more than `SCHEDULE_BYTES`."""
+        per_row = self.steps_per_frame * sizing.SCHEDULE_BYTES_PER_STEP
+        return max(1, min(DEFAULT_BLOCK_ROWS, SCHEDULE_BYTES // per_row))
+
+    def describe(self) -> str:
+        """``mingle for 600 s at 2 Hz (dt 0.01 s)``, for messages."""
+        return (
+            f"{self.scenario.name} for {self.count / self.rate:g} s at {self.rate:g} Hz "
+            f"(dt {self.dt:g} s)"
+        )
+
 
 def _plan(
     scenario: str | Scenario,
@@ -176,6 +226,10 @@ def _plan(
 ) -> _Plan:
     made = prepare(scenario, seed=seed, options=options)
     count = _frame_count(made.duration if duration is None else duration, rate)
+    if isinstance(dt, bool) or not isinstance(dt, (int, float)):
+        raise ValueError(f"dt must be a number of seconds, got {dt!r}")
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt}")
     world_seed, sensor_seed = np.random.SeedSequence(made.seed).spawn(2)
     return _Plan(
         scenario=made,
@@ -187,6 +241,70 @@ def _plan(
         world_seed=world_seed,
         sensor_seed=sensor_seed,
     )
+
+
+def _estimate(
+    plan: _Plan, *, view: str, streamed: bool, recording: bool, block_rows: int | None = None
+) -> sizing.Estimate:
+    """The plan's `sizing.Estimate`: every frame held unless ``streamed`` (then a chunk of
+    `STREAM_CHUNK_BYTES`); the robot's view schedules one frame's steps at a time."""
+    chunk = max(1, STREAM_CHUNK_BYTES // sizing.frame_bytes(plan.agents, view=view))
+    if view == "robot":
+        rows = 1
+    else:
+        rows = plan.block_rows if block_rows is None else block_rows
+    return sizing.episode_estimate(
+        agents=plan.agents,
+        frames=plan.count,
+        steps_per_frame=plan.steps_per_frame,
+        schedule_rows=rows,
+        view=view,
+        held_frames=chunk if streamed else plan.count,
+        recording=recording,
+    )
+
+
+def _guard(plan: _Plan, estimate: sizing.Estimate) -> None:
+    """Refuses, before anything is simulated, what this machine can never hold or finish."""
+    sizing.check_possible(estimate, what=plan.describe(), shrink=_SHRINK)
+
+
+def estimate_episode(
+    scenario: str | Scenario,
+    *,
+    seed: int | None = None,
+    duration: float | None = None,
+    rate: float = DEFAULT_RATE_HZ,
+    view: View = "truth",
+    dt: float = DEFAULT_DT_S,
+    decision_rate: float = DEFAULT_DECISION_RATE_HZ,
+    options: Mapping[str, Any] | None = None,
+    streamed: bool = False,
+    recording: bool = False,
+) -> sizing.Estimate:
+    """What an episode will take (memory, disk, time), from its arguments alone.
+
+    Arguments as for `simulate_episode`; ``streamed``: written by `write_episode` (a chunk of
+    frames held at a time) rather than returned whole; ``recording``: also recorded for Rerun.
+    Nothing is simulated; the scenario is made (pass a made one to make it once).
+
+    Raises:
+        ValueError: the arguments `simulate_episode` refuses (no refusal for size: see
+            `sim.sizing.check`).
+    """
+    if view not in VIEWS:
+        raise ValueError(f"view must be one of {VIEWS}, got {view!r}")
+    plan = _plan(
+        scenario,
+        seed=seed,
+        duration=duration,
+        rate=rate,
+        dt=dt,
+        decision_rate=decision_rate,
+        options=options,
+        sequence=None,
+    )
+    return _estimate(plan, view=view, streamed=streamed, recording=recording)
 
 
 def _world(plan: _Plan) -> World:
@@ -227,6 +345,11 @@ def episode_blocks(
         decision_rate=decision_rate,
         options=options,
         sequence=sequence,
+    )
+    if isinstance(block_rows, bool) or not isinstance(block_rows, (int, np.integer)):
+        raise ValueError(f"block_rows must be a positive int, got {block_rows!r}")
+    _guard(
+        plan, _estimate(plan, view="truth", streamed=True, recording=False, block_rows=block_rows)
     )
     world = _world(plan)
     return _blocks(plan, world, block_rows=block_rows, threads=threads)
@@ -270,6 +393,7 @@ def stream_episode(
         decision_rate=decision_rate,
         options=options,
         sequence=sequence,
+        streamed=True,
     )
     return _stream(plan, world, view, sensor)
 
@@ -286,6 +410,7 @@ def _setup(
     decision_rate: float,
     options: Mapping[str, Any] | None,
     sequence: str | None,
+    streamed: bool,
 ) -> tuple[_Plan, World, Sensor | None]:
     if view not in VIEWS:
         raise ValueError(f"view must be one of {VIEWS}, got {view!r}")
@@ -310,6 +435,7 @@ def _setup(
                 "(see its robot option)"
             )
         sensor = Sensor() if sensor is None else sensor
+    _guard(plan, _estimate(plan, view=view, streamed=streamed, recording=False))
     return plan, _world(plan), sensor
 
 
@@ -317,7 +443,7 @@ def _stream(
     plan: _Plan, world: World, view: str, sensor: Sensor | None
 ) -> Iterator[tuple[Frame, Frame]]:
     if view == "truth":
-        for block in _blocks(plan, world, block_rows=DEFAULT_BLOCK_ROWS, threads=1):
+        for block in _blocks(plan, world, block_rows=plan.block_rows, threads=1):
             for frame in block.frames():
                 yield frame, frame
         return
@@ -426,24 +552,159 @@ def simulate_episode(
         decision_rate=decision_rate,
         options=options,
         sequence=sequence,
+        streamed=False,
     )
     truth: list[Frame] = []
     seen: list[Frame] = []
     for world_frame, observed in _stream(plan, world, view, sensor):
         truth.append(world_frame)
         seen.append(observed)
-    made = plan.scenario
-    end = plan.count / plan.rate
     dataset = Dataset(
         frames=tuple(seen),
-        name=made.name,
-        source=f"reform-sim simulate --scenario {made.name} --seed {made.seed}",
+        name=plan.scenario.name,
+        source=_source(plan),
         metadata=_metadata(plan, view, sensor),
     )
     return Episode(
         dataset=dataset,
         truth=tuple(truth),
-        events=tuple(e for e in made.events if e.time <= end + 1e-9),
-        scenario=made,
+        events=_events(plan),
+        scenario=plan.scenario,
         model=world.model,
+    )
+
+
+def _source(plan: _Plan) -> str:
+    return f"reform-sim simulate --scenario {plan.scenario.name} --seed {plan.scenario.seed}"
+
+
+def _events(plan: _Plan) -> tuple[ScenarioEvent, ...]:
+    """The scenario's events within the episode."""
+    end = plan.count / plan.rate
+    return tuple(e for e in plan.scenario.events if e.time <= end + 1e-9)
+
+
+@dataclass(frozen=True, eq=False)
+class WrittenEpisode:
+    """An episode that `write_episode` wrote.
+
+    Attributes:
+        path: the Parquet file.
+        frames: frames written.
+        group_sizes: F-formation size (2 or more) -> how many times one was in a frame, over the
+            frames written (the groups restricted to the people in each frame).
+        events: the scenario's events within the episode, by time.
+        scenario: the scenario enacted.
+        metadata: the file's metadata (the episode's parameters), as `simulate_episode`'s
+            dataset has it.
+    """
+
+    path: Path
+    frames: int
+    group_sizes: Mapping[int, int]
+    events: tuple[ScenarioEvent, ...]
+    scenario: Scenario
+    metadata: Mapping[str, Any]
+
+
+def write_episode(
+    scenario: str | Scenario,
+    path: str | os.PathLike[str],
+    *,
+    seed: int | None = None,
+    duration: float | None = None,
+    rate: float = DEFAULT_RATE_HZ,
+    view: View = "truth",
+    sensor: Sensor | None = None,
+    dt: float = DEFAULT_DT_S,
+    decision_rate: float = DEFAULT_DECISION_RATE_HZ,
+    options: Mapping[str, Any] | None = None,
+    sequence: str | None = None,
+    progress: Callable[[int], object] | None = None,
+) -> WrittenEpisode:
+    """Runs one episode and writes its frames to a Parquet file as they come.
+
+    The file reads back (`reform.datasets.read_parquet`) as the dataset `simulate_episode`
+    returns for the same arguments, but at most `STREAM_CHUNK_BYTES` of frames are held at a
+    time: each chunk is written as one row group, so an episode of any length runs in bounded
+    memory (as the world's rollout does, `sim.world.World.rollout`). The file appears whole or
+    not at all (`reform.atomic.atomic_path`).
+
+    Args:
+        scenario, seed, duration, rate, view, sensor, dt, decision_rate, options, sequence: as
+            for `simulate_episode`.
+        path: the ``.parquet`` file to write (its folder is created).
+        progress: called with the number of frames made, after each frame (a progress bar's
+            ``update``).
+
+    Returns:
+        The `WrittenEpisode`: path, frame count, F-formation sizes, events.
+
+    Raises:
+        ValueError: what `simulate_episode` refuses, before anything is simulated.
+    """
+    import pyarrow.compute as pc  # as reform.datasets.parquet does: only where Parquet is written
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    plan, world, sensor = _setup(
+        scenario,
+        seed=seed,
+        duration=duration,
+        rate=rate,
+        view=view,
+        sensor=sensor,
+        dt=dt,
+        decision_rate=decision_rate,
+        options=options,
+        sequence=sequence,
+        streamed=True,
+    )
+    metadata = _metadata(plan, view, sensor)
+    chunk_frames = max(1, STREAM_CHUNK_BYTES // sizing.frame_bytes(plan.agents, view=view))
+    sizes: Counter[int] = Counter()
+    written = 0
+    with contextlib.ExitStack() as stack:
+        target = stack.enter_context(atomic_path(path))
+        scratch = target.with_name(target.name + ".chunk.parquet")
+        stack.callback(scratch.unlink, missing_ok=True)
+        writer = None
+        chunk: list[Frame] = []
+        frames = (observed for _, observed in _stream(plan, world, view, sensor))
+        for frame in frames:
+            chunk.append(frame)
+            sizes.update(len(g) for g in frame.groups or () if len(g) >= 2)
+            if progress is not None:
+                progress(1)
+            if len(chunk) < chunk_frames and written + len(chunk) < plan.count:
+                continue
+            # The chunk as the whole-file writer writes it, its frames numbered from `written`.
+            write_parquet(
+                Dataset(
+                    frames=tuple(chunk),
+                    name=plan.scenario.name,
+                    source=_source(plan),
+                    metadata=metadata,
+                ),
+                scratch,
+            )
+            table = pq.read_table(scratch)
+            index = table.schema.get_field_index("frame")
+            table = table.set_column(
+                index, table.schema.field(index), pc.add(table.column(index), written)
+            )
+            if writer is None:
+                writer = stack.enter_context(
+                    pq.ParquetWriter(target, table.schema, compression="zstd")
+                )
+            writer.write_table(table)
+            written += len(chunk)
+            chunk = []
+    return WrittenEpisode(
+        path=path,
+        frames=written,
+        group_sizes=dict(sorted(sizes.items())),
+        events=_events(plan),
+        scenario=plan.scenario,
+        metadata=metadata,
     )

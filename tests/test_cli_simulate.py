@@ -4,13 +4,19 @@ from __future__ import annotations
 
 import json
 import re
+import tracemalloc
 
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
+import tqdm  # noqa: F401 - imported before the memory of a refusal is traced
 from rerun.chunk import RrdReader
 
 import scenarios
+import sim.episode
+import sim.recording  # noqa: F401 - imported before the memory of a refusal is traced
 from reform.datasets import read_parquet
+from sim import sizing
 from sim.cli import main
 from sim.episode import simulate_episode
 
@@ -182,3 +188,104 @@ def test_calibrate_reads_the_datasets_named_by_the_environment(tmp_path, monkeyp
     monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "elsewhere"))
     assert main(["calibrate", "--out", str(tmp_path / "out")]) == 2
     assert f"--datasets {tmp_path / 'elsewhere'}: no salsa/ folder in it" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------------
+# Requests sized before they run (sim.sizing)
+
+GiB = 2**30
+REFUSAL_PEAK_BYTES = 50 * 2**20  # bytes: what a refused request may allocate while refused
+SHRINK = r"ask for less \(a shorter --duration, a lower --rate or a larger --dt\)"
+
+
+@pytest.fixture
+def machine(monkeypatch):
+    """16 GiB of memory available and 100 GiB of free disk, whatever runs the tests."""
+    monkeypatch.setattr(sizing, "available_memory", lambda: 16 * GiB)
+    monkeypatch.setattr(sizing, "total_memory", lambda: 32 * GiB)
+    monkeypatch.setattr(sizing, "free_disk", lambda path: 100 * GiB)
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("a World was built: the request was not refused first")
+
+    monkeypatch.setattr(sim.episode, "World", refuse)
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        (
+            ["--duration", "1e9"],
+            r"the run writes about [\d.]+ TiB \(2,000,000,000 frames of 18 agents\), more than "
+            r"the 100 GiB free where --out \S+never.parquet is; " + SHRINK + " or write elsewhere",
+        ),
+        (
+            ["--duration", "1e9", "--save", "REC"],
+            r"the run needs about [\d.]+ TiB of memory \(2,000,000,000 frames of 18 agents held "
+            r"in memory\), more than the 16 GiB of memory this machine has available; "
+            + SHRINK
+            + r", record nothing \(no --save, --connect, --serve\) to stream the frames to --out "
+            r"in bounded memory, or change the limit with --max-memory SIZE \(e.g. 64G\)",
+        ),
+        (
+            ["--dt", "1e-12"],
+            r"the run needs about 3.64 TiB of memory \(the world's schedule of "
+            r"500,000,000,000 control steps per frame\), more than the 16 GiB of memory this "
+            r"machine has available; " + SHRINK + r", or change the limit with --max-memory SIZE "
+            r"\(e.g. 64G\)",
+        ),
+        (
+            ["--dt", "1e-9"],
+            r"the run would take about [\d.]+ days on this machine \(1,200 frames of 18 agents\), "
+            r"more than the 7 days a run may take \(sim.sizing.MAX_RUN_SECONDS\); " + SHRINK,
+        ),
+        (
+            ["--duration", "6000", "--save", "REC", "--max-memory", "300M"],
+            r"the run needs about [\d.]+ MiB of memory \(12,000 frames of 18 agents held in "
+            r"memory\), more than the limit --max-memory 300 MiB; " + SHRINK + r", record nothing "
+            r"\(no --save, --connect, --serve\) to stream the frames to --out in bounded memory, "
+            r"or change the limit with --max-memory SIZE \(e.g. 64G\)",
+        ),
+        (
+            ["--max-memory", "8X"],
+            r"--max-memory: expected a size such as 8G, 512M or 1.5GiB, got '8X'",
+        ),
+    ],
+    ids=["forever", "forever-recorded", "tiny-dt", "years", "over-the-limit", "bad-limit"],
+)
+def test_simulate_refuses_what_cannot_fit_before_any_work(
+    tmp_path, capsys, machine, no_work, extra, match
+):
+    out, rrd = tmp_path / "never.parquet", tmp_path / "never.rrd"
+    extra = [str(rrd) if e == "REC" else e for e in extra]
+    argv = ["simulate", "--scenario", "mingle", "--seed", "1", "--out", str(out), *extra]
+    tracemalloc.start()
+    try:
+        code = main(argv)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert re.fullmatch(r"reform-sim simulate: error: " + match + r"\n", err), err
+    assert peak < REFUSAL_PEAK_BYTES
+    assert not out.exists() and not rrd.exists()
+
+
+def test_a_long_simulation_streams_to_its_file(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sim.episode, "STREAM_CHUNK_BYTES", 40_000)  # a few frames a row group
+    out = tmp_path / "long.parquet"
+    argv = ["simulate", "--scenario", "hri-conversation", "--seed", "3", "--out", str(out)]
+    assert main([*argv, "--set", "talk_duration=8", "--duration", "30", "--max-memory", "4G"]) == 0
+    assert pq.ParquetFile(out).num_row_groups > 2
+    expected = simulate_episode(
+        "hri-conversation", seed=3, duration=30.0, options={"talk_duration": 8.0}
+    )
+    assert list(read_parquet(out)) == list(expected.dataset)
+    printed = capsys.readouterr()
+    assert "60 frames of hri-conversation (seed 3, 30 s at 2 Hz, view truth)" in printed.out
+    assert printed.err == ""  # a run this short shows no progress bar

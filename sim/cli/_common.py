@@ -12,7 +12,10 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from sim.sizing import RequestTooLarge
 
 # reform.datasets' FORMATS and their aliases, and LENGTH_UNITS, kept here so that building the
 # parser imports nothing heavy (tests/test_cli_options.py checks that they agree).
@@ -128,6 +131,43 @@ def check_jobs(args: argparse.Namespace) -> None:
     jobs = getattr(args, "jobs", None)
     if jobs is not None and jobs < 1:
         raise CliError(f"--jobs must be >= 1, got {jobs}")
+
+
+def add_max_memory_argument(parser: argparse.ArgumentParser, *, holds: str) -> None:
+    """``--max-memory SIZE``: the memory a command may take, read by :func:`max_memory`.
+
+    Args:
+        holds: what the command holds in memory that streaming does not bound, for the help.
+    """
+    parser.add_argument(
+        "--max-memory",
+        default=None,
+        metavar="SIZE",
+        help=f"memory the run may take, e.g. 8G or 512M (default: what this machine has "
+        f"available); {holds}",
+    )
+
+
+def max_memory(args: argparse.Namespace) -> int | None:
+    """``--max-memory`` in bytes (None when not given); a `CliError` for a malformed size."""
+    text = getattr(args, "max_memory", None)
+    if text is None:
+        return None
+    from sim.sizing import parse_size
+
+    try:
+        return parse_size(text)
+    except ValueError as exc:
+        raise CliError(f"--max-memory: {exc}") from None
+
+
+def size_error(exc: RequestTooLarge, flags: dict[str, str] | None = None) -> CliError:
+    """A `sim.sizing.RequestTooLarge` as the command's one line, its parameters spelled as
+    flags: ``max_memory`` as ``--max-memory``, the others as ``flags`` says
+    (``{"out_dir": "--out"}``)."""
+    from sim.sizing import flag_name
+
+    return CliError(exc.message(lambda name: flag_name(name, flags)))
 
 
 def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data") -> None:

@@ -1,0 +1,368 @@
+"""sim.sizing: sizes in words, this machine, estimates, refusals; the simulation's requests
+sized before they run, and the streamed episode that keeps memory bounded."""
+
+from __future__ import annotations
+
+import re
+import tracemalloc
+
+import pyarrow.parquet as pq
+import pytest
+
+import sim.episode
+from reform.datasets import read_parquet
+from sim import sizing
+from sim.episode import (
+    estimate_episode,
+    simulate_episode,
+    stream_episode,
+    write_episode,
+)
+from sim.sizing import RequestTooLarge
+
+GiB = 2**30
+REFUSAL_PEAK_BYTES = 50 * 2**20  # bytes: what a refused request may allocate while refused
+
+
+@pytest.fixture
+def machine(monkeypatch):
+    """A machine with 16 GiB of memory available (32 GiB with swap) and 100 GiB of free disk,
+    whatever runs the tests."""
+    monkeypatch.setattr(sizing, "available_memory", lambda: 16 * GiB)
+    monkeypatch.setattr(sizing, "total_memory", lambda: 32 * GiB)
+    monkeypatch.setattr(sizing, "free_disk", lambda path: 100 * GiB)
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Fails any test whose request builds a world: refusals come before any work."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a World was built: the request was not refused first")
+
+    monkeypatch.setattr(sim.episode, "World", refuse)
+
+
+def refused_peak(call) -> tuple[RequestTooLarge, int]:
+    """The refusal ``call`` raises and the bytes it allocated at the peak (traced)."""
+    tracemalloc.start()
+    try:
+        with pytest.raises(RequestTooLarge) as info:
+            call()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return info.value, peak
+
+
+# --------------------------------------------------------------------------------------------
+# Sizes in words
+
+
+@pytest.mark.parametrize(
+    ("text", "size"),
+    [
+        ("8G", 8 * GiB),
+        ("8g", 8 * GiB),
+        ("512M", 512 * 2**20),
+        ("1.5GiB", 3 * 2**29),
+        ("2 TB", 2 * 2**40),
+        ("1000000", 1_000_000),
+        ("64k", 65_536),
+        ("10B", 10),
+    ],
+)
+def test_parse_size(text, size):
+    assert sizing.parse_size(text) == size
+
+
+@pytest.mark.parametrize("text", ["", "8X", "G", "-1G", "0", "8 GiBs", "1e9", "8iB"])
+def test_parse_size_refuses_what_is_not_a_size(text):
+    with pytest.raises(ValueError, match=r"expected a size|at least 1 byte"):
+        sizing.parse_size(text)
+
+
+@pytest.mark.parametrize(
+    ("size", "text"),
+    [
+        (0, "0 B"),
+        (1023, "1023 B"),
+        (1536, "1.5 KiB"),
+        (8 * GiB, "8 GiB"),
+        (3.6 * 2**40, "3.6 TiB"),
+        (2.0**70, "1.02e+03 EiB"),
+    ],
+)
+def test_format_size(size, text):
+    assert sizing.format_size(size) == text
+
+
+@pytest.mark.parametrize(
+    ("seconds", "text"),
+    [(0.5, "0.5 s"), (41, "41 s"), (720, "12 min"), (3.2 * 3600, "3.2 h"), (41 * 86400, "41 days")],
+)
+def test_format_duration(seconds, text):
+    assert sizing.format_duration(seconds) == text
+
+
+def test_count_is_readable_at_any_size():
+    assert sizing.count(1_200) == "1,200"
+    assert sizing.count(2 * 10**300) == "2e+300"
+
+
+# --------------------------------------------------------------------------------------------
+# This machine
+
+
+def test_memory_is_read_from_proc_meminfo(tmp_path, monkeypatch):
+    meminfo = tmp_path / "meminfo"
+    meminfo.write_text(
+        "MemTotal:       24683584 kB\nMemFree:         1000000 kB\n"
+        "MemAvailable:   22518916 kB\nSwapTotal:       1048576 kB\n"
+    )
+    monkeypatch.setattr(sizing, "_MEMINFO", meminfo)
+    assert sizing.available_memory() == 22518916 * 1024
+    assert sizing.total_memory() == (24683584 + 1048576) * 1024
+
+
+def test_memory_and_disk_of_this_machine_are_positive(tmp_path):
+    assert 0 < sizing.available_memory() <= sizing.total_memory()
+    assert sizing.free_disk(tmp_path / "not" / "yet" / "there.parquet") > 0
+
+
+# --------------------------------------------------------------------------------------------
+# Estimates
+
+
+def test_held_frames_grow_with_the_episode_streamed_ones_do_not():
+    shape = dict(agents=19, steps_per_frame=50, schedule_rows=500)
+    short = sizing.episode_estimate(frames=1_200, held_frames=1_200, **shape)
+    long = sizing.episode_estimate(frames=120_000, held_frames=120_000, **shape)
+    streamed = sizing.episode_estimate(frames=120_000, held_frames=1_000, **shape)
+    per_frame = sizing.FRAME_BYTES + 19 * sizing.AGENT_FRAME_BYTES
+    assert long.memory - short.memory == pytest.approx(118_800 * per_frame)
+    assert streamed.memory < short.memory
+    rows = sizing.DISK_EPISODE_BYTES  # the file's own bytes, beside its rows
+    assert long.disk - rows == pytest.approx(100 * (short.disk - rows))
+    assert "120,000 frames of 19 agents held in memory" == long.memory_cause
+    assert "1,000 frames of 19 agents held in memory" == streamed.memory_cause
+
+
+def test_the_robot_view_holds_two_frames_and_costs_its_rays():
+    shape = dict(agents=19, frames=1_000, steps_per_frame=50, schedule_rows=1, held_frames=1_000)
+    truth = sizing.episode_estimate(view="truth", **shape)
+    robot = sizing.episode_estimate(view="robot", **shape)
+    assert sizing.frame_bytes(19, view="robot") == 2 * sizing.frame_bytes(19)
+    assert robot.seconds - truth.seconds == pytest.approx(
+        1_000 * 19 * sizing.SECONDS_PER_OBSERVED_AGENT_FRAME
+    )
+
+
+def test_a_tiny_step_is_sized_by_the_worlds_schedule():
+    estimate = sizing.episode_estimate(
+        agents=18, frames=1_200, steps_per_frame=5 * 10**11, schedule_rows=1, held_frames=1_000
+    )
+    assert (
+        estimate.memory_cause == "the world's schedule of 500,000,000,000 control steps per frame"
+    )
+    assert estimate.memory > 5 * 10**11 * sizing.SCHEDULE_BYTES_PER_STEP
+
+
+def test_absurd_requests_are_sized_without_overflow():
+    estimate = sizing.episode_estimate(
+        agents=18, frames=2 * 10**300, steps_per_frame=2**62, schedule_rows=500, held_frames=1
+    )
+    assert estimate.seconds > 1e300
+    assert estimate.memory_cause == "the world's schedule of 4.61e+18 control steps per frame"
+    assert (
+        sizing.format_size(estimate.disk) == "1.81e+285 EiB"
+    )  # 2e300 frames of 18 agents, 58 B each
+
+
+def test_a_dataset_is_its_episodes_and_its_card():
+    one = sizing.episode_estimate(
+        agents=10, frames=600, steps_per_frame=50, schedule_rows=500, held_frames=600
+    )
+    many = sizing.dataset_estimate(one, episodes=10**9, workers=4)
+    assert many.memory == pytest.approx(4 * one.memory + 10**9 * sizing.CARD_EPISODE_BYTES)
+    assert many.memory_cause == "the dataset card's entries for 1,000,000,000 episodes"
+    assert many.seconds == pytest.approx(10**9 * one.seconds / 4)
+    few = sizing.dataset_estimate(one, episodes=3, workers=8)
+    assert few.memory == pytest.approx(3 * one.memory + 3 * sizing.CARD_EPISODE_BYTES)
+    assert few.memory_cause.startswith("3 workers, each with 600 frames of 10 agents")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(agents=-1), r"agents must be an int >= 0, got -1"),
+        (dict(frames=1.5), r"frames must be an int >= 0, got 1.5"),
+        (dict(view="sky"), r"view must be one of \('truth', 'robot'\), got 'sky'"),
+    ],
+)
+def test_episode_estimate_bad_input(kwargs, match):
+    shape = dict(agents=2, frames=10, steps_per_frame=5, schedule_rows=1, held_frames=10)
+    with pytest.raises(ValueError, match=match):
+        sizing.episode_estimate(**(shape | kwargs))
+
+
+# --------------------------------------------------------------------------------------------
+# Refusals
+
+
+def estimate(**overrides) -> sizing.Estimate:
+    fields = dict(
+        memory=40 * GiB,
+        memory_cause="2,000 frames of 9 agents held in memory",
+        disk=GiB,
+        seconds=10.0,
+        frames=2_000,
+        agents=9,
+    )
+    return sizing.Estimate(**(fields | overrides))
+
+
+def test_memory_refusal_names_the_estimate_the_limit_and_the_ways_out(machine):
+    with pytest.raises(RequestTooLarge) as info:
+        sizing.check(
+            estimate(),
+            shrink="a shorter {duration}",
+            alternative="drop {save} to stream",
+        )
+    refusal = info.value
+    assert (refusal.resource, refusal.needed, refusal.limit) == ("memory", 40 * GiB, 16 * GiB)
+    assert str(refusal) == (
+        "the run needs about 40 GiB of memory (2,000 frames of 9 agents held in memory), more "
+        "than the 16 GiB of memory this machine has available; ask for less (a shorter "
+        "duration), drop save to stream, or change the limit with max_memory SIZE (e.g. 64G)"
+    )
+    flags = refusal.message(sizing.flag_name)
+    assert "(a shorter --duration), drop --save to stream, or change the limit with " in flags
+    assert flags.endswith("--max-memory SIZE (e.g. 64G)")
+
+
+def test_a_memory_limit_lowers_or_raises_the_bar(machine):
+    with pytest.raises(RequestTooLarge, match=r"more than the limit max_memory 1 GiB;"):
+        sizing.check(estimate(memory=2 * GiB), shrink="less", memory_limit=GiB)
+    sizing.check(estimate(memory=40 * GiB), shrink="less", memory_limit=64 * GiB)
+
+
+def test_disk_refusal_names_the_output(machine, tmp_path):
+    with pytest.raises(RequestTooLarge) as info:
+        sizing.check(estimate(memory=GiB, disk=2 * 2**40), shrink="less", out=tmp_path / "a")
+    assert info.value.message(sizing.flag_name) == (
+        "the run writes about 2 TiB (2,000 frames of 9 agents), more than the 100 GiB free "
+        f"where --out {tmp_path / 'a'} is; ask for less (less) or write elsewhere"
+    )
+    # What is there already is not written again.
+    sizing.check(estimate(memory=GiB, disk=2 * 2**40), shrink="", out=tmp_path, disk_needed=GiB)
+
+
+def test_time_refusal_names_the_bound(machine):
+    with pytest.raises(RequestTooLarge) as info:
+        sizing.check(estimate(memory=GiB, seconds=41 * 86400.0), shrink="fewer {episodes}")
+    assert info.value.message(sizing.flag_name) == (
+        "the run would take about 41 days on this machine (2,000 frames of 9 agents), more "
+        "than the 7 days a run may take (sim.sizing.MAX_RUN_SECONDS); ask for less (fewer "
+        "--episodes)"
+    )
+
+
+def test_library_calls_are_refused_only_what_can_never_fit(machine):
+    sizing.check_possible(estimate(memory=30 * GiB), what="it", shrink="less")
+    with pytest.raises(RequestTooLarge, match=r"more than the 32 GiB of memory and swap"):
+        sizing.check_possible(estimate(memory=40 * GiB), what="it", shrink="less")
+
+
+def test_a_small_request_passes(machine, tmp_path):
+    sizing.check(estimate(memory=GiB), shrink="less", out=tmp_path)
+
+
+# --------------------------------------------------------------------------------------------
+# The simulation sized before it runs
+
+
+def test_an_episode_is_estimated_from_its_arguments():
+    estimate = estimate_episode("mingle", seed=1)
+    assert (estimate.frames, estimate.agents) == (1_200, 18)
+    streamed = estimate_episode("mingle", seed=1, duration=6000.0, streamed=True)
+    assert streamed.frames == 12_000
+    assert streamed.memory < estimate_episode("mingle", seed=1, duration=6000.0).memory
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (
+            lambda: simulate_episode("mingle", seed=1, dt=1e-12),
+            r"mingle for 600 s at 2 Hz \(dt 1e-12 s\) needs about 3\.64 TiB of memory \(the "
+            r"world's schedule of 500,000,000,000 control steps per frame\), more than the 32 "
+            r"GiB of memory and swap this machine has; ask for less \(a shorter duration, a "
+            r"lower rate or a larger dt\)",
+        ),
+        (
+            lambda: simulate_episode("mingle", seed=1, duration=1e9),
+            r"mingle for 1e\+09 s at 2 Hz \(dt 0.01 s\) needs about [\d.]+ TiB of memory "
+            r"\(2,000,000,000 frames of 18 agents held in memory\)",
+        ),
+        (
+            lambda: stream_episode("mingle", seed=1, duration=1e9),
+            r"would take about 10 days on this machine \(2,000,000,000 frames of 18 agents\)",
+        ),
+        (
+            lambda: sim.episode.episode_blocks("mingle", seed=1, dt=5e-324),
+            r"needs about 1.6e\+04 EiB of memory \(the world's schedule of 4.61e\+18 control "
+            r"steps per frame\)",
+        ),
+    ],
+    ids=["tiny-dt", "held-forever", "streamed-forever", "smallest-dt"],
+)
+def test_the_library_refuses_what_can_never_fit_before_any_work(machine, no_work, call, match):
+    refusal, peak = refused_peak(call)
+    assert re.search(match, str(refusal)), str(refusal)
+    assert peak < REFUSAL_PEAK_BYTES
+
+
+def test_write_episode_streams_in_row_groups_and_reads_back_whole(tmp_path, monkeypatch):
+    monkeypatch.setattr(sim.episode, "STREAM_CHUNK_BYTES", 40_000)  # a few frames a chunk
+    options = {"talk_duration": 8.0}
+    done = []
+    written = write_episode(
+        "hri-conversation",
+        tmp_path / "streamed.parquet",
+        seed=3,
+        duration=12.0,
+        options=options,
+        progress=done.append,
+    )
+    expected = simulate_episode("hri-conversation", seed=3, duration=12.0, options=options)
+    assert sum(done) == written.frames == 24
+    assert pq.ParquetFile(written.path).num_row_groups > 2
+    read = read_parquet(written.path)
+    assert list(read) == list(expected.dataset)
+    assert dict(read.metadata) == dict(expected.dataset.metadata)
+    assert (read.name, read.source) == (expected.dataset.name, expected.dataset.source)
+    assert written.events == expected.events
+    sizes = {}
+    for frame in expected.dataset:
+        for group in frame.groups or ():
+            if len(group) >= 2:
+                sizes[len(group)] = sizes.get(len(group), 0) + 1
+    assert written.group_sizes == sizes
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["streamed.parquet"]  # no scratch left
+
+
+def test_write_episode_streams_the_robots_view(tmp_path, monkeypatch):
+    monkeypatch.setattr(sim.episode, "STREAM_CHUNK_BYTES", 40_000)
+    kwargs = dict(seed=2, duration=10.0, view="robot", options={"robot": "watch", "players": 3})
+    written = write_episode("word-improv", tmp_path / "seen.parquet", **kwargs)
+    expected = simulate_episode("word-improv", **kwargs)
+    assert list(read_parquet(written.path)) == list(expected.dataset)
+
+
+def test_a_frame_spanning_many_steps_takes_fewer_rows_per_block(monkeypatch):
+    kwargs = dict(seed=1, duration=6.0, rate=1.0, dt=0.001, decision_rate=10.0)
+    whole = [truth for truth, _ in stream_episode("hri-passing", **kwargs)]
+    monkeypatch.setattr(sim.episode, "SCHEDULE_BYTES", 2 * 8_000)  # two frames' steps a block
+    blocked = [truth for truth, _ in stream_episode("hri-passing", **kwargs)]
+    assert blocked == whole
