@@ -974,12 +974,12 @@ def _write_cards(out_dir: Path, card: Mapping[str, Any]) -> None:
 # Checks before any work
 
 
-def _check_scenario(spec: GenerationSpec) -> dict[str, Any]:
+def _check_scenario(spec: GenerationSpec) -> tuple[dict[str, Any], Any]:
     """Makes episode 0's scenario and its scene: an unknown name (the known ones are listed),
     unknown or impossible options, a robot view without a robot fail here, before any work.
 
     Returns:
-        The scenario's options with its defaults filled in.
+        The scenario's options with its defaults filled in, and episode 0's made scenario.
     """
     import scenarios
     from sim.episode import prepare, scene_spec
@@ -994,7 +994,47 @@ def _check_scenario(spec: GenerationSpec) -> dict[str, Any]:
             f"view='robot' needs a robot, and scenario {spec.scenario} has none with these "
             "options (see its robot option)"
         )
-    return _json_value("scenario options", dict(made.options))
+    return _json_value("scenario options", dict(made.options)), made
+
+
+def _check_size(
+    spec: GenerationSpec,
+    made: Any,
+    *,
+    episodes: int,
+    out_dir: Path,
+    workers: int,
+    save_recordings: bool,
+    max_memory: int | None,
+) -> None:
+    """Refuses, before any work, a dataset that cannot fit this machine (`sim.sizing.check`):
+    its episodes sized like episode 0 (``made``), ``workers`` of them held at once; the disk
+    needed is for the episodes whose shards are not there yet."""
+    from sim import sizing
+    from sim.episode import estimate_episode
+
+    one = estimate_episode(
+        made, duration=spec.duration, rate=spec.rate, view=spec.view, recording=save_recordings
+    )
+    estimate = sizing.dataset_estimate(
+        one,
+        episodes=episodes,
+        workers=workers,
+        arrays=spec.view == "truth" and not save_recordings,
+    )
+    folder = out_dir / f"scenario={spec.scenario}"
+    there = sum(1 for _ in folder.glob(f"episode=*/{SHARD_FILE}")) if folder.is_dir() else 0
+    missing = max(0, episodes - there)
+    sizing.check(
+        estimate,
+        what=f"{sizing.count(episodes)} episodes of {spec.scenario}",
+        shrink="fewer {episodes}, a shorter {duration} or a lower {rate}",
+        memory_limit=max_memory,
+        alternative="fewer workers ({n_jobs})" if workers > 1 else "",
+        out=out_dir,
+        out_option="out_dir",
+        disk_needed=estimate.disk * missing / episodes,
+    )
 
 
 def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
@@ -1095,6 +1135,7 @@ def generate_dataset(
     n_jobs: int | None = None,
     save_recordings: bool = False,
     progress: bool = True,
+    max_memory: int | None = None,
 ) -> GenerationReport:
     """Generates (or resumes, or extends) a synthetic dataset of ``episodes`` episodes.
 
@@ -1115,6 +1156,8 @@ def generate_dataset(
         n_jobs: local worker processes (default: every core); ignored by Ray.
         save_recordings: also write one Rerun ``.rrd`` per episode under ``recordings/``.
         progress: show a progress bar on stderr.
+        max_memory: bytes of memory the run may take (its workers each hold one episode
+            whole); None for what this machine has available.
 
     Returns:
         A `GenerationReport`.
@@ -1122,6 +1165,8 @@ def generate_dataset(
     Raises:
         ValueError: bad parameters, an unknown scenario (the known ones are listed), impossible
             scenario options, or an ``out_dir`` holding something else: before any work.
+        sim.sizing.RequestTooLarge: (a ValueError) a dataset whose memory, disk or time cannot
+            fit this machine (`sim.sizing.check`), before any work.
         ImportError: ``backend="ray"`` without Ray installed.
     """
     started = time.perf_counter()
@@ -1141,8 +1186,19 @@ def generate_dataset(
         rate=rate,
         duration=duration,
     )
+    if max_memory is not None:
+        max_memory = _check_int("max_memory", max_memory, minimum=1)
     out_dir = Path(out_dir)
-    resolved = _check_scenario(spec)
+    resolved, made = _check_scenario(spec)
+    _check_size(
+        spec,
+        made,
+        episodes=episodes,
+        out_dir=out_dir,
+        workers=1 if backend == "ray" else n_jobs or _cpu_count(),
+        save_recordings=save_recordings,
+        max_memory=max_memory,
+    )
     parameters = spec.parameters()
     _check_folder(out_dir, parameters, episodes)
     if backend == "ray":

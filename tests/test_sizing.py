@@ -1,23 +1,26 @@
-"""sim.sizing: sizes in words, this machine, estimates, refusals; the simulation's requests
-sized before they run, and the streamed episode that keeps memory bounded."""
+"""sim.sizing: sizes in words, this machine, estimates, refusals; the simulation's and the
+generator's requests sized before they run, and the streamed episode that keeps memory bounded."""
 
 from __future__ import annotations
 
 import re
 import tracemalloc
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
 import sim.episode
 from reform.datasets import read_parquet
 from sim import sizing
+from sim.cli import main
 from sim.episode import (
     estimate_episode,
     simulate_episode,
     stream_episode,
     write_episode,
 )
+from sim.generate import generate_dataset
 from sim.sizing import RequestTooLarge
 
 GiB = 2**30
@@ -366,3 +369,70 @@ def test_a_frame_spanning_many_steps_takes_fewer_rows_per_block(monkeypatch):
     monkeypatch.setattr(sim.episode, "SCHEDULE_BYTES", 2 * 8_000)  # two frames' steps a block
     blocked = [truth for truth, _ in stream_episode("hri-passing", **kwargs)]
     assert blocked == whole
+
+
+# --------------------------------------------------------------------------------------------
+# The generator sized before it runs
+
+
+def test_generate_refuses_a_billion_episodes_before_any_work(machine, no_work, tmp_path):
+    out = tmp_path / "huge"
+    refusal, peak = refused_peak(
+        lambda: generate_dataset("mingle", episodes=10**9, seed=1, out_dir=out, n_jobs=2)
+    )
+    assert refusal.resource == "memory"
+    assert re.fullmatch(
+        r"1,000,000,000 episodes of mingle needs about [\d.]+ TiB of memory \(the dataset "
+        r"card's entries for 1,000,000,000 episodes\), more than the 16 GiB of memory this "
+        r"machine has available; ask for less \(fewer episodes, a shorter duration or a lower "
+        r"rate\), fewer workers \(n_jobs\), or change the limit with max_memory SIZE \(e.g. "
+        r"64G\)",
+        str(refusal),
+    ), str(refusal)
+    assert peak < REFUSAL_PEAK_BYTES
+    assert not out.exists()
+
+
+def test_generate_memory_limit_and_disk(machine, no_work, tmp_path, monkeypatch):
+    kwargs = dict(seed=1, out_dir=tmp_path / "d", n_jobs=1, duration=600.0)
+    with pytest.raises(RequestTooLarge, match=r"more than the limit max_memory 100 MiB"):
+        generate_dataset("mingle", episodes=2, max_memory=100 * 2**20, **kwargs)
+    monkeypatch.setattr(sizing, "free_disk", lambda path: 2**20)
+    with pytest.raises(
+        RequestTooLarge,
+        match=r"writes about [\d.]+ MiB \(2,400 frames of 18 agents\), more than the 1 MiB free",
+    ):
+        generate_dataset("mingle", episodes=2, **kwargs)
+    with pytest.raises(ValueError, match=r"max_memory must be an int >= 1, got 0"):
+        generate_dataset("mingle", episodes=2, max_memory=0, **kwargs)
+
+
+def test_generate_command_names_its_flags(machine, tmp_path, capsys):
+    argv = ["generate", "--scenario", "mingle", "--seed", "1", "--out", str(tmp_path / "g")]
+    assert main([*argv, "--episodes", "1000000000", "--jobs", "2"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("reform-sim generate: error: 1,000,000,000 episodes of mingle needs ")
+    assert (
+        "(fewer --episodes, a shorter --duration or a lower --rate), fewer workers (--jobs)" in err
+    )
+    assert err.rstrip().endswith("or change the limit with --max-memory SIZE (e.g. 64G)")
+    assert main([*argv, "--episodes", "2", "--max-memory", "lots"]) == 2
+    assert "--max-memory: expected a size such as 8G, 512M or 1.5GiB, got 'lots'" in (
+        capsys.readouterr().err
+    )
+    assert not (tmp_path / "g").exists()
+
+
+def test_generate_small_run_is_unaffected(tmp_path):
+    report = generate_dataset(
+        "hri-passing",
+        episodes=2,
+        seed=1,
+        out_dir=tmp_path / "small",
+        n_jobs=1,
+        duration=3.0,
+        progress=False,
+        max_memory=8 * GiB,
+    )
+    assert report.frames == 12
+    assert np.all([s.frames == 6 for s in report.shards])
