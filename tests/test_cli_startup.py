@@ -69,7 +69,7 @@ def test_the_packages_modules_are_attributes_on_first_use() -> None:
 
 
 @pytest.mark.parametrize(
-    "command", ["data info", "evaluate", "detect", "simulate", "stress", "experiment hri"]
+    "command", ["data info", "evaluate", "detect", "simulate", "stress", "experiment hri", "demo"]
 )
 def test_a_light_subcommand_imports_nothing_heavy_for_its_help(command: str) -> None:
     loaded = _python(
