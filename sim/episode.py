@@ -49,6 +49,7 @@ import scenarios
 from reform.atomic import atomic_path
 from reform.datasets import write_parquet
 from reform.frame import Dataset, Frame
+from reform.seeding import SENSOR, WORLD, derive_seed
 from scenarios import Scenario, ScenarioEvent, Stage
 from scenarios.script import Intent
 from sim import sizing
@@ -230,7 +231,7 @@ def _plan(
         raise ValueError(f"dt must be a number of seconds, got {dt!r}")
     if not (math.isfinite(dt) and dt > 0.0):
         raise ValueError(f"dt must be a positive number of seconds, got {dt}")
-    world_seed, sensor_seed = np.random.SeedSequence(made.seed).spawn(2)
+    world_seed, sensor_seed = derive_seed(made.seed, WORLD), derive_seed(made.seed, SENSOR)
     return _Plan(
         scenario=made,
         count=count,

@@ -60,6 +60,7 @@ import numpy as np
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.parquet import CARD_JSON
 from reform.frame import Dataset, Frame
+from reform.seeding import derive_int
 from sim.episode import DEFAULT_RATE_HZ
 
 __all__ = [
@@ -85,18 +86,15 @@ RECORDINGS_DIR = "recordings"
 LOCK_FILE = ".generate.lock"
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
-SEED_BITS = 63  # bits of an episode seed (a non-negative int64)
 SHOWN_PROBLEMS = 3  # shards named in the error when several are not where they belong
 
 
 def episode_seed(seed: int, episode: int) -> int:
-    """The seed of episode ``episode`` of a dataset with master seed ``seed``.
-
-    The first 63 bits drawn from ``SeedSequence(seed, spawn_key=(episode,))``, the
-    ``episode``-th child of ``SeedSequence(seed).spawn(...)``.
-    """
-    child = np.random.SeedSequence(int(seed), spawn_key=(int(episode),))
-    return int(child.generate_state(1, dtype=np.uint64)[0] >> np.uint64(64 - SEED_BITS))
+    """The seed of episode ``episode`` of a dataset with master seed ``seed``:
+    ``reform.seeding.derive_int(seed, episode)``, the first 63 bits of
+    ``SeedSequence(seed, spawn_key=(episode,))``, the ``episode``-th child of
+    ``SeedSequence(seed).spawn(...)``."""
+    return derive_int(seed, episode)
 
 
 def shard_path(out_dir: str | os.PathLike[str], scenario: str, episode: int) -> Path:

@@ -8,13 +8,13 @@ import json
 import matplotlib.image
 import pytest
 
+from reform.seeding import Role, derive_int
 from sim.cli import main
 from sim.experiments.stress import (
     AXES,
     DETECTORS,
     GRIDS,
     StressGrid,
-    episode_seed,
     run_stress,
     train_detectors,
     training_frames,
@@ -93,8 +93,8 @@ def test_scene_axes_change_the_scene(results) -> None:
 
 
 def test_training_and_test_seeds_differ() -> None:
-    train = {episode_seed(0, 0, s, i) for s in range(2) for i in range(4)}
-    test = {episode_seed(0, 1, i) for i in range(5)}
+    train = {derive_int(0, Role.STRESS_TRAIN, s, i) for s in range(2) for i in range(4)}
+    test = {derive_int(0, Role.STRESS_TEST, i) for i in range(5)}
     assert len(train) == 8 and len(test) == 5 and not train & test
 
 

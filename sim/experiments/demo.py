@@ -52,6 +52,7 @@ from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
 from reform.persistence import save_model
+from reform.seeding import Role, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import simulate_episode
 from sim.experiments.demo_files import DEFAULT_OUT, FIGURES, MODEL, RECORDINGS, SYNTHETIC
@@ -390,7 +391,7 @@ def run_demo(
         )
         for k, source in enumerate(budget.train):
             if source.tracker_noise:
-                rng = np.random.default_rng([seed, k])
+                rng = derive_rng(seed, Role.TRAINING_NOISE, k)
                 train_frames[source.scenario] = tuple(
                     noise.perturbation().apply_all(train_frames[source.scenario], rng)
                 )

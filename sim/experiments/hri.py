@@ -56,6 +56,7 @@ from reform.frame import Frame
 from reform.gcff import MDL_M2, STRIDE_M
 from reform.json_values import json_float
 from reform.metrics import Evaluation, evaluate
+from reform.seeding import Role, derive_int, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
@@ -67,7 +68,6 @@ from sim.experiments.stress import (
     TRACKER_POSITION_NOISE_M,
     TRACKER_YAW_NOISE_RAD,
     StressGrid,
-    episode_seed,
     resolve_grid,
     train_detectors,
     training_frames,
@@ -128,8 +128,6 @@ VIEW_TEXT = {
 PAPER_HRI: Mapping[str, tuple[float, float, float]] = MappingProxyType(
     {"REFORM (each of the three classifiers)": (75.7, 100.0, 86.2), "GCFF": (51.5, 63.6, 56.9)}
 )
-_ROLE_HRI = 4  # spawn key of the HRI episodes' seeds (sim.experiments.stress uses 0-3)
-_ROLE_HRI_BOOTSTRAP = 5
 CLASSIFIERS = tuple(
     reform.classifiers.CLASSIFIERS
 )  # the paper's three, as reform.classifiers names them
@@ -197,8 +195,9 @@ def hri_episodes(
 ) -> dict[tuple[str, str], list[tuple[Frame, ...]]]:
     """The HRI episodes, each seen from every view.
 
-    Episode ``i`` of scenario ``s`` has seed ``episode_seed(seed, 4, s, i)``; the views of one
-    episode are the same simulation (the world does not depend on the sensor).
+    Episode ``i`` of scenario ``s`` has seed ``derive_int(seed, Role.HRI_EPISODE, s, i)``
+    (`reform.seeding`); the views of one episode are the same simulation (the world does not
+    depend on the sensor).
 
     Returns:
         ``(scenario, view) -> one tuple of frames per episode``.
@@ -209,7 +208,7 @@ def hri_episodes(
     out: dict[tuple[str, str], list[tuple[Frame, ...]]] = {}
     for s, scenario in enumerate(HRI_SCENARIOS):
         for i in range(seeds):
-            episode = episode_seed(seed, _ROLE_HRI, s, i)
+            episode = derive_int(seed, Role.HRI_EPISODE, s, i)
             truth: tuple[Frame, ...] | None = None
             for view in views:
                 sensor = VIEWS[view]
@@ -412,9 +411,7 @@ def _rows(
         else:
             frames, predicted = frames_by[scenario], predictions[scenario]
         evaluation = evaluate(frames, predicted)
-        rng = np.random.default_rng(
-            np.random.SeedSequence(seed, spawn_key=(_ROLE_HRI_BOOTSTRAP, k))
-        )
+        rng = derive_rng(seed, Role.HRI_BOOTSTRAP, k)
         weights = bootstrap_weights(evaluation.sequence, rng=rng, resamples=resamples)
         out.append(
             HriRow(
@@ -547,7 +544,7 @@ def record_scenes(
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for s, scenario in enumerate(HRI_SCENARIOS):
-        episode_seed_ = episode_seed(seed, _ROLE_HRI, s, 0)
+        episode_seed_ = derive_int(seed, Role.HRI_EPISODE, s, 0)
         sensor = VIEWS[view]
         run = simulate_episode(
             scenario,

@@ -40,6 +40,7 @@ from reform.frame import Dataset, Frame
 from reform.majority import Majority
 from reform.metrics import PROTOCOL, evaluate, pair_labels
 from reform.reconstruction import greedy_reconstruction, relation_matrix
+from reform.seeding import Role, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from reform.tuning import N_FOLDS, Tuning, classifier_params, tune
 
@@ -326,7 +327,7 @@ def random_split(
     frames whose neighbours were trained on.
     """
     frames = tuple(frames)
-    order = np.random.default_rng(seed).permutation(len(frames))
+    order = derive_rng(seed, Role.PAPER_RANDOM_SPLIT).permutation(len(frames))
     n_train = int(np.floor(train_fraction * len(frames) + 0.5))
     train = tuple(frames[k] for k in sorted(order[:n_train].tolist()))
     test = tuple(frames[k] for k in sorted(order[n_train:].tolist()))

@@ -67,6 +67,7 @@ from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import PROTOCOL, T_TWO_THIRDS, Evaluation, evaluate
 from reform.perturb import Perturbation
+from reform.seeding import Role, derive_rng
 from reform.splits import time_blocks, time_split
 from reform.tuning import tune as cross_validate
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M, gcff_comparison
@@ -352,7 +353,7 @@ def calibrate_tracker_noise(
     for p in sorted(float(v) for v in position_grid):
         for y in sorted(float(v) for v in yaw_grid):
             noisy = Perturbation(position_noise=p, yaw_noise=y).apply_all(
-                frames, np.random.default_rng(seed)
+                frames, derive_rng(seed, Role.TRACKER_NOISE_FIT)
             )
             ks = tuple(float(k.statistic) for k in compare(noisy, target).ks)
             grid.append((p, y, ks))
@@ -745,7 +746,7 @@ def sim_to_real(
         perturbation = noise.perturbation()
         for k, source in enumerate(sources):
             if source.tracker_noise:
-                rng = np.random.default_rng([seed, k])
+                rng = derive_rng(seed, Role.TRAINING_NOISE, k)
                 generated[source.scenario] = tuple(
                     perturbation.apply_all(generated[source.scenario], rng)
                 )
@@ -791,7 +792,7 @@ def sim_to_real(
     groups = {d: _block_labels(frames, BOOTSTRAP_BLOCKS) for d, frames in tests.items()}
     weights = {}
     for k, (dataset, labels) in enumerate(groups.items()):
-        rng = np.random.default_rng([seed, 1000 + k])
+        rng = derive_rng(seed, Role.SIM2REAL_BOOTSTRAP, k)
         weights[dataset] = bootstrap_weights(labels, rng=rng, resamples=BOOTSTRAP_RESAMPLES)
 
     rows: list[Row] = []
@@ -967,7 +968,7 @@ def _cross_period(
     other = {"earlier": "later", "later": "earlier"}
     out = []
     for k, (held_out, scored) in enumerate(halves.items()):
-        rng = np.random.default_rng([seed, 2000 + k])
+        rng = derive_rng(seed, Role.SIM2REAL_PERIODS, k)
         weights = bootstrap_weights(
             _block_labels(scored, BOOTSTRAP_BLOCKS), rng=rng, resamples=BOOTSTRAP_RESAMPLES
         )

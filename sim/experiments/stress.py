@@ -59,6 +59,7 @@ from reform.gcff import Gcff
 from reform.json_values import json_float
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
+from reform.seeding import Role, derive_int, derive_rng
 from sim.episode import simulate_episode
 from sim.experiments.stress_grid import (
     AXES,
@@ -82,7 +83,6 @@ __all__ = [
     "StressGrid",
     "StressPoint",
     "StressResults",
-    "episode_seed",
     "resolve_grid",
     "run_stress",
     "train_detectors",
@@ -141,24 +141,10 @@ _SENSOR_TEXT = {
     ),
 }
 
-# Seed roles: spawn keys of the master seed, one per use, so that uses never share a seed.
-_ROLE_TRAIN, _ROLE_TEST, _ROLE_PERTURB, _ROLE_BOOTSTRAP = range(4)
-_SEED_BITS = 63  # bits of a scenario seed (a non-negative int64)
 # A party mingle's planner cannot lay out (no free floor) is drawn again with another seed, at
 # most this many times.
 MAX_REDRAWS = 5
 ROBOT_VIEW_COST = 4.0  # a robot-view episode costs about this many ground-truth ones (rays)
-
-
-def episode_seed(seed: int, role: int, *keys: int) -> int:
-    """A scenario seed for one use of the master ``seed``: ``SeedSequence(seed, spawn_key=(role,
-    *keys))``'s first 63 bits. Different roles or keys give independent seeds."""
-    state = np.random.SeedSequence(int(seed), spawn_key=(int(role), *map(int, keys)))
-    return int(state.generate_state(1, dtype=np.uint64)[0] >> np.uint64(64 - _SEED_BITS))
-
-
-def _rng(seed: int, role: int, *keys: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(role, *keys)))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -231,7 +217,8 @@ def training_frames(
     """The synthetic training set: ``episodes`` episodes of each training scenario.
 
     Episode ``i`` of scenario ``s`` (in ``scenarios`` order) has seed
-    ``episode_seed(seed, 0, s, i)``; test episodes of :func:`run_stress` use another role.
+    ``derive_int(seed, Role.STRESS_TRAIN, s, i)`` (`reform.seeding`); test episodes of
+    :func:`run_stress` use another role.
 
     Args:
         seed: master seed.
@@ -259,7 +246,7 @@ def _training_specs(
     seed: int, episodes: int, duration: float, rate: float, scenarios: Sequence[str]
 ) -> list[_EpisodeSpec]:
     return [
-        _EpisodeSpec(name, episode_seed(seed, _ROLE_TRAIN, s, i), (), duration, rate)
+        _EpisodeSpec(name, derive_int(seed, Role.STRESS_TRAIN, s, i), (), duration, rate)
         for s, name in enumerate(scenarios)
         for i in range(episodes)
     ]
@@ -393,7 +380,8 @@ def _perturb_task(
     out: list[tuple[str, int, int, _Scored | str]] = []
     for k, level in enumerate(grid.levels(axis)):
         perturbation = _perturbation(axis, level)
-        rng = _rng(seed, _ROLE_PERTURB, axis_index, episode)  # the same draws at every level
+        # The same draws at every level.
+        rng = derive_rng(seed, Role.STRESS_PERTURB, axis_index, episode)
         perturbed = perturbation.apply_all(frames, rng)
         out.append((axis, k, episode, _score(perturbed, detectors, density)))
     return out
@@ -414,7 +402,7 @@ def _scene_task(
         notes = []
         for attempt in range(MAX_REDRAWS + 1):
             keys = (episode,) if attempt == 0 else (episode, attempt)
-            spec = _scene_spec(grid, axis, level, episode_seed(seed, _ROLE_TEST, *keys))
+            spec = _scene_spec(grid, axis, level, derive_int(seed, Role.STRESS_TEST, *keys))
             try:
                 frames, density = _simulate_scene(spec)
             except ValueError as exc:  # the planner cannot lay out this party: draw another
@@ -612,7 +600,7 @@ def _point(
     sequence = [s for part in scored for s in part.sequence]
     frames = len(sequence)
     weights = bootstrap_weights(
-        sequence, rng=_rng(seed, _ROLE_BOOTSTRAP, axis_index, k), resamples=resamples
+        sequence, rng=derive_rng(seed, Role.STRESS_BOOTSTRAP, axis_index, k), resamples=resamples
     )
     detectors = list(dict.fromkeys(d for d, _ in scored[0].precision))  # in the run's order
     n_sequences = len(set(sequence))
@@ -762,7 +750,7 @@ def run_stress(
             raise ValueError(f"detectors must hold {DETECTORS}, missing {missing}")
     learners = [name for name, plugin in plugins.items() if getattr(plugin, "fit", None)]
 
-    test_seeds = [episode_seed(seed, _ROLE_TEST, i) for i in range(grid.seeds)]
+    test_seeds = [derive_int(seed, Role.STRESS_TEST, i) for i in range(grid.seeds)]
     training: dict[str, Any] = {}
     train: tuple[Frame, ...] = ()
     if detectors is None or learners:
