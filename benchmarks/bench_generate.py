@@ -6,7 +6,8 @@ scenario's natural length (600 s, 1,200 frames), ground-truth view. Measured in 
 * **stages** of one episode, serially, CPU time per annotated frame: making the scenario (its whole
   script is drawn), the poses (``sim.episode.episode_blocks``: the script sampled at 10 Hz, the
   motion kernel and MuJoCo's kinematics at 100 Hz, the ground-truth rule; the floor a dataset
-  stands on), the shard written from the pose arrays (``write_parquet_arrays``, the path
+  stands on), the shard written from the pose arrays (``write_parquet`` of a
+  ``FrameBlock``, the path
   ``generate`` takes for the truth view), and for comparison the Frame path (one validated
   `reform.Frame` per instant, then ``write_parquet``), which the robot view and recordings take;
   the two shards must be the same file, byte for byte (checked);
@@ -37,13 +38,11 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 from timing import BenchmarkParser
 
 import scenarios
-from reform import Dataset
+from reform import Dataset, FrameBlock
 from reform.datasets import write_parquet
-from reform.datasets.parquet import write_parquet_arrays
 from sim.episode import episode_blocks
 from sim.generate import episode_seed, generate_dataset
 
@@ -82,20 +81,7 @@ def stages(episodes: int, seed: int, duration: float | None) -> dict[str, float]
             poses_s = CLOCK() - start
             start = CLOCK()
             columns_path = Path(scratch) / f"{k}-columns.parquet"
-            write_parquet_arrays(
-                columns_path,
-                time=np.concatenate([b.time for b in blocks]),
-                ids=blocks[0].ids,
-                kinds=blocks[0].kinds,
-                present=np.concatenate([b.present for b in blocks]),
-                position=np.concatenate([b.position for b in blocks]),
-                yaw=np.concatenate([b.yaw for b in blocks]),
-                head_position=np.concatenate([b.head_position for b in blocks]),
-                head_yaw=np.concatenate([b.head_yaw for b in blocks]),
-                groups=[g for b in blocks for g in b.groups],
-                sequence="bench",
-                name=SCENARIO,
-            )
+            write_parquet(FrameBlock.concatenate(blocks), columns_path, name=SCENARIO)
             columns_s = CLOCK() - start
             start = CLOCK()
             frames = tuple(f for b in blocks for f in b.frames())

@@ -10,7 +10,8 @@ same run on the same compiled model:
   printed too, with the rollout's ratio to it;
 * **rollout**: ``World.rollout(..., rate=100)``: the script sampled at 10 Hz, the compiled motion
   kernel (walking, avoidance, personal space, head, sway) at 100 Hz, MuJoCo's ``mj_kinematics``
-  for every step (called from the compiled loop), body and head poses read back as `Poses`;
+  for every step (called from the compiled loop), body and head poses read back as
+  `reform.FrameBlock`;
 * **frames**: ``World.run(..., rate=100)``: the same, one `reform.Frame` per step (validated
   records; this path is meant for annotation rates of a few hertz);
 * with ``--threads 2``, the rollout again with each block's kinematics in one ``mujoco.batch``

@@ -50,6 +50,7 @@ _EXPORTS = {
     "Group": "reform.frame",
     "complete_partition": "reform.frame",
     "wrap_angle": "reform.frame",
+    "FrameBlock": "reform.frame_block",
     "Gcff": "reform.gcff",
     "Majority": "reform.majority",
     "T_ONE": "reform.metrics",

@@ -3,7 +3,7 @@
 Public surface (loaded on first use, so that the command line starts fast):
 
 * scenes: `SceneSpec`, `PersonSpec`, `RobotSpec`, `build_scene`;
-* the world: `World`, `Intent`, `RobotCommand`, `Script`, `Poses`, `MotionLimits`,
+* the world: `World`, `Intent`, `RobotCommand`, `Script`, `MotionLimits`,
   `PERSON_LIMITS`, `ROBOT_LIMITS`;
 * the robot's view: `Sensor`, `HeadCamera` (optional rendering);
 * assets: `asset_names`, `asset_path`, `asset_xml`.
@@ -37,7 +37,6 @@ _EXPORTS = {
     "Intent": "sim.world",
     "RobotCommand": "sim.world",
     "Script": "sim.world",
-    "Poses": "sim.world",
     "MotionLimits": "sim.motion",
     "PERSON_LIMITS": "sim.motion",
     "ROBOT_LIMITS": "sim.motion",

@@ -14,10 +14,10 @@ and options, or a made `scenarios.Scenario`) into frames:
    (field of view, range, occlusion by MuJoCo rays, dropouts, noise) and the observed frame
    keeps the ground truth restricted to the people it holds.
 
-`episode_blocks` is the fast ground-truth path (blocks of `Poses`, MuJoCo kinematics batched per
-block) and `stream_episode` yields frames one at a time; `simulate_episode` collects them into a
-`reform.Dataset` with the scenario's events beside it, and `write_episode` writes them to a
-Parquet file as they come, in bounded memory, however long the episode.
+`episode_blocks` is the fast ground-truth path (`reform.FrameBlock` blocks, MuJoCo kinematics
+batched per block) and `stream_episode` yields frames one at a time; `simulate_episode`
+collects them into a `reform.Dataset` with the scenario's events beside it, and `write_episode`
+writes them to a Parquet file as they come, in bounded memory, however long the episode.
 
 Sizes: every entry point sizes its request first (`estimate_episode`, `sim.sizing`) and refuses,
 before anything is simulated, what this machine can never hold or finish (more memory than it
@@ -49,6 +49,7 @@ import scenarios
 from reform.atomic import atomic_path
 from reform.datasets import write_parquet
 from reform.frame import Dataset, Frame
+from reform.frame_block import FrameBlock
 from reform.seeding import SENSOR, WORLD, derive_seed
 from scenarios import Scenario, ScenarioEvent, Stage
 from scenarios.script import Intent
@@ -59,7 +60,6 @@ from sim.world import (
     DEFAULT_BLOCK_ROWS,
     DEFAULT_DECISION_RATE_HZ,
     DEFAULT_DT_S,
-    Poses,
     World,
     restrict_groups,
 )
@@ -331,7 +331,7 @@ def episode_blocks(
     sequence: str | None = None,
     block_rows: int = DEFAULT_BLOCK_ROWS,
     threads: int = 1,
-) -> Iterator[Poses]:
+) -> Iterator[FrameBlock]:
     """Ground-truth poses of an episode in blocks, with the settled groups (the fast path).
 
     Arguments as for `simulate_episode`; ``block_rows`` frames per block, MuJoCo kinematics
@@ -356,7 +356,7 @@ def episode_blocks(
     return _blocks(plan, world, block_rows=block_rows, threads=threads)
 
 
-def _blocks(plan: _Plan, world: World, *, block_rows: int, threads: int) -> Iterator[Poses]:
+def _blocks(plan: _Plan, world: World, *, block_rows: int, threads: int) -> Iterator[FrameBlock]:
     truth = plan.scenario.ground_truth(world.ids.tolist())
     for block in world.rollout(
         plan.count / plan.rate, rate=plan.rate, block_rows=block_rows, threads=threads

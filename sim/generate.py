@@ -60,6 +60,7 @@ import numpy as np
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.parquet import CARD_JSON
 from reform.frame import Dataset, Frame
+from reform.frame_block import FrameBlock
 from reform.seeding import derive_int
 from sim.episode import DEFAULT_RATE_HZ
 
@@ -375,32 +376,20 @@ def _summarise_frames(spec: GenerationSpec, episode: int, frames: Sequence[Frame
     return _summary(spec, episode, len(frames), annotated, rows, sizes)
 
 
-def _summarise_arrays(
-    spec: GenerationSpec,
-    episode: int,
-    ids: np.ndarray,
-    present: np.ndarray,
-    groups: Sequence[Sequence[Sequence[int]] | None],
-) -> ShardSummary:
-    """As `_summarise_frames`, for the frames of a roster (groups restricted to who is present)."""
+def _summarise_block(spec: GenerationSpec, episode: int, block: FrameBlock) -> ShardSummary:
+    """As `_summarise_frames`, for the frames of a block, without making them."""
     sizes: Counter[int] = Counter()
     annotated = 0
-    counts = present.sum(axis=1)
-    index_of = {int(i): a for a, i in enumerate(ids.tolist())}
-    for t, frame_groups in enumerate(groups):
-        if frame_groups is None:
+    counts = block.present.sum(axis=1)
+    for t, groups in enumerate(block.present_groups()):
+        if groups is None:
             continue
         annotated += 1
-        here = present[t]
-        grouped = 0
-        for group in frame_groups:
-            size = sum(1 for m in group if here[index_of[int(m)]])
-            if size:
-                sizes[size] += 1
-                grouped += size
+        sizes.update(len(group) for group in groups)
+        grouped = sum(len(group) for group in groups)
         if counts[t] > grouped:
             sizes[1] += int(counts[t]) - grouped
-    return _summary(spec, episode, len(groups), annotated, int(counts.sum()), sizes)
+    return _summary(spec, episode, len(block), annotated, int(counts.sum()), sizes)
 
 
 def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> dict[str, Any]:
@@ -438,10 +427,11 @@ def _simulate_and_write(
     """Simulates one episode and writes its recording (if asked) and then its shard.
 
     The ground-truth view without a recording takes the fast path: poses in blocks of arrays
-    (`sim.episode.episode_blocks`) written as columns (`write_parquet_arrays`), no `Frame` per
-    instant. The file is the one the frame path writes, byte for byte.
+    (`sim.episode.episode_blocks`) written as columns (`reform.datasets.write_parquet` of a
+    `reform.FrameBlock`), no `Frame` per instant. The file is the one the frame path writes,
+    byte for byte.
     """
-    from reform.datasets.parquet import write_parquet, write_parquet_arrays
+    from reform.datasets.parquet import write_parquet
     from sim.episode import episode_blocks, prepare, simulate_episode
 
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
@@ -449,25 +439,13 @@ def _simulate_and_write(
     source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
     path = shard_path(out_dir, spec.scenario, episode)
     if spec.view == "truth" and not save_recordings:
-        blocks = list(
-            episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence)
+        block = FrameBlock.concatenate(
+            list(episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence))
         )
-        first = blocks[0]
-        groups = tuple(g for block in blocks for g in block.groups)
-        present = np.concatenate([block.present for block in blocks])
-        summary = _summarise_arrays(spec, episode, first.ids, present, groups)
-        write_parquet_arrays(
+        summary = _summarise_block(spec, episode, block)
+        write_parquet(
+            block,
             path,
-            time=np.concatenate([block.time for block in blocks]),
-            ids=first.ids,
-            kinds=first.kinds,
-            present=present,
-            position=np.concatenate([block.position for block in blocks]),
-            yaw=np.concatenate([block.yaw for block in blocks]),
-            head_position=np.concatenate([block.head_position for block in blocks]),
-            head_yaw=np.concatenate([block.head_yaw for block in blocks]),
-            groups=groups,
-            sequence=sequence,
             name=spec.scenario,
             source=source,
             metadata=_shard_metadata(spec, summary, made),

@@ -18,7 +18,7 @@ at ``1 / dt`` Hz (100 Hz by default) within speed, acceleration and turn-rate li
 letting two agents interpenetrate, writes the resulting poses to MuJoCo mocap bodies and joints,
 runs MuJoCo's kinematics, and reads body and head poses back from ``xpos`` / ``xquat`` of each
 agent's ``torso`` and ``head`` bodies. It hands them out as `reform.Frame` objects (`World.frame`,
-`World.run`) or, for speed, as blocks of arrays (`Poses`, from `World.rollout`).
+`World.run`) or, for speed, as blocks of arrays (`reform.FrameBlock`, from `World.rollout`).
 
 The robot follows intents like a person, or velocity commands (`World.command_robot` with a
 `RobotCommand`: forward speed, turn rate, head pan and tilt rates), as a controller would drive
@@ -44,6 +44,7 @@ import numpy as np
 from mujoco import batch as mj_batch
 
 from reform.frame import ROBOT, Frame, Group, wrap_angle
+from reform.frame_block import FrameBlock
 from reform.perturb import restrict_groups
 from scenarios.script import WALK_SPEED_M_S, Intent, Point, Script
 from sim import _native, motion
@@ -107,83 +108,6 @@ def yaw_from_quat(quat: np.ndarray) -> np.ndarray:
     """
     w, x, y, z = quat[..., 0], quat[..., 1], quat[..., 2], quat[..., 3]
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-@dataclass(frozen=True, eq=False)
-class Poses:
-    """Ground-truth poses of every agent at consecutive output times: one block of a run.
-
-    Arrays cover every agent of the scene (people in scene order, then the robot); ``present``
-    says who was in the room. Poses of absent agents are where they were parked.
-
-    Attributes:
-        time: (T,) seconds from the start of the run.
-        ids: (n,) int64 agent ids.
-        kinds: n strings, ``"human"`` or ``"robot"``.
-        present: (T, n) bool.
-        position: (T, n, 2) torso position on the ground plane, metres.
-        yaw: (T, n) torso yaw, radians in [-pi, pi].
-        head_position: (T, n, 2) head position on the ground plane, metres.
-        head_yaw: (T, n) head yaw, radians in [-pi, pi].
-        groups: T entries: the groups the script declared at each time (or ``None``).
-        sequence: name of the run.
-    """
-
-    time: np.ndarray
-    ids: np.ndarray
-    kinds: tuple[str, ...]
-    present: np.ndarray
-    position: np.ndarray
-    yaw: np.ndarray
-    head_position: np.ndarray
-    head_yaw: np.ndarray
-    groups: tuple[tuple[Group, ...] | None, ...]
-    sequence: str = ""
-
-    def __post_init__(self) -> None:
-        t = np.asarray(self.time).shape[0]
-        n = np.asarray(self.ids).shape[0]
-        expected = {
-            "present": (t, n),
-            "position": (t, n, 2),
-            "yaw": (t, n),
-            "head_position": (t, n, 2),
-            "head_yaw": (t, n),
-        }
-        for name, shape in expected.items():
-            array = np.asarray(getattr(self, name))
-            if array.shape != shape:
-                raise ValueError(f"Poses.{name} must have shape {shape}, got {array.shape}")
-            array.flags.writeable = False
-        if len(self.groups) != t or len(self.kinds) != n:
-            raise ValueError(
-                f"Poses.groups must have {t} entries and kinds {n}, got {len(self.groups)} and "
-                f"{len(self.kinds)}"
-            )
-
-    def __len__(self) -> int:
-        return int(self.time.shape[0])
-
-    def frame(self, row: int) -> Frame:
-        """Row ``row`` as a Frame of the agents present then."""
-        keep = self.present[row]
-        ids = self.ids[keep]
-        return Frame(
-            ids=ids,
-            kinds=tuple(k for k, p in zip(self.kinds, keep, strict=True) if p),
-            position=self.position[row, keep],
-            yaw=self.yaw[row, keep],
-            head_position=self.head_position[row, keep],
-            head_yaw=self.head_yaw[row, keep],
-            groups=restrict_groups(self.groups[row], set(ids.tolist())),
-            time=float(self.time[row]),
-            sequence=self.sequence,
-        )
-
-    def frames(self) -> Iterator[Frame]:
-        """Every row as a Frame."""
-        for row in range(len(self)):
-            yield self.frame(row)
 
 
 def _steps_per(period: float, dt: float, *, name: str, unit_hint: str) -> int:
@@ -512,7 +436,7 @@ class World:
         rate: float = 1.0 / DEFAULT_DT_S,
         block_rows: int = DEFAULT_BLOCK_ROWS,
         threads: int = 1,
-    ) -> Iterator[Poses]:
+    ) -> Iterator[FrameBlock]:
         """Advances by ``duration`` seconds, yielding poses every ``1 / rate`` s in blocks.
 
         The fast path: the compiled motion kernel moves the agents and calls MuJoCo's
@@ -567,7 +491,7 @@ class World:
             groups = self._groups_of_steps(steps)
             self._load_row(*last)
             done += rows
-            yield Poses(
+            yield FrameBlock(
                 time=steps * self._dt,
                 ids=self._ids,
                 kinds=self._kinds,

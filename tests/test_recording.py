@@ -17,7 +17,7 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
-from reform import Frame, Majority, evaluate
+from reform import Frame, FrameBlock, Majority, evaluate
 from sim.recording import (
     APPLICATION_ID,
     BodyPoses,
@@ -849,14 +849,13 @@ def test_columns_hold_what_the_frames_hold():
 
 def test_pose_blocks_make_the_columns_of_their_frames(tmp_path):
     from sim.episode import episode_blocks
-    from sim.world import Poses
 
     blocks = list(episode_blocks("word-improv", seed=3, duration=20, rate=2, block_rows=16))
     rng = np.random.default_rng(0)
     present = np.ones((6, 3), bool)
     present[2:4, 1] = False  # person 2 leaves for two frames
     present[5, :] = False  # nobody
-    made = Poses(
+    made = FrameBlock(
         time=np.arange(6) * 0.5 + 30.0,
         ids=np.array([1, 2, 100]),
         kinds=("human", "human", "robot"),

@@ -9,8 +9,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from reform import Frame, wrap_angle
-from sim import Intent, Poses, RobotCommand, RobotSpec, SceneSpec, World
+from reform import Frame, FrameBlock, wrap_angle
+from sim import Intent, RobotCommand, RobotSpec, SceneSpec, World
 from sim.scene import PersonSpec
 from sim.world import yaw_from_quat
 
@@ -97,7 +97,7 @@ def test_rollout_blocks_equal_run_frames() -> None:
     by_frame = list(World(spec, seed=3, script=Shuffle(spec, 4)).run(6.0, rate=20.0))
     world = World(spec, seed=3, script=Shuffle(spec, 4))
     blocks = list(world.rollout(6.0, rate=20.0, block_rows=37))
-    assert all(isinstance(b, Poses) and len(b) <= 37 for b in blocks)
+    assert all(isinstance(b, FrameBlock) and len(b) <= 37 for b in blocks)
     by_block = [f for block in blocks for f in block.frames()]
     assert len(by_block) == len(by_frame) == 120
     assert all(a == b for a, b in zip(by_frame, by_block, strict=True))

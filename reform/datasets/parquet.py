@@ -9,9 +9,9 @@ The round trip is exact: ``read_parquet(p) `` gives frames equal to the ones wri
 values bit for bit, ``None`` heads distinct from unobserved NaN heads, group order and member
 order preserved). The metadata comes back as JSON gives it (lists for tuples, string keys).
 
-`write_parquet_arrays` writes the same file from arrays over a fixed roster (who is present at
-each instant, poses, groups), without a `Frame` per instant: the fast path of dataset
-generation.
+`write_parquet` writes the same file from a `reform.FrameBlock` (arrays over a fixed roster: who
+is present at each instant, poses, groups) without a `Frame` per instant: the fast path of
+dataset generation.
 
 A folder of Parquet files (for instance hive-partitioned shards
 ``DIR/scenario=.../episode=.../part.parquet``) reads as one dataset: the files in natural sorted
@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -36,6 +36,7 @@ from reform.atomic import atomic_path
 from reform.datasets._validation import check_time_increases, file_kind, make_frame
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
+from reform.frame_block import FrameBlock
 
 __all__ = [
     "CARD_JSON",
@@ -46,7 +47,6 @@ __all__ = [
     "METADATA_KEY",
     "read_parquet",
     "write_parquet",
-    "write_parquet_arrays",
 ]
 
 FORMAT_VERSION = 1
@@ -132,23 +132,40 @@ def _arrow_type(pa, type_name: str):
 
 
 def write_parquet(
-    dataset: Dataset, path: str | PathLike[str], *, compression: str = "zstd"
+    dataset: Dataset | FrameBlock,
+    path: str | PathLike[str],
+    *,
+    name: str | None = None,
+    source: str = "",
+    metadata: Mapping[str, Any] | None = None,
+    compression: str = "zstd",
 ) -> Path:
     """Writes ``dataset`` to one Parquet file, atomically (temporary file, then rename).
 
     Args:
-        dataset: the frames and provenance. Its metadata must be JSON-serialisable.
+        dataset: the frames and provenance (a `Dataset`), or one sequence as a `FrameBlock`,
+            written without a `Frame` per instant: the same file, byte for byte, as the
+            `Dataset` of ``block.frames()``.
         path: the file to write (parent folders are created).
+        name, source, metadata: the header of a `FrameBlock` (a `Dataset` carries its own;
+            giving them with one is an error). ``metadata`` must be JSON-serialisable.
         compression: Parquet codec (``"zstd"``, ``"snappy"``, ``"none"`` ...).
 
     Returns:
         The path written.
 
     Raises:
-        ValueError: the metadata is not JSON-serialisable, or ``compression`` is not one of
-            :data:`CODECS`: before anything is written.
+        ValueError: the metadata is not JSON-serialisable, ``compression`` is not one of
+            :data:`CODECS`, or the header is missing or given twice: before anything is written.
     """
     _check_compression(compression)
+    if isinstance(dataset, FrameBlock):
+        if name is None:
+            raise ValueError("write_parquet of a FrameBlock needs name=, the dataset's name")
+        header_json = _header_json(name, source, "m", metadata or {})
+        return _write_table(_block_columns(dataset), header_json, Path(path), compression)
+    if name is not None or source or metadata is not None:
+        raise ValueError("write_parquet of a Dataset takes its name, source and metadata from it")
     listed = {
         str(k): [list(g) for g in frame.listed_groups]
         for k, frame in enumerate(dataset.frames)
@@ -158,71 +175,6 @@ def write_parquet(
         dataset.name, dataset.source, dataset.units, dataset.metadata, listed_groups=listed
     )
     return _write_table(_columns(dataset.frames), header_json, Path(path), compression)
-
-
-def write_parquet_arrays(
-    path: str | PathLike[str],
-    *,
-    time: np.ndarray,
-    ids: np.ndarray,
-    kinds: Sequence[str],
-    present: np.ndarray,
-    position: np.ndarray,
-    yaw: np.ndarray,
-    head_position: np.ndarray | None = None,
-    head_yaw: np.ndarray | None = None,
-    groups: Sequence[Sequence[Sequence[int]] | None],
-    sequence: str,
-    name: str,
-    source: str = "",
-    metadata: Mapping[str, Any] | None = None,
-    compression: str = "zstd",
-) -> Path:
-    """Writes one sequence given as arrays over a fixed roster: the columnar fast path.
-
-    The file is the one :func:`write_parquet` writes for the frames ``t = 0 .. T-1`` holding the
-    people present at ``t`` (in roster order) with the groups of ``t`` restricted to them, byte
-    for byte, without making a `Frame` per instant. The values are checked as `Frame` checks
-    them, with whole-array operations.
-
-    Args:
-        path: the file to write (atomically).
-        time: (T,) seconds.
-        ids: (n,) person ids of the roster, unique.
-        kinds: n strings, ``"human"`` or ``"robot"``.
-        present: (T, n) bool, who is in frame ``t``.
-        position: (T, n, 2) body positions, metres (finite where present).
-        yaw: (T, n) body yaws, radians in [-pi, pi] (where present).
-        head_position: optional (T, n, 2) head positions, metres; NaN = head not observed.
-        head_yaw: optional (T, n) head yaws, NaN exactly where ``head_position`` is NaN.
-        groups: T entries: the ground-truth groups of ``t`` as roster ids (members absent at
-            ``t`` are left out, groups left empty are dropped), or ``None`` (not annotated).
-        sequence: the sequence name of every frame.
-        name: the dataset name; ``source`` and ``metadata`` as for a `Dataset`.
-        compression: Parquet codec.
-
-    Returns:
-        The path written.
-
-    Raises:
-        ValueError: shapes, values or groups that a `Frame` would refuse, or an unknown
-            ``compression``: before anything is written.
-    """
-    _check_compression(compression)
-    columns = _columns_from_arrays(
-        time=time,
-        ids=ids,
-        kinds=kinds,
-        present=present,
-        position=position,
-        yaw=yaw,
-        head_position=head_position,
-        head_yaw=head_yaw,
-        groups=groups,
-        sequence=sequence,
-    )
-    header_json = _header_json(name, source, "m", metadata or {})
-    return _write_table(columns, header_json, Path(path), compression)
 
 
 def _check_compression(compression: Any) -> None:
@@ -237,83 +189,16 @@ def _check_compression(compression: Any) -> None:
         )
 
 
-def _columns_from_arrays(
-    *,
-    time: np.ndarray,
-    ids: np.ndarray,
-    kinds: Sequence[str],
-    present: np.ndarray,
-    position: np.ndarray,
-    yaw: np.ndarray,
-    head_position: np.ndarray | None,
-    head_yaw: np.ndarray | None,
-    groups: Sequence[Sequence[Sequence[int]] | None],
-    sequence: str,
-) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The long table's columns (as :func:`_columns` makes them) from roster arrays."""
-    time = np.asarray(time, dtype=np.float64)
-    if time.ndim != 1:
-        raise ValueError(f"time must have shape (T,), got {time.shape}")
-    n_frames = time.size
-    ids = np.asarray(ids)
-    if ids.ndim != 1 or (ids.size and not np.issubdtype(ids.dtype, np.integer)):
-        raise ValueError(f"ids must be integers with shape (n,), got {ids.dtype} {ids.shape}")
-    ids = ids.astype(np.int64)
-    n = ids.size
-    if np.unique(ids).size != n:
-        raise ValueError(f"ids must be unique, got {ids.tolist()}")
-    kinds = tuple(kinds)
-    if len(kinds) != n or any(k not in KINDS for k in kinds):
-        raise ValueError(f"kinds must be {n} entries among {KINDS}, got {kinds}")
-    present = np.asarray(present, dtype=bool)
-    position = np.asarray(position, dtype=np.float64)
-    yaw = np.asarray(yaw, dtype=np.float64)
-    for label, array, shape in (
-        ("present", present, (n_frames, n)),
-        ("position", position, (n_frames, n, 2)),
-        ("yaw", yaw, (n_frames, n)),
-    ):
-        if array.shape != shape:
-            raise ValueError(f"{label} must have shape {shape}, got {array.shape}")
-    if len(groups) != n_frames:
-        raise ValueError(f"groups must have {n_frames} entries, got {len(groups)}")
-    if not np.all(np.isfinite(time)):
-        raise ValueError("time must be finite, got NaN or inf")
-    if not (np.all(np.isfinite(position[present])) and np.all(np.isfinite(yaw[present]))):
-        raise ValueError("position and yaw must be finite where present, got NaN or inf")
-    if np.any(np.abs(position[present]) > POSITION_LIMIT_M):
-        raise ValueError(
-            f"position must be metres with |x|, |y| <= {POSITION_LIMIT_M:g} where present, "
-            f"got {float(np.max(np.abs(position[present]))):g}"
-        )
-    if np.any(np.abs(yaw[present]) > _YAW_LIMIT_RAD):
-        raise ValueError("yaw must be radians wrapped to [-pi, pi] (wrap with reform.wrap_angle)")
-    has_head = head_position is not None
-    if has_head != (head_yaw is not None):
-        raise ValueError("head_position and head_yaw must be given together or not at all")
-    if has_head:
-        head_position = np.asarray(head_position, dtype=np.float64)
-        head_yaw = np.asarray(head_yaw, dtype=np.float64)
-        if head_position.shape != (n_frames, n, 2) or head_yaw.shape != (n_frames, n):
-            raise ValueError(
-                f"head_position and head_yaw must have shapes {(n_frames, n, 2)} and "
-                f"{(n_frames, n)}, got {head_position.shape} and {head_yaw.shape}"
-            )
-        hp, hy = head_position[present], head_yaw[present]
-        missing = np.isnan(hp)
-        if (
-            np.any(np.isinf(hp))
-            or np.any(np.isinf(hy))
-            or np.any(missing[:, 0] != missing[:, 1])
-            or np.any(missing[:, 0] != np.isnan(hy))
-        ):
-            raise ValueError("a head is either fully observed (x, y, yaw) or fully NaN, never inf")
-        if np.any(np.abs(hy[~np.isnan(hy)]) > _YAW_LIMIT_RAD):
-            raise ValueError("head_yaw must be radians wrapped to [-pi, pi]")
-        if np.any(np.abs(hp[~np.isnan(hp)]) > POSITION_LIMIT_M):
-            raise ValueError(
-                f"head_position must be metres with |x|, |y| <= {POSITION_LIMIT_M:g} where present"
-            )
+def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The long table's columns (as :func:`_columns` makes them) from a block's arrays."""
+    time, ids, present, n_frames, n = (
+        block.time,
+        block.ids,
+        block.present,
+        len(block),
+        block.ids.size,
+    )
+    has_head = block.head_position is not None
 
     # Row order: frame by frame, the people present in roster order; an empty frame gets one
     # row in an extra column n (its person columns null).
@@ -329,16 +214,16 @@ def _columns_from_arrays(
     person_id = np.where(empty, 0, ids[a_safe] if n else 0)
     kind = np.empty(n_rows, dtype=object)
     if n:
-        kind[:] = np.array(kinds, dtype=object)[a_safe]
+        kind[:] = np.array(block.kinds, dtype=object)[a_safe]
     kind[empty] = None
     body = np.zeros((n_rows, 3))
     head = np.zeros((n_rows, 3))
     if n:
-        body[:, :2] = position[t_of, a_safe]
-        body[:, 2] = yaw[t_of, a_safe]
+        body[:, :2] = block.position[t_of, a_safe]
+        body[:, 2] = block.yaw[t_of, a_safe]
         if has_head:
-            head[:, :2] = head_position[t_of, a_safe]
-            head[:, 2] = head_yaw[t_of, a_safe]
+            head[:, :2] = block.head_position[t_of, a_safe]
+            head[:, 2] = block.head_yaw[t_of, a_safe]
     body[empty] = 0.0
     head[empty] = 0.0
 
@@ -346,11 +231,15 @@ def _columns_from_arrays(
     member = np.full(n_rows, -1, dtype=np.int32)
     annotated_frame = np.zeros(n_frames, dtype=bool)
     index_of = {int(i): a for a, i in enumerate(ids.tolist())}
-    for t, frame_groups in enumerate(groups):
+    for t, frame_groups in enumerate(block.present_groups()):
         if frame_groups is None:
             continue
         annotated_frame[t] = True
-        _place_groups(t, frame_groups, index_of, present[t], row_of[t], group, member)
+        rows = row_of[t]
+        for g, members in enumerate(frame_groups):
+            for m, person in enumerate(members):
+                group[rows[index_of[int(person)]]] = g
+                member[rows[index_of[int(person)]]] = m
 
     counts = np.bincount(t_of, minlength=n_frames)
     has_head_rows = np.full(n_rows, has_head)
@@ -358,7 +247,7 @@ def _columns_from_arrays(
     no_group = group < 0
     nothing = np.zeros(n_rows, dtype=bool)
     return {
-        "sequence": (np.full(n_rows, str(sequence), dtype=object), nothing),
+        "sequence": (np.full(n_rows, block.sequence, dtype=object), nothing),
         "frame": (t_of.astype(np.int64), nothing),
         "time": (np.repeat(time, counts), nothing),
         "annotated": (np.repeat(annotated_frame, counts), nothing),
@@ -374,40 +263,6 @@ def _columns_from_arrays(
         "group": (group, no_group),
         "group_member": (member, no_group),
     }
-
-
-def _place_groups(
-    t: int,
-    frame_groups: Sequence[Sequence[int]],
-    index_of: dict[int, int],
-    present: np.ndarray,
-    rows: np.ndarray,
-    group: np.ndarray,
-    member: np.ndarray,
-) -> None:
-    """Writes frame ``t``'s group and member indices, its groups restricted to who is present."""
-    seen: set[int] = set()
-    g = 0
-    for k, members in enumerate(frame_groups):
-        m = 0
-        for person in members:
-            a = index_of.get(int(person))
-            if a is None:
-                raise ValueError(
-                    f"groups[{t}][{k}] names person {person}, who is not in the roster "
-                    f"(ids {sorted(index_of)})"
-                )
-            if a in seen:
-                raise ValueError(
-                    f"groups[{t}] must be disjoint, person {person} appears twice (group {k})"
-                )
-            seen.add(a)
-            if present[a]:
-                group[rows[a]] = g
-                member[rows[a]] = m
-                m += 1
-        if m:
-            g += 1
 
 
 def _header_json(

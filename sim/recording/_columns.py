@@ -18,7 +18,7 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
-from reform import ROBOT, Frame, Group
+from reform import ROBOT, Frame, FrameBlock, Group
 
 __all__ = [
     "FrameColumns",
@@ -141,10 +141,10 @@ class FrameColumns:
         )
 
     @classmethod
-    def from_blocks(cls, blocks: Iterable[Any]) -> FrameColumns:
-        """The columns of the simulator's pose blocks (``sim.world.Poses``, as
-        ``sim.episode.episode_blocks`` yields them), equal to ``FrameColumns.of`` of the frames
-        the blocks hold (``Poses.frames()``), without making those frames.
+    def from_blocks(cls, blocks: Iterable[FrameBlock]) -> FrameColumns:
+        """The columns of frame blocks (`reform.FrameBlock`, as ``sim.episode.episode_blocks``
+        yields them), equal to ``FrameColumns.of`` of the frames the blocks hold
+        (``FrameBlock.frames()``), without making those frames.
         """
         parts: list[FrameColumns] = []
         for block in blocks:
@@ -165,7 +165,7 @@ class FrameColumns:
                     head_yaw=np.asarray(block.head_yaw, dtype=np.float64)[rows, agents],
                     time=np.asarray(block.time, dtype=np.float64),
                     sequence=(str(block.sequence),) * n_rows,
-                    groups=_present_groups(block, present),
+                    groups=block.present_groups(),
                 )
             )
         return cls.concatenate(parts)
@@ -256,30 +256,6 @@ class FrameColumns:
             sequence=self.sequence,
             groups=self.groups,
         )
-
-
-def _present_groups(block: Any, present: np.ndarray) -> tuple[tuple[Group, ...] | None, ...]:
-    """Each row's declared groups of a pose block restricted to the agents present (None where
-    not annotated), worked out again only where the groups or the people present change."""
-    from sim.world import restrict_groups
-
-    changed = np.ones(present.shape[0], dtype=bool)
-    changed[1:] = np.any(present[1:] != present[:-1], axis=1)
-    groups: list[tuple[Group, ...] | None] = []
-    declared_before: Any = None
-    restricted: tuple[Group, ...] | None = None
-    for row, declared in enumerate(block.groups):
-        if declared is None:
-            restricted = None
-        elif (
-            changed[row]
-            or declared_before is None
-            or not (declared is declared_before or declared == declared_before)
-        ):
-            restricted = restrict_groups(declared, set(block.ids[present[row]].tolist()))
-        declared_before = declared
-        groups.append(restricted)
-    return tuple(groups)
 
 
 def _concatenate(arrays: Sequence[np.ndarray], empty: tuple[int, ...], dtype: Any) -> np.ndarray:

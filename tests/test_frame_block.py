@@ -1,4 +1,5 @@
-"""The columnar fast path: `write_parquet_arrays` writes the file `write_parquet` writes."""
+"""Frames as columns (reform.FrameBlock): its frames, its checks, and the Parquet file written
+from it, the same bytes as the file of its frames written one by one."""
 
 from __future__ import annotations
 
@@ -7,9 +8,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from reform import Dataset, Frame
+from reform import Dataset, Frame, FrameBlock
 from reform.datasets import read_parquet, write_parquet
-from reform.datasets.parquet import write_parquet_arrays
 
 
 def roster_frames(arrays: dict) -> tuple[Frame, ...]:
@@ -39,9 +39,13 @@ def roster_frames(arrays: dict) -> tuple[Frame, ...]:
     return tuple(out)
 
 
+def block(arrays: dict) -> FrameBlock:
+    return FrameBlock(**{"head_position": None, "head_yaw": None, **arrays})
+
+
 def write_both(tmp_path, arrays: dict, metadata=None) -> tuple[bytes, bytes]:
-    fast = write_parquet_arrays(
-        tmp_path / "fast.parquet", name="roster", source="test", metadata=metadata, **arrays
+    fast = write_parquet(
+        block(arrays), tmp_path / "fast.parquet", name="roster", source="test", metadata=metadata
     )
     dataset = Dataset(
         frames=roster_frames(arrays), name="roster", source="test", metadata=metadata or {}
@@ -93,6 +97,37 @@ def test_same_bytes_as_the_frames_written_one_by_one(tmp_path):
     assert back.frames[4].groups == ((9,), (0, 4))  # 2 is absent
 
 
+def test_a_blocks_frames_are_the_frames_it_stands_for():
+    made = block(example())
+    assert tuple(made.frames()) == roster_frames(example())
+    assert [made.frame(t) for t in range(len(made))] == list(roster_frames(example()))
+    assert made.present_groups()[1] == ((4,), (2,))
+
+
+def test_blocks_concatenate_in_order():
+    arrays = example()
+    first = block({**arrays, **{k: arrays[k][:2] for k in _ROWS}, "groups": arrays["groups"][:2]})
+    rest = block({**arrays, **{k: arrays[k][2:] for k in _ROWS}, "groups": arrays["groups"][2:]})
+    joined = FrameBlock.concatenate([first, rest])
+    assert tuple(joined.frames()) == roster_frames(arrays)
+    with pytest.raises(ValueError, match="block 1 differs from block 0 in its roster"):
+        FrameBlock.concatenate([first, block({**arrays, "sequence": "other"})])
+    with pytest.raises(ValueError, match="at least one block"):
+        FrameBlock.concatenate([])
+
+
+def test_a_block_copies_and_freezes_what_it_is_given():
+    arrays = example()
+    made = block(arrays)
+    arrays["position"][0, 0] = 99.0
+    assert made.position[0, 0, 0] != 99.0 and arrays["position"].flags.writeable
+    with pytest.raises(ValueError, match="read-only"):
+        made.yaw[0, 0] = 1.0
+
+
+_ROWS = ("time", "present", "position", "yaw", "head_position", "head_yaw")
+
+
 def test_without_heads_and_without_frames(tmp_path):
     arrays = example()
     del arrays["head_position"], arrays["head_yaw"]
@@ -124,7 +159,7 @@ def test_without_heads_and_without_frames(tmp_path):
 def test_bad_arrays_are_refused(tmp_path, change, match):
     arrays = {**example(), **change}
     with pytest.raises(ValueError, match=match):
-        write_parquet_arrays(tmp_path / "bad.parquet", name="x", **arrays)
+        write_parquet(block(arrays), tmp_path / "bad.parquet", name="x")
     assert not (tmp_path / "bad.parquet").exists()
 
 
@@ -133,7 +168,7 @@ def test_a_half_observed_head_is_refused(tmp_path):
     arrays["head_yaw"] = arrays["head_yaw"].copy()
     arrays["head_yaw"][0, 0] = np.nan
     with pytest.raises(ValueError, match=r"fully observed \(x, y, yaw\) or fully NaN"):
-        write_parquet_arrays(tmp_path / "bad.parquet", name="x", **arrays)
+        write_parquet(block(arrays), tmp_path / "bad.parquet", name="x")
 
 
 @st.composite
