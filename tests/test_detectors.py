@@ -1,10 +1,9 @@
-"""The detector registry (reform.detectors): names, plugins, entry points, every error message,
-and one contract test over every registered detector."""
+"""The detector registry (reform.detectors): names, plugins, entry points, every error message.
+The contract every registered detector keeps is tests/test_detector_contract.py."""
 
 from __future__ import annotations
 
 import json
-import math
 import sys
 import textwrap
 from collections.abc import Iterator
@@ -30,7 +29,6 @@ from reform import (
     register_detector,
     run_detector,
     save_model,
-    wrap_angle,
     write_parquet,
 )
 from reform.classifiers import make_classifier
@@ -490,50 +488,6 @@ def test_fit_detector_fits_a_copy(plugins):
         match=r"^lab: detector's fit raised ValueError: needs head poses \(on 3 frames\)$",
     ):
         fit_detector("lab", FitRaises(None), FRAMES)
-
-
-# ------------------------------------------------------------------------------------------------
-# The contract, for every registered detector
-
-
-def options_for(name: str, model_path: Path) -> dict:
-    """What each built-in needs to be made; a new built-in that needs options fails here."""
-    return {"reform": {"model": model_path}}.get(name, {})
-
-
-@pytest.mark.parametrize("name", detector_names())
-def test_every_detector_returns_a_partition_per_frame(name, model_path):
-    detector = make_detector(name, **options_for(name, model_path))
-    frames = toy_frames(7, 4, sizes=(3, 2), loners=2) + toy_frames(8, 1, sizes=(), loners=1)
-    partitions = run_detector(name, detector, frames)
-    assert len(partitions) == len(frames)
-    for frame, partition in zip(frames, partitions, strict=True):
-        assert sorted(m for group in partition for m in group) == sorted(frame.ids.tolist())
-    assert run_detector(name, detector, []) == []
-
-
-def moved(frame, *, shift: tuple[float, float], turn: float):
-    rotation = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
-    return frame.replace(
-        position=frame.position @ rotation.T + shift, yaw=wrap_angle(frame.yaw + turn)
-    )
-
-
-@pytest.mark.parametrize("name", ["majority", "gcff"])
-@pytest.mark.parametrize(
-    ("shift", "turn"),
-    [((0.0, 0.0), math.pi / 2), ((12.5, -40.0), 0.0), ((-3.0, 7.0), 2.0), ((100.0, 0.5), -2.9)],
-    ids=["quarter-turn", "translation", "both", "far-and-back"],
-)
-def test_partition_does_not_depend_on_where_the_scene_is(name, shift, turn):
-    detector = make_detector(name)
-    frames = toy_frames(11, 6, sizes=(3, 2, 4), loners=2)
-    before = [as_sets(p) for p in detector.predict(frames)]
-    after = [
-        as_sets(p) for p in detector.predict([moved(f, shift=shift, turn=turn) for f in frames])
-    ]
-    assert after == before
-    assert any(len(group) > 1 for partition in before for group in partition) or name == "majority"
 
 
 def test_the_command_lines_built_ins_are_registered_names():
