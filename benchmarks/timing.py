@@ -1,9 +1,10 @@
 """What every benchmark script shares: its command line, timing a call over repeats, and where
 the datasets are.
 
-Every script's command line starts from :class:`BenchmarkParser`: ``--quick`` (a smoke run that
-``tests/test_benchmarks.py`` runs: tiny sizes, one or two repeats, every equality check of the
-full run, no timing threshold) and, where the script repeats its timings, ``--repeats``.
+Every script's command line starts from :class:`BenchmarkParser`: ``--quick`` (a smoke run
+that ``tests/benchmarks/test_benchmarks.py`` runs: tiny sizes, one or two repeats, every
+equality check of the full run, no timing threshold) and, where the script repeats its
+timings, ``--repeats``.
 
 A plain module beside the scripts: ``python benchmarks/bench_x.py`` puts ``benchmarks/`` first
 on ``sys.path``, so each script imports it as ``from timing import ...``.

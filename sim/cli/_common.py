@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from sim.sizing import RequestTooLarge
 
 # reform.datasets' FORMATS and their aliases, and LENGTH_UNITS, kept here so that building the
-# parser imports nothing heavy (tests/test_cli_options.py checks that they agree).
+# parser imports nothing heavy (tests/sim/cli/test_cli_options.py checks that they agree).
 FORMATS = ("salsa", "dante", "babble", "gcff", "parquet")
 LENGTH_UNITS = ("cm", "m", "px")
 # Default share of each sequence's annotated frames, by time, that trains (reform.time_split's).

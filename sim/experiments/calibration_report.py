@@ -178,7 +178,7 @@ def to_markdown(report: CalibrationReport) -> str:
         "its out-of-group statistics are weak evidence.",
         "- Rare sizes of the randomised mode come from few parties (few draws allow groups of "
         "8); the drawn radius laws themselves span both datasets for every size "
-        "(tests/test_calibration_scenarios.py).",
+        "(tests/sim/experiments/test_calibration_scenarios.py).",
         "",
     ]
     if report.hri:

@@ -34,7 +34,7 @@ from reform.datasets import (
 from reform.datasets.fetch import MANIFEST
 from sim.cli import main
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = Path(__file__).resolve().parents[3]
 REPO = "lab/fformations"
 COMMIT = "1" * 40
 OTHER_COMMIT = "2" * 40

@@ -14,7 +14,7 @@ import pytest
 
 from sim.cli import _resumes, build_parser
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 START = (
     "import sys; from sim.cli import console_main; sys.argv[0] = 'reform-sim'; "
     "sys.exit(console_main())"

@@ -300,7 +300,7 @@ def test_gcff_angles_a_little_beyond_a_turn_are_wrapped(tmp_path):
 
 def test_a_mat_file_that_crashes_the_reader_is_one_clean_error(tmp_path):
     # Four zero bytes at offset 232 of this small file make scipy's compiled MATLAB reader
-    # crash the process (SIGSEGV, found by tests/test_datasets_fuzz.py): read in a child
+    # crash the process (SIGSEGV, found by test_datasets_fuzz.py): read in a child
     # process, it is one error naming the file.
     folder = _gcff(tmp_path / "set", [PEOPLE[:2]], [[[1, 2]]])
     data = (folder / "features.mat").read_bytes()

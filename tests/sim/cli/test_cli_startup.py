@@ -14,7 +14,7 @@ import pytest
 from sim.cli import build_parser, main
 from sim.cli._common import CommandParser
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 # Packages a command needs only once it runs (each costs 0.1 to 0.7 s to import). The package
 # `reform` itself is light (its names load on first use); its modules are not.
 HEAVY = ("gymnasium", "numpy", "scipy", "sklearn", "rerun", "mujoco", "scenarios")

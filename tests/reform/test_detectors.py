@@ -1,5 +1,5 @@
 """The detector registry (reform.detectors): names, plugins, entry points, every error message.
-The contract every registered detector keeps is tests/test_detector_contract.py."""
+The contract every registered detector keeps is tests/reform/test_detector_contract.py."""
 
 from __future__ import annotations
 

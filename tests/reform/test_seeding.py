@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from reform.seeding import SEED_BITS, SENSOR, WORLD, Role, derive_int, derive_rng, derive_seed
-from sim.generate import episode_seed
 
 
 def test_a_key_is_a_spawn_key_of_the_master_seed():
@@ -20,7 +19,7 @@ def test_a_datasets_episodes_are_the_children_of_its_master_seed():
     children = np.random.SeedSequence(11).spawn(4)
     for k, child in enumerate(children):
         state = int(child.generate_state(1, dtype=np.uint64)[0] >> np.uint64(64 - SEED_BITS))
-        assert episode_seed(11, k) == derive_int(11, k) == state
+        assert derive_int(11, k) == state
 
 
 def test_an_episodes_world_and_sensor_are_its_two_children():

@@ -29,7 +29,7 @@ from sim.generate import (
     shard_path,
 )
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = "hri-conversation"  # two people and the robot: a cheap scene with groups and a robot
 EPISODES = 4
 SEED = 11

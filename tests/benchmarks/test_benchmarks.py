@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = Path(__file__).resolve().parents[2]
 BENCHMARKS_DIR = REPO_ROOT / "benchmarks"
 BENCHMARKS = sorted(BENCHMARKS_DIR.glob("bench_*.py"))
 QUICK_TIMEOUT_S = 120  # seconds for one quick run (they take 1-15 s on a busy 2-core machine)
