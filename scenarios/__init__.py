@@ -1,6 +1,7 @@
 """scenarios: scripted social scenes as data and pure functions of time and a random generator.
 
-Registered scenarios (``make(name, seed=..., **options)``, ``names()``, ``options(name)``):
+Registered scenarios (``make(name, seed=..., **options)``, ``names()``, ``names(tag=...)``,
+``options(name)``), each option written once in its factory's signature (`register`):
 
 * ``hri-conversation``, ``hri-robot-excluded``, ``hri-passing``: the REFORM paper's
   proof-of-concept scenes with the Directions Robot (`scenarios.hri`);
@@ -29,6 +30,7 @@ from __future__ import annotations
 from scenarios import hri, mingle, randomisation, word_improv  # noqa: F401  (registration)
 from scenarios.registry import (
     Option,
+    Range,
     ScenarioInfo,
     describe,
     make,
@@ -52,6 +54,7 @@ __all__ = [
     "Intent",
     "Option",
     "PlannedGroup",
+    "Range",
     "RobotPlace",
     "Role",
     "Scenario",

@@ -13,15 +13,15 @@ positions, paths and gaze vary with the seed.
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import MEAN_UTTERANCE_S, converse, standing
 from scenarios.formation import circle_places, facing_centre
-from scenarios.registry import register
-from scenarios.scenario import Scenario, check_option
+from scenarios.registry import Range, register
+from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Stage
 from scenarios.timeline import TimelineBuilder
@@ -123,36 +123,31 @@ def _leave(
     return gone + 1.0
 
 
-@register("hri-conversation")
+@register("hri-conversation", tags=("hri",), robot={})
 def hri_conversation(
     *,
     seed: int,
-    radius: float = 0.6,
-    talk_duration: float = 40.0,
+    radius: Annotated[float, Range(0.3, 1.5, unit="m")] = 0.6,
+    talk_duration: Annotated[float, Range(0.0, unit="s", above=True)] = 40.0,
     approach: Literal["front", "left", "right", "random"] = "random",
     leave: bool = True,
-    position_noise: float = 0.03,
-    orientation_noise: float = 0.1,
-    mean_utterance: float = MEAN_UTTERANCE_S,
+    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
+    orientation_noise: Annotated[float, Range(0.0, 0.5, unit="rad")] = 0.1,
+    mean_utterance: Annotated[float, Range(0.5, 30.0, unit="s")] = MEAN_UTTERANCE_S,
 ) -> Scenario:
     """Two people walk up to the Directions Robot and converse with it (an F-formation of 3).
 
     Args:
         seed: seeds every draw.
-        radius: o-space radius of the group of three, metres (0.3-1.5).
-        talk_duration: seconds of conversation once both have arrived (> 0).
+        radius: o-space radius of the group of three, metres.
+        talk_duration: seconds of conversation once both have arrived.
         approach: where the two come from (the robot faces east, "front").
         leave: whether they walk out at the end (the group ends when they set off).
-        position_noise: standard deviation of each person's place, metres (0-0.3).
-        orientation_noise: standard deviation of each person's facing, radians (0-0.5).
-        mean_utterance: mean length of one speaker's turn, seconds (0.5-30).
+        position_noise: standard deviation of each person's place, metres.
+        orientation_noise: standard deviation of each person's facing, radians.
+        mean_utterance: mean length of one speaker's turn, seconds.
     """
     name = "hri-conversation"
-    check_option(name, "radius", radius, low=0.3, high=1.5, unit="m")
-    check_option(name, "talk_duration", talk_duration, low=0.0, above=True, unit="s")
-    check_option(name, "position_noise", position_noise, low=0.0, high=0.3, unit="m")
-    check_option(name, "orientation_noise", orientation_noise, low=0.0, high=0.5, unit="rad")
-    check_option(name, "mean_utterance", mean_utterance, low=0.5, high=30.0, unit="s")
     rng = np.random.default_rng(seed)
     robot = _robot(ROOM_M)
     robot_xy = np.array(robot.position)
@@ -194,15 +189,6 @@ def hri_conversation(
     return Scenario(
         name=name,
         seed=seed,
-        options={
-            "radius": radius,
-            "talk_duration": talk_duration,
-            "approach": approach,
-            "leave": leave,
-            "position_noise": position_noise,
-            "orientation_noise": orientation_noise,
-            "mean_utterance": mean_utterance,
-        },
         stage=Stage(room=ROOM_M, people=roles, robot=robot),
         timeline=builder.build(),
         duration=duration,
@@ -210,39 +196,33 @@ def hri_conversation(
     )
 
 
-@register("hri-robot-excluded")
+@register("hri-robot-excluded", tags=("hri",), robot={})
 def hri_robot_excluded(
     *,
     seed: int,
-    distance: float = 1.8,
-    radius: float = 0.42,
-    talk_duration: float = 40.0,
+    distance: Annotated[float, Range(1.0, 4.0, unit="m")] = 1.8,
+    radius: Annotated[float, Range(0.3, 1.0, unit="m")] = 0.42,
+    talk_duration: Annotated[float, Range(0.0, unit="s", above=True)] = 40.0,
     walk_in: bool = True,
     leave: bool = True,
-    position_noise: float = 0.03,
-    orientation_noise: float = 0.1,
-    mean_utterance: float = MEAN_UTTERANCE_S,
+    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
+    orientation_noise: Annotated[float, Range(0.0, 0.5, unit="rad")] = 0.1,
+    mean_utterance: Annotated[float, Range(0.5, 30.0, unit="s")] = MEAN_UTTERANCE_S,
 ) -> Scenario:
     """Two people stand in front of the robot and talk to each other; the robot is left out.
 
     Args:
         seed: seeds every draw.
-        distance: from the robot to the pair's o-space centre, metres (1.0-4.0).
-        radius: half the distance between the two, metres (0.3-1.0).
-        talk_duration: seconds of conversation once both stand at their places (> 0).
+        distance: from the robot to the pair's o-space centre, metres.
+        radius: half the distance between the two, metres.
+        talk_duration: seconds of conversation once both stand at their places.
         walk_in: whether they walk in first (else they stand there from the start).
         leave: whether they walk out at the end (the group ends when they set off).
-        position_noise: standard deviation of each person's place, metres (0-0.3).
-        orientation_noise: standard deviation of each person's facing, radians (0-0.5).
-        mean_utterance: mean length of one speaker's turn, seconds (0.5-30).
+        position_noise: standard deviation of each person's place, metres.
+        orientation_noise: standard deviation of each person's facing, radians.
+        mean_utterance: mean length of one speaker's turn, seconds.
     """
     name = "hri-robot-excluded"
-    check_option(name, "distance", distance, low=1.0, high=4.0, unit="m")
-    check_option(name, "radius", radius, low=0.3, high=1.0, unit="m")
-    check_option(name, "talk_duration", talk_duration, low=0.0, above=True, unit="s")
-    check_option(name, "position_noise", position_noise, low=0.0, high=0.3, unit="m")
-    check_option(name, "orientation_noise", orientation_noise, low=0.0, high=0.5, unit="rad")
-    check_option(name, "mean_utterance", mean_utterance, low=0.5, high=30.0, unit="s")
     rng = np.random.default_rng(seed)
     robot = _robot(ROOM_M)
     robot_xy = np.array(robot.position)
@@ -286,16 +266,6 @@ def hri_robot_excluded(
     return Scenario(
         name=name,
         seed=seed,
-        options={
-            "distance": distance,
-            "radius": radius,
-            "talk_duration": talk_duration,
-            "walk_in": walk_in,
-            "leave": leave,
-            "position_noise": position_noise,
-            "orientation_noise": orientation_noise,
-            "mean_utterance": mean_utterance,
-        },
         stage=Stage(room=ROOM_M, people=roles, robot=robot),
         timeline=builder.build(),
         duration=duration,
@@ -303,26 +273,23 @@ def hri_robot_excluded(
     )
 
 
-@register("hri-passing")
+@register("hri-passing", tags=("hri",), robot={})
 def hri_passing(
     *,
     seed: int,
-    people: int = 2,
-    passes: int = 4,
-    look_at_robot: float = 0.3,
+    people: Annotated[int, Range(1, 6)] = 2,
+    passes: Annotated[int, Range(1, 50)] = 4,
+    look_at_robot: Annotated[float, Range(0.0, 1.0)] = 0.3,
 ) -> Scenario:
     """People walk past each other and the robot, again and again: no F-formation.
 
     Args:
         seed: seeds every draw.
-        people: how many walk (1-6).
-        passes: how many times each crosses the robot's view (1-50).
-        look_at_robot: probability that a walker looks at the robot on a pass (0-1).
+        people: how many walk.
+        passes: how many times each crosses the robot's view.
+        look_at_robot: probability that a walker looks at the robot on a pass.
     """
     name = "hri-passing"
-    check_option(name, "people", people, low=1, high=6)
-    check_option(name, "passes", passes, low=1, high=50)
-    check_option(name, "look_at_robot", look_at_robot, low=0.0, high=1.0)
     rng = np.random.default_rng(seed)
     room = PASSING_ROOM_M
     robot = _robot(room)
@@ -366,7 +333,6 @@ def hri_passing(
     return Scenario(
         name=name,
         seed=seed,
-        options={"people": people, "passes": passes, "look_at_robot": look_at_robot},
         stage=Stage(room=room, people=roles, robot=robot),
         timeline=builder.build(),
         duration=finish,

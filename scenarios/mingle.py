@@ -29,14 +29,15 @@ import dataclasses
 import heapq
 import math
 from dataclasses import dataclass, field
+from typing import Annotated, Any
 
 import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import RadiusLaw, circle_places, min_radius
-from scenarios.registry import register
-from scenarios.scenario import Scenario, check_option
+from scenarios.registry import Range, check_ranges, register
+from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
 from scenarios.timeline import TimelineBuilder
@@ -89,42 +90,49 @@ class NoFloorError(ValueError):
 
 @dataclass(frozen=True)
 class MingleParams:
-    """Every number that shapes a party (the options of ``mingle``)."""
+    """Every number that shapes a party: the options of ``mingle``, declared once here.
 
-    people: int = 18
-    duration: float = 600.0
-    room_side: float = 0.0
-    max_group_size: int = 8
+    Attributes:
+        people: guests.
+        duration: length of the party, seconds.
+        room_side: side of the square room, metres; 0: 0.4 people per m^2, at least 4 m, grown
+            by 10% steps while the drawn party does not fit.
+        max_group_size: largest group; SALSA holds groups of 8.
+        robot: whether the robot stands by the west wall, watching.
+        passers_by: extra people crossing the room now and then.
+        radius_base: o-space radius of a pair, metres.
+        radius_per_member: growth of the radius per extra member, metres.
+        radius_spread: relative standard deviation of a group's radius.
+        position_noise: standard deviation of a place, metres.
+        orientation_noise: standard deviation of a facing, radians.
+        head_noise: standard deviation of a gaze off its target, radians.
+        mean_stay: mean time a member stays in a group, seconds.
+        mean_alone: mean time someone stays alone before acting, seconds.
+        alone_share: share of the guests alone at the start.
+        mean_utterance: mean length of one speaker's turn, seconds.
+    """
+
+    people: Annotated[int, Range(2, 100)] = 18
+    duration: Annotated[float, Range(0.0, unit="s", above=True)] = 600.0
+    room_side: Annotated[float, Range(0.0, 100.0, unit="m")] = 0.0
+    max_group_size: Annotated[int, Range(2, 12)] = 8
     robot: bool = False
-    passers_by: int = 0
-    radius_base: float = SALSA_RADIUS.base
-    radius_per_member: float = SALSA_RADIUS.per_member
-    radius_spread: float = 0.10
-    position_noise: float = 0.05
-    orientation_noise: float = 0.7
-    head_noise: float = 0.2
-    mean_stay: float = 300.0
-    mean_alone: float = 10.0
-    alone_share: float = 0.08
-    mean_utterance: float = 4.0
+    passers_by: Annotated[int, Range(0, 20)] = 0
+    radius_base: Annotated[float, Range(0.3, 2.0, unit="m")] = SALSA_RADIUS.base
+    radius_per_member: Annotated[float, Range(0.0, 0.5)] = SALSA_RADIUS.per_member
+    radius_spread: Annotated[float, Range(0.0, 0.5)] = 0.10
+    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.05
+    orientation_noise: Annotated[float, Range(0.0, 1.0)] = 0.7
+    head_noise: Annotated[float, Range(0.0, 1.0, unit="rad")] = 0.2
+    mean_stay: Annotated[float, Range(1.0, unit="s")] = 300.0
+    mean_alone: Annotated[float, Range(1.0, unit="s")] = 10.0
+    alone_share: Annotated[float, Range(0.0, 1.0)] = 0.08
+    mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 4.0
 
     def check(self, name: str) -> None:
-        """`ValueError` naming the option for impossible values."""
-        check_option(name, "people", self.people, low=2, high=100)
-        check_option(name, "duration", self.duration, low=0.0, above=True, unit="s")
-        check_option(name, "room_side", self.room_side, low=0.0, high=100.0, unit="m")
-        check_option(name, "max_group_size", self.max_group_size, low=2, high=12)
-        check_option(name, "passers_by", self.passers_by, low=0, high=20)
-        check_option(name, "radius_base", self.radius_base, low=0.3, high=2.0, unit="m")
-        check_option(name, "radius_per_member", self.radius_per_member, low=0.0, high=0.5)
-        check_option(name, "radius_spread", self.radius_spread, low=0.0, high=0.5)
-        check_option(name, "position_noise", self.position_noise, low=0.0, high=0.3, unit="m")
-        check_option(name, "orientation_noise", self.orientation_noise, low=0.0, high=1.0)
-        check_option(name, "head_noise", self.head_noise, low=0.0, high=1.0, unit="rad")
-        check_option(name, "mean_stay", self.mean_stay, low=1.0, unit="s")
-        check_option(name, "mean_alone", self.mean_alone, low=1.0, unit="s")
-        check_option(name, "alone_share", self.alone_share, low=0.0, high=1.0)
-        check_option(name, "mean_utterance", self.mean_utterance, low=0.5, high=60.0, unit="s")
+        """`ValueError` naming the option for impossible values: each out of its range
+        (`scenarios.registry.check_ranges`), or a party that cannot fit its room."""
+        check_ranges(name, self)
         if self.room_side > 0.0:
             if self.room_side < MIN_ROOM_M:
                 raise ValueError(
@@ -718,8 +726,8 @@ def _on_wall(side: int, along: float, edge: float) -> np.ndarray:
     ][side]
 
 
-def build_mingle(params: MingleParams, *, seed: int, name: str, options: dict) -> Scenario:
-    """The party of ``params`` drawn with ``seed`` (options recorded as ``options``)."""
+def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
+    """The party of ``params`` drawn with ``seed``."""
     params.check(name)
     rng = np.random.default_rng(seed)
     side = params.side()
@@ -783,7 +791,6 @@ def build_mingle(params: MingleParams, *, seed: int, name: str, options: dict) -
     return Scenario(
         name=name,
         seed=seed,
-        options=options,
         stage=Stage(room=(side, side), people=tuple(roles), robot=robot),
         timeline=builder.build(),
         duration=params.duration,
@@ -791,81 +798,26 @@ def build_mingle(params: MingleParams, *, seed: int, name: str, options: dict) -
     )
 
 
-@register("mingle")
-def mingle(
-    *,
-    seed: int,
-    people: int = 18,
-    duration: float = 600.0,
-    room_side: float = 0.0,
-    max_group_size: int = 8,
-    robot: bool = False,
-    passers_by: int = 0,
-    radius_base: float = SALSA_RADIUS.base,
-    radius_per_member: float = SALSA_RADIUS.per_member,
-    radius_spread: float = 0.10,
-    position_noise: float = 0.05,
-    orientation_noise: float = 0.7,
-    head_noise: float = 0.2,
-    mean_stay: float = 300.0,
-    mean_alone: float = 10.0,
-    alone_share: float = 0.08,
-    mean_utterance: float = 4.0,
-) -> Scenario:
+@register("mingle", options=MingleParams, tags=("party",), robot={"robot": True})
+def mingle(*, seed: int, **options: Any) -> Scenario:
     """A SALSA-like party: groups of 2-8 forming, merging, splitting; people alone.
 
-    Args:
-        seed: seeds every draw.
-        people: guests (2-100).
-        duration: length of the party, seconds (> 0).
-        room_side: side of the square room, metres (0: 0.4 people per m^2, at least 4 m, grown
-            by 10% steps while the drawn party does not fit).
-        max_group_size: largest group (2-12; SALSA holds groups of 8).
-        robot: whether the robot stands by the west wall, watching.
-        passers_by: extra people crossing the room now and then (0-20).
-        radius_base: o-space radius of a pair, metres (0.3-2).
-        radius_per_member: growth of the radius per extra member, metres (0-0.5).
-        radius_spread: relative standard deviation of a group's radius (0-0.5).
-        position_noise: standard deviation of a place, metres (0-0.3).
-        orientation_noise: standard deviation of a facing, radians (0-1).
-        head_noise: standard deviation of a gaze off its target, radians (0-1).
-        mean_stay: mean time a member stays in a group, seconds (>= 1).
-        mean_alone: mean time someone stays alone before acting, seconds (>= 1).
-        alone_share: share of the guests alone at the start (0-1).
-        mean_utterance: mean length of one speaker's turn, seconds (0.5-60).
+    Its options are the fields of `MingleParams`.
     """
-    options = dict(
-        people=people,
-        duration=duration,
-        room_side=room_side,
-        max_group_size=max_group_size,
-        robot=robot,
-        passers_by=passers_by,
-        radius_base=radius_base,
-        radius_per_member=radius_per_member,
-        radius_spread=radius_spread,
-        position_noise=position_noise,
-        orientation_noise=orientation_noise,
-        head_noise=head_noise,
-        mean_stay=mean_stay,
-        mean_alone=mean_alone,
-        alone_share=alone_share,
-        mean_utterance=mean_utterance,
-    )
     params = MingleParams(**options)
-    if room_side > 0.0:  # the user's room: a party that does not fit is an error
-        return build_mingle(params, seed=seed, name="mingle", options=options)
-    return build_mingle_in_room(params, seed=seed, name="mingle", options=options)
+    if params.room_side > 0.0:  # the user's room: a party that does not fit is an error
+        return build_mingle(params, seed=seed, name="mingle")
+    return build_mingle_in_room(params, seed=seed, name="mingle")
 
 
-def build_mingle_in_room(params: MingleParams, *, seed: int, name: str, options: dict) -> Scenario:
+def build_mingle_in_room(params: MingleParams, *, seed: int, name: str) -> Scenario:
     """`build_mingle`, growing the room by `ROOM_GROWTH` (at most `ROOM_RETRIES` times) while
     the drawn party does not fit; the room actually used is the scenario's stage."""
     params.check(name)  # before the room is picked: a negative room_side is not "pick one"
     params = dataclasses.replace(params, room_side=params.side())
     for _ in range(ROOM_RETRIES):
         try:
-            return build_mingle(params, seed=seed, name=name, options=options)
+            return build_mingle(params, seed=seed, name=name)
         except NoFloorError:
             params = dataclasses.replace(params, room_side=params.room_side * ROOM_GROWTH)
     raise NoFloorError(

@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Annotated
 
 import numpy as np
 
 from scenarios.mingle import MingleParams, build_mingle_in_room
-from scenarios.registry import register
+from scenarios.registry import Range, register
 from scenarios.scenario import Scenario, check_option
 
 __all__ = ["RANGES", "draw_params", "mingle_randomised"]
@@ -68,42 +69,34 @@ def draw_params(
     return params, drawn
 
 
-@register("mingle-randomised")
+@register("mingle-randomised", tags=("party", "randomised"), robot={"robot": True})
 def mingle_randomised(
     *,
     seed: int,
-    people_min: int = 6,
-    people_max: int = 30,
-    duration: float = 300.0,
+    people_min: Annotated[int, Range(2, 100)] = 6,
+    people_max: Annotated[int, Range(2, 100)] = 30,
+    duration: Annotated[float, Range(0.0, unit="s", above=True)] = 300.0,
     robot: bool = False,
 ) -> Scenario:
     """Domain-randomised mingling: group shape, noise, sizes and crowd density drawn per seed.
 
     Args:
         seed: seeds the drawn parameters and the party.
-        people_min: fewest guests drawn (2-100).
-        people_max: most guests drawn (people_min-100).
-        duration: length of the party, seconds (> 0).
+        people_min: fewest guests drawn.
+        people_max: most guests drawn, at least people_min.
+        duration: length of the party, seconds.
         robot: whether the robot stands by the west wall, watching.
     """
     name = "mingle-randomised"
-    check_option(name, "people_min", people_min, low=2, high=100)
     check_option(name, "people_max", people_max, low=people_min, high=100)
-    check_option(name, "duration", duration, low=0.0, above=True, unit="s")
     rng = np.random.default_rng(seed)
     people = int(rng.integers(people_min, people_max + 1))
     params, drawn = draw_params(rng, people=people, duration=duration, robot=robot)
-    options = {
-        "people_min": people_min,
-        "people_max": people_max,
-        "duration": duration,
-        "robot": robot,
-        "drawn": {"people": people, **drawn},
-    }
     party_seed = int(rng.integers(2**63 - 1))
-    party = build_mingle_in_room(params, seed=party_seed, name=name, options=options)
+    party = build_mingle_in_room(params, seed=party_seed, name=name)
     return dataclasses.replace(
         party,
         seed=seed,
+        options={"drawn": {"people": people, **drawn}},  # its options are recorded before it
         description="mingling with every shape parameter drawn from wide ranges",
     )

@@ -1,28 +1,43 @@
 """Scenarios by name: ``register`` a factory, ``make`` a scenario, list ``names`` and ``options``.
 
 A factory is a function ``factory(*, seed: int, option: type = default, ...) -> Scenario``.
-Its keyword options (with type annotations ``int``, ``float``, ``bool``, ``str`` or a
-``Literal`` of strings, and defaults) are the scenario's options; their help comes from the
-factory's docstring (``Args:`` section). `make` checks the name and the options' names and types
-before calling the factory, which checks their values (ranges, feasibility) before drawing
-anything.
+Each option is written once, in the factory's signature: its type annotation (``int``,
+``float``, ``bool``, ``str`` or a ``Literal`` of strings), its allowed range where it has one
+(``Annotated[float, Range(0.3, 1.5, unit="m")]``) and its default; its help comes from the
+factory's docstring (``Args:`` section). A factory whose options are a frozen dataclass's fields
+says so (``register(name, options=Params)``, help from the class's ``Attributes:``) and takes
+them as keywords. Everything else reads them from there: `register` wraps the factory so that
+every call, through `make` or directly, checks each option's name, type and range before the
+factory draws anything, and records every option's value (defaults included) in the
+scenario's ``options``. The factory itself checks only what depends on several options at once
+(a party that fits its room).
+
+Tags sort scenarios into sets (``register(name, tags=("hri",))``; ``names(tag="hri")``), so
+that no other module keeps a list of names.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import inspect
 import math
 import re
 import typing
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
+from types import MappingProxyType
+from typing import Annotated, Any, Literal
 
-from scenarios.scenario import Scenario
+from scenarios.scenario import Scenario, check_option
 
 __all__ = [
+    "Annotated",
     "Option",
+    "Range",
     "ScenarioInfo",
+    "check_options",
+    "check_ranges",
     "describe",
     "make",
     "names",
@@ -37,6 +52,31 @@ _FALSE = ("false", "no", "off", "0")
 
 
 @dataclass(frozen=True)
+class Range:
+    """The values a number option may take: ``low <= value <= high`` (``low < value`` with
+    ``above``), either end open when ``None``; ``unit`` for the message."""
+
+    low: float | None = None
+    high: float | None = None
+    unit: str = ""
+    above: bool = False
+
+    def text(self) -> str:
+        """The range as the options' help shows it: ``0.3-1.5``, ``> 0``, ``>= 1``."""
+        if self.low is not None and self.high is not None:
+            return f"{self.low:g}-{self.high:g}"
+        if self.low is not None:
+            return f"{'>' if self.above else '>='} {self.low:g}"
+        return "any" if self.high is None else f"<= {self.high:g}"
+
+    def check(self, value: float, *, scenario: str, name: str) -> None:
+        """`ValueError` naming the scenario and the option when ``value`` is out of range."""
+        check_option(
+            scenario, name, value, low=self.low, high=self.high, unit=self.unit, above=self.above
+        )
+
+
+@dataclass(frozen=True)
 class Option:
     """One option of a scenario.
 
@@ -46,6 +86,7 @@ class Option:
         default: the default value.
         help: one line (with the unit).
         choices: the allowed values of a ``str`` option with a fixed set, else ``None``.
+        range: the allowed values of a number option, else ``None``.
     """
 
     name: str
@@ -53,6 +94,7 @@ class Option:
     default: Any
     help: str = ""
     choices: tuple[str, ...] | None = None
+    range: Range | None = None
 
     @property
     def type_name(self) -> str:
@@ -79,6 +121,8 @@ class Option:
             raise ValueError(
                 f"{scenario}: option {self.name} must be {self._expected()}, got {value!r}"
             )
+        if self.range is not None:
+            self.range.check(value, scenario=scenario, name=self.name)
         return value
 
     def parse(self, text: str, *, scenario: str) -> Any:
@@ -112,12 +156,16 @@ class Option:
 
 @dataclass(frozen=True)
 class ScenarioInfo:
-    """A registered scenario: name, one-line description, factory, options."""
+    """A registered scenario: name, one-line description, factory, options, tags, and the
+    options that put the Directions Robot in its scene (``robot``; None: it has no place for
+    the robot)."""
 
     name: str
     description: str
     factory: Callable[..., Scenario]
     options: tuple[Option, ...]
+    tags: frozenset[str] = frozenset()
+    robot: Mapping[str, Any] | None = None
 
     def option(self, name: str) -> Option:
         for option in self.options:
@@ -133,13 +181,13 @@ _REGISTRY: dict[str, ScenarioInfo] = {}
 
 
 def _arg_help(doc: str) -> dict[str, str]:
-    """``name -> help`` from a Google-style ``Args:`` section."""
+    """``name -> help`` from a Google-style ``Args:`` (or ``Attributes:``) section."""
     out: dict[str, str] = {}
     lines = inspect.cleandoc(doc or "").splitlines()
     inside = False
     current = None
     for line in lines:
-        if line.strip() in ("Args:", "Arguments:"):
+        if line.strip() in ("Args:", "Arguments:", "Attributes:"):
             inside = True
             continue
         if inside:
@@ -154,18 +202,36 @@ def _arg_help(doc: str) -> dict[str, str]:
     return out
 
 
-def _options_of(name: str, factory: Callable[..., Scenario]) -> tuple[Option, ...]:
-    hints = typing.get_type_hints(factory)
-    helps = _arg_help(factory.__doc__ or "")
+def _declared(source: Callable[..., Any] | type) -> list[tuple[str, Any, Any]]:
+    """``(name, annotation, default)`` of each option ``source`` declares: the keyword-only
+    parameters of a factory but ``seed``, or the fields of a frozen dataclass."""
+    hints = typing.get_type_hints(source, include_extras=True)
+    if dataclasses.is_dataclass(source):
+        return [
+            (f.name, hints.get(f.name), f.default) for f in dataclasses.fields(source) if f.init
+        ]
     out = []
-    for param in inspect.signature(factory).parameters.values():
-        if param.name == "seed":
+    for param in inspect.signature(source).parameters.values():
+        if param.name == "seed" or param.kind is inspect.Parameter.VAR_KEYWORD:
             continue
         if param.kind is not inspect.Parameter.KEYWORD_ONLY or param.default is param.empty:
-            raise TypeError(
-                f"scenario {name}: option {param.name} must be keyword-only with a default"
-            )
-        hint = hints.get(param.name)
+            raise TypeError(f"option {param.name} must be keyword-only with a default")
+        out.append((param.name, hints.get(param.name), param.default))
+    return out
+
+
+def _options_of(name: str, source: Callable[..., Any] | type) -> tuple[Option, ...]:
+    helps = _arg_help(source.__doc__ or "")
+    out = []
+    try:
+        declared = _declared(source)
+    except TypeError as exc:
+        raise TypeError(f"scenario {name}: {exc}") from None
+    for key, hint, default in declared:
+        bounds = None
+        if typing.get_origin(hint) is Annotated:
+            hint, *extras = typing.get_args(hint)
+            bounds = next((e for e in extras if isinstance(e, Range)), None)
         choices = None
         if typing.get_origin(hint) is Literal:
             choices = tuple(str(c) for c in typing.get_args(hint))
@@ -174,23 +240,84 @@ def _options_of(name: str, factory: Callable[..., Scenario]) -> tuple[Option, ..
             kind = hint
         else:
             raise TypeError(
-                f"scenario {name}: option {param.name} must be annotated bool, int, float, str "
+                f"scenario {name}: option {key} must be annotated bool, int, float, str "
                 f"or a Literal of strings, got {hint!r}"
             )
-        option = Option(param.name, kind, param.default, helps.get(param.name, ""), choices)
-        option.check(param.default, scenario=name)
+        if default is dataclasses.MISSING:
+            raise TypeError(f"scenario {name}: option {key} must have a default")
+        if bounds is not None and kind not in (int, float):
+            raise TypeError(f"scenario {name}: option {key} has a Range but is not a number")
+        text = helps.get(key, "")
+        if bounds is not None:  # the range is shown from the annotation, never typed twice
+            end = "." if text.endswith(".") else ""
+            text = f"{text.rstrip('.')} ({bounds.text()}){end}".lstrip()
+        option = Option(key, kind, default, text, choices, bounds)
+        option.check(default, scenario=name)
         out.append(option)
     return tuple(out)
 
 
+def check_ranges(scenario: str, params: Any) -> None:
+    """Checks each field of the dataclass instance ``params`` against its ``Range``
+    annotation; `ValueError` naming ``scenario`` and the first field out of range."""
+    for key, hint, _ in _declared(type(params)):
+        if typing.get_origin(hint) is Annotated:
+            for extra in typing.get_args(hint)[1:]:
+                if isinstance(extra, Range):
+                    extra.check(getattr(params, key), scenario=scenario, name=key)
+
+
+def check_options_of(
+    name: str, declared: tuple[Option, ...], given: Mapping[str, Any]
+) -> dict[str, Any]:
+    """``given`` checked against the options ``declared`` (names, types, ranges)."""
+    by_name = {o.name: o for o in declared}
+    out = {}
+    for key, value in given.items():
+        if key not in by_name:
+            raise ValueError(
+                f"{name}: unknown option {key!r}; options are {list(by_name) or 'none'}"
+            )
+        out[key] = by_name[key].check(value, scenario=name)
+    return out
+
+
+def check_options(name: str, given: Mapping[str, Any]) -> dict[str, Any]:
+    """Every option of scenario ``name``: the values ``given``, checked (name, type, range),
+    and the defaults of the others, in declaration order.
+
+    Raises:
+        ValueError: an unknown option (the scenario's listed), a value of the wrong type or out
+            of its range, naming the scenario and the option.
+    """
+    info = describe(name)
+    checked = check_options_of(name, info.options, given)
+    return {o.name: checked.get(o.name, o.default) for o in info.options}
+
+
 def register(
-    name: str, *, description: str | None = None
+    name: str,
+    *,
+    description: str | None = None,
+    tags: tuple[str, ...] = (),
+    options: type | None = None,
+    robot: Mapping[str, Any] | None = None,
 ) -> Callable[[Callable[..., Scenario]], Callable[..., Scenario]]:
     """Registers a scenario factory under ``name`` (decorator).
 
     Args:
         name: the scenario's name (lower case, words joined by ``-``).
         description: one line; default the first line of the factory's docstring.
+        tags: the sets the scenario belongs to (``names(tag=...)``).
+        options: a frozen dataclass whose fields are the options, when the factory takes them
+            as ``**options`` rather than in its signature.
+        robot: the options that put the Directions Robot in the scene (``{}`` when it is always
+            there); None when the scene has no place for it. The robot's environments
+            (`sim.envs`) are made for every scenario that has one.
+
+    Returns:
+        The decorator, which returns the factory wrapped: every call checks its options and
+        records them all in the scenario it returns.
     """
 
     def decorate(factory: Callable[..., Scenario]) -> Callable[..., Scenario]:
@@ -200,20 +327,49 @@ def register(
         if "seed" not in signature.parameters:
             raise TypeError(f"scenario {name}: the factory must take a keyword argument seed")
         first = (inspect.getdoc(factory) or "").split("\n", 1)[0].strip()
+
+        @functools.wraps(factory)
+        def checked(*, seed: int, **given: Any) -> Scenario:
+            seed = _check_seed(seed)
+            values = check_options(name, given)
+            made = factory(seed=seed, **values)
+            # What the factory recorded besides its options (what it drew) follows them.
+            drawn = {k: v for k, v in made.options.items() if k not in values}
+            return dataclasses.replace(made, options={**values, **drawn})
+
+        declared = _options_of(name, factory if options is None else options)
+        checked.__signature__ = signature.replace(  # type: ignore[attr-defined]
+            parameters=[
+                inspect.Parameter("seed", inspect.Parameter.KEYWORD_ONLY, annotation=int),
+                *(
+                    inspect.Parameter(
+                        o.name, inspect.Parameter.KEYWORD_ONLY, default=o.default, annotation=o.type
+                    )
+                    for o in declared
+                ),
+            ]
+        )
         _REGISTRY[name] = ScenarioInfo(
             name=name,
             description=description or first,
-            factory=factory,
-            options=_options_of(name, factory),
+            factory=checked,
+            options=declared,
+            tags=frozenset(tags),
+            robot=None
+            if robot is None
+            else MappingProxyType(check_options_of(name, declared, robot)),
         )
-        return factory
+        return checked
 
     return decorate
 
 
-def names() -> tuple[str, ...]:
-    """The registered scenario names, sorted."""
-    return tuple(sorted(_REGISTRY))
+def names(*, tag: str | None = None) -> tuple[str, ...]:
+    """The registered scenario names, sorted; with ``tag``, those tagged so, in the order they
+    were registered (the order their module lists them)."""
+    if tag is None:
+        return tuple(sorted(_REGISTRY))
+    return tuple(name for name, info in _REGISTRY.items() if tag in info.tags)
 
 
 def describe(name: str) -> ScenarioInfo:
@@ -240,15 +396,10 @@ def make(name: str, *, seed: int, **overrides: Any) -> Scenario:
 
     Raises:
         ValueError: unknown scenario (the known ones listed), unknown option (the scenario's
-            listed), a value of the wrong type, or an impossible value (from the factory),
-            before anything is drawn.
+            listed), a value of the wrong type or out of its range, or an impossible
+            combination (from the factory), before anything is drawn.
     """
-    info = describe(name)
-    seed = _check_seed(seed)
-    values: dict[str, Any] = {}
-    for key, value in overrides.items():
-        values[key] = info.option(key).check(value, scenario=name)
-    return info.factory(seed=seed, **values)
+    return describe(name).factory(seed=seed, **overrides)
 
 
 def parse_options(name: str, pairs: Mapping[str, str]) -> dict[str, Any]:

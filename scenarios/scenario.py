@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
@@ -21,20 +21,21 @@ class Scenario:
     Attributes:
         name: the registered name, e.g. ``"word-improv"``.
         seed: the seed it was drawn with.
-        options: every option's value (defaults included), JSON-ready.
         stage: the room, the people, the robot.
         timeline: the script (`scenarios.script.Script`): intents and planned groups by time.
         duration: natural length of the episode, seconds.
         description: one line.
+        options: every option's value (defaults included), JSON-ready; the registry records
+            them (`scenarios.register`), the factory need not.
     """
 
     name: str
     seed: int
-    options: Mapping[str, Any]
     stage: Stage
     timeline: Timeline
     duration: float
     description: str = ""
+    options: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "options", MappingProxyType(dict(self.options)))

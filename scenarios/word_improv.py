@@ -23,15 +23,15 @@ torsos facing the group's centre within 5 degrees in the median).
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import RadiusLaw, circle_places
-from scenarios.registry import register
-from scenarios.scenario import Scenario, check_option
+from scenarios.registry import Range, register
+from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Stage
 from scenarios.timeline import TimelineBuilder
@@ -56,49 +56,39 @@ END_TAIL_S = 2.0  # seconds recorded after the game ends (the last two still sta
 MAX_TURNS = 10_000  # turns after which the game stops even without a winner
 
 
-@register("word-improv")
+@register("word-improv", tags=("game",), robot={"robot": "watch"})
 def word_improv(
     *,
     seed: int,
-    players: int = 6,
-    turn_duration: float = 30.0,
-    fail_probability: float = 0.12,
+    players: Annotated[int, Range(2, 7)] = 6,
+    turn_duration: Annotated[float, Range(5.0, 300.0, unit="s")] = 30.0,
+    fail_probability: Annotated[float, Range(0.01, 1.0)] = 0.12,
     robot: Literal["none", "watch", "moderate"] = "none",
-    radius_base: float = BABBLE_RADIUS.base,
-    radius_per_member: float = BABBLE_RADIUS.per_member,
-    radius_spread: float = 0.03,
-    position_noise: float = 0.03,
-    orientation_noise: float = 0.08,
-    head_noise: float = 0.0,
-    mean_utterance: float = 5.0,
+    radius_base: Annotated[float, Range(0.3, 2.0, unit="m")] = BABBLE_RADIUS.base,
+    radius_per_member: Annotated[float, Range(0.0, 0.5, unit="m")] = BABBLE_RADIUS.per_member,
+    radius_spread: Annotated[float, Range(0.0, 0.5)] = 0.03,
+    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
+    orientation_noise: Annotated[float, Range(0.0, 0.8, unit="rad")] = 0.08,
+    head_noise: Annotated[float, Range(0.0, 0.8, unit="rad")] = 0.0,
+    mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 5.0,
 ) -> Scenario:
     """The Babble Word Improv Game: a circle that shuffles and loses a player at a time.
 
     Args:
         seed: seeds every draw.
-        players: players at the start, besides the moderator (2-7; Babble: 6 and a moderator).
-        turn_duration: mean length of a turn, seconds (5-300).
-        fail_probability: chance that the turn's player fails and leaves, per turn (0.01-1).
+        players: players at the start, besides the moderator; Babble: 6 and a moderator.
+        turn_duration: mean length of a turn, seconds.
+        fail_probability: chance that the turn's player fails and leaves, per turn.
         robot: none, watch (from a corner) or moderate (the robot is the moderator).
-        radius_base: o-space radius of a pair, metres (0.3-2).
-        radius_per_member: growth of the radius per extra member, metres (0-0.5).
-        radius_spread: relative standard deviation of a circle's radius (0-0.5).
-        position_noise: standard deviation of a place, metres (0-0.3).
-        orientation_noise: standard deviation of a facing, radians (0-0.8).
-        head_noise: standard deviation of a gaze off its target, radians (0-0.8).
-        mean_utterance: mean length of one speaker's turn to speak, seconds (0.5-60).
+        radius_base: o-space radius of a pair, metres.
+        radius_per_member: growth of the radius per extra member, metres.
+        radius_spread: relative standard deviation of a circle's radius.
+        position_noise: standard deviation of a place, metres.
+        orientation_noise: standard deviation of a facing, radians.
+        head_noise: standard deviation of a gaze off its target, radians.
+        mean_utterance: mean length of one speaker's turn to speak, seconds.
     """
     name = "word-improv"
-    check_option(name, "players", players, low=2, high=7)
-    check_option(name, "turn_duration", turn_duration, low=5.0, high=300.0, unit="s")
-    check_option(name, "fail_probability", fail_probability, low=0.01, high=1.0)
-    check_option(name, "radius_base", radius_base, low=0.3, high=2.0, unit="m")
-    check_option(name, "radius_per_member", radius_per_member, low=0.0, high=0.5, unit="m")
-    check_option(name, "radius_spread", radius_spread, low=0.0, high=0.5)
-    check_option(name, "position_noise", position_noise, low=0.0, high=0.3, unit="m")
-    check_option(name, "orientation_noise", orientation_noise, low=0.0, high=0.8, unit="rad")
-    check_option(name, "head_noise", head_noise, low=0.0, high=0.8, unit="rad")
-    check_option(name, "mean_utterance", mean_utterance, low=0.5, high=60.0, unit="s")
     law = RadiusLaw(radius_base, radius_per_member)
     largest = law(players + 1) * (1.0 + 3.0 * radius_spread) + CENTRE_JITTER_M + 0.35
     if largest > 0.5 * min(AREA_M):
@@ -260,19 +250,6 @@ def word_improv(
     return Scenario(
         name=name,
         seed=seed,
-        options={
-            "players": players,
-            "turn_duration": turn_duration,
-            "fail_probability": fail_probability,
-            "robot": robot,
-            "radius_base": radius_base,
-            "radius_per_member": radius_per_member,
-            "radius_spread": radius_spread,
-            "position_noise": position_noise,
-            "orientation_noise": orientation_noise,
-            "head_noise": head_noise,
-            "mean_utterance": mean_utterance,
-        },
         stage=Stage(room=AREA_M, people=roles, robot=robot_place),
         timeline=builder.build(),
         duration=t,

@@ -1,7 +1,9 @@
 """Gymnasium environments: the Directions Robot as the agent in scripted social scenes.
 
-Importing this package registers one environment per scenario for the joining task and one for
-observing (or name it in the id: ``gymnasium.make("sim.envs:ReformSim/Mingle-v0")``)::
+Importing this package registers, for every registered scenario with a place for the robot
+(`scenarios.register`'s ``robot=``) but the randomised ones (whose room and crowd change with
+the seed), one environment for the joining task and one for observing
+(or name it in the id: ``gymnasium.make("sim.envs:ReformSim/Mingle-v0")``)::
 
     ReformSim/HRIConversation-v0    ReformSim/HRIConversationObserve-v0
     ReformSim/HRIRobotExcluded-v0   ReformSim/HRIRobotExcludedObserve-v0
@@ -11,7 +13,8 @@ observing (or name it in the id: ``gymnasium.make("sim.envs:ReformSim/Mingle-v0"
 
 ``gymnasium.make(id, **kwargs)`` passes keyword arguments on to `SocialEnv` (``detector=``,
 ``model=``, ``sensor=``, ``render_mode="rgb_array"``, ``record_dir=``, ...). Registration
-imports only gymnasium: the environment's module (MuJoCo, the detectors) loads on first make.
+imports only gymnasium and the scenario registry: the environment's module (MuJoCo, the
+detectors) loads on first make.
 
 Public surface (loaded on first use): `SocialEnv`, `TruthDetector`, the task (`JoinTask`,
 `OSpace`, `estimate_o_space`, `joining_place`, `REWARD_TERMS`), the scripted baseline
@@ -24,21 +27,39 @@ from typing import Any
 
 import gymnasium as gym
 
+import scenarios
 from reform._lazy import lazy_exports
 
 NAMESPACE = "ReformSim"
 ENTRY_POINT = "sim.envs.social:SocialEnv"
 
-# Environment name -> scenario name and its options for the environment (joining, observing):
-# the robot must be in the scene; a joining episode needs only the first minute of a party.
-_SCENES: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
-    "HRIConversation": ("hri-conversation", {}, {}),
-    "HRIRobotExcluded": ("hri-robot-excluded", {}, {}),
-    "HRIPassing": ("hri-passing", {}, {}),
-    "WordImprov": ("word-improv", {"robot": "watch"}, {"robot": "watch"}),
-    "Mingle": ("mingle", {"robot": True, "duration": 60.0}, {"robot": True}),
-}
+# A joining episode needs only the first minute of a party.
+_JOIN_OPTIONS: dict[str, dict[str, Any]] = {"party": {"duration": 60.0}}
 
+
+def _env_name(scenario: str) -> str:
+    """``hri-robot-excluded`` -> ``HRIRobotExcluded``."""
+    return "".join("HRI" if w == "hri" else w.capitalize() for w in scenario.split("-"))
+
+
+def _scenes() -> dict[str, tuple[str, dict[str, Any], dict[str, Any]]]:
+    """Environment name -> scenario and its options for joining and for observing: every
+    scenario with a place for the robot, but those tagged ``randomised``, whose room and crowd
+    are drawn anew per seed while an environment's observation space is fixed when it is
+    made."""
+    out = {}
+    for name in scenarios.names():
+        info = scenarios.describe(name)
+        if info.robot is None or "randomised" in info.tags:
+            continue
+        join = dict(info.robot)
+        for tag in sorted(info.tags & _JOIN_OPTIONS.keys()):
+            join |= _JOIN_OPTIONS[tag]
+        out[_env_name(name)] = (name, join, dict(info.robot))
+    return out
+
+
+_SCENES = _scenes()
 ENV_IDS: tuple[str, ...] = tuple(
     f"{NAMESPACE}/{name}{suffix}-v0" for name in _SCENES for suffix in ("", "Observe")
 )

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+import scenarios
 from reform.calibration import (
     MIN_GROUPS,
     TIGHTNESS,
@@ -61,7 +62,7 @@ CALIBRATED: Mapping[str, tuple[str, float]] = {
 }
 RANDOMISED = "mingle-randomised"
 RANDOMISED_RATE_HZ = 0.5  # Hz
-HRI_SCENES = ("hri-conversation", "hri-robot-excluded", "hri-passing")
+HRI_SCENES = scenarios.names(tag="hri")
 HRI_RATE_HZ = 1.0  # Hz
 COVERAGE_QUANTILES = (0.05, 0.5, 0.95)
 

@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 import reform.classifiers
+import scenarios
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, score_intervals
 from reform.classifiers import BAGGED_TREES, WEIGHTED_KNN
 from reform.detectors import make_detector, run_detector
@@ -90,7 +91,7 @@ __all__ = [
     "reform_detectors",
 ]
 
-HRI_SCENARIOS = ("hri-conversation", "hri-robot-excluded", "hri-passing")
+HRI_SCENARIOS = scenarios.names(tag="hri")  # the paper's three scenes, in the order registered
 ALL = "all"  # the three scenes pooled, as the paper's 100 frames were
 WIDE_FOV_DEG = 180.0  # degrees, the robot-wide view's field of view
 VIEWS: Mapping[str, Sensor | None] = MappingProxyType(

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
+import inspect
 import math
 import subprocess
 import sys
 from collections import Counter
+from typing import Annotated
 
 import numpy as np
 import pytest
@@ -19,8 +22,12 @@ from scenarios import (
     GroundTruth,
     Intent,
     PlannedGroup,
+    Range,
+    Scenario,
     TimelineBuilder,
 )
+from scenarios.hri import hri_conversation
+from scenarios.mingle import MingleParams
 from sim.episode import Episode, scene_spec, simulate_episode, stream_episode
 from sim.scene import PersonSpec
 
@@ -363,6 +370,60 @@ def test_registry_lists_typed_options():
         "robot": True,
         "people": 20,
     }
+
+
+def test_an_option_is_declared_once_and_read_everywhere():
+    """The signature (or the options dataclass) holds type, range and default; the help shows
+    the range, every call checks it, and the scenario records every option's value."""
+    radius = {o.name: o for o in scenarios.options("hri-conversation")}["radius"]
+    assert (radius.range.low, radius.range.high, radius.range.unit) == (0.3, 1.5, "m")
+    assert radius.help == "o-space radius of the group of three, metres (0.3-1.5)."
+    people = {o.name: o for o in scenarios.options("mingle")}["people"]
+    assert (people.type, people.default, people.range.text()) == (int, 18, "2-100")
+    assert {o.name for o in scenarios.options("mingle")} == {
+        f.name for f in dataclasses.fields(MingleParams)
+    }
+    made = hri_conversation(seed=3, radius=0.8)
+    assert dict(made.options) == {o.name: o.default for o in scenarios.options(made.name)} | {
+        "radius": 0.8
+    }
+    with pytest.raises(ValueError, match=r"option radius must be within \[0.3, 1.5\] m, got 2.0"):
+        hri_conversation(seed=3, radius=2.0)  # a direct call is checked as make's is
+    with pytest.raises(ValueError, match=r"hri-conversation: unknown option 'colour'"):
+        hri_conversation(seed=3, colour=1)
+    assert list(inspect.signature(hri_conversation).parameters)[:3] == [
+        "seed",
+        "radius",
+        "talk_duration",
+    ]
+    randomised = scenarios.make("mingle-randomised", seed=2, people_min=8, people_max=9)
+    assert list(randomised.options) == ["people_min", "people_max", "duration", "robot", "drawn"]
+    assert randomised.options["drawn"]["people"] in (8, 9)
+
+
+def test_scenario_sets_come_from_tags():
+    assert scenarios.names(tag="hri") == ("hri-conversation", "hri-robot-excluded", "hri-passing")
+    assert scenarios.names(tag="party") == ("mingle", "mingle-randomised")
+    assert scenarios.names(tag="nothing-tagged-so") == ()
+    assert set(scenarios.names()) == {
+        n for t in ("hri", "party", "game") for n in scenarios.names(tag=t)
+    }
+
+
+def test_a_factory_declaring_an_option_badly_is_refused_at_registration():
+    with pytest.raises(TypeError, match=r"scenario bad: option size has a Range but is not a"):
+
+        @scenarios.register("bad")
+        def bad(*, seed: int, size: Annotated[str, Range(0, 1)] = "a") -> Scenario:
+            raise AssertionError
+
+    with pytest.raises(ValueError, match=r"bad-default: option size must be within \[0, 1\]"):
+
+        @scenarios.register("bad-default")
+        def bad_default(*, seed: int, size: Annotated[int, Range(0, 1)] = 5) -> Scenario:
+            raise AssertionError
+
+    assert "bad" not in scenarios.names() and "bad-default" not in scenarios.names()
 
 
 @pytest.mark.parametrize(

@@ -92,8 +92,8 @@ def test_import_sim_envs_registers_every_id_and_stays_light() -> None:
     code = (
         "import sys, gymnasium, sim.envs\n"
         "ids = [i for i in gymnasium.registry if i.startswith('ReformSim/')]\n"
-        "heavy = [m for m in sys.modules if m in ('mujoco', 'sklearn', 'scenarios', "
-        "'sim.envs.social') or m.startswith('reform.') and m != 'reform._lazy']\n"
+        "heavy = [m for m in sys.modules if m in ('mujoco', 'sklearn', 'sim.envs.social') "
+        "or m.startswith('reform.') and m != 'reform._lazy']\n"
         "print(len(ids), heavy)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -102,7 +102,24 @@ def test_import_sim_envs_registers_every_id_and_stays_light() -> None:
 
 
 def test_ids_name_a_task_and_an_observe_variant_per_scenario() -> None:
+    """Every registered scenario with a place for the robot has its two environments (but the
+    randomised ones: their room changes with the seed)."""
+    names = {i.split("/")[1].removesuffix("-v0").removesuffix("Observe") for i in ENV_IDS}
+    assert names == {
+        "HRIConversation",
+        "HRIRobotExcluded",
+        "HRIPassing",
+        "WordImprov",
+        "Mingle",
+    }
     assert len(ENV_IDS) == 10
+    assert gym.spec("ReformSim/Mingle-v0").kwargs["scenario_options"] == {
+        "robot": True,
+        "duration": 60.0,
+    }
+    assert gym.spec("ReformSim/WordImprovObserve-v0").kwargs["scenario_options"] == {
+        "robot": "watch"
+    }
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.entry_point == "sim.envs.social:SocialEnv"
