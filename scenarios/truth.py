@@ -54,7 +54,8 @@ class GroundTruth:
         facing_tolerance: float = FACING_TOLERANCE_RAD,
     ) -> None:
         self._plan = tuple(sorted(plan, key=lambda g: g.start))
-        column = {int(a): c for c, a in enumerate(ids)}
+        self._ids = tuple(int(a) for a in ids)
+        column = {a: c for c, a in enumerate(self._ids)}
         self._columns = []
         for g in self._plan:
             missing = [m for m in g.members if m not in column]
@@ -71,6 +72,11 @@ class GroundTruth:
         self._live_until = np.array([g.end for g in self._plan], dtype=np.float64)
         self._dropped = np.zeros(k, dtype=bool)
         self._next = 0  # plan entries before this one have been looked at
+
+    @property
+    def ids(self) -> tuple[int, ...]:
+        """The agent ids, the columns of the pose arrays `update` takes."""
+        return self._ids
 
     def update(
         self,

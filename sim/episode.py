@@ -7,9 +7,10 @@ and options, or a made `scenarios.Scenario`) into frames:
    overlaps and room capacity);
 2. the `World` samples the scenario's `Timeline` for intents (every ``1 / decision_rate`` s)
    and moves everyone at ``1 / dt`` Hz;
-3. poses are read every ``1 / rate`` seconds and the ground truth is settled by the scenario
-   layer's rule (`scenarios.GroundTruth`: a group starts when its members have arrived at their
-   places facing the centre, and ends when the first leaves);
+3. poses are read every ``1 / rate`` seconds and the world settles the ground truth by the
+   scenario layer's rule (``World(truth=scenario.ground_truth())``, `scenarios.GroundTruth`: a
+   group starts when its members have arrived at their places facing the centre, and ends when
+   the first leaves), in this one place for every path (blocks, frames, the robot's view);
 4. with ``view="robot"`` the robot's head sensor (`sim.sensor.Sensor`) observes each frame
    (field of view, range, occlusion by MuJoCo rays, dropouts, noise) and the observed frame
    keeps the ground truth restricted to the people it holds.
@@ -61,7 +62,6 @@ from sim.world import (
     DEFAULT_DECISION_RATE_HZ,
     DEFAULT_DT_S,
     World,
-    restrict_groups,
 )
 
 __all__ = [
@@ -316,6 +316,7 @@ def _world(plan: _Plan) -> World:
         dt=plan.dt,
         decision_rate=plan.decision_rate,
         sequence=plan.sequence,
+        truth=plan.scenario.ground_truth(),
     )
 
 
@@ -357,12 +358,9 @@ def episode_blocks(
 
 
 def _blocks(plan: _Plan, world: World, *, block_rows: int, threads: int) -> Iterator[FrameBlock]:
-    truth = plan.scenario.ground_truth(world.ids.tolist())
-    for block in world.rollout(
+    return world.rollout(
         plan.count / plan.rate, rate=plan.rate, block_rows=block_rows, threads=threads
-    ):
-        groups = truth.update(block.time, block.present, block.position, block.yaw)
-        yield dataclasses.replace(block, groups=groups)
+    )
 
 
 def stream_episode(
@@ -450,22 +448,8 @@ def _stream(
         return
     assert sensor is not None
     rng = np.random.default_rng(plan.sensor_seed)
-    truth = plan.scenario.ground_truth(world.ids.tolist())
-    n = world.ids.size
     for frame in world.run(plan.count / plan.rate, rate=plan.rate):
-        rows = np.array([world.agent_index(int(i)) for i in frame.ids], dtype=np.int64)
-        present = np.zeros((1, n), dtype=bool)
-        present[0, rows] = True
-        position = np.zeros((1, n, 2))
-        position[0, rows] = frame.position
-        yaw = np.zeros((1, n))
-        yaw[0, rows] = frame.yaw
-        (groups,) = truth.update(np.array([frame.time]), present, position, yaw)
-        world_frame = frame.replace(groups=restrict_groups(groups, set(frame.ids.tolist())))
-        observed = sensor.observe(world, rng)
-        seen = set(observed.ids.tolist())
-        observed = observed.replace(groups=restrict_groups(world_frame.groups, seen))
-        yield world_frame, observed
+        yield frame, sensor.observe(world, rng)
 
 
 @dataclass(frozen=True, eq=False)

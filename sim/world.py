@@ -47,6 +47,7 @@ from reform.frame import ROBOT, Frame, Group, wrap_angle
 from reform.frame_block import FrameBlock
 from reform.perturb import restrict_groups
 from scenarios.script import WALK_SPEED_M_S, Intent, Point, Script
+from scenarios.truth import GroundTruth
 from sim import _native, motion
 from sim.motion import (
     PERSON_LIMITS,
@@ -136,6 +137,10 @@ class World:
         person_limits: motion limits of the people.
         robot_limits: motion limits of the robot.
         model: a model built by ``build_scene(spec)`` to reuse; ``None`` builds one.
+        truth: the ground-truth rule that settles the groups from the poses (a
+            `scenarios.GroundTruth` over this world's ids, in order), applied here once to every
+            output time; ``None``: the groups are the ones the script declares (or
+            `set_groups`'s).
 
     Raises:
         ValueError: on an invalid step or rate, or if the script's first intents or groups are
@@ -154,6 +159,7 @@ class World:
         person_limits: MotionLimits = PERSON_LIMITS,
         robot_limits: MotionLimits = ROBOT_LIMITS,
         model: mujoco.MjModel | None = None,
+        truth: GroundTruth | None = None,
     ) -> None:
         if not isinstance(spec, SceneSpec):
             raise ValueError(f"spec must be a SceneSpec, got {type(spec).__name__}")
@@ -192,6 +198,13 @@ class World:
         self._ids.flags.writeable = False
         self._kinds = tuple(a.kind for a in agents)
         self._index = {int(a.id): i for i, a in enumerate(agents)}
+        if truth is not None and tuple(truth.ids) != tuple(self._ids.tolist()):
+            raise ValueError(
+                f"truth must settle the groups over this world's agents {self._ids.tolist()}, "
+                f"in order; it holds {list(truth.ids)}"
+            )
+        self._truth = truth
+        self._truth_now: tuple[int, tuple[Group, ...]] | None = None  # (step, its groups)
         self._robot = n - 1 if spec.robot is not None else -1
         self._bind_model(agents)
         for size in ("nbody", "nmocap", "nq"):
@@ -401,11 +414,12 @@ class World:
         self._load_row(mpos[0], mquat[0], qpos[0], present[0])
 
     def frame(self) -> Frame:
-        """The ground truth now: poses read from MuJoCo's kinematics, the declared groups."""
+        """The ground truth now: poses read from MuJoCo's kinematics, the groups settled (by
+        the ``truth`` rule, else as declared), restricted to the agents present."""
         keep = np.flatnonzero(self._present)
         torso, head = self._torso_body[keep], self._head_body[keep]
         ids = self._ids[keep]
-        groups = restrict_groups(self._groups_at_step(self._step_index), set(ids.tolist()))
+        groups = restrict_groups(self.groups(), set(ids.tolist()))
         return Frame(
             ids=ids,
             kinds=tuple(self._kinds[i] for i in keep),
@@ -417,6 +431,21 @@ class World:
             time=self.time,
             sequence=self._sequence,
         )
+
+    def groups(self) -> tuple[Group, ...] | None:
+        """The ground-truth groups now, as the ``truth`` rule settles them from the poses (each
+        output time settled once, in time order), else as the script or `set_groups` declares
+        them; ``None``: not annotated."""
+        if self._truth is None:
+            return self._groups_at_step(self._step_index)
+        if self._truth_now is None or self._truth_now[0] != self._step_index:
+            xy = self._data.xpos[self._torso_body, :2]
+            yaw = yaw_from_quat(self._data.xquat[self._torso_body])
+            (now,) = self._truth.update(
+                np.array([self.time]), self._present[None], xy[None], yaw[None]
+            )
+            self._truth_now = (self._step_index, now)
+        return self._truth_now[1]
 
     def run(self, duration: float, *, rate: float = DEFAULT_DECISION_RATE_HZ) -> Iterator[Frame]:
         """Advances by ``duration`` seconds, yielding a Frame every ``1 / rate`` seconds.
@@ -488,7 +517,12 @@ class World:
                 yaws = yaw_from_quat(np.take(batch.xquat[:rows], bodies, axis=1))
                 last = (mpos[rows - 1], mquat[rows - 1], qpos[rows - 1], present[rows - 1])
             steps = first_step + every * np.arange(1, rows + 1)
-            groups = self._groups_of_steps(steps)
+            if self._truth is None:
+                groups = self._groups_of_steps(steps)
+            else:
+                groups = self._truth.update(
+                    steps * self._dt, present[:rows], xy[:rows, :n], yaws[:, :n]
+                )
             self._load_row(*last)
             done += rows
             yield FrameBlock(

@@ -358,12 +358,12 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             seed=world_seed,
             script=ScenarioScript(scenario),
             sequence=f"{scenario.name}-{scenario.seed}",
+            truth=scenario.ground_truth(),
         )
         world.command_robot(RobotCommand())
         self._eyes = Eyes(world, self._sensor)
         self._robot_index = self._eyes.robot
         self._people_rows = np.flatnonzero(world.ids != world.robot_id).astype(np.int64)
-        self._truth_rule = scenario.ground_truth(world.ids.tolist())
         self._target = None if first is None else Target(scenario.plan, first, world.ids, robot_id)
         limit = scenario.duration
         if self._episode_seconds is not None:
@@ -589,9 +589,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         """Observation and info of the state the world is in now."""
         eyes = self._eyes
         truth = eyes.truth()
-        groups = self._truth_rule.update(
-            np.array([truth.time]), truth.present[None], truth.position[None], truth.yaw[None]
-        )[0]
+        groups = self._world.groups()
         view = eyes.look(truth, self.np_random)
         if self._steps_taken % self._detect_every == 0:
             self._detect(truth, view, groups)

@@ -9,8 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 
+import scenarios
 from reform import Frame, FrameBlock, wrap_angle
 from sim import Intent, RobotCommand, RobotSpec, SceneSpec, World
+from sim.episode import scene_spec
 from sim.scene import PersonSpec
 from sim.world import yaw_from_quat
 
@@ -302,3 +304,28 @@ def test_a_commanded_robot_stops_at_a_person_instead_of_shoving() -> None:
     assert np.linalg.norm(person) < 0.02  # idle sway only
     gap = np.linalg.norm(person - robot) - world.radii.sum()
     assert 0.0 <= gap < 0.1
+
+
+def test_a_world_settles_its_groups_by_the_ground_truth_rule():
+    """With ``truth=``, the world's groups are the rule's (a group starts when its members have
+    arrived), the same on the fast path and frame by frame; without it, the script's."""
+    made = scenarios.make("hri-conversation", seed=2, talk_duration=5.0)
+    spec = scene_spec(made.stage, name=made.name)
+
+    def world(truth):
+        return World(spec, seed=0, script=made.timeline, truth=truth)
+
+    declared = [f.groups for f in world(None).run(12.0, rate=2.0)]
+    frames = [f.groups for f in world(made.ground_truth()).run(12.0, rate=2.0)]
+    blocks = [
+        g
+        for b in world(made.ground_truth()).rollout(12.0, rate=2.0, block_rows=5)
+        for g in b.groups
+    ]
+    assert frames == [tuple(g) for g in blocks]
+    walking_up = [k for k, (d, s) in enumerate(zip(declared, frames, strict=True)) if d and not s]
+    assert walking_up and walking_up[0] == 0  # planned from the start, formed only on arrival
+    assert any(len(g) == 3 for groups in frames for g in groups)
+    other = scenarios.make("hri-passing", seed=0, people=3).ground_truth()
+    with pytest.raises(ValueError, match=r"truth must settle the groups over this world's agents"):
+        world(other)
