@@ -10,44 +10,76 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from sim.cli import (
-    _benchmark,
-    _calibrate,
-    _characterize,
-    _data,
-    _datasets,
-    _demo,
-    _detect,
-    _evaluate,
-    _experiment,
-    _generate,
-    _policy,
-    _scenarios,
-    _simulate,
-    _stress,
-    _train,
-)
-from sim.cli._common import CliError, CommandParser, check_jobs
+from sim.cli._common import CliError, Command, CommandParser, add_commands, check_jobs
 from sim.cli._interrupt import sigint_to_main_only
 
-# Each module exposes ``register(subparsers)``, adding its subcommand: a name and help line at
-# once, the arguments (and the ``handler`` default) when the subcommand is used.
-_COMMANDS = (
-    _demo,
-    _data,
-    _datasets,
-    _evaluate,
-    _detect,
-    _benchmark,
-    _experiment,
-    _train,
-    _characterize,
-    _scenarios,
-    _simulate,
-    _generate,
-    _calibrate,
-    _stress,
-    _policy,
+# The subcommands, in the order of ``reform-sim --help``: each a name, its help line and the
+# module of its arguments (`sim.cli._NAME`; what it does is `sim.cli.NAME`).
+COMMANDS = (
+    Command(
+        "demo",
+        "the whole toolkit on an embedded default: simulate, train, evaluate, record, report",
+        "sim.cli._demo",
+    ),
+    Command("data", "inspect or convert a dataset", "sim.cli._data"),
+    Command("datasets", "list or fetch the field's public datasets", "sim.cli._datasets"),
+    Command(
+        "evaluate",
+        "score a detector on a dataset (pairwise accuracy, P/R/F1 at T=2/3 and T=1)",
+        "sim.cli._evaluate",
+    ),
+    Command(
+        "detect",
+        "run a detector and write the detected groups of every frame as JSON",
+        "sim.cli._detect",
+    ),
+    Command(
+        "benchmark",
+        "every detector on every dataset: P/R/F1 at T = 2/3 and 1, and the mean",
+        "sim.cli._benchmark",
+    ),
+    Command(
+        "experiment",
+        "run a documented experiment and write its results (Markdown + JSON)",
+        "sim.cli._experiment",
+    ),
+    Command(
+        "train",
+        "train REFORM on a dataset's annotated frames and save it (skops)",
+        "sim.cli._train",
+    ),
+    Command(
+        "characterize",
+        "Tightness and Symmetry by group size, ANOVA, Tukey's HSD; compare with real data",
+        "sim.cli._characterize",
+        aliases=("characterise",),
+    ),
+    Command("scenarios", "list the registered scenarios and their options", "sim.cli._scenarios"),
+    Command(
+        "simulate",
+        "run one episode of a scenario and write its frames (Parquet)",
+        "sim.cli._simulate",
+    ),
+    Command(
+        "generate",
+        "generate a synthetic dataset: many seeded episodes as Parquet shards",
+        "sim.cli._generate",
+    ),
+    Command(
+        "calibrate",
+        "simulate the scenarios and set them beside SALSA and Babble",
+        "sim.cli._calibrate",
+    ),
+    Command(
+        "stress",
+        "stress tests: F1 of REFORM and GCFF against noise, dropouts, crowds, the sensor",
+        "sim.cli._stress",
+    ),
+    Command(
+        "policy",
+        "scripted baseline of the Gymnasium joining task: success rate",
+        "sim.cli._policy",
+    ),
 )
 
 
@@ -85,8 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(
         dest="command", metavar="COMMAND", required=True, parser_class=CommandParser
     )
-    for module in _COMMANDS:
-        module.register(subparsers)
+    add_commands(subparsers, COMMANDS)
     return parser
 
 

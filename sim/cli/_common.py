@@ -1,16 +1,20 @@
-"""Pieces the subcommands share.
+"""Pieces the subcommands share, and how a subcommand is declared.
 
-Building the parser imports only argparse and these modules: a subcommand's arguments are added
-when that subcommand is parsed or its help is shown (`CommandParser`), and the libraries a
-subcommand runs on are imported inside its handler.
+A subcommand is two modules: ``sim/cli/_NAME.py``, its arguments (light: what adding them needs),
+and ``sim/cli/NAME.py``, what it does (its libraries imported at the top). `Command` names both
+for the command table (`sim.cli.COMMANDS`): building the top-level parser imports neither, a
+subcommand's arguments module is imported when that subcommand is parsed or its help is shown
+(`CommandParser`), and its run module when it runs (`run_with`).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -91,6 +95,58 @@ class CommandParser(argparse.ArgumentParser):
     def format_help(self) -> str:
         self._ensure_arguments()
         return super().format_help()
+
+
+@dataclass(frozen=True)
+class Command:
+    """One subcommand of a command table.
+
+    Attributes:
+        name: what is typed (``reform-sim NAME``).
+        help: its line in the table's help.
+        arguments: the module adding its arguments: ``DESCRIPTION`` (shown as written) and
+            ``add_arguments(parser)``, which sets the ``handler`` default (`run_with`).
+        aliases: other names for it.
+    """
+
+    name: str
+    help: str
+    arguments: str
+    aliases: tuple[str, ...] = ()
+
+
+def add_commands(subparsers: argparse._SubParsersAction, commands: Sequence[Command]) -> None:
+    """Adds each command of ``commands`` to ``subparsers``: its name and help line now, its
+    arguments (importing its arguments module) when it is used."""
+    for command in commands:
+        subparsers.add_parser(
+            command.name,
+            aliases=list(command.aliases),
+            help=command.help,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+            arguments=_arguments_of(command.arguments),
+        )
+
+
+def _arguments_of(module_name: str) -> Callable[[argparse.ArgumentParser], None]:
+    def add(parser: argparse.ArgumentParser) -> None:
+        module = importlib.import_module(module_name)
+        parser.description = module.DESCRIPTION
+        module.add_arguments(parser)
+
+    return add
+
+
+def run_with(target: str) -> Callable[[argparse.Namespace], int]:
+    """The handler ``module:function``, imported when the command runs (so that its arguments
+    and its help do not import what it runs on)."""
+    module_name, function = target.split(":")
+
+    def handler(args: argparse.Namespace) -> int:
+        return getattr(importlib.import_module(module_name), function)(args)
+
+    handler.target = target  # type: ignore[attr-defined]
+    return handler
 
 
 def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bool = False) -> None:

@@ -3,35 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
-from typing import Any
 
-from sim.cli._common import CliError, check_output, check_recording, load_data
-from sim.cli._detection import add_detection_arguments, detect_frames, record_detection
-from sim.cli._detectors import check_detector, detector_params
+from sim.cli._common import run_with
+from sim.cli._detection import add_detection_arguments
+from sim.recording import add_recording_arguments
 
-# Version of the JSON written by ``detect`` (docs/json-schema.md).
-DETECTIONS_SCHEMA_VERSION = 1
-
-_DESCRIPTION = """\
+DESCRIPTION = """\
 Runs a detector on the frames of a dataset and writes, per frame, its sequence, time stamp and
 the detected F-formations (groups of two or more person ids; everyone in no group is alone).
 """
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
-    subparsers.add_parser(
-        "detect",
-        help="run a detector and write the detected groups of every frame as JSON",
-        description=_DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        arguments=_arguments,
-    )
-
-
-def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.recording import add_recording_arguments
+def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_detection_arguments(parser)
     parser.add_argument("--out", required=True, metavar="OUT", help="JSON file to write")
@@ -41,76 +24,4 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
         help="only the frames that carry ground truth (default: every frame)",
     )
     add_recording_arguments(parser)
-    parser.set_defaults(handler=run)
-
-
-def detections_json(
-    frames, predictions, *, detector: str, params: dict[str, Any], dataset, indices
-) -> dict[str, Any]:
-    """The ``detect`` output (docs/json-schema.md); groups sorted, singletons left out."""
-    from reform import __version__
-
-    records = []
-    for index, frame, partition in zip(indices, frames, predictions, strict=True):
-        groups = sorted(sorted(int(m) for m in g) for g in partition if len(g) >= 2)
-        records.append(
-            {
-                "index": int(index),
-                "sequence": frame.sequence,
-                "time": frame.time,
-                "groups": groups,
-            }
-        )
-    return {
-        "schema_version": DETECTIONS_SCHEMA_VERSION,
-        "kind": "reform-sim/detections",
-        "reform_version": __version__,
-        "detector": detector,
-        "detector_params": params,
-        "dataset": dataset.name,
-        "source": dataset.source,
-        "frames": records,
-    }
-
-
-def _dumps(result: dict[str, Any]) -> str:
-    """JSON with the header indented and one line per frame record (readable, diff-friendly)."""
-    header = {key: value for key, value in result.items() if key != "frames"}
-    text = json.dumps(header, indent=2, allow_nan=False)
-    records = ",\n".join("    " + json.dumps(r, allow_nan=False) for r in result["frames"])
-    frames = '  "frames": [\n' + records + "\n  ]" if records else '  "frames": []'
-    return text[: text.rindex("}")].rstrip() + ",\n" + frames + "\n}\n"
-
-
-def run(args: argparse.Namespace) -> int:
-    from reform.atomic import atomic_open
-
-    spec = check_detector(args)
-    check_output("--out", args.out)
-    check_recording(args)
-    dataset = load_data(args)
-    indices = [i for i, f in enumerate(dataset.frames) if f.annotated or not args.annotated_only]
-    frames = [dataset.frames[i] for i in indices]
-    if not frames:
-        raise CliError(f"{args.data}: no frames to run the detector on")
-    detector, predictions = detect_frames(args, spec, frames)
-    result = detections_json(
-        frames,
-        predictions,
-        detector=args.detector,
-        params=detector_params(detector),
-        dataset=dataset,
-        indices=indices,
-    )
-    with atomic_open(args.out) as handle:
-        handle.write(_dumps(result))
-    n_groups = sum(len(record["groups"]) for record in result["frames"])
-    print(
-        f"{args.detector} on {dataset.name}: {len(frames):,} frames, {n_groups:,} F-formations "
-        f"detected; wrote {args.out}",
-        file=sys.stderr,
-    )
-    record_detection(
-        args, command="detect", dataset=dataset, frames=frames, predictions=predictions
-    )
-    return 0
+    parser.set_defaults(handler=run_with("sim.cli.detect:run"))

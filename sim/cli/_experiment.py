@@ -4,27 +4,35 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli import (
-    _experiment_gcff,
-    _experiment_hri,
-    _experiment_paper,
-    _experiment_sim2real,
+from sim.cli._common import Command, add_commands
+
+DESCRIPTION = "Runs a documented experiment and writes its results (Markdown + JSON)."
+
+# The experiments, in the order of ``reform-sim experiment --help``.
+EXPERIMENTS = (
+    Command(
+        "gcff",
+        "GCFF (paper setting, tuned on SALSA train) beside REFORM, SALSA test and Babble",
+        "sim.cli._experiment_gcff",
+    ),
+    Command(
+        "paper",
+        "the REFORM paper's experiment (Table I, Babble) on SALSA and Babble",
+        "sim.cli._experiment_paper",
+    ),
+    Command(
+        "hri",
+        "the paper's HRI proof of concept re-enacted: REFORM and GCFF on the HRI scenes",
+        "sim.cli._experiment_hri",
+    ),
+    Command(
+        "sim2real",
+        "REFORM trained on synthetic crowds only, tested on SALSA and Babble",
+        "sim.cli._experiment_sim2real",
+    ),
 )
 
-# Each module exposes ``register(experiments)``, adding its experiment as the commands do theirs;
-# the order is the order of ``reform-sim experiment --help``.
-_EXPERIMENTS = (_experiment_gcff, _experiment_paper, _experiment_hri, _experiment_sim2real)
 
-
-def register(subparsers: argparse._SubParsersAction) -> None:
-    subparsers.add_parser(
-        "experiment",
-        help="run a documented experiment and write its results (Markdown + JSON)",
-        arguments=_experiments,
-    )
-
-
-def _experiments(parser: argparse.ArgumentParser) -> None:
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     experiments = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
-    for module in _EXPERIMENTS:
-        module.register(experiments)
+    add_commands(experiments, EXPERIMENTS)

@@ -3,22 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import shlex
-import sys
-import time
-from pathlib import Path
 
-from sim.cli._common import CliError, check_output
+from sim.cli._common import run_with
 from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
-    check_report,
-    report_stem,
-    write_report,
 )
+from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
-_DESCRIPTION = """\
+DESCRIPTION = """\
 Simulates the three HRI scenes of the REFORM paper (hri-conversation: two people and the robot
 converse; hri-robot-excluded: two people talk in front of the robot; hri-passing: people walk
 past, no F-formation) with several seeds, and scores REFORM (weighted KNN, bagged trees, logistic
@@ -30,18 +23,7 @@ robot view, detections of REFORM and GCFF).
 """
 
 
-def register(experiments: argparse._SubParsersAction) -> None:
-    experiments.add_parser(
-        "hri",
-        help="the paper's HRI proof of concept re-enacted: REFORM and GCFF on the HRI scenes",
-        description=_DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        arguments=_arguments,
-    )
-
-
-def _arguments(parser: argparse.ArgumentParser) -> None:
-    from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
+def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_dataset_arguments(parser, babble=False)
     add_out_argument(parser)
@@ -68,90 +50,4 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="write DIR/<scene>.rrd: the first episode of each scene from the robot's view",
     )
-    parser.set_defaults(handler=run)
-
-
-def _command(args: argparse.Namespace) -> str:
-    from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
-
-    words = ["reform-sim", "experiment", "hri"]
-    if args.datasets is not None:
-        words += ["--datasets", args.datasets]
-    if args.salsa is not None:
-        words += ["--salsa", args.salsa]
-    if args.seeds != DEFAULT_SEEDS:
-        words += ["--seeds", str(args.seeds)]
-    if args.seed != 0:
-        words += ["--seed", str(args.seed)]
-    if args.views != ",".join(VIEW_NAMES):
-        words += ["--views", args.views]
-    if args.jobs is not None:
-        words += ["--jobs", str(args.jobs)]
-    if args.recordings is not None:
-        words += ["--recordings", args.recordings]
-    words += ["--out", args.out]
-    return shlex.join(words)
-
-
-def run(args: argparse.Namespace) -> int:
-    from reform.datasets import load_salsa
-    from sim.experiments.hri import VIEWS, hri_detectors, hri_experiment, record_scenes
-    from sim.experiments.hri_report import to_markdown
-
-    if args.seeds < 1:
-        raise CliError(f"--seeds must be >= 1, got {args.seeds}")
-    if args.seed < 0:
-        raise CliError(f"--seed must be >= 0, got {args.seed}")
-    views = [v.strip() for v in args.views.split(",") if v.strip()]
-    unknown = [v for v in views if v not in VIEWS]
-    if unknown or not views:
-        raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
-    check_report(report_stem(args.out))
-    check_output("--recordings", args.recordings, folder=True)
-    salsa_path = args.salsa
-    if salsa_path is None and args.datasets is not None:
-        salsa_path = str(Path(args.datasets) / "salsa")
-    salsa = None
-    if salsa_path is not None:
-        from reform.datasets import resolve
-
-        try:
-            salsa_path = str(resolve(salsa_path))
-        except FileNotFoundError:
-            raise CliError(
-                f"SALSA not found at {salsa_path} (give --salsa PATH|NAME or --datasets DIR)"
-            ) from None
-        print(f"loading SALSA from {salsa_path}", file=sys.stderr)
-        salsa = load_salsa(salsa_path).frames
-    else:
-        print("no SALSA given: the SALSA-trained REFORM rows are left out", file=sys.stderr)
-
-    def progress(line: str) -> None:
-        print(line, file=sys.stderr, flush=True)
-
-    start = time.perf_counter()
-    detectors, training = hri_detectors(
-        salsa=salsa, seed=args.seed, jobs=args.jobs, progress=progress
-    )
-    trained = time.perf_counter() - start
-    experiment = hri_experiment(
-        seed=args.seed,
-        seeds=args.seeds,
-        views=views,
-        detectors=detectors,
-        training=training,
-        progress=progress,
-    )
-    timings = {"training": trained, **experiment.timings}
-    timings["total"] = time.perf_counter() - start
-    experiment = dataclasses.replace(experiment, timings=timings)
-    command = _command(args)
-    out = report_stem(args.out)
-    write_report(
-        out, to_markdown(experiment, command=command), experiment.to_json(command=command), indent=1
-    )
-    print(f"wrote {out}.md and {out}.json")
-    if args.recordings is not None:
-        for path in record_scenes(detectors, args.recordings, seed=args.seed):
-            print(f"wrote recording {path}")
-    return 0
+    parser.set_defaults(handler=run_with("sim.cli.experiment_hri:run"))

@@ -1,0 +1,118 @@
+"""What ``reform-sim benchmark`` does when it runs.
+
+Its arguments are `sim.cli._benchmark`."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+
+from tqdm import tqdm
+
+from reform.datasets import detect_format, is_fetched, local_datasets_dir, registry
+from reform.detectors import make_detector
+from reform.splits import DEFAULT_TRAIN_FRACTION
+from sim.cli._benchmark import DEFAULT_DETECTORS, DEFAULT_OUT
+from sim.cli._common import (
+    CliError,
+    check_backend,
+    check_output,
+)
+from sim.experiments.benchmark import dataset_spec, detector_spec, model_spec, run_benchmark
+from sim.experiments.benchmark_report import write_report
+
+
+def _found_datasets() -> list[str]:
+    """Every dataset name on this machine: the fetched public ones, then the local folders."""
+
+    names = [entry.name for entry in registry() if is_fetched(entry.name)]
+    local = local_datasets_dir()
+    if local is not None and local.is_dir():
+        for child in sorted(local.iterdir()):
+            if child.is_dir() and child.name not in names:
+                try:
+                    detect_format(child)
+                except ValueError:
+                    continue
+                names.append(child.name)
+    return names
+
+
+def _run(args: argparse.Namespace) -> int:
+
+    check_backend(args)
+    check_output("--out", args.out, folder=True)
+    names = args.data or _found_datasets()
+    if not names:
+        raise CliError(
+            "no datasets found: fetch the public ones with `reform-sim datasets fetch --all`, "
+            "point $REFORM_SIM_DATASETS at a folder of datasets, or give --data PATH|NAME"
+        )
+    fraction = DEFAULT_TRAIN_FRACTION if args.train_fraction is None else args.train_fraction
+    if not 0.0 < fraction < 1.0:
+        raise CliError(f"--train-fraction must lie in (0, 1), got {fraction}")
+    split = tuple(args.test_split or ("salsa",))
+    datasets = [dataset_spec(name, test_split=split, train_fraction=fraction) for name in names]
+    detectors = [detector_spec(spec) for spec in (args.detector or DEFAULT_DETECTORS)]
+    detectors += [model_spec(path) for path in args.model or ()]
+    _check_detectors(detectors)
+
+    bar = None
+    if not args.no_progress:
+        bar = tqdm(
+            total=len(datasets) * len(detectors), desc="benchmark", unit="cell", file=sys.stderr
+        )
+
+    def progress(done: int, total: int, cell) -> None:  # noqa: ARG001
+        if bar is not None:
+            f1 = "skipped" if cell.scores is None else f"F1 {100 * cell.scores.at['2/3'][2]:.1f}"
+            bar.set_postfix_str(f"{cell.dataset} × {cell.detector}: {f1}", refresh=False)
+            bar.update(1)
+
+    try:
+        benchmark = run_benchmark(
+            datasets,
+            detectors,
+            jobs=args.jobs or 1,
+            backend=args.backend,
+            address=args.address,
+            progress=progress,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    command = _command(args)
+    written = write_report(benchmark, args.out, command=command, recordings=not args.no_recordings)
+    print(written["markdown"].read_text(), end="")
+    print(f"wrote {args.out}/: " + ", ".join(p.name for p in written.values()), file=sys.stderr)
+    return 0
+
+
+def _check_detectors(detectors) -> None:
+    """Every plugin is made once up front, so that a bad one is named before any work."""
+
+    for detector in detectors:
+        if detector.spec in ("gcff", "gcff-own") or detector.spec.startswith("reform:"):
+            continue
+        make_detector(detector.spec)
+
+
+def _command(args: argparse.Namespace) -> str:
+    """The command line that reruns this benchmark."""
+    words = ["reform-sim", "benchmark"]
+    for flag, values in (
+        ("--data", args.data),
+        ("--detector", args.detector),
+        ("--model", args.model),
+        ("--test-split", args.test_split),
+    ):
+        for value in values or ():
+            words += [flag, value]
+    if args.train_fraction is not None:
+        words += ["--train-fraction", f"{args.train_fraction:g}"]
+    if args.out != DEFAULT_OUT:
+        words += ["--out", args.out]
+    if args.no_recordings:
+        words.append("--no-recordings")
+    return " ".join(shlex.quote(w) for w in words)

@@ -1,0 +1,86 @@
+"""What ``reform-sim experiment gcff`` does when it runs.
+
+Its arguments are `sim.cli._experiment_gcff`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from typing import Any
+
+from reform.datasets import load_babble, load_salsa, resolve
+from sim.cli._common import CliError, check_train_fraction, read_text
+from sim.cli._experiment_io import check_report, publish, report_stem
+from sim.experiments.gcff import gcff_comparison
+from sim.experiments.gcff_report import to_markdown
+
+
+def _command(args: argparse.Namespace) -> str:
+    words = [
+        "reform-sim",
+        "experiment",
+        "gcff",
+        "--salsa",
+        args.salsa,
+        "--babble",
+        args.babble,
+        "--train-fraction",
+        f"{args.train_fraction:g}",
+    ]
+    for flag, grid in (("--stride-grid", args.stride_grid), ("--mdl-grid", args.mdl_grid)):
+        if grid is not None:
+            words += [flag, ",".join(f"{v:g}" for v in grid)]
+    if args.gcff_orientation != "body":
+        words += ["--gcff-orientation", args.gcff_orientation]
+    for path in args.with_results:
+        words += ["--with-results", path]
+    words += ["--out", args.out]
+    return shlex.join(words)
+
+
+def _read_results(path: str) -> list[dict[str, Any]]:
+    text = read_text("--with-results", path, expected="JSON text")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CliError(f"--with-results {path}: not JSON ({exc})") from None
+    if isinstance(data, dict) and "results" in data:
+        data = data["results"]
+    results = data if isinstance(data, list) else [data]
+    for i, result in enumerate(results):
+        if not isinstance(result, dict) or result.get("kind") != "reform-sim/evaluation":
+            raise CliError(
+                f"--with-results {path}: entry {i} must be an evaluation "
+                "(kind 'reform-sim/evaluation'), got "
+                f"{result.get('kind') if isinstance(result, dict) else type(result).__name__}"
+            )
+    return results
+
+
+def run(args: argparse.Namespace) -> int:
+
+    check_train_fraction(args)
+    check_report(report_stem(args.out))
+    extra = [result for path in args.with_results for result in _read_results(path)]
+    print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
+    grids = {
+        name: value
+        for name, value in (("stride_grid", args.stride_grid), ("mdl_grid", args.mdl_grid))
+        if value is not None
+    }
+    comparison = gcff_comparison(
+        load_salsa(resolve(args.salsa)),
+        load_babble(resolve(args.babble)),
+        train_fraction=args.train_fraction,
+        orientation=args.gcff_orientation,
+        **grids,
+    )
+    if extra:
+        comparison = comparison.with_results(extra)
+    command = _command(args)
+    publish(
+        to_markdown(comparison, command=command), comparison.to_json(command=command), out=args.out
+    )
+    return 0

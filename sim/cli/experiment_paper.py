@@ -1,0 +1,68 @@
+"""What ``reform-sim experiment paper`` does when it runs.
+
+Its arguments are `sim.cli._experiment_paper`."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+import time
+
+from reform.datasets import load_babble, load_salsa, resolve
+from sim.cli._common import (
+    TRAIN_FRACTION,
+    CliError,
+    check_train_fraction,
+)
+from sim.cli._experiment_io import (
+    check_report,
+    dataset_words,
+    publish,
+    report_stem,
+    salsa_and_babble,
+)
+from sim.experiments.paper import paper_experiment
+from sim.experiments.paper_report import to_markdown
+
+
+def _command(args: argparse.Namespace) -> str:
+    words = ["reform-sim", "experiment", "paper", *dataset_words(args)]
+    if args.train_fraction != TRAIN_FRACTION:
+        words += ["--train-fraction", f"{args.train_fraction:g}"]
+    if args.folds != 5:
+        words += ["--folds", str(args.folds)]
+    if args.jobs is not None:
+        words += ["--jobs", str(args.jobs)]
+    if args.no_diagnostics:
+        words.append("--no-diagnostics")
+    words += ["--out", args.out]
+    return shlex.join(words)
+
+
+def run(args: argparse.Namespace) -> int:
+
+    check_train_fraction(args)
+    if args.folds < 2:
+        raise CliError(f"--folds must be at least 2, got {args.folds}")
+    salsa, babble = salsa_and_babble(args)
+    check_report(report_stem(args.out))
+    started = time.perf_counter()
+
+    def progress(message: str) -> None:
+        print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr)
+
+    experiment = paper_experiment(
+        load_salsa(resolve(salsa)),
+        load_babble(resolve(babble)),
+        train_fraction=args.train_fraction,
+        n_folds=args.folds,
+        n_jobs=args.jobs,
+        diagnostics=not args.no_diagnostics,
+        progress=progress,
+    )
+    command = _command(args)
+    publish(
+        to_markdown(experiment, command=command), experiment.to_json(command=command), out=args.out
+    )
+    return 0

@@ -1,0 +1,58 @@
+"""What ``reform-sim generate`` does when it runs.
+
+Its arguments are `sim.cli._generate`."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from sim.cli._common import (
+    check_backend,
+    check_output,
+    max_memory,
+    parse_overrides,
+    sensor_options,
+    size_error,
+)
+from sim.generate import generate_dataset
+from sim.sizing import RequestTooLarge
+
+
+def _run(args: argparse.Namespace) -> int:
+
+    check_backend(args)
+    check_output("--out", args.out, folder=True)
+    limit = max_memory(args)
+    try:
+        report = generate_dataset(
+            args.scenario,
+            episodes=args.episodes,
+            seed=args.seed,
+            out_dir=args.out,
+            options=parse_overrides(args.scenario, args.overrides),
+            view=args.view,
+            sensor=sensor_options(args),
+            **({} if args.rate is None else {"rate": args.rate}),
+            duration=args.duration,
+            backend=args.backend,
+            address=args.address,
+            n_jobs=args.jobs,
+            save_recordings=args.save_recordings,
+            progress=not args.no_progress,
+            max_memory=limit,
+        )
+    except RequestTooLarge as exc:  # sized before any work: named by the flags
+        raise size_error(exc, {"out_dir": "--out", "n_jobs": "--jobs"}) from None
+    made = report.generated_annotated_frames
+    speed = made / report.seconds if report.seconds > 0 else 0.0
+    print(
+        f"{report.out_dir}: {report.episodes} episodes of {args.scenario} "
+        f"({len(report.generated)} generated, {len(report.skipped)} already there), "
+        f"{report.frames:,} frames ({report.annotated_frames:,} annotated); "
+        f"this run: {made:,} annotated frames in {report.seconds:.1f} s ({speed:,.0f}/s) "
+        f"on {report.n_jobs} {'CPUs (Ray)' if report.backend == 'ray' else 'processes'}; "
+        f"card: {report.card}"
+    )
+    sys.stdout.flush()
+    return 0
