@@ -44,7 +44,20 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
+import sklearn
+from sklearn.base import BaseEstimator, is_classifier
+from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
+from sklearn.exceptions import NotFittedError
+from sklearn.linear_model import LogisticRegression
+from sklearn.neighbors import BallTree, KDTree, KNeighborsClassifier
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.tree import BaseDecisionTree
+from sklearn.tree._tree import Tree
+from sklearn.utils.validation import check_is_fitted
+from skops.io._protocol import PROTOCOL
 
+import reform
 from reform.atomic import atomic_open
 from reform.datasets.errors import shorten
 from reform.detector import Reform, _check_threshold
@@ -119,9 +132,6 @@ def _skops_io() -> Any:
 
 
 def _versions() -> dict[str, str]:
-    import sklearn
-
-    import reform
 
     return {"reform_sim": reform.__version__, "scikit_learn": sklearn.__version__}
 
@@ -140,7 +150,6 @@ def save_model(model: Reform, path: str | os.PathLike[str]) -> Path:
         TypeError: if ``model`` is not a Reform.
         sklearn.exceptions.NotFittedError: if it is not fitted.
     """
-    from sklearn.utils.validation import check_is_fitted
 
     if not isinstance(model, Reform):
         raise TypeError(f"model must be a reform.Reform, got {type(model).__name__}")
@@ -469,7 +478,6 @@ class _Schema:
         raise ValueError(f"{self.path}: schema.json: {place}: {problem}")
 
     def check(self) -> None:
-        from skops.io._protocol import PROTOCOL
 
         raw = self.archive.read("schema.json")
         try:
@@ -846,8 +854,6 @@ def _check_model(path: Path, model: Reform, listed: Any) -> None:
     The objects came from a file, built without their constructors: scikit-learn's own
     inspection of them (tags, properties) may raise anything, which is refused as well.
     """
-    from sklearn.exceptions import NotFittedError
-    from sklearn.utils.validation import check_is_fitted
 
     missing = [name for name in ("classifier_", "features_") if not hasattr(model, name)]
     if missing:
@@ -997,13 +1003,6 @@ def _first(mask: np.ndarray) -> int:
 
 def _check_estimator(where: str, estimator: Any, n_features: int | None) -> None:
     """Checks an estimator given ``n_features`` columns (None: unknown), and what it holds."""
-    from sklearn.base import BaseEstimator
-    from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
-    from sklearn.linear_model import LogisticRegression
-    from sklearn.neighbors import KNeighborsClassifier
-    from sklearn.pipeline import Pipeline
-    from sklearn.preprocessing import StandardScaler
-    from sklearn.tree import BaseDecisionTree
 
     if not isinstance(estimator, BaseEstimator):
         _check_inside(where, estimator, n_features, depth=0, seen=set())
@@ -1050,7 +1049,6 @@ def _classes(where: str, estimator: Any) -> np.ndarray:
 
 
 def _check_pipeline(where: str, pipeline: Any, n_features: int | None) -> None:
-    from sklearn.preprocessing import StandardScaler
 
     steps = pipeline.steps
     if not isinstance(steps, list) or not steps:
@@ -1090,7 +1088,6 @@ def _check_logistic(where: str, model: Any, n_features: int | None) -> None:
 
 
 def _check_neighbors(where: str, model: Any, n_features: int | None) -> None:
-    from sklearn.neighbors import BallTree, KDTree
 
     n = _n_in(where, model, n_features)
     fit_x = _array(
@@ -1144,7 +1141,6 @@ def _check_neighbors(where: str, model: Any, n_features: int | None) -> None:
 def _check_binary_tree(where: str, tree: Any, shape: tuple[int, int] | None) -> None:
     """A KDTree or BallTree: its queries index ``data`` through ``idx_array`` and walk
     ``node_data`` as an implicit binary tree (children of node i: 2i + 1, 2i + 2)."""
-    from sklearn.neighbors import KDTree
 
     data, index, nodes, bounds = tree.get_arrays()
     data = _array(f"{where}.data", data, ndim=2, kind="f", shape=shape)
@@ -1205,8 +1201,6 @@ def _check_binary_tree(where: str, tree: Any, shape: tuple[int, int] | None) -> 
 
 
 def _check_decision_tree(where: str, model: Any, n_features: int | None) -> None:
-    from sklearn.base import is_classifier
-    from sklearn.tree._tree import Tree
 
     n = _n_in(where, model, n_features)
     outputs = _int(f"{where}.n_outputs_", getattr(model, "n_outputs_", None), low=1, high=1)
@@ -1370,9 +1364,6 @@ def _check_inside(
 ) -> None:
     """The trees and neighbour trees anywhere inside an estimator this module does not know,
     each checked on its own terms (its own feature count)."""
-    from sklearn.base import BaseEstimator
-    from sklearn.neighbors import BallTree, KDTree
-    from sklearn.tree._tree import Tree
 
     if id(value) in seen or depth > _INSIDE_DEPTH:
         return

@@ -45,6 +45,8 @@ from typing import Any, Literal
 
 import mujoco
 import numpy as np
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
 
 import scenarios
 from reform.atomic import atomic_path
@@ -628,8 +630,6 @@ def write_episode(
     Raises:
         ValueError: what `simulate_episode` refuses, before anything is simulated.
     """
-    import pyarrow.compute as pc  # as reform.datasets.parquet does: only where Parquet is written
-    import pyarrow.parquet as pq
 
     path = Path(path)
     plan, world, sensor = _setup(

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import hashlib
 import json
 import math
 import os
@@ -56,13 +57,29 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
+import pyarrow.parquet as pq
+from joblib import Parallel, cpu_count, delayed
+from tqdm import tqdm
 
+import scenarios
+from reform import __version__
 from reform.atomic import atomic_open, atomic_path
-from reform.datasets.parquet import CARD_JSON
+from reform.datasets.errors import DataFormatError
+from reform.datasets.parquet import CARD_JSON, FORMAT_VERSION, METADATA_KEY, write_parquet
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
 from reform.seeding import derive_int
-from sim.episode import DEFAULT_RATE_HZ
+from sim import sizing
+from sim.episode import (
+    DEFAULT_RATE_HZ,
+    episode_blocks,
+    estimate_episode,
+    prepare,
+    scene_spec,
+    simulate_episode,
+)
+from sim.recording import FieldOfView, record_episode
+from sim.sensor import Sensor
 
 __all__ = [
     "BACKENDS",
@@ -184,8 +201,6 @@ class GenerationSpec:
     def parameters(self) -> dict[str, Any]:
         """The parameters as the card records them (JSON values); two runs with equal
         parameters (and package version) write the same data."""
-        from reform import __version__
-        from reform.datasets.parquet import FORMAT_VERSION
 
         return {
             "scenario": self.scenario,
@@ -213,7 +228,6 @@ def _sensor(view: str, sensor: Any) -> Any:
                 "sensor options apply to view='robot' only, got sensor options with view='truth'"
             )
         return None
-    from sim.sensor import Sensor
 
     if sensor is None:
         return Sensor()
@@ -431,8 +445,6 @@ def _simulate_and_write(
     `reform.FrameBlock`), no `Frame` per instant. The file is the one the frame path writes,
     byte for byte.
     """
-    from reform.datasets.parquet import write_parquet
-    from sim.episode import episode_blocks, prepare, simulate_episode
 
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
     sequence = _sequence_name(spec.scenario, episode)
@@ -475,7 +487,6 @@ def _simulate_and_write(
 
 def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None:
     """One Rerun recording of the episode: the scene, everyone, the groups, the robot's view."""
-    from sim.recording import FieldOfView, record_episode
 
     # Rerun writes to a path ending in .rrd: a hidden scratch folder beside it, then a rename.
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -648,7 +659,6 @@ def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict
         ValueError: a shard is not the one its place says (other episode, seed, sequence or
             parameters), or not a shard of reform-sim generate; naming each such file.
     """
-    from reform.datasets.errors import DataFormatError
 
     shards: dict[int, ShardSummary] = {}
     problems: list[DataFormatError] = []
@@ -683,10 +693,6 @@ def _checked_shard(path: Path, spec: GenerationSpec, episode: int) -> ShardSumma
     Raises:
         DataFormatError: naming the file, what was expected and what was found.
     """
-    import pyarrow.parquet as pq
-
-    from reform.datasets.errors import DataFormatError
-    from reform.datasets.parquet import METADATA_KEY
 
     try:
         handle = pq.ParquetFile(path)
@@ -811,7 +817,6 @@ def _card(
 
 def _shard_files(out_dir: Path, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
     """Each shard's size and sha256, for the card."""
-    import hashlib
 
     files = {}
     for shard in shards:
@@ -957,8 +962,6 @@ def _check_scenario(spec: GenerationSpec) -> tuple[dict[str, Any], Any]:
     Returns:
         The scenario's options with its defaults filled in, and episode 0's made scenario.
     """
-    import scenarios
-    from sim.episode import prepare, scene_spec
 
     known = scenarios.names()
     if spec.scenario not in known:
@@ -986,8 +989,6 @@ def _check_size(
     """Refuses, before any work, a dataset that cannot fit this machine (`sim.sizing.check`):
     its episodes sized like episode 0 (``made``), ``workers`` of them held at once; the disk
     needed is for the episodes whose shards are not there yet."""
-    from sim import sizing
-    from sim.episode import estimate_episode
 
     one = estimate_episode(
         made, duration=spec.duration, rate=spec.rate, view=spec.view, recording=save_recordings
@@ -1038,7 +1039,6 @@ def _local(
         for batch in batches:
             yield _run_batch(spec, str(out_dir), batch, save_recordings)
         return
-    from joblib import Parallel, delayed
 
     parallel = Parallel(
         n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
@@ -1236,7 +1236,6 @@ def generate_dataset(
 
 
 def _cpu_count() -> int:
-    from joblib import cpu_count
 
     return max(1, int(cpu_count()))
 
@@ -1248,7 +1247,6 @@ def _drain(
     scenario: str,
     progress: bool,
 ) -> None:
-    from tqdm import tqdm
 
     with tqdm(
         total=episodes,

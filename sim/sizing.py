@@ -21,9 +21,13 @@ loads MuJoCo.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
+import subprocess
+import sys
+import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -544,9 +548,6 @@ else:
 
 def _probe(job: Mapping[str, object]) -> dict[str, float]:  # pragma: no cover - by hand
     """Runs one probe in a fresh process: its printed figures and its peak resident bytes."""
-    import json
-    import subprocess
-    import sys
 
     child = subprocess.Popen(
         [sys.executable, "-c", _PROBE, json.dumps(job)], stdout=subprocess.PIPE, text=True
@@ -568,7 +569,6 @@ def measure() -> dict[str, float]:  # pragma: no cover - run by hand, see the mo
     Runs small episodes of ``mingle`` in fresh processes and fits the differences of their peak
     resident memory, wall-clock time and file sizes. Takes a few minutes.
     """
-    import tempfile
 
     with tempfile.TemporaryDirectory() as scratch:
         runs: dict[str, dict[str, float]] = {}

@@ -32,6 +32,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from sim.envs.planner import Field, next_point, plan_field
@@ -586,7 +587,6 @@ def evaluate_policy(
         ValueError: for a non-positive episode count or an environment without the joining
             task.
     """
-    import gymnasium as gym
 
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")

@@ -67,6 +67,7 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 from gymnasium import spaces
 from gymnasium.error import InvalidAction, ResetNeeded
@@ -82,6 +83,7 @@ from sim.envs.target import Target, choose_target, circle_of, joinable_place
 from sim.envs.view import Eyes, Truth, View, robot_frame
 from sim.episode import ScenarioScript, scene_spec
 from sim.motion import ROBOT_LIMITS
+from sim.recording import FieldOfView, record_episode
 from sim.scene import ROBOT_RADIUS_M
 from sim.sensor import Sensor
 from sim.world import DEFAULT_DT_S, RobotCommand, World
@@ -421,7 +423,6 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             return None
         if self._world is None:
             raise ResetNeeded("Cannot call env.render() before calling env.reset()")
-        import mujoco
 
         world = self._world
         width, height = self._render_size
@@ -754,7 +755,6 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     def _record(self, observed: list[Frame], partitions: list[tuple[Group, ...]]) -> Path:
         """Saves the episode's Rerun recording (written atomically by `sim.recording`)."""
-        from sim.recording import FieldOfView, record_episode
 
         assert self._record_dir is not None
         scenario = self._scenario

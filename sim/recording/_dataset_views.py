@@ -26,6 +26,7 @@ import numpy.typing as npt
 import rerun as rr
 
 from reform import Frame, GroupShapes, characterise, pair_labels
+from reform.features import DISTANCE, EFFORT_ANGLE, frame_pair_features
 from sim.recording import _colours
 
 __all__ = [
@@ -96,7 +97,6 @@ def log_characterisation(
 
 def pair_scatter_data(frames: Iterable[Frame]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Distance (m), Effort Angle (rad) and label of every pair of the annotated frames."""
-    from reform.features import DISTANCE, EFFORT_ANGLE, frame_pair_features
 
     features, labels = [], []
     for frame in frames:

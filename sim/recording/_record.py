@@ -31,6 +31,7 @@ from sim.recording._scene import (
 from sim.recording._stream import open_recording, recording_id
 from sim.recording._target import RecordingTarget, target_from_args
 from sim.recording._timeline import Clock
+from sim.world import restrict_groups
 
 __all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
 
@@ -65,7 +66,6 @@ def _with_truth(observed: FrameColumns, world: FrameColumns, clock: Clock) -> Fr
     missing = [f for f, groups in enumerate(observed.groups) if groups is None]
     if not missing:
         return observed
-    from sim.world import restrict_groups
 
     world_truth = dict(zip(clock.rows_of_columns(world).tolist(), world.groups, strict=True))
     rows = clock.rows_of_columns(observed, what="observed")

@@ -16,10 +16,13 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from io import BytesIO
 from typing import Any
 
+import mujoco
 import numpy as np
 import rerun as rr
+from PIL import Image
 
 from reform import Frame
 from sim.recording import _colours
@@ -66,7 +69,6 @@ def _rotate(wxyz: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _name(model, body: int) -> str:
-    import mujoco
 
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
@@ -117,7 +119,6 @@ def log_model(
     Returns:
         Number of geoms logged per kind (``"capsules"``, ``"boxes"``, ...), and ``"skipped"``.
     """
-    import mujoco
 
     if not isinstance(model, mujoco.MjModel):
         raise ValueError(f"model must be a compiled mujoco.MjModel, got {type(model).__name__}")
@@ -459,9 +460,6 @@ def log_camera_images(
     Returns:
         Bytes of JPEG logged.
     """
-    from io import BytesIO
-
-    from PIL import Image
 
     if not 1 <= jpeg_quality <= 100:
         raise ValueError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
