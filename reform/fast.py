@@ -31,6 +31,12 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
+from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
+from sklearn.linear_model import LogisticRegression
+from sklearn.neighbors import KNeighborsClassifier
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.tree import DecisionTreeClassifier, ExtraTreeClassifier
 
 MAX_GRID_CELLS = 1 << 26  # cells of a compiled tree-ensemble table (one byte each): 64 MiB
 _BAND_CELLS = 1 << 21  # cells accumulated at once while compiling a table
@@ -129,8 +135,6 @@ def compile_classifier(
 
 def _split_scalers(classifier: Any) -> tuple[tuple[Any, ...], Any | None]:
     """(StandardScaler steps, final estimator) of a pipeline, or ((), classifier)."""
-    from sklearn.pipeline import Pipeline
-    from sklearn.preprocessing import StandardScaler
 
     if not isinstance(classifier, Pipeline):
         return (), classifier
@@ -154,8 +158,6 @@ def _scale(scalers: tuple[Any, ...], features: np.ndarray) -> np.ndarray:
 
 def _tree_ensemble(estimator: Any) -> list[tuple[Any, np.ndarray]] | None:
     """[(tree_, feature columns)] of a supported tree classifier, else None."""
-    from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
-    from sklearn.tree import DecisionTreeClassifier, ExtraTreeClassifier
 
     def is_tree(model: Any) -> bool:
         return (
@@ -187,13 +189,11 @@ def _tree_ensemble(estimator: Any) -> list[tuple[Any, np.ndarray]] | None:
 
 
 def _is_logistic(estimator: Any) -> bool:
-    from sklearn.linear_model import LogisticRegression
 
     return type(estimator) is LogisticRegression and np.asarray(estimator.coef_).shape[0] == 1
 
 
 def _is_neighbors(estimator: Any) -> bool:
-    from sklearn.neighbors import KNeighborsClassifier
 
     return (
         type(estimator) is KNeighborsClassifier

@@ -22,6 +22,7 @@ pyarrow is imported only inside these functions.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import re
@@ -32,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from reform import __version__
 from reform.atomic import atomic_path
 from reform.datasets._validation import check_time_increases, file_kind, make_frame
 from reform.datasets.errors import DataFormatError
@@ -273,7 +275,6 @@ def _header_json(
     *,
     listed_groups: Mapping[str, list[list[int]]] | None = None,
 ) -> str:
-    from reform import __version__
 
     header = {
         "format_version": FORMAT_VERSION,
@@ -510,7 +511,6 @@ def _read_card(folder: Path) -> dict[str, Any] | None:
 
 
 def _sha256(path: Path) -> str:
-    import hashlib
 
     digest = hashlib.sha256()
     with open(path, "rb") as handle:
