@@ -23,7 +23,7 @@ from scenarios.formation import circle_places, facing_centre
 from scenarios.registry import Range, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
-from scenarios.stage import RobotPlace, Stage
+from scenarios.stage import RobotPlace, Role, Stage
 from scenarios.timeline import TimelineBuilder
 
 __all__ = ["hri_conversation", "hri_passing", "hri_robot_excluded"]
@@ -123,6 +123,57 @@ def _leave(
     return gone + 1.0
 
 
+def _talk(
+    builder: TimelineBuilder,
+    members: list[int],
+    places: np.ndarray,
+    facings: np.ndarray,
+    centre: np.ndarray,
+    *,
+    arrive: float,
+    talk_duration: float,
+    leave: bool,
+    rng: np.random.Generator,
+    mean_utterance: float,
+) -> tuple[float, list[tuple[float, int]]]:
+    """Plans the group of ``members`` from the start (the rule starts it once all have arrived)
+    until they set off, and their conversation after ``arrive``; returns when the talk ends and
+    the speaking turns."""
+    talk_end = arrive + talk_duration
+    builder.group(members, places, facings, centre, start=0.0, end=talk_end if leave else math.inf)
+    turns = converse(
+        builder,
+        members,
+        places,
+        facings,
+        start=arrive,
+        end=talk_end,
+        rng=rng,
+        mean_utterance=mean_utterance,
+    )
+    return talk_end, turns
+
+
+def _made(
+    name: str,
+    seed: int,
+    builder: TimelineBuilder,
+    roles: tuple[Role, ...],
+    robot: RobotPlace,
+    duration: float,
+    description: str,
+) -> Scenario:
+    """One of the HRI scenes, made: the people and the robot in the HRI room."""
+    return Scenario(
+        name=name,
+        seed=seed,
+        stage=Stage(room=ROOM_M, people=roles, robot=robot),
+        timeline=builder.build(),
+        duration=duration,
+        description=description,
+    )
+
+
 @register("hri-conversation", tags=("hri",), robot={})
 def hri_conversation(
     *,
@@ -170,29 +221,28 @@ def hri_conversation(
     members = [ROBOT_ID, *people]
     all_places = np.vstack([robot_xy, places])
     all_facings = np.concatenate([[robot.yaw], facings])
-    talk_end = arrive + talk_duration
-    end = talk_end if leave else math.inf
-    builder.group(members, all_places, all_facings, centre, start=0.0, end=end)
     builder.event(0.0, "approach", f"people {people} walk up to the robot")
-    converse(
+    talk_end, _ = _talk(
         builder,
         members,
         all_places,
         all_facings,
-        start=arrive,
-        end=talk_end,
+        centre,
+        arrive=arrive,
+        talk_duration=talk_duration,
+        leave=leave,
         rng=rng,
         mean_utterance=mean_utterance,
     )
     builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=people[0]))
-    duration = _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end
-    return Scenario(
-        name=name,
-        seed=seed,
-        stage=Stage(room=ROOM_M, people=roles, robot=robot),
-        timeline=builder.build(),
-        duration=duration,
-        description="two people and the robot converse: one F-formation of three",
+    return _made(
+        name,
+        seed,
+        builder,
+        roles,
+        robot,
+        _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end,
+        "two people and the robot converse: one F-formation of three",
     )
 
 
@@ -246,30 +296,29 @@ def hri_robot_excluded(
     roles = cast(rng, people, starts, start_yaws, parts="guest")
     builder = TimelineBuilder([*people, ROBOT_ID])
     arrive = _take_places(builder, people, starts, places, facings, rng, walk_in=walk_in)
-    talk_end = arrive + talk_duration
-    end = talk_end if leave else math.inf
-    builder.group(people, places, facings, centre, start=0.0, end=end)
-    turns = converse(
+    talk_end, turns = _talk(
         builder,
         people,
         places,
         facings,
-        start=arrive,
-        end=talk_end,
+        centre,
+        arrive=arrive,
+        talk_duration=talk_duration,
+        leave=leave,
         rng=rng,
         mean_utterance=mean_utterance,
     )
     builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_point=tuple(centre)))
     for t, speaker in turns:
         builder.set(t, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=speaker))
-    duration = _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end
-    return Scenario(
-        name=name,
-        seed=seed,
-        stage=Stage(room=ROOM_M, people=roles, robot=robot),
-        timeline=builder.build(),
-        duration=duration,
-        description="two people converse in front of the robot: one F-formation of two",
+    return _made(
+        name,
+        seed,
+        builder,
+        roles,
+        robot,
+        _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end,
+        "two people converse in front of the robot: one F-formation of two",
     )
 
 
