@@ -23,13 +23,6 @@ from collections.abc import Callable, Mapping
 from types import MappingProxyType
 from typing import Any
 
-from sklearn.ensemble import BaggingClassifier
-from sklearn.linear_model import LogisticRegression
-from sklearn.neighbors import KNeighborsClassifier
-from sklearn.pipeline import Pipeline
-from sklearn.preprocessing import StandardScaler
-from sklearn.tree import DecisionTreeClassifier
-
 WEIGHTED_KNN = "weighted-knn"
 BAGGED_TREES = "bagged-trees"
 LOGISTIC_REGRESSION = "logistic-regression"
@@ -62,6 +55,9 @@ def weighted_knn(*, n_neighbors: int = DEFAULT_N_NEIGHBORS) -> Any:
     Returns:
         An unfitted ``Pipeline(StandardScaler, KNeighborsClassifier(weights="distance"))``.
     """
+    from sklearn.neighbors import KNeighborsClassifier
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import StandardScaler
 
     return Pipeline(
         [
@@ -87,6 +83,8 @@ def bagged_trees(
     Returns:
         An unfitted ``BaggingClassifier(DecisionTreeClassifier(...))``.
     """
+    from sklearn.ensemble import BaggingClassifier
+    from sklearn.tree import DecisionTreeClassifier
 
     return BaggingClassifier(
         DecisionTreeClassifier(min_samples_leaf=min_samples_leaf),
@@ -104,6 +102,9 @@ def logistic_regression(*, C: float = DEFAULT_C) -> Any:  # noqa: N803 (scikit-l
     Returns:
         An unfitted ``Pipeline(StandardScaler, LogisticRegression)``.
     """
+    from sklearn.linear_model import LogisticRegression
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import StandardScaler
 
     return Pipeline([("scale", StandardScaler()), ("logreg", LogisticRegression(C=C))])
 

@@ -189,12 +189,10 @@ def _tree_ensemble(estimator: Any) -> list[tuple[Any, np.ndarray]] | None:
 
 
 def _is_logistic(estimator: Any) -> bool:
-
     return type(estimator) is LogisticRegression and np.asarray(estimator.coef_).shape[0] == 1
 
 
 def _is_neighbors(estimator: Any) -> bool:
-
     return (
         type(estimator) is KNeighborsClassifier
         and len(estimator.classes_) == 2

@@ -96,8 +96,9 @@ class FrameBlock:
                 raise ValueError(f"{name} must have shape {shapes[name]}, got {array.shape}")
         for name, value in (("time", time), ("ids", ids), ("kinds", kinds), *values.items()):
             object.__setattr__(self, name, value)
+        if not isinstance(self.sequence, str):
+            raise ValueError(f"sequence must be a string, got {self.sequence!r}")
         object.__setattr__(self, "groups", tuple(self.groups))
-        object.__setattr__(self, "sequence", str(self.sequence))
         self._check_values()
         self._check_groups()
 
@@ -128,6 +129,12 @@ class FrameBlock:
         position, yaw = self.position[present], self.yaw[present]
         if not np.all(np.isfinite(self.time)):
             raise ValueError("time must be finite, got NaN or inf")
+        if np.any(np.diff(self.time) <= 0.0):
+            k = int(np.flatnonzero(np.diff(self.time) <= 0.0)[0])
+            raise ValueError(
+                f"time must increase, got {self.time[k]:g} s then {self.time[k + 1]:g} s at rows "
+                f"{k} and {k + 1}"
+            )
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(yaw))):
             raise ValueError("position and yaw must be finite where present, got NaN or inf")
         if np.any(np.abs(position) > POSITION_LIMIT_M):
@@ -176,8 +183,10 @@ class FrameBlock:
                 or (block.head_position is None) != (first.head_position is None)
             ):
                 raise ValueError(
-                    f"block {k} differs from block 0 in its roster, sequence or heads: "
-                    f"ids {block.ids.tolist()} against {first.ids.tolist()}"
+                    f"block {k} differs from block 0 in its roster, sequence or heads: ids "
+                    f"{block.ids.tolist()}, sequence {block.sequence!r}, heads "
+                    f"{block.head_position is not None} against {first.ids.tolist()}, "
+                    f"{first.sequence!r}, {first.head_position is not None}"
                 )
         heads = first.head_position is not None
 

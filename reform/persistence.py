@@ -132,7 +132,6 @@ def _skops_io() -> Any:
 
 
 def _versions() -> dict[str, str]:
-
     return {"reform_sim": reform.__version__, "scikit_learn": sklearn.__version__}
 
 
@@ -478,7 +477,6 @@ class _Schema:
         raise ValueError(f"{self.path}: schema.json: {place}: {problem}")
 
     def check(self) -> None:
-
         raw = self.archive.read("schema.json")
         try:
             text = raw.decode(json.detect_encoding(raw), "surrogatepass")
@@ -1049,7 +1047,6 @@ def _classes(where: str, estimator: Any) -> np.ndarray:
 
 
 def _check_pipeline(where: str, pipeline: Any, n_features: int | None) -> None:
-
     steps = pipeline.steps
     if not isinstance(steps, list) or not steps:
         raise _Broken(f"{where}.steps", f"expected a list of steps, found {shorten(repr(steps))}")
@@ -1088,7 +1085,6 @@ def _check_logistic(where: str, model: Any, n_features: int | None) -> None:
 
 
 def _check_neighbors(where: str, model: Any, n_features: int | None) -> None:
-
     n = _n_in(where, model, n_features)
     fit_x = _array(
         f"{where}._fit_X", getattr(model, "_fit_X", None), ndim=2, kind="f", shape=(None, n)
@@ -1201,7 +1197,6 @@ def _check_binary_tree(where: str, tree: Any, shape: tuple[int, int] | None) -> 
 
 
 def _check_decision_tree(where: str, model: Any, n_features: int | None) -> None:
-
     n = _n_in(where, model, n_features)
     outputs = _int(f"{where}.n_outputs_", getattr(model, "n_outputs_", None), low=1, high=1)
     n_classes = None

@@ -32,7 +32,6 @@ from typing import Annotated, Any, Literal
 from scenarios.scenario import Scenario, check_option
 
 __all__ = [
-    "Annotated",
     "Option",
     "Range",
     "ScenarioInfo",
@@ -267,7 +266,7 @@ def check_ranges(scenario: str, params: Any) -> None:
                     extra.check(getattr(params, key), scenario=scenario, name=key)
 
 
-def check_options_of(
+def _check_options_of(
     name: str, declared: tuple[Option, ...], given: Mapping[str, Any]
 ) -> dict[str, Any]:
     """``given`` checked against the options ``declared`` (names, types, ranges)."""
@@ -291,7 +290,7 @@ def check_options(name: str, given: Mapping[str, Any]) -> dict[str, Any]:
             of its range, naming the scenario and the option.
     """
     info = describe(name)
-    checked = check_options_of(name, info.options, given)
+    checked = _check_options_of(name, info.options, given)
     return {o.name: checked.get(o.name, o.default) for o in info.options}
 
 
@@ -357,7 +356,7 @@ def register(
             tags=frozenset(tags),
             robot=None
             if robot is None
-            else MappingProxyType(check_options_of(name, declared, robot)),
+            else MappingProxyType(_check_options_of(name, declared, robot)),
         )
         return checked
 

@@ -382,6 +382,8 @@ class World:
         """Declares the ground-truth groups from now on (worlds without a script)."""
         if self._script is not None:
             raise ValueError("set_groups: this world's groups come from its script")
+        if self._truth is not None:
+            raise ValueError("set_groups: this world's groups come from its ground-truth rule")
         self._manual_groups = self._validate_groups(groups, self.time)
 
     def command_robot(self, command: RobotCommand | None) -> None:

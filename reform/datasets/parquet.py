@@ -275,7 +275,6 @@ def _header_json(
     *,
     listed_groups: Mapping[str, list[list[int]]] | None = None,
 ) -> str:
-
     header = {
         "format_version": FORMAT_VERSION,
         "generator_version": f"reform-sim {__version__}",
@@ -511,7 +510,6 @@ def _read_card(folder: Path) -> dict[str, Any] | None:
 
 
 def _sha256(path: Path) -> str:
-
     digest = hashlib.sha256()
     with open(path, "rb") as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):

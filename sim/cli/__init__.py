@@ -173,7 +173,3 @@ def _one_line(message: object) -> str:
     """An error message on one line, cut to a readable length."""
     text = " ".join(str(message).split("\n"))
     return text if len(text) <= 2000 else text[:1980] + f"… ({len(text):,} characters)"
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(console_main())

@@ -17,7 +17,6 @@ small grid and re-enacts the paper's HRI experiment. Writes Rerun recordings (.r
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     parser.add_argument(
         "--datasets",
         metavar="DIR",

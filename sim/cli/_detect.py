@@ -15,7 +15,6 @@ the detected F-formations (groups of two or more person ids; everyone in no grou
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     add_detection_arguments(parser)
     parser.add_argument("--out", required=True, metavar="OUT", help="JSON file to write")
     parser.add_argument(

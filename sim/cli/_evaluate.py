@@ -17,7 +17,6 @@ recall and precision by group size. Prints the table; --json and --markdown save
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     add_detection_arguments(parser)
     parser.add_argument(
         "--json", metavar="OUT", help="write the results as JSON (docs/json-schema.md)"

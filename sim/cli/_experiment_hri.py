@@ -24,7 +24,6 @@ robot view, detections of REFORM and GCFF).
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     add_dataset_arguments(parser, babble=False)
     add_out_argument(parser)
     parser.add_argument(

@@ -31,7 +31,6 @@ needs the whole episode in memory, up to --max-memory.
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
     parser.add_argument("--seed", required=True, type=int, metavar="S", help="episode seed")
     parser.add_argument("--out", required=True, metavar="FILE.parquet", help="output file")

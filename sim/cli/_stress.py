@@ -27,7 +27,6 @@ Their scores are in stress.json.
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     parser.add_argument(
         "--grid",
         choices=tuple(GRIDS),

@@ -28,7 +28,6 @@ hyper-parameters by time-blocked cross-validation on the frames used for trainin
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-
     add_data_arguments(parser)
     parser.add_argument(
         "--classifier",

@@ -40,7 +40,6 @@ def _found_datasets() -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
-
     check_backend(args)
     check_output("--out", args.out, folder=True)
     names = args.data or _found_datasets()

@@ -148,7 +148,6 @@ def _report(
     command: str,
     style: str,
 ) -> str:
-
     parts = []
     if style == "markdown":
         parts += [

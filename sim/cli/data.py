@@ -16,7 +16,6 @@ from sim.cli._common import check_output, load_data
 
 
 def run_verify(args: argparse.Namespace) -> int:
-
     problems = verify_folder(args.path)
     for problem in problems:
         print(problem)
@@ -28,13 +27,11 @@ def run_verify(args: argparse.Namespace) -> int:
 
 
 def _load(args: argparse.Namespace):
-
     dataset = load_data(args, attribute="path")
     return args.format or detect_format(resolve(args.path)), dataset
 
 
 def run_info(args: argparse.Namespace) -> int:
-
     format, dataset = _load(args)
     summary = summarise(dataset)
     summary["format"] = format
@@ -47,7 +44,6 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_convert(args: argparse.Namespace) -> int:
-
     check_output("--out", args.out)
     _, dataset = _load(args)
     write_parquet(dataset, args.out)

@@ -26,7 +26,6 @@ def format_size(n_bytes: int) -> str:
 
 
 def _rows(args: argparse.Namespace) -> tuple[Path, list[dict[str, Any]]]:
-
     cache = Path(args.cache) if args.cache is not None else cache_dir()
     local = local_datasets_dir()
     rows = []
@@ -89,7 +88,6 @@ def format_table(rows: list[dict[str, Any]], *, cache: Path) -> str:
 
 
 def run_fetch(args: argparse.Namespace) -> int:
-
     known = [dataset.name for dataset in registry(args.registry)]
     if args.all and args.names:
         raise CliError("give dataset names or --all, not both")

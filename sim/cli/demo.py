@@ -14,7 +14,6 @@ from sim.experiments.demo_report import write_report
 
 
 def run(args: argparse.Namespace) -> int:
-
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     check_output("--out", args.out, folder=True)

@@ -57,7 +57,6 @@ def _dumps(result: dict[str, Any]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-
     spec = check_detector(args)
     check_output("--out", args.out)
     check_recording(args)

@@ -17,7 +17,6 @@ from sim.experiments.tables import format_report
 
 
 def run(args: argparse.Namespace) -> int:
-
     spec = check_detector(args)
     check_output("--json", args.json)
     check_output("--markdown", args.markdown)

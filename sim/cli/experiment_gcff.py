@@ -60,7 +60,6 @@ def _read_results(path: str) -> list[dict[str, Any]]:
 
 
 def run(args: argparse.Namespace) -> int:
-
     check_train_fraction(args)
     check_report(report_stem(args.out))
     extra = [result for path in args.with_results for result in _read_results(path)]

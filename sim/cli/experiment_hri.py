@@ -24,7 +24,6 @@ from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
 
 def _command(args: argparse.Namespace) -> str:
-
     words = ["reform-sim", "experiment", "hri"]
     if args.datasets is not None:
         words += ["--datasets", args.datasets]
@@ -45,7 +44,6 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-
     if args.seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {args.seeds}")
     if args.seed < 0:

@@ -41,7 +41,6 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-
     check_train_fraction(args)
     if args.folds < 2:
         raise CliError(f"--folds must be at least 2, got {args.folds}")

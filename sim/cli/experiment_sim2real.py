@@ -57,7 +57,6 @@ def _outputs(out: str) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-
     salsa, babble = salsa_and_babble(args)
     if not args.episodes_scale > 0:
         raise CliError(f"--episodes-scale must be > 0, got {args.episodes_scale}")

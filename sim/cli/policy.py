@@ -17,7 +17,6 @@ from sim.envs.policy import evaluate_policy
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-
     if args.env not in gym.registry:
         known = ", ".join(i for i in sim.envs.ENV_IDS if not i.endswith("Observe-v0"))
         raise CliError(f"--env: unknown environment {args.env!r}; the joining ones: {known}")

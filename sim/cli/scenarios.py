@@ -15,7 +15,6 @@ def _json_default(value):
 
 
 def run(args: argparse.Namespace) -> int:
-
     infos = [scenarios.describe(n) for n in (args.names or scenarios.names())]
     if args.json:
         document = [

@@ -34,7 +34,6 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-
     grid = GRIDS[args.grid]
     if args.seeds is not None:
         if args.seeds < 1:

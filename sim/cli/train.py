@@ -22,7 +22,6 @@ from sim.cli._common import (
 
 
 def run(args: argparse.Namespace) -> int:
-
     check_output("--out", args.out)
     if args.train_fraction is None:
         args.train_fraction = TRAIN_FRACTION

@@ -6,10 +6,10 @@ the seed), one environment for the joining task and one for observing
 (or name it in the id: ``gymnasium.make("sim.envs:ReformSim/Mingle-v0")``)::
 
     ReformSim/HRIConversation-v0    ReformSim/HRIConversationObserve-v0
-    ReformSim/HRIRobotExcluded-v0   ReformSim/HRIRobotExcludedObserve-v0
     ReformSim/HRIPassing-v0         ReformSim/HRIPassingObserve-v0
-    ReformSim/WordImprov-v0         ReformSim/WordImprovObserve-v0
+    ReformSim/HRIRobotExcluded-v0   ReformSim/HRIRobotExcludedObserve-v0
     ReformSim/Mingle-v0             ReformSim/MingleObserve-v0
+    ReformSim/WordImprov-v0         ReformSim/WordImprovObserve-v0
 
 ``gymnasium.make(id, **kwargs)`` passes keyword arguments on to `SocialEnv` (``detector=``,
 ``model=``, ``sensor=``, ``render_mode="rgb_array"``, ``record_dir=``, ...). Registration

@@ -256,8 +256,8 @@ def to_markdown(results: StressResults, *, command: str, plots: Mapping[str, str
             f"strides {list(grid.gcff_stride_grid_m)} m, mdl {list(grid.gcff_mdl_grid_m2)} m²): "
             f"stride {training['gcff_stride_m']:g} m, mdl {training['gcff_mdl_m2']:g} m². "
             "No real data is used. Training and test episodes take their seeds from different "
-            "spawn keys of the master seed (`sim.experiments.stress.episode_seed`), so they never "
-            "share one.",
+            "spawn keys of the master seed (`reform.seeding`: roles STRESS_TRAIN and "
+            "STRESS_TEST), so they never share one.",
         ]
     else:
         lines += ["- **Detectors** were given, already fitted."]

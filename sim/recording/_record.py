@@ -13,6 +13,7 @@ from typing import Any
 import rerun as rr
 
 from reform import Evaluation, Frame, Group
+from reform.perturb import restrict_groups
 from sim.recording._blueprint import default_blueprint
 from sim.recording._columns import FrameColumns
 from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
@@ -31,7 +32,6 @@ from sim.recording._scene import (
 from sim.recording._stream import open_recording, recording_id
 from sim.recording._target import RecordingTarget, target_from_args
 from sim.recording._timeline import Clock
-from sim.world import restrict_groups
 
 __all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
 

@@ -69,7 +69,6 @@ def _rotate(wxyz: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _name(model, body: int) -> str:
-
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
 

@@ -84,6 +84,20 @@ def test_a_light_subcommand_imports_nothing_heavy_for_its_help(command: str) -> 
     assert loaded.splitlines()[-1] == "[]"
 
 
+def test_train_help_names_the_classifiers_without_loading_scikit_learn() -> None:
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        "try:\n"
+        "    main(['train', '--help'])\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        "heavy = ('sklearn', 'scipy', 'mujoco')\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy))\n"
+    )
+    assert loaded.splitlines()[-1] == "[]"
+
+
 def test_every_subcommand_gets_its_arguments_and_a_handler() -> None:
     parsers = _subcommands(build_parser())
     assert "reform-sim characterize" in parsers
