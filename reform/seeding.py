@@ -11,7 +11,8 @@ never share draws and adding a use never reshuffles another. The keys have three
   of ``SeedSequence(seed).spawn(...)``, so that episode ``k`` depends on the master seed and
   ``k`` alone;
 - **an episode's parts**: ``(WORLD,)`` and ``(SENSOR,)`` of the episode's own seed, the world's
-  motion and the robot's sensor noise.
+  motion and the robot's sensor noise; ``(ANNOTATION_DRAW,)`` and ``(ANNOTATION,)``, the draw
+  of its annotation model (when randomised) and that model's own random errors.
 
 A key is the same key whatever the order in which the uses run, which is what lets a study run
 its units in any order, on any number of processes, with the same result.
@@ -24,6 +25,8 @@ from enum import IntEnum
 import numpy as np
 
 __all__ = [
+    "ANNOTATION",
+    "ANNOTATION_DRAW",
     "SEED_BITS",
     "SENSOR",
     "WORLD",
@@ -35,9 +38,11 @@ __all__ = [
 
 SEED_BITS = 63  # bits of a derived integer seed (a non-negative int64)
 
-# The two parts of one episode's seed (its spawn keys).
+# The parts of one episode's seed (its spawn keys).
 WORLD = 0
 SENSOR = 1
+ANNOTATION_DRAW = 2
+ANNOTATION = 3
 
 
 class Role(IntEnum):

@@ -63,12 +63,13 @@ from tqdm import tqdm
 
 import scenarios
 from reform import __version__
+from reform.annotation import ANNOTATION_RANGES, AnnotationModel, draw_annotation
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.errors import DataFormatError
 from reform.datasets.parquet import CARD_JSON, FORMAT_VERSION, METADATA_KEY, write_parquet
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
-from reform.seeding import derive_int
+from reform.seeding import ANNOTATION, ANNOTATION_DRAW, derive_int, derive_rng
 from sim import sizing
 from sim.episode import (
     DEFAULT_RATE_HZ,
@@ -104,6 +105,7 @@ RECORDINGS_DIR = "recordings"
 LOCK_FILE = ".generate.lock"
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
+RANDOM_ANNOTATION = "random"  # GenerationSpec.annotation: one model drawn per episode
 SHOWN_PROBLEMS = 3  # shards named in the error when several are not where they belong
 
 
@@ -164,6 +166,10 @@ class GenerationSpec:
         sensor: the sensor model of the robot view (``None`` for the truth view).
         rate: output (annotation) rate, Hz.
         duration: episode length, seconds; ``None`` for each episode's natural length.
+        annotation: how the dataset's annotation records each episode (`reform.annotation`):
+            an `AnnotationModel` (or its settings as a mapping), ``"random"`` for one drawn per
+            episode from `reform.annotation.ANNOTATION_RANGES`, or ``None`` for the frames as
+            simulated.
     """
 
     scenario: str
@@ -173,6 +179,7 @@ class GenerationSpec:
     sensor: Any = None
     rate: float = DEFAULT_RATE_HZ
     duration: float | None = None
+    annotation: AnnotationModel | str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.scenario, str) or not self.scenario:
@@ -197,6 +204,7 @@ class GenerationSpec:
                     f"{1.0 / rate:g} s"
                 )
             object.__setattr__(self, "duration", duration)
+        object.__setattr__(self, "annotation", _annotation(self.annotation))
 
     def parameters(self) -> dict[str, Any]:
         """The parameters as the card records them (JSON values); two runs with equal
@@ -217,7 +225,41 @@ class GenerationSpec:
             "seed_rule": (
                 "episode k: the first 63 bits of numpy SeedSequence(seed, spawn_key=(k,))"
             ),
-        }
+        } | self._annotation_parameters()
+
+    def _annotation_parameters(self) -> dict[str, Any]:
+        """The annotation as the card records it; nothing for the frames as simulated (so that
+        such datasets keep the cards they had)."""
+        if self.annotation is None:
+            return {}
+        if self.annotation == RANDOM_ANNOTATION:
+            return {
+                "annotation": RANDOM_ANNOTATION,
+                "annotation_ranges": {k: list(v) for k, v in ANNOTATION_RANGES.items()},
+            }
+        return {"annotation": self.annotation.to_json()}
+
+    def annotation_of(self, episode: int) -> AnnotationModel | None:
+        """The annotation model of episode ``episode`` and the generator that applies it."""
+        if self.annotation is None:
+            return None
+        if self.annotation == RANDOM_ANNOTATION:
+            return draw_annotation(derive_rng(episode_seed(self.seed, episode), ANNOTATION_DRAW))
+        return self.annotation
+
+
+def _annotation(value: Any) -> AnnotationModel | str | None:
+    """``value`` as a GenerationSpec's annotation: None for the identity."""
+    if value is None or value == RANDOM_ANNOTATION:
+        return value
+    if isinstance(value, Mapping):
+        value = AnnotationModel(**value)
+    if not isinstance(value, AnnotationModel):
+        raise ValueError(
+            f"annotation must be an AnnotationModel, its settings or {RANDOM_ANNOTATION!r}, got "
+            f"{value!r}"
+        )
+    return None if value.identity else value
 
 
 def _sensor(view: str, sensor: Any) -> Any:
@@ -450,6 +492,18 @@ def _simulate_and_write(
     sequence = _sequence_name(spec.scenario, episode)
     source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
     path = shard_path(out_dir, spec.scenario, episode)
+    annotation = spec.annotation_of(episode)
+    if annotation is not None:
+        return _annotated(
+            spec,
+            episode,
+            made,
+            annotation,
+            path,
+            sequence=sequence,
+            source=source,
+            recording=_recording_path(out_dir, episode) if save_recordings else None,
+        )
     if spec.view == "truth" and not save_recordings:
         block = FrameBlock.concatenate(
             list(episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence))
@@ -481,6 +535,38 @@ def _simulate_and_write(
         source=source,
         metadata=_shard_metadata(spec, summary, made),
     )
+    write_parquet(dataset, path)
+    return summary
+
+
+def _annotated(
+    spec: GenerationSpec,
+    episode: int,
+    made: Any,
+    annotation: AnnotationModel,
+    path: Path,
+    *,
+    sequence: str,
+    source: str,
+    recording: Path | None,
+) -> ShardSummary:
+    """One episode as ``annotation`` records it (``reform.annotation``), written as its shard,
+    the model in the shard's metadata (and the simulated episode recorded, if asked)."""
+    result = simulate_episode(
+        made,
+        duration=spec.duration,
+        rate=spec.rate,
+        view=spec.view,
+        sensor=spec.sensor,
+        sequence=sequence,
+    )
+    if recording is not None:
+        _record(spec, episode, result, recording)
+    rng = derive_rng(episode_seed(spec.seed, episode), ANNOTATION)
+    frames = annotation.apply(result.dataset.frames, rng)
+    summary = _summarise_frames(spec, episode, frames)
+    metadata = _shard_metadata(spec, summary, made) | {"annotation": annotation.to_json()}
+    dataset = Dataset(frames=frames, name=spec.scenario, source=source, metadata=metadata)
     write_parquet(dataset, path)
     return summary
 
@@ -860,7 +946,28 @@ def _command(spec: GenerationSpec, episodes: int) -> str:
                     words.append(flag if value else "--no-" + f.name.replace("_", "-"))
                 else:
                     words += [flag, f"{value:g}"]
+    if spec.annotation == RANDOM_ANNOTATION:
+        words += ["--annotation", RANDOM_ANNOTATION]
+    elif spec.annotation is not None:
+        default = AnnotationModel()
+        for f in dataclasses.fields(spec.annotation):
+            value = getattr(spec.annotation, f.name)
+            if value != getattr(default, f.name):
+                text = value if isinstance(value, str) else f"{value:g}"
+                words += ["--annotation", f"{f.name}={text}"]
     return shlex.join(words)
+
+
+def _annotation_text(annotation: Any) -> str:
+    """The card's line on the annotation model (`reform.annotation`)."""
+    if annotation is None:
+        return "none: the frames as simulated"
+    if annotation == RANDOM_ANNOTATION:
+        return (
+            "randomised: one model per episode drawn from `reform.annotation.ANNOTATION_RANGES` "
+            f"(listed in {CARD_JSON}; each shard's metadata holds its own)"
+        )
+    return f"`{json.dumps(annotation, sort_keys=True)}` (`reform.annotation.AnnotationModel`)"
 
 
 def _markdown(card: Mapping[str, Any]) -> str:
@@ -899,6 +1006,7 @@ def _markdown(card: Mapping[str, Any]) -> str:
         f"| sensor | {_sensor_text(p['sensor'])} |",
         f"| rate | {p['rate_hz']:g} Hz |",
         f"| episode duration | {_duration_text(p['duration_s'])} |",
+        f"| annotation | {_annotation_text(p.get('annotation'))} |",
         f"| package version | {p['package_version']} |",
         f"| Parquet format version | {p['format_version']} |",
         f"| episodes | {card['episodes']} |",
@@ -1106,6 +1214,7 @@ def generate_dataset(
     sensor: Any = None,
     rate: float = DEFAULT_RATE_HZ,
     duration: float | None = None,
+    annotation: Any = None,
     backend: str = "local",
     address: str | None = None,
     n_jobs: int | None = None,
@@ -1126,6 +1235,9 @@ def generate_dataset(
             ``None`` for its defaults (robot view) or no sensor (truth view).
         rate: output (annotation) rate, Hz (2 Hz, SALSA's, by default).
         duration: episode length, seconds; ``None`` for each episode's natural length.
+        annotation: how the annotation records each episode (`reform.annotation`): an
+            `AnnotationModel` or its settings, ``"random"`` (one model drawn per episode from
+            `reform.annotation.ANNOTATION_RANGES`, each recorded in its shard), or ``None``.
         backend: ``"local"`` (processes on this machine) or ``"ray"`` (remote tasks).
         address: the Ray cluster's address (``"auto"``, ``"ray://host:10001"``, ``host:6379``);
             ``None`` joins the Ray instance already running in this process, else starts one.
@@ -1161,6 +1273,7 @@ def generate_dataset(
         sensor=sensor,
         rate=rate,
         duration=duration,
+        annotation=annotation,
     )
     if max_memory is not None:
         max_memory = _check_int("max_memory", max_memory, minimum=1)
@@ -1236,7 +1349,6 @@ def generate_dataset(
 
 
 def _cpu_count() -> int:
-
     return max(1, int(cpu_count()))
 
 
@@ -1247,7 +1359,6 @@ def _drain(
     scenario: str,
     progress: bool,
 ) -> None:
-
     with tqdm(
         total=episodes,
         initial=len(shards),

@@ -42,6 +42,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="also write one Rerun .rrd per episode (DIR/recordings/episode=K.rrd)",
     )
+    parser.add_argument(
+        "--annotation",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="how the annotation records each episode (reform.annotation.AnnotationModel): "
+        "orientation=body|head, directions=K|continuous, scale_sd=F, position_noise=M, "
+        "yaw_noise=RAD, dropout=P, min_group_seconds=S; repeatable; 'random' draws one model "
+        "per episode from reform.annotation.ANNOTATION_RANGES",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_max_memory_argument(
         parser, holds="each worker holds the episode it writes (episodes do not stream)"

@@ -7,7 +7,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from reform.annotation import AnnotationModel, parse_annotation
 from sim.cli._common import (
+    CliError,
     check_backend,
     check_output,
     max_memory,
@@ -15,12 +17,24 @@ from sim.cli._common import (
     sensor_options,
     size_error,
 )
-from sim.generate import generate_dataset
+from sim.generate import RANDOM_ANNOTATION, generate_dataset
 from sim.sizing import RequestTooLarge
 
 
-def _run(args: argparse.Namespace) -> int:
+def _annotation(items: list[str]) -> AnnotationModel | str | None:
+    """``--annotation``: settings, or ``random`` alone."""
+    if RANDOM_ANNOTATION in items:
+        if len(items) > 1:
+            raise CliError(
+                f"--annotation {RANDOM_ANNOTATION} draws every setting; it takes no other "
+                f"--annotation, got {items}"
+            )
+        return RANDOM_ANNOTATION
+    return parse_annotation(items) if items else None
 
+
+def _run(args: argparse.Namespace) -> int:
+    annotation = _annotation(args.annotation)
     check_backend(args)
     check_output("--out", args.out, folder=True)
     limit = max_memory(args)
@@ -35,6 +49,7 @@ def _run(args: argparse.Namespace) -> int:
             sensor=sensor_options(args),
             **({} if args.rate is None else {"rate": args.rate}),
             duration=args.duration,
+            annotation=annotation,
             backend=args.backend,
             address=args.address,
             n_jobs=args.jobs,

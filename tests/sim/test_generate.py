@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shlex
 import shutil
 import signal
 import subprocess
@@ -16,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from reform.annotation import AnnotationModel
 from reform.datasets import load_dataset, read_parquet, write_parquet
 from reform.frame import Dataset
 from sim.cli import main
@@ -502,3 +504,86 @@ def test_every_wrong_shard_is_named_on_resume(reference, tmp_path):
     )
     assert "episode=3/part.parquet: field 'metadata.episode'" in message
     assert "episode=0/" not in message and "episode=2/" not in message
+
+
+def test_an_annotation_model_records_each_episode_as_it_says(tmp_path):
+    """--annotation: the shards hold the frames as the model records them, the card and each
+    shard record it, the card's command reproduces the data byte for byte."""
+    model = AnnotationModel(directions=4, scale_sd=0.05, position_noise=0.03, dropout=0.05)
+    plain = generate_dataset(
+        "word-improv",
+        episodes=2,
+        seed=3,
+        out_dir=tmp_path / "plain",
+        duration=20,
+        n_jobs=1,
+        progress=False,
+    )
+    made = generate_dataset(
+        "word-improv",
+        episodes=2,
+        seed=3,
+        out_dir=tmp_path / "coded",
+        duration=20,
+        n_jobs=1,
+        progress=False,
+        annotation=model,
+    )
+    card = read_card(made.out_dir)
+    assert card["parameters"]["annotation"] == model.to_json()
+    assert "annotation" not in read_card(plain.out_dir)["parameters"]
+    assert "--annotation directions=4" in card["command"]
+    step = np.pi / 2
+    for k in range(2):
+        truth = read_parquet(shard_path(plain.out_dir, "word-improv", k))
+        coded = read_parquet(shard_path(made.out_dir, "word-improv", k))
+        assert coded.metadata["annotation"] == model.to_json()
+        yaws = np.concatenate([f.yaw for f in coded.frames])
+        np.testing.assert_allclose(np.round(yaws / step) * step, yaws)
+        assert sum(f.n_people for f in coded.frames) < sum(f.n_people for f in truth.frames)
+    again = tmp_path / "again"
+    words = shlex.split(card["command"].replace("DIR", str(again)))
+    assert main([*words[1:], "--jobs", "1", "--no-progress"]) == 0
+    for k in range(2):
+        first = shard_path(made.out_dir, "word-improv", k).read_bytes()
+        assert shard_path(again, "word-improv", k).read_bytes() == first
+
+
+def test_a_randomised_annotation_draws_one_model_per_episode(tmp_path):
+    made = generate_dataset(
+        "mingle",
+        episodes=3,
+        seed=5,
+        out_dir=tmp_path / "r",
+        duration=10,
+        n_jobs=1,
+        progress=False,
+        annotation="random",
+    )
+    card = read_card(made.out_dir)
+    assert card["parameters"]["annotation"] == "random"
+    assert card["parameters"]["annotation_ranges"]["directions"] == [None, 4, 8, 24]
+    models = [
+        read_parquet(shard_path(made.out_dir, "mingle", k)).metadata["annotation"] for k in range(3)
+    ]
+    assert len({json.dumps(m, sort_keys=True) for m in models}) == 3
+    for m in models:
+        AnnotationModel(**m)  # each a valid model
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--annotation", "directions=0"], "directions must be a whole number >= 1"),
+        (["--annotation", "scale_sd=-1"], "annotation scale_sd must be >= 0, got -1.0"),
+        (["--annotation", "random", "--annotation", "dropout=0.1"], "takes no other"),
+        (["--annotation", "depth=3"], "annotation setting 'depth=3': expected KEY=VALUE"),
+    ],
+)
+def test_bad_annotation_settings_are_one_line_before_any_work(tmp_path, capsys, flags, message):
+    out = tmp_path / "never"
+    argv = ["generate", "--scenario", "mingle", "--episodes", "1", "--seed", "1", "--out", str(out)]
+    assert main([*argv, *flags]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
