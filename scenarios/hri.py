@@ -20,7 +20,7 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import MEAN_UTTERANCE_S, converse, standing
 from scenarios.formation import circle_places, facing_centre
-from scenarios.registry import Range, register
+from scenarios.registry import MAX_SCENE_S, Range, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Role, Stage
@@ -179,7 +179,7 @@ def hri_conversation(
     *,
     seed: int,
     radius: Annotated[float, Range(0.3, 1.5, unit="m")] = 0.6,
-    talk_duration: Annotated[float, Range(0.0, unit="s", above=True)] = 40.0,
+    talk_duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 40.0,
     approach: Literal["front", "left", "right", "random"] = "random",
     leave: bool = True,
     position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
@@ -252,7 +252,7 @@ def hri_robot_excluded(
     seed: int,
     distance: Annotated[float, Range(1.0, 4.0, unit="m")] = 1.8,
     radius: Annotated[float, Range(0.3, 1.0, unit="m")] = 0.42,
-    talk_duration: Annotated[float, Range(0.0, unit="s", above=True)] = 40.0,
+    talk_duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 40.0,
     walk_in: bool = True,
     leave: bool = True,
     position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,

@@ -36,7 +36,7 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import RadiusLaw, circle_places, min_radius
-from scenarios.registry import Range, check_ranges, register
+from scenarios.registry import MAX_SCENE_S, Range, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
@@ -113,7 +113,7 @@ class MingleParams:
     """
 
     people: Annotated[int, Range(2, 100)] = 18
-    duration: Annotated[float, Range(0.0, unit="s", above=True)] = 600.0
+    duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 600.0
     room_side: Annotated[float, Range(0.0, 100.0, unit="m")] = 0.0
     max_group_size: Annotated[int, Range(2, 12)] = 8
     robot: bool = False

@@ -32,6 +32,7 @@ from typing import Annotated, Any, Literal
 from scenarios.scenario import Scenario, check_option
 
 __all__ = [
+    "MAX_SCENE_S",
     "Option",
     "Range",
     "ScenarioInfo",
@@ -46,6 +47,9 @@ __all__ = [
 ]
 
 _TYPES = (bool, int, float, str)
+# The longest scene a duration option may ask for, seconds (a day): drawing a script is work in
+# proportion to its length, done before the simulation is sized.
+MAX_SCENE_S = 86_400.0
 _TRUE = ("true", "yes", "on", "1")
 _FALSE = ("false", "no", "off", "0")
 

@@ -633,8 +633,12 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
         return None
     try:
         card = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: expected a reform-sim dataset card (JSON), got {exc}") from exc
+    except RecursionError:
+        raise ValueError(
+            f"{path}: expected a reform-sim dataset card (JSON), got JSON nested too deep to read"
+        ) from None
     if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
         raise ValueError(
             f"{path}: expected a reform-sim dataset card with a 'parameters' object, "

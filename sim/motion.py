@@ -43,6 +43,9 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from sim._numba_cache import use_a_writable_cache
+
+use_a_writable_cache()  # before the kernel's functions are compiled and cached
 # Motion state columns (one row per agent).
 S_X, S_Y, S_VX, S_VY, S_YAW, S_HEAD, S_TILT, S_PRESENT = range(8)
 N_STATE = 8

@@ -56,6 +56,7 @@ GROUPS_FILE = "group_names.txt"
 FIELDS_PER_PERSON = {5: "ID x y body head", 4: "ID x y θ"}
 _FAKE = "fake"
 _ID_PATTERN = re.compile(r"ID_(\d+)")
+_ID_MAX = 2**63 - 1  # person ids are int64
 _TIME_DECIMALS = 1  # SALSA is sampled every 3 s at t = 0.2 + 3k
 _TIME_GRID_TOLERANCE_S = 1e-4  # SALSA's session-2 offset is 2e-5 s
 _NAN_TOKENS = frozenset({"nan", "NaN", "NAN", "-nan", "-NaN"})
@@ -239,7 +240,12 @@ def _parse_id(token: str, *, path: Path, where: str) -> int:
     match = _ID_PATTERN.fullmatch(token)
     if match is None:
         raise DataFormatError(path, where, "ID", "a token ID_<number>", repr(token))
-    return int(match.group(1))
+    digits = match.group(1).lstrip("0") or "0"
+    if len(digits) > len(str(_ID_MAX)) or int(digits) > _ID_MAX:
+        raise DataFormatError(
+            path, where, "ID", f"a token ID_<number> with a number <= {_ID_MAX}", repr(token)
+        )
+    return int(digits)
 
 
 def _is_person_token(token: str) -> bool:

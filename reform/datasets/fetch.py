@@ -324,6 +324,8 @@ def _read_registry(path: str | PathLike[str] | None) -> tuple[PublicDataset, ...
         raise DataFormatError(
             source, f"line {exc.lineno}, column {exc.colno}", None, "JSON", exc.msg
         ) from None
+    except RecursionError:
+        raise DataFormatError(source, None, None, "JSON", "nesting too deep to read") from None
     if not isinstance(document, dict) or not isinstance(document.get("datasets"), list):
         raise DataFormatError(
             source, None, "datasets", "an object with a list of datasets", _kind(document)
@@ -437,7 +439,7 @@ def _complete(dataset: PublicDataset, folder: Path) -> bool:
     """Whether ``folder`` holds a complete, verified copy of ``dataset``."""
     try:
         manifest = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return False
     if not isinstance(manifest, dict):
         return False

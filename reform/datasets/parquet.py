@@ -491,10 +491,18 @@ def _read_card(folder: Path) -> dict[str, Any] | None:
     """The card of a ``reform-sim generate`` folder (``dataset.json``), or None without one."""
     card_path = folder / CARD_JSON
     if not card_path.is_file():
+        if card_path.exists() or card_path.is_symlink():
+            raise DataFormatError(
+                card_path,
+                None,
+                None,
+                "a reform-sim dataset card (a JSON file)",
+                file_kind(card_path),
+            )
         return None
     try:
-        card = json.loads(card_path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        text = card_path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
         raise DataFormatError(
             card_path,
             None,
@@ -502,11 +510,23 @@ def _read_card(folder: Path) -> dict[str, Any] | None:
             "a reform-sim dataset card (JSON)",
             f"{type(exc).__name__}: {exc}",
         ) from exc
-    if not isinstance(card, dict):
-        raise DataFormatError(
-            card_path, None, None, "a reform-sim dataset card (a JSON object)", type(card).__name__
-        )
-    return card
+    return _json_object(text, card_path, field=None, expected="a reform-sim dataset card (JSON)")
+
+
+def _json_object(
+    text: str | bytes, path: Path, *, field: str | None, expected: str
+) -> dict[str, Any]:
+    """``text`` as a JSON object; one `DataFormatError` naming ``path`` for anything else
+    (malformed, nested too deep to read, not an object)."""
+    try:
+        value = json.loads(text)
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DataFormatError(path, None, field, expected, f"{type(exc).__name__}: {exc}") from exc
+    except RecursionError:
+        raise DataFormatError(path, None, field, expected, "JSON nested too deep to read") from None
+    if not isinstance(value, dict):
+        raise DataFormatError(path, None, field, expected, f"a JSON {type(value).__name__}")
+    return value
 
 
 def _sha256(path: Path) -> str:
@@ -527,10 +547,17 @@ def _check_shards(
         The files to read and, with ``allow_incomplete``, the problems found (else the first
         problem is raised).
     """
-    listed = card.get("shards")
-    if card.get("complete") is not True or not isinstance(listed, list):
-        return files, []
     card_path = folder / CARD_JSON
+    listed = card.get("shards")
+    complete = card.get("complete")
+    if not isinstance(complete, bool):
+        raise DataFormatError(card_path, None, "complete", "true or false", repr(complete))
+    if not complete:
+        return files, []
+    if not isinstance(listed, list):
+        raise DataFormatError(
+            card_path, None, "shards", "the list of the dataset's shards", type(listed).__name__
+        )
     problems: list[DataFormatError] = []
     keep: list[Path] = []
     names: set[str] = set()
@@ -540,6 +567,19 @@ def _check_shards(
                 card_path, f"shards[{k}]", "path", "a shard's relative path", repr(entry)
             )
         relative = entry["path"]
+        for key, kind in (("bytes", int), ("sha256", str)):
+            if key in entry and (not isinstance(entry[key], kind) or isinstance(entry[key], bool)):
+                raise DataFormatError(
+                    card_path,
+                    f"shards[{k}]",
+                    key,
+                    "a size in bytes" if kind is int else "a sha256 hex digest",
+                    repr(entry[key]),
+                )
+        if relative in names:
+            raise DataFormatError(
+                card_path, f"shards[{k}]", "path", "each shard listed once", repr(relative)
+            )
         names.add(relative)
         shard = folder / relative
         where = f"shard {relative} (shards[{k}] of {CARD_JSON})"
@@ -647,10 +687,16 @@ def _read_file(path: Path) -> tuple[list[Frame], dict[str, Any]]:
             f"a {METADATA_KEY.decode()!r} entry (a file written by reform-sim)",
             "none",
         )
-    try:
-        header = json.loads(raw)
-    except json.JSONDecodeError as exc:
-        raise DataFormatError(path, None, "schema metadata", "JSON", f"{exc}") from exc
+    header = _json_object(raw, path, field="schema metadata", expected="a JSON object")
+    for key, kind in (("name", str), ("source", str), ("metadata", dict)):
+        if key in header and not isinstance(header[key], kind):
+            raise DataFormatError(
+                path,
+                None,
+                key,
+                f"a JSON {'object' if kind is dict else 'string'}",
+                type(header[key]).__name__,
+            )
     version = header.get("format_version")
     if not isinstance(version, int) or version > FORMAT_VERSION or version < 1:
         raise DataFormatError(

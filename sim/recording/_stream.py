@@ -84,7 +84,11 @@ def open_recording(
             rec.set_sinks(*sinks, default_blueprint=blueprint)
             rec.send_recording_name(name)
             yield rec
-            rec.flush()
+            try:
+                rec.flush()
+            except RuntimeError as exc:  # a viewer that cannot be reached: one line, naming it
+                where = f"--connect {target.connect or 'the default viewer'}"
+                raise OSError(f"{where}: {' '.join(str(exc).split())}") from None
             if server is not None:
                 _serve_until_interrupted(server.uri)
         finally:

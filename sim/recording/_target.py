@@ -27,6 +27,10 @@ SERVE_GRPC_PORT = 9876  # Rerun's default gRPC port
 SERVE_WEB_PORT = 9090  # Rerun's default web viewer port
 
 
+# The address schemes of a Rerun viewer (rr.GrpcSink's).
+VIEWER_SCHEMES = ("rerun://", "rerun+http://", "rerun+https://")
+
+
 @dataclass(frozen=True)
 class RecordingTarget:
     """Where a recording goes; any combination.
@@ -50,6 +54,12 @@ class RecordingTarget:
             object.__setattr__(self, "save", path)
         if self.save is None and self.connect is None and not self.serve:
             raise ValueError("a recording target needs save, connect or serve; got none")
+        if self.connect and not self.connect.startswith(VIEWER_SCHEMES):
+            raise ValueError(
+                f"--url must be a Rerun viewer's address starting with one of "
+                f"{', '.join(VIEWER_SCHEMES)} (e.g. rerun+http://127.0.0.1:9876/proxy), got "
+                f"{self.connect!r}"
+            )
 
     @classmethod
     def coerce(cls, target: RecordingTarget | str | os.PathLike[str]) -> RecordingTarget:

@@ -440,7 +440,12 @@ def test_a_factory_declaring_an_option_badly_is_refused_at_registration():
         ("word-improv", {"colour": 1}, r"word-improv: unknown option 'colour'; options are \["),
         ("mingle", {"people": 101}, r"option people must be within \[2, 100\], got 101"),
         ("mingle", {"people": 60, "room_side": 6.0}, r"60 people do not fit a 6 m x 6 m room"),
-        ("mingle", {"duration": -5.0}, r"option duration must be within \(0, inf\] s, got -5.0"),
+        ("mingle", {"duration": -5.0}, r"option duration must be within \(0, 86400\] s, got -5.0"),
+        (
+            "mingle",
+            {"duration": 1e9},
+            r"option duration must be within \(0, 86400\] s, got 1000000000.0",
+        ),
         ("mingle", {"room_side": -3.0}, r"option room_side must be within \[0, 100\] m, got -3.0"),
         ("mingle", {"people": -1}, r"option people must be within \[2, 100\], got -1"),
         ("mingle", {"passers_by": 99999}, r"option passers_by must be within \[0, 20\], got 99999"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 from pathlib import Path
@@ -475,11 +476,20 @@ def test_time_must_increase_within_a_sequence(salsa_head, time, found):
 
 def _generated_folder(root: Path, salsa_dataset, *, written: int, episodes: int, complete: bool):
     """A folder shaped as ``reform-sim generate`` writes it: shards and a dataset card."""
+    shards = []
     for k in range(written):
         frames = tuple(f.replace(sequence=f"walk-{k}") for f in salsa_dataset.frames[:2])
-        write_parquet(
+        path = write_parquet(
             Dataset(frames=frames, name="walk"),
             root / "scenario=walk" / f"episode={k}" / "part.parquet",
+        )
+        data = path.read_bytes()
+        shards.append(
+            {
+                "path": path.relative_to(root).as_posix(),
+                "bytes": len(data),
+                "sha256": hashlib.sha256(data).hexdigest(),
+            }
         )
     card = {
         "card_version": 1,
@@ -487,6 +497,7 @@ def _generated_folder(root: Path, salsa_dataset, *, written: int, episodes: int,
         "complete": complete,
         "episodes": episodes,
         "command": f"reform-sim generate --scenario walk --episodes {episodes} --seed 0 --out DIR",
+        "shards": shards,
     }
     (root / "dataset.json").write_text(json.dumps(card))
     return root
@@ -518,6 +529,51 @@ def test_a_finished_generated_folder_reads(tmp_path, salsa_dataset):
         tmp_path / "data", salsa_dataset, written=3, episodes=3, complete=True
     )
     assert read_parquet(folder).sequences() == ("walk-0", "walk-1", "walk-2")
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"shards": None}, r"field 'shards': expected the list of the dataset's shards, found"),
+        ({"complete": "yes"}, r"field 'complete': expected true or false, found 'yes'"),
+        (
+            {"shards": [{"path": "scenario=walk/episode=0/part.parquet", "bytes": "many"}]},
+            r"shards\[0\]: field 'bytes': expected a size in bytes, found 'many'",
+        ),
+        (
+            {"shards": [{"path": "scenario=walk/episode=0/part.parquet", "sha256": 12}]},
+            r"shards\[0\]: field 'sha256': expected a sha256 hex digest, found 12",
+        ),
+        (
+            {"shards": [{"path": "scenario=walk/episode=0/part.parquet"}] * 2},
+            r"shards\[1\]: field 'path': expected each shard listed once",
+        ),
+    ],
+    ids=["no-shard-list", "complete-not-a-bool", "bytes-not-a-number", "sha-not-text", "twice"],
+)
+def test_a_card_that_cannot_vouch_for_its_shards_is_refused(
+    tmp_path, salsa_dataset, change, message
+):
+    folder = _generated_folder(
+        tmp_path / "data", salsa_dataset, written=1, episodes=1, complete=True
+    )
+    card = json.loads((folder / "dataset.json").read_text()) | change
+    (folder / "dataset.json").write_text(json.dumps(card))
+    with pytest.raises(DataFormatError, match=message):
+        read_parquet(folder)
+
+
+def test_a_card_nested_too_deep_or_not_a_file_is_one_error(tmp_path, salsa_dataset):
+    folder = _generated_folder(
+        tmp_path / "data", salsa_dataset, written=1, episodes=1, complete=True
+    )
+    (folder / "dataset.json").write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(DataFormatError, match=r"found JSON nested too deep to read"):
+        read_parquet(folder)
+    (folder / "dataset.json").unlink()
+    (folder / "dataset.json").mkdir()
+    with pytest.raises(DataFormatError, match=r"dataset card \(a JSON file\), found a folder"):
+        read_parquet(folder)
 
 
 def test_a_corrupt_card_is_named(tmp_path, salsa_dataset):
