@@ -12,11 +12,13 @@ as on any error (joblib terminates them) and ``main`` reports the interruption i
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 from collections.abc import Iterator
 
 _parked: threading.Thread | None = None
+_TRACKER_FILTER = "ignore:resource_tracker:UserWarning"  # loky's tracker's leftover warnings
 
 
 def _park() -> None:
@@ -42,6 +44,12 @@ def sigint_to_main_only() -> Iterator[None]:
         yield
         return
     _park()
+    # An interrupted pool of loky workers leaves semaphores its resource tracker (a process of
+    # its own) cleans up at exit, saying so in a warning on stderr: the interruption is already
+    # said in one line. Worker processes inherit the filter through the environment.
+    filters = os.environ.get("PYTHONWARNINGS", "")
+    if _TRACKER_FILTER not in filters.split(","):
+        os.environ["PYTHONWARNINGS"] = ",".join(f for f in (filters, _TRACKER_FILTER) if f)
     # multiprocessing's resource tracker, started on the first use of worker processes, unblocks
     # SIGINT in the thread that starts it (instead of restoring the mask; Python 3.11). Started
     # here, before the block (11 ms, one small process), it leaves the mask alone later.
