@@ -9,13 +9,22 @@ created) raises `OutputPathError` naming the path before anything is written;
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-__all__ = ["OutputPathError", "atomic_open", "atomic_path", "check_file_path", "check_folder_path"]
+__all__ = [
+    "OutputPathError",
+    "atomic_open",
+    "atomic_path",
+    "check_file_path",
+    "check_folder_path",
+    "file_kind",
+]
 
 _DEFAULT_FILE_MODE = 0o666
 
@@ -74,6 +83,30 @@ def _check_writable(folder: Path, existing: Path, target: str | os.PathLike[str]
         raise OutputPathError(target, problem) from exc
 
 
+def file_kind(path: Path) -> str:
+    """What is at ``path``, for a message: ``"no such file"``, ``"a folder"``, ``"a FIFO (named
+    pipe)"``, ``"a socket"``, ``"a character device"``, ``"a symbolic link loop"``, ..."""
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a symbolic link loop"
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            return "a dangling symbolic link" if path.is_symlink() else "no such file"
+        return f"a path that cannot be read ({exc.strerror})"
+    for test, kind in (
+        (stat.S_ISREG, "a file"),
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISSOCK, "a socket"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+    ):
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
 def _check_file_kinds(path: str | os.PathLike[str]) -> tuple[Path, Path]:
     """The checks that need no write (not a folder, not under a file): the target and the
     nearest existing ancestor of its folder."""
@@ -81,6 +114,10 @@ def _check_file_kinds(path: str | os.PathLike[str]) -> tuple[Path, Path]:
     if os.fspath(path).endswith(("/", os.sep)) or target.is_dir():
         found = "an existing folder" if target.is_dir() else "a folder path ending in /"
         raise OutputPathError(path, f"expected a file path, found {found}")
+    kind = file_kind(target)
+    if kind not in ("a file", "no such file", "a dangling symbolic link"):
+        # Replacing a FIFO or a device by a file of results is never what was meant.
+        raise OutputPathError(path, f"expected a file path, found {kind}")
     return target, _nearest_existing(target.parent, path)
 
 

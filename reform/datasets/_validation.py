@@ -12,6 +12,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from reform.atomic import file_kind
 from reform.datasets.errors import DataFormatError
 from reform.frame import POSITION_LIMIT_M, Frame
 
@@ -23,33 +24,6 @@ WRAPPED_ANGLE_LIMIT_RAD = math.pi + 2e-3
 # annotations drift up to 65.3 rad (about ten turns); angles in degrees reach 90-360 in every
 # realistic scene, so a value beyond this bound means degrees, not a long drift. Radians.
 UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
-
-
-def file_kind(path: Path) -> str:
-    """What is at ``path``, for a message: ``"no such file"``, ``"a folder"``, ``"a FIFO (named
-    pipe)"``, ``"a socket"``, ``"a character device"``, ``"a symbolic link loop"``, ..."""
-    import errno
-    import stat
-
-    try:
-        mode = path.stat().st_mode
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            return "a symbolic link loop"
-        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
-            return "a dangling symbolic link" if path.is_symlink() else "no such file"
-        return f"a path that cannot be read ({exc.strerror})"
-    for test, kind in (
-        (stat.S_ISREG, "a file"),
-        (stat.S_ISDIR, "a folder"),
-        (stat.S_ISFIFO, "a FIFO (named pipe)"),
-        (stat.S_ISSOCK, "a socket"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-    ):
-        if test(mode):
-            return kind
-    return "not a regular file"
 
 
 def require_file(path: Path, *, what: str) -> Path:

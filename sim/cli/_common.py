@@ -34,6 +34,11 @@ DATASETS_VARIABLE = "REFORM_SIM_DATASETS"  # environment variable naming them el
 def read_text(option: str, path: str, *, expected: str) -> str:
     """The UTF-8 text of the file ``option`` names; a `CliError` naming the option and the file
     when it cannot be read or is not UTF-8 text (``expected`` says what it should hold)."""
+    from reform.atomic import file_kind  # here: building the parser imports no reform module
+
+    kind = file_kind(Path(path))
+    if kind != "a file":
+        raise CliError(f"{option} {path}: expected {expected} in a file, found {kind}")
     try:
         return Path(path).read_text(encoding="utf-8")
     except OSError as exc:

@@ -46,6 +46,8 @@ def _read_results(path: str) -> list[dict[str, Any]]:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CliError(f"--with-results {path}: not JSON ({exc})") from None
+    except RecursionError:
+        raise CliError(f"--with-results {path}: JSON nested too deep to read") from None
     if isinstance(data, dict) and "results" in data:
         data = data["results"]
     results = data if isinstance(data, list) else [data]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import shlex
 import sys
 import time
@@ -58,8 +59,8 @@ def _outputs(out: str) -> Path:
 
 def run(args: argparse.Namespace) -> int:
     salsa, babble = salsa_and_babble(args)
-    if not args.episodes_scale > 0:
-        raise CliError(f"--episodes-scale must be > 0, got {args.episodes_scale}")
+    if not (math.isfinite(args.episodes_scale) and args.episodes_scale > 0):
+        raise CliError(f"--episodes-scale must be a finite number > 0, got {args.episodes_scale}")
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     classifiers = CLASSIFIER_NAMES

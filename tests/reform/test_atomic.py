@@ -152,3 +152,17 @@ def test_a_dangling_link_is_named_as_such(tmp_path):
     link.symlink_to(tmp_path / "missing-folder")
     with pytest.raises(OutputPathError, match=r"expected a folder at .*gone, found a link to"):
         check_file_path(link / "out.json")
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_fifo_or_a_device_is_not_replaced_by_a_file_of_results(tmp_path, kind):
+    if kind == "fifo":
+        target = tmp_path / "pipe"
+        os.mkfifo(target)
+        found = "a FIFO"
+    else:
+        target = Path("/dev/null")
+        found = "a character device"
+    with pytest.raises(OutputPathError, match=f"expected a file path, found {found}"):
+        check_file_path(target)
+    assert stat.S_ISFIFO(target.stat().st_mode) if kind == "fifo" else target.is_char_device()

@@ -598,3 +598,30 @@ def test_unknown_compression_is_refused_before_writing(tmp_path):
     for codec in ("none", "snappy", "ZSTD"):
         path = write_parquet(_mixed_dataset(), tmp_path / f"{codec}.parquet", compression=codec)
         _same(read_parquet(path), _mixed_dataset())
+
+
+@pytest.mark.parametrize(
+    ("header", "message"),
+    [
+        (b"[1, 2]", r"field 'schema metadata': expected a JSON object, found a JSON list"),
+        (
+            b'{"format_version": 1, "name": {"a": 1}}',
+            r"field 'name': expected a JSON string, found dict",
+        ),
+        (
+            b'{"format_version": 1, "metadata": [1]}',
+            r"field 'metadata': expected a JSON object, found list",
+        ),
+        (b"[" * 100_000 + b"]" * 100_000, r"expected a JSON object, found JSON nested too deep"),
+    ],
+    ids=["a-list", "name-an-object", "metadata-a-list", "too-deep"],
+)
+def test_a_header_of_the_wrong_shape_is_one_error(tmp_path, header, message):
+    import pyarrow.parquet as pq
+
+    path = write_parquet(_mixed_dataset(), tmp_path / "good.parquet")
+    table = pq.read_table(path)
+    bad = table.replace_schema_metadata({**table.schema.metadata, METADATA_KEY: header})
+    pq.write_table(bad, tmp_path / "bad.parquet")
+    with pytest.raises(DataFormatError, match=message):
+        read_parquet(tmp_path / "bad.parquet")

@@ -225,6 +225,13 @@ def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
             id="bad-id-token",
         ),
         pytest.param(
+            ["0.2 ID_" + "9" * 40 + " 1.0 2.0 0.1 0.2"],
+            ["0.2 < ID_001 >"],
+            r"line 1: field 'ID': expected a token ID_<number> with a number <= "
+            r"9223372036854775807, found 'ID_9999",
+            id="id-beyond-int64",
+        ),
+        pytest.param(
             [f"0.2 {_person(1)} {_person(1)}"],
             ["0.2 < ID_001 >"],
             r"features.txt: line 1: field 'ID': .*found id 1 twice",
