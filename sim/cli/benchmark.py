@@ -53,6 +53,12 @@ def _run(args: argparse.Namespace) -> int:
         raise CliError(f"--train-fraction must lie in (0, 1), got {fraction}")
     split = tuple(args.test_split or ("salsa",))
     datasets = [dataset_spec(name, test_split=split, train_fraction=fraction) for name in names]
+    unknown = [name for name in args.test_split or () if name not in {d.name for d in datasets}]
+    if unknown:
+        raise CliError(
+            f"--test-split {unknown[0]}: expected the name of a dataset of this run "
+            f"({', '.join(d.name for d in datasets)}), got {unknown[0]!r}"
+        )
     detectors = [detector_spec(spec) for spec in (args.detector or DEFAULT_DETECTORS)]
     detectors += [model_spec(path) for path in args.model or ()]
     _check_detectors(detectors)

@@ -181,8 +181,9 @@ def test_cli_writes_the_tables_the_plot_and_the_recordings(small, tmp_path, caps
         ),
         (["--detector", "nowhere.module:make"], "nowhere.module"),
         (["--backend", "local", "--address", "x"], "--address needs --backend ray"),
+        (["--test-split", "slasa"], "--test-split slasa: expected the name of a dataset"),
     ],
-    ids=["unknown-dataset", "plugin-that-does-not-import", "address-without-ray"],
+    ids=["unknown-dataset", "plugin-that-does-not-import", "address-without-ray", "typo-split"],
 )
 def test_cli_bad_input_is_one_line(small, tmp_path, capsys, argv, message):
     if "--data" not in argv:
