@@ -39,6 +39,7 @@ __all__ = [
     "RequestTooLarge",
     "available_memory",
     "check",
+    "check_episodes",
     "check_possible",
     "dataset_estimate",
     "episode_estimate",
@@ -425,6 +426,27 @@ def _check_time(estimate: Estimate, what: str, shrink: str, max_seconds: float) 
             f"({_frames_text(estimate.frames, estimate.agents)}), more than the "
             f"{format_duration(max_seconds)} a run may take (sim.sizing.MAX_RUN_SECONDS); "
             + _ask_for_less(shrink),
+        )
+
+
+def check_episodes(episodes: int, *, what: str, flag: str) -> None:
+    """Refuses, before any work, a study whose ``episodes`` simulated episodes would take longer
+    than `MAX_RUN_SECONDS` even at `SECONDS_PER_EPISODE` each (the least an episode costs beside
+    its frames): the guard of the studies that count episodes rather than frames.
+
+    Raises:
+        RequestTooLarge: naming the estimate, the limit and ``flag``.
+    """
+    seconds = episodes * SECONDS_PER_EPISODE
+    if seconds > MAX_RUN_SECONDS:
+        raise RequestTooLarge(
+            "time",
+            seconds,
+            MAX_RUN_SECONDS,
+            f"{what} would take at least {format_duration(seconds)} on this machine "
+            f"({count(episodes)} episodes at {SECONDS_PER_EPISODE:g} s each at the least), more "
+            f"than the {format_duration(MAX_RUN_SECONDS)} a run may take "
+            f"(sim.sizing.MAX_RUN_SECONDS); ask for fewer ({flag})",
         )
 
 

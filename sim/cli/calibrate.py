@@ -16,6 +16,7 @@ from reform.datasets import fetch, is_fetched, load_babble, load_salsa
 from sim.cli._common import DEFAULT_DATASETS, CliError, check_output, default_datasets
 from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
 from sim.experiments.calibration_report import to_markdown
+from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -33,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
     if seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {seeds}")
+    check_episodes(seeds, what="the calibration", flag="--seeds")
     given = args.datasets or default_datasets()
     folders = {}
     for name in ("salsa", "babble"):

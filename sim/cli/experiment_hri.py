@@ -21,6 +21,7 @@ from sim.cli._experiment_io import (
 from sim.experiments.hri import VIEWS, hri_detectors, hri_experiment, record_scenes
 from sim.experiments.hri_report import to_markdown
 from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
+from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -46,6 +47,7 @@ def _command(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     if args.seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {args.seeds}")
+    check_episodes(args.seeds, what="the HRI experiment", flag="--seeds")
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     views = [v.strip() for v in args.views.split(",") if v.strip()]

@@ -13,6 +13,7 @@ from sim.cli._common import CliError, check_output, check_recording
 from sim.cli._detectors import make_plugin
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
 from sim.experiments.stress_report import write_report
+from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -39,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
         if args.seeds < 1:
             raise CliError(f"--seeds must be >= 1, got {args.seeds}")
         grid = dataclasses.replace(grid, seeds=args.seeds)
+        check_episodes(args.seeds, what="the stress test", flag="--seeds")
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     axes = None
