@@ -442,8 +442,10 @@ def test_a_study_counting_episodes_is_refused_when_even_its_least_cost_is_too_lo
     sizing.check_episodes(1000, what="the study", flag="--seeds")  # about a minute: fine
     with pytest.raises(sizing.RequestTooLarge, match=r"the study would take at least 2.41 years"):
         sizing.check_episodes(10**9, what="the study", flag="--seeds")
-    for argv in (["calibrate", "--seeds", "1000000000"], ["experiment", "hri", "--seeds", "10**9"]):
-        argv[-1] = str(10**9)
+    for argv in (
+        ["calibrate", "--seeds", "1000000000"],
+        ["experiment", "hri", "--seeds", "1000000000"],
+    ):
         assert main([*argv, "--out", "/tmp/never-written"]) == 2
         err = capsys.readouterr().err
         assert "would take at least" in err and "(--seeds)" in err and err.count("\n") == 1
