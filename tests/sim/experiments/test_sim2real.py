@@ -263,7 +263,8 @@ def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["--episodes-scale", "0"], "--episodes-scale must be > 0, got 0.0"),
+        (["--episodes-scale", "0"], "--episodes-scale must be a finite number > 0, got 0.0"),
+        (["--episodes-scale", "inf"], "--episodes-scale must be a finite number > 0, got inf"),
         (["--classifiers", "svm"], "--classifiers must be among"),
         ([], "give --datasets DIR"),
     ],
