@@ -58,6 +58,7 @@ _YAW_LIMIT_RAD = math.pi + 2e-3  # wrapped radians plus rounding; larger values 
 CODECS = ("none", "snappy", "gzip", "brotli", "lz4", "zstd")
 # The card of a folder written by ``reform-sim generate`` (sim.generate.CARD_JSON).
 CARD_JSON = "dataset.json"  # the card of a folder written by reform-sim generate
+CARD_VERSION = 1  # the newest card format this reader knows (sim.generate.CARD_VERSION)
 
 # name -> (arrow type name, nullable, unit, description). The README's column table is this.
 COLUMNS: dict[str, tuple[str, bool, str, str]] = {
@@ -558,6 +559,26 @@ def _check_shards(
         raise DataFormatError(
             card_path, None, "shards", "the list of the dataset's shards", type(listed).__name__
         )
+    version = card.get("card_version", CARD_VERSION)
+    if (
+        isinstance(version, bool)
+        or not isinstance(version, int)
+        or not 1 <= version <= CARD_VERSION
+    ):
+        raise DataFormatError(
+            card_path, None, "card_version", f"an integer from 1 to {CARD_VERSION}", repr(version)
+        )
+    episodes = card.get("episodes")
+    if episodes is not None and (
+        isinstance(episodes, bool) or not isinstance(episodes, int) or episodes != len(listed)
+    ):
+        raise DataFormatError(
+            card_path,
+            None,
+            "episodes",
+            f"the number of shards the card lists ({len(listed)})",
+            repr(episodes),
+        )
     problems: list[DataFormatError] = []
     keep: list[Path] = []
     names: set[str] = set()
@@ -567,6 +588,14 @@ def _check_shards(
                 card_path, f"shards[{k}]", "path", "a shard's relative path", repr(entry)
             )
         relative = entry["path"]
+        if Path(relative).is_absolute() or ".." in Path(relative).parts:
+            raise DataFormatError(
+                card_path,
+                f"shards[{k}]",
+                "path",
+                "a path inside the dataset's folder",
+                repr(relative),
+            )
         for key, kind in (("bytes", int), ("sha256", str)):
             if key in entry and (not isinstance(entry[key], kind) or isinstance(entry[key], bool)):
                 raise DataFormatError(
@@ -590,7 +619,7 @@ def _check_shards(
         else:
             error = None
         if size is None:
-            found = "no such file" if error is None else f"{type(error).__name__}: {error}"
+            found = file_kind(shard) if error is None else f"{type(error).__name__}: {error}"
             problems.append(DataFormatError(shard, None, None, f"the {where}", found))
             continue
         expected_size = entry.get("bytes")

@@ -14,14 +14,22 @@ import sim.envs
 from reform.atomic import atomic_open
 from sim.cli._common import CliError, check_output
 from sim.envs.policy import evaluate_policy
+from sim.sizing import check_episodes
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    if args.env not in gym.registry:
-        known = ", ".join(i for i in sim.envs.ENV_IDS if not i.endswith("Observe-v0"))
-        raise CliError(f"--env: unknown environment {args.env!r}; the joining ones: {known}")
+    joining = [i for i in sim.envs.ENV_IDS if not i.endswith("Observe-v0")]
+    if args.env not in joining:
+        what = "an environment of another task" if args.env in gym.registry else "unknown"
+        raise CliError(
+            f"--env {args.env}: expected one of the joining task's environments "
+            f"({', '.join(joining)}), got {what}"
+        )
     if args.episodes < 1:
         raise CliError(f"--episodes must be a positive number, got {args.episodes}")
+    if args.seed < 0:
+        raise CliError(f"--seed must be >= 0, got {args.seed}")
+    check_episodes(args.episodes, what="the policy evaluation", flag="--episodes")
     check_output("--json", args.json)
     kwargs = {}
     if args.detector is not None:

@@ -545,11 +545,26 @@ def test_a_finished_generated_folder_reads(tmp_path, salsa_dataset):
             r"shards\[0\]: field 'sha256': expected a sha256 hex digest, found 12",
         ),
         (
-            {"shards": [{"path": "scenario=walk/episode=0/part.parquet"}] * 2},
+            {"shards": [{"path": "scenario=walk/episode=0/part.parquet"}] * 2, "episodes": 2},
             r"shards\[1\]: field 'path': expected each shard listed once",
         ),
+        ({"episodes": 5}, r"field 'episodes': expected the number of shards the card lists \(1\)"),
+        ({"card_version": 99}, r"field 'card_version': expected an integer from 1 to 1"),
+        (
+            {"shards": [{"path": "../../etc/passwd"}]},
+            r"expected a path inside the dataset's folder",
+        ),
     ],
-    ids=["no-shard-list", "complete-not-a-bool", "bytes-not-a-number", "sha-not-text", "twice"],
+    ids=[
+        "no-shard-list",
+        "complete-not-a-bool",
+        "bytes-not-a-number",
+        "sha-not-text",
+        "twice",
+        "episodes-disagree",
+        "newer-card",
+        "outside-the-folder",
+    ],
 )
 def test_a_card_that_cannot_vouch_for_its_shards_is_refused(
     tmp_path, salsa_dataset, change, message
