@@ -67,7 +67,7 @@ import numpy.typing as npt
 from sklearn.base import BaseEstimator
 from sklearn.exceptions import NotFittedError
 
-from reform.frame import Frame, Group, check_frames
+from reform.frame import POSITION_LIMIT_M, Frame, Group, check_frames
 
 __all__ = [
     "CM_PER_M",
@@ -499,14 +499,18 @@ def _convert(value: float, factor: float) -> float:
 
 
 def _check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    """A stride (metres, ``allow_zero``) or an mdl (square metres) as a float, or a ValueError:
+    finite, not negative, and no larger than a position may be (`POSITION_LIMIT_M`, squared for
+    an mdl), beyond which its squares overflow."""
     try:
         number = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
+    high = POSITION_LIMIT_M if allow_zero else POSITION_LIMIT_M**2
     bad = not np.isfinite(number) or number < 0 or (number == 0 and not allow_zero)
-    if bad:
+    if bad or number > high:
         expected = "a finite number >= 0" if allow_zero else "a finite number > 0"
-        raise ValueError(f"{name} must be {expected}, got {value!r}")
+        raise ValueError(f"{name} must be {expected} and <= {high:g}, got {value!r}")
     return number
 
 

@@ -59,6 +59,7 @@ CODECS = ("none", "snappy", "gzip", "brotli", "lz4", "zstd")
 # The card of a folder written by ``reform-sim generate`` (sim.generate.CARD_JSON).
 CARD_JSON = "dataset.json"  # the card of a folder written by reform-sim generate
 CARD_VERSION = 1  # the newest card format this reader knows (sim.generate.CARD_VERSION)
+READ_BYTES_PER_ROW = 320  # bytes of memory per row while a file is read (measured: peak)
 
 # name -> (arrow type name, nullable, unit, description). The README's column table is this.
 COLUMNS: dict[str, tuple[str, bool, str, str]] = {
@@ -697,10 +698,42 @@ def _natural_key(relative: Path) -> tuple:
     )
 
 
+def _available_memory() -> int | None:
+    """Bytes of memory this machine has available now (Linux), or None where it cannot say."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError):
+        return None
+    return None
+
+
+def _check_rows_fit(path: Path, pq: Any) -> None:
+    """Refuses, before reading it, a file whose rows cannot fit the memory available (a few MB
+    of Parquet can claim a hundred million rows)."""
+    try:
+        rows = pq.ParquetFile(path).metadata.num_rows
+    except Exception:  # noqa: BLE001 - a corrupt footer is named by read_table below
+        return
+    need = rows * READ_BYTES_PER_ROW
+    available = _available_memory()
+    if available is not None and need > available:
+        raise DataFormatError(
+            path,
+            None,
+            None,
+            f"a file whose rows fit the {available / 2**30:.1f} GiB of memory available",
+            f"{rows:,} rows needing about {need / 2**30:.1f} GiB to read",
+        )
+
+
 def _read_file(path: Path) -> tuple[list[Frame], dict[str, Any]]:
     pa, pq = _pyarrow()
     if path.stat().st_size == 0:
         raise DataFormatError(path, None, None, "a Parquet file", "an empty file")
+    _check_rows_fit(path, pq)
     try:
         table = pq.read_table(path, partitioning=None)
     except Exception as exc:  # pyarrow raises ArrowInvalid, OSError... on corrupt files
@@ -1025,7 +1058,9 @@ def _groups(
         return ()
     g, m, person = group[listed], member[listed], ids[listed]
     n_groups = int(g.max()) + 1
-    if g.min() < 0 or set(g.tolist()) != set(range(n_groups)):
+    # Each group holds someone: more groups than people listed is malformed (and a huge index
+    # must not build a huge range).
+    if g.min() < 0 or n_groups > g.size or set(g.tolist()) != set(range(n_groups)):
         raise DataFormatError(
             path,
             where,

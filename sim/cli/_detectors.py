@@ -192,8 +192,16 @@ def _gcff(args: argparse.Namespace) -> Any:
         dataset = load_data(args)
         try:
             detector = GcffBySequence.from_dataset(dataset, orientation=orientation)
-        except ValueError:
-            detector = None  # a sequence ships no settings_gc.mat: the reference's defaults
+        except ValueError as exc:
+            # A sequence ships no usable settings_gc.mat: the reference's defaults, said aloud.
+            defaults = Gcff()
+            print(
+                f"gcff: {' '.join(str(exc).split())}; using the reference's defaults (stride "
+                f"{defaults.stride:g} m, mdl {defaults.mdl:g} m²) for every sequence; give "
+                "--stride/--mdl or --settings to choose",
+                file=sys.stderr,
+            )
+            detector = None
         if detector is not None:
             shipped = "; ".join(
                 f"{sequence}: stride {stride:g} m, mdl {mdl:g} m²"

@@ -449,9 +449,10 @@ def test_head_orientation(salsa_frames):
     ("params", "match"),
     [
         ({"orientation": "gaze"}, "orientation must be one of"),
-        ({"mdl": 0.0}, "mdl must be a finite number > 0, got 0.0"),
+        ({"mdl": 0.0}, r"mdl must be a finite number > 0 and <= 1e\+16, got 0.0"),
         ({"stride": -0.1}, "stride must be a finite number >= 0"),
         ({"mdl": float("nan")}, "mdl must be a finite number > 0"),
+        ({"stride": 1e300}, r"stride must be a finite number >= 0 and <= 1e\+08, got 1e\+300"),
     ],
 )
 def test_bad_parameters_are_named(params, match):

@@ -68,11 +68,13 @@ def test_explicit_parameters_override_the_folder_settings(tmp_path):
     assert (result["detector_params"]["stride"], result["detector_params"]["mdl"]) == (0.7, 1.0)
 
 
-def test_defaults_without_settings(tmp_path):
-    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+@pytest.mark.parametrize("settings", [None, {"foo": 1.0}], ids=["no-file", "no-stride-or-mdl"])
+def test_defaults_without_settings_said_aloud(tmp_path, capsys, settings):
+    folder = write_gcff_folder(tmp_path / "Scene", settings=settings)
     groups, result = detect(tmp_path, "--data", str(folder))
     assert groups == PAIR
     assert (result["detector_params"]["stride"], result["detector_params"]["mdl"]) == (0.7, 1.0)
+    assert "using the reference's defaults (stride 0.7 m, mdl 1 m²)" in capsys.readouterr().err
 
 
 def test_settings_file_in_centimetres(tmp_path):
