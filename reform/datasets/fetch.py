@@ -38,7 +38,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 from urllib.parse import quote, unquote, urlsplit
 
-from reform.atomic import atomic_open, check_folder_path
+from reform.atomic import atomic_open, check_folder_path, file_kind
 from reform.datasets.errors import DataFormatError
 
 __all__ = [
@@ -312,6 +312,9 @@ def registry(path: str | PathLike[str] | None = None) -> tuple[PublicDataset, ..
 def _read_registry(path: str | PathLike[str] | None) -> tuple[PublicDataset, ...]:
     """:func:`registry`, under a name the functions taking a ``registry=`` argument can call."""
     source = _packaged_registry() if path is None else Path(path)
+    kind = file_kind(source)
+    if kind != "a file":
+        raise DataFormatError(source, None, None, "a registry file (JSON)", kind)
     try:
         text = source.read_text(encoding="utf-8")
     except OSError as exc:

@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from reform import __version__
+from reform.atomic import file_kind
 from reform.bootstrap import bootstrap_weights
 from reform.calibration import characterise_dataset, compare
 from reform.classifiers import CLASSIFIERS, make_classifier
@@ -193,6 +194,21 @@ def count_pairs(frames: Sequence[Frame]) -> int:
     return int(sum(f.n_people * (f.n_people - 1) // 2 for f in frames))
 
 
+def _check_synthetic_root(root: Path) -> None:
+    """Refuses a synthetic-data folder holding files of its own (a real dataset's, another
+    project's): the generated datasets, one folder each, would be written beside them."""
+    if not root.is_dir():
+        return
+    for entry in sorted(root.iterdir()):
+        if entry.name.startswith("."):
+            continue
+        if not entry.is_dir():
+            raise ValueError(
+                f"{root}: expected a folder of generated datasets (one folder each), found "
+                f"{entry.name} ({file_kind(entry)}); give another --synthetic folder"
+            )
+
+
 def generate_sources(
     sources: Sequence[SyntheticSource],
     *,
@@ -216,6 +232,7 @@ def generate_sources(
     names = [s.scenario for s in sources]
     if len(set(names)) != len(names):
         raise ValueError(f"sources must name each scenario once, got {names}")
+    _check_synthetic_root(Path(root))
     out: dict[str, tuple[Frame, ...]] = {}
     for source in sources:
         folder = Path(root) / source.folder(seed)

@@ -251,11 +251,15 @@ def test_deterministic_data(tiny, salsa_dataset) -> None:
 
 
 def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
+    from sim.experiments.sim2real import generate_sources
+
     with pytest.raises(ValueError, match="classifiers must be among"):
         sim_to_real(salsa_dataset, babble_dataset, synthetic_root=tmp_path, classifiers=("svm",))
+    (tmp_path / "features.txt").write_text("0.2 ID_001 1 2 0 0\n")  # a real dataset's file
+    with pytest.raises(ValueError, match=r"expected a folder of generated datasets .*features.txt"):
+        generate_sources([SyntheticSource("mingle", episodes=1)], root=tmp_path, seed=0)
+    (tmp_path / "features.txt").unlink()
     with pytest.raises(ValueError, match="sources must name each scenario once"):
-        from sim.experiments.sim2real import generate_sources
-
         source = SyntheticSource("mingle", episodes=1)
         generate_sources([source, dataclasses.replace(source)], root=tmp_path, seed=0)
 
