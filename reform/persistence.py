@@ -38,6 +38,7 @@ import math
 import os
 import re
 import struct
+import warnings
 import zipfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -47,7 +48,7 @@ import numpy as np
 import sklearn
 from sklearn.base import BaseEstimator, is_classifier
 from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
-from sklearn.exceptions import NotFittedError
+from sklearn.exceptions import InconsistentVersionWarning, NotFittedError
 from sklearn.linear_model import LogisticRegression
 from sklearn.neighbors import BallTree, KDTree, KNeighborsClassifier
 from sklearn.pipeline import Pipeline
@@ -229,7 +230,11 @@ def _read_payload(path: Path, trusted: Iterable[str], max_bytes: int) -> Any:
         _Schema(path, archive, max_bytes).check()
     untrusted = _check_types(path, data, trusted)
     try:
-        return _skops_io().loads(data, trusted=untrusted)
+        with warnings.catch_warnings():
+            # A model from another scikit-learn warns as it is built; _unwrap then refuses it
+            # in one line naming both versions, so the warning would only come first.
+            warnings.simplefilter("ignore", InconsistentVersionWarning)
+            return _skops_io().loads(data, trusted=untrusted)
     except Exception as exc:  # skops and the constructors it calls, on a file's content
         raise ValueError(f"{path}: the file's objects cannot be built: {_describe(exc)}") from exc
 

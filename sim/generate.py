@@ -1313,7 +1313,8 @@ def generate_dataset(
         if backend == "ray":
             ray, owned, workers = _ray_cpus(address)
         else:
-            workers = n_jobs or _cpu_count()
+            # No more processes than episodes to write (the report says how many ran).
+            workers = max(1, min(n_jobs or _cpu_count(), len(todo)))
         try:
             batches = _batches(todo, workers)
             if backend == "ray":

@@ -1162,3 +1162,28 @@ def test_a_stored_compiled_table_is_ignored(tmp_path):
     assert not isinstance(loaded._compiled, LogisticRegression)
     frames = toy_frames(9, 5)
     assert loaded.predict(frames) == fresh().predict(frames)
+
+
+def test_a_model_of_another_scikit_learn_is_one_line_without_warnings_first(tmp_path):
+    """Every scikit-learn version in the file rewritten to 0.1.0: the version check refuses it,
+    and scikit-learn's own warning, raised while the file's estimators are built, does not come
+    first."""
+    import warnings as _warnings
+    import zipfile
+
+    import sklearn
+
+    model = Reform(make_classifier("logistic-regression")).fit(toy_frames(0, 10))
+    path = save_model(model, tmp_path / "m.skops")
+    with zipfile.ZipFile(path) as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    members["schema.json"] = members["schema.json"].replace(sklearn.__version__.encode(), b"0.1.0")
+    old = tmp_path / "old.skops"
+    with zipfile.ZipFile(old, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    with _warnings.catch_warnings(record=True) as caught:
+        _warnings.simplefilter("always")
+        with pytest.raises(ValueError, match=r"old.skops: model written with scikit-learn 0.1.0"):
+            load_model(old)
+    assert [str(w.message) for w in caught] == []
