@@ -57,12 +57,21 @@ def _child(write: int, function: Callable[..., Any], args: tuple) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     except (ImportError, ValueError, OSError):
         pass
+    too_big = (
+        "MemoryError",
+        f"more than the {MEMORY_HEADROOM_BYTES / 2**30:g} GiB of memory a file may take to read "
+        "(a compressed bomb, or a matrix it claims too large)",
+    )
     try:
         payload = ("ok", function(*args))
+    except MemoryError:
+        payload = ("error", *too_big)
     except BaseException as exc:  # everything the reader raises goes back to the parent
         payload = ("error", type(exc).__name__, str(exc))
     try:
         data = pickle.dumps(payload, protocol=pickle.HIGHEST_PROTOCOL)
+    except MemoryError:
+        data = pickle.dumps(("error", *too_big))
     except Exception as exc:
         data = pickle.dumps(("error", type(exc).__name__, f"result not transferable: {exc}"))
     with os.fdopen(write, "wb") as pipe:
