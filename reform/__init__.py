@@ -12,6 +12,7 @@ from __future__ import annotations
 from reform._lazy import lazy_exports
 
 _EXPORTS = {
+    "AnnotationModel": "reform.annotation",
     "PAPER_CHARACTERISATION": "reform.calibration",
     "Characterisation": "reform.calibration",
     "Comparison": "reform.calibration",
@@ -26,6 +27,7 @@ _EXPORTS = {
     "write_parquet": "reform.datasets",
     "DataFormatError": "reform.datasets.errors",
     "Reform": "reform.detector",
+    "check_detector": "reform.detector_checks",
     "Detector": "reform.detectors",
     "DetectorError": "reform.detectors",
     "DetectorInfo": "reform.detectors",
