@@ -35,5 +35,10 @@ def use_a_writable_cache() -> None:
         return
     folder = Path(tempfile.gettempdir()) / f"reform-sim-numba-{os.getuid()}"
     folder.mkdir(mode=0o700, exist_ok=True)
+    info = folder.lstat()
+    if folder.is_symlink() or info.st_uid != os.getuid() or info.st_mode & 0o077:
+        # Someone else's folder (or one others may write in): the cache is code, so never
+        # load it from there; a fresh private folder instead, compiled anew.
+        folder = Path(tempfile.mkdtemp(prefix="reform-sim-numba-"))
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
     numba.config.CACHE_DIR = str(folder)
