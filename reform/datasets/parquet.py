@@ -39,6 +39,7 @@ from reform.datasets._validation import check_time_increases, file_kind, make_fr
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.frame_block import FrameBlock
+from reform.machine import available_memory
 
 __all__ = [
     "CARD_JSON",
@@ -698,18 +699,6 @@ def _natural_key(relative: Path) -> tuple:
     )
 
 
-def _available_memory() -> int | None:
-    """Bytes of memory this machine has available now (Linux), or None where it cannot say."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError):
-        return None
-    return None
-
-
 def _check_rows_fit(path: Path, pq: Any) -> None:
     """Refuses, before reading it, a file whose rows cannot fit the memory available (a few MB
     of Parquet can claim a hundred million rows)."""
@@ -718,8 +707,8 @@ def _check_rows_fit(path: Path, pq: Any) -> None:
     except Exception:  # noqa: BLE001 - a corrupt footer is named by read_table below
         return
     need = rows * READ_BYTES_PER_ROW
-    available = _available_memory()
-    if available is not None and need > available:
+    available = available_memory()
+    if available and need > available:
         raise DataFormatError(
             path,
             None,

@@ -10,6 +10,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+import reform.machine
 import sim.episode
 from reform.datasets import read_parquet
 from sim import sizing
@@ -123,7 +124,7 @@ def test_memory_is_read_from_proc_meminfo(tmp_path, monkeypatch):
         "MemTotal:       24683584 kB\nMemFree:         1000000 kB\n"
         "MemAvailable:   22518916 kB\nSwapTotal:       1048576 kB\n"
     )
-    monkeypatch.setattr(sizing, "_MEMINFO", meminfo)
+    monkeypatch.setattr(reform.machine, "_MEMINFO", meminfo)
     assert sizing.available_memory() == 22518916 * 1024
     assert sizing.total_memory() == (24683584 + 1048576) * 1024
 
