@@ -482,10 +482,11 @@ def _simulate_and_write(
 ) -> ShardSummary:
     """Simulates one episode and writes its recording (if asked) and then its shard.
 
-    The ground-truth view without a recording takes the fast path: poses in blocks of arrays
-    (`sim.episode.episode_blocks`) written as columns (`reform.datasets.write_parquet` of a
-    `reform.FrameBlock`), no `Frame` per instant. The file is the one the frame path writes,
-    byte for byte.
+    The ground-truth view without a recording or an annotation model takes the fast path: poses
+    in blocks of arrays (`sim.episode.episode_blocks`) written as columns
+    (`reform.datasets.write_parquet` of a `reform.FrameBlock`), no `Frame` per instant. The file
+    is the one the frame path writes, byte for byte. An annotation model records the simulated
+    frames as it says; the recording, when asked for, is of the simulation itself.
     """
 
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
@@ -493,18 +494,7 @@ def _simulate_and_write(
     source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
     path = shard_path(out_dir, spec.scenario, episode)
     annotation = spec.annotation_of(episode)
-    if annotation is not None:
-        return _annotated(
-            spec,
-            episode,
-            made,
-            annotation,
-            path,
-            sequence=sequence,
-            source=source,
-            recording=_recording_path(out_dir, episode) if save_recordings else None,
-        )
-    if spec.view == "truth" and not save_recordings:
+    if spec.view == "truth" and not save_recordings and annotation is None:
         block = FrameBlock.concatenate(
             list(episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence))
         )
@@ -525,48 +515,21 @@ def _simulate_and_write(
         sensor=spec.sensor,
         sequence=sequence,
     )
-    frames = result.dataset.frames
-    summary = _summarise_frames(spec, episode, frames)
-    if save_recordings:
+    if save_recordings:  # the simulated episode, before any annotation model
         _record(spec, episode, result, _recording_path(out_dir, episode))
+    frames = result.dataset.frames
+    metadata: dict[str, Any] = {}
+    if annotation is not None:  # as the annotation records it (reform.annotation)
+        rng = derive_rng(episode_seed(spec.seed, episode), ANNOTATION)
+        frames = annotation.apply(frames, rng)
+        metadata["annotation"] = annotation.to_json()
+    summary = _summarise_frames(spec, episode, frames)
     dataset = Dataset(
         frames=frames,
         name=spec.scenario,
         source=source,
-        metadata=_shard_metadata(spec, summary, made),
+        metadata=_shard_metadata(spec, summary, made) | metadata,
     )
-    write_parquet(dataset, path)
-    return summary
-
-
-def _annotated(
-    spec: GenerationSpec,
-    episode: int,
-    made: Any,
-    annotation: AnnotationModel,
-    path: Path,
-    *,
-    sequence: str,
-    source: str,
-    recording: Path | None,
-) -> ShardSummary:
-    """One episode as ``annotation`` records it (``reform.annotation``), written as its shard,
-    the model in the shard's metadata (and the simulated episode recorded, if asked)."""
-    result = simulate_episode(
-        made,
-        duration=spec.duration,
-        rate=spec.rate,
-        view=spec.view,
-        sensor=spec.sensor,
-        sequence=sequence,
-    )
-    if recording is not None:
-        _record(spec, episode, result, recording)
-    rng = derive_rng(episode_seed(spec.seed, episode), ANNOTATION)
-    frames = annotation.apply(result.dataset.frames, rng)
-    summary = _summarise_frames(spec, episode, frames)
-    metadata = _shard_metadata(spec, summary, made) | {"annotation": annotation.to_json()}
-    dataset = Dataset(frames=frames, name=spec.scenario, source=source, metadata=metadata)
     write_parquet(dataset, path)
     return summary
 
