@@ -21,11 +21,11 @@ $(VENV)/.installed-test: $(VENV)/.installed
 	touch $@
 
 ## demo: install, then run the main job on the embedded default
-# --datasets only for a folder that exists: a DATASETS naming nothing (a clone with no
+# --data only for a folder that exists: a DATASETS naming nothing (a clone with no
 # ../shared beside it) is said, and the demo looks for the datasets itself.
 demo: $(VENV)/.installed
 	$(if $(DATASETS),$(if $(wildcard $(DATASETS)),,@echo "make demo: DATASETS=$(DATASETS) is not a folder here; the demo looks for the datasets itself" >&2))
-	$(BIN)/reform-sim demo $(if $(wildcard $(DATASETS)),--datasets $(DATASETS))
+	$(BIN)/reform-sim demo $(if $(wildcard $(DATASETS)),--data $(DATASETS))
 
 ## test: install with the test extras, then run the whole test suite
 test: $(VENV)/.installed-test

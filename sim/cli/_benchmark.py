@@ -6,9 +6,9 @@ import argparse
 
 from sim.cli._common import (
     add_backend_arguments,
-    add_train_fraction_argument,
     run_with,
 )
+from sim.cli._grammar import add_frames, add_quiet, add_recordings
 
 DEFAULT_OUT = "benchmark-output"
 DEFAULT_DETECTORS = ("gcff", "gcff-own", "majority")
@@ -51,7 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--model",
         action="append",
-        metavar="MODEL",
+        metavar="FILE.skops",
         help="a REFORM model file written by `reform-sim train` (repeatable)",
     )
     parser.add_argument(
@@ -60,15 +60,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="score this dataset on its test split only (repeatable; default: salsa)",
     )
-    add_train_fraction_argument(
-        parser, help="the training share of the split of --test-split datasets (0.6)", default=None
+    add_frames(
+        parser,
+        default=None,
+        scored="scored in every dataset",
+        default_help="the test part in --test-split datasets, all elsewhere",
     )
     parser.add_argument(
         "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder (./{DEFAULT_OUT})"
     )
-    parser.add_argument(
-        "--no-recordings", action="store_true", help="do not write the per-dataset .rrd files"
-    )
+    add_recordings(parser, default=True, each="dataset")
     add_backend_arguments(parser, jobs_default="1")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.benchmark:_run"))

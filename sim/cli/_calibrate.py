@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import DEFAULT_DATASETS, run_with
+from sim.cli._common import run_with
+from sim.cli._experiment_io import add_dataset_arguments
+from sim.cli._grammar import add_episodes, add_quiet
 
 DESCRIPTION = """\
 Simulates word-improv and mingle with default options and compares them with Babble and SALSA:
@@ -13,20 +15,17 @@ the pair features against bounds from the real data; also the randomised mode's 
 HRI scenes. Writes calibration.md and calibration.json into --out.
 """
 
+BASENAME = "calibration"
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--out", required=True, metavar="DIR", help="folder for the report")
     parser.add_argument(
-        "--datasets",
-        default=None,
-        metavar="DIR",
-        help="folder holding salsa/ and babble/ (default: $REFORM_SIM_DATASETS, else "
-        f"{DEFAULT_DATASETS})",
+        "--out", required=True, metavar="DIR", help=f"folder for {BASENAME}.md and {BASENAME}.json"
     )
-    parser.add_argument(
-        "--seeds", type=int, default=None, metavar="N", help="episodes per scenario (default 8)"
-    )
+    add_dataset_arguments(parser)
+    add_episodes(parser, help="episodes per scenario (default 8)", old="--seeds")
     parser.add_argument(
         "--check", action="store_true", help="exit with status 1 when a target is missed"
     )
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.calibrate:run"))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import FORMATS, run_with
+from sim.cli._grammar import add_quiet, add_report_out
 
 DESCRIPTION = """\
 Measures the ground-truth F-formations of one or more datasets (real or synthetic): Tightness
@@ -17,16 +18,20 @@ With --compare-to, each dataset is also set beside each reference: mean Tightnes
 Symmetry differences by size, two-sample Kolmogorov-Smirnov tests of the pair features, and
 whether the mean Tightness lies within --tolerance of the reference's for every size the
 reference holds at least --min-groups times (--check: exit status 1 when not).
+--out DIR writes characterisation.json and characterisation.md there.
 """
+
+BASENAME = "characterisation"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--data",
         required=True,
+        action="extend",
         nargs="+",
         metavar="PATH|NAME",
-        help="dataset file(s) or folder(s), or dataset names (fetched or local)",
+        help="dataset file(s) or folder(s), or dataset names (fetched or local); repeatable",
     )
     parser.add_argument(
         "--format",
@@ -44,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--compare-to",
         nargs="+",
         default=[],
-        metavar="REF",
+        metavar="PATH|NAME",
         help="reference dataset(s) to set each --data dataset beside (format detected)",
     )
     parser.add_argument(
@@ -71,11 +76,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="exit with status 1 when a comparison misses the tolerance",
     )
-    parser.add_argument("--json", metavar="OUT", help="write every number as JSON")
-    parser.add_argument("--markdown", metavar="OUT", help="write the report as Markdown")
+    add_report_out(parser, basename=BASENAME, holds="every number")
     parser.add_argument(
         "--notes",
-        metavar="MD",
-        help="Markdown file appended to the --markdown report as its discussion",
+        metavar="FILE.md",
+        help="Markdown file appended to the Markdown report as its discussion",
     )
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.characterize:run"))

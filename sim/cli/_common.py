@@ -231,7 +231,7 @@ def size_error(exc: RequestTooLarge, flags: dict[str, str] | None = None) -> Cli
     return CliError(exc.message(lambda name: flag_name(name, flags)))
 
 
-def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data") -> None:
+def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool = False) -> None:
     """``--data PATH|NAME [--format F] [--units cm|m]``: where a dataset is and how to read it.
 
     The dataset is a path, or a name that :func:`load_data` resolves (`reform.datasets.resolve`):
@@ -239,16 +239,10 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, flag: str = "--data")
 
     Args:
         parser: the subcommand's parser.
-        flag: ``"--data"`` (a required option) or a name without dashes (a positional).
+        old_positional: the dataset may still be given as a positional path, its former
+            spelling (read with a warning by :func:`data_path`).
     """
-    text = (
-        "dataset file or folder, or a dataset's name: a fetched public dataset "
-        f"(reform-sim datasets list) or a folder in ${DATASETS_VARIABLE} (else {DEFAULT_DATASETS})"
-    )
-    if flag.startswith("-"):
-        parser.add_argument(flag, required=True, metavar="PATH|NAME", help=text)
-    else:
-        parser.add_argument(flag, metavar="PATH|NAME", help=text)
+    add_data_argument(parser, old_positional=old_positional)
     parser.add_argument(
         "--format",
         choices=FORMATS,
@@ -336,17 +330,83 @@ def check_train_fraction(args: argparse.Namespace) -> None:
         raise CliError(f"--train-fraction must lie in (0, 1), got {args.train_fraction}")
 
 
-def load_data(args: argparse.Namespace, *, attribute: str = "data"):
+def add_data_argument(
+    parser: argparse.ArgumentParser, *, old_positional: bool = False, metavar: str = "PATH|NAME"
+) -> None:
+    """``--data PATH|NAME`` alone (required); with ``old_positional``, also the former
+    positional spelling, hidden (:func:`data_path` settles the two)."""
+    text = (
+        "dataset file or folder, or a dataset's name: a fetched public dataset "
+        f"(reform-sim datasets list) or a folder in ${DATASETS_VARIABLE} (else {DEFAULT_DATASETS})"
+    )
+    parser.add_argument("--data", required=not old_positional, metavar=metavar, help=text)
+    if old_positional:
+        parser.add_argument("old_path", nargs="?", default=None, help=argparse.SUPPRESS)
+
+
+def data_path(args: argparse.Namespace) -> str:
+    """``--data``, or the positional path of the former spelling (with a warning); sets
+    ``args.data``."""
+    old = getattr(args, "old_path", None)
+    if old is not None:
+        if args.data is not None:
+            raise CliError(f"give the dataset once: --data {args.data}, or {old}, not both")
+        print(
+            f"warning: the dataset as a positional path ({old}) is deprecated and goes in the "
+            f"next release; use --data {old}",
+            file=sys.stderr,
+        )
+        args.data, args.old_path = old, None
+    if args.data is None:
+        raise CliError("--data PATH|NAME is required: the dataset to read")
+    return args.data
+
+
+def check_frames(args: argparse.Namespace) -> None:
+    """Checks ``--frames`` and ``--train-fraction`` (`sim.cli._grammar.add_frames`) up front:
+    a fraction in (0, 1), and only where it splits (``--frames train|test``); sets the default
+    fraction."""
+    if args.train_fraction is None:
+        args.train_fraction = TRAIN_FRACTION
+        return
+    check_train_fraction(args)
+    if args.frames in (None, "all"):
+        raise CliError(
+            f"--train-fraction {args.train_fraction:g} splits the frames for --frames "
+            "train|test; with --frames all every annotated frame counts"
+        )
+
+
+def select_frames(args: argparse.Namespace, frames: Sequence[Any], *, doing: str) -> list[Any]:
+    """The annotated ``frames`` that ``--frames`` names: all, or the train or test part of
+    `reform.time_split` (``--train-fraction``); a `CliError` naming the dataset when none is
+    left (``doing`` says what they were for)."""
+    from reform import time_split
+
+    frames = [frame for frame in frames if frame.annotated]
+    if not frames:
+        raise CliError(f"{args.data}: the dataset has no annotated frames to {doing}")
+    if args.frames != "all":
+        train, test = time_split(frames, args.train_fraction)
+        frames = train if args.frames == "train" else test
+        if not frames:
+            raise CliError(f"{args.data}: the {args.frames} part of the split holds no frames")
+    return frames
+
+
+def load_data(args: argparse.Namespace):
     """Loads the dataset named by :func:`add_data_arguments`: a path, or a dataset's name
     (`reform.datasets.resolve`; an unfetched public dataset's error says how to fetch it)."""
     from reform.datasets import load_dataset, resolve
+
+    data_path(args)
 
     if args.units == "px" and args.metres_per_pixel is None:
         raise CliError("--units px needs --metres-per-pixel M: pixels are never read as metres")
     if args.metres_per_pixel is not None and args.units != "px":
         raise CliError(f"--metres-per-pixel is the scale of --units px, got --units {args.units}")
     dataset = load_dataset(
-        resolve(getattr(args, attribute)),
+        resolve(args.data),
         format=args.format,
         units=args.units,
         metres_per_pixel=args.metres_per_pixel,
@@ -356,7 +416,7 @@ def load_data(args: argparse.Namespace, *, attribute: str = "data"):
     missing = dataset.metadata.get("incomplete")
     if missing:  # read on purpose (--allow-incomplete): say what is left out
         print(
-            f"warning: {getattr(args, attribute)}: {len(missing)} shard(s) left out "
+            f"warning: {args.data}: {len(missing)} shard(s) left out "
             f"(--allow-incomplete): {missing[0]}" + (" …" if len(missing) > 1 else ""),
             file=sys.stderr,
         )
@@ -365,12 +425,12 @@ def load_data(args: argparse.Namespace, *, attribute: str = "data"):
 
 # Sensor flags: field of sim.Sensor -> (flag, unit shown in the help).
 _SENSOR_NUMBERS = {
-    "fov_deg": ("--fov-deg", "horizontal field of view, degrees"),
-    "min_range": ("--min-range", "nearest distance seen, metres"),
-    "max_range": ("--max-range", "farthest distance seen, metres"),
-    "position_noise": ("--position-noise", "position noise per axis (std), metres"),
-    "yaw_noise": ("--yaw-noise", "yaw noise (std), radians"),
-    "dropout": ("--dropout", "probability that a seen person is missed"),
+    "fov_deg": ("--fov-deg", "DEG", "horizontal field of view, degrees"),
+    "min_range": ("--min-range", "M", "nearest distance seen, metres"),
+    "max_range": ("--max-range", "M", "farthest distance seen, metres"),
+    "position_noise": ("--position-noise", "M", "position noise per axis (std), metres"),
+    "yaw_noise": ("--yaw-noise", "RAD", "yaw noise (std), radians"),
+    "dropout": ("--dropout", "P", "probability that a seen person is missed"),
 }
 _SENSOR_SWITCHES = {
     "occlusion": ("--occlusion", "other bodies hide people (default: yes)"),
@@ -404,8 +464,10 @@ def add_view_argument(parser: argparse.ArgumentParser) -> None:
 def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:
     """The robot sensor's flags (fields of `sim.Sensor`), used with ``--view robot``."""
     sensor = parser.add_argument_group("sensor (with --view robot)")
-    for name, (flag, text) in _SENSOR_NUMBERS.items():
-        sensor.add_argument(flag, dest=f"sensor_{name}", type=float, default=None, help=text)
+    for name, (flag, metavar, text) in _SENSOR_NUMBERS.items():
+        sensor.add_argument(
+            flag, dest=f"sensor_{name}", type=float, default=None, metavar=metavar, help=text
+        )
     for name, (flag, text) in _SENSOR_SWITCHES.items():
         sensor.add_argument(
             flag,

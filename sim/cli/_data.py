@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_data_arguments, run_with
+from sim.cli._common import add_data_argument, add_data_arguments, run_with
 
 _INFO_DESCRIPTION = """\
 Loads a dataset (SALSA / DANTE text, Babble, a GCFF MATLAB folder, or the project's Parquet)
@@ -52,17 +52,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _info_arguments(parser: argparse.ArgumentParser) -> None:
-    add_data_arguments(parser, flag="path")
+    add_data_arguments(parser, old_positional=True)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.set_defaults(handler=run_with("sim.cli.data:run_info"))
 
 
 def _verify_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("path", metavar="DIR", help="a folder written by reform-sim generate")
+    add_data_argument(parser, old_positional=True, metavar="DIR")
     parser.set_defaults(handler=run_with("sim.cli.data:run_verify"))
 
 
 def _convert_arguments(parser: argparse.ArgumentParser) -> None:
-    add_data_arguments(parser, flag="path")
-    parser.add_argument("--out", required=True, metavar="OUT", help="the .parquet file to write")
+    add_data_arguments(parser, old_positional=True)
+    parser.add_argument(
+        "--out", required=True, metavar="FILE.parquet", help="the .parquet file to write"
+    )
     parser.set_defaults(handler=run_with("sim.cli.data:run_convert"))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import run_with
+from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
 The field's public F-formation datasets (CoffeeBreak, Cocktail Party, Synth, GDet, SALSA,
@@ -77,7 +78,5 @@ def _fetch_arguments(parser: argparse.ArgumentParser) -> None:
         help="fetch from <URL>/<repo>/<commit>/<path> (http://, https://, file:// or a folder)",
     )
     _common_arguments(parser)
-    parser.add_argument(
-        "--no-progress", action="store_true", help="no progress bars (shown on a terminal only)"
-    )
+    add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.datasets:run_fetch"))

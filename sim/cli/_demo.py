@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import run_with
+from sim.cli._grammar import add_quiet, add_seed, rename, setter
 from sim.experiments.demo_files import DEFAULT_OUT
 
 DESCRIPTION = """\
 Simulates every registered scenario briefly, generates a synthetic training set (mingle and
 word-improv), trains REFORM on it, scores REFORM and GCFF on held-back synthetic episodes and,
-when found under --datasets, on the SALSA test split and Babble, runs the stress tests on the
+when found (--data), on the SALSA test split and Babble, runs the stress tests on the
 small grid and re-enacts the paper's HRI experiment. Writes Rerun recordings (.rrd), the model
 (model.skops), plots and a Markdown report into --out, and says where they are.
 """
@@ -18,21 +19,22 @@ small grid and re-enacts the paper's HRI experiment. Writes Rerun recordings (.r
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--datasets",
+        "--data",
         metavar="DIR",
         default=None,
         help="folder holding salsa/ and/or babble/ (default: $REFORM_SIM_DATASETS, else "
-        "../shared/datasets when it exists, else synthetic data only)",
+        "../shared/datasets when it exists, else the fetched ones, else synthetic data only)",
     )
+    rename(parser, "--datasets", "--data", setter("data"), metavar="DIR")
     parser.add_argument(
         "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder ({DEFAULT_OUT})"
     )
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="master seed (0)")
+    add_seed(parser)
     parser.add_argument(
         "--jobs", type=int, default=None, metavar="N", help="worker processes (every core)"
     )
     parser.add_argument(
         "--quick", action="store_true", help="tiny budgets: a smoke run in well under a minute"
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.demo:run"))

@@ -6,6 +6,7 @@ import argparse
 
 from sim.cli._common import run_with
 from sim.cli._detection import add_detection_arguments
+from sim.cli._grammar import add_frames, rename, setter
 from sim.recording import add_recording_arguments
 
 DESCRIPTION = """\
@@ -16,11 +17,8 @@ the detected F-formations (groups of two or more person ids; everyone in no grou
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_detection_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="OUT", help="JSON file to write")
-    parser.add_argument(
-        "--annotated-only",
-        action="store_true",
-        help="only the frames that carry ground truth (default: every frame)",
-    )
+    add_frames(parser, default=None, scored="to run on")
+    rename(parser, "--annotated-only", "--frames all", setter("frames", "all"), nargs=0)
+    parser.add_argument("--out", required=True, metavar="FILE.json", help="JSON file to write")
     add_recording_arguments(parser)
     parser.set_defaults(handler=run_with("sim.cli.detect:run"))

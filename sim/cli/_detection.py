@@ -4,17 +4,21 @@ Rerun recording."""
 from __future__ import annotations
 
 import argparse
+import sys
+import time
 from collections.abc import Sequence
 from typing import Any
 
 from sim.cli._common import add_data_arguments
 from sim.cli._detectors import DetectorSpec, add_detector_arguments
+from sim.cli._grammar import add_quiet, show_progress
 
 
 def add_detection_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--detector`` and every detector's options, then the dataset (``--data`` ...)."""
+    """``--detector`` and every detector's options, the dataset (``--data`` ...), ``--quiet``."""
     add_detector_arguments(parser)
     add_data_arguments(parser)
+    add_quiet(parser, old=())
 
 
 def detect_frames(
@@ -26,7 +30,14 @@ def detect_frames(
     from reform.detectors import run_detector
 
     detector = spec.build(args)
-    return detector, run_detector(args.detector, detector, frames)
+    started = time.perf_counter()
+    if show_progress(args):
+        print(f"running {args.detector} on {len(frames):,} frames ...", file=sys.stderr)
+    partitions = run_detector(args.detector, detector, frames)
+    if show_progress(args):
+        seconds = time.perf_counter() - started
+        print(f"{args.detector}: {len(frames):,} frames in {seconds:.1f} s", file=sys.stderr)
+    return detector, partitions
 
 
 def record_detection(

@@ -123,14 +123,14 @@ def _gcff_arguments(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--settings",
-        metavar="settings_gc.mat",
+        metavar="FILE.mat",
         help="GCFF: read stride and mdl from a GCFF settings file, in centimetres and cm² "
         "(in metres when --units m is given)",
     )
     group.add_argument(
         "--tune-on",
-        metavar="TRAIN",
-        help="GCFF: grid-search stride and mdl on the annotated frames of the dataset TRAIN "
+        metavar="PATH|NAME",
+        help="GCFF: grid-search stride and mdl on the annotated frames of this dataset "
         "(format detected; give training data only), objective: F1 at T = 2/3",
     )
     group.add_argument(
@@ -218,7 +218,7 @@ def _gcff(args: argparse.Namespace) -> Any:
 def _reform_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--model",
-        metavar="MODEL",
+        metavar="FILE.skops",
         help="reform: a model file written by `reform-sim train` (.skops)",
     )
 

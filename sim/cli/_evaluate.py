@@ -6,22 +6,25 @@ import argparse
 
 from sim.cli._common import run_with
 from sim.cli._detection import add_detection_arguments
+from sim.cli._grammar import add_frames, add_report_out
 from sim.recording import add_recording_arguments
 
 DESCRIPTION = """\
 Runs a detector on every annotated frame of a dataset and scores it with the field's protocol
 (GCFF's ff_evalgroups): pairwise accuracy; precision, recall and F1 at T = 2/3 and T = 1
 (singletons dropped, means of the per-frame P and R, F1 of the means); micro-averaged P/R/F1;
-recall and precision by group size. Prints the table; --json and --markdown save it.
+recall and precision by group size. Prints the table; --out DIR saves it (DIR/evaluation.json,
+DIR/evaluation.md). --frames test scores the SALSA test split that `reform-sim train --frames
+train` leaves out.
 """
+
+BASENAME = "evaluation"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_detection_arguments(parser)
-    parser.add_argument(
-        "--json", metavar="OUT", help="write the results as JSON (docs/json-schema.md)"
-    )
-    parser.add_argument("--markdown", metavar="OUT", help="write the table as Markdown")
+    add_frames(parser, scored="to score")
+    add_report_out(parser, basename=BASENAME, holds="the scores, docs/json-schema.md")
     parser.add_argument(
         "--per-frame",
         action="store_true",

@@ -8,7 +8,8 @@ from sim.cli._common import (
     add_train_fraction_argument,
     run_with,
 )
-from sim.cli._experiment_io import add_out_argument
+from sim.cli._experiment_io import add_dataset_arguments, add_out_argument
+from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
 Scores GCFF with the REFORM paper's setting (stride 0.7 m, MDL 30000 read as 30000 cm² =
@@ -16,18 +17,15 @@ Scores GCFF with the REFORM paper's setting (stride 0.7 m, MDL 30000 read as 300
 SALSA training split (reform.time_split), plus the majority baseline, on the SALSA test split and
 on Babble, with the field's protocol. Evaluation JSON files of other detectors on the same frames
 (REFORM's classifiers; dataset "salsa-test" or "babble") are added with --with-results. Writes
-OUT.md and OUT.json and prints the Markdown.
+DIR/gcff-comparison.md and DIR/gcff-comparison.json and prints the Markdown.
 """
+
+BASENAME = "gcff-comparison"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--salsa", required=True, metavar="PATH|NAME", help="SALSA (DANTE folder or dataset name)"
-    )
-    parser.add_argument(
-        "--babble", required=True, metavar="PATH|NAME", help="Babble (folder or dataset name)"
-    )
-    add_out_argument(parser)
+    add_dataset_arguments(parser)
+    add_out_argument(parser, basename=BASENAME)
     add_train_fraction_argument(
         parser,
         help="share of each SALSA session's annotated frames, by time, used to tune (default 0.6)",
@@ -60,6 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="evaluation JSON (reform-sim evaluate --json, or a file holding a 'results' list) "
         "of another detector on the same frames; repeatable",
     )
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.experiment_gcff:run"))
 
 

@@ -9,31 +9,33 @@ from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
 )
+from sim.cli._grammar import add_episodes, add_quiet, add_recordings, add_seed
 from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
 DESCRIPTION = """\
 Simulates the three HRI scenes of the REFORM paper (hri-conversation: two people and the robot
 converse; hri-robot-excluded: two people talk in front of the robot; hri-passing: people walk
 past, no F-formation) with several seeds, and scores REFORM (weighted KNN, bagged trees, logistic
-regression; trained on the SALSA training split when --salsa or --datasets is given, and on a
+regression; trained on the SALSA training split when SALSA is found (--data), and on a
 synthetic training set), GCFF (the paper's setting and the reference default) and the majority
 baseline from the ground truth and from the robot's head sensor, beside the paper's HRI numbers.
-Writes OUT.md and OUT.json; with --recordings DIR, one Rerun recording per scene (first seed,
-robot view, detections of REFORM and GCFF).
+Writes DIR/hri.md and DIR/hri.json; with --recordings, one Rerun recording per scene in
+DIR/recordings/ (first seed, robot view, detections of REFORM and GCFF).
 """
+
+BASENAME = "hri"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_dataset_arguments(parser, babble=False)
-    add_out_argument(parser)
-    parser.add_argument(
-        "--seeds",
-        type=int,
+    add_dataset_arguments(parser, names=("salsa",))
+    add_out_argument(parser, basename=BASENAME)
+    add_episodes(
+        parser,
         default=DEFAULT_SEEDS,
-        metavar="K",
         help=f"episodes per scene (default {DEFAULT_SEEDS})",
+        old="--seeds",
     )
-    parser.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
+    add_seed(parser)
     parser.add_argument(
         "--views",
         default=",".join(VIEW_NAMES),
@@ -43,10 +45,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--jobs", type=int, default=None, metavar="N", help="worker processes for training"
     )
-    parser.add_argument(
-        "--recordings",
-        default=None,
-        metavar="DIR",
-        help="write DIR/<scene>.rrd: the first episode of each scene from the robot's view",
-    )
+    add_recordings(parser, default=False, each="scene (its first episode, robot view)", folder=True)
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.experiment_hri:run"))

@@ -1,5 +1,5 @@
-"""What the ``experiment`` subcommands share: where SALSA and Babble are, and the report each
-writes (OUT.md and OUT.json)."""
+"""What the ``experiment`` subcommands share: where SALSA and Babble are (``--data``), and the
+report each writes (DIR/NAME.md and DIR/NAME.json)."""
 
 from __future__ import annotations
 
@@ -10,65 +10,92 @@ from pathlib import Path
 from typing import Any
 
 from sim.cli._common import CliError, check_output
+from sim.cli._grammar import appender, data_entries, rename
 
-OUT_HELP = "output path without extension: writes OUT.md and OUT.json"
 REPORT_SUFFIXES = (".md", ".json")
+DATA_HELP = (
+    "a dataset (repeatable): NAME=PATH, a fetched or local dataset's name ({names}), its folder, "
+    "or a folder holding {folders} (default: the fetched or local {names})"
+)
 
 
-def add_dataset_arguments(parser: argparse.ArgumentParser, *, babble: bool = True) -> None:
-    """``--datasets DIR``, ``--salsa PATH|NAME`` and, with ``babble``, ``--babble PATH|NAME``."""
-    held = "salsa/ and babble/" if babble else "salsa/"
+def add_dataset_arguments(
+    parser: argparse.ArgumentParser, *, names: tuple[str, ...] = ("salsa", "babble")
+) -> None:
+    """``--data`` (repeatable) naming the datasets ``names``; the former ``--datasets DIR``,
+    ``--salsa PATH`` and ``--babble PATH`` are its old spellings."""
     parser.add_argument(
-        "--datasets", metavar="DIR", help=f"folder holding {held} (e.g. ../shared/datasets)"
-    )
-    parser.add_argument(
-        "--salsa",
+        "--data",
+        action="append",
+        default=[],
         metavar="PATH|NAME",
-        help="SALSA folder or dataset name (default: DIR/salsa, else the fetched or local salsa)",
+        help=DATA_HELP.format(names=", ".join(names), folders=" and ".join(f"{n}/" for n in names)),
     )
-    if babble:
-        parser.add_argument(
-            "--babble",
-            metavar="PATH|NAME",
-            help="Babble folder or dataset name (default: DIR/babble, else the fetched or local "
-            "babble)",
+    rename(parser, "--datasets", "--data DIR", appender("data"), metavar="DIR")
+    for name in names:
+        rename(
+            parser,
+            f"--{name}",
+            f"--data {name}=PATH",
+            appender("data", lambda path, name=name: f"{name}={path}"),
+            metavar="PATH",
         )
 
 
-def salsa_and_babble(args: argparse.Namespace) -> tuple[str, str]:
-    """The SALSA and Babble folders: ``--salsa`` / ``--babble``, else under ``--datasets``.
-
-    ``--salsa`` and ``--babble`` may name a dataset (a fetched one, or a folder of the real
-    datasets'): the caller loads them through `reform.datasets.resolve`, after checking its
-    outputs."""
-    salsa = args.salsa or (args.datasets and str(Path(args.datasets) / "salsa"))
-    babble = args.babble or (args.datasets and str(Path(args.datasets) / "babble"))
-    if not salsa or not babble:
-        raise CliError(
-            "give --datasets DIR (holding salsa/ and babble/) or --salsa and --babble (paths, or "
-            "the names of fetched datasets: reform-sim datasets fetch salsa babble)"
-        )
-    return salsa, babble
+def named_datasets(
+    args: argparse.Namespace, names: tuple[str, ...] = ("salsa", "babble")
+) -> dict[str, str]:
+    """Each of ``names`` as ``--data`` gives it: a path or a dataset's name, which the caller
+    loads through `reform.datasets.resolve` (the name itself when ``--data`` says nothing of it:
+    the fetched or local dataset). A path that does not say which dataset it is: `CliError`."""
+    named, rest = data_entries(args.data, names)
+    for value in rest:
+        folder = Path(value)
+        if value in names:
+            named.setdefault(value, value)
+        elif folder.name.lower() in names:
+            named.setdefault(folder.name.lower(), value)
+        elif folder.is_dir() and any((folder / name).is_dir() for name in names):
+            for name in names:
+                named.setdefault(name, str(folder / name))
+        else:
+            raise CliError(
+                f"--data {value}: expected one of {', '.join(names)} (a name, NAME=PATH, its "
+                f"folder or a folder holding {' and '.join(f'{n}/' for n in names)}), found "
+                f"{'a folder holding none of them' if folder.is_dir() else 'nothing it names'}; "
+                f"say which it is, e.g. --data {names[0]}={value}"
+            )
+    return {name: named.get(name, name) for name in names}
 
 
 def dataset_words(args: argparse.Namespace) -> list[str]:
-    """The dataset flags of :func:`add_dataset_arguments` given, as command-line words."""
-    words = ["--datasets", args.datasets] if args.datasets else []
-    for flag, value in (("--salsa", args.salsa), ("--babble", args.babble)):
-        if value:
-            words += [flag, value]
-    return words
+    """The ``--data`` values given, as command-line words."""
+    return [word for value in args.data for word in ("--data", value)]
 
 
-def add_out_argument(parser: argparse.ArgumentParser, *, help: str = OUT_HELP) -> None:  # noqa: A002
-    """The required ``--out OUT``."""
-    parser.add_argument("--out", required=True, metavar="OUT", help=help)
+def add_out_argument(parser: argparse.ArgumentParser, *, basename: str) -> None:
+    """The required ``--out DIR``: the folder of BASENAME.md and BASENAME.json."""
+    parser.add_argument(
+        "--out",
+        required=True,
+        metavar="DIR",
+        help=f"folder for {basename}.md and {basename}.json (created)",
+    )
 
 
-def report_stem(out: str, *, suffixes: tuple[str, ...] = REPORT_SUFFIXES) -> Path:
-    """``--out`` without its extension when it is one of ``suffixes``."""
+def report_stem(out: str, basename: str, *, suffixes: tuple[str, ...] = REPORT_SUFFIXES) -> Path:
+    """Where ``--out`` puts the report, without its extension: DIR/BASENAME. The former
+    spelling, a path ending in one of ``suffixes``, still names the files themselves (with a
+    warning naming the new one)."""
     path = Path(out)
-    return path.with_suffix("") if path.suffix in suffixes else path
+    if path.suffix in suffixes:
+        print(
+            f"warning: --out {out} (a file name) is deprecated and goes in the next release; "
+            f"use --out {path.parent} (a folder: {path.parent / basename}.md and .json)",
+            file=sys.stderr,
+        )
+        return path.with_suffix("")
+    return path / basename
 
 
 def check_report(
@@ -76,14 +103,14 @@ def check_report(
 ) -> None:
     """Raises `CliError` unless STEM.md, STEM.json (``suffixes``) can be written: up front,
     before the experiment runs."""
+    check_output(option, stem.parent, folder=True)
     for suffix in suffixes:
         check_output(option, stem.with_name(stem.name + suffix))
 
 
-def publish(markdown: str, document: dict[str, Any], *, out: str) -> None:
-    """Writes an experiment's report (its page and its JSON) to OUT.md and OUT.json and prints
-    the Markdown."""
-    stem = report_stem(out)
+def publish(markdown: str, document: dict[str, Any], *, stem: Path) -> None:
+    """Writes an experiment's report (its page and its JSON) to STEM.md and STEM.json and
+    prints the Markdown."""
     write_report(stem, markdown, document)
     print(markdown, end="")
     print(f"wrote {stem}.md and {stem}.json", file=sys.stderr)

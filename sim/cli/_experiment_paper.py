@@ -12,6 +12,7 @@ from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
 )
+from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
 Trains REFORM with the paper's three classifiers on the SALSA training split (reform.time_split:
@@ -19,14 +20,16 @@ per session, the first 60 % of annotated frames by time), with hyper-parameters 
 time-blocked cross-validation on that part only, and scores them and the majority baseline on
 the SALSA test split and on every annotated Babble frame, at T = 2/3 and T = 1, beside the
 paper's published figures. Diagnostics rerun the classifiers under the paper's kind of split,
-MATLAB's presets and a feature slip, to explain the differences. Writes OUT.md and OUT.json and
-prints the Markdown.
+MATLAB's presets and a feature slip, to explain the differences. Writes DIR/paper-experiment.md
+and DIR/paper-experiment.json and prints the Markdown.
 """
+
+BASENAME = "paper-experiment"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_dataset_arguments(parser)
-    add_out_argument(parser)
+    add_out_argument(parser, basename=BASENAME)
     add_train_fraction_argument(
         parser,
         help="share of each SALSA session's annotated frames, by time, for training (0.6)",
@@ -36,4 +39,5 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--no-diagnostics", action="store_true", help="skip the diagnostic reruns (faster)"
     )
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.experiment_paper:run"))

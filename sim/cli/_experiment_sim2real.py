@@ -9,6 +9,7 @@ from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
 )
+from sim.cli._grammar import add_quiet, add_seed
 
 DESCRIPTION = """\
 Trains REFORM (the paper's three classifiers) only on simulated episodes of mingle (a SALSA-like
@@ -17,25 +18,24 @@ game), and scores it on the SALSA test split (reform.time_split) and on every an
 frame, beside REFORM trained on SALSA's training split, GCFF (the paper's setting and tuned on
 SALSA's training split) and the majority baseline, with block-bootstrap intervals and the
 experiment's goals checked. The synthetic data are generated once under --synthetic and reused.
-Writes OUT/sim2real.md, OUT/sim2real.json and OUT/sim2real.png (or OUT.md, OUT.json, OUT.png
-when OUT is not a folder) and prints the Markdown.
+Writes DIR/sim2real.md, DIR/sim2real.json and DIR/sim2real.png and prints the Markdown.
 """
+
+BASENAME = "sim2real"
 
 DEFAULT_SYNTHETIC = "runs/sim2real"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_dataset_arguments(parser)
-    add_out_argument(
-        parser, help="a folder (writes sim2real.md/.json/.png in it) or a path without extension"
-    )
+    add_out_argument(parser, basename=BASENAME)
     parser.add_argument(
         "--synthetic",
         default=DEFAULT_SYNTHETIC,
         metavar="DIR",
         help=f"folder of the generated synthetic data, reused when present ({DEFAULT_SYNTHETIC})",
     )
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="master seed (0)")
+    add_seed(parser)
     parser.add_argument(
         "--episodes-scale",
         type=float,
@@ -58,5 +58,5 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="leave the randomised mode (mingle-randomised) out of the diagnostics",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.experiment_sim2real:run"))

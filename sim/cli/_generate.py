@@ -12,6 +12,7 @@ from sim.cli._common import (
     add_view_argument,
     run_with,
 )
+from sim.cli._grammar import add_quiet, add_recordings, add_seed, rename, setter
 
 DESCRIPTION = """\
 Simulates EPISODES episodes of a scenario and writes them as hive-partitioned Parquet
@@ -25,7 +26,7 @@ refused in one line when it cannot fit this machine.
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
     parser.add_argument("--episodes", required=True, type=int, metavar="N", help="episodes")
-    parser.add_argument("--seed", required=True, type=int, metavar="S", help="master seed")
+    add_seed(parser)
     parser.add_argument("--out", required=True, metavar="DIR", help="dataset folder")
     add_overrides_argument(parser)
     parser.add_argument(
@@ -37,11 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_view_argument(parser)
     add_sensor_arguments(parser)
     add_backend_arguments(parser, jobs_default="all cores")
-    parser.add_argument(
-        "--save-recordings",
-        action="store_true",
-        help="also write one Rerun .rrd per episode (DIR/recordings/episode=K.rrd)",
-    )
+    add_recordings(parser, default=False, each="episode (DIR/recordings/episode=K.rrd)")
+    rename(parser, "--save-recordings", "--recordings", setter("recordings", True), nargs=0)
     parser.add_argument(
         "--annotation",
         action="append",
@@ -52,7 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "yaw_noise=RAD, dropout=P, min_group_seconds=S; repeatable; 'random' draws one model "
         "per episode from reform.annotation.ANNOTATION_RANGES",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_quiet(parser)
     add_max_memory_argument(
         parser, holds="each worker holds the episode it writes (episodes do not stream)"
     )

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import run_with
+from sim.cli._grammar import add_episodes, add_quiet, add_seed, rename, setter
 
 DESCRIPTION = """\
 Runs the scripted baseline of the joining task (go to the gap in the detected o-space, face the
@@ -31,12 +32,10 @@ def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--env", required=True, metavar="ID", help="environment id, e.g. ReformSim/Mingle-v0"
     )
-    parser.add_argument("--episodes", type=int, default=100, metavar="N", help="default 100")
+    add_episodes(parser, default=100, help="episodes (default 100)")
+    add_seed(parser, help="episode k uses seed S + k")
     parser.add_argument(
-        "--seed", type=int, default=0, metavar="S", help="episode k uses seed S + k (default 0)"
-    )
-    parser.add_argument(
-        "--model", default=None, metavar="FILE", help="REFORM model file to detect with"
+        "--model", default=None, metavar="FILE.skops", help="REFORM model file to detect with"
     )
     parser.add_argument(
         "--detector",
@@ -45,6 +44,10 @@ def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
         help="detector without a --model: gcff (default) or truth (the ground truth of what the "
         "robot sees: the policy's upper bound)",
     )
-    parser.add_argument("--json", default=None, metavar="FILE", help="write the results here")
-    parser.add_argument("--progress", action="store_true", help="show a progress bar")
+    parser.add_argument(
+        "--out", default=None, metavar="FILE.json", help="write the results as JSON here"
+    )
+    rename(parser, "--json", "--out", setter("out"), metavar="FILE")
+    add_quiet(parser, old=())
+    rename(parser, "--progress", "(progress is shown by default)", setter("quiet", False), nargs=0)
     parser.set_defaults(handler=run_with("sim.cli.policy:_evaluate"))

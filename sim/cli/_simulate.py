@@ -11,6 +11,7 @@ from sim.cli._common import (
     add_view_argument,
     run_with,
 )
+from sim.cli._grammar import add_quiet, add_seed
 from sim.recording import add_recording_arguments
 
 # How sizing's messages name the simulation's parameters here.
@@ -32,7 +33,7 @@ needs the whole episode in memory, up to --max-memory.
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
-    parser.add_argument("--seed", required=True, type=int, metavar="S", help="episode seed")
+    add_seed(parser, help="episode seed")
     parser.add_argument("--out", required=True, metavar="FILE.parquet", help="output file")
     parser.add_argument(
         "--duration",
@@ -59,5 +60,5 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser,
         holds="a recording holds the whole episode, the frames otherwise stream to --out",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.simulate:run"))

@@ -6,7 +6,9 @@ import argparse
 
 from sim.cli._common import run_with
 from sim.cli._detectors import detector_name
+from sim.cli._grammar import add_episodes, add_quiet, add_seed
 from sim.experiments.stress_grid import AXES, GRIDS
+from sim.recording import add_recording_arguments
 
 DESCRIPTION = """\
 F1 at T = 2/3 and T = 1 of REFORM (weighted KNN, bagged trees, logistic regression) and GCFF as
@@ -33,14 +35,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="default",
         help="levels and sizes (default: default)",
     )
-    parser.add_argument(
-        "--seeds",
-        type=int,
-        default=None,
-        metavar="K",
+    add_episodes(
+        parser,
         help="test episodes per point (default: the grid's, 5 for default, 2 for small)",
+        old="--seeds",
     )
-    parser.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
+    add_seed(parser)
     parser.add_argument(
         "--axes",
         default=None,
@@ -71,10 +71,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="folder for stress.md, stress.json and the plots (default: ./stress)",
     )
-    parser.add_argument(
-        "--save",
-        default=None,
-        metavar="PATH.rrd",
-        help="also save the curves as a Rerun recording; open it with `rerun PATH.rrd`",
-    )
+    add_recording_arguments(parser, what="the curves")
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.stress:run"))

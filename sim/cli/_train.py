@@ -7,13 +7,8 @@ import argparse
 from reform.classifiers import CLASSIFIERS
 from reform.features import DEFAULT_FEATURES, FEATURES
 from reform.reconstruction import RECONSTRUCTIONS
-from sim.cli._common import (
-    add_data_arguments,
-    add_train_fraction_argument,
-    run_with,
-)
-
-FRAME_CHOICES = ("all", "train", "test")
+from sim.cli._common import add_data_arguments, run_with
+from sim.cli._grammar import add_frames, add_quiet
 
 DESCRIPTION = """\
 Deconstructs the annotated frames of a dataset into pairs (Distance, Effort Angle), fits one of
@@ -35,18 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="bagged-trees",
         help="pair classifier (default: bagged-trees)",
     )
-    parser.add_argument(
-        "--frames",
-        choices=FRAME_CHOICES,
-        default="all",
-        help="annotated frames to train on: all, or the train/test part of reform.time_split",
-    )
-    add_train_fraction_argument(
-        parser,
-        help="with --frames train|test: share of each sequence's annotated frames, by time, in "
-        "the train part (0.6)",
-        default=None,  # not given: it needs --frames train|test
-    )
+    add_frames(parser, scored="to train on")
     parser.add_argument(
         "--tune",
         action="store_true",
@@ -74,6 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="together when the classifier's probability is at least P (default: its decision)",
     )
     parser.add_argument(
-        "--out", required=True, metavar="MODEL", help="model file to write (.skops)"
+        "--out", required=True, metavar="FILE.skops", help="model file to write (.skops)"
     )
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.train:run"))

@@ -5,6 +5,7 @@ Its arguments are `sim.cli._benchmark`."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import shlex
 import sys
 
@@ -53,6 +54,8 @@ def _run(args: argparse.Namespace) -> int:
         raise CliError(f"--train-fraction must lie in (0, 1), got {fraction}")
     split = tuple(args.test_split or ("salsa",))
     datasets = [dataset_spec(name, test_split=split, train_fraction=fraction) for name in names]
+    if args.frames is not None:
+        datasets = [dataclasses.replace(d, split=args.frames) for d in datasets]
     unknown = [name for name in args.test_split or () if name not in {d.name for d in datasets}]
     if unknown:
         raise CliError(
@@ -64,7 +67,7 @@ def _run(args: argparse.Namespace) -> int:
     _check_detectors(detectors)
 
     bar = None
-    if not args.no_progress:
+    if not args.quiet:
         bar = tqdm(
             total=len(datasets) * len(detectors), desc="benchmark", unit="cell", file=sys.stderr
         )
@@ -88,7 +91,7 @@ def _run(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.close()
     command = _command(args)
-    written = write_report(benchmark, args.out, command=command, recordings=not args.no_recordings)
+    written = write_report(benchmark, args.out, command=command, recordings=args.recordings)
     print(written["markdown"].read_text(), end="")
     print(f"wrote {args.out}/: " + ", ".join(p.name for p in written.values()), file=sys.stderr)
     return 0
@@ -111,6 +114,7 @@ def _command(args: argparse.Namespace) -> str:
         ("--detector", args.detector),
         ("--model", args.model),
         ("--test-split", args.test_split),
+        ("--frames", [args.frames] if args.frames else None),
     ):
         for value in values or ():
             words += [flag, value]
@@ -118,6 +122,6 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--train-fraction", f"{args.train_fraction:g}"]
     if args.out != DEFAULT_OUT:
         words += ["--out", args.out]
-    if args.no_recordings:
+    if not args.recordings:
         words.append("--no-recordings")
     return " ".join(shlex.quote(w) for w in words)

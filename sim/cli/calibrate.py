@@ -5,65 +5,61 @@ Its arguments are `sim.cli._calibrate`."""
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import shlex
 import sys
+import time
 from pathlib import Path
 
-from reform.atomic import atomic_open
-from reform.datasets import fetch, is_fetched, load_babble, load_salsa
-from sim.cli._common import DEFAULT_DATASETS, CliError, check_output, default_datasets
+from reform.datasets import load_babble, load_salsa, resolve
+from sim.cli._calibrate import BASENAME
+from sim.cli._common import CliError, check_output
+from sim.cli._experiment_io import dataset_words, named_datasets, write_report
 from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
 from sim.experiments.calibration_report import to_markdown
 from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "calibrate", "--out", args.out]
-    if args.datasets is not None:
-        words += ["--datasets", args.datasets]
-    if args.seeds is not None:
-        words += ["--seeds", str(args.seeds)]
+    words = ["reform-sim", "calibrate", "--out", args.out, *dataset_words(args)]
+    if args.episodes is not None:
+        words += ["--episodes", str(args.episodes)]
     if args.check:
         words.append("--check")
     return shlex.join(words)
 
 
 def run(args: argparse.Namespace) -> int:
-    seeds = DEFAULT_SEEDS if args.seeds is None else args.seeds
+    seeds = DEFAULT_SEEDS if args.episodes is None else args.episodes
     if seeds < 1:
-        raise CliError(f"--seeds must be >= 1, got {seeds}")
-    check_episodes(seeds, what="the calibration", flag="--seeds")
-    given = args.datasets or default_datasets()
+        raise CliError(f"--episodes must be >= 1, got {seeds}")
+    check_episodes(seeds, what="the calibration", flag="--episodes")
     folders = {}
-    for name in ("salsa", "babble"):
-        if given is not None:
-            folders[name] = Path(given) / name
-            if not folders[name].is_dir():
-                raise CliError(f"--datasets {given}: no {name}/ folder in it")
-        elif is_fetched(name):
-            folders[name] = fetch(name)
-        else:
+    for name, given in named_datasets(args).items():
+        try:
+            folders[name] = resolve(given)
+        except FileNotFoundError as exc:
             raise CliError(
-                f"{name} not found: give --datasets DIR (holding salsa/ and babble/; default "
-                f"{DEFAULT_DATASETS}) or fetch it with `reform-sim datasets fetch {name}`"
-            )
+                f"{name} not found ({exc}): give --data DIR (holding salsa/ and babble/) or "
+                f"--data {name}=PATH, or fetch it with `reform-sim datasets fetch {name}`"
+            ) from None
     check_output("--out", args.out, folder=True)
-    out = Path(args.out)
+    stem = Path(args.out) / BASENAME
+    started = time.perf_counter()
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(f"[{time.perf_counter() - started:6.1f} s] {line}", file=sys.stderr, flush=True)
+
     report = calibrate_scenarios(
         load_salsa(folders["salsa"]),
         load_babble(folders["babble"]),
         seeds=seeds,
         command=_command(args),
+        progress=progress,
     )
-    out.mkdir(parents=True, exist_ok=True)
-    markdown = out / "calibration.md"
-    with atomic_open(markdown) as handle:
-        handle.write(to_markdown(report))
-    with atomic_open(out / "calibration.json") as handle:
-        json.dump(report.to_json(), handle, indent=2, allow_nan=False)
-        handle.write("\n")
+    write_report(stem, to_markdown(report), report.to_json())
+    markdown = stem.with_suffix(".md")
     for cal in report.calibrations:
         checked = cal.comparison.reference_sizes()
         gaps = [abs(d) for s, d in cal.comparison.tightness_difference().items() if s in checked]
@@ -74,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             f"KS D (distance in/out, effort in/out) {ks}"
         )
     failures = report.failures()
-    print(f"wrote {markdown} and {out / 'calibration.json'}", file=sys.stderr)
+    print(f"wrote {markdown} and {stem.with_suffix('.json')}", file=sys.stderr)
     if failures:
         for line in failures:
             print(f"missed: {line}", file=sys.stderr)

@@ -14,7 +14,9 @@ from typing import Any
 from reform.atomic import atomic_open
 from reform.calibration import MIN_GROUPS, TIGHTNESS_TOLERANCE_M, characterise_dataset, compare
 from reform.datasets import detect_format, load_dataset, resolve
-from sim.cli._common import CliError, check_output, read_text
+from sim.cli._characterize import BASENAME
+from sim.cli._common import CliError, read_text
+from sim.cli._grammar import report_outputs
 from sim.experiments.characterisation_report import (
     characterisation_summary,
     format_calibration,
@@ -43,8 +45,9 @@ def _command(args: argparse.Namespace) -> str:
     if args.check:
         words.append("--check")
     for flag, value in (
-        ("--json", args.json),
-        ("--markdown", args.markdown),
+        ("--json", args.old_json),
+        ("--markdown", args.old_markdown),
+        ("--out", args.out),
         ("--notes", args.notes),
     ):
         if value:
@@ -63,16 +66,17 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--min-groups must be >= 1, got {min_groups}")
     if not tolerance > 0.0:
         raise CliError(f"--tolerance must be a positive number of metres, got {tolerance:g}")
-    check_output("--json", args.json)
-    check_output("--markdown", args.markdown)
+    outputs = report_outputs(args, BASENAME)
     notes = None
     if args.notes:
-        if not args.markdown:
-            raise CliError("--notes is appended to the Markdown report: give --markdown OUT too")
+        if "markdown" not in outputs:
+            raise CliError("--notes is appended to the Markdown report: give --out DIR too")
         notes = read_text("--notes", args.notes, expected="UTF-8 Markdown text")
 
     datasets: list[dict[str, Any]] = []
     for path in args.data:
+        if not args.quiet:
+            print(f"characterising {path}", file=sys.stderr)
         location = resolve(path)
         format = args.format or detect_format(location)
         dataset = load_dataset(location, format=format, units=args.units)
@@ -112,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
     command = _command(args)
     summaries = [item["summary"] for item in datasets]
     print(_report(summaries, comparisons, command=command, style="text"), end="")
-    if args.json:
+    if "json" in outputs:
+        path = outputs["json"][1]
         document = {
             "schema_version": CHARACTERISATION_SCHEMA_VERSION,
             "command": command,
@@ -121,17 +126,18 @@ def run(args: argparse.Namespace) -> int:
             "datasets": summaries,
             "comparisons": comparisons,
         }
-        with atomic_open(args.json) as handle:
+        with atomic_open(path) as handle:
             json.dump(document, handle, indent=2, allow_nan=False)
             handle.write("\n")
-        print(f"wrote {args.json}", file=sys.stderr)
-    if args.markdown:
+        print(f"wrote {path}", file=sys.stderr)
+    if "markdown" in outputs:
+        path = outputs["markdown"][1]
         text = _report(summaries, comparisons, command=command, style="markdown")
         if notes:
             text += "\n## Discussion\n\n" + notes.strip() + "\n"
-        with atomic_open(args.markdown) as handle:
+        with atomic_open(path) as handle:
             handle.write(text)
-        print(f"wrote {args.markdown}", file=sys.stderr)
+        print(f"wrote {path}", file=sys.stderr)
     if args.check and any(not c["within_tolerance"] for c in comparisons):
         print(
             "reform-sim characterize: the mean Tightness misses the tolerance (see above)",

@@ -12,23 +12,24 @@ from typing import Any
 from reform.datasets import detect_format, resolve, write_parquet
 from reform.datasets.parquet import verify_folder
 from reform.datasets.summary import summarise
-from sim.cli._common import check_output, load_data
+from sim.cli._common import check_output, data_path, load_data
 
 
 def run_verify(args: argparse.Namespace) -> int:
-    problems = verify_folder(args.path)
+    path = data_path(args)
+    problems = verify_folder(path)
     for problem in problems:
         print(problem)
     if problems:
-        print(f"{args.path}: {len(problems)} problem(s); the dataset is not whole", file=sys.stderr)
+        print(f"{path}: {len(problems)} problem(s); the dataset is not whole", file=sys.stderr)
         return 1
-    print(f"{args.path}: whole (every shard its card lists is there, unaltered)")
+    print(f"{path}: whole (every shard its card lists is there, unaltered)")
     return 0
 
 
 def _load(args: argparse.Namespace):
-    dataset = load_data(args, attribute="path")
-    return args.format or detect_format(resolve(args.path)), dataset
+    dataset = load_data(args)
+    return args.format or detect_format(resolve(args.data)), dataset
 
 
 def run_info(args: argparse.Namespace) -> int:

@@ -106,7 +106,7 @@ def run_fetch(args: argparse.Namespace) -> int:
             name,
             mirror=args.mirror,
             cache=cache,
-            progress=not args.no_progress and sys.stderr.isatty(),
+            progress=not args.quiet and sys.stderr.isatty(),
             registry=args.registry,
         )
         print(f"{name}: {folder}" + (" (already fetched)" if already else ""))

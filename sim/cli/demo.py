@@ -20,11 +20,11 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     result = run_demo(
         out_dir=args.out,
-        datasets=args.datasets if args.datasets is not None else default_datasets(),
+        datasets=args.data if args.data is not None else default_datasets(),
         seed=args.seed,
         jobs=args.jobs,
         quick=args.quick,
-        progress_bars=not args.no_progress,
+        progress_bars=not args.quiet,
     )
     written = write_report(result)
     seconds = time.perf_counter() - started
@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"real datasets: {' and '.join(missing)} not found, so this run scored simulated "
             "data only. Add them with `reform-sim datasets fetch salsa babble` (or give "
-            "--datasets DIR, a folder holding salsa/ and babble/) and run again for the "
+            "--data DIR, a folder holding salsa/ and babble/) and run again for the "
             "SALSA and Babble evaluations."
         )
     sys.stdout.flush()

@@ -11,7 +11,14 @@ from typing import Any
 
 from reform import __version__
 from reform.atomic import atomic_open
-from sim.cli._common import CliError, check_output, check_recording, load_data
+from sim.cli._common import (
+    CliError,
+    check_frames,
+    check_output,
+    check_recording,
+    load_data,
+    select_frames,
+)
 from sim.cli._detection import detect_frames, record_detection
 from sim.cli._detectors import check_detector, detector_params
 
@@ -58,10 +65,15 @@ def _dumps(result: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     spec = check_detector(args)
+    check_frames(args)
     check_output("--out", args.out)
     check_recording(args)
     dataset = load_data(args)
-    indices = [i for i, f in enumerate(dataset.frames) if f.annotated or not args.annotated_only]
+    if args.frames is None:
+        indices = list(range(len(dataset.frames)))
+    else:
+        chosen = {id(f) for f in select_frames(args, dataset.frames, doing="run on")}
+        indices = [i for i, f in enumerate(dataset.frames) if id(f) in chosen]
     frames = [dataset.frames[i] for i in indices]
     if not frames:
         raise CliError(f"{args.data}: no frames to run the detector on")

@@ -10,21 +10,21 @@ import sys
 
 from reform.atomic import atomic_open
 from reform.metrics import evaluate
-from sim.cli._common import CliError, check_output, check_recording, load_data
+from sim.cli._common import check_frames, check_recording, load_data, select_frames
 from sim.cli._detection import detect_frames, record_detection
 from sim.cli._detectors import check_detector, detector_params
+from sim.cli._evaluate import BASENAME
+from sim.cli._grammar import report_outputs
 from sim.experiments.tables import format_report
 
 
 def run(args: argparse.Namespace) -> int:
     spec = check_detector(args)
-    check_output("--json", args.json)
-    check_output("--markdown", args.markdown)
+    check_frames(args)
+    outputs = report_outputs(args, BASENAME)
     check_recording(args)
     dataset = load_data(args)
-    frames = dataset.annotated()
-    if not frames:
-        raise CliError(f"{args.data}: the dataset has no annotated frames, nothing to evaluate")
+    frames = select_frames(args, dataset.frames, doing="evaluate on")
     detector, predictions = detect_frames(args, spec, frames)
     evaluation = evaluate(frames, predictions)
     result = evaluation.to_json(
@@ -35,15 +35,17 @@ def run(args: argparse.Namespace) -> int:
         per_frame=args.per_frame,
     )
     print(format_report(result, style="text"), end="")
-    if args.json:
-        with atomic_open(args.json) as handle:
+    if "json" in outputs:
+        path = outputs["json"][1]
+        with atomic_open(path) as handle:
             json.dump(result, handle, indent=2, allow_nan=False)
             handle.write("\n")
-        print(f"wrote {args.json}", file=sys.stderr)
-    if args.markdown:
-        with atomic_open(args.markdown) as handle:
+        print(f"wrote {path}", file=sys.stderr)
+    if "markdown" in outputs:
+        path = outputs["markdown"][1]
+        with atomic_open(path) as handle:
             handle.write(format_report(result, style="markdown"))
-        print(f"wrote {args.markdown}", file=sys.stderr)
+        print(f"wrote {path}", file=sys.stderr)
     record_detection(
         args,
         command="evaluate",

@@ -12,7 +12,14 @@ from typing import Any
 
 from reform.datasets import load_babble, load_salsa, resolve
 from sim.cli._common import CliError, check_train_fraction, read_text
-from sim.cli._experiment_io import check_report, publish, report_stem
+from sim.cli._experiment_gcff import BASENAME
+from sim.cli._experiment_io import (
+    check_report,
+    dataset_words,
+    named_datasets,
+    publish,
+    report_stem,
+)
 from sim.experiments.gcff import gcff_comparison
 from sim.experiments.gcff_report import to_markdown
 
@@ -22,10 +29,7 @@ def _command(args: argparse.Namespace) -> str:
         "reform-sim",
         "experiment",
         "gcff",
-        "--salsa",
-        args.salsa,
-        "--babble",
-        args.babble,
+        *dataset_words(args),
         "--train-fraction",
         f"{args.train_fraction:g}",
     ]
@@ -63,17 +67,20 @@ def _read_results(path: str) -> list[dict[str, Any]]:
 
 def run(args: argparse.Namespace) -> int:
     check_train_fraction(args)
-    check_report(report_stem(args.out))
+    data = named_datasets(args)
+    stem = report_stem(args.out, BASENAME)
+    check_report(stem)
     extra = [result for path in args.with_results for result in _read_results(path)]
-    print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
+    if not args.quiet:
+        print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
     grids = {
         name: value
         for name, value in (("stride_grid", args.stride_grid), ("mdl_grid", args.mdl_grid))
         if value is not None
     }
     comparison = gcff_comparison(
-        load_salsa(resolve(args.salsa)),
-        load_babble(resolve(args.babble)),
+        load_salsa(resolve(data["salsa"])),
+        load_babble(resolve(data["babble"])),
         train_fraction=args.train_fraction,
         orientation=args.gcff_orientation,
         **grids,
@@ -82,6 +89,6 @@ def run(args: argparse.Namespace) -> int:
         comparison = comparison.with_results(extra)
     command = _command(args)
     publish(
-        to_markdown(comparison, command=command), comparison.to_json(command=command), out=args.out
+        to_markdown(comparison, command=command), comparison.to_json(command=command), stem=stem
     )
     return 0

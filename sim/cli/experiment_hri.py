@@ -9,12 +9,14 @@ import dataclasses
 import shlex
 import sys
 import time
-from pathlib import Path
 
 from reform.datasets import load_salsa, resolve
 from sim.cli._common import CliError, check_output
+from sim.cli._experiment_hri import BASENAME
 from sim.cli._experiment_io import (
     check_report,
+    dataset_words,
+    named_datasets,
     report_stem,
     write_report,
 )
@@ -25,55 +27,57 @@ from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "experiment", "hri"]
-    if args.datasets is not None:
-        words += ["--datasets", args.datasets]
-    if args.salsa is not None:
-        words += ["--salsa", args.salsa]
-    if args.seeds != DEFAULT_SEEDS:
-        words += ["--seeds", str(args.seeds)]
+    words = ["reform-sim", "experiment", "hri", *dataset_words(args)]
+    if args.episodes != DEFAULT_SEEDS:
+        words += ["--episodes", str(args.episodes)]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
     if args.views != ",".join(VIEW_NAMES):
         words += ["--views", args.views]
     if args.jobs is not None:
         words += ["--jobs", str(args.jobs)]
-    if args.recordings is not None:
-        words += ["--recordings", args.recordings]
+    if args.recordings:
+        words.append("--recordings")
     words += ["--out", args.out]
     return shlex.join(words)
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.seeds < 1:
-        raise CliError(f"--seeds must be >= 1, got {args.seeds}")
-    check_episodes(args.seeds, what="the HRI experiment", flag="--seeds")
+    if args.episodes < 1:
+        raise CliError(f"--episodes must be >= 1, got {args.episodes}")
+    check_episodes(args.episodes, what="the HRI experiment", flag="--episodes")
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     views = [v.strip() for v in args.views.split(",") if v.strip()]
     unknown = [v for v in views if v not in VIEWS]
     if unknown or not views:
         raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
-    check_report(report_stem(args.out))
-    check_output("--recordings", args.recordings, folder=True)
-    salsa_path = args.salsa
-    if salsa_path is None and args.datasets is not None:
-        salsa_path = str(Path(args.datasets) / "salsa")
+    out = report_stem(args.out, BASENAME)
+    check_report(out)
+    recordings = None
+    if args.recordings:
+        recordings = (
+            args.recordings if isinstance(args.recordings, str) else out.parent / "recordings"
+        )
+        check_output("--recordings", recordings, folder=True)
+    salsa_path = named_datasets(args, ("salsa",))["salsa"]
     salsa = None
-    if salsa_path is not None:
-        try:
-            salsa_path = str(resolve(salsa_path))
-        except FileNotFoundError:
+    try:
+        salsa_path = str(resolve(salsa_path))
+    except FileNotFoundError:
+        if args.data:
             raise CliError(
-                f"SALSA not found at {salsa_path} (give --salsa PATH|NAME or --datasets DIR)"
+                f"SALSA not found at {salsa_path} (give --data salsa=PATH, or fetch it: "
+                "reform-sim datasets fetch salsa)"
             ) from None
+        print("SALSA not found: the SALSA-trained REFORM rows are left out", file=sys.stderr)
+    else:
         print(f"loading SALSA from {salsa_path}", file=sys.stderr)
         salsa = load_salsa(salsa_path).frames
-    else:
-        print("no SALSA given: the SALSA-trained REFORM rows are left out", file=sys.stderr)
 
     def progress(line: str) -> None:
-        print(line, file=sys.stderr, flush=True)
+        if not args.quiet:
+            print(line, file=sys.stderr, flush=True)
 
     start = time.perf_counter()
     detectors, training = hri_detectors(
@@ -82,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     trained = time.perf_counter() - start
     experiment = hri_experiment(
         seed=args.seed,
-        seeds=args.seeds,
+        seeds=args.episodes,
         views=views,
         detectors=detectors,
         training=training,
@@ -92,12 +96,11 @@ def run(args: argparse.Namespace) -> int:
     timings["total"] = time.perf_counter() - start
     experiment = dataclasses.replace(experiment, timings=timings)
     command = _command(args)
-    out = report_stem(args.out)
     write_report(
         out, to_markdown(experiment, command=command), experiment.to_json(command=command), indent=1
     )
     print(f"wrote {out}.md and {out}.json")
-    if args.recordings is not None:
-        for path in record_scenes(detectors, args.recordings, seed=args.seed):
+    if recordings is not None:
+        for path in record_scenes(detectors, recordings, seed=args.seed):
             print(f"wrote recording {path}")
     return 0

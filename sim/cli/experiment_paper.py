@@ -18,10 +18,11 @@ from sim.cli._common import (
 from sim.cli._experiment_io import (
     check_report,
     dataset_words,
+    named_datasets,
     publish,
     report_stem,
-    salsa_and_babble,
 )
+from sim.cli._experiment_paper import BASENAME
 from sim.experiments.paper import paper_experiment
 from sim.experiments.paper_report import to_markdown
 
@@ -44,16 +45,19 @@ def run(args: argparse.Namespace) -> int:
     check_train_fraction(args)
     if args.folds < 2:
         raise CliError(f"--folds must be at least 2, got {args.folds}")
-    salsa, babble = salsa_and_babble(args)
-    check_report(report_stem(args.out))
+    data = named_datasets(args)
+    stem = report_stem(args.out, BASENAME)
+    check_report(stem)
     started = time.perf_counter()
 
     def progress(message: str) -> None:
+        if args.quiet:
+            return
         print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr)
 
     experiment = paper_experiment(
-        load_salsa(resolve(salsa)),
-        load_babble(resolve(babble)),
+        load_salsa(resolve(data["salsa"])),
+        load_babble(resolve(data["babble"])),
         train_fraction=args.train_fraction,
         n_folds=args.folds,
         n_jobs=args.jobs,
@@ -62,6 +66,6 @@ def run(args: argparse.Namespace) -> int:
     )
     command = _command(args)
     publish(
-        to_markdown(experiment, command=command), experiment.to_json(command=command), out=args.out
+        to_markdown(experiment, command=command), experiment.to_json(command=command), stem=stem
     )
     return 0

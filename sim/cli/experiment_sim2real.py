@@ -10,7 +10,6 @@ import math
 import shlex
 import sys
 import time
-from pathlib import Path
 
 from reform.datasets import load_babble, load_salsa, resolve
 from sim.cli._common import CliError, check_output
@@ -18,10 +17,11 @@ from sim.cli._experiment_io import (
     REPORT_SUFFIXES,
     check_report,
     dataset_words,
+    named_datasets,
     report_stem,
-    salsa_and_babble,
     write_report,
 )
+from sim.cli._experiment_sim2real import BASENAME
 from sim.experiments.sim2real import (
     CLASSIFIER_NAMES,
     DEFAULT_SOURCES,
@@ -29,8 +29,6 @@ from sim.experiments.sim2real import (
     sim_to_real,
 )
 from sim.experiments.sim2real_report import sim2real_figure, to_markdown
-
-BASENAME = "sim2real"
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -49,16 +47,8 @@ def _command(args: argparse.Namespace) -> str:
     return shlex.join(words)
 
 
-def _outputs(out: str) -> Path:
-    """The output path without extension."""
-    path = Path(out)
-    if out.endswith(("/", "\\")) or path.is_dir():
-        return path / BASENAME
-    return report_stem(out, suffixes=(*REPORT_SUFFIXES, ".png"))
-
-
 def run(args: argparse.Namespace) -> int:
-    salsa, babble = salsa_and_babble(args)
+    data = named_datasets(args)
     if not (math.isfinite(args.episodes_scale) and args.episodes_scale > 0):
         raise CliError(f"--episodes-scale must be a finite number > 0, got {args.episodes_scale}")
     if args.seed < 0:
@@ -72,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
                 f"--classifiers must be among {','.join(CLASSIFIER_NAMES)}, "
                 f"got {args.classifiers!r}"
             )
-    out = _outputs(args.out)
+    out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_report(out, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_output("--synthetic", args.synthetic, folder=True)
     sources = tuple(
@@ -82,11 +72,14 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
 
     def progress(message: str) -> None:
-        print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True)
+        if not args.quiet:
+            print(
+                f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
+            )
 
     result = sim_to_real(
-        load_salsa(resolve(salsa)),
-        load_babble(resolve(babble)),
+        load_salsa(resolve(data["salsa"])),
+        load_babble(resolve(data["babble"])),
         synthetic_root=args.synthetic,
         sources=sources,
         seed=args.seed,
@@ -95,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         diagnostics=not args.no_diagnostics,
         randomised=() if args.no_randomised else RANDOMISED_SOURCES,
         progress=progress,
-        progress_bars=not args.no_progress,
+        progress_bars=not args.quiet,
     )
     command = _command(args)
     figure = sim2real_figure(result, out.with_name(out.name + ".png"))

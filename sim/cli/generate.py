@@ -53,8 +53,8 @@ def _run(args: argparse.Namespace) -> int:
             backend=args.backend,
             address=args.address,
             n_jobs=args.jobs,
-            save_recordings=args.save_recordings,
-            progress=not args.no_progress,
+            save_recordings=args.recordings,
+            progress=not args.quiet,
             max_memory=limit,
         )
     except RequestTooLarge as exc:  # sized before any work: named by the flags

@@ -30,7 +30,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     check_episodes(args.episodes, what="the policy evaluation", flag="--episodes")
-    check_output("--json", args.json)
+    check_output("--out", args.out)
     kwargs = {}
     if args.detector is not None:
         if args.model is not None:
@@ -41,7 +41,7 @@ def _evaluate(args: argparse.Namespace) -> int:
             raise CliError(f"--model: no such file {args.model}")
         kwargs["model"] = args.model
     result = evaluate_policy(
-        args.env, episodes=args.episodes, seed=args.seed, progress=args.progress, **kwargs
+        args.env, episodes=args.episodes, seed=args.seed, progress=not args.quiet, **kwargs
     )
     steps = result.mean_steps_to_success
     print(
@@ -52,8 +52,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         + ("-" if steps is None else f"{steps:.0f}")
         + f"; {result.seconds:.0f} s"
     )
-    if args.json is not None:
-        with atomic_open(args.json, "w") as handle:
+    if args.out is not None:
+        with atomic_open(args.out, "w") as handle:
             json.dump(result.to_json(), handle, indent=2)
             handle.write("\n")
     return 0

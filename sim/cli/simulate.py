@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         total=estimate.frames,
         unit="frame",
         desc=f"simulate {made.name}",
-        disable=args.no_progress,
+        disable=args.quiet,
         delay=1.0,  # short runs print nothing
         file=sys.stderr,
     ) as bar:

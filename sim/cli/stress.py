@@ -13,13 +13,14 @@ from sim.cli._common import CliError, check_output, check_recording
 from sim.cli._detectors import make_plugin
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
 from sim.experiments.stress_report import write_report
+from sim.recording import target_from_args
 from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
     words = ["reform-sim", "stress", "--grid", args.grid]
-    if args.seeds is not None:
-        words += ["--seeds", str(args.seeds)]
+    if args.episodes is not None:
+        words += ["--episodes", str(args.episodes)]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
     if args.axes is not None:
@@ -36,11 +37,11 @@ def _command(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     grid = GRIDS[args.grid]
-    if args.seeds is not None:
-        if args.seeds < 1:
-            raise CliError(f"--seeds must be >= 1, got {args.seeds}")
-        grid = dataclasses.replace(grid, seeds=args.seeds)
-        check_episodes(args.seeds, what="the stress test", flag="--seeds")
+    if args.episodes is not None:
+        if args.episodes < 1:
+            raise CliError(f"--episodes must be >= 1, got {args.episodes}")
+        grid = dataclasses.replace(grid, seeds=args.episodes)
+        check_episodes(args.episodes, what="the stress test", flag="--episodes")
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     axes = None
@@ -63,14 +64,17 @@ def run(args: argparse.Namespace) -> int:
         plugins[name] = make_plugin(name)
 
     def progress(line: str) -> None:
-        print(line, file=sys.stderr, flush=True)
+        if not args.quiet:
+            print(line, file=sys.stderr, flush=True)
 
     results = run_stress(
         grid, seed=args.seed, jobs=args.jobs, axes=axes, plugins=plugins, progress=progress
     )
     if results.grid_name == "custom":
-        results = dataclasses.replace(results, grid_name=f"{args.grid} (--seeds {args.seeds})")
-    written = write_report(results, args.out, command=_command(args), save=args.save)
+        results = dataclasses.replace(
+            results, grid_name=f"{args.grid} (--episodes {args.episodes})"
+        )
+    written = write_report(results, args.out, command=_command(args), save=target_from_args(args))
     print(
         f"stress tests done in {results.timings['total']:.0f} s "
         f"({results.environment.get('cpu_s', 0):.0f} CPU s on {results.jobs} worker(s))",

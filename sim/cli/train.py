@@ -7,50 +7,43 @@ from __future__ import annotations
 import argparse
 import sys
 
-from reform import Reform, time_split
+from reform import Reform
 from reform.classifiers import make_classifier
 from reform.features import check_features
 from reform.persistence import save_model
 from reform.tuning import classifier_params, tune
 from sim.cli._common import (
-    TRAIN_FRACTION,
     CliError,
+    check_frames,
     check_output,
-    check_train_fraction,
     load_data,
+    select_frames,
 )
+from sim.cli._grammar import show_progress
 
 
 def run(args: argparse.Namespace) -> int:
     check_output("--out", args.out)
-    if args.train_fraction is None:
-        args.train_fraction = TRAIN_FRACTION
-    else:
-        check_train_fraction(args)
-        if args.frames == "all":
-            raise CliError(
-                f"--train-fraction {args.train_fraction:g} splits the frames for --frames "
-                "train|test; with --frames all every annotated frame trains"
-            )
+    check_frames(args)
     if args.threshold is not None and not 0.0 < args.threshold < 1.0:
         raise CliError(f"--threshold must be a probability in (0, 1), got {args.threshold}")
     features = check_features([name.strip() for name in args.features.split(",") if name.strip()])
     dataset = load_data(args)
-    frames = dataset.annotated()
-    if not frames:
-        raise CliError(f"{args.data}: the dataset has no annotated frames to train on")
-    if args.frames != "all":
-        train, test = time_split(frames, args.train_fraction)
-        frames = train if args.frames == "train" else test
-        if not frames:
-            raise CliError(f"{args.data}: the {args.frames} part of the split holds no frames")
+    frames = select_frames(args, dataset.frames, doing="train on")
     params = {}
     if args.tune:
-        print(f"cross-validating {args.classifier} on {len(frames)} frames ...", file=sys.stderr)
+        if not args.quiet:
+            print(
+                f"cross-validating {args.classifier} on {len(frames)} frames ...", file=sys.stderr
+            )
         tuning = tune(args.classifier, frames, features=features, n_jobs=args.jobs)
         params = classifier_params(args.classifier, tuning.best_params)
         for candidate, score in zip(tuning.candidates, tuning.mean_score, strict=True):
+            if args.quiet:
+                break
             print(f"  {candidate}: CV pairwise accuracy {100 * score:.2f} %", file=sys.stderr)
+    if show_progress(args):
+        print(f"fitting {args.classifier} on {len(frames):,} frames ...", file=sys.stderr)
     model = Reform(
         make_classifier(args.classifier, **params),
         features=features,

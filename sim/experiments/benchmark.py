@@ -127,10 +127,12 @@ class DatasetSpec:
         )
 
     def frames(self, dataset: Dataset) -> tuple[Frame, ...]:
-        """The annotated frames scored: all of them, or the test part of the time split."""
-        if self.split == "test":
-            _, test = time_split(dataset.frames, self.train_fraction)
-            return tuple(f for f in test if f.groups is not None)
+        """The annotated frames scored: all of them, or the train or test part of the time
+        split."""
+        if self.split in ("train", "test"):
+            train, test = time_split(dataset.frames, self.train_fraction)
+            part = train if self.split == "train" else test
+            return tuple(f for f in part if f.groups is not None)
         return dataset.annotated()
 
 

@@ -24,7 +24,7 @@ seeds and measures it with the instrument used for the real data
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -222,6 +222,7 @@ def calibrate_scenarios(
     randomised: bool = True,
     hri: bool = True,
     command: str = "",
+    progress: Callable[[str], None] | None = None,
 ) -> CalibrationReport:
     """Simulates the calibrated scenarios with default options and sets them beside SALSA and
     Babble (see the module doc).
@@ -233,6 +234,7 @@ def calibrate_scenarios(
         randomised: also measure the randomised mode's coverage.
         hri: also measure the HRI scenes.
         command: the command line that made the report, for its header.
+        progress: called with a line as each scenario starts.
     """
     if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
         raise ValueError(f"seeds must be an int >= 1, got {seeds!r}")
@@ -258,8 +260,10 @@ def calibrate_scenarios(
             "SALSA session 1 against session 2",
         ),
     }
+    say = progress or (lambda line: None)
     calibrations = []
     for name, (reference, rate) in CALIBRATED.items():
+        say(f"simulating {seeds} episodes of {name}")
         frames = scenario_frames(name, seeds=seeds, rate=rate)
         measured = characterise_dataset(frames, name=name)
         limit, source = bounds[reference]
@@ -274,11 +278,13 @@ def calibrate_scenarios(
         )
     random_part = None
     if randomised:
+        say(f"simulating {seeds} episodes of {RANDOMISED}")
         random_part = characterise_dataset(
             scenario_frames(RANDOMISED, seeds=seeds, rate=RANDOMISED_RATE_HZ), name=RANDOMISED
         )
     hri_parts = ()
     if hri:
+        say(f"simulating {seeds} episodes of each of {', '.join(HRI_SCENES)}")
         hri_parts = tuple(
             characterise_dataset(scenario_frames(n, seeds=seeds, rate=HRI_RATE_HZ), name=n)
             for n in HRI_SCENES

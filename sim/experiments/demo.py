@@ -643,7 +643,7 @@ def _command(
 ) -> str:
     words = ["reform-sim", "demo"]
     if datasets is not None:
-        words += ["--datasets", str(datasets)]
+        words += ["--data", str(datasets)]
     words += ["--out", str(out)]
     if seed:
         words += ["--seed", str(seed)]

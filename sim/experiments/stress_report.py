@@ -33,7 +33,12 @@ from sim.experiments.stress import (
     sensor_description,
 )
 from sim.experiments.tables import command_block, percent, render_table
-from sim.recording import default_blueprint, log_stress_curves, open_recording
+from sim.recording import (
+    RecordingTarget,
+    default_blueprint,
+    log_stress_curves,
+    open_recording,
+)
 
 __all__ = [
     "MARKDOWN_NAME",
@@ -368,12 +373,14 @@ def write_report(
     out_dir: str | Path,
     *,
     command: str,
-    save: str | Path | None = None,
+    save: RecordingTarget | str | Path | None = None,
 ) -> dict[str, Path]:
-    """Writes the Markdown report, the JSON, the plots and, with ``save``, a ``.rrd``.
+    """Writes the Markdown report, the JSON, the plots and, with ``save``, the curves as a
+    Rerun recording (a ``.rrd`` path, or any `sim.recording.RecordingTarget`).
 
     Returns:
-        What was written: ``"markdown"``, ``"json"``, ``"plot:<axis>"`` and ``"recording"``.
+        What was written: ``"markdown"``, ``"json"``, ``"plot:<axis>"`` and ``"recording"``
+        (the ``.rrd`` saved, if any).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -393,13 +400,17 @@ def write_report(
         handle.write("\n")
     written["json"] = data
     if save is not None:
-        written["recording"] = record(results, save)
+        saved = record(results, save)
+        if saved is not None:
+            written["recording"] = saved
     return written
 
 
-def record(results: StressResults, path: str | Path) -> Path:
-    """The curves as a Rerun recording at ``path`` (``.rrd``)."""
+def record(results: StressResults, target: RecordingTarget | str | Path) -> Path | None:
+    """The curves as a Rerun recording sent to ``target`` (a ``.rrd`` path or a
+    `sim.recording.RecordingTarget`); the ``.rrd`` saved, if any."""
+    target = RecordingTarget.coerce(target)
     blueprint = default_blueprint(scores=False, stress=recording_names(results))
-    with open_recording(path, name="stress", seed=results.seed, blueprint=blueprint) as rec:
+    with open_recording(target, name="stress", seed=results.seed, blueprint=blueprint) as rec:
         log_results(rec, results)
-    return Path(path)
+    return target.save

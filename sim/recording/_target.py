@@ -73,27 +73,35 @@ class RecordingTarget:
         )
 
 
-def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--save PATH.rrd``, ``--connect``, ``--url URL``, ``--serve`` (``rr.script_add_args``)."""
+def add_recording_arguments(parser: argparse.ArgumentParser, *, what: str = "the run") -> None:
+    """``--save PATH.rrd``, ``--connect``, ``--url URL``, ``--serve``, ``--headless``: the flags
+    of ``rr.script_add_args`` (``what``: what the recording shows, for the help)."""
     group = parser.add_argument_group("Rerun recording")
     group.add_argument(
         "--save",
         metavar="PATH.rrd",
         default=None,
-        help="save the run as a Rerun recording; open it with `rerun PATH.rrd`",
+        help=f"save {what} as a Rerun recording; open it with `rerun PATH.rrd`",
     )
     group.add_argument(
-        "--connect", action="store_true", help="stream the run to a running Rerun viewer"
+        "--connect", action="store_true", help=f"stream {what} to a running Rerun viewer"
     )
     group.add_argument(
         "--url",
         default=None,
+        metavar="URL",
         help="viewer URL for --connect (default: rerun+http://127.0.0.1:9876/proxy)",
     )
     group.add_argument(
         "--serve",
         action="store_true",
         help=f"host the recording for viewers on {SERVE_BIND_IP} until Ctrl-C",
+    )
+    group.add_argument(
+        "--headless",
+        action="store_true",
+        help="never open a viewer window (the default here: the recording goes only where "
+        "--save, --connect or --serve send it)",
     )
 
 

@@ -260,7 +260,7 @@ def test_a_broken_plugin_is_one_line_naming_it_and_the_frame(lab, name, message)
     assert run.stderr == f"reform-sim evaluate: error: {message}\n"  # one line, no traceback
 
 
-STRESS = ("stress", "--grid", "small", "--axes", "position-noise", "--seeds", "2", "--jobs", "2")
+STRESS = ("stress", "--grid", "small", "--axes", "position-noise", "--episodes", "2", "--jobs", "2")
 
 
 @pytest.mark.slow
@@ -343,7 +343,7 @@ def test_benchmark_runs_an_installed_plugin_beside_the_built_ins(lab):
         "gcff",
         "--out",
         out,
-        "--no-progress",
+        "--quiet",
         lab=lab,
     )
     assert run.returncode == 0, run.stderr
@@ -362,7 +362,7 @@ def test_benchmark_stops_on_a_broken_plugin_in_one_line(lab):
         "pairs-raises",
         "--out",
         lab["root"] / "b2",
-        "--no-progress",
+        "--quiet",
         lab=lab,
     )
     assert run.returncode == 2

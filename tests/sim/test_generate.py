@@ -178,7 +178,7 @@ def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference
     out = tmp_path / "data"
     command = [*CLI, "generate", *ARGS, "--out", str(out)]
     process = subprocess.Popen(
-        [*command, "--jobs", "1", "--no-progress"],
+        [*command, "--jobs", "1", "--quiet"],
         cwd=REPO_ROOT,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
@@ -206,7 +206,7 @@ def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference
     assert len(read_parquet(out, allow_incomplete=True)) == len(written) * DURATION_S * 2
 
     resumed = subprocess.run(
-        [*command, "--jobs", "2", "--no-progress"],
+        [*command, "--jobs", "2", "--quiet"],
         cwd=REPO_ROOT,
         capture_output=True,
         timeout=RUN_TIMEOUT_S,
@@ -234,7 +234,7 @@ def test_ray_backend_gives_the_local_data(reference, tmp_path):
         address = ray.get_runtime_context().gcs_address
         run = subprocess.run(
             [*CLI, "generate", *ARGS, "--out", str(tmp_path / "cli")]
-            + ["--backend", "ray", "--address", address, "--no-progress"],
+            + ["--backend", "ray", "--address", address, "--quiet"],
             cwd=REPO_ROOT,
             capture_output=True,
             timeout=RUN_TIMEOUT_S,
@@ -251,7 +251,7 @@ def test_command_line_writes_the_dataset_and_train_reads_it(tmp_path, capsys):
     out = tmp_path / "data"
     code = main(
         ["generate", "--scenario", "hri-robot-excluded", "--episodes", "2", "--seed", "3"]
-        + ["--out", str(out), "--duration", "30", "--set", "radius=0.5", "--no-progress"]
+        + ["--out", str(out), "--duration", "30", "--set", "radius=0.5", "--quiet"]
     )
     assert code == 0
     assert "2 generated, 0 already there" in capsys.readouterr().out
@@ -440,7 +440,7 @@ def test_a_shard_copied_to_another_episode_is_refused_on_resume(reference, tmp_p
     )
     with pytest.raises(ValueError, match=expected):
         generate(out)
-    assert main(["generate", *ARGS, "--out", str(out), "--no-progress"]) == 2
+    assert main(["generate", *ARGS, "--out", str(out), "--quiet"]) == 2
     assert "episode=1/part.parquet: field 'metadata.episode'" in capsys.readouterr().err
     assert contents(out) == before  # nothing regenerated, the card left as it was
     moved.unlink()  # the user's say: the file goes, the next run makes it again
@@ -543,7 +543,7 @@ def test_an_annotation_model_records_each_episode_as_it_says(tmp_path):
         assert sum(f.n_people for f in coded.frames) < sum(f.n_people for f in truth.frames)
     again = tmp_path / "again"
     words = shlex.split(card["command"].replace("DIR", str(again)))
-    assert main([*words[1:], "--jobs", "1", "--no-progress"]) == 0
+    assert main([*words[1:], "--jobs", "1", "--quiet"]) == 0
     for k in range(2):
         first = shard_path(made.out_dir, "word-improv", k).read_bytes()
         assert shard_path(again, "word-improv", k).read_bytes() == first

@@ -103,15 +103,15 @@ def test_a_parquet_file_the_card_does_not_list_is_refused(folder):
 
 
 def test_data_verify_and_the_commands_say_what_is_left_out(folder, capsys):
-    assert main(["data", "verify", str(folder)]) == 0
+    assert main(["data", "verify", "--data", str(folder)]) == 0
     assert "whole" in capsys.readouterr().out
     shard = _shards(folder)[2]["path"]
     _delete(folder, shard)
-    assert main(["data", "verify", str(folder)]) == 1
+    assert main(["data", "verify", "--data", str(folder)]) == 1
     captured = capsys.readouterr()
     assert shard in captured.out and "1 problem(s)" in captured.err
-    assert main(["data", "info", str(folder)]) == 2
+    assert main(["data", "info", "--data", str(folder)]) == 2
     assert "the dataset is not whole" in capsys.readouterr().err
-    assert main(["data", "info", str(folder), "--allow-incomplete"]) == 0
+    assert main(["data", "info", "--data", str(folder), "--allow-incomplete"]) == 0
     err = capsys.readouterr().err
     assert "1 shard(s) left out (--allow-incomplete)" in err and shard in err

@@ -444,8 +444,8 @@ def test_a_study_counting_episodes_is_refused_when_even_its_least_cost_is_too_lo
     with pytest.raises(sizing.RequestTooLarge, match=r"the study would take at least 2.41 years"):
         sizing.check_episodes(10**9, what="the study", flag="--seeds")
     for argv in (
-        ["calibrate", "--seeds", "1000000000"],
-        ["experiment", "hri", "--seeds", "1000000000"],
+        ["calibrate", "--episodes", "1000000000"],
+        ["experiment", "hri", "--episodes", "1000000000"],
     ):
         assert main([*argv, "--out", "/tmp/never-written"]) == 2
         err = capsys.readouterr().err

@@ -684,7 +684,7 @@ def test_cli_fetch_from_a_mirror(http_mirror, cache, registry_file, capsys):
         f"flat: {cache / 'flat'}",
     ]
     assert len(server.requests) == 5
-    assert main([*argv[:2], "flat", *argv[3:], "--no-progress"]) == 0
+    assert main([*argv[:2], "flat", *argv[3:], "--quiet"]) == 0
     assert capsys.readouterr().out == f"flat: {cache / 'flat'} (already fetched)\n"
     assert len(server.requests) == 5
 

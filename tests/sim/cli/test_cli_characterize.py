@@ -161,7 +161,7 @@ def test_one_group_size_prints_no_tests(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--notes", "n.md"], "--notes is appended to the Markdown report: give --markdown OUT"),
+        (["--notes", "n.md"], "--notes is appended to the Markdown report: give --out DIR"),
         (["--min-groups", "0"], "--min-groups must be >= 1, got 0"),
         (["--tolerance", "-1"], "--tolerance must be a positive number of metres, got -1"),
     ],

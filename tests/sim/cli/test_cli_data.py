@@ -14,7 +14,7 @@ from sim.cli import main
 
 
 def test_info_salsa(salsa_dir, capsys):
-    assert main(["data", "info", str(salsa_dir)]) == 0
+    assert main(["data", "info", "--data", str(salsa_dir)]) == 0
     out = capsys.readouterr().out
     assert "dataset          salsa (format salsa)" in out
     assert "frames           1145" in out
@@ -32,7 +32,7 @@ def test_info_salsa(salsa_dir, capsys):
 
 
 def test_info_babble_json(babble_dir, capsys):
-    assert main(["data", "info", str(babble_dir), "--format", "babble", "--json"]) == 0
+    assert main(["data", "info", "--data", str(babble_dir), "--format", "babble", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["format"] == "babble"
     assert summary["frames"] == 3481
@@ -63,23 +63,23 @@ def _gcff_folder(folder):
 
 def test_info_gcff_units(tmp_path, capsys):
     folder = _gcff_folder(tmp_path / "tiny")
-    assert main(["data", "info", str(folder)]) == 0
+    assert main(["data", "info", "--data", str(folder)]) == 0
     out = capsys.readouterr().out
     assert "units            m (file in cm, converted)" in out
     assert "frames           2" in out
     assert "annotated frames 1" in out
     assert '"stride_m": 0.7' in out
-    assert main(["data", "info", str(folder), "--units", "m", "--json"]) == 0
+    assert main(["data", "info", "--data", str(folder), "--units", "m", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["group_sizes"] == {"2": 1}
 
 
 def test_convert_then_info(tmp_path, salsa_dir, capsys):
     out = tmp_path / "salsa.parquet"
-    assert main(["data", "convert", str(salsa_dir), "--out", str(out)]) == 0
+    assert main(["data", "convert", "--data", str(salsa_dir), "--out", str(out)]) == 0
     assert read_parquet(out).frames == load_salsa(salsa_dir).frames
     capsys.readouterr()
-    assert main(["data", "info", str(out)]) == 0
+    assert main(["data", "info", "--data", str(out)]) == 0
     text = capsys.readouterr().out
     assert "(format parquet)" in text and "frames           1145" in text
 
@@ -96,7 +96,7 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
         Frame(ids=[], position=np.zeros((0, 2)), yaw=[], time=1.0),
     )
     path = write_parquet(Dataset(frames=frames, name="tiny"), tmp_path / "tiny.parquet")
-    assert main(["data", "info", str(path)]) == 0
+    assert main(["data", "info", "--data", str(path)]) == 0
     out = capsys.readouterr().out
     assert "robots           in 1 frames" in out
     assert "per frame min 0, median 1, max 2" in out
@@ -105,11 +105,17 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["data", "info", "/nonexistent/place"], "no such file or folder, nor a dataset name"),
-        (["data", "info", "{salsa}", "--units", "cm"], "salsa format stores positions in 'm'"),
-        (["data", "info", "{tmp}"], "expected a dataset in one of the formats: salsa"),
         (
-            ["data", "info", "{salsa}", "--format", "gcff"],
+            ["data", "info", "--data", "/nonexistent/place"],
+            "no such file or folder, nor a dataset name",
+        ),
+        (
+            ["data", "info", "--data", "{salsa}", "--units", "cm"],
+            "salsa format stores positions in 'm'",
+        ),
+        (["data", "info", "--data", "{tmp}"], "expected a dataset in one of the formats: salsa"),
+        (
+            ["data", "info", "--data", "{salsa}", "--format", "gcff"],
             "salsa: expected a GCFF folder (features.mat, groundtruth.mat) or a folder of them",
         ),
     ],
@@ -134,16 +140,16 @@ def test_help(capsys):
 def test_an_unfinished_generate_folder_needs_allow_incomplete(tmp_path, capsys):
     out = tmp_path / "run"
     argv = ["generate", "--scenario", "hri-passing", "--episodes", "2", "--seed", "0"]
-    assert main([*argv, "--duration", "5", "--no-progress", "--out", str(out)]) == 0
+    assert main([*argv, "--duration", "5", "--quiet", "--out", str(out)]) == 0
     card = out / "dataset.json"
     data = json.loads(card.read_text())
     data["complete"] = False  # as a run stopped before its last episode leaves it
     card.write_text(json.dumps(data))
     capsys.readouterr()
-    assert main(["data", "info", str(out)]) == 2
+    assert main(["data", "info", "--data", str(out)]) == 2
     err = capsys.readouterr().err
     assert "incomplete dataset (2 of 2 episodes written)" in err and "--allow-incomplete" in err
-    assert main(["data", "info", str(out), "--allow-incomplete"]) == 0
+    assert main(["data", "info", "--data", str(out), "--allow-incomplete"]) == 0
     assert "frames" in capsys.readouterr().out
 
 
@@ -162,10 +168,10 @@ def _gcff_with_absent_member(folder):
 
 def test_info_counts_the_repairs_and_strict_refuses(tmp_path, capsys):
     folder = _gcff_with_absent_member(tmp_path / "quirks")
-    assert main(["data", "info", str(folder), "--json"]) == 0
+    assert main(["data", "info", "--data", str(folder), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)["report"]
     assert report["repairs"] == {"people_dropped_nan": 1, "groundtruth_members_absent": 1}
-    assert main(["data", "info", str(folder), "--strict"]) == 2
+    assert main(["data", "info", "--data", str(folder), "--strict"]) == 2
     err = capsys.readouterr().err
     assert "frame 1, row 3 (ID 3): field 'x'" in err and "refused by --strict" in err
 
@@ -180,6 +186,9 @@ def test_info_counts_the_repairs_and_strict_refuses(tmp_path, capsys):
 )
 def test_pixel_units_need_their_scale(tmp_path, capsys, argv, message):
     folder = _gcff_with_absent_member(tmp_path / "px")
-    assert main(["data", "info", str(folder), *argv]) == 2
+    assert main(["data", "info", "--data", str(folder), *argv]) == 2
     assert message in capsys.readouterr().err
-    assert main(["data", "info", str(folder), "--units", "px", "--metres-per-pixel", "0.01"]) == 0
+    assert (
+        main(["data", "info", "--data", str(folder), "--units", "px", "--metres-per-pixel", "0.01"])
+        == 0
+    )

@@ -106,7 +106,7 @@ def test_detect_majority_writes_every_frame(salsa_dir, tmp_path, capsys):
     assert "1,145 frames, 0 F-formations" in err
 
     status, _, err = run(
-        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out, "--annotated-only"],
+        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out, "--frames", "all"],
         capsys,
     )
     assert status == 0, err
@@ -129,7 +129,7 @@ def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, cap
     )
     out = tmp_path / "groups.json"
     status, _, err = run(
-        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out, "--annotated-only"],
+        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out, "--frames", "all"],
         capsys,
     )
     assert status == 0, err

@@ -60,7 +60,7 @@ def _interrupt(
 def test_generate_interrupted_says_run_again_to_resume(tmp_path):
     out = tmp_path / "synthetic"
     argv = ["generate", "--scenario", "mingle", "--episodes", "400", "--seed", "0"]
-    argv += ["--duration", "20", "--jobs", "2", "--no-progress", "--out", str(out)]
+    argv += ["--duration", "20", "--jobs", "2", "--quiet", "--out", str(out)]
     status, err = _interrupt(argv, tmp_path, started=lambda _: any(out.rglob("part.parquet")))
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert err.strip().splitlines() == [
@@ -89,7 +89,7 @@ def test_main_called_from_python_lets_ctrl_c_reach_its_caller(tmp_path):
         "print('the script went on', file=sys.stderr)\n"
     )
     argv = ["generate", "--scenario", "mingle", "--episodes", "400", "--seed", "0"]
-    argv += ["--duration", "20", "--jobs", "2", "--no-progress", "--out", str(out)]
+    argv += ["--duration", "20", "--jobs", "2", "--quiet", "--out", str(out)]
     started = lambda _: any(out.rglob("part.parquet"))  # noqa: E731
     status, err = _interrupt(argv, tmp_path, started=started, start=script)
     assert err.strip().splitlines()[-1] == "KeyboardInterrupt reached the caller", err

@@ -66,7 +66,7 @@ def test_train_fraction_needs_a_split(toy_dataset, tmp_path, capsys):
     err = cli_error([*argv, "--train-fraction", "0.3"], capsys)
     assert err == (
         "reform-sim train: error: --train-fraction 0.3 splits the frames for --frames "
-        "train|test; with --frames all every annotated frame trains"
+        "train|test; with --frames all every annotated frame counts"
     )
     assert not model.exists()
     assert main([str(a) for a in [*argv, "--train-fraction", "0.3", "--frames", "train"]]) == 0
@@ -87,8 +87,8 @@ JOBS_COMMANDS = [
     ["stress", "--grid", "small", "--out", "{tmp}/s"],
     ["demo", "--quick", "--out", "{tmp}/d"],
     ["experiment", "hri", "--out", "{tmp}/h"],
-    ["experiment", "paper", "--salsa", "s", "--babble", "b", "--out", "{tmp}/p"],
-    ["experiment", "sim2real", "--salsa", "s", "--babble", "b", "--out", "{tmp}/r"],
+    ["experiment", "paper", "--data", "salsa=s", "--data", "babble=b", "--out", "{tmp}/p"],
+    ["experiment", "sim2real", "--data", "salsa=s", "--data", "babble=b", "--out", "{tmp}/r"],
 ]
 
 
@@ -104,8 +104,8 @@ def test_jobs_below_one_is_refused_up_front(argv, jobs, toy_dataset, tmp_path, c
 def test_notes_that_are_not_text_name_the_file(toy_dataset, tmp_path, capsys):
     notes = tmp_path / "notes.md"
     notes.write_bytes(b"# Notes\n\xff\xfe binary")
-    report = tmp_path / "report.md"
-    argv = ["characterize", "--data", toy_dataset, "--markdown", report, "--notes", notes]
+    report = tmp_path / "reports" / "characterisation.md"
+    argv = ["characterize", "--data", toy_dataset, "--out", report.parent, "--notes", notes]
     err = cli_error(argv, capsys)
     assert err == (
         f"reform-sim characterize: error: --notes {notes}: expected UTF-8 Markdown text, "
@@ -117,7 +117,16 @@ def test_notes_that_are_not_text_name_the_file(toy_dataset, tmp_path, capsys):
 def test_with_results_that_are_not_text_name_the_file(tmp_path, capsys):
     results = tmp_path / "results.json"
     results.write_bytes(b"\x89PNG\r\n")
-    argv = ["experiment", "gcff", "--salsa", "s", "--babble", "b", "--out", tmp_path / "x"]
+    argv = [
+        "experiment",
+        "gcff",
+        "--data",
+        "salsa=s",
+        "--data",
+        "babble=b",
+        "--out",
+        tmp_path / "x",
+    ]
     err = cli_error([*argv, "--with-results", results], capsys)
     assert err == (
         f"reform-sim experiment: error: --with-results {results}: expected JSON text, found "
@@ -139,6 +148,6 @@ def test_a_system_error_is_one_line_naming_the_path(tmp_path, capsys):
 
     # A path whose name is too long for the file system: the system refuses it (OSError).
     long = tmp_path / ("x" * 300)
-    assert main(["data", "info", str(long / "features.txt")]) == 2
+    assert main(["data", "info", "--data", str(long / "features.txt")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("reform-sim data: error: ") and err.count("\n") == 1

@@ -40,15 +40,11 @@ def _tree(root: Path) -> list[str]:
 DATA = "{data}"  # replaced by the toy dataset
 
 FOLDER_AS_FILE = [
-    (["evaluate", "--detector", "majority", "--data", DATA, "--json"], "--json", "folder"),
-    (["evaluate", "--detector", "majority", "--data", DATA, "--markdown"], "--markdown", "folder"),
     (["detect", "--detector", "majority", "--data", DATA, "--out"], "--out", "folder"),
-    (["data", "convert", DATA, "--out"], "--out", "folder"),
+    (["data", "convert", "--data", DATA, "--out"], "--out", "folder"),
     (["train", "--data", DATA, "--out"], "--out", "folder"),
-    (["characterize", "--data", DATA, "--json"], "--json", "folder"),
-    (["characterize", "--data", DATA, "--markdown"], "--markdown", "folder"),
     (["simulate", "--scenario", "mingle", "--seed", "0", "--out"], "--out", "folder.parquet"),
-    (["policy", "evaluate", "--env", "ReformSim/Mingle-v0", "--json"], "--json", "folder"),
+    (["policy", "evaluate", "--env", "ReformSim/Mingle-v0", "--out"], "--out", "folder"),
 ]
 
 
@@ -65,8 +61,27 @@ def test_an_existing_folder_given_for_a_file(argv, option, name, places, toy_dat
     assert _tree(places) == before
 
 
+@pytest.mark.parametrize(
+    ("argv", "name"),
+    [
+        (["evaluate", "--detector", "majority", "--data", DATA], "evaluation.json"),
+        (["characterize", "--data", DATA], "characterisation.md"),
+    ],
+)
+def test_a_report_file_that_is_a_folder(argv, name, places, toy_dataset, capsys):
+    (places / "reports" / name).mkdir(parents=True)
+    before = _tree(places)
+    argv = [toy_dataset if a == DATA else a for a in argv]
+    err = cli_error([*argv, "--out", places / "reports"], capsys)
+    assert err == (
+        f"reform-sim {argv[0]}: error: --out {places / 'reports' / name}: "
+        "expected a file path, found an existing folder"
+    )
+    assert _tree(places) == before
+
+
 UNDER_A_FILE = [
-    (["evaluate", "--detector", "majority", "--data", DATA, "--json"], "--json", "out.json"),
+    (["evaluate", "--detector", "majority", "--data", DATA, "--out"], "--out", "sub"),
     (["evaluate", "--detector", "majority", "--data", DATA, "--save"], "--save", "x.rrd"),
     (
         ["detect", "--detector", "majority", "--data", DATA, "--out", "{tmp}/d.json", "--save"],
@@ -81,18 +96,18 @@ UNDER_A_FILE = [
     ),
     (["stress", "--grid", "small", "--out"], "--out", "sub"),
     (["demo", "--quick", "--out"], "--out", "sub"),
-    (["experiment", "paper", "--salsa", "s", "--babble", "b", "--out"], "--out", "r.md"),
-    (["experiment", "gcff", "--salsa", "s", "--babble", "b", "--out"], "--out", "r.md"),
-    (["experiment", "hri", "--out", "{tmp}/h", "--recordings"], "--recordings", "rec"),
-    (["experiment", "sim2real", "--salsa", "s", "--babble", "b", "--out"], "--out", "r.md"),
+    (["experiment", "paper", "--data", "salsa=s", "--data", "babble=b", "--out"], "--out", "r"),
+    (["experiment", "gcff", "--data", "salsa=s", "--data", "babble=b", "--out"], "--out", "r"),
+    (["experiment", "hri", "--recordings", "--out"], "--out", "h"),
+    (["experiment", "sim2real", "--data", "salsa=s", "--data", "babble=b", "--out"], "--out", "r"),
     (
         [
             "experiment",
             "sim2real",
-            "--salsa",
-            "s",
-            "--babble",
-            "b",
+            "--data",
+            "salsa=s",
+            "--data",
+            "babble=b",
             "--out",
             "{tmp}/x",
             "--synthetic",
@@ -100,7 +115,7 @@ UNDER_A_FILE = [
         "--synthetic",
         "syn",
     ),
-    (["calibrate", "--datasets", "{tmp}/datasets", "--out"], "--out", "sub"),
+    (["calibrate", "--data", "{tmp}/datasets", "--out"], "--out", "sub"),
 ]
 
 
@@ -122,8 +137,9 @@ def test_a_path_under_a_file(argv, option, below, places, toy_dataset, capsys):
         (["stress", "--grid", "small", "--out"], "--out"),
         (["demo", "--quick", "--out"], "--out"),
         (["generate", "--scenario", "mingle", "--episodes", "1", "--seed", "0", "--out"], "--out"),
-        (["calibrate", "--datasets", "{tmp}/datasets", "--out"], "--out"),
-        (["experiment", "hri", "--out", "{tmp}/h", "--recordings"], "--recordings"),
+        (["calibrate", "--data", "{tmp}/datasets", "--out"], "--out"),
+        (["experiment", "hri", "--recordings", "--out"], "--out"),
+        (["evaluate", "--detector", "majority", "--data", "{tmp}/toy.parquet", "--out"], "--out"),
     ],
 )
 def test_a_file_given_for_an_output_folder(argv, option, places, capsys):
@@ -136,11 +152,11 @@ def test_a_file_given_for_an_output_folder(argv, option, places, capsys):
 
 
 def test_an_experiment_report_that_is_a_folder(places, capsys):
-    err = cli_error(
-        ["experiment", "paper", "--salsa", "s", "--babble", "b", "--out", places / "rep"], capsys
-    )
+    (places / "rep" / "paper-experiment.md").mkdir(parents=True)
+    argv = ["experiment", "paper", "--data", "salsa=s", "--data", "babble=b"]
+    err = cli_error([*argv, "--out", places / "rep"], capsys)
     assert err == (
-        f"reform-sim experiment: error: --out {places / 'rep.md'}: "
+        f"reform-sim experiment: error: --out {places / 'rep' / 'paper-experiment.md'}: "
         "expected a file path, found an existing folder"
     )
 
@@ -171,8 +187,8 @@ def test_save_must_be_an_rrd_file_before_the_run(tmp_path, capsys):
 
 
 def test_an_empty_output_path_is_refused(toy_dataset, capsys):
-    argv = ["evaluate", "--detector", "majority", "--data", toy_dataset, "--json", ""]
+    argv = ["evaluate", "--detector", "majority", "--data", toy_dataset, "--out", ""]
     assert (
         cli_error(argv, capsys)
-        == "reform-sim evaluate: error: --json: expected a path, found an empty one"
+        == "reform-sim evaluate: error: --out: expected a path, found an empty one"
     )

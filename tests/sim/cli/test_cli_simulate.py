@@ -178,16 +178,20 @@ def test_simulate_refuses_other_outputs(tmp_path, capsys):
 
 
 def test_calibrate_bad_input(tmp_path, capsys):
-    assert main(["calibrate", "--out", str(tmp_path), "--datasets", str(tmp_path)]) == 2
-    assert "no salsa/ folder in it" in capsys.readouterr().err
-    assert main(["calibrate", "--out", str(tmp_path), "--seeds", "0"]) == 2
-    assert "--seeds must be >= 1, got 0" in capsys.readouterr().err
+    assert main(["calibrate", "--out", str(tmp_path), "--data", str(tmp_path)]) == 2
+    assert f"--data {tmp_path}: expected one of salsa, babble" in capsys.readouterr().err
+    (tmp_path / "salsa").mkdir()
+    assert main(["calibrate", "--out", str(tmp_path), "--data", str(tmp_path)]) == 2
+    assert f"babble not found ({tmp_path / 'babble'}: no such file" in capsys.readouterr().err
+    assert main(["calibrate", "--out", str(tmp_path), "--episodes", "0"]) == 2
+    assert "--episodes must be >= 1, got 0" in capsys.readouterr().err
 
 
 def test_calibrate_reads_the_datasets_named_by_the_environment(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "elsewhere"))
     assert main(["calibrate", "--out", str(tmp_path / "out")]) == 2
-    assert f"--datasets {tmp_path / 'elsewhere'}: no salsa/ folder in it" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "salsa not found" in err and "reform-sim datasets fetch salsa" in err
 
 
 # --------------------------------------------------------------------------------------------

@@ -158,7 +158,7 @@ def test_cli_writes_the_tables_the_plot_and_the_recordings(small, tmp_path, caps
     shipped, bare = small
     out = tmp_path / "out"
     argv = ["benchmark", "--data", shipped.path, "--data", bare.path, "--out", str(out)]
-    assert main([*argv, "--no-progress"]) == 0
+    assert main([*argv, "--quiet"]) == 0
     printed = capsys.readouterr().out
     assert "## Per dataset" in printed and "## Mean over datasets" in printed
     assert "skipped: dataset 'bare'" in printed
@@ -188,7 +188,7 @@ def test_cli_writes_the_tables_the_plot_and_the_recordings(small, tmp_path, caps
 def test_cli_bad_input_is_one_line(small, tmp_path, capsys, argv, message):
     if "--data" not in argv:
         argv = ["--data", small[0].path, *argv]
-    assert main(["benchmark", *argv, "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    assert main(["benchmark", *argv, "--out", str(tmp_path / "o"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("reform-sim benchmark: error: ") and message in err
     assert err.count("\n") == 1

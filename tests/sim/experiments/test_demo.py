@@ -21,8 +21,8 @@ from sim.experiments.demo_report import write_report
 def demo(tmp_path_factory, shared_datasets) -> Path:
     """One quick demo run through the command line, with the real datasets."""
     out = tmp_path_factory.mktemp("demo") / "demo-output"
-    argv = ["demo", "--quick", "--datasets", str(shared_datasets), "--out", str(out)]
-    assert main([*argv, "--seed", "3", "--jobs", "1", "--no-progress"]) == 0
+    argv = ["demo", "--quick", "--data", str(shared_datasets), "--out", str(out)]
+    assert main([*argv, "--seed", "3", "--jobs", "1", "--quiet"]) == 0
     return out
 
 
@@ -151,7 +151,7 @@ def test_budgets() -> None:
     [
         (["--seed", "-1"], "--seed must be >= 0, got -1"),
         (["--jobs", "0"], "--jobs must be >= 1, got 0"),
-        (["--datasets", "/nonexistent/datasets"], "/nonexistent/datasets is not a folder"),
+        (["--data", "/nonexistent/datasets"], "/nonexistent/datasets is not a folder"),
     ],
 )
 def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:

@@ -102,7 +102,7 @@ def test_command_writes_markdown_and_json(tmp_path, salsa_dataset, salsa_dir, ba
     other_json = tmp_path / "other.json"
     other_json.write_text(json.dumps({"results": [other]}))
     out = tmp_path / "results" / "gcff-comparison"
-    args = ["--salsa", str(salsa_dir), "--babble", str(babble_dir)]
+    args = ["--data", f"salsa={str(salsa_dir)}", "--data", f"babble={str(babble_dir)}"]
     args += ["--stride-grid", "0.7", "--mdl-grid", "1", "--with-results", str(other_json)]
     assert main(["experiment", "gcff", *args, "--out", f"{out}.md"]) == 0
     written = json.loads(out.with_suffix(".json").read_text())

@@ -147,8 +147,8 @@ def test_a_broken_detector_is_one_line_naming_it_the_view_and_the_frame() -> Non
     ("argv", "message"),
     [
         (["--views", "sonar"], "--views must name views among"),
-        (["--seeds", "0"], "--seeds must be >= 1, got 0"),
-        (["--salsa", "/nonexistent/salsa"], "SALSA not found at /nonexistent/salsa"),
+        (["--episodes", "0"], "--episodes must be >= 1, got 0"),
+        (["--data", "salsa=/nonexistent/salsa"], "SALSA not found at /nonexistent/salsa"),
     ],
 )
 def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:

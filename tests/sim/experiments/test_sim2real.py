@@ -274,7 +274,7 @@ def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
     ],
 )
 def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
-    extra = [] if not argv else ["--datasets", "/nonexistent"]
+    extra = [] if not argv else ["--data", "/nonexistent"]
     assert main(["experiment", "sim2real", "--out", str(tmp_path), *extra, *argv]) == 2
     assert message in capsys.readouterr().err
 

@@ -201,7 +201,7 @@ def test_grid_validation() -> None:
 def test_cli_runs_one_axis(tmp_path, capsys) -> None:
     out = tmp_path / "report"
     code = main(
-        ["stress", "--grid", "small", "--axes", "dropout", "--seeds", "1", "--jobs", "1"]
+        ["stress", "--grid", "small", "--axes", "dropout", "--episodes", "1", "--jobs", "1"]
         + ["--out", str(out)]
     )
     assert code == 0
@@ -215,7 +215,7 @@ def test_cli_runs_one_axis(tmp_path, capsys) -> None:
     ("argv", "message"),
     [
         (["--axes", "weather"], "--axes must name axes among"),
-        (["--seeds", "0"], "--seeds must be >= 1, got 0"),
+        (["--episodes", "0"], "--episodes must be >= 1, got 0"),
         (["--save", "curves.txt"], "--save must be a path ending in .rrd"),
     ],
 )

@@ -1,0 +1,310 @@
+"""The one grammar of ``reform-sim``'s commands, and the builders every subcommand uses to keep it.
+
+Each concept has one spelling across the subcommands (``tests/sim/cli/test_cli_grammar.py``
+walks every parser and checks it):
+
+=================  =====================================================================
+data in            ``--data PATH|NAME`` (repeatable where a command reads several;
+                   ``NAME=PATH`` says which dataset a path is)
+results out        ``--out DIR`` where a command writes several files, ``--out FILE`` where
+                   it writes exactly one
+seed               ``--seed S``, default 0
+counts             ``--episodes N``
+parallel work      ``--jobs N`` (with ``--backend``/``--address`` where Ray can run it)
+progress           bars and lines on stderr; ``--quiet`` silences them
+one recording      ``--save PATH.rrd``, ``--connect [--url URL]``, ``--serve``, ``--headless``
+                   (the flags of ``rr.script_add_args``)
+recordings         ``--recordings/--no-recordings``: one ``.rrd`` per item in OUT/recordings/
+frames scored      ``--frames all|train|test`` with ``--train-fraction F``
+=================  =====================================================================
+
+Old spellings keep working for one release: `rename` declares one, hidden from the help, which
+prints a line naming the new spelling and then does what the new one does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from sim.cli._common import TRAIN_FRACTION, check_output
+
+DEFAULT_SEED = 0
+FRAME_CHOICES = ("all", "train", "test")
+
+# old spelling -> new, as `rename` declared them (for the grammar test and the docs)
+RENAMED: dict[str, str] = {}
+
+
+class _Renamed(argparse.Action):
+    """An old spelling: says which spelling replaces it, then applies the value as that does."""
+
+    def __init__(
+        self,
+        option_strings: Sequence[str],
+        dest: str,
+        *,
+        new: str,
+        apply: Callable[[argparse.Namespace, Any], None],
+        nargs: int | str | None = None,
+        metavar: str | None = None,
+        type: Callable[[str], Any] | None = None,  # noqa: A002
+    ) -> None:
+        super().__init__(
+            option_strings,
+            argparse.SUPPRESS,
+            nargs=nargs,
+            metavar=metavar,
+            type=type,
+            help=argparse.SUPPRESS,
+        )
+        self.new = new
+        self.apply = apply
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        print(
+            f"warning: {option_string} is deprecated and goes in the next release; use {self.new}",
+            file=sys.stderr,
+        )
+        self.apply(namespace, values)
+
+
+def rename(
+    parser: argparse.ArgumentParser | argparse._ArgumentGroup,
+    old: str,
+    new: str,
+    apply: Callable[[argparse.Namespace, Any], None],
+    *,
+    nargs: int | str | None = None,
+    metavar: str | None = None,
+    type: Callable[[str], Any] | None = None,  # noqa: A002
+) -> None:
+    """Declares ``old``, a former spelling of ``new``: hidden, it warns and calls
+    ``apply(namespace, value)`` with the value converted by ``type`` (``nargs=0``: a switch)."""
+    RENAMED[old] = new
+    parser.add_argument(
+        old, action=_Renamed, new=new, apply=apply, nargs=nargs, metavar=metavar, type=type
+    )
+
+
+def setter(dest: str, value: Any = None) -> Callable[[argparse.Namespace, Any], None]:
+    """``apply`` for `rename`: stores the given value in ``dest`` (``value`` for a switch)."""
+
+    def apply(namespace: argparse.Namespace, given: Any) -> None:
+        setattr(namespace, dest, given if value is None else value)
+
+    return apply
+
+
+def appender(dest: str, form: Callable[[Any], Any] = lambda v: v) -> Callable[..., None]:
+    """``apply`` for `rename`: appends ``form(value)`` to the list in ``dest``."""
+
+    def apply(namespace: argparse.Namespace, given: Any) -> None:
+        items = list(getattr(namespace, dest, None) or [])
+        items.append(form(given))
+        setattr(namespace, dest, items)
+
+    return apply
+
+
+def add_seed(parser: argparse.ArgumentParser, *, help: str = "master seed") -> None:  # noqa: A002
+    """``--seed S``, default 0."""
+    parser.add_argument(
+        "--seed", type=int, default=DEFAULT_SEED, metavar="S", help=f"{help} (default 0)"
+    )
+
+
+def add_episodes(
+    parser: argparse.ArgumentParser,
+    *,
+    help: str,  # noqa: A002
+    default: int | None = None,
+    required: bool = False,
+    old: str | None = None,
+) -> None:
+    """``--episodes N`` (``old``: its former spelling, e.g. ``--seeds``)."""
+    parser.add_argument(
+        "--episodes", type=int, default=default, required=required, metavar="N", help=help
+    )
+    if old is not None:
+        rename(parser, old, "--episodes", setter("episodes"), metavar="N", type=int)
+
+
+def add_quiet(parser: argparse.ArgumentParser, *, old: Sequence[str] = ("--no-progress",)) -> None:
+    """``--quiet``: no progress on stderr (``old``: the former ``--no-progress``)."""
+    parser.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress bars or lines on stderr"
+    )
+    for spelling in old:
+        rename(parser, spelling, "--quiet", setter("quiet", True), nargs=0)
+
+
+def show_progress(args: argparse.Namespace) -> bool:
+    """Whether a short command shows its progress lines: not ``--quiet``, and stderr a
+    terminal (a log or a pipe gets the result and errors alone)."""
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+def add_out(
+    parser: argparse.ArgumentParser,
+    *,
+    folder: bool,
+    help: str,  # noqa: A002
+    default: str | None = None,
+    metavar: str | None = None,
+) -> None:
+    """``--out DIR`` (``folder``: the command writes several files) or ``--out FILE``."""
+    parser.add_argument(
+        "--out",
+        required=default is None,
+        default=default,
+        metavar=metavar or ("DIR" if folder else "FILE"),
+        help=help if default is None else f"{help} (default: {default})",
+    )
+
+
+class _Recordings(argparse.Action):
+    """``--recordings/--no-recordings``; with ``folder``, ``--recordings DIR`` (the former
+    spelling of an experiment's) still names the folder, with a warning."""
+
+    def __init__(
+        self,
+        option_strings: Sequence[str],
+        dest: str,
+        *,
+        default: bool = False,
+        help: str | None = None,  # noqa: A002
+        folder: bool = False,
+    ) -> None:
+        strings = [*option_strings, *(f"--no-{s[2:]}" for s in option_strings)]
+        super().__init__(
+            strings,
+            dest,
+            nargs="?" if folder else 0,
+            default=default,
+            help=help,
+            metavar="DIR" if folder else None,
+        )
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        if option_string is not None and option_string.startswith("--no-"):
+            setattr(namespace, self.dest, False)
+        elif values:
+            print(
+                f"warning: {option_string} {values} is deprecated and goes in the next release; "
+                f"use {option_string} (OUT/recordings/)",
+                file=sys.stderr,
+            )
+            setattr(namespace, self.dest, values)
+        else:
+            setattr(namespace, self.dest, True)
+
+    def format_usage(self) -> str:
+        return " | ".join(self.option_strings)
+
+
+def add_report_out(parser: argparse.ArgumentParser, *, basename: str, holds: str) -> None:
+    """``--out DIR``: BASENAME.json and BASENAME.md in DIR (``holds``: what the JSON holds);
+    the former ``--json FILE`` and ``--markdown FILE`` still name the files (`report_outputs`)."""
+    parser.add_argument(
+        "--out",
+        default=None,
+        metavar="DIR",
+        help=f"write {basename}.json ({holds}) and {basename}.md in this folder",
+    )
+    parser.set_defaults(old_json=None, old_markdown=None)
+    rename(parser, "--json", "--out DIR", setter("old_json"), metavar="FILE")
+    rename(parser, "--markdown", "--out DIR", setter("old_markdown"), metavar="FILE")
+
+
+def report_outputs(args: argparse.Namespace, basename: str) -> dict[str, tuple[str, Path]]:
+    """The files `add_report_out`'s flags name, by kind (``json``, ``markdown``), with the
+    option naming each; each checked writable before any work."""
+    outputs = {}
+    if args.out is not None:
+        check_output("--out", args.out, folder=True)
+        out = Path(args.out)
+        outputs = {
+            "json": ("--out", out / f"{basename}.json"),
+            "markdown": ("--out", out / f"{basename}.md"),
+        }
+    for kind, option in (("json", "--json"), ("markdown", "--markdown")):
+        path = getattr(args, f"old_{kind}")
+        if path is not None:
+            outputs[kind] = (option, Path(path))
+    for option, path in outputs.values():
+        check_output(option, path)
+    return outputs
+
+
+def add_recordings(
+    parser: argparse.ArgumentParser, *, default: bool, each: str, folder: bool = False
+) -> None:
+    """``--recordings/--no-recordings``: one Rerun ``.rrd`` per ``each`` in OUT/recordings/
+    (``folder``: the former ``--recordings DIR`` still works)."""
+    parser.add_argument(
+        "--recordings",
+        action=_Recordings,
+        default=default,
+        folder=folder,
+        help=f"write one Rerun .rrd per {each} in OUT/recordings/ (default: "
+        f"{'yes' if default else 'no'})",
+    )
+
+
+def add_frames(
+    parser: argparse.ArgumentParser,
+    *,
+    default: str | None = "all",
+    scored: str,
+    default_help: str = "every frame, annotated or not",
+) -> None:
+    """``--frames all|train|test`` and ``--train-fraction F``: which annotated frames are
+    ``scored`` (``all``, or the part of `reform.time_split`); read by
+    `sim.cli._common.select_frames` (``default`` None: every frame, annotated or not)."""
+    parser.add_argument(
+        "--frames",
+        choices=FRAME_CHOICES,
+        default=default,
+        help=f"annotated frames {scored}: all, or the train/test part of reform.time_split "
+        f"(default: {default or default_help})",
+    )
+    parser.add_argument(
+        "--train-fraction",
+        type=float,
+        default=None,
+        metavar="F",
+        help="with --frames train|test: each sequence's share of annotated frames, by time, in "
+        f"the train part (default {TRAIN_FRACTION:g})",
+    )
+
+
+def data_entries(
+    values: Sequence[str] | None, names: Sequence[str]
+) -> tuple[dict[str, str], list[str]]:
+    """Splits ``--data`` values into ``NAME=PATH`` pairs for ``names`` and the rest (paths,
+    dataset names, folders holding several datasets)."""
+    named: dict[str, str] = {}
+    rest: list[str] = []
+    for value in values or ():
+        name, sep, path = value.partition("=")
+        if sep and name in names:
+            named[name] = path
+        else:
+            rest.append(value)
+    return named, rest

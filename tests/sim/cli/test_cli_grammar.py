@@ -1,0 +1,191 @@
+"""One grammar for every command (sim.cli._grammar): a walk over every subcommand's parser checks
+that each concept has its one spelling, and that each old spelling still works for a release,
+saying which spelling replaces it."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from sim.cli import build_parser, main
+from sim.cli._grammar import FRAME_CHOICES, RENAMED
+
+# Spellings that the grammar replaced: none of them may be shown in a command's help.
+OLD_SPELLINGS = {
+    "--datasets",
+    "--salsa",
+    "--babble",
+    "--seeds",
+    "--no-progress",
+    "--progress",
+    "--markdown",
+    "--save-recordings",
+    "--annotated-only",
+}
+# Commands that can take over two seconds: progress on stderr, --quiet to silence it.
+LONG = {
+    "demo",
+    "datasets fetch",
+    "benchmark",
+    "experiment gcff",
+    "experiment paper",
+    "experiment hri",
+    "experiment sim2real",
+    "simulate",
+    "generate",
+    "calibrate",
+    "stress",
+    "policy evaluate",
+    "characterize",
+    "train",
+    "evaluate",
+    "detect",
+}
+# Commands that record one Rerun recording of the run: the flags of rr.script_add_args.
+RECORDING = {"simulate", "evaluate", "detect", "stress"}
+RERUN_FLAGS = {"--save", "--connect", "--url", "--serve", "--headless"}
+# Commands that score or run on a dataset's frames: --frames all|train|test.
+FRAMES = {"evaluate", "detect", "benchmark", "train"}
+
+
+def _commands(parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()):
+    """(command words, parser) for every leaf subcommand."""
+    subparsers = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subparsers:
+        parser.format_help()  # adds a lazily declared subcommand's arguments
+        yield " ".join(prefix), parser
+        return
+    for action in subparsers:
+        seen = set()
+        for name, sub in action.choices.items():
+            if id(sub) in seen:
+                continue  # an alias
+            seen.add(id(sub))
+            sub.format_help()
+            yield from _commands(sub, (*prefix, name))
+
+
+COMMANDS = dict(_commands(build_parser()))
+
+
+def _visible(parser: argparse.ArgumentParser) -> list[argparse.Action]:
+    return [
+        a
+        for a in parser._actions
+        if a.help is not argparse.SUPPRESS and not isinstance(a, argparse._HelpAction)
+    ]
+
+
+def _flags(parser: argparse.ArgumentParser) -> set[str]:
+    return {flag for a in _visible(parser) for flag in a.option_strings}
+
+
+def test_the_walk_finds_every_command():
+    assert {"generate", "experiment sim2real", "data info", "policy evaluate"} <= set(COMMANDS)
+    assert len(COMMANDS) >= 20
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_each_concept_has_its_one_spelling(command):
+    parser = COMMANDS[command]
+    flags = _flags(parser)
+    assert not flags & OLD_SPELLINGS, f"{command} shows old spellings {flags & OLD_SPELLINGS}"
+    for action in _visible(parser):
+        takes_value = action.nargs != 0 and not isinstance(action, argparse.BooleanOptionalAction)
+        if not action.option_strings:  # a positional: names, never the data read
+            assert action.dest not in ("data", "path"), f"{command}: data as a positional"
+            continue
+        if takes_value and action.choices is None:
+            assert action.metavar, f"{command} {action.option_strings}: no metavar"
+        if "--json" in action.option_strings:
+            assert action.nargs == 0, f"{command}: --json takes a path; use --out"
+        if "--out" in action.option_strings:
+            assert action.metavar == "DIR" or action.metavar.startswith("FILE"), (
+                f"{command}: --out {action.metavar}"
+            )
+        if "--seed" in action.option_strings:
+            assert (action.default, action.metavar, action.required) == (0, "S", False), command
+        if "--frames" in action.option_strings:
+            assert set(action.choices) <= set(FRAME_CHOICES), command
+    assert ("--quiet" in flags) == (command in LONG), command
+    if command in RECORDING:
+        assert RERUN_FLAGS <= flags, f"{command} lacks {RERUN_FLAGS - flags}"
+    assert ("--frames" in flags) == (command in FRAMES), command
+
+
+def test_data_is_read_with_data_everywhere():
+    readers = [c for c, p in COMMANDS.items() if any(a.dest == "data" for a in p._actions)]
+    assert set(readers) >= {
+        "data info",
+        "data verify",
+        "data convert",
+        "evaluate",
+        "detect",
+        "train",
+        "characterize",
+        "benchmark",
+        "calibrate",
+        "demo",
+        "experiment gcff",
+        "experiment paper",
+        "experiment hri",
+        "experiment sim2real",
+    }
+    for command in readers:
+        (action,) = [a for a in COMMANDS[command]._actions if a.dest == "data"]
+        assert action.option_strings == ["--data"], command
+
+
+def test_every_old_spelling_is_declared_and_names_its_replacement():
+    assert OLD_SPELLINGS - {"--markdown"} <= set(RENAMED) | {"--progress"}
+    assert all(new.startswith(("--", "(")) for new in RENAMED.values())
+
+
+@pytest.mark.parametrize(
+    ("argv", "attribute", "value", "new"),
+    [
+        (["stress", "--seeds", "3"], "episodes", 3, "--episodes"),
+        (["calibrate", "--out", "o", "--seeds", "2"], "episodes", 2, "--episodes"),
+        (["generate", "--scenario", "mingle", "--episodes", "1", "--out", "o", "--no-progress"],
+         "quiet", True, "--quiet"),
+        (["generate", "--scenario", "mingle", "--episodes", "1", "--out", "o",
+          "--save-recordings"], "recordings", True, "--recordings"),
+        (["experiment", "paper", "--out", "o", "--salsa", "s", "--babble", "b"],
+         "data", ["salsa=s", "babble=b"], "--data"),
+        (["experiment", "gcff", "--out", "o", "--datasets", "d"], "data", ["d"], "--data DIR"),
+        (["demo", "--datasets", "d"], "data", "d", "--data"),
+        (["evaluate", "--detector", "majority", "--data", "x", "--json", "r.json"],
+         "old_json", "r.json", "--out DIR"),
+        (["detect", "--detector", "majority", "--data", "x", "--out", "d.json",
+          "--annotated-only"], "frames", "all", "--frames all"),
+        (["policy", "evaluate", "--env", "E", "--json", "p.json"], "out", "p.json", "--out"),
+    ],
+)  # fmt: skip
+def test_an_old_spelling_still_works_and_says_the_new_one(argv, attribute, value, new, capsys):
+    args = build_parser().parse_args(argv)
+    assert getattr(args, attribute) == value
+    err = capsys.readouterr().err
+    assert "is deprecated" in err and f"use {new}" in err
+
+
+def test_a_positional_dataset_still_reads_with_a_warning(tmp_path, capsys):
+    from toy_scenes import toy_frames
+
+    from reform import Dataset, write_parquet
+
+    path = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=tuple(toy_frames(0, 5)), name="toy", source="toy"), path)
+    assert main(["data", "info", str(path)]) == 0
+    captured = capsys.readouterr()
+    assert f"use --data {path}" in captured.err and "dataset          toy" in captured.out
+    assert main(["data", "info", str(path), "--data", str(path)]) == 2
+    assert "give the dataset once" in capsys.readouterr().err
+
+
+def test_help_shows_no_dest_names_as_metavars():
+    for command, parser in COMMANDS.items():
+        text = parser.format_help()
+        for action in _visible(parser):
+            if action.option_strings and action.nargs != 0 and action.dest.upper() in text:
+                assert action.metavar or action.choices, f"{command}: {action.dest.upper()}"
