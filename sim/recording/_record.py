@@ -98,6 +98,8 @@ def _log_groups_and_scores(
     truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
     trees = {} if truth is None else {TRUTH: truth}
     for index, (name, partitions) in enumerate(detections.items()):
+        # Groups no true group matches take tracks no earlier tree used: their own colours.
+        first = 1 + max((int(t.tracks.max(initial=0)) for t in trees.values()), default=0)
         trees[name] = log_groups(
             rec,
             detected_on,
@@ -107,6 +109,7 @@ def _log_groups_and_scores(
             evaluation=(evaluations or {}).get(name),
             truth=truth,
             layer=index + 1,
+            first_track=first,
         )
     scored = {
         name: tree.evaluation
