@@ -399,7 +399,9 @@ def write_report(
 
 def record(results: StressResults, path: str | Path) -> Path:
     """The curves as a Rerun recording at ``path`` (``.rrd``)."""
-    blueprint = default_blueprint(scores=False, stress=recording_names(results))
+    blueprint = default_blueprint(
+        scene=False, scores=False, events=False, stress=recording_names(results)
+    )
     with open_recording(path, name="stress", seed=results.seed, blueprint=blueprint) as rec:
         log_results(rec, results)
     return Path(path)
