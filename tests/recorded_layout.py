@@ -31,7 +31,7 @@ class Panel:
 
 def _blueprint_rows(path: Path) -> dict[str, dict[str, object]]:
     reader = RrdReader(path)
-    (store,) = reader.blueprints()
+    store = reader.blueprints()[0]  # a file of several recordings holds one layout each
     rows: dict[str, dict[str, object]] = defaultdict(dict)
     for chunk in reader.stream(store=store):
         batch = chunk.to_record_batch()
@@ -76,10 +76,13 @@ def panels(path: Path) -> list[Panel]:
 class RecordedData:
     """The recording store of an .rrd: per entity, whether it holds data, and its scalars."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, recording_id: str | None = None) -> None:
         self.entities: set[str] = set()
         self.scalars: dict[str, list[float]] = defaultdict(list)
-        for chunk in RrdReader(path).stream():
+        reader = RrdReader(path)
+        stores = reader.recordings()
+        store = next(s for s in stores if recording_id in (None, s.recording_id))
+        for chunk in reader.stream(store=store):
             entity = str(chunk.entity_path)
             if chunk.num_rows:
                 self.entities.add(entity)
@@ -112,10 +115,11 @@ def entities_shown(panel: Panel, data: RecordedData) -> set[str]:
     return keep - drop
 
 
-def assert_every_panel_holds_data(path: Path) -> list[Panel]:
-    """Every panel of the layout shows entities holding data, and each plot has a y range
-    holding every value it draws; returns the panels."""
-    data = RecordedData(path)
+def assert_every_panel_holds_data(path: Path, recording_id: str | None = None) -> list[Panel]:
+    """Every panel of the layout shows entities holding data (in the recording
+    ``recording_id``, default the file's first), and each plot has a y range holding every
+    value it draws; returns the panels."""
+    data = RecordedData(path, recording_id)
     shown = panels(path)
     assert shown, f"{path}: the layout shows no panel"
     for panel in shown:
