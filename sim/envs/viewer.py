@@ -34,13 +34,14 @@ from sim.recording import (
     log_room,
     open_recording,
 )
-from sim.recording._colours import HUMAN, ROBOT, SINGLETON
+from sim.recording._colours import ROBOT, SINGLETON
+from sim.recording._target import VIEWER_SCHEMES
 
 __all__ = ["DEFAULT_VIEWER", "ViewerStream", "viewer_listening"]
 
 DEFAULT_VIEWER = "rerun+http://127.0.0.1:9876/proxy"  # Rerun's default viewer address
 PROBE_TIMEOUT_S = 0.25  # seconds to wait for a viewer's port to answer
-PERSON_RADIUS_M = 0.22  # metres, the dot of a person (seen from above)
+PERSON_RADIUS_M = 0.22  # metres, the dot of a person (grey when alone)
 PERSON_Z_M = 0.9  # metres: people's dots float at chest height
 HEADING_M = 0.5  # metres, length of the robot's heading arrow
 PEOPLE = "world/people"
@@ -78,7 +79,11 @@ class ViewerStream:
     """
 
     def __init__(self, url: str = DEFAULT_VIEWER) -> None:
-        RecordingTarget(connect=url)  # checks the address's form
+        if not isinstance(url, str) or not url.startswith(VIEWER_SCHEMES):
+            raise ValueError(
+                f"viewer must be a Rerun viewer's address starting with one of "
+                f"{', '.join(VIEWER_SCHEMES)} (e.g. {DEFAULT_VIEWER}), got {url!r}"
+            )
         self.url = url
         self._stack: contextlib.ExitStack | None = None
         self._rec: rr.RecordingStream | None = None
@@ -165,9 +170,7 @@ class ViewerStream:
             rr.Points3D(
                 np.column_stack([position[people], np.full(len(people_ids), PERSON_Z_M)]),
                 radii=PERSON_RADIUS_M,
-                colors=[
-                    colour_of.get(int(i), HUMAN if not colour_of else SINGLETON) for i in people_ids
-                ],
+                colors=[colour_of.get(int(i), SINGLETON) for i in people_ids],
                 labels=[str(i) for i in people_ids],
             ),
         )

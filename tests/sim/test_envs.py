@@ -504,7 +504,9 @@ def test_human_mode_without_a_viewer_or_display_warns_once_and_runs(monkeypatch)
     assert time.perf_counter() - start < 10.0
     with pytest.raises(ValueError, match="viewer is for render_mode='human'"):
         toy_env(viewer="rerun+http://127.0.0.1:9876/proxy")
-    with pytest.raises(ValueError, match="must be a Rerun viewer's address"):
+    with pytest.raises(
+        ValueError, match=r"^viewer must be a Rerun viewer.s address .* got .http://example.org.$"
+    ):
         toy_env(render_mode="human", viewer="http://example.org")
 
 
@@ -727,6 +729,18 @@ def test_the_truth_detector_s_episode_is_recorded(tmp_path: Path) -> None:
     entities = {str(chunk.entity_path) for chunk in RrdReader(path).stream()}
     # The recording's ground truth and the truth detector's detections, side by side.
     assert {"/world/groups/truth/members", "/world/groups/truth-detector/members"} <= entities
+    # The detected pair is matched to the true pair: one colour class in both trees.
+    classes = {}
+    for chunk in RrdReader(path).stream():
+        tree = str(chunk.entity_path)
+        if tree.endswith("/members") and not chunk.is_static:
+            batch = chunk.to_record_batch().to_pydict()
+            for ids, labels in zip(batch["person_id"], batch["Cylinders3D:class_ids"], strict=True):
+                classes.setdefault(tree, set()).update(
+                    (i, c) for i, c in zip(ids, labels, strict=True) if i in (1, 2)
+                )
+    assert classes["/world/groups/truth/members"] == {(1, 1), (2, 1)}
+    assert classes["/world/groups/truth-detector/members"] == {(1, 1), (2, 1)}
 
 
 # ---------------------------------------------------------------------------------------------
