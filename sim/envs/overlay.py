@@ -10,6 +10,7 @@ same rings to Rerun.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -137,19 +138,20 @@ def project(points: np.ndarray, cameras: Sequence[object], width: int, height: i
     return out
 
 
+@functools.lru_cache(maxsize=8)
+def _disc(half: int) -> np.ndarray:
+    """(k, 2) row, column offsets of the pixels within ``half`` of a centre pixel."""
+    span = np.arange(-half, half + 1)
+    rows, cols = np.meshgrid(span, span, indexing="ij")
+    inside = rows * rows + cols * cols <= half * half
+    return np.column_stack([rows[inside], cols[inside]])
+
+
 def _stamp(image: np.ndarray, pixels: np.ndarray, colour: np.ndarray, half: int) -> None:
     """Paints a disc of radius ``half`` pixels around each pixel position (in place)."""
     height, width = image.shape[:2]
-    offsets = np.array(
-        [
-            (dr, dc)
-            for dr in range(-half, half + 1)
-            for dc in range(-half, half + 1)
-            if dr * dr + dc * dc <= half * half
-        ]
-    )
     centre = np.rint(pixels[:, ::-1]).astype(np.int64)  # (row, column)
-    cells = (centre[:, None, :] + offsets[None, :, :]).reshape(-1, 2)
+    cells = (centre[:, None, :] + _disc(half)[None, :, :]).reshape(-1, 2)
     inside = (
         (cells[:, 0] >= 0) & (cells[:, 0] < height) & (cells[:, 1] >= 0) & (cells[:, 1] < width)
     )
@@ -163,19 +165,17 @@ def draw_rings(
     """Paints ``rings`` onto ``image`` (height, width, 3) uint8, in place; returns it.
 
     Each ring is projected through ``cameras`` (the scene's, as rendered) and drawn as a line
-    of its colour and half-thickness, densely enough to leave no gaps.
+    of its colour and half-thickness, a disc per pixel of its length.
     """
     height, width = image.shape[:2]
     for ring in rings:
-        pixels = project(ring_points(ring), cameras, width, height)
-        pixels = pixels[np.all(np.isfinite(pixels), axis=1)]
-        if len(pixels) < 2:
+        outline = project(ring_points(ring), cameras, width, height)
+        outline = outline[np.all(np.isfinite(outline), axis=1)]
+        if len(outline) < 2:
             continue
-        step = np.hypot(*np.diff(pixels, axis=0).T)
-        count = np.maximum(np.ceil(step / 0.5).astype(np.int64), 1)
-        t = np.concatenate([np.arange(k) / k for k in count.tolist()])
-        start = np.repeat(pixels[:-1], count, axis=0)
-        delta = np.repeat(np.diff(pixels, axis=0), count, axis=0)
-        dense = np.vstack([start + delta * t[:, None], pixels[-1:]])
-        _stamp(image, dense, np.asarray(ring.colour[:3], dtype=np.uint8), ring.width_px)
+        # Again with a point per pixel of the outline's length: a line without gaps.
+        length = float(np.sum(np.hypot(*np.diff(outline, axis=0).T)))
+        pixels = project(ring_points(ring, n=max(int(length), RING_POINTS)), cameras, width, height)
+        pixels = pixels[np.all(np.isfinite(pixels), axis=1)]
+        _stamp(image, pixels, np.asarray(ring.colour[:3], dtype=np.uint8), ring.width_px)
     return image
