@@ -130,7 +130,8 @@ def stages(
     detected_on = columns if seen is None else seen
     out["read the frames into columns"] = time.perf_counter() - start
     bounds = room_bounds(columns)
-    blueprint = default_blueprint(scores=True, bounds=bounds)
+    counts = [len(f.fformations()) for f in world]
+    blueprint = default_blueprint(scores=True, max_groups=max(counts, default=0), bounds=bounds)
     with open_recording(path, name="stages", seed=0, blueprint=blueprint) as rec:
         start = time.perf_counter()
         clock = log_frames(rec, columns, observed=seen)
@@ -142,6 +143,7 @@ def stages(
         start = time.perf_counter()
         trees = {"truth": truth}
         for layer, (name, partitions) in enumerate(found.items(), start=1):
+            first = 1 + max(int(t.tracks.max(initial=0)) for t in trees.values())
             trees[name] = log_groups(
                 rec,
                 detected_on,
@@ -151,6 +153,7 @@ def stages(
                 evaluation=evaluations[name],
                 truth=truth,
                 layer=layer,
+                first_track=first,
             )
         out[f"groups: {len(found)} detectors (mistakes, matched colours)"] = (
             time.perf_counter() - start

@@ -55,6 +55,8 @@ _EXPORTS = {
     "FrameBlock": "reform.frame_block",
     "Gcff": "reform.gcff",
     "Majority": "reform.majority",
+    "jaccard_matrix": "reform.matching",
+    "match_groups": "reform.matching",
     "T_ONE": "reform.metrics",
     "T_TWO_THIRDS": "reform.metrics",
     "THRESHOLDS": "reform.metrics",

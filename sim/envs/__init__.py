@@ -12,9 +12,15 @@ the seed), one environment for the joining task and one for observing
     ReformSim/WordImprov-v0         ReformSim/WordImprovObserve-v0
 
 ``gymnasium.make(id, **kwargs)`` passes keyword arguments on to `SocialEnv` (``detector=``,
-``model=``, ``sensor=``, ``render_mode="rgb_array"``, ``record_dir=``, ...). Registration
-imports only gymnasium and the scenario registry: the environment's module (MuJoCo, the
-detectors) loads on first make.
+``model=``, ``sensor=``, ``render_mode="rgb_array"`` or ``"human"``, ``record_dir=``, ...).
+Registration imports only gymnasium and the scenario registry: the environment's module
+(MuJoCo, the detectors) loads on first make.
+
+Each id carries its time limit twice, in agreement: ``episode_seconds`` for the environment
+(40 s joining, 120 s observing; an episode also ends when its scenario does) and
+``max_episode_steps`` (400 and 1,200 steps at 10 Hz) for the `gymnasium.wrappers.TimeLimit`
+that ``gymnasium.make`` wraps around it, so both truncate on the same step. A longer episode
+needs both: ``gymnasium.make(id, episode_seconds=60, max_episode_steps=600)``.
 
 Public surface (loaded on first use): `SocialEnv`, `TruthDetector`, the task (`JoinTask`,
 `OSpace`, `estimate_o_space`, `joining_place`, `REWARD_TERMS`), the scripted baseline
@@ -29,6 +35,7 @@ import gymnasium as gym
 
 import scenarios
 from reform._lazy import lazy_exports
+from sim.envs.timing import JOIN_EPISODE_S, OBSERVE_EPISODE_S, episode_steps
 
 NAMESPACE = "ReformSim"
 ENTRY_POINT = "sim.envs.social:SocialEnv"
@@ -68,9 +75,9 @@ ENV_IDS: tuple[str, ...] = tuple(
 def register_envs() -> None:
     """Registers every environment of `ENV_IDS` (again: registering twice is harmless)."""
     for name, (scenario, join_options, observe_options) in _SCENES.items():
-        for suffix, task, options in (
-            ("", "join", join_options),
-            ("Observe", "observe", observe_options),
+        for suffix, task, options, seconds in (
+            ("", "join", join_options, JOIN_EPISODE_S),
+            ("Observe", "observe", observe_options, OBSERVE_EPISODE_S),
         ):
             env_id = f"{NAMESPACE}/{name}{suffix}-v0"
             if env_id in gym.registry:
@@ -78,7 +85,13 @@ def register_envs() -> None:
             gym.register(
                 id=env_id,
                 entry_point=ENTRY_POINT,
-                kwargs={"scenario": scenario, "task": task, "scenario_options": dict(options)},
+                kwargs={
+                    "scenario": scenario,
+                    "task": task,
+                    "scenario_options": dict(options),
+                    "episode_seconds": seconds,
+                },
+                max_episode_steps=episode_steps(seconds),
                 disable_env_checker=False,
             )
 

@@ -78,9 +78,12 @@ from reform.frame import Frame, Group
 from reform.metrics import T_TWO_THIRDS, evaluate
 from scenarios import PlannedGroup, Scenario, Stage
 from scenarios.mingle import NoFloorError
+from sim.envs.overlay import GroupRing, draw_rings, group_rings
 from sim.envs.reward import JoinTask, OSpace, assess, reward_terms
 from sim.envs.target import Target, choose_target, circle_of, joinable_place
+from sim.envs.timing import CONTROL_RATE_HZ, DETECT_RATE_HZ, JOIN_EPISODE_S, episode_steps
 from sim.envs.view import Eyes, Truth, View, robot_frame
+from sim.envs.viewer import DEFAULT_VIEWER, ViewerStream
 from sim.episode import ScenarioScript, scene_spec
 from sim.motion import ROBOT_LIMITS
 from sim.recording import FieldOfView, record_episode
@@ -99,11 +102,8 @@ __all__ = [
     "TruthDetector",
 ]
 
-CONTROL_RATE_HZ = 10.0  # Hz, agent decisions (the world moves at 100 Hz in between)
-DETECT_RATE_HZ = 2.0  # Hz, detector runs on the robot's view
 DEFAULT_DETECTOR = "gcff"  # the registry's detector an environment detects with by default
 TRUTH = "truth"  # the detector option naming `TruthDetector`
-JOIN_EPISODE_S = 40.0  # seconds, time limit of a joining episode
 VIEW_MARGIN_M = 1.0  # metres beyond the sensor's range that observed positions may reach
 ROOM_MARGIN_M = 0.5  # metres beyond the walls in the bounds of the robot's position
 START_DISTANCE_M = (1.0, 2.5)  # metres outside the target's circle where the robot may start
@@ -174,13 +174,20 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         observe_groups: whether the observation holds ``people_group``.
         robot_start: default start of the robot, ``"random"`` or ``"scenario"``; default:
             random for joining, the scenario's for observing.
-        render_mode: None or ``"rgb_array"`` (an overview of the room from above).
+        render_mode: None, ``"rgb_array"`` (`render` returns an overview of the room from
+            above, the true groups ringed wide and thick and the last detection's ringed
+            inside them, a matched group in its true group's colour: `sim.envs.overlay`) or
+            ``"human"`` (every step is streamed to a Rerun viewer, an episode a recording:
+            `sim.envs.viewer`; with no viewer listening and no display to start one, one
+            warning and nothing shown).
         render_size: (width, height) of rendered frames, pixels.
+        viewer: the Rerun viewer's gRPC address for ``render_mode="human"`` (default Rerun's
+            ``rerun+http://127.0.0.1:9876/proxy``).
         record_dir: a folder to save each episode's Rerun recording in (``<scenario>-<seed>
             -<episode>.rrd``), or None.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_RATE_HZ)}
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": int(CONTROL_RATE_HZ)}
 
     def __init__(
         self,
@@ -200,6 +207,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         render_mode: str | None = None,
         render_size: tuple[int, int] = RENDER_SIZE_PX,
         record_dir: str | os.PathLike[str] | None = None,
+        viewer: str | None = None,
     ) -> None:
         if isinstance(scenario, str):
             if scenario not in scenarios.names():
@@ -286,6 +294,11 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         )
         self._world: World | None = None
         self._renderer: Any = None
+        self._viewer = None
+        if render_mode == "human":
+            self._viewer = ViewerStream(DEFAULT_VIEWER if viewer is None else viewer)
+        elif viewer is not None:
+            raise ValueError(f"viewer is for render_mode='human', got render_mode={render_mode!r}")
         self._episodes = 0
         self._done = True
 
@@ -372,7 +385,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             limit = min(limit, self._episode_seconds)
         elif self._task is not None:
             limit = min(limit, JOIN_EPISODE_S)
-        self._limit_steps = max(1, math.floor(limit / self._control_dt + 1e-9))
+        self._limit_steps = episode_steps(limit, 1.0 / self._control_dt)
         self._steps_taken = 0
         self._held = 0
         self._hold_steps = (
@@ -388,6 +401,13 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._episodes += 1
         self._done = False
         observation, info = self._advance(first_step=True)
+        if self._viewer is not None:
+            self._viewer.open(
+                name=f"{self._sequence}-{self._episodes}",
+                seed=int(scenario.seed),
+                room=stage.room,
+            )
+            self._show()
         return observation, info
 
     def step(
@@ -409,20 +429,30 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         reward = float(sum(terms.values()))
         terminated = bool(info["is_success"] or self._target_gone)
         truncated = not terminated and self._steps_taken >= self._limit_steps
+        if self._viewer is not None:
+            self._show()
         if terminated or truncated:
             self._done = True
             info["episode"] = self._finish()
+            if self._viewer is not None:
+                self._viewer.close()
         return observation, reward, terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
+        """``"rgb_array"``: the room from above with the groups ringed, (height, width, 3)
+        uint8; ``"human"``: streams the current step to the viewer (steps do so themselves)
+        and returns None."""
         if self.render_mode is None:
             gym.logger.warn(
                 "render() was called without a render_mode; make the env with "
-                "render_mode='rgb_array'"
+                "render_mode='rgb_array' or 'human'"
             )
             return None
         if self._world is None:
             raise ResetNeeded("Cannot call env.render() before calling env.reset()")
+        if self.render_mode == "human":
+            self._show()
+            return None
 
         world = self._world
         width, height = self._render_size
@@ -439,11 +469,40 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         camera.elevation = -65.0
         camera.azimuth = 90.0
         self._renderer.update_scene(world.data, camera=camera)
-        return self._renderer.render().copy()
+        image = self._renderer.render().copy()
+        return draw_rings(image, self._rings(), self._renderer.scene.camera)
 
     def close(self) -> None:
         self._close_renderer()
+        if self._viewer is not None:
+            self._viewer.close()
         super().close()
+
+    def _rings(self) -> list[GroupRing]:
+        """The rings of the true groups and the last detection's now."""
+        truth = self._now
+        return group_rings(
+            self._eyes.ids,
+            truth.position,
+            self._groups_now,
+            {_recorded_name(self.detector_name): self._detected},
+        )
+
+    def _show(self) -> None:
+        """Streams the state now to the viewer (human render mode)."""
+        assert self._viewer is not None
+        truth = self._now
+        self._viewer.show(
+            step=self._steps_taken,
+            time=truth.time,
+            ids=self._eyes.ids,
+            kinds=self._eyes.kinds,
+            present=truth.present,
+            position=truth.position,
+            yaw=truth.yaw,
+            rings=self._rings(),
+            sources=("truth", _recorded_name(self.detector_name)),
+        )
 
     # ---------------------------------------------------------------------------------------
     # Internals
@@ -596,6 +655,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             self._detect(truth, view, groups)
         if self._record_dir is not None:
             self._recorded.append(eyes.truth_frame(truth, groups, sequence=self._sequence))
+        self._now, self._groups_now = truth, groups
         info = self._task_info(truth, first_step=first_step)
         observation = self._observation(truth, view)
         info.update(

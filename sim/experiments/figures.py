@@ -3,7 +3,7 @@
 * :func:`score_bars`: grouped bars (one group per test set, one bar per detector) with error
   bars, e.g. F1 at T = 2/3 with bootstrap intervals;
 * :func:`top_view`: one frame from above: people as discs with facing arrows, groups as
-  rings, truth and a detector side by side.
+  rings, truth and detectors side by side, a matched group in one colour in every panel.
 
 matplotlib is imported inside the functions, with the non-interactive ``Agg`` backend; every
 file is written atomically.
@@ -21,8 +21,9 @@ import numpy as np
 
 from reform.atomic import atomic_path
 from reform.frame import Frame, Group
+from sim.recording import fformations, group_colour, match_tracks
 
-__all__ = ["Bar", "pyplot", "save_png", "score_bars", "top_view"]
+__all__ = ["Bar", "pyplot", "save_png", "score_bars", "top_view", "top_view_figure"]
 
 DPI = 110  # dots per inch of the PNG files
 WIDTH_IN = 8.0  # inches, figure width
@@ -135,42 +136,54 @@ def top_view(
     """One frame from above, once per partition (e.g. ground truth, REFORM, GCFF).
 
     People are discs with an arrow along their body yaw (robots are squares); members of a
-    group of two or more share a colour and a ring through them; singletons are grey.
+    group of two or more share a colour and a ring through them; singletons are grey. The first
+    partition is the reference (the ground truth): each other panel's group matched to one of
+    its groups (`reform.match_groups`, largest summed Jaccard index) wears that group's colour,
+    and an unmatched group a colour no reference group has (`sim.recording` uses the same
+    colours). Axes are the room's x and y in metres.
 
     Args:
         frame: the frame.
-        partitions: panel title -> a full partition of the frame's ids.
+        partitions: panel title -> a full partition of the frame's ids; the first is the
+            reference.
         path: the PNG file to write.
         title: figure title.
 
     Returns:
         The path written.
     """
+    return save_png(top_view_figure(frame, partitions, title=title), path)
+
+
+def top_view_figure(
+    frame: Frame, partitions: Mapping[str, Sequence[Group]], *, title: str = ""
+) -> Any:
+    """The matplotlib figure :func:`top_view` saves (for a caller to adjust or show)."""
     if not partitions:
         raise ValueError("partitions must hold at least one partition, got none")
     plt = pyplot()
     panels = len(partitions)
-    fig, axes = plt.subplots(1, panels, figsize=(3.3 * panels, 3.4), squeeze=False)
-    colours = plt.get_cmap("tab10")
+    fig, axes = plt.subplots(1, panels, figsize=(3.3 * panels, 3.6), squeeze=False)
+    names = list(partitions)
+    reference_tracks, tracks = match_tracks(
+        partitions[names[0]], {name: partitions[name] for name in names[1:]}
+    )
+    tracks[names[0]] = reference_tracks
     row_of = {int(i): k for k, i in enumerate(frame.ids)}
     lo = frame.position.min(axis=0) - 0.8
     hi = frame.position.max(axis=0) + 0.8
-    for ax, (name, partition) in zip(axes[0], partitions.items(), strict=True):
+    for index, (ax, name) in enumerate(zip(axes[0], names, strict=True)):
         colour_of: dict[int, Any] = {}
-        track = 0
-        for group in partition:
-            if len(group) < 2:
-                continue
-            colour = colours(track % 10)
-            track += 1
-            rows = [row_of[int(m)] for m in group if int(m) in row_of]
+        for group, track in zip(fformations(partitions[name]), tracks[name], strict=True):
+            colour = _rgb(group_colour(track))
+            rows = [row_of[m] for m in group if m in row_of]
             centre = frame.position[rows].mean(axis=0)
             radius = float(np.mean(np.linalg.norm(frame.position[rows] - centre, axis=1)))
             ax.add_patch(
                 plt.Circle(centre, radius, fill=False, color=colour, linewidth=1.2, alpha=0.8)
             )
             for m in group:
-                colour_of[int(m)] = colour
+                colour_of[m] = colour
         for k, person in enumerate(frame.ids.tolist()):
             x, y = frame.position[k]
             colour = colour_of.get(int(person), "0.6")
@@ -182,7 +195,15 @@ def top_view(
         ax.set_ylim(lo[1], hi[1])
         ax.set_aspect("equal")
         ax.set_title(name, fontsize=9)
+        ax.set_xlabel("x (m)", fontsize=8)
+        if index == 0:
+            ax.set_ylabel("y (m)", fontsize=8)
         ax.tick_params(labelsize=7)
     if title:
         fig.suptitle(title, fontsize=10)
-    return save_png(fig, path)
+    return fig
+
+
+def _rgb(colour: Sequence[int]) -> tuple[float, float, float]:
+    """An sRGB 0-255 colour as matplotlib's 0-1 triple."""
+    return (colour[0] / 255.0, colour[1] / 255.0, colour[2] / 255.0)

@@ -410,7 +410,9 @@ def record(results: StressResults, target: RecordingTarget | str | Path) -> Path
     """The curves as a Rerun recording sent to ``target`` (a ``.rrd`` path or a
     `sim.recording.RecordingTarget`); the ``.rrd`` saved, if any."""
     target = RecordingTarget.coerce(target)
-    blueprint = default_blueprint(scores=False, stress=recording_names(results))
+    blueprint = default_blueprint(
+        scene=False, scores=False, events=False, stress=recording_names(results)
+    )
     with open_recording(target, name="stress", seed=results.seed, blueprint=blueprint) as rec:
         log_results(rec, results)
     return target.save

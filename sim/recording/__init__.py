@@ -39,6 +39,9 @@ from reform._lazy import lazy_exports
 # recording flags (`add_recording_arguments`) does not import Rerun.
 _EXPORTS = {
     "default_blueprint": "sim.recording._blueprint",
+    "fformations": "sim.recording._colours",
+    "group_colour": "sim.recording._colours",
+    "match_tracks": "sim.recording._colours",
     "FrameColumns": "sim.recording._columns",
     "DATASET_ROOT": "sim.recording._dataset_views",
     "log_characterisation": "sim.recording._dataset_views",

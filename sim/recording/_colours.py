@@ -1,8 +1,20 @@
-"""Colours shared by the recording's entity trees (sRGB, 0-255, RGBA)."""
+"""Colours shared by the recording's entity trees, the figures and the environments' frames
+(sRGB, 0-255, RGBA).
+
+Groups are coloured by track: the ground truth's F-formations take tracks 1, 2, ...; a
+detected F-formation matched to a true one (`reform.match_groups`: the one-to-one assignment
+of largest summed Jaccard index) takes that group's track, so a matched group wears one colour
+in the truth and in every detector; an unmatched one takes a track of its own (`match_tracks`).
+"""
 
 from __future__ import annotations
 
+import colorsys
+from collections.abc import Iterable, Mapping, Sequence
+
 import numpy as np
+
+from reform.matching import match_groups
 
 # Tableau 10 then its light variants: distinct group colours that read on a dark background.
 GROUP_PALETTE = np.array(
@@ -54,12 +66,78 @@ APART = (80, 120, 200, 255)  # pair label 0
 TOGETHER = (240, 140, 40, 255)  # pair label 1
 
 
+_GOLDEN_TURN = 0.618033988749895  # of a full hue circle: successive hues stay far apart
+
+
 def group_colour(track: int) -> tuple[int, int, int, int]:
-    """Colour of group track ``track`` (1, 2, ...); 0 is the singleton grey."""
+    """Colour of group track ``track`` (1, 2, ...); 0 is the singleton grey.
+
+    The first tracks take the palette's colours; later ones take hues a golden turn apart
+    (saturated, mid-light), so no two tracks of a run share a colour.
+    """
     if track <= 0:
         return SINGLETON
-    r, g, b = GROUP_PALETTE[(track - 1) % len(GROUP_PALETTE)]
-    return (int(r), int(g), int(b), 255)
+    if track <= len(GROUP_PALETTE):
+        r, g, b = GROUP_PALETTE[track - 1]
+        return (int(r), int(g), int(b), 255)
+    hue = ((track - len(GROUP_PALETTE)) * _GOLDEN_TURN) % 1.0
+    value = 0.95 if track % 2 else 0.75
+    r, g, b = (round(255 * c) for c in colorsys.hsv_to_rgb(hue, 0.65, value))
+    return (r, g, b, 255)
+
+
+def fformations(partition: Iterable[Iterable[int]]) -> list[tuple[int, ...]]:
+    """The F-formations of a partition (its groups of two or more), as tuples of ids."""
+    groups = (tuple(int(m) for m in group) for group in partition)
+    return [group for group in groups if len(group) >= 2]
+
+
+def match_tracks(
+    truth: Iterable[Iterable[int]] | None,
+    detections: Mapping[str, Iterable[Iterable[int]]],
+) -> tuple[list[int], dict[str, list[int]]]:
+    """Tracks (colour classes) of the F-formations of one frame's truth and detections.
+
+    Args:
+        truth: the true partition (or its F-formations); None when unknown.
+        detections: detector name -> its partition of the frame.
+
+    Returns:
+        The truth's tracks (1, 2, ... in order of its F-formations) and, per detector, the
+        track of each of its F-formations in order: the matched true group's track, or a
+        track no true group has; a detected group with the same members as an unmatched group
+        of an earlier detector shares its track.
+    """
+    true_groups = fformations(truth or ())
+    true_tracks = list(range(1, len(true_groups) + 1))
+    next_track = len(true_groups) + 1
+    extra: dict[frozenset[int], int] = {}
+    out: dict[str, list[int]] = {}
+    for name, partition in detections.items():
+        groups = fformations(partition)
+        tracks = []
+        for group, match in zip(groups, match_groups(true_groups, groups), strict=True):
+            if match is not None:
+                tracks.append(true_tracks[match])
+                continue
+            key = frozenset(group)
+            if key not in extra:
+                extra[key] = next_track
+                next_track += 1
+            tracks.append(extra[key])
+        out[name] = tracks
+    return true_tracks, out
+
+
+def colour_of_groups(
+    groups: Sequence[Sequence[int]], tracks: Sequence[int]
+) -> dict[int, tuple[int, int, int, int]]:
+    """Person id -> the colour of their F-formation's track."""
+    return {
+        int(m): group_colour(track)
+        for group, track in zip(groups, tracks, strict=True)
+        for m in group
+    }
 
 
 def series_colour(index: int) -> tuple[int, int, int, int]:

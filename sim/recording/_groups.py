@@ -11,8 +11,9 @@
   cylinder, one instance per group).
 
 Groups are coloured through an annotation context (one class per group track): a group keeps its
-colour from frame to frame while it keeps a majority of its members, and a detected group that
-matches a true group (T = 2/3, ``reform.metrics``) takes that group's colour.
+colour from frame to frame while it keeps a majority of its members, and a detected group
+matched to a true group of its frame (`reform.match_groups`: the one-to-one matching of largest
+summed Jaccard index) takes that group's colour; unmatched groups take colours of their own.
 
 For detectors, on annotated frames, mistakes are drawn under ``world/groups/<name>/mistakes``:
 ``missed`` (true F-formations no detected group matches, red rings), ``spurious`` (detected
@@ -36,6 +37,7 @@ import numpy as np
 import rerun as rr
 
 from reform import T_TWO_THIRDS, Evaluation, Frame, Group, complete_partition, evaluate
+from reform.matching import match_groups
 from sim.recording import _colours
 from sim.recording._columns import (
     FrameColumns,
@@ -667,6 +669,7 @@ def log_groups(
     evaluation: Evaluation | None = None,
     truth: LoggedGroups | None = None,
     layer: int | None = None,
+    first_track: int | None = None,
 ) -> LoggedGroups:
     """Logs one entity tree of groups, ``world/groups/<name>``, for a finished run.
 
@@ -680,11 +683,15 @@ def log_groups(
         clock: the run's clock; default: the clock of ``frames``.
         evaluation: ``reform.evaluate(frames, partitions)``, for the mistakes and the colours
             of matched groups; computed here when None and the frames carry ground truth.
-        truth: the truth tree's :func:`log_groups` result, so that detected groups that
-            match a true group share its colour.
+        truth: the truth tree's :func:`log_groups` result, so that a detected group matched
+            to a true group of its frame (`reform.match_groups`: the one-to-one matching of
+            largest summed Jaccard index) shares its colour.
         layer: stacking order of the tree: 0 (truth, default for it) is drawn lowest with the
             largest discs, each next layer higher with smaller discs (default for detectors: 1;
             give the k-th detector k + 1).
+        first_track: the first track (colour class) of groups no true group matches; default:
+            one past the truth's. Give each detector one past the previous trees' tracks so
+            that unmatched groups of different detectors never share a colour.
 
     Returns:
         What was drawn (pass the truth tree's as ``truth`` to the detectors' calls).
@@ -722,10 +729,11 @@ def log_groups(
         if evaluation is not None:
             true_layout = GroupLayout.truth(columns)
             matches = _matches(evaluation, layout, true_layout)
-            if truth is not None:
-                fixed = _inherit_tracks(layout, true_layout, matches, truth, rows)
-    first = 1 if truth is None else int(truth.tracks.max(initial=0)) + 1
-    tracks = group_tracks(layout, columns.segment, fixed=fixed, first_track=first)
+    if not is_truth and truth is not None:
+        fixed = _inherit_tracks(layout, rows, truth)
+    if first_track is None:
+        first_track = 1 if truth is None else int(truth.tracks.max(initial=0)) + 1
+    tracks = group_tracks(layout, columns.segment, fixed=fixed, first_track=first_track)
 
     n_tracks = int(tracks.max(initial=0))
     label = "group" if is_truth else f"{name} group"
@@ -796,37 +804,38 @@ def log_groups(
     )
 
 
-def _inherit_tracks(
-    layout: GroupLayout,
-    true_layout: GroupLayout,
-    matches: _Matches,
-    truth: LoggedGroups,
-    rows: np.ndarray,
-) -> np.ndarray:
-    """(n_fformations,) for each matched detected F-formation, the truth tree's track of the
-    first true F-formation of its frame it matches (T = 2/3), where the truth tree holds that
-    group at that time; -1 elsewhere."""
+def _inherit_tracks(layout: GroupLayout, rows: np.ndarray, truth: LoggedGroups) -> np.ndarray:
+    """(n_fformations,) for each detected F-formation matched to an F-formation of the truth
+    tree at the same clock row (`reform.match_groups`: largest summed Jaccard index, one to
+    one), that group's track; -1 elsewhere.
+
+    The truth tree may hold more people than the detector saw (the world's frames against the
+    robot's view): a detected group matches the true group it overlaps most, seen or not.
+    """
     fixed = np.full(layout.group_frame.size, -1, dtype=np.int64)
-    d, t, shared = matches.pair_detected, matches.pair_true, matches.overlap
-    largest = np.maximum(layout.group_size[d], true_layout.group_size[t])
-    fits = matches.detected_matched[d] & matches.true_matched[t] & (3 * shared >= 2 * largest)
-    d, t = d[fits], t[fits]
-    d, first = np.unique(d, return_index=True)  # pairs run detected-major, true in order
-    t = t[first]
     tree = truth.layout
-    if not d.size or not tree.group_frame.size:
+    if not layout.group_frame.size or not tree.group_frame.size:
         return fixed
-    tree_set = {s: k for k, s in enumerate(tree.sets)}
-    global_set = np.array([tree_set.get(s, -1) for s in true_layout.sets], dtype=np.int64)
-    n_sets = len(tree.sets)
-    tree_key = truth.rows[tree.group_frame] * n_sets + tree.group_set
-    order = np.argsort(tree_key, kind="stable")
-    sorted_key = tree_key[order]
-    wanted_set = global_set[true_layout.group_set[t]]
-    wanted = rows[layout.group_frame[d]] * n_sets + wanted_set
-    at = np.minimum(np.searchsorted(sorted_key, wanted), sorted_key.size - 1)
-    hit = (wanted_set >= 0) & (sorted_key[at] == wanted)
-    fixed[d[hit]] = truth.tracks[order[at[hit]]]
+    truth_frame = np.full(int(max(rows.max(initial=-1), truth.rows.max(initial=-1))) + 1, -1)
+    truth_frame[truth.rows] = np.arange(truth.rows.size)
+    starts, tree_starts = layout.group_starts.tolist(), tree.group_starts.tolist()
+    group_set, tree_set = layout.group_set.tolist(), tree.group_set.tolist()
+    tracks = truth.tracks.tolist()
+    known: dict[tuple[tuple[int, ...], tuple[int, ...]], list[int | None]] = {}
+    for f in np.flatnonzero(layout.group_counts).tolist():
+        t = int(truth_frame[rows[f]]) if rows[f] >= 0 else -1
+        if t < 0 or tree_starts[t] == tree_starts[t + 1]:
+            continue
+        mine = tuple(group_set[starts[f] : starts[f + 1]])
+        theirs = tuple(tree_set[tree_starts[t] : tree_starts[t + 1]])
+        matched = known.get((mine, theirs))
+        if matched is None:
+            matched = known[(mine, theirs)] = match_groups(
+                [tree.sets[k] for k in theirs], [layout.sets[k] for k in mine]
+            )
+        for k, j in enumerate(matched):
+            if j is not None:
+                fixed[starts[f] + k] = tracks[tree_starts[t] + j]
     return fixed
 
 

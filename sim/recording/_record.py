@@ -18,7 +18,7 @@ from sim.recording._blueprint import default_blueprint
 from sim.recording._columns import FrameColumns
 from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
 from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
-from sim.recording._groups import TRUTH, log_groups
+from sim.recording._groups import TRUTH, GroupLayout, log_groups
 from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
 from sim.recording._scene import (
     BodyPoses,
@@ -81,6 +81,38 @@ def _with_truth(observed: FrameColumns, world: FrameColumns, clock: Clock) -> Fr
     return dataclasses.replace(observed, groups=tuple(groups), frames=frames)
 
 
+def _most_fformations(partitions: Iterable[Partition | None]) -> int:
+    """The most F-formations (groups of two or more) of any one partition."""
+    best, last = 0, None
+    for partition in partitions:
+        if partition is None or partition is last:
+            continue
+        last = partition
+        best = max(best, sum(1 for group in partition if len(group) >= 2))
+    return best
+
+
+def _run_blueprint(
+    world: FrameColumns,
+    detections: Mapping[str, Sequence[Partition]],
+    events: Sequence[object],
+    **views: Any,
+) -> rr.blueprint.Blueprint:
+    """The default layout of a run recorded by `_log_groups_and_scores`: panels only for what
+    it logs (scores with ground truth and detectors, group counts for any group tree, events
+    given or groups forming), the counts plot's range holding every count."""
+    annotated = any(groups is not None for groups in world.groups)
+    truth = GroupLayout.truth(world) if annotated else None
+    counts = [int(truth.group_counts.max(initial=0))] if truth is not None else []
+    counts += [_most_fformations(partitions) for partitions in detections.values()]
+    return default_blueprint(
+        scores=annotated and bool(detections),
+        max_groups=max(counts) if counts else None,
+        events=bool(events) or (truth is not None and truth.group_frame.size > 0),
+        **views,
+    )
+
+
 def _log_groups_and_scores(
     rec: rr.RecordingStream,
     world: FrameColumns,
@@ -98,6 +130,8 @@ def _log_groups_and_scores(
     truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
     trees = {} if truth is None else {TRUTH: truth}
     for index, (name, partitions) in enumerate(detections.items()):
+        # Groups no true group matches take tracks no earlier tree used: their own colours.
+        first = 1 + max((int(t.tracks.max(initial=0)) for t in trees.values()), default=0)
         trees[name] = log_groups(
             rec,
             detected_on,
@@ -107,6 +141,7 @@ def _log_groups_and_scores(
             evaluation=(evaluations or {}).get(name),
             truth=truth,
             layer=index + 1,
+            first_track=first,
         )
     scored = {
         name: tree.evaluation
@@ -173,13 +208,11 @@ def record_episode(
     seen = None if observed is None else _with_truth(FrameColumns.coerce(observed), world, clock)
     detected_on = seen if seen is not None else world
     name = name or world.sequence[0] or "episode"
-    annotated = any(groups is not None for groups in world.groups)
     cameras = tuple(cameras)
+    events = tuple(events or ())
     bounds = room_bounds(world)
-    blueprint = default_blueprint(
-        scores=annotated and bool(detections),
-        bounds=bounds,
-        cameras=tuple(c.name for c in cameras),
+    blueprint = _run_blueprint(
+        world, detections, events, bounds=bounds, cameras=tuple(c.name for c in cameras)
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         log_frames(
@@ -199,7 +232,7 @@ def record_episode(
         for camera in cameras:
             log_camera_images(rec, camera, clock=clock)
         scored = _log_groups_and_scores(
-            rec, world, detected_on, detections, evaluations, events or (), clock=clock
+            rec, world, detected_on, detections, evaluations, events, clock=clock
         )
     return Recorded(
         recording_id=recording_id(name, seed=seed), n_frames=len(world), evaluations=scored
@@ -249,11 +282,8 @@ def record_evaluation(
     if views and columns.frames is None:
         raise ValueError("dataset views need the frames: pass reform.Frame objects, not columns")
     bounds = room_bounds(columns)
-    blueprint = default_blueprint(
-        scores=annotated and bool(predictions),
-        bounds=bounds,
-        characterisation=views,
-        pairs=views,
+    blueprint = _run_blueprint(
+        columns, predictions, (), bounds=bounds, characterisation=views, pairs=views
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         clock = log_frames(rec, columns, field_of_view=None)

@@ -7,6 +7,7 @@ import json
 import math
 import subprocess
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -124,6 +125,43 @@ def test_ids_name_a_task_and_an_observe_variant_per_scenario() -> None:
         spec = gym.spec(env_id)
         assert spec.entry_point == "sim.envs.social:SocialEnv"
         assert spec.kwargs["task"] == ("observe" if "Observe" in env_id else "join")
+
+
+def test_each_id_carries_its_time_limit_for_the_time_limit_wrapper() -> None:
+    from gymnasium.wrappers import TimeLimit
+
+    from sim.envs.timing import JOIN_EPISODE_S, OBSERVE_EPISODE_S
+
+    for env_id in ENV_IDS:
+        spec = gym.spec(env_id)
+        seconds = OBSERVE_EPISODE_S if "Observe" in env_id else JOIN_EPISODE_S
+        assert spec.kwargs["episode_seconds"] == seconds
+        assert spec.max_episode_steps == round(seconds * 10)  # 10 Hz control steps
+    env = gym.make("ReformSim/HRIRobotExcluded-v0", detector="truth")
+    wrapper, limits = env, []
+    while isinstance(wrapper, gym.Wrapper):
+        if isinstance(wrapper, TimeLimit):
+            limits.append(wrapper._max_episode_steps)
+        wrapper = wrapper.env
+    assert limits == [400]
+    env.close()
+
+
+def test_the_env_and_the_time_limit_truncate_on_the_same_step() -> None:
+    # The pair talks for 40 s after walking in: the 40 s limit comes first. The env ends its
+    # own episode on the step TimeLimit truncates: its summary is there, nothing doubles up.
+    env = gym.make("ReformSim/HRIRobotExcluded-v0", detector="truth")
+    env.reset(seed=0, options={"scenario_seed": 0})
+    steps, done = 0, False
+    while not done:
+        _, _, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+        steps += 1
+        done = terminated or truncated
+    assert steps == 400 and truncated and not terminated
+    assert info["episode"]["steps"] == 400 and info["episode"]["time"] == pytest.approx(40.0)
+    with pytest.raises(ResetNeeded, match="after the episode ended"):
+        env.unwrapped.step(np.zeros(3, dtype=np.float32))
+    env.close()
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS, ids=lambda i: i.split("/")[1])
@@ -328,7 +366,7 @@ def test_unknown_options_and_bad_arguments_are_refused() -> None:
     with pytest.raises(ValueError, match="detect_rate: 1 / rate = 0.25 s must be a whole number"):
         toy_env(detect_rate=4.0)
     with pytest.raises(ValueError, match="render_mode must be None or one of"):
-        toy_env(render_mode="human")
+        toy_env(render_mode="ansi")
     with pytest.raises(ValueError, match="has no robot"):
         gym.make("ReformSim/WordImprov-v0", scenario_options={"robot": "none"})
 
@@ -345,8 +383,11 @@ def test_make_vec_works(mode: str) -> None:
     try:
         observation, info = envs.reset(seed=3)
         assert observation["people_position"].shape == (2, 2, 2)
+        ended = []
         for _ in range(12):  # past the 1 s limit: the envs reset themselves
             observation, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
+            ended.append(bool(truncated.all()))
+        assert ended.index(True) == 9  # the tenth step of 0.1 s ends both episodes
         assert reward.shape == (2,) and observation["robot_pose"].shape == (2, 3)
     finally:
         envs.close()
@@ -380,6 +421,95 @@ def test_render_gives_an_overview_image() -> None:
     env.close()
 
 
+def _coloured(image: np.ndarray, colour) -> np.ndarray:
+    """(k, 2) row, column of the pixels exactly of ``colour``."""
+    return np.argwhere(np.all(image == np.array(colour[:3], dtype=np.uint8), axis=-1))
+
+
+def test_rgb_frames_ring_the_true_and_detected_groups_where_they_stand() -> None:
+    from sim.envs.overlay import DETECTED_MARGIN_M, TRUTH_MARGIN_M, project
+    from sim.recording import group_colour
+
+    width, height = 320, 240
+    env = toy_env(render_mode="rgb_array", render_size=(width, height), detector="truth")
+    env.reset(seed=0)
+    image = env.render()
+    cameras = env._renderer.scene.camera
+    # The pair stands at x = -0.5 and 0.5 around the origin: the truth's ring has radius
+    # 0.5 + 0.35 m, the detection's (the truth detector: matched, so the same colour) 0.5 +
+    # 0.2 m. The camera looks north over x = 0: the rings sit mid-image.
+    pixels = _coloured(image, group_colour(1))
+    assert len(pixels) > 150
+    assert abs(pixels[:, 1].mean() - width / 2) < 3.0
+    outer = PAIR_HALF_M + TRUTH_MARGIN_M
+    inner = PAIR_HALF_M + DETECTED_MARGIN_M
+    ends = project(np.array([[-outer, 0, 0.02], [outer, 0, 0.02]]), cameras, width, height)
+    span = ends[1, 0] - ends[0, 0]
+    assert pixels[:, 1].min() >= ends[0, 0] - 4 and pixels[:, 1].max() <= ends[1, 0] + 4
+    assert pixels[:, 1].max() - pixels[:, 1].min() > 0.9 * span
+    # Two rings: on the row through the centre, coloured pixels near both radii, each side.
+    centre = project(np.array([[0.0, 0.0, 0.02]]), cameras, width, height)[0]
+    row = pixels[np.abs(pixels[:, 0] - centre[1]) <= 1, 1] - centre[0]
+    metre = span / (2 * outer)
+    for radius in (outer, inner):
+        for side in (-1, 1):
+            assert np.min(np.abs(row - side * radius * metre)) <= 3, (radius, side)
+    env.close()
+
+
+def test_rgb_frames_draw_no_ring_once_the_group_is_gone() -> None:
+    from sim.recording import group_colour
+
+    env = SocialEnv(
+        lambda *, seed: toy_pair(seed=seed, end=0.5),
+        robot_start="scenario",
+        task="observe",
+        render_mode="rgb_array",
+        detector="truth",
+    )
+    env.reset(seed=0)
+    assert len(_coloured(env.render(), group_colour(1))) > 100
+    for _ in range(11):  # past 0.5 s and the detection at 1.0 s
+        env.step(np.zeros(3, dtype=np.float32))
+    assert env.unwrapped._groups_now == ()
+    assert len(_coloured(env.render(), group_colour(1))) == 0
+    env.close()
+
+
+def test_check_env_passes_with_the_render_check() -> None:
+    env = gym.make("ReformSim/HRIRobotExcludedObserve-v0", render_mode="rgb_array")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        # The checker makes a human-mode twin too: here, with no viewer, it says so once.
+        warnings.filterwarnings("ignore", message=".*no Rerun viewer at")
+        check_env(env.unwrapped)
+    env.close()
+
+
+def test_human_mode_without_a_viewer_or_display_warns_once_and_runs(monkeypatch) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    port = _free_port()  # nothing listens there
+    env = toy_env(render_mode="human", viewer=f"rerun+http://127.0.0.1:{port}/proxy")
+    start = time.perf_counter()
+    with pytest.warns(UserWarning, match="no Rerun viewer at .* and no display"):
+        env.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a second warning would fail
+        for _ in range(5):
+            env.step(np.zeros(3, dtype=np.float32))
+        assert env.render() is None
+        env.reset(seed=1)
+    env.close()
+    assert time.perf_counter() - start < 10.0
+    with pytest.raises(ValueError, match="viewer is for render_mode='human'"):
+        toy_env(viewer="rerun+http://127.0.0.1:9876/proxy")
+    with pytest.raises(
+        ValueError, match=r"^viewer must be a Rerun viewer.s address .* got .http://example.org.$"
+    ):
+        toy_env(render_mode="human", viewer="http://example.org")
+
+
 def test_record_dir_saves_a_readable_recording(tmp_path: Path) -> None:
     from rerun.chunk import RrdReader
 
@@ -395,6 +525,102 @@ def test_record_dir_saves_a_readable_recording(tmp_path: Path) -> None:
     entities = {chunk.entity_path for chunk in store.stream()}
     assert any("people" in e for e in entities)
     assert any("groups" in e for e in entities)
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+@pytest.fixture
+def rerun_server(tmp_path: Path):
+    """A real Rerun server (the ``rerun`` program, no window) saving what it receives."""
+    from sim.envs.viewer import viewer_listening
+
+    port = _free_port()
+    saved = tmp_path / "received.rrd"
+    log = (tmp_path / "server.log").open("w")
+    server = subprocess.Popen(
+        [str(Path(sys.executable).parent / "rerun"), "--port", str(port), "--save", str(saved)],
+        stdout=log,
+        stderr=subprocess.STDOUT,
+    )
+    url = f"rerun+http://127.0.0.1:{port}/proxy"
+    try:
+        for _ in range(100):
+            if viewer_listening(url):
+                break
+            time.sleep(0.1)
+        else:
+            raise AssertionError(f"the rerun server did not listen on port {port}")
+        yield url, saved, server
+    finally:
+        if server.poll() is None:
+            server.terminate()
+            server.wait(timeout=20)
+        log.close()
+
+
+def _stores(path: Path) -> dict[str, list[tuple]]:
+    """Recording id -> everything its recording holds, minus row ids, in a canonical order."""
+    from rerun.chunk import RrdReader
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a file a server wrote has no footer: read it whole
+        reader = RrdReader(path)
+        out = {}
+        for store in reader.recordings():
+            rows = []
+            for chunk in reader.stream(store=store):
+                batch = chunk.to_record_batch()
+                keep = [n for n in batch.schema.names if not n.startswith("rerun.controls")]
+                rows.append((str(chunk.entity_path), repr(batch.select(keep).to_pydict())))
+            out[store.recording_id] = sorted(rows)
+    return out
+
+
+def test_human_mode_streams_each_episode_to_the_viewer(rerun_server) -> None:
+    from recorded_layout import assert_every_panel_holds_data
+
+    from sim.recording import recording_id
+
+    url, saved, server = rerun_server
+    env = toy_env(
+        render_mode="human", viewer=url, detector="truth", task="observe", episode_seconds=1.0
+    )
+    names = []
+    for _ in range(2):  # one seed twice: the same content in two recordings
+        env.reset(seed=0, options={"scenario_seed": 4})
+        names.append(f"toy-pair-4-{env.unwrapped._episodes}")
+        assert env.render() is None
+        _run_out(env)
+    env.close()
+    server.terminate()
+    server.wait(timeout=20)
+    stores = _stores(saved)
+    ids = [recording_id(name, seed=4) for name in names]
+    assert set(ids) <= set(stores)
+    first, second = (stores[i] for i in ids)
+    assert f"[['{names[0]}']]" in dict(first)["/__properties"]
+    # The episodes' names differ; everything they hold is the same.
+    assert [r for r in first if r[0] != "/__properties"] == [
+        r for r in second if r[0] != "/__properties"
+    ]
+    entities = {e for e, _ in first}
+    assert {"/world/people", "/world/robot", "/world/groups/truth"} <= entities
+    assert "/world/groups/truth-detector" in entities and "/world/room/floor" in entities
+    people = [rows for e, rows in first if e == "/world/people"]
+    assert len(people) == 11  # the reset and ten steps of 0.1 s: one log each
+    rings = [rows for e, rows in first if e == "/world/groups/truth"]
+    assert all("'1,2'" in rows for rows in rings)  # the pair, ringed at every step
+    assert {f"'frame': [{k}]" for k in range(11)} == {r.split(",")[0][1:] for r in people}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # no footer: read whole
+        shown = assert_every_panel_holds_data(saved, ids[0])
+    assert [p.kind for p in shown] == ["3D"]
 
 
 def _run_out(env: SocialEnv) -> dict:
@@ -503,6 +729,18 @@ def test_the_truth_detector_s_episode_is_recorded(tmp_path: Path) -> None:
     entities = {str(chunk.entity_path) for chunk in RrdReader(path).stream()}
     # The recording's ground truth and the truth detector's detections, side by side.
     assert {"/world/groups/truth/members", "/world/groups/truth-detector/members"} <= entities
+    # The detected pair is matched to the true pair: one colour class in both trees.
+    classes = {}
+    for chunk in RrdReader(path).stream():
+        tree = str(chunk.entity_path)
+        if tree.endswith("/members") and not chunk.is_static:
+            batch = chunk.to_record_batch().to_pydict()
+            for ids, labels in zip(batch["person_id"], batch["Cylinders3D:class_ids"], strict=True):
+                classes.setdefault(tree, set()).update(
+                    (i, c) for i, c in zip(ids, labels, strict=True) if i in (1, 2)
+                )
+    assert classes["/world/groups/truth/members"] == {(1, 1), (2, 1)}
+    assert classes["/world/groups/truth-detector/members"] == {(1, 1), (2, 1)}
 
 
 # ---------------------------------------------------------------------------------------------

@@ -596,12 +596,44 @@ def random_detector(frames: list[Frame], seed: int) -> list[tuple[tuple[int, ...
     return out
 
 
+def reference_matching(trues, groups) -> dict[frozenset[int], frozenset[int]]:
+    """Detected group -> the true group it stands for, plainly: of every one-to-one matching of
+    overlapping groups, the one of largest summed Jaccard index (then the smallest summed pair
+    index ``i * len(trues) + j``), found by trying them all."""
+    best, best_key = {}, None
+
+    def walk(i, used, pairs, total, index):
+        nonlocal best, best_key
+        if i == len(groups):
+            key = (round(total, 9), -index)
+            if best_key is None or key > best_key:
+                best, best_key = dict(pairs), key
+            return
+        walk(i + 1, used, pairs, total, index)
+        for j, true in enumerate(trues):
+            shared = len(groups[i] & true)
+            if j in used or not shared:
+                continue
+            pairs[groups[i]] = true
+            walk(
+                i + 1,
+                used | {j},
+                pairs,
+                total + shared / len(groups[i] | true),
+                index + i * len(trues) + j,
+            )
+            del pairs[groups[i]]
+
+    walk(0, frozenset(), {}, 0.0, 0)
+    return best
+
+
 def reference_tracks(
     frames, partitions, *, truth=None, first_track=1
 ) -> list[dict[frozenset[int], int]]:
     """Each frame's F-formation -> colour, the rule written plainly: a group keeps its track
-    while it keeps a majority of its members; given the truth's tracks, a detected group that
-    matches a true group (T = 2/3, the first in the truth's order) takes its track."""
+    while it keeps a majority of its members; given the truth's tracks, a detected group
+    matched to a true group of its frame (`reference_matching`) takes its track."""
     out, previous, sequence, next_track = [], [], None, first_track
     for t, (frame, partition) in enumerate(zip(frames, partitions, strict=True)):
         if frame.sequence != sequence:
@@ -613,10 +645,8 @@ def reference_tracks(
         fixed = {}
         if truth is not None and frame.groups is not None:
             trues = [frozenset(g) for g in frame.groups if len(g) >= 2]
-            for group in groups:
-                fit = [tr for tr in trues if 3 * len(group & tr) >= 2 * max(len(group), len(tr))]
-                if fit:
-                    fixed[group] = truth[t][fit[0]]
+            for group, true in reference_matching(trues, groups).items():
+                fixed[group] = truth[t][true]
         current, used = [], set(fixed.values())
         for group in groups:
             track = fixed.get(group) or next(
@@ -745,14 +775,11 @@ def test_random_runs_colour_groups_by_the_majority_rule(random_episode):
     truth_tracks = reference_tracks(
         frames, [f.partition() if f.groups is not None else None for f in frames]
     )
-    first = 1 + max(k for tracks in truth_tracks for k in tracks.values())
-    trees = {
-        "truth": truth_tracks,
-        **{
-            name: reference_tracks(frames, partitions, truth=truth_tracks, first_track=first)
-            for name, partitions in random_episode["detections"].items()
-        },
-    }
+    trees = {"truth": truth_tracks}
+    for name, partitions in random_episode["detections"].items():
+        # Each detector's unmatched groups take tracks after every earlier tree's.
+        first = 1 + max(k for tree in trees.values() for tracks in tree for k in tracks.values())
+        trees[name] = reference_tracks(frames, partitions, truth=truth_tracks, first_track=first)
     for name, by_frame in trees.items():
         for t, tracks in enumerate(by_frame):
             row = rec.rows[f"/world/groups/{name}/members"][t]
