@@ -102,9 +102,7 @@ def _options(parser: argparse.ArgumentParser) -> list[str]:
                 action, argparse._SubParsersAction | argparse._HelpAction
             ):
                 continue
-            rows.append(
-                f"| {_flags(action)} | {_help(action)} | {_default(action)} |"
-            )
+            rows.append(f"| {_flags(action)} | {_help(action)} | {_default(action)} |")
         if rows:
             title = group.title or "options"
             lines += [f"**{title[0].upper() + title[1:]}**", ""]
@@ -117,10 +115,10 @@ def _options(parser: argparse.ArgumentParser) -> list[str]:
 
 def _flags(action: argparse.Action) -> str:
     if not action.option_strings:
-        return f"`{_metavar(action)}`".replace("|", "\\|")
+        return f"`{_metavar(action)}`"  # a pipe inside a code span does not split the cell
     takes_value = action.nargs != 0
     metavar = f" {_metavar(action)}" if takes_value else ""
-    return "<br>".join(f"`{flag}{metavar}`" for flag in action.option_strings).replace("|", "\\|")
+    return "<br>".join(f"`{flag}{metavar}`" for flag in action.option_strings)
 
 
 def _metavar(action: argparse.Action) -> str:
@@ -159,7 +157,7 @@ def _default(action: argparse.Action) -> str:
         or callable(default)
     ):
         return ""
-    return "`" + str(default).replace("|", "\\|") + "`"
+    return f"`{default}`"
 
 
 def _cell(text: str) -> str:
