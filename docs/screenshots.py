@@ -65,8 +65,17 @@ def main() -> int:
                 subprocess.run(command, shell=True, cwd=folder, check=True)
             port = _free_port()
             viewer = subprocess.Popen(
-                [str(rerun), "--headless", "--renderer", "vulkan", "--port", str(port),
-                 "--window-size", WINDOW, "--hide-welcome-screen"],
+                [
+                    str(rerun),
+                    "--headless",
+                    "--renderer",
+                    "vulkan",
+                    "--port",
+                    str(port),
+                    "--window-size",
+                    WINDOW,
+                    "--hide-welcome-screen",
+                ],
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.DEVNULL,
             )
