@@ -33,7 +33,8 @@ class HeadCamera:
 
     Args:
         world: a world with a robot.
-        width, height: image size, pixels (at most the model's offscreen buffer, 640 x 480).
+        width: image width, pixels (at most the model's offscreen buffer, 640 x 480).
+        height: image height, pixels (at most 640 x 480, as ``width``).
         fov_deg: horizontal field of view, degrees.
 
     Use as a context manager, or call `close`, to free the OpenGL context.

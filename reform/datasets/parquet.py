@@ -152,8 +152,11 @@ def write_parquet(
             written without a `Frame` per instant: the same file, byte for byte, as the
             `Dataset` of ``block.frames()``.
         path: the file to write (parent folders are created).
-        name, source, metadata: the header of a `FrameBlock` (a `Dataset` carries its own;
-            giving them with one is an error). ``metadata`` must be JSON-serialisable.
+        name: the dataset's name, in the header of a `FrameBlock` (a `Dataset` carries its
+            own; giving it with one is an error).
+        source: where the data come from, in the header of a `FrameBlock` (as ``name``).
+        metadata: the provenance, in the header of a `FrameBlock` (as ``name``); must be
+            JSON-serialisable.
         compression: Parquet codec (``"zstd"``, ``"snappy"``, ``"none"`` ...).
 
     Returns:

@@ -15,7 +15,7 @@ histogram over the annotated frames (singletons included), units, and the loader
 
 _CONVERT_DESCRIPTION = """\
 Loads a dataset in any supported format and writes it in the project's Parquet format
-(positions in metres, every column documented in the README).
+(positions in metres, every column documented in docs/reference/formats.md).
 """
 
 

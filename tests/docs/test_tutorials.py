@@ -1,0 +1,111 @@
+"""Every code block of the tutorials runs, in an empty folder, as a reader would run it."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from site_pages import DOCS, NEEDS_DATASETS, RUNNABLE_PAGES, blocks, page_script
+
+# Sizes in the tutorials are small: a page runs in well under a minute on two shared cores.
+PAGE_TIMEOUT_S = 600
+DATASETS_ENV = "REFORM_SIM_DATASETS"
+
+
+def _run_page(text: str, folder: Path, *, datasets: Path | None) -> subprocess.CompletedProcess:
+    (folder / "_page.py").write_text(page_script(text))
+    env = dict(os.environ)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    env["REFORM_SIM_DATA"] = str(folder / "_cache")  # no dataset fetched before the page
+    env["MPLBACKEND"] = "Agg"
+    env.pop(DATASETS_ENV, None)
+    if datasets is not None:
+        env[DATASETS_ENV] = str(datasets)
+    return subprocess.run(
+        [sys.executable, "_page.py"],
+        cwd=folder,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=PAGE_TIMEOUT_S,
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", RUNNABLE_PAGES)
+def test_every_block_of_the_page_runs(page, tmp_path, request):
+    text = (DOCS / page).read_text(encoding="utf-8")
+    datasets = request.getfixturevalue("shared_datasets") if NEEDS_DATASETS in text else None
+    done = _run_page(text, tmp_path, datasets=datasets)
+    assert done.returncode == 0, (
+        f"{page}: a block failed (exit {done.returncode})\n{done.stderr[-4000:]}"
+    )
+    ran = done.stderr.count("--- line ")
+    assert ran == sum(b.runs for b in blocks(text)) > 0
+
+
+@pytest.mark.parametrize("page", RUNNABLE_PAGES)
+def test_the_page_has_runnable_blocks_and_marks_the_others(page):
+    page_blocks = blocks((DOCS / page).read_text(encoding="utf-8"))
+    assert any(b.runs for b in page_blocks), f"{page}: no block runs"
+    for block in page_blocks:
+        if block.language in ("sh", "shell", "console", "py", "python3"):
+            pytest.fail(f"{page}:{block.line}: write ```bash or ```python, not ```{block.language}")
+
+
+SAMPLE = """\
+# A page
+
+```bash
+echo one > one.txt
+```
+
+```python title="pkg/mod.py"
+VALUE = 3
+```
+
+<!-- not run: opens a window -->
+```bash
+exit 1
+```
+
+```python
+from pkg.mod import VALUE
+assert VALUE == 3
+seen = open("one.txt").read().strip()
+```
+
+```text
+shown only
+```
+
+```python
+assert seen == "one"
+```
+"""
+
+
+def test_the_runner_writes_files_skips_marked_blocks_and_shares_python_names(tmp_path):
+    found = blocks(SAMPLE)
+    assert [(b.language, b.title, b.skipped, b.runs) for b in found] == [
+        ("bash", None, False, True),
+        ("python", "pkg/mod.py", False, False),
+        ("bash", None, True, False),
+        ("python", None, False, True),
+        ("text", None, False, False),
+        ("python", None, False, True),
+    ]
+    done = _run_page(SAMPLE, tmp_path, datasets=None)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.count("--- line ") == 3
+
+
+def test_a_failing_block_fails_the_page_and_names_its_line(tmp_path):
+    page = "# A page\n\n```bash\ntrue\n```\n\n```python\nraise SystemExit('broken')\n```\n"
+    done = _run_page(page, tmp_path, datasets=None)
+    assert done.returncode != 0
+    assert "--- line 7: python" in done.stderr
+    assert "broken" in done.stderr
