@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import DEFAULT_DATASETS, run_with
+from sim.cli._common import DEFAULT_DATASETS, add_backend_arguments, run_with
 
 DESCRIPTION = """\
 Simulates word-improv and mingle with default options and compares them with Babble and SALSA:
@@ -29,4 +29,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--check", action="store_true", help="exit with status 1 when a target is missed"
     )
+    add_backend_arguments(parser, jobs_default="every core", jobs_help="episodes at once")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run_with("sim.cli.calibrate:run"))

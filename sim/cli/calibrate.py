@@ -13,7 +13,14 @@ from pathlib import Path
 
 from reform.atomic import atomic_open
 from reform.datasets import fetch, is_fetched, load_babble, load_salsa
-from sim.cli._common import DEFAULT_DATASETS, CliError, check_output, default_datasets
+from sim.cli._common import (
+    DEFAULT_DATASETS,
+    CliError,
+    check_backend,
+    check_output,
+    default_datasets,
+    executor_from_args,
+)
 from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
 from sim.experiments.calibration_report import to_markdown
 from sim.sizing import check_episodes
@@ -27,6 +34,12 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--seeds", str(args.seeds)]
     if args.check:
         words.append("--check")
+    if args.jobs is not None:
+        words += ["--jobs", str(args.jobs)]
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
     return shlex.join(words)
 
 
@@ -35,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
     if seeds < 1:
         raise CliError(f"--seeds must be >= 1, got {seeds}")
     check_episodes(seeds, what="the calibration", flag="--seeds")
+    check_backend(args)
     given = args.datasets or default_datasets()
     folders = {}
     for name in ("salsa", "babble"):
@@ -51,12 +65,11 @@ def run(args: argparse.Namespace) -> int:
             )
     check_output("--out", args.out, folder=True)
     out = Path(args.out)
-    report = calibrate_scenarios(
-        load_salsa(folders["salsa"]),
-        load_babble(folders["babble"]),
-        seeds=seeds,
-        command=_command(args),
-    )
+    salsa, babble = load_salsa(folders["salsa"]), load_babble(folders["babble"])
+    with executor_from_args(args, progress=not args.no_progress) as executor:
+        report = calibrate_scenarios(
+            salsa, babble, seeds=seeds, command=_command(args), executor=executor
+        )
     out.mkdir(parents=True, exist_ok=True)
     markdown = out / "calibration.md"
     with atomic_open(markdown) as handle:

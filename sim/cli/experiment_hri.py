@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from reform.datasets import load_salsa, resolve
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_backend, check_output, executor_from_args
 from sim.cli._experiment_io import (
     check_report,
     report_stem,
@@ -38,6 +38,10 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--views", args.views]
     if args.jobs is not None:
         words += ["--jobs", str(args.jobs)]
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
     if args.recordings is not None:
         words += ["--recordings", args.recordings]
     words += ["--out", args.out]
@@ -55,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
     if unknown or not views:
         raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
     check_report(report_stem(args.out))
+    check_backend(args)
     check_output("--recordings", args.recordings, folder=True)
     salsa_path = args.salsa
     if salsa_path is None and args.datasets is not None:
@@ -76,18 +81,20 @@ def run(args: argparse.Namespace) -> int:
         print(line, file=sys.stderr, flush=True)
 
     start = time.perf_counter()
-    detectors, training = hri_detectors(
-        salsa=salsa, seed=args.seed, jobs=args.jobs, progress=progress
-    )
-    trained = time.perf_counter() - start
-    experiment = hri_experiment(
-        seed=args.seed,
-        seeds=args.seeds,
-        views=views,
-        detectors=detectors,
-        training=training,
-        progress=progress,
-    )
+    with executor_from_args(args) as executor:
+        detectors, training = hri_detectors(
+            salsa=salsa, seed=args.seed, progress=progress, executor=executor
+        )
+        trained = time.perf_counter() - start
+        experiment = hri_experiment(
+            seed=args.seed,
+            seeds=args.seeds,
+            views=views,
+            detectors=detectors,
+            training=training,
+            progress=progress,
+            executor=executor,
+        )
     timings = {"training": trained, **experiment.timings}
     timings["total"] = time.perf_counter() - start
     experiment = dataclasses.replace(experiment, timings=timings)
