@@ -333,15 +333,15 @@ def check_backend(args: argparse.Namespace) -> None:
         return
     from sim.executor import ClusterError, check_address, import_ray
 
-    try:
-        import_ray()
-    except ImportError as exc:
-        raise CliError(f"--backend ray: {exc}") from None
-    if args.address is not None:
+    if args.address is not None:  # first: it needs no Ray, and answers in seconds
         try:
             check_address(args.address)
         except ClusterError as exc:
             raise CliError(f"--{exc}") from None
+    try:
+        import_ray()
+    except ImportError as exc:
+        raise CliError(f"--backend ray: {exc}") from None
 
 
 def executor_from_args(args: argparse.Namespace, *, progress: bool = True):
