@@ -4,7 +4,7 @@ arguments, and the ratio.
 A Ray instance is started in this process on this machine's cores (its start is timed apart),
 then each command's library call runs on the local backend (``jobs`` = every core, joblib's
 loky) and on Ray (`sim.executor.Executor("ray")` for stress; generate's own ``backend="ray"``),
-each backend's workers warmed up first (one small unit of the same work), medians over
+each backend's workers warmed up first (a smaller run of the same work), medians over
 ``--repeats`` runs. The outputs must be the same on both backends (checked: stress's curves and
 training summary as JSON; every generated shard and the card, byte for byte).
 
@@ -13,7 +13,7 @@ machine, where it brings no extra cores; on a cluster the same run spreads over 
 CPUs. On a machine shared with other work the wall times carry its load (printed).
 
 Run: ``python benchmarks/bench_backends.py [--repeats 2] [--quick]`` (``--quick``: stress on
-one axis with one test episode, generate two 30-second episodes, one repeat).
+one axis with one test episode, generate two 30-second episodes, one repeat, no warm-up).
 """
 
 from __future__ import annotations
@@ -35,9 +35,9 @@ from sim.generate import generate_dataset
 
 SCENARIO = "mingle"  # generate's scenario, at its default 18 people
 SEED = 1
-STRESS_AXES = ("dropout", "density")  # one perturbation axis, one scene axis
-EPISODES = 8  # generate: episodes per run
-DURATION_S = 120.0  # generate: seconds per episode
+STRESS_AXES = ("position-noise", "dropout", "density", "sensor")  # perturbations, scenes
+EPISODES = 16  # generate: episodes per run
+DURATION_S = 600.0  # generate: seconds per episode (the scenario's natural length)
 QUICK_EPISODES = 2
 QUICK_DURATION_S = 30.0
 QUICK_AXES = ("dropout",)
@@ -48,11 +48,13 @@ def _stress_key(results) -> dict:
     return {k: data[k] for k in ("grid", "detectors", "training", "axes")}
 
 
-def bench_stress(executor: Executor, grid, axes, repeats: int) -> tuple[list[float], dict]:
+def bench_stress(
+    executor: Executor, grid, axes, repeats: int, *, warm: bool
+) -> tuple[list[float], dict]:
     """Wall seconds of each `run_stress`, and its results (JSON) for the equality check."""
     seconds, key = [], None
-    warm = dataclasses.replace(grid, seeds=1)
-    run_stress(warm, seed=SEED, axes=axes[:1], executor=executor)  # workers up, code compiled
+    if warm:  # workers up, code compiled
+        run_stress(dataclasses.replace(grid, seeds=1), seed=SEED, axes=axes[:1], executor=executor)
     for _ in range(repeats):
         start = time.perf_counter()
         results = run_stress(grid, seed=SEED, axes=axes, executor=executor)
@@ -62,21 +64,21 @@ def bench_stress(executor: Executor, grid, axes, repeats: int) -> tuple[list[flo
 
 
 def bench_generate(
-    backend: str, root: Path, episodes: int, duration: float, repeats: int
+    backend: str, root: Path, episodes: int, duration: float, repeats: int, *, warm: bool
 ) -> tuple[list[float], Path]:
     """Wall seconds of each `generate_dataset` into a fresh folder; the last folder."""
     options = {"n_jobs": cpu_count()} if backend == "local" else {}
-    warm = root / f"warm-{backend}"
-    generate_dataset(
-        SCENARIO,
-        episodes=1,
-        seed=SEED + 1,
-        out_dir=warm,
-        duration=duration,
-        backend=backend,
-        progress=False,
-        **options,
-    )
+    if warm:  # workers up, code compiled; another seed, another folder
+        generate_dataset(
+            SCENARIO,
+            episodes=1,
+            seed=SEED + 1,
+            out_dir=root / f"warm-{backend}",
+            duration=duration,
+            backend=backend,
+            progress=False,
+            **options,
+        )
     seconds, out = [], root
     for k in range(repeats):
         out = root / f"{backend}-{k}"
@@ -117,7 +119,7 @@ def same_files(a: Path, b: Path) -> bool:
 def line(what: str, local: list[float], ray: list[float], workers: int) -> str:
     lo, ra = statistics.median(local), statistics.median(ray)
     return (
-        f"{what:<44} local {workers} processes {lo:7.1f} s   ray {ra:7.1f} s   "
+        f"{what:<58} local {workers} processes {lo:7.1f} s   ray {ra:7.1f} s   "
         f"ray / local: {ra / lo:.2f}x"
     )
 
@@ -138,9 +140,10 @@ def main() -> None:
         grid = GRIDS["small"]
         if args.quick:
             grid = dataclasses.replace(grid, seeds=1)
-        local_s, local_key = bench_stress(Executor("local"), grid, axes, args.repeats)
+        warm = not args.quick
+        local_s, local_key = bench_stress(Executor("local"), grid, axes, args.repeats, warm=warm)
         with Executor("ray") as executor:
-            ray_s, ray_key = bench_stress(executor, grid, axes, args.repeats)
+            ray_s, ray_key = bench_stress(executor, grid, axes, args.repeats, warm=warm)
         if ray_key != local_key:
             raise SystemExit("stress: the Ray backend's results differ from the local ones")
         what = f"stress (grid small, {grid.seeds} seeds, {','.join(axes)})"
@@ -150,8 +153,12 @@ def main() -> None:
         duration = QUICK_DURATION_S if args.quick else DURATION_S
         scratch = Path(tempfile.mkdtemp(prefix="bench-backends-"))
         try:
-            local_g, local_out = bench_generate("local", scratch, episodes, duration, args.repeats)
-            ray_g, ray_out = bench_generate("ray", scratch, episodes, duration, args.repeats)
+            local_g, local_out = bench_generate(
+                "local", scratch, episodes, duration, args.repeats, warm=warm
+            )
+            ray_g, ray_out = bench_generate(
+                "ray", scratch, episodes, duration, args.repeats, warm=warm
+            )
             if not same_files(local_out, ray_out):
                 raise SystemExit("generate: the Ray backend's dataset differs from the local one")
         finally:

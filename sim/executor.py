@@ -48,6 +48,7 @@ __all__ = [
     "Executor",
     "check_address",
     "cpu_count",
+    "import_ray",
 ]
 
 BACKENDS = ("local", "ray")
@@ -232,7 +233,8 @@ class Executor:
             are the cluster's CPUs.
         address: the Ray cluster (``HOST:PORT``, ``ray://HOST:PORT``, ``"auto"``); None joins
             the Ray instance this process has joined, else starts one on this machine. Probed
-            at once (:func:`check_address`).
+            at once (:func:`check_address`). A process already joined to a Ray instance keeps
+            it (Ray joins one per process).
         progress: show a tqdm bar on stderr for each `map` given a ``desc``.
 
     Raises:
@@ -300,7 +302,13 @@ class Executor:
         if self._ray is None:
             ray = import_ray()
             if not ray.is_initialized():
-                ray.init(address=self.address, log_to_driver=False, include_dashboard=False)
+                try:
+                    ray.init(address=self.address, log_to_driver=False, include_dashboard=False)
+                except (ConnectionError, RuntimeError) as exc:  # answered the probe, not Ray
+                    first = str(exc).strip().splitlines()[0] if str(exc).strip() else repr(exc)
+                    raise ClusterError(
+                        f"address {self.address}: Ray could not join the cluster ({first})"
+                    ) from None
                 self._owned = True
             self._ray = ray
         return self._ray
