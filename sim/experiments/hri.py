@@ -217,7 +217,8 @@ def hri_episodes(
     ]
     executor = Executor("local", jobs=1) if executor is None else executor
     out: dict[tuple[str, str], list[tuple[Frame, ...]]] = {}
-    for (scenario, *_), seen in zip(units, executor.map(_hri_episode, units), strict=True):
+    seen_all = executor.map(_hri_episode, units, desc="HRI episodes", unit="episode")
+    for (scenario, *_), seen in zip(units, seen_all, strict=True):
         for view, frames in seen:
             out.setdefault((scenario, view), []).append(frames)
     return out
