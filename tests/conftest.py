@@ -79,3 +79,19 @@ def gcff_reference_dir(shared_datasets: Path) -> Path:
             pytest.fail(message)
         pytest.skip(message)
     return path
+
+
+@pytest.fixture(scope="session")
+def ray_instance():
+    """A real local Ray instance (2 CPUs, as this machine has), started once per test session
+    and joined by every ``backend="ray"`` run in it; the ``ray`` module."""
+    ray = pytest.importorskip("ray")
+    if not ray.is_initialized():
+        ray.init(
+            num_cpus=2,
+            object_store_memory=100 * 2**20,
+            include_dashboard=False,
+            log_to_driver=False,
+        )
+    yield ray
+    ray.shutdown()

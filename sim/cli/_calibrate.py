@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_backend_arguments, run_with
 from sim.cli._experiment_io import add_dataset_arguments
 from sim.cli._grammar import add_episodes, add_quiet
 
@@ -27,5 +27,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--check", action="store_true", help="exit with status 1 when a target is missed"
     )
+    add_backend_arguments(parser, jobs_default="every core", jobs_help="episodes at once")
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.calibrate:run"))

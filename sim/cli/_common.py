@@ -276,34 +276,46 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool 
     )
 
 
-def add_backend_arguments(parser: argparse.ArgumentParser, *, jobs_default: str) -> None:
-    """``--jobs N``, ``--backend local|ray`` and ``--address ADDR``, checked by
-    :func:`check_backend`.
+def add_backend_arguments(
+    parser: argparse.ArgumentParser, *, jobs_default: str, jobs_help: str = "worker processes"
+) -> None:
+    """``--jobs N``, ``--backend local|ray`` and ``--address ADDR``: where a command's
+    independent units of work run (`sim.executor.Executor`), checked by :func:`check_backend`
+    and made into an executor by :func:`executor_from_args`.
 
     Args:
         jobs_default: what ``--jobs`` defaults to, for the help (``"all cores"``).
+        jobs_help: what the local processes do, for the help.
     """
     parser.add_argument(
         "--jobs",
         type=int,
         default=None,
         metavar="N",
-        help=f"worker processes with --backend local (default: {jobs_default})",
+        help=f"{jobs_help} with --backend local (default: {jobs_default}); results do not "
+        "depend on it",
     )
     parser.add_argument(
         "--backend",
         choices=("local", "ray"),
         default="local",
         help="local: worker processes on this machine (--jobs); ray: Ray tasks on every CPU of "
-        "the cluster at --address, or of a Ray instance started on this machine without it",
+        "the cluster at --address, or of a Ray instance started on this machine without it; "
+        "the results are the same",
     )
     parser.add_argument(
-        "--address", default=None, metavar="ADDR", help="Ray cluster address (with --backend ray)"
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="Ray cluster address with --backend ray: HOST:PORT (what `ray start --head` "
+        "prints), ray://HOST:PORT, or auto (the cluster running on this machine)",
     )
 
 
 def check_backend(args: argparse.Namespace) -> None:
-    """Raises `CliError` for ``--address`` without Ray, or ``--jobs`` with it."""
+    """Raises `CliError` for ``--address`` without Ray, ``--jobs`` with it, Ray not installed,
+    or an ``--address`` where no cluster answers (probed in seconds, before any work:
+    `sim.executor.check_address`)."""
     if args.address is not None and args.backend != "ray":
         raise CliError(f"--address needs --backend ray, got --backend {args.backend}")
     if args.jobs is not None and args.backend == "ray":
@@ -311,6 +323,28 @@ def check_backend(args: argparse.Namespace) -> None:
             "--jobs sets local worker processes (--backend local); with --backend ray every CPU "
             "of the Ray cluster works (a local one when --address is not given)"
         )
+    if args.backend != "ray":
+        return
+    from sim.executor import ClusterError, check_address, import_ray
+
+    if args.address is not None:  # first: it needs no Ray, and answers in seconds
+        try:
+            check_address(args.address)
+        except ClusterError as exc:
+            raise CliError(f"--{exc}") from None
+    try:
+        import_ray()
+    except ImportError as exc:
+        raise CliError(f"--backend ray: {exc}") from None
+
+
+def executor_from_args(args: argparse.Namespace, *, progress: bool = True):
+    """The `sim.executor.Executor` that ``--backend``, ``--jobs`` and ``--address`` ask for,
+    checked first (:func:`check_backend`); use it as a context manager."""
+    check_backend(args)
+    from sim.executor import Executor
+
+    return Executor(args.backend, jobs=args.jobs, address=args.address, progress=progress)
 
 
 def add_train_fraction_argument(

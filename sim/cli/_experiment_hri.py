@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_backend_arguments, run_with
 from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
@@ -42,8 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="V1,V2",
         help=f"views to score (default {','.join(VIEW_NAMES)})",
     )
-    parser.add_argument(
-        "--jobs", type=int, default=None, metavar="N", help="worker processes for training"
+    add_backend_arguments(
+        parser, jobs_default="every core", jobs_help="worker processes (training, episodes)"
     )
     add_recordings(parser, default=False, each="scene (its first episode, robot view)", folder=True)
     add_quiet(parser, old=())

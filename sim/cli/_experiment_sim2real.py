@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_backend_arguments, run_with
 from sim.cli._experiment_io import (
     add_dataset_arguments,
     add_out_argument,
@@ -49,7 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="A,B",
         help="REFORM classifiers (default: weighted-knn,bagged-trees,logistic-regression)",
     )
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes")
+    add_backend_arguments(
+        parser, jobs_default="every core", jobs_help="worker processes (generation, training)"
+    )
     parser.add_argument(
         "--no-diagnostics", action="store_true", help="skip the per-source diagnostic rows"
     )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_backend_arguments, run_with
 from sim.cli._detectors import detector_name
 from sim.cli._grammar import add_episodes, add_quiet, add_seed
 from sim.experiments.stress_grid import AXES, GRIDS
@@ -47,13 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="A,B,...",
         help=f"axes to run (default all): {','.join(AXES)}",
     )
-    parser.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        metavar="N",
-        help="worker processes (default: every core); results do not depend on it",
-    )
+    add_backend_arguments(parser, jobs_default="every core")
     parser.add_argument(
         "--detector",
         action="append",

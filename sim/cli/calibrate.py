@@ -8,12 +8,11 @@ import argparse
 import math
 import shlex
 import sys
-import time
 from pathlib import Path
 
 from reform.datasets import load_babble, load_salsa, resolve
 from sim.cli._calibrate import BASENAME
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_backend, check_output, executor_from_args
 from sim.cli._experiment_io import dataset_words, named_datasets, write_report
 from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
 from sim.experiments.calibration_report import to_markdown
@@ -26,6 +25,12 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--episodes", str(args.episodes)]
     if args.check:
         words.append("--check")
+    if args.jobs is not None:
+        words += ["--jobs", str(args.jobs)]
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
     return shlex.join(words)
 
 
@@ -34,6 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if seeds < 1:
         raise CliError(f"--episodes must be >= 1, got {seeds}")
     check_episodes(seeds, what="the calibration", flag="--episodes")
+    check_backend(args)
     folders = {}
     for name, given in named_datasets(args).items():
         try:
@@ -45,19 +51,11 @@ def run(args: argparse.Namespace) -> int:
             ) from None
     check_output("--out", args.out, folder=True)
     stem = Path(args.out) / BASENAME
-    started = time.perf_counter()
-
-    def progress(line: str) -> None:
-        if not args.quiet:
-            print(f"[{time.perf_counter() - started:6.1f} s] {line}", file=sys.stderr, flush=True)
-
-    report = calibrate_scenarios(
-        load_salsa(folders["salsa"]),
-        load_babble(folders["babble"]),
-        seeds=seeds,
-        command=_command(args),
-        progress=progress,
-    )
+    salsa, babble = load_salsa(folders["salsa"]), load_babble(folders["babble"])
+    with executor_from_args(args, progress=not args.quiet) as executor:
+        report = calibrate_scenarios(
+            salsa, babble, seeds=seeds, command=_command(args), executor=executor
+        )
     write_report(stem, to_markdown(report), report.to_json())
     markdown = stem.with_suffix(".md")
     for cal in report.calibrations:

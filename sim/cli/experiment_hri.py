@@ -11,7 +11,7 @@ import sys
 import time
 
 from reform.datasets import load_salsa, resolve
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_backend, check_output, executor_from_args
 from sim.cli._experiment_hri import BASENAME
 from sim.cli._experiment_io import (
     check_report,
@@ -36,6 +36,10 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--views", args.views]
     if args.jobs is not None:
         words += ["--jobs", str(args.jobs)]
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
     if args.recordings:
         words.append("--recordings")
     words += ["--out", args.out]
@@ -54,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
     out = report_stem(args.out, BASENAME)
     check_report(out)
+    check_backend(args)
     recordings = None
     if args.recordings:
         recordings = (
@@ -80,18 +85,20 @@ def run(args: argparse.Namespace) -> int:
             print(line, file=sys.stderr, flush=True)
 
     start = time.perf_counter()
-    detectors, training = hri_detectors(
-        salsa=salsa, seed=args.seed, jobs=args.jobs, progress=progress
-    )
-    trained = time.perf_counter() - start
-    experiment = hri_experiment(
-        seed=args.seed,
-        seeds=args.episodes,
-        views=views,
-        detectors=detectors,
-        training=training,
-        progress=progress,
-    )
+    with executor_from_args(args, progress=not args.quiet) as executor:
+        detectors, training = hri_detectors(
+            salsa=salsa, seed=args.seed, progress=progress, executor=executor
+        )
+        trained = time.perf_counter() - start
+        experiment = hri_experiment(
+            seed=args.seed,
+            seeds=args.episodes,
+            views=views,
+            detectors=detectors,
+            training=training,
+            progress=progress,
+            executor=executor,
+        )
     timings = {"training": trained, **experiment.timings}
     timings["total"] = time.perf_counter() - start
     experiment = dataclasses.replace(experiment, timings=timings)

@@ -12,7 +12,7 @@ import sys
 import time
 
 from reform.datasets import load_babble, load_salsa, resolve
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_backend, check_output, executor_from_args
 from sim.cli._experiment_io import (
     REPORT_SUFFIXES,
     check_report,
@@ -43,6 +43,10 @@ def _command(args: argparse.Namespace) -> str:
         words.append("--no-diagnostics")
     if args.no_randomised:
         words.append("--no-randomised")
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
     words += ["--out", args.out]
     return shlex.join(words)
 
@@ -65,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_report(out, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_output("--synthetic", args.synthetic, folder=True)
+    check_backend(args)
     sources = tuple(
         dataclasses.replace(s, episodes=max(1, round(s.episodes * args.episodes_scale)))
         for s in DEFAULT_SOURCES
@@ -77,19 +82,20 @@ def run(args: argparse.Namespace) -> int:
                 f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
             )
 
-    result = sim_to_real(
-        load_salsa(resolve(data["salsa"])),
-        load_babble(resolve(data["babble"])),
-        synthetic_root=args.synthetic,
-        sources=sources,
-        seed=args.seed,
-        classifiers=classifiers,
-        n_jobs=args.jobs,
-        diagnostics=not args.no_diagnostics,
-        randomised=() if args.no_randomised else RANDOMISED_SOURCES,
-        progress=progress,
-        progress_bars=not args.quiet,
-    )
+    with executor_from_args(args, progress=not args.quiet) as executor:
+        result = sim_to_real(
+            load_salsa(resolve(data["salsa"])),
+            load_babble(resolve(data["babble"])),
+            synthetic_root=args.synthetic,
+            sources=sources,
+            seed=args.seed,
+            classifiers=classifiers,
+            diagnostics=not args.no_diagnostics,
+            randomised=() if args.no_randomised else RANDOMISED_SOURCES,
+            progress=progress,
+            progress_bars=not args.quiet,
+            executor=executor,
+        )
     command = _command(args)
     figure = sim2real_figure(result, out.with_name(out.name + ".png"))
     markdown = to_markdown(result, command=command, figure=figure.name)

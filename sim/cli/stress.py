@@ -9,7 +9,7 @@ import dataclasses
 import shlex
 import sys
 
-from sim.cli._common import CliError, check_output, check_recording
+from sim.cli._common import CliError, check_output, check_recording, executor_from_args
 from sim.cli._detectors import make_plugin
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
 from sim.experiments.stress_report import write_report
@@ -27,6 +27,10 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--axes", args.axes]
     if args.jobs is not None:
         words += ["--jobs", str(args.jobs)]
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
     for name in args.detectors or ():
         words += ["--detector", name]
     words += ["--out", args.out]
@@ -67,9 +71,10 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(line, file=sys.stderr, flush=True)
 
-    results = run_stress(
-        grid, seed=args.seed, jobs=args.jobs, axes=axes, plugins=plugins, progress=progress
-    )
+    with executor_from_args(args) as executor:
+        results = run_stress(
+            grid, seed=args.seed, axes=axes, plugins=plugins, progress=progress, executor=executor
+        )
     if results.grid_name == "custom":
         results = dataclasses.replace(
             results, grid_name=f"{args.grid} (--episodes {args.episodes})"
@@ -77,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
     written = write_report(results, args.out, command=_command(args), save=target_from_args(args))
     print(
         f"stress tests done in {results.timings['total']:.0f} s "
-        f"({results.environment.get('cpu_s', 0):.0f} CPU s on {results.jobs} worker(s))",
+        f"({results.environment.get('cpu_s', 0):.0f} CPU s on {results.jobs} "
+        f"{'Ray CPU(s)' if args.backend == 'ray' else 'worker(s)'})",
         file=sys.stderr,
     )
     for key, path in written.items():

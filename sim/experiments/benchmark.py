@@ -17,10 +17,10 @@ name, an installed plugin's name, ``package.module:factory``), plus two of this 
 
 and REFORM models given as files (``reform-sim train``'s ``.skops``).
 
-Cells are independent units of work: they run in this process (``jobs=1``), on local worker
-processes (joblib's loky), or as Ray tasks (``backend="ray"``); the results are the same, and
-in the same order, whichever runs them. This module imports no Rerun and no MuJoCo; the report
-(Markdown, JSON, plot, ``.rrd``) is :mod:`sim.experiments.benchmark_report`.
+Cells are independent units of work (`sim.executor`): they run in this process (``jobs=1``),
+on local worker processes (joblib's loky), or as Ray tasks (``backend="ray"``); the results are
+the same, and in the same order, whichever runs them. This module imports no Rerun and no
+MuJoCo; the report (Markdown, JSON, plot, ``.rrd``) is :mod:`sim.experiments.benchmark_report`.
 """
 
 from __future__ import annotations
@@ -28,12 +28,10 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-from joblib import Parallel, delayed
 
 from reform.datasets import load_dataset, resolve
 from reform.detectors import make_detector, run_detector
@@ -42,6 +40,7 @@ from reform.gcff import Gcff, GcffBySequence
 from reform.metrics import evaluate
 from reform.persistence import load_model, model_info
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
+from sim.executor import BACKENDS, Executor
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 
 __all__ = [
@@ -59,7 +58,6 @@ __all__ = [
     "run_benchmark",
 ]
 
-BACKENDS = ("local", "ray")
 THRESHOLDS = ("2/3", "1")
 GCFF_ONE = "gcff"
 GCFF_OWN = "gcff-own"
@@ -363,38 +361,8 @@ def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
     )
 
 
-def _local(units: list[tuple[DatasetSpec, DetectorSpec]], jobs: int) -> Iterator[tuple[int, Cell]]:
-    if jobs == 1:
-        for k, (d, m) in enumerate(units):
-            yield k, _score(d, m)
-        return
-
-    parallel = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")
-    yield from parallel(delayed(_indexed)(k, d, m) for k, (d, m) in enumerate(units))
-
-
-def _indexed(k: int, dataset: DatasetSpec, detector: DetectorSpec) -> tuple[int, Cell]:
-    return k, _score(dataset, detector)
-
-
-def _ray(
-    units: list[tuple[DatasetSpec, DetectorSpec]], address: str | None
-) -> Iterator[tuple[int, Cell]]:
-    from sim.generate import _import_ray
-
-    ray = _import_ray()
-    owned = not ray.is_initialized()
-    if owned:
-        ray.init(address=address, log_to_driver=False, include_dashboard=False)
-    try:
-        task = ray.remote(num_cpus=1, max_retries=2)(_indexed)
-        pending = [task.remote(k, d, m) for k, (d, m) in enumerate(units)]
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            yield ray.get(done[0])
-    finally:
-        if owned:
-            ray.shutdown()
+def _score_unit(unit: tuple[DatasetSpec, DetectorSpec]) -> Cell:
+    return _score(*unit)
 
 
 def run_benchmark(
@@ -405,6 +373,7 @@ def run_benchmark(
     backend: str = "local",
     address: str | None = None,
     progress: Callable[[int, int, Cell], None] | None = None,
+    executor: Executor | None = None,
 ) -> Benchmark:
     """Runs every detector on every dataset.
 
@@ -415,6 +384,8 @@ def run_benchmark(
         backend: ``"local"`` or ``"ray"``.
         address: the Ray cluster's address (``backend="ray"``); None starts a local instance.
         progress: called as ``progress(done, total, cell)`` as each cell finishes.
+        executor: where the cells run (`sim.executor.Executor`), instead of ``jobs``,
+            ``backend`` and ``address``.
 
     Raises:
         ValueError: no dataset or detector, a repeated label, an unknown backend, jobs < 1.
@@ -440,16 +411,16 @@ def run_benchmark(
         raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
     units = [(d, m) for d in datasets for m in detectors]
     start = time.perf_counter()
-    results: list[Cell | None] = [None] * len(units)
-    stream = _ray(units, address) if backend == "ray" else _local(units, jobs)
-    for done, (k, cell) in enumerate(stream, start=1):
-        results[k] = cell
-        if progress is not None:
-            progress(done, len(units), cell)
+    if executor is None:
+        local = backend == "local"
+        with Executor(backend, jobs=jobs if local else None, address=address) as own:
+            cells = own.map(_score_unit, units, on_done=progress)
+    else:
+        cells = executor.map(_score_unit, units, on_done=progress)
     return Benchmark(
         datasets=datasets,
         detectors=detectors,
-        cells=tuple(c for c in results if c is not None),
+        cells=tuple(cells),
         seconds=time.perf_counter() - start,
     )
 

@@ -19,12 +19,15 @@ seeds and measures it with the instrument used for the real data
 * ``mingle-randomised``: the spread of Tightness by size its draws cover, beside both real
   datasets' means;
 * the HRI scenes: their Tightness, Symmetry and pair features, for reference.
+
+Every episode is an independent unit of work (`sim.executor`): they run on local processes or as
+Ray tasks, and the report is the same whichever runs them.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -42,6 +45,7 @@ from reform.calibration import (
 )
 from reform.frame import Dataset, Frame
 from sim.episode import simulate_episode
+from sim.executor import Executor
 
 __all__ = [
     "CALIBRATED",
@@ -73,13 +77,19 @@ def scenario_frames(
     seeds: int,
     rate: float,
     options: Mapping[str, Any] | None = None,
+    executor: Executor | None = None,
 ) -> list[Frame]:
     """Ground-truth frames of ``seeds`` episodes (seeds 0 .. n-1) of scenario ``name`` at its
-    natural length."""
-    frames: list[Frame] = []
-    for seed in range(seeds):
-        frames.extend(simulate_episode(name, seed=seed, rate=rate, options=options).dataset)
-    return frames
+    natural length, the episodes run by ``executor`` (default: in this process)."""
+    executor = Executor("local", jobs=1) if executor is None else executor
+    units = [(name, seed, rate, options) for seed in range(seeds)]
+    return [f for episode in executor.map(_episode_frames, units) for f in episode]
+
+
+def _episode_frames(unit: tuple[str, int, float, Mapping[str, Any] | None]) -> tuple[Frame, ...]:
+    """The ground-truth frames of one episode: ``(scenario, seed, rate, options)``."""
+    name, seed, rate, options = unit
+    return tuple(simulate_episode(name, seed=seed, rate=rate, options=options).dataset)
 
 
 @dataclass(frozen=True, eq=False)
@@ -222,7 +232,7 @@ def calibrate_scenarios(
     randomised: bool = True,
     hri: bool = True,
     command: str = "",
-    progress: Callable[[str], None] | None = None,
+    executor: Executor | None = None,
 ) -> CalibrationReport:
     """Simulates the calibrated scenarios with default options and sets them beside SALSA and
     Babble (see the module doc).
@@ -234,7 +244,7 @@ def calibrate_scenarios(
         randomised: also measure the randomised mode's coverage.
         hri: also measure the HRI scenes.
         command: the command line that made the report, for its header.
-        progress: called with a line as each scenario starts.
+        executor: where the episodes run (`sim.executor.Executor`; default: in this process).
     """
     if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
         raise ValueError(f"seeds must be an int >= 1, got {seeds!r}")
@@ -260,11 +270,23 @@ def calibrate_scenarios(
             "SALSA session 1 against session 2",
         ),
     }
-    say = progress or (lambda line: None)
+    # Every episode of every scenario, one unit each, in one map (the slowest scenario's
+    # episodes do not wait for the others').
+    rates = {name: rate for name, (_, rate) in CALIBRATED.items()}
+    if randomised:
+        rates[RANDOMISED] = RANDOMISED_RATE_HZ
+    if hri:
+        rates.update(dict.fromkeys(HRI_SCENES, HRI_RATE_HZ))
+    units = [(name, seed, rate, None) for name, rate in rates.items() for seed in range(seeds)]
+    executor = Executor("local", jobs=1) if executor is None else executor
+    episodes = executor.map(_episode_frames, units, desc="calibrate", unit="episode")
+    simulated: dict[str, list[Frame]] = {name: [] for name in rates}
+    for (name, *_), frames_ in zip(units, episodes, strict=True):
+        simulated[name].extend(frames_)
+
     calibrations = []
     for name, (reference, rate) in CALIBRATED.items():
-        say(f"simulating {seeds} episodes of {name}")
-        frames = scenario_frames(name, seeds=seeds, rate=rate)
+        frames = simulated[name]
         measured = characterise_dataset(frames, name=name)
         limit, source = bounds[reference]
         calibrations.append(
@@ -278,17 +300,10 @@ def calibrate_scenarios(
         )
     random_part = None
     if randomised:
-        say(f"simulating {seeds} episodes of {RANDOMISED}")
-        random_part = characterise_dataset(
-            scenario_frames(RANDOMISED, seeds=seeds, rate=RANDOMISED_RATE_HZ), name=RANDOMISED
-        )
+        random_part = characterise_dataset(simulated[RANDOMISED], name=RANDOMISED)
     hri_parts = ()
     if hri:
-        say(f"simulating {seeds} episodes of each of {', '.join(HRI_SCENES)}")
-        hri_parts = tuple(
-            characterise_dataset(scenario_frames(n, seeds=seeds, rate=HRI_RATE_HZ), name=n)
-            for n in HRI_SCENES
-        )
+        hri_parts = tuple(characterise_dataset(simulated[n], name=n) for n in HRI_SCENES)
     return CalibrationReport(
         calibrations=tuple(calibrations),
         references=refs,

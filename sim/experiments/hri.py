@@ -60,6 +60,7 @@ from reform.metrics import Evaluation, evaluate
 from reform.seeding import Role, derive_int, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import DEFAULT_RATE_HZ, simulate_episode
+from sim.executor import Executor
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 from sim.experiments.stress import (
@@ -193,12 +194,14 @@ def hri_episodes(
     seeds: int = DEFAULT_SEEDS,
     rate: float = DEFAULT_RATE_HZ,
     views: Sequence[str] = tuple(VIEWS),
+    executor: Executor | None = None,
 ) -> dict[tuple[str, str], list[tuple[Frame, ...]]]:
     """The HRI episodes, each seen from every view.
 
     Episode ``i`` of scenario ``s`` has seed ``derive_int(seed, Role.HRI_EPISODE, s, i)``
     (`reform.seeding`); the views of one episode are the same simulation (the world does not
-    depend on the sensor).
+    depend on the sensor). Each episode is a unit of work run by ``executor`` (default: in
+    this process); the frames do not depend on it.
 
     Returns:
         ``(scenario, view) -> one tuple of frames per episode``.
@@ -206,24 +209,40 @@ def hri_episodes(
     unknown = [v for v in views if v not in VIEWS]
     if unknown:
         raise ValueError(f"views must be among {tuple(VIEWS)}, got {unknown}")
+    views = tuple(views)
+    units = [
+        (scenario, derive_int(seed, Role.HRI_EPISODE, s, i), rate, views)
+        for s, scenario in enumerate(HRI_SCENARIOS)
+        for i in range(seeds)
+    ]
+    executor = Executor("local", jobs=1) if executor is None else executor
     out: dict[tuple[str, str], list[tuple[Frame, ...]]] = {}
-    for s, scenario in enumerate(HRI_SCENARIOS):
-        for i in range(seeds):
-            episode = derive_int(seed, Role.HRI_EPISODE, s, i)
-            truth: tuple[Frame, ...] | None = None
-            for view in views:
-                sensor = VIEWS[view]
-                if sensor is None:
-                    continue
-                run = simulate_episode(
-                    scenario, seed=episode, rate=rate, view="robot", sensor=sensor
-                )
-                out.setdefault((scenario, view), []).append(run.dataset.frames)
-                truth = run.truth
-            if "truth" in views:
-                if truth is None:
-                    truth = simulate_episode(scenario, seed=episode, rate=rate).dataset.frames
-                out.setdefault((scenario, "truth"), []).append(truth)
+    seen_all = executor.map(_hri_episode, units, desc="HRI episodes", unit="episode")
+    for (scenario, *_), seen in zip(units, seen_all, strict=True):
+        for view, frames in seen:
+            out.setdefault((scenario, view), []).append(frames)
+    return out
+
+
+def _hri_episode(
+    unit: tuple[str, int, float, tuple[str, ...]],
+) -> list[tuple[str, tuple[Frame, ...]]]:
+    """One HRI episode, ``(scenario, seed, rate, views)``, seen from each view: the robot's
+    views in ``views`` order, then the truth."""
+    scenario, episode, rate, views = unit
+    out: list[tuple[str, tuple[Frame, ...]]] = []
+    truth: tuple[Frame, ...] | None = None
+    for view in views:
+        sensor = VIEWS[view]
+        if sensor is None:
+            continue
+        run = simulate_episode(scenario, seed=episode, rate=rate, view="robot", sensor=sensor)
+        out.append((view, run.dataset.frames))
+        truth = run.truth
+    if "truth" in views:
+        if truth is None:
+            truth = simulate_episode(scenario, seed=episode, rate=rate).dataset.frames
+        out.append(("truth", truth))
     return out
 
 
@@ -235,6 +254,7 @@ def hri_detectors(
     grid: StressGrid | str = "default",
     jobs: int | None = None,
     progress: Callable[[str], None] | None = None,
+    executor: Executor | None = None,
 ) -> tuple[list[HriDetector], dict[str, Any]]:
     """The detectors of the experiment, fitted, and what they were trained on.
 
@@ -245,21 +265,27 @@ def hri_detectors(
         grid: the size of the synthetic training set (``train_*`` fields of a
             :class:`sim.experiments.stress.StressGrid`, or a name of
             :data:`sim.experiments.stress.GRIDS`).
-        jobs: worker processes (None: every core).
+        jobs: local worker processes (None: every core).
         progress: called with one line of text per stage.
+        executor: where the episodes and fits run (`sim.executor.Executor`), instead of
+            ``jobs`` local processes.
 
     Returns:
         The detectors (SALSA-trained REFORM, synthetic-trained REFORM, GCFF twice, majority)
         and a summary of the training data.
     """
     say = progress or (lambda _line: None)
+    if executor is None:
+        executor = Executor("local", jobs=jobs)
+    elif jobs is not None:
+        raise ValueError(f"jobs is for local processes; give it or executor, got both ({jobs})")
     detectors: list[HriDetector] = []
     info: dict[str, Any] = {}
     if salsa is not None:
         annotated = [f for f in salsa if f.groups is not None]
         train, _ = time_split(annotated, train_fraction)
         say(f"training REFORM on the SALSA training split ({len(train)} frames)")
-        fitted = train_detectors(train, jobs=jobs, names=CLASSIFIERS)
+        fitted = train_detectors(train, names=CLASSIFIERS, executor=executor)
         detectors += reform_detectors(fitted, training="salsa")
         info["salsa"] = {
             "frames": len(train),
@@ -276,10 +302,10 @@ def hri_detectors(
         episodes=grid.train_episodes,
         duration=grid.train_duration_s,
         rate=grid.train_rate_hz,
-        jobs=jobs,
+        executor=executor,
     )
     say(f"training REFORM on the synthetic training set ({len(synthetic)} frames)")
-    fitted = train_detectors(synthetic, jobs=jobs, names=CLASSIFIERS)
+    fitted = train_detectors(synthetic, names=CLASSIFIERS, executor=executor)
     detectors += reform_detectors(fitted, training="synthetic")
     info["synthetic"] = {
         "frames": len(synthetic),
@@ -452,6 +478,7 @@ def hri_experiment(
     detectors: Sequence[HriDetector] | None = None,
     training: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    executor: Executor | None = None,
 ) -> HriExperiment:
     """Runs the HRI experiment.
 
@@ -468,6 +495,8 @@ def hri_experiment(
         training: what ``detectors`` were trained on (the second value of
             :func:`hri_detectors`), for the report.
         progress: called with one line of text per stage.
+        executor: where the training and the episodes run (`sim.executor.Executor`), instead
+            of ``jobs`` local processes (the episodes: in this process without it).
 
     Returns:
         The rows, the data summary, the training summary and the timings.
@@ -481,12 +510,14 @@ def hri_experiment(
     timings: dict[str, float] = {}
     start = time.perf_counter()
     if detectors is None:
-        detectors, training = hri_detectors(salsa=salsa, seed=seed, jobs=jobs, progress=say)
+        detectors, training = hri_detectors(
+            salsa=salsa, seed=seed, jobs=jobs, progress=say, executor=executor
+        )
         timings["training"] = time.perf_counter() - start
     training = dict(training or {})
     t0 = time.perf_counter()
     say(f"simulating {seeds} episode(s) of each HRI scenario, views {', '.join(views)}")
-    episodes = hri_episodes(seed=seed, seeds=seeds, rate=rate, views=views)
+    episodes = hri_episodes(seed=seed, seeds=seeds, rate=rate, views=views, executor=executor)
     timings["simulation"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     rows: list[HriRow] = []

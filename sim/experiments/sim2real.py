@@ -38,6 +38,9 @@ The experiment behind ``reform-sim experiment sim2real`` (results in
 
 No test score feeds any choice: the noise comes from calibration statistics of training data,
 the hyper-parameters from cross-validation on synthetic data.
+
+The independent units of work, the generated episodes and every model's tuning and fit, run on
+local processes or as Ray tasks (`sim.executor`); the results are the same whichever runs them.
 """
 
 from __future__ import annotations
@@ -71,6 +74,7 @@ from reform.perturb import Perturbation
 from reform.seeding import Role, derive_rng
 from reform.splits import time_blocks, time_split
 from reform.tuning import tune as cross_validate
+from sim.executor import Executor
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M, gcff_comparison
 from sim.generate import generate_dataset
 
@@ -216,6 +220,7 @@ def generate_sources(
     seed: int,
     n_jobs: int | None = None,
     progress: bool = True,
+    executor: Executor | None = None,
 ) -> dict[str, tuple[Frame, ...]]:
     """Generates (or reuses) every source's episodes under ``root`` and reads them back.
 
@@ -225,6 +230,8 @@ def generate_sources(
         seed: master seed of every source.
         n_jobs: worker processes of the generation (default: every core).
         progress: progress bars on stderr.
+        executor: where the episodes run (`sim.executor.Executor`), instead of ``n_jobs``
+            local processes.
 
     Returns:
         ``scenario -> annotated frames``, in the order of ``sources``.
@@ -233,6 +240,13 @@ def generate_sources(
     if len(set(names)) != len(names):
         raise ValueError(f"sources must name each scenario once, got {names}")
     _check_synthetic_root(Path(root))
+    backend = {"n_jobs": n_jobs}
+    if executor is not None:
+        if n_jobs is not None:
+            raise ValueError("n_jobs is for local processes; give it or executor, got both")
+        backend = {"n_jobs": executor.jobs, "backend": executor.backend}
+        if executor.address is not None:
+            backend["address"] = executor.address
     out: dict[str, tuple[Frame, ...]] = {}
     for source in sources:
         folder = Path(root) / source.folder(seed)
@@ -244,8 +258,8 @@ def generate_sources(
             options=dict(source.options),
             rate=source.rate,
             duration=source.duration,
-            n_jobs=n_jobs,
             progress=progress,
+            **backend,
         )
         dataset = read_parquet(folder)
         wanted = {f"{source.scenario}-{k}" for k in range(source.episodes)}
@@ -461,6 +475,16 @@ def train_reform(
     if chosen:
         estimator.set_params(**chosen)
     return Reform(estimator).fit(frames), tuning
+
+
+def _fit_unit(
+    unit: tuple[str, str, bool, Mapping[str, Any] | None],
+    frame_sets: Mapping[str, Sequence[Frame]],
+) -> tuple[Any, Any]:
+    """One model, a unit of work: ``(classifier, training set's key in frame_sets, tune,
+    params)`` -> :func:`train_reform`'s ``(model, tuning)``."""
+    classifier, key, tune, params = unit
+    return train_reform(classifier, frame_sets[key], tune=tune, params=params)
 
 
 def _block_labels(frames: Sequence[Frame], blocks: int) -> list[str]:
@@ -711,6 +735,7 @@ def sim_to_real(
     gcff_grids: Mapping[str, Sequence[float]] | None = None,
     progress: Callable[[str], None] | None = None,
     progress_bars: bool = True,
+    executor: Executor | None = None,
 ) -> SimToReal:
     """Runs the sim-to-real experiment (see the module docstring).
 
@@ -722,20 +747,26 @@ def sim_to_real(
         seed: master seed of the synthetic episodes and the tracker noise.
         classifiers: the REFORM classifiers compared.
         train_fraction: share of each SALSA session's annotated frames, by time, for training.
-        n_jobs: worker processes (generation and cross-validation).
+        n_jobs: local worker processes (generation, and the models' tuning and fits).
         diagnostics: also train on each source alone, without tracker noise, and with the
             ``randomised`` sources in place of those with tracker noise (Bagged Trees when among
             ``classifiers``, with the synthetic model's hyper-parameters).
         randomised: the randomised mode's sources for the diagnostics (empty: none).
         gcff_grids: ``stride_grid`` and ``mdl_grid`` of GCFF's tuning (default: reform's).
         progress: ``callable(str)`` told each stage.
-        progress_bars: tqdm bars for the generation.
+        progress_bars: tqdm bars for the generation and the training.
+        executor: where the units of work run (`sim.executor.Executor`), instead of ``n_jobs``
+            local processes.
 
     Returns:
         The :class:`SimToReal` results.
     """
     started = time.perf_counter()
     say = progress or (lambda message: None)
+    if executor is None:
+        executor = Executor("local", jobs=n_jobs, progress=progress_bars)
+    elif n_jobs is not None:
+        raise ValueError(f"n_jobs is for local processes; give it or executor, got both ({n_jobs})")
     for name in classifiers:
         if name not in CLASSIFIERS:
             raise ValueError(f"classifiers must be among {tuple(CLASSIFIERS)}, got {name!r}")
@@ -752,7 +783,7 @@ def sim_to_real(
 
     say(f"generating the synthetic training data under {synthetic_root}")
     generated = generate_sources(
-        sources, root=synthetic_root, seed=seed, n_jobs=n_jobs, progress=progress_bars
+        sources, root=synthetic_root, seed=seed, progress=progress_bars, executor=executor
     )
     noise = None
     exact = dict(generated)
@@ -847,22 +878,31 @@ def sim_to_real(
     synthetic_params: dict[str, Mapping[str, Any]] = {}
     synthetic_models: dict[str, Any] = {}
     salsa_params: dict[str, Mapping[str, Any]] = {}
-    for name in classifiers:
-        label = DISPLAY[name]
-        say(f"{label}: tuning and training on the synthetic set ({len(synthetic)} frames)")
-        model, tuned = train_reform(name, synthetic, n_jobs=n_jobs)
-        tuning[SYNTHETIC][name] = tuned.to_json()
-        synthetic_params[name] = dict(tuned.best_params)
-        synthetic_models[name] = model
-        add(model, f"REFORM {label}", SYNTHETIC, name)
-        say(f"{label}: tuning and training on SALSA's training split ({len(train)} frames)")
-        model, tuned = train_reform(name, train, n_jobs=n_jobs)
-        tuning[SALSA_TRAIN][name] = tuned.to_json()
-        salsa_params[name] = dict(tuned.best_params)
-        add(model, f"REFORM {label}", SALSA_TRAIN, name)
+    say(
+        f"{', '.join(DISPLAY[n] for n in classifiers)}: tuning and training on the synthetic "
+        f"set ({len(synthetic)} frames) and on SALSA's training split ({len(train)} frames)"
+    )
+    units = [(name, key, True, None) for name in classifiers for key in (SYNTHETIC, SALSA_TRAIN)]
+    fits = executor.map(
+        _fit_unit,
+        units,
+        shared=({SYNTHETIC: synthetic, SALSA_TRAIN: tuple(train)},),
+        desc="sim2real training",
+        unit="model",
+    )
+    for (name, key, _, _), (model, tuned) in zip(units, fits, strict=True):
+        tuning[key][name] = tuned.to_json()
+        if key == SYNTHETIC:
+            synthetic_params[name] = dict(tuned.best_params)
+            synthetic_models[name] = model
+        else:
+            salsa_params[name] = dict(tuned.best_params)
+        add(model, f"REFORM {DISPLAY[name]}", key, name)
 
     say("across periods: SALSA's training split in halves, each scored by the other's model")
-    cross_period, half_models = _cross_period(train, synthetic_models, salsa_params, seed=seed)
+    cross_period, half_models = _cross_period(
+        train, synthetic_models, salsa_params, seed=seed, executor=executor
+    )
     for (half, name), model in half_models.items():
         add(model, f"REFORM {DISPLAY[name]}", half_training(half), name, diagnostic=True)
 
@@ -902,7 +942,11 @@ def sim_to_real(
         if randomised:
             say("diagnostic: generating the randomised mode's episodes")
             drawn = generate_sources(
-                randomised, root=synthetic_root, seed=seed, n_jobs=n_jobs, progress=progress_bars
+                randomised,
+                root=synthetic_root,
+                seed=seed,
+                progress=progress_bars,
+                executor=executor,
             )
             mixed = balance_pairs(
                 {
@@ -912,9 +956,10 @@ def sim_to_real(
             )
             joined = " + ".join(mixed)
             parts.append((f"synthetic: {joined}", tuple(f for v in mixed.values() for f in v)))
-        for description, frames in parts:
-            say(f"diagnostic: Bagged Trees trained on {description}")
-            model, _ = train_reform("bagged-trees", frames, tune=False, params=params)
+        say(f"diagnostic: Bagged Trees trained on {', '.join(d for d, _ in parts)}")
+        units = [("bagged-trees", description, False, params) for description, _ in parts]
+        fits = executor.map(_fit_unit, units, shared=(dict(parts),))
+        for (description, _), (model, _) in zip(parts, fits, strict=True):
             add(model, "REFORM Bagged Trees", description, "bagged-trees", diagnostic=True)
 
     differences = {}
@@ -965,6 +1010,7 @@ def _cross_period(
     salsa_params: Mapping[str, Mapping[str, Any]],
     *,
     seed: int,
+    executor: Executor,
 ) -> tuple[tuple[CrossPeriod, ...], dict[tuple[str, str], Any]]:
     """Each half (in time) of SALSA's training split scored by a model trained on the other
     half and by the synthetic model (see :class:`CrossPeriod`).
@@ -977,11 +1023,13 @@ def _cross_period(
     if not earlier or not later:
         return (), {}
     halves = {"earlier": tuple(earlier), "later": tuple(later)}
-    models = {
-        (half, name): train_reform(name, frames, tune=False, params=salsa_params[name])[0]
-        for half, frames in halves.items()
-        for name in synthetic_models
-    }
+    keys = [(half, name) for half in halves for name in synthetic_models]
+    fits = executor.map(
+        _fit_unit,
+        [(name, half, False, salsa_params[name]) for half, name in keys],
+        shared=(halves,),
+    )
+    models = {key: model for key, (model, _) in zip(keys, fits, strict=True)}
     other = {"earlier": "later", "later": "earlier"}
     out = []
     for k, (held_out, scored) in enumerate(halves.items()):

@@ -31,14 +31,16 @@ beside these on the same frames, fitted on the same training frames when they ha
 Confidence intervals: two-stage bootstrap (episodes, then frames within each;
 :mod:`reform.bootstrap`), percentile intervals, the same resamples for every detector at a point.
 
-Everything runs in parallel over the machine's cores (joblib processes); the results do not
-depend on the number of workers. ``GRIDS["small"]`` runs in seconds (tests, the demo);
+Everything runs in parallel, as independent units of work (`sim.executor`): over the machine's
+cores (joblib processes) or as Ray tasks on a cluster; the results do not depend on the backend
+or the number of workers. ``GRIDS["small"]`` runs in seconds (tests, the demo);
 ``GRIDS["default"]`` is the documented run.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import time
@@ -48,7 +50,6 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-from joblib import Parallel, delayed
 
 from reform.bootstrap import ScoreIntervals, bootstrap_weights, frame_intervals
 from reform.classifiers import BAGGED_TREES, LOGISTIC_REGRESSION, WEIGHTED_KNN, make_classifier
@@ -61,6 +62,7 @@ from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
 from reform.seeding import Role, derive_int, derive_rng
 from sim.episode import simulate_episode
+from sim.executor import Executor, cpu_count
 from sim.experiments.stress_grid import (
     AXES,
     BASE_PEOPLE,
@@ -213,6 +215,7 @@ def training_frames(
     rate: float = 0.5,
     scenarios: Sequence[str] = TRAINING_SCENARIOS,
     jobs: int | None = None,
+    executor: Executor | None = None,
 ) -> tuple[Frame, ...]:
     """The synthetic training set: ``episodes`` episodes of each training scenario.
 
@@ -226,20 +229,32 @@ def training_frames(
         duration: seconds per episode.
         rate: frames per second.
         scenarios: registered scenario names, at their default options.
-        jobs: worker processes (None: every core).
+        jobs: local worker processes (None: every core).
+        executor: where the episodes run (`sim.executor.Executor`) instead of ``jobs`` local
+            processes; the frames do not depend on it.
 
     Returns:
         The annotated frames, scenario by scenario, episode by episode.
     """
     specs = _training_specs(seed, episodes, duration, rate, scenarios)
-    return _simulate_all(specs, jobs=jobs)
+    return _simulate_all(specs, executor=_executor(jobs, executor))
+
+
+def _executor(jobs: int | None, executor: Executor | None) -> Executor:
+    """``executor``, or local processes (``jobs`` of them); not both."""
+    if executor is None:
+        return Executor("local", jobs=jobs)
+    if jobs is not None:
+        raise ValueError(f"jobs is for local processes; give it or executor, got both ({jobs})")
+    return executor
 
 
 def _simulate_all(
-    specs: Sequence[_EpisodeSpec], *, jobs: int | None, cpu: list[float] | None = None
+    specs: Sequence[_EpisodeSpec], *, executor: Executor, cpu: list[float] | None = None
 ) -> tuple[Frame, ...]:
     """The frames of every episode of ``specs``, episode after episode."""
-    return tuple(f for frames in _parallel(_simulate, specs, jobs=jobs, cpu=cpu) for f in frames)
+    episodes = _parallel(_simulate, specs, executor=executor, cpu=cpu)
+    return tuple(f for frames in episodes for f in frames)
 
 
 def _training_specs(
@@ -273,14 +288,17 @@ def train_detectors(
     grid: StressGrid | None = None,
     jobs: int | None = None,
     names: Sequence[str] = DETECTORS,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
     """REFORM with each classifier fitted on ``frames``, and GCFF tuned on a subsample of them.
 
     Args:
         frames: annotated training frames.
         grid: the GCFF tuning grid and subsample size (default ``GRIDS["default"]``).
-        jobs: worker processes (None: every core).
+        jobs: local worker processes (None: every core).
         names: which of :data:`DETECTORS` to fit.
+        executor: where the fits run (`sim.executor.Executor`) instead of ``jobs`` local
+            processes; the fitted detectors do not depend on it.
 
     Returns:
         Detector name -> fitted detector, in ``names`` order.
@@ -289,7 +307,7 @@ def train_detectors(
     unknown = [n for n in names if n not in DETECTORS]
     if unknown:
         raise ValueError(f"names must be among {DETECTORS}, got {unknown}")
-    return _fit_all(frames, grid, names, jobs=jobs)
+    return _fit_all(frames, grid, names, executor=_executor(jobs, executor))
 
 
 def _fit_all(
@@ -297,11 +315,12 @@ def _fit_all(
     grid: StressGrid,
     names: Sequence[str],
     *,
-    jobs: int | None,
+    executor: Executor,
     cpu: list[float] | None = None,
 ) -> dict[str, Any]:
-    """Detector name -> ``_fit(name, frames, grid)``, the fits on ``jobs`` processes."""
-    fitted = _parallel(_fit, [(n, frames, grid) for n in names], jobs=jobs, star=True, cpu=cpu)
+    """Detector name -> ``_fit(name, frames, grid)``, the fits run by ``executor`` (the
+    frames sent once)."""
+    fitted = _parallel(_fit, list(names), shared=(frames, grid), executor=executor, cpu=cpu)
     return dict(zip(names, fitted, strict=True))
 
 
@@ -373,8 +392,8 @@ def _perturb_task(
     axis_index: int,
     episode: int,
     base: tuple[Sequence[Frame], float],
-    detectors: Mapping[str, Any],
     seed: int,
+    detectors: Mapping[str, Any],
 ) -> list[tuple[str, int, int, _Scored | str]]:
     frames, density = base
     out: list[tuple[str, int, int, _Scored | str]] = []
@@ -642,9 +661,7 @@ def _point(
 
 
 def _cpu_count() -> int:
-    return max(
-        1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    )
+    return cpu_count()
 
 
 def _load_average() -> list[float] | None:
@@ -654,10 +671,10 @@ def _load_average() -> list[float] | None:
         return None
 
 
-def _timed(function: Callable[..., Any], star: bool, item: Any) -> tuple[Any, float]:
-    """``function(item)`` (or ``function(*item)``) and the CPU seconds it took."""
+def _timed(function: Callable[..., Any], item: Any, *shared: Any) -> tuple[Any, float]:
+    """``function(item, *shared)`` and the CPU seconds it took."""
     start = time.process_time()
-    result = function(*item) if star else function(item)
+    result = function(item, *shared)
     return result, time.process_time() - start
 
 
@@ -665,29 +682,26 @@ def _parallel(
     function: Callable[..., Any],
     items: Sequence[Any],
     *,
-    jobs: int | None,
-    star: bool = False,
+    executor: Executor,
+    shared: Sequence[Any] = (),
     progress: Callable[[int, int], None] | None = None,
     cpu: list[float] | None = None,
 ) -> list[Any]:
-    """``function`` over ``items`` in order, on ``jobs`` processes (serial for 1 job or 1 item).
+    """``function(item, *shared)`` over ``items``, in order, run by ``executor``.
 
     The CPU seconds of every call are appended to ``cpu`` when it is given.
     """
-    workers = _cpu_count() if jobs is None else int(jobs)
-    if workers <= 1 or len(items) <= 1:
-        results = (_timed(function, star, item) for item in items)
-    else:
-        runner = Parallel(n_jobs=min(workers, len(items)), return_as="generator")
-        results = runner(delayed(_timed)(function, star, item) for item in items)
-    out = []
-    for k, (result, seconds) in enumerate(results):
-        out.append(result)
-        if cpu is not None:
-            cpu.append(seconds)
+
+    def done(k: int, total: int, _result: Any) -> None:
         if progress is not None:
-            progress(k + 1, len(items))
-    return out
+            progress(k, total)
+
+    timed = executor.map(
+        functools.partial(_timed, function), items, shared=tuple(shared), on_done=done
+    )
+    if cpu is not None:
+        cpu.extend(seconds for _, seconds in timed)
+    return [result for result, _ in timed]
 
 
 # ------------------------------------------------------------------------------------------------
@@ -703,13 +717,18 @@ def run_stress(
     detectors: Mapping[str, Any] | None = None,
     plugins: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    executor: Executor | None = None,
 ) -> StressResults:
     """Runs the stress tests.
+
+    Every stage splits into independent units (an episode, a detector's fit, a scoring task)
+    that ``executor`` runs: local processes (``jobs`` of them) by default, or Ray tasks
+    (`sim.executor.Executor`); the results are the same bit for bit whichever runs them.
 
     Args:
         grid: a :class:`StressGrid` or the name of one of :data:`GRIDS`.
         seed: master seed of training episodes, test episodes, perturbations and bootstrap.
-        jobs: worker processes (None: every core). Results do not depend on it.
+        jobs: local worker processes (None: every core). Results do not depend on it.
         axes: axes to run (names of :data:`AXES`), default all.
         detectors: fitted detectors by name (:data:`DETECTORS` keys) instead of training them
             on the synthetic training set; e.g. REFORM trained on SALSA.
@@ -721,6 +740,7 @@ def run_stress(
             returns something that is not a partition fails the run with one line naming it
             and the frame.
         progress: called with one line of text as stages start and tasks finish.
+        executor: where the units run, instead of ``jobs`` local processes.
 
     Returns:
         The curves with their confidence intervals, the training summary and the timings.
@@ -731,11 +751,16 @@ def run_stress(
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
         raise ValueError(f"jobs must be None or an int >= 1, got {jobs!r}")
     names = tuple(AXES) if axes is None else tuple(check_axis(a) for a in axes)
-    workers = _cpu_count() if jobs is None else jobs
+    executor = _executor(jobs, executor)
+    workers = executor.workers
     say = progress if progress is not None else (lambda _line: None)
     timings: dict[str, float] = {}
     start = time.perf_counter()
-    environment: dict[str, Any] = {"cores": _cpu_count(), "load_average_start": _load_average()}
+    environment: dict[str, Any] = {
+        "cores": _cpu_count(),
+        "backend": executor.backend,
+        "load_average_start": _load_average(),
+    }
     cpu: list[float] = []
 
     plugins = dict(plugins or {})
@@ -763,7 +788,7 @@ def run_stress(
         specs = _training_specs(
             seed, grid.train_episodes, grid.train_duration_s, grid.train_rate_hz, TRAINING_SCENARIOS
         )
-        train = _simulate_all(specs, jobs=jobs, cpu=cpu)
+        train = _simulate_all(specs, executor=executor, cpu=cpu)
         train_seeds = {
             name: [spec.seed for spec in specs if spec.scenario == name]
             for name in TRAINING_SCENARIOS
@@ -775,7 +800,7 @@ def run_stress(
     if detectors is None:
         say(f"training REFORM (3 classifiers) and tuning GCFF on {len(train)} frames")
         t0 = time.perf_counter()
-        detectors = _fit_all(train, grid, DETECTORS, jobs=jobs, cpu=cpu)
+        detectors = _fit_all(train, grid, DETECTORS, executor=executor, cpu=cpu)
         timings["training"] = time.perf_counter() - t0
         gcff = detectors[GCFF]
         training = {
@@ -817,19 +842,17 @@ def run_stress(
     if perturb_axes:
         say(f"simulating {grid.seeds} test episode(s) of {TEST_SCENARIO}")
         specs = [_scene_spec(grid, None, None, s) for s in test_seeds]
-        base = _parallel(_simulate_scene, specs, jobs=jobs, cpu=cpu)
+        base = _parallel(_simulate_scene, specs, executor=executor, cpu=cpu)
     timings["test episodes"] = time.perf_counter() - t0
 
     axis_index = {name: list(AXES).index(name) for name in names}
     tasks: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
     for name in perturb_axes:
         for e, episode in enumerate(base):
-            tasks.append(
-                (_perturb_task, (grid, name, axis_index[name], e, episode, detectors, seed))
-            )
+            tasks.append((_perturb_task, (grid, name, axis_index[name], e, episode, seed)))
     for name in scene_axes:
         for k in range(len(grid.levels(name))):
-            tasks.append((_scene_task, (grid, name, k, seed, detectors)))
+            tasks.append((_scene_task, (grid, name, k, seed)))
     # Longest first, so that no long task starts last; the results do not depend on the order.
     tasks.sort(key=lambda task: -_cost(grid, task))
     say(f"scoring {len(tasks)} task(s) on {min(workers, max(len(tasks), 1))} worker(s)")
@@ -838,7 +861,10 @@ def run_stress(
     def report(done: int, total: int) -> None:
         say(f"  {done}/{total} tasks done ({time.perf_counter() - start:.0f} s)")
 
-    results = _parallel(_call, tasks, jobs=jobs, progress=report, cpu=cpu)
+    # The detectors are shared by every task: sent once to each worker (Ray: once in all).
+    results = _parallel(
+        _call, tasks, shared=(detectors,), executor=executor, progress=report, cpu=cpu
+    )
     timings["scoring"] = time.perf_counter() - t0
 
     cells: dict[tuple[str, int], list[tuple[int, _Scored | str]]] = {}
@@ -885,9 +911,9 @@ def run_stress(
     )
 
 
-def _call(task: tuple[Callable[..., Any], tuple[Any, ...]]) -> Any:
+def _call(task: tuple[Callable[..., Any], tuple[Any, ...]], detectors: Mapping[str, Any]) -> Any:
     function, args = task
-    return function(*args)
+    return function(*args, detectors)
 
 
 def sensor_description(name: str) -> str:

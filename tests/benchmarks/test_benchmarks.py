@@ -38,6 +38,10 @@ DATASETS_MISSING = _timing_module().DATASETS_MISSING
 # What each benchmark's quick run must print: its figure lines, each a pattern matched against
 # one line of its output. A new benchmark needs an entry here.
 FIGURES: dict[str, tuple[str, ...]] = {
+    "bench_backends": (
+        r"^stress \(.*\) +local \d+ processes +[\d.]+ s +ray +[\d.]+ s +ray / local: [\d.]+x$",
+        r"^generate \(.*\) +local \d+ processes +[\d.]+ s +ray +[\d.]+ s +ray / local: [\d.]+x$",
+    ),
     "bench_characterisation": (
         r"^characterise +[\d.]+ ms +per-item loop +[\d.]+ ms +ratio +[\d.]+x$",
         r"^pair_feature_samples +[\d.]+ ms +per-item loop +[\d.]+ ms +ratio +[\d.]+x$",

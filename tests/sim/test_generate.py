@@ -218,33 +218,23 @@ def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference
     assert contents(out) == contents(reference)
 
 
-def test_ray_backend_gives_the_local_data(reference, tmp_path):
-    ray = pytest.importorskip("ray")
-    ray.init(
-        num_cpus=2,
-        object_store_memory=100 * 2**20,
-        include_dashboard=False,
-        log_to_driver=False,
+def test_ray_backend_gives_the_local_data(reference, tmp_path, ray_instance):
+    report = generate(tmp_path / "ray", backend="ray")
+    assert report.backend == "ray" and report.n_jobs == 2
+    assert contents(tmp_path / "ray") == contents(reference)
+    # The command line joins the running cluster by its address.
+    address = ray_instance.get_runtime_context().gcs_address
+    run = subprocess.run(
+        [*CLI, "generate", *ARGS, "--out", str(tmp_path / "cli")]
+        + ["--backend", "ray", "--address", address, "--quiet"],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        timeout=RUN_TIMEOUT_S,
+        text=True,
     )
-    try:
-        report = generate(tmp_path / "ray", backend="ray")
-        assert report.backend == "ray" and report.n_jobs == 2
-        assert contents(tmp_path / "ray") == contents(reference)
-        # The command line joins the running cluster by its address.
-        address = ray.get_runtime_context().gcs_address
-        run = subprocess.run(
-            [*CLI, "generate", *ARGS, "--out", str(tmp_path / "cli")]
-            + ["--backend", "ray", "--address", address, "--quiet"],
-            cwd=REPO_ROOT,
-            capture_output=True,
-            timeout=RUN_TIMEOUT_S,
-            text=True,
-        )
-        assert run.returncode == 0, run.stderr[-3000:]
-        assert "CPUs (Ray)" in run.stdout
-        assert contents(tmp_path / "cli") == contents(reference)
-    finally:
-        ray.shutdown()
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "CPUs (Ray)" in run.stdout
+    assert contents(tmp_path / "cli") == contents(reference)
 
 
 def test_command_line_writes_the_dataset_and_train_reads_it(tmp_path, capsys):

@@ -195,17 +195,10 @@ def test_cli_bad_input_is_one_line(small, tmp_path, capsys, argv, message):
 
 
 @pytest.mark.slow
-def test_ray_backend_gives_the_local_cells(small):
-    ray = pytest.importorskip("ray")
+def test_ray_backend_gives_the_local_cells(small, ray_instance):
     detectors = [detector_spec(s) for s in ("gcff", "gcff-own", "majority")]
     local = run_benchmark(small, detectors)
-    ray.init(
-        num_cpus=2, object_store_memory=100 * 2**20, include_dashboard=False, log_to_driver=False
-    )
-    try:
-        remote = run_benchmark(small, detectors, backend="ray")
-    finally:
-        ray.shutdown()
+    remote = run_benchmark(small, detectors, backend="ray")
     key = [(c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in local.cells]
     assert key == [
         (c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in remote.cells

@@ -103,6 +103,30 @@ def test_report(experiment) -> None:
     assert len(data["rows"]) == len(experiment.rows)
 
 
+@pytest.mark.slow
+def test_ray_backend_gives_the_local_experiment(detectors, experiment, ray_instance) -> None:
+    """Training and episodes as Ray tasks on a real local instance: the same report."""
+    from sim.executor import Executor
+
+    fitted, training = detectors
+    with Executor("ray") as executor:
+        others, remote_training = hri_detectors(salsa=None, seed=0, grid="small", executor=executor)
+        remote = hri_experiment(
+            seed=0,
+            seeds=SEEDS,
+            detectors=[fitted[0], *others],
+            training=remote_training,
+            resamples=100,
+            rate=1.0,
+            executor=executor,
+        )
+    assert remote_training == training
+    ours, theirs = experiment.to_json(command="x"), remote.to_json(command="x")
+    del ours["timings_s"], theirs["timings_s"]
+    assert len(ours["rows"]) > 0
+    assert theirs == ours
+
+
 def test_episodes_are_deterministic() -> None:
     a = hri_episodes(seed=3, seeds=1, rate=1.0, views=("truth",))
     b = hri_episodes(seed=3, seeds=1, rate=1.0, views=("truth",))

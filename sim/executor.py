@@ -1,0 +1,448 @@
+"""Where independent units of work run: this process, local worker processes, or a Ray cluster.
+
+A command whose work splits into independent units (episodes to simulate, detectors to fit,
+cells of a benchmark) maps one picklable function over them with an `Executor`::
+
+    with Executor("ray", address="10.0.0.5:6379") as executor:
+        cells = executor.map(score, units, desc="benchmark")
+
+`Executor.map` returns the results in the order of the units, whichever worker ran which unit
+and in whatever order they finished, so a run gives the same results bit for bit on either
+backend and with any number of workers, provided each unit is deterministic on its own (seeded
+from the unit, never from the worker). `Executor.imap_unordered` yields ``(index, result)`` as
+units finish, for a caller that handles each result as it comes (writes a dataset's shard).
+
+Backends (:data:`BACKENDS`):
+
+* ``"local"``: ``jobs`` worker processes on this machine (joblib's loky; every core by
+  default). With one job, or one unit, the units run in this process, in order.
+* ``"ray"``: one Ray task per unit on every CPU of the cluster at ``address``, of the Ray
+  instance this process has already joined, or of one started on this machine. A task whose
+  worker process dies (a node lost, a process killed, out of memory) is run again by Ray, up
+  to :data:`MAX_RETRIES` times. An exception the function raises is not retried (it would
+  raise again): the run stops with that exception, as on the local backend.
+
+Arguments every unit shares (``shared``: fitted detectors, a training set) are sent once: Ray
+puts them in its object store once and each task reads them from there.
+
+An ``address`` is probed before Ray is asked to join it (:func:`check_address`): where nothing
+answers, the run stops within seconds with one line, before any work, rather than after Ray's
+own long connection timeouts.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+__all__ = [
+    "BACKENDS",
+    "MAX_RETRIES",
+    "ClusterError",
+    "Executor",
+    "check_address",
+    "cpu_count",
+    "import_ray",
+]
+
+BACKENDS = ("local", "ray")
+MAX_RETRIES = 3  # times Ray runs a unit again after its worker process died
+PROBE_TIMEOUT_S = 3.0  # seconds a cluster address has to accept a connection
+GCS_PORT = 6379  # Ray's default cluster (GCS) port: ``ray start --head`` listens there
+CLIENT_PORT = 10001  # Ray Client's default port (``ray://host``)
+CLIENT_SCHEME = "ray://"
+AUTO = "auto"  # the cluster started on this machine by ``ray start --head``
+RAY_ADDRESS_VARIABLE = "RAY_ADDRESS"
+GCS_PROBE_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"  # every Ray GCS serves it
+RAY_INSTALL = "pip install 'reform-sim[ray]' (or pip install ray)"
+
+
+class ClusterError(ConnectionError):
+    """A Ray cluster that cannot be reached, or that lost a unit's worker more often than
+    :data:`MAX_RETRIES` allows. One line, naming the address or the unit."""
+
+
+def cpu_count() -> int:
+    """The CPUs this process may run on (its affinity, else the machine's)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def import_ray() -> Any:
+    """The ``ray`` module; an ImportError with the install command when it is missing."""
+    try:
+        import ray
+    except ImportError as exc:
+        raise ImportError(f"backend 'ray' needs Ray: {RAY_INSTALL}") from exc
+    return ray
+
+
+def _split(address: str) -> tuple[str, int]:
+    """``host:port`` (or ``host``, or ``[v6]:port``) as ``(host, port)``."""
+    scheme_port = CLIENT_PORT if address.startswith(CLIENT_SCHEME) else GCS_PORT
+    rest = address.removeprefix(CLIENT_SCHEME)
+    if rest.startswith("["):  # [IPv6]:port
+        host, _, tail = rest[1:].partition("]")
+        port_text = tail.removeprefix(":")
+    elif rest.count(":") == 1:
+        host, port_text = rest.split(":")
+    else:
+        host, port_text = rest, ""
+    if not host:
+        raise ClusterError(
+            f"address {address}: expected HOST:PORT, ray://HOST:PORT or {AUTO}, got no host"
+        )
+    if not port_text:
+        return host, scheme_port
+    if not port_text.isdigit() or not 0 < int(port_text) < 65536:
+        raise ClusterError(
+            f"address {address}: expected a port number 1-65535 after the host, got {port_text!r}"
+        )
+    return host, int(port_text)
+
+
+def _running_cluster() -> str | None:
+    """The address of the cluster ``ray start --head`` started on this machine, if any:
+    ``$RAY_ADDRESS``, else the file Ray leaves in its temporary folder."""
+    named = os.environ.get(RAY_ADDRESS_VARIABLE)
+    if named and named != AUTO:
+        return named
+    temp = Path(os.environ.get("RAY_TMPDIR", "/tmp")) / "ray" / "ray_current_cluster"
+    try:
+        text = temp.read_text().strip()
+    except OSError:
+        return None
+    return text or None
+
+
+def check_address(address: str) -> str:
+    """Probes a Ray cluster address with one short connection, before Ray is asked to join it.
+
+    Args:
+        address: ``HOST:PORT`` (the cluster's GCS, what ``ray start --head`` prints; the port
+            defaults to 6379), ``ray://HOST:PORT`` (Ray Client, port 10001 by default), or
+            ``"auto"`` (the cluster running on this machine).
+
+    Returns:
+        The address as given (``"auto"`` resolved to the running cluster's).
+
+    Raises:
+        ClusterError: nothing answers there within :data:`PROBE_TIMEOUT_S` seconds, the host
+            name does not resolve, or the address is malformed; one line naming it.
+    """
+    if not isinstance(address, str) or not address.strip():
+        raise ClusterError(
+            f"address {address!r}: expected HOST:PORT, ray://HOST:PORT or {AUTO}, got no address"
+        )
+    address = address.strip()
+    given = address
+    if address == AUTO:
+        found = _running_cluster()
+        if found is None:
+            raise ClusterError(
+                f"address {AUTO}: no Ray cluster is running on this machine (start one with "
+                "`ray start --head`, or give its HOST:PORT)"
+            )
+        address = found
+    host, port = _split(address)
+    why = _unreachable(host, port)
+    if why is None and not address.startswith(CLIENT_SCHEME):
+        why = _not_a_cluster(host, port)
+    if why is None:
+        return address
+    shown = given if given == address else f"{given} ({address})"
+    raise ClusterError(
+        f"address {shown}: no Ray cluster reachable, {why}; start one with `ray start --head` "
+        "and give the address it prints"
+    )
+
+
+def _unreachable(host: str, port: int) -> str | None:
+    """Why no connection to ``host:port`` can be made, or None when one can."""
+    try:
+        with socket.create_connection((host, port), timeout=PROBE_TIMEOUT_S):
+            return None
+    except socket.gaierror:
+        return f"host {host!r} is not known"
+    except ConnectionRefusedError:
+        return f"nothing listens at {host}:{port}"
+    except TimeoutError:
+        return f"{host}:{port} did not answer within {PROBE_TIMEOUT_S:g} s"
+    except OSError as exc:
+        return f"{host}:{port}: {exc.strerror or exc}"
+
+
+def _not_a_cluster(host: str, port: int) -> str | None:
+    """Why what answers at ``host:port`` is not a Ray cluster's GCS, or None when it is (or
+    when gRPC, which Ray's extra installs, is missing to ask it).
+
+    One gRPC call to the GCS (its cluster id): a Ray GCS answers it, or refuses it for a
+    missing authentication token, which ``ray.init`` then supplies; a server of another kind
+    (a proxy, a database on Redis's port) answers that it has no such method.
+    """
+    try:
+        import grpc
+    except ImportError:  # pragma: no cover - the ray extra installs it
+        return None
+    channel = grpc.insecure_channel(f"{host}:{port}")
+    call = channel.unary_unary(
+        GCS_PROBE_METHOD,
+        request_serializer=lambda _request: b"",
+        response_deserializer=lambda reply: reply,
+    )
+    try:
+        call(None, timeout=PROBE_TIMEOUT_S)
+    except grpc.RpcError as exc:
+        code = exc.code()
+        if code in (grpc.StatusCode.UNAUTHENTICATED, grpc.StatusCode.PERMISSION_DENIED):
+            return None
+        if code == grpc.StatusCode.DEADLINE_EXCEEDED:
+            return f"{host}:{port} did not answer as a Ray cluster within {PROBE_TIMEOUT_S:g} s"
+        if code == grpc.StatusCode.UNAVAILABLE:
+            return f"{host}:{port} is unavailable ({exc.details()})"
+        return f"what answers at {host}:{port} is not a Ray cluster ({exc.details()})"
+    finally:
+        channel.close()
+    return None
+
+
+def _apply(function: Callable[..., Any], unit: Any, *shared: Any) -> Any:
+    return function(unit, *shared)
+
+
+def _indexed(function: Callable[..., Any], k: int, unit: Any, *shared: Any) -> tuple[int, Any]:
+    return k, function(unit, *shared)
+
+
+class Executor:
+    """Runs a function over independent units, on local processes or on a Ray cluster.
+
+    Use it as a context manager: a Ray instance it starts (or joins) is shut down at the end;
+    one this process had joined before is left running.
+
+    Args:
+        backend: ``"local"`` or ``"ray"`` (:data:`BACKENDS`).
+        jobs: local worker processes (None: every core); must be None with Ray, whose workers
+            are the cluster's CPUs.
+        address: the Ray cluster (``HOST:PORT``, ``ray://HOST:PORT``, ``"auto"``); None joins
+            the Ray instance this process has joined, else starts one on this machine. Probed
+            at once (:func:`check_address`). A process already joined to a Ray instance keeps
+            it (Ray joins one per process).
+        progress: show a tqdm bar on stderr for each `map` given a ``desc``.
+
+    Raises:
+        ValueError: an unknown backend, ``jobs`` < 1, ``jobs`` or ``address`` with the wrong
+            backend.
+        ClusterError: an ``address`` where no cluster answers.
+        ImportError: ``"ray"`` without Ray installed.
+    """
+
+    def __init__(
+        self,
+        backend: str = "local",
+        *,
+        jobs: int | None = None,
+        address: str | None = None,
+        progress: bool = True,
+    ) -> None:
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+        if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+            raise ValueError(f"jobs must be None or an int >= 1, got {jobs!r}")
+        if backend == "ray" and jobs is not None:
+            raise ValueError(
+                f"jobs sets local worker processes; with backend 'ray' every CPU of the cluster "
+                f"works, got jobs={jobs}"
+            )
+        if address is not None and backend != "ray":
+            raise ValueError(
+                f"address is for backend 'ray', got address={address!r} with {backend!r}"
+            )
+        self.backend = backend
+        self.jobs = jobs
+        self.address = address
+        self.progress = progress
+        self._ray: Any = None
+        self._owned = False
+        self._task: Any = None
+        if backend == "ray":
+            import_ray()
+            if address is not None:
+                check_address(address)
+
+    def __repr__(self) -> str:
+        where = f"jobs={self.jobs}" if self.backend == "local" else f"address={self.address!r}"
+        return f"Executor({self.backend!r}, {where})"
+
+    # -- lifecycle ------------------------------------------------------------------------
+
+    def __enter__(self) -> Executor:
+        if self.backend == "ray":
+            self._connect()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Shuts down the Ray instance this executor started or joined (not one the process
+        had joined before it)."""
+        if self._owned and self._ray is not None:
+            self._ray.shutdown()
+        self._ray, self._owned, self._task = None, False, None
+
+    def _connect(self) -> Any:
+        if self._ray is None:
+            ray = import_ray()
+            if not ray.is_initialized():
+                try:
+                    ray.init(address=self.address, log_to_driver=False, include_dashboard=False)
+                except (ConnectionError, RuntimeError) as exc:  # answered the probe, not Ray
+                    first = str(exc).strip().splitlines()[0] if str(exc).strip() else repr(exc)
+                    raise ClusterError(
+                        f"address {self.address}: Ray could not join the cluster ({first})"
+                    ) from None
+                self._owned = True
+            self._ray = ray
+        return self._ray
+
+    # -- what it runs on --------------------------------------------------------------------
+
+    @property
+    def remote(self) -> bool:
+        """Whether units may run on other machines (no shared disk with this process)."""
+        return self.backend == "ray"
+
+    @property
+    def workers(self) -> int:
+        """Units that run at once: local processes, or the Ray cluster's CPUs."""
+        if self.backend == "ray":
+            ray = self._connect()
+            return max(1, int(ray.cluster_resources().get("CPU", 1)))
+        return cpu_count() if self.jobs is None else self.jobs
+
+    def describe(self) -> dict[str, Any]:
+        """The backend and its workers, for a run's record (JSON values)."""
+        out: dict[str, Any] = {"backend": self.backend, "workers": self.workers}
+        if self.address is not None:
+            out["address"] = self.address
+        return out
+
+    # -- mapping ----------------------------------------------------------------------------
+
+    def map(
+        self,
+        function: Callable[..., Any],
+        units: Sequence[Any],
+        *,
+        shared: Sequence[Any] = (),
+        desc: str | None = None,
+        unit: str = "task",
+        on_done: Callable[[int, int, Any], None] | None = None,
+    ) -> list[Any]:
+        """``[function(u, *shared) for u in units]``, the units run in parallel.
+
+        Args:
+            function: a picklable function (defined at a module's top level).
+            units: the units, each picklable.
+            shared: further arguments every call takes, sent once.
+            desc: the progress bar's label (no bar without it, or with ``progress=False``).
+            unit: what a unit is called in the bar.
+            on_done: called as ``on_done(done, total, result)`` as each unit finishes.
+
+        Returns:
+            The results in the order of ``units``.
+        """
+        units = list(units)
+        results: list[Any] = [None] * len(units)
+        with tqdm(
+            total=len(units),
+            desc=desc,
+            unit=unit,
+            file=sys.stderr,
+            disable=not (self.progress and desc),
+            dynamic_ncols=True,
+        ) as bar:
+            for done, (k, result) in enumerate(
+                self.imap_unordered(function, units, shared=shared), start=1
+            ):
+                results[k] = result
+                bar.update(1)
+                if on_done is not None:
+                    on_done(done, len(units), result)
+        return results
+
+    def imap_unordered(
+        self, function: Callable[..., Any], units: Sequence[Any], *, shared: Sequence[Any] = ()
+    ) -> Iterator[tuple[int, Any]]:
+        """``(k, function(units[k], *shared))`` for every unit, as units finish."""
+        units = list(units)
+        shared = tuple(shared)
+        if not units:
+            return iter(())
+        if self.backend == "ray":
+            return self._ray_stream(function, units, shared)
+        return self._local_stream(function, units, shared)
+
+    def _local_stream(
+        self, function: Callable[..., Any], units: list[Any], shared: tuple[Any, ...]
+    ) -> Iterator[tuple[int, Any]]:
+        workers = min(self.workers, len(units))
+        if workers <= 1:
+            for k, item in enumerate(units):
+                yield k, function(item, *shared)
+            return
+        from joblib import Parallel, delayed
+
+        parallel = Parallel(
+            n_jobs=workers, backend="loky", return_as="generator_unordered", batch_size=1
+        )
+        yield from parallel(
+            delayed(_indexed)(function, k, item, *shared) for k, item in enumerate(units)
+        )
+
+    def _ray_stream(
+        self, function: Callable[..., Any], units: list[Any], shared: tuple[Any, ...]
+    ) -> Iterator[tuple[int, Any]]:
+        ray = self._connect()
+        if self._task is None:
+            self._task = ray.remote(num_cpus=1, max_retries=MAX_RETRIES, retry_exceptions=False)(
+                _apply
+            )
+        refs = [ray.put(value) for value in shared]
+        index = {}
+        for k, item in enumerate(units):
+            index[self._task.remote(function, item, *refs)] = k
+        pending = list(index)
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                k = index[done[0]]
+                yield k, self._get(ray, done[0], k)
+        finally:
+            for ref in pending:  # stopped early (an error, Ctrl-C): the rest need not run
+                ray.cancel(ref, force=True)
+
+    def _get(self, ray: Any, ref: Any, k: int) -> Any:
+        from ray.exceptions import RayError, RayTaskError
+
+        try:
+            return ray.get(ref)
+        except RayTaskError as exc:
+            cause = getattr(exc, "cause", None)
+            if isinstance(cause, BaseException):  # the function's own error, as locally
+                raise cause from None
+            raise
+        except RayError as exc:  # the worker (or its node) died more often than retried
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise ClusterError(
+                f"unit {k} was lost {MAX_RETRIES + 1} times on the Ray cluster "
+                f"({type(exc).__name__}: {first})"
+            ) from None
