@@ -3,16 +3,26 @@
 A generated folder::
 
     DIR/
-      dataset.json                                the dataset card: every parameter, the seed of
-                                                  every episode, frame counts, group sizes
-      README.md                                   the same card, for people
-      scenario=<name>/episode=<k>/part.parquet    one shard per episode, the project's format
-      recordings/episode=<k>.rrd                  with ``save_recordings``: one Rerun recording
-                                                  per episode
+      README.md                                       the dataset card, for people, with Hugging
+                                                      Face dataset-card front matter
+      dataset.json                                    the same card, for programs: every
+                                                      parameter, the seed, size and sha256 of
+                                                      every shard, frame counts, group sizes
+      data/scenario=<name>/episode=<k>/part.parquet   one shard per episode, the project's format
+      recordings/episode=<k>.rrd                      with ``save_recordings``: one Rerun
+                                                      recording per episode
 
 Every shard is an ordinary file of the project's Parquet format (`reform.datasets.write_parquet`)
 whose frames belong to the sequence ``"<name>-<k>"``, so the folder reads as one dataset with
 ``reform.datasets.read_parquet(DIR)`` (or ``load_dataset``, ``reform-sim train --data DIR``).
+``DIR/data`` holds nothing but the shards (hive-partitioned by ``scenario`` and ``episode``, no
+file inside has such a column), so other tools read it as it is: ``pandas.read_parquet(DIR /
+"data")``, ``pyarrow.dataset.dataset(DIR / "data", partitioning="hive")``, polars and DuckDB
+(``read_parquet('DIR/data/**/*.parquet', hive_partitioning = true)``); and the folder is laid
+out as a Hugging Face dataset repository (card ``README.md`` with its ``configs``), so it can be
+pushed to a hub as it is. A folder written before this layout (shards right under ``DIR``,
+``scenario=<name>/...``) still reads, and a run resuming or extending it continues in its
+layout, so that one folder never mixes the two.
 
 **Seeds.** Episode ``k`` is simulated with its own seed, drawn from the master seed by
 ``numpy.random.SeedSequence(seed, spawn_key=(k,))`` (the ``k``-th child of
@@ -101,6 +111,18 @@ BACKENDS = ("local", "ray")
 CARD_MARKDOWN = "README.md"  # the dataset card, for people
 CARD_VERSION = 1
 SHARD_FILE = "part.parquet"
+DATA_DIR = "data"  # the shards' folder (the hive root); "" in folders of the first layout
+CARD_LICENSE = "mit"  # the card's license: the toolkit's own (edit it before publishing)
+# Hugging Face size categories (number of rows): upper bound -> name.
+SIZE_CATEGORIES = (
+    (1_000, "n<1K"),
+    (10_000, "1K<n<10K"),
+    (100_000, "10K<n<100K"),
+    (1_000_000, "100K<n<1M"),
+    (10_000_000, "1M<n<10M"),
+    (100_000_000, "10M<n<100M"),
+    (1_000_000_000, "100M<n<1B"),
+)
 RECORDINGS_DIR = "recordings"
 LOCK_FILE = ".generate.lock"
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
@@ -117,9 +139,76 @@ def episode_seed(seed: int, episode: int) -> int:
     return derive_int(seed, episode)
 
 
-def shard_path(out_dir: str | os.PathLike[str], scenario: str, episode: int) -> Path:
-    """Where episode ``episode`` of ``scenario`` lives in a generated folder."""
-    return Path(out_dir) / f"scenario={scenario}" / f"episode={int(episode)}" / SHARD_FILE
+def shard_path(
+    out_dir: str | os.PathLike[str], scenario: str, episode: int, *, data_dir: str | None = None
+) -> Path:
+    """Where episode ``episode`` of ``scenario`` lives in a generated folder.
+
+    Args:
+        out_dir: the dataset folder.
+        scenario: the scenario's name.
+        episode: the episode index.
+        data_dir: the shards' folder inside ``out_dir``: ``"data"``, or ``""`` for a folder of
+            the first layout (shards right under ``out_dir``); None for the layout of the folder
+            as it is (``"data"`` for a new one).
+    """
+    folder = Path(out_dir)
+    data = folder_layout(folder) if data_dir is None else data_dir
+    return folder / data / _relative_shard(scenario, episode)
+
+
+def _relative_shard(scenario: str, episode: int) -> str:
+    """A shard's path under the hive root (`ShardSummary.path`; shards carry it)."""
+    return f"scenario={scenario}/episode={int(episode)}/{SHARD_FILE}"
+
+
+def folder_layout(out_dir: str | os.PathLike[str]) -> str:
+    """The shards' folder of a generated folder: ``"data"``, or ``""`` when the folder is of the
+    first layout (shards right under it, ``scenario=<name>/...``; its card says so even before a
+    shard is written). A new or empty folder gets ``"data"``.
+
+    Raises:
+        ValueError: the folder holds shards in both layouts.
+    """
+    folder = Path(out_dir)
+    if not folder.is_dir():
+        return DATA_DIR
+    old = next(folder.glob("scenario=*"), None)
+    if old is not None:
+        if (folder / DATA_DIR).exists():
+            raise ValueError(
+                f"out_dir {folder} holds shards in two layouts ({old.name}/ and {DATA_DIR}/): "
+                f"expected one; move {old.name}/ and its kin under {DATA_DIR}/ or use another "
+                "folder"
+            )
+        return ""
+    try:
+        card = read_card(folder)
+    except ValueError:
+        card = None
+    if card is not None and str(card.get("layout", "")).startswith("scenario="):
+        return ""
+    return DATA_DIR
+
+
+@dataclass(frozen=True)
+class _Folder:
+    """Where a run writes: the dataset folder and its shards' folder (`folder_layout`)."""
+
+    out: Path
+    data: str = DATA_DIR
+
+    @property
+    def root(self) -> Path:
+        """The hive root: ``scenario=<name>/episode=<k>/part.parquet`` below it."""
+        return self.out / self.data
+
+    def shard(self, scenario: str, episode: int) -> Path:
+        return self.root / _relative_shard(scenario, episode)
+
+    def listed(self, summary: ShardSummary) -> str:
+        """The shard's path as the card lists it: relative to the dataset folder."""
+        return f"{self.data}/{summary.path}" if self.data else summary.path
 
 
 def _recording_path(out_dir: Path, episode: int) -> Path:
@@ -404,7 +493,7 @@ def _summary(
     return ShardSummary(
         episode=int(episode),
         seed=episode_seed(spec.seed, episode),
-        path=shard_path(".", spec.scenario, episode).as_posix().removeprefix("./"),
+        path=_relative_shard(spec.scenario, episode),
         sequence=_sequence_name(spec.scenario, episode),
         frames=frames,
         annotated_frames=annotated,
@@ -465,11 +554,11 @@ def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> d
 
 
 def _write_episode(
-    spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
+    spec: GenerationSpec, folder: _Folder, episode: int, *, save_recordings: bool
 ) -> ShardSummary:
     """`_simulate_and_write`, its errors naming the episode and its seed (to reproduce it)."""
     try:
-        return _simulate_and_write(spec, out_dir, episode, save_recordings=save_recordings)
+        return _simulate_and_write(spec, folder, episode, save_recordings=save_recordings)
     except ValueError as exc:
         raise ValueError(
             f"episode {episode} of {spec.scenario} (episode seed {episode_seed(spec.seed, episode)}"
@@ -478,7 +567,7 @@ def _write_episode(
 
 
 def _simulate_and_write(
-    spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
+    spec: GenerationSpec, folder: _Folder, episode: int, *, save_recordings: bool
 ) -> ShardSummary:
     """Simulates one episode and writes its recording (if asked) and then its shard.
 
@@ -492,7 +581,7 @@ def _simulate_and_write(
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
     sequence = _sequence_name(spec.scenario, episode)
     source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
-    path = shard_path(out_dir, spec.scenario, episode)
+    path = folder.shard(spec.scenario, episode)
     annotation = spec.annotation_of(episode)
     if spec.view == "truth" and not save_recordings and annotation is None:
         block = FrameBlock.concatenate(
@@ -516,7 +605,7 @@ def _simulate_and_write(
         sequence=sequence,
     )
     if save_recordings:  # the simulated episode, before any annotation model
-        _record(spec, episode, result, _recording_path(out_dir, episode))
+        _record(spec, episode, result, _recording_path(folder.out, episode))
     frames = result.dataset.frames
     metadata: dict[str, Any] = {}
     if annotation is not None:  # as the annotation records it (reform.annotation)
@@ -557,10 +646,9 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
 
 
 def _run_batch(
-    spec: GenerationSpec, out_dir: str, episodes: Sequence[int], save_recordings: bool
+    spec: GenerationSpec, folder: _Folder, episodes: Sequence[int], save_recordings: bool
 ) -> list[ShardSummary]:
-    """A batch of episodes, written straight into ``out_dir`` (local workers)."""
-    folder = Path(out_dir)
+    """A batch of episodes, written straight into ``folder`` (local workers)."""
     return [_write_episode(spec, folder, k, save_recordings=save_recordings) for k in episodes]
 
 
@@ -570,13 +658,13 @@ def _run_batch_bytes(
     """A batch of episodes, sent back as file contents (Ray workers, maybe on other machines)."""
     out = []
     with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
-        folder = Path(scratch)
+        folder = _Folder(Path(scratch))
         for k in episodes:
             summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
-            shard = (folder / summary.path).read_bytes()
+            shard = (folder.root / summary.path).read_bytes()
             recording = None
             if save_recordings:
-                recording = _recording_path(folder, k).read_bytes()
+                recording = _recording_path(folder.out, k).read_bytes()
             out.append((summary, shard, recording))
     return out
 
@@ -612,9 +700,8 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
 
 def _is_ours(name: str) -> bool:
     """Entries a generated folder may hold besides its shards."""
-    return name in (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR) or name.startswith(
-        ("scenario=", ".")
-    )
+    ours = (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR, DATA_DIR)
+    return name in ours or name.startswith(("scenario=", "."))
 
 
 def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -> None:
@@ -687,7 +774,12 @@ def _folder_lock(out_dir: Path) -> Iterator[None]:
 
 def _remove_stale_temporaries(out_dir: Path) -> None:
     """Temporary files of a killed run (``.part.parquet.*.tmp`` and the like)."""
-    for pattern in ("scenario=*/episode=*/.*.tmp", f"{RECORDINGS_DIR}/.*.tmp", ".*.tmp"):
+    for pattern in (
+        f"{DATA_DIR}/scenario=*/episode=*/.*.tmp",
+        "scenario=*/episode=*/.*.tmp",
+        f"{RECORDINGS_DIR}/.*.tmp",
+        ".*.tmp",
+    ):
         for path in out_dir.glob(pattern):
             if path.is_dir():
                 shutil.rmtree(path, ignore_errors=True)
@@ -695,13 +787,15 @@ def _remove_stale_temporaries(out_dir: Path) -> None:
                 path.unlink(missing_ok=True)
 
 
-def _finished(out_dir: Path, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:
-    if not shard_path(out_dir, spec.scenario, episode).is_file():
+def _finished(folder: _Folder, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:
+    if not folder.shard(spec.scenario, episode).is_file():
         return False
-    return not save_recordings or _recording_path(out_dir, episode).is_file()
+    return not save_recordings or _recording_path(folder.out, episode).is_file()
 
 
-def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict[int, ShardSummary]:
+def _existing_shards(
+    folder: _Folder, spec: GenerationSpec, episodes: int
+) -> dict[int, ShardSummary]:
     """The summaries of the shards already in the folder, each checked to be its episode's.
 
     A shard copied or moved to another episode's place would otherwise be taken for that
@@ -716,7 +810,7 @@ def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict
     shards: dict[int, ShardSummary] = {}
     problems: list[DataFormatError] = []
     for k in range(episodes):
-        path = shard_path(out_dir, spec.scenario, k)
+        path = folder.shard(spec.scenario, k)
         if not path.is_file():
             continue
         try:
@@ -727,7 +821,7 @@ def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict
         shown = "; ".join(str(p) for p in problems[:SHOWN_PROBLEMS])
         more = len(problems) - SHOWN_PROBLEMS
         raise ValueError(
-            f"out_dir {out_dir}: {len(problems)} of the {len(problems) + len(shards)} shards "
+            f"out_dir {folder.out}: {len(problems)} of the {len(problems) + len(shards)} shards "
             f"already there {'is' if len(problems) == 1 else 'are'} not the episode "
             f"{'its place says' if len(problems) == 1 else 'their places say'}: {shown}"
             + (f"; and {more} more" if more > 0 else "")
@@ -836,10 +930,13 @@ def _card(
     complete: bool,
     resolved_options: Mapping[str, Any] | None,
     files: Mapping[str, Mapping[str, Any]] | None = None,
+    data_dir: str = DATA_DIR,
 ) -> dict[str, Any]:
     """The card; ``files`` (shard path -> ``bytes`` and ``sha256``) are listed with each shard,
-    so that a reader can tell a missing, truncated or altered shard (the final card has them)."""
+    so that a reader can tell a missing, truncated or altered shard (the final card has them).
+    Shards are listed by their path in the folder (under ``data_dir``)."""
     files = files or {}
+    folder = _Folder(Path(), data_dir)
     sizes: Counter[int] = Counter()
     for shard in shards:
         sizes.update(shard.group_sizes)
@@ -850,8 +947,8 @@ def _card(
         "parameters": spec.parameters(),
         "scenario_options_resolved": resolved_options,
         "episodes": episodes,
-        "layout": f"scenario={spec.scenario}/episode=<k>/{SHARD_FILE}, sequence "
-        f"'{spec.scenario}-<k>'",
+        "layout": f"{data_dir + '/' if data_dir else ''}scenario={spec.scenario}/episode=<k>/"
+        f"{SHARD_FILE}, sequence '{spec.scenario}-<k>'",
         "command": _command(spec, episodes),
         "totals": {
             "shards": len(shards),
@@ -862,18 +959,18 @@ def _card(
             "group_sizes": {str(k): v for k, v in sorted(sizes.items())},
         },
         "shards": [
-            {**s.to_json(), **files.get(s.path, {})}
+            {**s.to_json(), "path": folder.listed(s), **files.get(s.path, {})}
             for s in sorted(shards, key=lambda s: s.episode)
         ],
     }
 
 
-def _shard_files(out_dir: Path, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
+def _shard_files(folder: _Folder, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
     """Each shard's size and sha256, for the card."""
 
     files = {}
     for shard in shards:
-        path = out_dir / shard.path
+        path = folder.root / shard.path
         digest = hashlib.sha256()
         with open(path, "rb") as handle:
             for block in iter(lambda: handle.read(1 << 20), b""):
@@ -937,10 +1034,47 @@ def _annotation_text(annotation: Any) -> str:
     return f"`{json.dumps(annotation, sort_keys=True)}` (`reform.annotation.AnnotationModel`)"
 
 
+def _size_category(rows: int) -> str:
+    """The Hugging Face size category of a dataset of ``rows`` rows."""
+    for bound, name in SIZE_CATEGORIES:
+        if rows < bound:
+            return name
+    return "n>1B"
+
+
+def _front_matter(card: Mapping[str, Any]) -> list[str]:
+    """The Hugging Face dataset-card metadata (YAML): license, task, tags, size, and the
+    ``configs`` that point the hub at the shards. Strings are JSON, which YAML reads as is."""
+    p = card["parameters"]
+    data = str(card["layout"]).split("scenario=", 1)[0]
+    q = json.dumps
+    return [
+        "---",
+        f"license: {CARD_LICENSE}",
+        f"pretty_name: {q('reform-sim synthetic dataset: ' + p['scenario'])}",
+        "task_categories:",
+        "- robotics",
+        "tags:",
+        *(f"- {t}" for t in ("f-formation", "social-robotics", "group-detection", "synthetic")),
+        *(f"- {t}" for t in ("simulation", "mujoco", "reform-sim")),
+        "size_categories:",
+        f"- {q(_size_category(int(card['totals']['rows'])))}",
+        "configs:",
+        "- config_name: default",
+        "  data_files:",
+        "  - split: train",
+        f"    path: {q(data + 'scenario=*/episode=*/*.parquet')}",
+        "---",
+        "",
+    ]
+
+
 def _markdown(card: Mapping[str, Any]) -> str:
     p = card["parameters"]
     totals = card["totals"]
+    data = str(card["layout"]).split("scenario=", 1)[0]
     lines = [
+        *_front_matter(card),
         f"# Synthetic dataset: {p['scenario']}",
         "",
         f"Generated by {p['package_version']} ({card['kind']}); "
@@ -959,6 +1093,17 @@ def _markdown(card: Mapping[str, Any]) -> str:
         "dataset = read_parquet('DIR')"
         if card["complete"]
         else "dataset = read_parquet('DIR', allow_incomplete=True)  # the episodes written so far",
+        "```",
+        "",
+        "Other tools read the shards (one row per person and frame, columns "
+        "`reform.datasets.COLUMNS`, plus the hive columns `scenario` and `episode`):",
+        "",
+        "```python",
+        "import pandas",
+        f"table = pandas.read_parquet('DIR/{data}')",
+        "import duckdb",
+        f"duckdb.sql(\"SELECT * FROM read_parquet('DIR/{data}**/*.parquet', "
+        "hive_partitioning = true)\")",
         "```",
         "",
         "## Parameters",
@@ -1074,7 +1219,7 @@ def _check_size(
         workers=workers,
         arrays=spec.view == "truth" and not save_recordings,
     )
-    folder = out_dir / f"scenario={spec.scenario}"
+    folder = _Folder(out_dir, folder_layout(out_dir)).root / f"scenario={spec.scenario}"
     there = sum(1 for _ in folder.glob(f"episode=*/{SHARD_FILE}")) if folder.is_dir() else 0
     missing = max(0, episodes - there)
     sizing.check(
@@ -1105,21 +1250,21 @@ def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
 
 def _local(
     spec: GenerationSpec,
-    out_dir: Path,
+    folder: _Folder,
     batches: list[list[int]],
     n_jobs: int,
     save_recordings: bool,
 ) -> Iterator[list[ShardSummary]]:
     if n_jobs == 1 or len(batches) == 1:
         for batch in batches:
-            yield _run_batch(spec, str(out_dir), batch, save_recordings)
+            yield _run_batch(spec, folder, batch, save_recordings)
         return
 
     parallel = Parallel(
         n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
     )
     yield from parallel(
-        delayed(_run_batch)(spec, str(out_dir), batch, save_recordings) for batch in batches
+        delayed(_run_batch)(spec, folder, batch, save_recordings) for batch in batches
     )
 
 
@@ -1147,7 +1292,7 @@ def _ray_cpus(address: str | None) -> tuple[Any, bool, int]:
 def _ray(
     ray: Any,
     spec: GenerationSpec,
-    out_dir: Path,
+    folder: _Folder,
     batches: list[list[int]],
     save_recordings: bool,
 ) -> Iterator[list[ShardSummary]]:
@@ -1158,9 +1303,9 @@ def _ray(
         summaries = []
         for summary, shard, recording in ray.get(done[0]):
             if recording is not None:
-                with atomic_path(_recording_path(out_dir, summary.episode)) as tmp:
+                with atomic_path(_recording_path(folder.out, summary.episode)) as tmp:
                     tmp.write_bytes(recording)
-            with atomic_path(out_dir / summary.path) as tmp:
+            with atomic_path(folder.root / summary.path) as tmp:
                 tmp.write_bytes(shard)
             summaries.append(summary)
         yield summaries
@@ -1262,14 +1407,22 @@ def generate_dataset(
 
     with _folder_lock(out_dir):
         _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
+        folder = _Folder(out_dir, folder_layout(out_dir))
         _remove_stale_temporaries(out_dir)
-        existing = _existing_shards(out_dir, spec, episodes)
-        done = [k for k in existing if _finished(out_dir, spec, k, save_recordings)]
+        existing = _existing_shards(folder, spec, episodes)
+        done = [k for k in existing if _finished(folder, spec, k, save_recordings)]
         shards = {k: existing[k] for k in done}
         todo = [k for k in range(episodes) if k not in shards]
         _write_cards(
             out_dir,
-            _card(spec, episodes, list(shards.values()), complete=False, resolved_options=resolved),
+            _card(
+                spec,
+                episodes,
+                list(shards.values()),
+                complete=False,
+                resolved_options=resolved,
+                data_dir=folder.data,
+            ),
         )
         ray = None
         owned = False
@@ -1281,10 +1434,10 @@ def generate_dataset(
         try:
             batches = _batches(todo, workers)
             if backend == "ray":
-                results = _ray(ray, spec, out_dir, batches, save_recordings)
+                results = _ray(ray, spec, folder, batches, save_recordings)
             else:
                 results = _local(
-                    spec, out_dir, batches, min(workers, len(batches) or 1), save_recordings
+                    spec, folder, batches, min(workers, len(batches) or 1), save_recordings
                 )
             _drain(results, shards, episodes, spec.scenario, progress)
         finally:
@@ -1298,7 +1451,8 @@ def generate_dataset(
             summaries,
             complete=True,
             resolved_options=resolved,
-            files=_shard_files(out_dir, summaries),
+            files=_shard_files(folder, summaries),
+            data_dir=folder.data,
         )
         _write_cards(out_dir, card)
     return GenerationReport(

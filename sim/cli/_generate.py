@@ -15,8 +15,9 @@ from sim.cli._common import (
 
 DESCRIPTION = """\
 Simulates EPISODES episodes of a scenario and writes them as hive-partitioned Parquet
-(DIR/scenario=NAME/episode=K/part.parquet) with a dataset card (DIR/dataset.json,
-DIR/README.md). Same seed, same data; finished shards are skipped, so an interrupted run resumes
+(DIR/data/scenario=NAME/episode=K/part.parquet, which pandas, pyarrow, polars and DuckDB read as
+they are) with a dataset card (DIR/dataset.json, and DIR/README.md with Hugging Face front
+matter, so that the folder can be pushed to a hub as it is). Same seed, same data; finished shards are skipped, so an interrupted run resumes
 and a larger --episodes extends. The run is sized first (memory, disk, time; sim.sizing) and
 refused in one line when it cannot fit this machine.
 """
