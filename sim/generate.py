@@ -42,8 +42,21 @@ starts, and so is a folder another run is writing.
 
 **Parallelism.** Episodes run in batches (tiny tasks are slower in parallel) on local processes
 (joblib's loky backend, every core by default), or as Ray remote tasks on an existing cluster
-(``backend="ray"``, ``address=...``). Ray workers send each shard back as bytes and this process
-writes it, so the cluster needs no shared file system, only reform-sim installed on every node.
+(``backend="ray"``, ``address=...``). Ray workers writing to a folder on this machine send each
+shard back as bytes and this process writes it, so the cluster needs no shared file system, only
+reform-sim installed on every node.
+
+**Object storage.** ``out_dir`` may be a URI (``s3://bucket/prefix``, ``gs://…``, any fsspec
+filesystem; `reform.datasets.store`), credentials from the environment. Every worker (local or
+Ray) writes its shards there itself, each in two steps: the shard object (whole or absent), then
+its commit object (`reform.datasets.store_dataset`); the finished run writes the card listing
+every shard with its size and sha256, and deletes the commits. A resumed run skips the committed
+shards and writes the others again (an uncommitted shard object is never taken for done, nor
+read). Two runs on one prefix are refused: the lock object ``.generate.lock`` is created only if
+there is none (S3: ``If-None-Match: *``); one left by a killed run on this machine (its process
+gone) is taken over with a conditional overwrite (``If-Match`` its ETag). An unusable store (no
+credentials, unreachable, no such bucket) or a prefix holding something else is refused in one
+line before any work.
 """
 
 from __future__ import annotations
@@ -56,6 +69,7 @@ import math
 import os
 import shlex
 import shutil
+import socket
 import sys
 import tempfile
 import time
@@ -77,6 +91,8 @@ from reform.annotation import ANNOTATION_RANGES, AnnotationModel, draw_annotatio
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.errors import DataFormatError
 from reform.datasets.parquet import CARD_JSON, FORMAT_VERSION, METADATA_KEY, write_parquet
+from reform.datasets.store import Store, is_uri, open_store
+from reform.datasets.store_dataset import COMMITS_DIR, StoreFolder, commit_name
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
 from reform.seeding import ANNOTATION, ANNOTATION_DRAW, derive_int, derive_rng
@@ -435,7 +451,7 @@ class GenerationReport:
     """What a call of `generate_dataset` did.
 
     Attributes:
-        out_dir: the dataset folder.
+        out_dir: the dataset folder (its URI in a store).
         spec: the parameters.
         episodes: episodes in the dataset.
         generated: episodes simulated by this call.
@@ -444,10 +460,10 @@ class GenerationReport:
         seconds: wall-clock time of this call, seconds.
         backend: ``"local"`` or ``"ray"``.
         n_jobs: worker processes used (local), or the cluster's CPUs (Ray).
-        card: path of the JSON card; ``card_markdown`` of the Markdown one.
+        card: path (URI) of the JSON card; ``card_markdown`` of the Markdown one.
     """
 
-    out_dir: Path
+    out_dir: Path | str
     spec: GenerationSpec
     episodes: int
     generated: tuple[int, ...]
@@ -456,8 +472,8 @@ class GenerationReport:
     seconds: float
     backend: str
     n_jobs: int
-    card: Path
-    card_markdown: Path
+    card: Path | str
+    card_markdown: Path | str
 
     @property
     def frames(self) -> int:
@@ -669,8 +685,31 @@ def _run_batch_bytes(
     return out
 
 
-# ------------------------------------------------------------------------------------------
-# The folder: card, lock, finished shards
+def _run_batch_store(
+    spec: GenerationSpec, uri: str, episodes: Sequence[int], save_recordings: bool
+) -> list[tuple[ShardSummary, dict[str, Any]]]:
+    """A batch of episodes written to the store at ``uri`` by this worker: each shard, then its
+    commit. Returns each summary with its shard's ``bytes`` and ``sha256``."""
+    store = open_store(uri, check=False)
+    out = []
+    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
+        folder = _Folder(Path(scratch))
+        for k in episodes:
+            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
+            local = folder.root / summary.path
+            shard = local.read_bytes()
+            local.unlink()
+            if save_recordings:
+                recording = _recording_path(folder.out, k)
+                store.write(recording.relative_to(folder.out).as_posix(), recording.read_bytes())
+                recording.unlink()
+            listed = f"{DATA_DIR}/{summary.path}"
+            store.write(listed, shard)
+            files = {"bytes": len(shard), "sha256": hashlib.sha256(shard).hexdigest()}
+            entry = {**summary.to_json(), "path": listed, **files}
+            store.write(commit_name(k), json.dumps(entry, sort_keys=True).encode())
+            out.append((summary, files))
+    return out
 
 
 def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
@@ -720,6 +759,20 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
                 f"empty or new folder, or one made by reform-sim generate, found {shown}"
             )
         return
+    _check_card(str(out_dir), card, parameters, episodes)
+    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+    if extra:
+        raise ValueError(
+            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"{', '.join(extra[:5])}"
+        )
+
+
+def _check_card(
+    out: str, card: Mapping[str, Any], parameters: Mapping[str, Any], episodes: int
+) -> None:
+    """Refuses a card of another dataset, or of more episodes than asked for."""
+    out_dir = out
     theirs = card["parameters"]
     differing = sorted(
         k for k in set(theirs) | set(parameters) if theirs.get(k) != parameters.get(k)
@@ -741,12 +794,128 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
             f"episodes: out_dir {out_dir} holds a dataset of {held} episodes, asked for "
             f"{episodes}; ask for at least {held} (more extends it) or use another folder"
         )
-    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+
+
+def _store_card(store: Store) -> dict[str, Any] | None:
+    """`read_card` of a dataset in a store."""
+    text = store.read(CARD_JSON)
+    if text is None:
+        return None
+    try:
+        card = json.loads(text)
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise ValueError(
+            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card (JSON), got "
+            f"{type(exc).__name__}"
+        ) from None
+    if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
+        raise ValueError(
+            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card with a 'parameters' "
+            f"object, got {type(card).__name__}"
+        )
+    return card
+
+
+def _check_store(store: Store, parameters: Mapping[str, Any], episodes: int) -> None:
+    """`_check_folder` of a prefix in a store: empty, or holding this dataset alone."""
+    names = {name.split("/", 1)[0] for name in store.sizes()}
+    card = _store_card(store)
+    if card is None:
+        foreign = sorted(n for n in names if not n.startswith("."))
+        if foreign:
+            shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
+            raise ValueError(
+                f"out_dir {store.uri} holds objects but no dataset card ({CARD_JSON}): expected "
+                f"an empty prefix or one written by reform-sim generate, found {shown}"
+            )
+        return
+    _check_card(store.uri, card, parameters, episodes)
+    extra = sorted(n for n in names if not _is_ours(n) and n != COMMITS_DIR)
     if extra:
         raise ValueError(
-            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"out_dir {store.uri} holds objects that are not part of a generated dataset: "
             f"{', '.join(extra[:5])}"
         )
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def _store_lock(store: Store) -> Iterator[None]:
+    """Holds the lock object of a prefix in a store, refusing a second concurrent run.
+
+    The lock is created only if there is none. One held by a run of this machine whose process
+    is gone (killed) is taken over, only if it is still that run's (a conditional overwrite);
+    one of another machine is refused, with what to delete if that run is gone.
+    """
+    mine = json.dumps(
+        {
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+            "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        }
+    ).encode()
+    if not store.create(LOCK_FILE, mine):
+        tag = store.tag(LOCK_FILE)
+        try:
+            holder = json.loads(store.read(LOCK_FILE) or b"{}")
+        except (UnicodeDecodeError, json.JSONDecodeError):
+            holder = {}
+        holder = holder if isinstance(holder, dict) else {}
+        pid = holder.get("pid")
+        gone = (
+            holder.get("host") == socket.gethostname() and isinstance(pid, int) and not _alive(pid)
+        )
+        if not (gone and tag and store.replace(LOCK_FILE, mine, tag)):
+            raise ValueError(
+                f"out_dir {store.uri} is being written by another reform-sim generate run "
+                f"(host {holder.get('host', '?')}, process {pid or '?'}, since "
+                f"{holder.get('started', '?')}); wait for it to finish or use another prefix; "
+                f"if that run is gone, delete {store.url(LOCK_FILE)}"
+            )
+    try:
+        yield
+    finally:
+        if store.read(LOCK_FILE) == mine:
+            store.delete(LOCK_FILE)
+
+
+def _committed_shards(
+    store: Store, spec: GenerationSpec, episodes: int
+) -> dict[int, tuple[ShardSummary, dict[str, Any]]]:
+    """The shards already done in a store: listed by its card with their size and sha256 (a
+    finished dataset being extended) or committed by a run, each still there with that size
+    and of its episode. Any other shard object is written again."""
+    folder = StoreFolder(store)
+    entries: dict[int, Mapping[str, Any]] = {}
+    card = _store_card(store)
+    for entry in (card or {}).get("shards", []):
+        if isinstance(entry, dict) and "sha256" in entry:
+            entries[int(entry["episode"])] = entry
+    entries.update(folder.commits())
+    done = {}
+    for k, entry in entries.items():
+        expected = _summary(spec, k, 0, 0, 0, {})
+        path = f"{DATA_DIR}/{expected.path}"
+        if k >= episodes or entry.get("path") != path or folder.size(path) != entry.get("bytes"):
+            continue
+        summary = ShardSummary.from_json({**entry, "path": expected.path})
+        if (summary.seed, summary.sequence) != (expected.seed, expected.sequence):
+            continue
+        done[k] = (summary, {"bytes": entry["bytes"], "sha256": entry["sha256"]})
+    return done
+
+
+# ------------------------------------------------------------------------------------------
+# The folder: card, lock, finished shards (on this machine)
 
 
 @contextlib.contextmanager
@@ -1201,7 +1370,7 @@ def _check_size(
     made: Any,
     *,
     episodes: int,
-    out_dir: Path,
+    out_dir: Path | None,
     workers: int,
     save_recordings: bool,
     max_memory: int | None,
@@ -1219,8 +1388,10 @@ def _check_size(
         workers=workers,
         arrays=spec.view == "truth" and not save_recordings,
     )
-    folder = _Folder(out_dir, folder_layout(out_dir)).root / f"scenario={spec.scenario}"
-    there = sum(1 for _ in folder.glob(f"episode=*/{SHARD_FILE}")) if folder.is_dir() else 0
+    there = 0
+    if out_dir is not None:
+        folder = _Folder(out_dir, folder_layout(out_dir)).root / f"scenario={spec.scenario}"
+        there = sum(1 for _ in folder.glob(f"episode=*/{SHARD_FILE}")) if folder.is_dir() else 0
     missing = max(0, episodes - there)
     sizing.check(
         estimate,
@@ -1340,7 +1511,9 @@ def generate_dataset(
         scenario: a registered scenario name (``scenarios.names()``).
         episodes: number of episodes (shards), >= 1.
         seed: master seed, >= 0; episode ``k`` gets `episode_seed`\\ ``(seed, k)``.
-        out_dir: the dataset folder: new, empty, or holding this same dataset (resume/extend).
+        out_dir: the dataset folder: new, empty, or holding this same dataset (resume/extend);
+            a path, or a store's URI (``s3://bucket/prefix``, any fsspec filesystem;
+            credentials from the environment, `reform.datasets.store`).
         options: scenario option overrides (JSON values), as for ``scenarios.make``.
         view: ``"truth"`` or ``"robot"`` (observed by the robot's head sensor).
         sensor: the robot view's sensor model: a ``sim.Sensor`` or a mapping of its fields;
@@ -1365,6 +1538,8 @@ def generate_dataset(
     Raises:
         ValueError: bad parameters, an unknown scenario (the known ones are listed), impossible
             scenario options, or an ``out_dir`` holding something else: before any work.
+        reform.datasets.store.StoreError: (a ValueError) a store that cannot be used: no
+            credentials, unreachable, no such bucket; before any work.
         sim.sizing.RequestTooLarge: (a ValueError) a dataset whose memory, disk or time cannot
             fit this machine (`sim.sizing.check`), before any work.
         ImportError: ``backend="ray"`` without Ray installed.
@@ -1389,18 +1564,33 @@ def generate_dataset(
     )
     if max_memory is not None:
         max_memory = _check_int("max_memory", max_memory, minimum=1)
-    out_dir = Path(out_dir)
+    store = open_store(os.fspath(out_dir)) if is_uri(out_dir) else None
+    if store is None:
+        out_dir = Path(out_dir)
     resolved, made = _check_scenario(spec)
     _check_size(
         spec,
         made,
         episodes=episodes,
-        out_dir=out_dir,
+        out_dir=out_dir if store is None else None,
         workers=1 if backend == "ray" else n_jobs or _cpu_count(),
         save_recordings=save_recordings,
         max_memory=max_memory,
     )
     parameters = spec.parameters()
+    if store is not None:
+        return _generate_store(
+            store,
+            spec,
+            episodes=episodes,
+            resolved=resolved,
+            backend=backend,
+            address=address,
+            n_jobs=n_jobs,
+            save_recordings=save_recordings,
+            progress=progress,
+            started=started,
+        )
     _check_folder(out_dir, parameters, episodes)
     if backend == "ray":
         _import_ray()
@@ -1468,6 +1658,121 @@ def generate_dataset(
         card=card_path,
         card_markdown=out_dir / CARD_MARKDOWN,
     )
+
+
+def _generate_store(
+    store: Store,
+    spec: GenerationSpec,
+    *,
+    episodes: int,
+    resolved: dict[str, Any],
+    backend: str,
+    address: str | None,
+    n_jobs: int | None,
+    save_recordings: bool,
+    progress: bool,
+    started: float,
+) -> GenerationReport:
+    """`generate_dataset` into a store: the workers write the shards and their commits."""
+    parameters = spec.parameters()
+    _check_store(store, parameters, episodes)
+    if backend == "ray":
+        _import_ray()
+    with _store_lock(store):
+        _check_store(store, parameters, episodes)  # again, now that no other run can write
+        existing = _committed_shards(store, spec, episodes)
+        objects = store.sizes()
+        done = [
+            k
+            for k in existing
+            if not save_recordings or f"{RECORDINGS_DIR}/episode={k}.rrd" in objects
+        ]
+        shards = {k: existing[k][0] for k in done}
+        files = {existing[k][0].path: existing[k][1] for k in done}
+        todo = [k for k in range(episodes) if k not in shards]
+        _write_store_cards(
+            store,
+            _card(spec, episodes, list(shards.values()), complete=False, resolved_options=resolved),
+        )
+        ray = None
+        owned = False
+        if backend == "ray":
+            ray, owned, workers = _ray_cpus(address)
+        else:
+            workers = max(1, min(n_jobs or _cpu_count(), len(todo)))
+        try:
+            batches = _batches(todo, workers)
+            if backend == "ray":
+                results = _ray_store(ray, spec, store.uri, batches, save_recordings)
+            else:
+                results = _local_store(
+                    spec, store.uri, batches, min(workers, len(batches) or 1), save_recordings
+                )
+            _drain(_collect(results, files), shards, episodes, spec.scenario, progress)
+        finally:
+            if owned:
+                ray.shutdown()
+        summaries = [shards[k] for k in range(episodes)]
+        card = _card(
+            spec, episodes, summaries, complete=True, resolved_options=resolved, files=files
+        )
+        _write_store_cards(store, card)
+        store.delete(*store.sizes(COMMITS_DIR))  # the card lists every shard now
+    return GenerationReport(
+        out_dir=store.uri,
+        spec=spec,
+        episodes=episodes,
+        generated=tuple(todo),
+        skipped=tuple(done),
+        shards=tuple(summaries),
+        seconds=time.perf_counter() - started,
+        backend=backend,
+        n_jobs=workers,
+        card=store.url(CARD_JSON),
+        card_markdown=store.url(CARD_MARKDOWN),
+    )
+
+
+def _write_store_cards(store: Store, card: Mapping[str, Any]) -> None:
+    store.write(CARD_JSON, (json.dumps(card, indent=2, allow_nan=False) + "\n").encode())
+    store.write(CARD_MARKDOWN, _markdown(card).encode())
+
+
+def _local_store(
+    spec: GenerationSpec, uri: str, batches: list[list[int]], n_jobs: int, save_recordings: bool
+) -> Iterator[list[tuple[ShardSummary, dict[str, Any]]]]:
+    if n_jobs == 1 or len(batches) == 1:
+        for batch in batches:
+            yield _run_batch_store(spec, uri, batch, save_recordings)
+        return
+    parallel = Parallel(
+        n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
+    )
+    yield from parallel(
+        delayed(_run_batch_store)(spec, uri, batch, save_recordings) for batch in batches
+    )
+
+
+def _ray_store(
+    ray: Any, spec: GenerationSpec, uri: str, batches: list[list[int]], save_recordings: bool
+) -> Iterator[list[tuple[ShardSummary, dict[str, Any]]]]:
+    """Each Ray worker writes its shards to the store itself; only summaries come back."""
+    task = ray.remote(num_cpus=1, max_retries=2)(_run_batch_store)
+    pending = [task.remote(spec, uri, batch, save_recordings) for batch in batches]
+    while pending:
+        done, pending = ray.wait(pending, num_returns=1)
+        yield ray.get(done[0])
+
+
+def _collect(
+    results: Iterable[list[tuple[ShardSummary, dict[str, Any]]]],
+    files: dict[str, dict[str, Any]],
+) -> Iterator[list[ShardSummary]]:
+    """The summaries of ``results``, their shards' sizes and sha256 kept in ``files``."""
+    for batch in results:
+        for summary, shard in batch:
+            files[summary.path] = shard
+        yield [summary for summary, _ in batch]
 
 
 def _cpu_count() -> int:

@@ -58,7 +58,11 @@ def _info_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _verify_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("path", metavar="DIR", help="a folder written by reform-sim generate")
+    parser.add_argument(
+        "path",
+        metavar="DIR|URI",
+        help="a folder written by reform-sim generate, or its URI in a store (s3://bucket/prefix)",
+    )
     parser.set_defaults(handler=run_with("sim.cli.data:run_verify"))
 
 
