@@ -712,6 +712,10 @@ def _run_batch_store(
     return out
 
 
+# ------------------------------------------------------------------------------------------
+# The dataset: its card, what it may hold
+
+
 def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
     """The JSON card of a generated folder, or ``None`` when it has none.
 
@@ -771,8 +775,8 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
 def _check_card(
     out: str, card: Mapping[str, Any], parameters: Mapping[str, Any], episodes: int
 ) -> None:
-    """Refuses a card of another dataset, or of more episodes than asked for."""
-    out_dir = out
+    """Refuses a card of another dataset, or of more episodes than asked for (``out``: the
+    folder or URI, for the message)."""
     theirs = card["parameters"]
     differing = sorted(
         k for k in set(theirs) | set(parameters) if theirs.get(k) != parameters.get(k)
@@ -784,16 +788,20 @@ def _check_card(
             for k in differing
         )
         raise ValueError(
-            f"out_dir {out_dir} holds another dataset (its {CARD_JSON} differs in "
+            f"out_dir {out} holds another dataset (its {CARD_JSON} differs in "
             f"{', '.join(differing)}): {details}. Use another folder, or the same parameters "
             "to resume it"
         )
     held = int(card.get("episodes", 0))
     if episodes < held:
         raise ValueError(
-            f"episodes: out_dir {out_dir} holds a dataset of {held} episodes, asked for "
+            f"episodes: out_dir {out} holds a dataset of {held} episodes, asked for "
             f"{episodes}; ask for at least {held} (more extends it) or use another folder"
         )
+
+
+# ------------------------------------------------------------------------------------------
+# A prefix in a store: card, lock, committed shards
 
 
 def _store_card(store: Store) -> dict[str, Any] | None:
@@ -915,7 +923,7 @@ def _committed_shards(
 
 
 # ------------------------------------------------------------------------------------------
-# The folder: card, lock, finished shards (on this machine)
+# A folder on this machine: lock, finished shards
 
 
 @contextlib.contextmanager
@@ -1272,7 +1280,7 @@ def _markdown(card: Mapping[str, Any]) -> str:
         f"table = pandas.read_parquet('DIR/{data}')",
         "import duckdb",
         f"duckdb.sql(\"SELECT * FROM read_parquet('DIR/{data}**/*.parquet', "
-        "hive_partitioning = true)\")",
+        'hive_partitioning = true)")',
         "```",
         "",
         "## Parameters",

@@ -435,10 +435,10 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
             units="m",
             metadata=header.get("metadata", {}),
         )
-    return _read_folder(_Folder(path), allow_incomplete=allow_incomplete)
+    return _read_folder(_LocalFolder(path), allow_incomplete=allow_incomplete)
 
 
-class _Folder:
+class _LocalFolder:
     """A dataset folder on this machine, as `_read_folder` and `_check_shards` see it: files by
     relative path."""
 
@@ -483,7 +483,7 @@ class _Folder:
 
 
 def _read_folder(source: Any, *, allow_incomplete: bool) -> Dataset:
-    """A folder of Parquet files (`_Folder`, or `reform.datasets.store` one) as one dataset."""
+    """A folder of Parquet files (`_LocalFolder`, or `reform.datasets.store` one) as one dataset."""
     files = source.parquet_files()
     card = source.card()
     problems: list[DataFormatError] = []
@@ -492,9 +492,7 @@ def _read_folder(source: Any, *, allow_incomplete: bool) -> Dataset:
             _check_complete(source, card, len(files))
         files, problems = _check_shards(source, card, files, allow_incomplete=allow_incomplete)
     if not files and not problems:
-        raise DataFormatError(
-            source.where(), None, None, "a folder holding .parquet files", "none"
-        )
+        raise DataFormatError(source.where(), None, None, "a folder holding .parquet files", "none")
     files.sort(key=lambda p: _natural_key(Path(p)))
     frames: list[Frame] = []
     shards = []
@@ -1168,7 +1166,7 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
 
 
 def _source(path: str | PathLike[str]) -> Any:
-    """The folder at ``path`` (a `_Folder`, or a store's for a URI); None when there is none."""
+    """The folder at ``path`` (a `_LocalFolder`, or a store's for a URI); None when none."""
     from reform.datasets.store import is_uri
 
     if is_uri(path):
@@ -1176,4 +1174,4 @@ def _source(path: str | PathLike[str]) -> Any:
 
         return StoreFolder.open(str(path))
     folder = Path(path)
-    return _Folder(folder) if folder.is_dir() else None
+    return _LocalFolder(folder) if folder.is_dir() else None
