@@ -339,3 +339,21 @@ def test_ray_workers_write_their_shards_to_the_store(server, reference):
         assert open_store(uri).read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
     finally:
         ray.shutdown()
+
+
+def test_any_fsspec_filesystem_is_a_store(reference):
+    uri = "memory://reform-sim-test/ds"  # fsspec's in-memory filesystem, this process only
+    generate(uri)
+    same_as_reference(uri, reference)
+    assert read_parquet(uri).frames == read_parquet(reference).frames
+    assert verify_folder(uri) == []
+
+
+def test_a_filesystem_not_installed_is_named_with_its_install_command():
+    try:
+        import gcsfs  # noqa: F401
+    except ImportError:
+        with pytest.raises(StoreError, match=r"gs://lab/ds: cannot open a gs:// store .*gcsfs"):
+            open_store("gs://lab/ds")
+    else:
+        pytest.skip("gcsfs is installed")
