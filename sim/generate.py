@@ -82,7 +82,7 @@ from typing import Any
 
 import numpy as np
 import pyarrow.parquet as pq
-from joblib import Parallel, cpu_count, delayed
+from joblib import Parallel, cpu_count, delayed, parallel_config
 from tqdm import tqdm
 
 import scenarios
@@ -112,11 +112,13 @@ __all__ = [
     "BACKENDS",
     "CARD_JSON",
     "CARD_MARKDOWN",
+    "DATA_DIR",
     "VIEWS",
     "GenerationReport",
     "GenerationSpec",
     "ShardSummary",
     "episode_seed",
+    "folder_layout",
     "generate_dataset",
     "read_card",
     "shard_path",
@@ -141,6 +143,8 @@ SIZE_CATEGORIES = (
 )
 RECORDINGS_DIR = "recordings"
 LOCK_FILE = ".generate.lock"
+# Environment variables the stores' libraries read (botocore, google-auth, azure, fsspec).
+STORE_ENVIRONMENT = ("AWS_", "GOOGLE_", "GCE_", "AZURE_", "FSSPEC_")
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
 RANDOM_ANNOTATION = "random"  # GenerationSpec.annotation: one model drawn per episode
@@ -1753,9 +1757,11 @@ def _local_store(
         for batch in batches:
             yield _run_batch_store(spec, uri, batch, save_recordings)
         return
-    parallel = Parallel(
-        n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
-    )
+    # The workers open the store with the store's variables of this process's environment as
+    # they are now (credentials, endpoint): a pool started before they were set is not reused.
+    environment = {k: v for k, v in os.environ.items() if k.startswith(STORE_ENVIRONMENT)}
+    with parallel_config(backend="loky", initializer=os.environ.update, initargs=(environment,)):
+        parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered", batch_size=1)
     yield from parallel(
         delayed(_run_batch_store)(spec, uri, batch, save_recordings) for batch in batches
     )

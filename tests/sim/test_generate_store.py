@@ -357,3 +357,17 @@ def test_a_filesystem_not_installed_is_named_with_its_install_command():
             open_store("gs://lab/ds")
     else:
         pytest.skip("gcsfs is installed")
+
+
+def test_local_workers_see_the_credentials_as_they_are_now(server, reference, monkeypatch):
+    from joblib import Parallel, delayed
+
+    for key in server:  # a pool of workers started before the credentials were set
+        monkeypatch.delenv(key)
+    assert Parallel(n_jobs=2, backend="loky")(delayed(os.getenv)(k) for k in server) == [
+        None
+    ] * len(server)
+    monkeypatch.undo()
+    uri = f"s3://{BUCKET}/pool"
+    assert generate(uri, n_jobs=2).n_jobs == 2
+    same_as_reference(uri, reference)
