@@ -3,16 +3,26 @@
 A generated folder::
 
     DIR/
-      dataset.json                                the dataset card: every parameter, the seed of
-                                                  every episode, frame counts, group sizes
-      README.md                                   the same card, for people
-      scenario=<name>/episode=<k>/part.parquet    one shard per episode, the project's format
-      recordings/episode=<k>.rrd                  with ``save_recordings``: one Rerun recording
-                                                  per episode
+      README.md                                       the dataset card, for people, with Hugging
+                                                      Face dataset-card front matter
+      dataset.json                                    the same card, for programs: every
+                                                      parameter, the seed, size and sha256 of
+                                                      every shard, frame counts, group sizes
+      data/scenario=<name>/episode=<k>/part.parquet   one shard per episode, the project's format
+      recordings/episode=<k>.rrd                      with ``save_recordings``: one Rerun
+                                                      recording per episode
 
 Every shard is an ordinary file of the project's Parquet format (`reform.datasets.write_parquet`)
 whose frames belong to the sequence ``"<name>-<k>"``, so the folder reads as one dataset with
 ``reform.datasets.read_parquet(DIR)`` (or ``load_dataset``, ``reform-sim train --data DIR``).
+``DIR/data`` holds nothing but the shards (hive-partitioned by ``scenario`` and ``episode``, no
+file inside has such a column), so other tools read it as it is: ``pandas.read_parquet(DIR /
+"data")``, ``pyarrow.dataset.dataset(DIR / "data", partitioning="hive")``, polars and DuckDB
+(``read_parquet('DIR/data/**/*.parquet', hive_partitioning = true)``); and the folder is laid
+out as a Hugging Face dataset repository (card ``README.md`` with its ``configs``), so it can be
+pushed to a hub as it is. A folder written before this layout (shards right under ``DIR``,
+``scenario=<name>/...``) still reads, and a run resuming or extending it continues in its
+layout, so that one folder never mixes the two.
 
 **Seeds.** Episode ``k`` is simulated with its own seed, drawn from the master seed by
 ``numpy.random.SeedSequence(seed, spawn_key=(k,))`` (the ``k``-th child of
@@ -32,8 +42,21 @@ starts, and so is a folder another run is writing.
 
 **Parallelism.** Episodes run in batches (tiny tasks are slower in parallel) on local processes
 (joblib's loky backend, every core by default), or as Ray remote tasks on an existing cluster
-(``backend="ray"``, ``address=...``). Ray workers send each shard back as bytes and this process
-writes it, so the cluster needs no shared file system, only reform-sim installed on every node.
+(``backend="ray"``, ``address=...``). Ray workers writing to a folder on this machine send each
+shard back as bytes and this process writes it, so the cluster needs no shared file system, only
+reform-sim installed on every node.
+
+**Object storage.** ``out_dir`` may be a URI (``s3://bucket/prefix``, ``gs://…``, any fsspec
+filesystem; `reform.datasets.store`), credentials from the environment. Every worker (local or
+Ray) writes its shards there itself, each in two steps: the shard object (whole or absent), then
+its commit object (`reform.datasets.store_dataset`); the finished run writes the card listing
+every shard with its size and sha256, and deletes the commits. A resumed run skips the committed
+shards and writes the others again (an uncommitted shard object is never taken for done, nor
+read). Two runs on one prefix are refused: the lock object ``.generate.lock`` is created only if
+there is none (S3: ``If-None-Match: *``); one left by a killed run on this machine (its process
+gone) is taken over with a conditional overwrite (``If-Match`` its ETag). An unusable store (no
+credentials, unreachable, no such bucket) or a prefix holding something else is refused in one
+line before any work.
 """
 
 from __future__ import annotations
@@ -46,6 +69,7 @@ import math
 import os
 import shlex
 import shutil
+import socket
 import sys
 import tempfile
 import time
@@ -58,7 +82,7 @@ from typing import Any
 
 import numpy as np
 import pyarrow.parquet as pq
-from joblib import Parallel, cpu_count, delayed
+from joblib import Parallel, cpu_count, delayed, parallel_config
 from tqdm import tqdm
 
 import scenarios
@@ -67,6 +91,8 @@ from reform.annotation import ANNOTATION_RANGES, AnnotationModel, draw_annotatio
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.errors import DataFormatError
 from reform.datasets.parquet import CARD_JSON, FORMAT_VERSION, METADATA_KEY, write_parquet
+from reform.datasets.store import Store, is_uri, open_store
+from reform.datasets.store_dataset import COMMITS_DIR, StoreFolder, commit_name
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
 from reform.seeding import ANNOTATION, ANNOTATION_DRAW, derive_int, derive_rng
@@ -86,11 +112,13 @@ __all__ = [
     "BACKENDS",
     "CARD_JSON",
     "CARD_MARKDOWN",
+    "DATA_DIR",
     "VIEWS",
     "GenerationReport",
     "GenerationSpec",
     "ShardSummary",
     "episode_seed",
+    "folder_layout",
     "generate_dataset",
     "read_card",
     "shard_path",
@@ -101,8 +129,22 @@ BACKENDS = ("local", "ray")
 CARD_MARKDOWN = "README.md"  # the dataset card, for people
 CARD_VERSION = 1
 SHARD_FILE = "part.parquet"
+DATA_DIR = "data"  # the shards' folder (the hive root); "" in folders of the first layout
+CARD_LICENSE = "mit"  # the card's license: the toolkit's own (edit it before publishing)
+# Hugging Face size categories (number of rows): upper bound -> name.
+SIZE_CATEGORIES = (
+    (1_000, "n<1K"),
+    (10_000, "1K<n<10K"),
+    (100_000, "10K<n<100K"),
+    (1_000_000, "100K<n<1M"),
+    (10_000_000, "1M<n<10M"),
+    (100_000_000, "10M<n<100M"),
+    (1_000_000_000, "100M<n<1B"),
+)
 RECORDINGS_DIR = "recordings"
 LOCK_FILE = ".generate.lock"
+# Environment variables the stores' libraries read (botocore, google-auth, azure, fsspec).
+STORE_ENVIRONMENT = ("AWS_", "GOOGLE_", "GCE_", "AZURE_", "FSSPEC_")
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
 RANDOM_ANNOTATION = "random"  # GenerationSpec.annotation: one model drawn per episode
@@ -117,9 +159,76 @@ def episode_seed(seed: int, episode: int) -> int:
     return derive_int(seed, episode)
 
 
-def shard_path(out_dir: str | os.PathLike[str], scenario: str, episode: int) -> Path:
-    """Where episode ``episode`` of ``scenario`` lives in a generated folder."""
-    return Path(out_dir) / f"scenario={scenario}" / f"episode={int(episode)}" / SHARD_FILE
+def shard_path(
+    out_dir: str | os.PathLike[str], scenario: str, episode: int, *, data_dir: str | None = None
+) -> Path:
+    """Where episode ``episode`` of ``scenario`` lives in a generated folder.
+
+    Args:
+        out_dir: the dataset folder.
+        scenario: the scenario's name.
+        episode: the episode index.
+        data_dir: the shards' folder inside ``out_dir``: ``"data"``, or ``""`` for a folder of
+            the first layout (shards right under ``out_dir``); None for the layout of the folder
+            as it is (``"data"`` for a new one).
+    """
+    folder = Path(out_dir)
+    data = folder_layout(folder) if data_dir is None else data_dir
+    return folder / data / _relative_shard(scenario, episode)
+
+
+def _relative_shard(scenario: str, episode: int) -> str:
+    """A shard's path under the hive root (`ShardSummary.path`; shards carry it)."""
+    return f"scenario={scenario}/episode={int(episode)}/{SHARD_FILE}"
+
+
+def folder_layout(out_dir: str | os.PathLike[str]) -> str:
+    """The shards' folder of a generated folder: ``"data"``, or ``""`` when the folder is of the
+    first layout (shards right under it, ``scenario=<name>/...``; its card says so even before a
+    shard is written). A new or empty folder gets ``"data"``.
+
+    Raises:
+        ValueError: the folder holds shards in both layouts.
+    """
+    folder = Path(out_dir)
+    if not folder.is_dir():
+        return DATA_DIR
+    old = next(folder.glob("scenario=*"), None)
+    if old is not None:
+        if (folder / DATA_DIR).exists():
+            raise ValueError(
+                f"out_dir {folder} holds shards in two layouts ({old.name}/ and {DATA_DIR}/): "
+                f"expected one; move {old.name}/ and its kin under {DATA_DIR}/ or use another "
+                "folder"
+            )
+        return ""
+    try:
+        card = read_card(folder)
+    except ValueError:
+        card = None
+    if card is not None and str(card.get("layout", "")).startswith("scenario="):
+        return ""
+    return DATA_DIR
+
+
+@dataclass(frozen=True)
+class _Folder:
+    """Where a run writes: the dataset folder and its shards' folder (`folder_layout`)."""
+
+    out: Path
+    data: str = DATA_DIR
+
+    @property
+    def root(self) -> Path:
+        """The hive root: ``scenario=<name>/episode=<k>/part.parquet`` below it."""
+        return self.out / self.data
+
+    def shard(self, scenario: str, episode: int) -> Path:
+        return self.root / _relative_shard(scenario, episode)
+
+    def listed(self, summary: ShardSummary) -> str:
+        """The shard's path as the card lists it: relative to the dataset folder."""
+        return f"{self.data}/{summary.path}" if self.data else summary.path
 
 
 def _recording_path(out_dir: Path, episode: int) -> Path:
@@ -346,7 +455,7 @@ class GenerationReport:
     """What a call of `generate_dataset` did.
 
     Attributes:
-        out_dir: the dataset folder.
+        out_dir: the dataset folder (its URI in a store).
         spec: the parameters.
         episodes: episodes in the dataset.
         generated: episodes simulated by this call.
@@ -355,10 +464,10 @@ class GenerationReport:
         seconds: wall-clock time of this call, seconds.
         backend: ``"local"`` or ``"ray"``.
         n_jobs: worker processes used (local), or the cluster's CPUs (Ray).
-        card: path of the JSON card; ``card_markdown`` of the Markdown one.
+        card: path (URI) of the JSON card; ``card_markdown`` of the Markdown one.
     """
 
-    out_dir: Path
+    out_dir: Path | str
     spec: GenerationSpec
     episodes: int
     generated: tuple[int, ...]
@@ -367,8 +476,8 @@ class GenerationReport:
     seconds: float
     backend: str
     n_jobs: int
-    card: Path
-    card_markdown: Path
+    card: Path | str
+    card_markdown: Path | str
 
     @property
     def frames(self) -> int:
@@ -404,7 +513,7 @@ def _summary(
     return ShardSummary(
         episode=int(episode),
         seed=episode_seed(spec.seed, episode),
-        path=shard_path(".", spec.scenario, episode).as_posix().removeprefix("./"),
+        path=_relative_shard(spec.scenario, episode),
         sequence=_sequence_name(spec.scenario, episode),
         frames=frames,
         annotated_frames=annotated,
@@ -465,11 +574,11 @@ def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> d
 
 
 def _write_episode(
-    spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
+    spec: GenerationSpec, folder: _Folder, episode: int, *, save_recordings: bool
 ) -> ShardSummary:
     """`_simulate_and_write`, its errors naming the episode and its seed (to reproduce it)."""
     try:
-        return _simulate_and_write(spec, out_dir, episode, save_recordings=save_recordings)
+        return _simulate_and_write(spec, folder, episode, save_recordings=save_recordings)
     except ValueError as exc:
         raise ValueError(
             f"episode {episode} of {spec.scenario} (episode seed {episode_seed(spec.seed, episode)}"
@@ -478,7 +587,7 @@ def _write_episode(
 
 
 def _simulate_and_write(
-    spec: GenerationSpec, out_dir: Path, episode: int, *, save_recordings: bool
+    spec: GenerationSpec, folder: _Folder, episode: int, *, save_recordings: bool
 ) -> ShardSummary:
     """Simulates one episode and writes its recording (if asked) and then its shard.
 
@@ -492,7 +601,7 @@ def _simulate_and_write(
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
     sequence = _sequence_name(spec.scenario, episode)
     source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
-    path = shard_path(out_dir, spec.scenario, episode)
+    path = folder.shard(spec.scenario, episode)
     annotation = spec.annotation_of(episode)
     if spec.view == "truth" and not save_recordings and annotation is None:
         block = FrameBlock.concatenate(
@@ -516,7 +625,7 @@ def _simulate_and_write(
         sequence=sequence,
     )
     if save_recordings:  # the simulated episode, before any annotation model
-        _record(spec, episode, result, _recording_path(out_dir, episode))
+        _record(spec, episode, result, _recording_path(folder.out, episode))
     frames = result.dataset.frames
     metadata: dict[str, Any] = {}
     if annotation is not None:  # as the annotation records it (reform.annotation)
@@ -557,10 +666,9 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
 
 
 def _run_batch(
-    spec: GenerationSpec, out_dir: str, episodes: Sequence[int], save_recordings: bool
+    spec: GenerationSpec, folder: _Folder, episodes: Sequence[int], save_recordings: bool
 ) -> list[ShardSummary]:
-    """A batch of episodes, written straight into ``out_dir`` (local workers)."""
-    folder = Path(out_dir)
+    """A batch of episodes, written straight into ``folder`` (local workers)."""
     return [_write_episode(spec, folder, k, save_recordings=save_recordings) for k in episodes]
 
 
@@ -570,19 +678,46 @@ def _run_batch_bytes(
     """A batch of episodes, sent back as file contents (Ray workers, maybe on other machines)."""
     out = []
     with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
-        folder = Path(scratch)
+        folder = _Folder(Path(scratch))
         for k in episodes:
             summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
-            shard = (folder / summary.path).read_bytes()
+            shard = (folder.root / summary.path).read_bytes()
             recording = None
             if save_recordings:
-                recording = _recording_path(folder, k).read_bytes()
+                recording = _recording_path(folder.out, k).read_bytes()
             out.append((summary, shard, recording))
     return out
 
 
+def _run_batch_store(
+    spec: GenerationSpec, uri: str, episodes: Sequence[int], save_recordings: bool
+) -> list[tuple[ShardSummary, dict[str, Any]]]:
+    """A batch of episodes written to the store at ``uri`` by this worker: each shard, then its
+    commit. Returns each summary with its shard's ``bytes`` and ``sha256``."""
+    store = open_store(uri, check=False)
+    out = []
+    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
+        folder = _Folder(Path(scratch))
+        for k in episodes:
+            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
+            local = folder.root / summary.path
+            shard = local.read_bytes()
+            local.unlink()
+            if save_recordings:
+                recording = _recording_path(folder.out, k)
+                store.write(recording.relative_to(folder.out).as_posix(), recording.read_bytes())
+                recording.unlink()
+            listed = f"{DATA_DIR}/{summary.path}"
+            store.write(listed, shard)
+            files = {"bytes": len(shard), "sha256": hashlib.sha256(shard).hexdigest()}
+            entry = {**summary.to_json(), "path": listed, **files}
+            store.write(commit_name(k), json.dumps(entry, sort_keys=True).encode())
+            out.append((summary, files))
+    return out
+
+
 # ------------------------------------------------------------------------------------------
-# The folder: card, lock, finished shards
+# The dataset: its card, what it may hold
 
 
 def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
@@ -612,9 +747,8 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
 
 def _is_ours(name: str) -> bool:
     """Entries a generated folder may hold besides its shards."""
-    return name in (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR) or name.startswith(
-        ("scenario=", ".")
-    )
+    ours = (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR, DATA_DIR)
+    return name in ours or name.startswith(("scenario=", "."))
 
 
 def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -> None:
@@ -633,6 +767,20 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
                 f"empty or new folder, or one made by reform-sim generate, found {shown}"
             )
         return
+    _check_card(str(out_dir), card, parameters, episodes)
+    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+    if extra:
+        raise ValueError(
+            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"{', '.join(extra[:5])}"
+        )
+
+
+def _check_card(
+    out: str, card: Mapping[str, Any], parameters: Mapping[str, Any], episodes: int
+) -> None:
+    """Refuses a card of another dataset, or of more episodes than asked for (``out``: the
+    folder or URI, for the message)."""
     theirs = card["parameters"]
     differing = sorted(
         k for k in set(theirs) | set(parameters) if theirs.get(k) != parameters.get(k)
@@ -644,22 +792,142 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
             for k in differing
         )
         raise ValueError(
-            f"out_dir {out_dir} holds another dataset (its {CARD_JSON} differs in "
+            f"out_dir {out} holds another dataset (its {CARD_JSON} differs in "
             f"{', '.join(differing)}): {details}. Use another folder, or the same parameters "
             "to resume it"
         )
     held = int(card.get("episodes", 0))
     if episodes < held:
         raise ValueError(
-            f"episodes: out_dir {out_dir} holds a dataset of {held} episodes, asked for "
+            f"episodes: out_dir {out} holds a dataset of {held} episodes, asked for "
             f"{episodes}; ask for at least {held} (more extends it) or use another folder"
         )
-    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+
+
+# ------------------------------------------------------------------------------------------
+# A prefix in a store: card, lock, committed shards
+
+
+def _store_card(store: Store) -> dict[str, Any] | None:
+    """`read_card` of a dataset in a store."""
+    text = store.read(CARD_JSON)
+    if text is None:
+        return None
+    try:
+        card = json.loads(text)
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise ValueError(
+            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card (JSON), got "
+            f"{type(exc).__name__}"
+        ) from None
+    if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
+        raise ValueError(
+            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card with a 'parameters' "
+            f"object, got {type(card).__name__}"
+        )
+    return card
+
+
+def _check_store(store: Store, parameters: Mapping[str, Any], episodes: int) -> None:
+    """`_check_folder` of a prefix in a store: empty, or holding this dataset alone."""
+    names = {name.split("/", 1)[0] for name in store.sizes()}
+    card = _store_card(store)
+    if card is None:
+        foreign = sorted(n for n in names if not n.startswith("."))
+        if foreign:
+            shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
+            raise ValueError(
+                f"out_dir {store.uri} holds objects but no dataset card ({CARD_JSON}): expected "
+                f"an empty prefix or one written by reform-sim generate, found {shown}"
+            )
+        return
+    _check_card(store.uri, card, parameters, episodes)
+    extra = sorted(n for n in names if not _is_ours(n) and n != COMMITS_DIR)
     if extra:
         raise ValueError(
-            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"out_dir {store.uri} holds objects that are not part of a generated dataset: "
             f"{', '.join(extra[:5])}"
         )
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def _store_lock(store: Store) -> Iterator[None]:
+    """Holds the lock object of a prefix in a store, refusing a second concurrent run.
+
+    The lock is created only if there is none. One held by a run of this machine whose process
+    is gone (killed) is taken over, only if it is still that run's (a conditional overwrite);
+    one of another machine is refused, with what to delete if that run is gone.
+    """
+    mine = json.dumps(
+        {
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+            "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        }
+    ).encode()
+    if not store.create(LOCK_FILE, mine):
+        tag = store.tag(LOCK_FILE)
+        try:
+            holder = json.loads(store.read(LOCK_FILE) or b"{}")
+        except (UnicodeDecodeError, json.JSONDecodeError):
+            holder = {}
+        holder = holder if isinstance(holder, dict) else {}
+        pid = holder.get("pid")
+        gone = (
+            holder.get("host") == socket.gethostname() and isinstance(pid, int) and not _alive(pid)
+        )
+        if not (gone and tag and store.replace(LOCK_FILE, mine, tag)):
+            raise ValueError(
+                f"out_dir {store.uri} is being written by another reform-sim generate run "
+                f"(host {holder.get('host', '?')}, process {pid or '?'}, since "
+                f"{holder.get('started', '?')}); wait for it to finish or use another prefix; "
+                f"if that run is gone, delete {store.url(LOCK_FILE)}"
+            )
+    try:
+        yield
+    finally:
+        if store.read(LOCK_FILE) == mine:
+            store.delete(LOCK_FILE)
+
+
+def _committed_shards(
+    store: Store, spec: GenerationSpec, episodes: int
+) -> dict[int, tuple[ShardSummary, dict[str, Any]]]:
+    """The shards already done in a store: listed by its card with their size and sha256 (a
+    finished dataset being extended) or committed by a run, each still there with that size
+    and of its episode. Any other shard object is written again."""
+    folder = StoreFolder(store)
+    entries: dict[int, Mapping[str, Any]] = {}
+    card = _store_card(store)
+    for entry in (card or {}).get("shards", []):
+        if isinstance(entry, dict) and "sha256" in entry:
+            entries[int(entry["episode"])] = entry
+    entries.update(folder.commits())
+    done = {}
+    for k, entry in entries.items():
+        expected = _summary(spec, k, 0, 0, 0, {})
+        path = f"{DATA_DIR}/{expected.path}"
+        if k >= episodes or entry.get("path") != path or folder.size(path) != entry.get("bytes"):
+            continue
+        summary = ShardSummary.from_json({**entry, "path": expected.path})
+        if (summary.seed, summary.sequence) != (expected.seed, expected.sequence):
+            continue
+        done[k] = (summary, {"bytes": entry["bytes"], "sha256": entry["sha256"]})
+    return done
+
+
+# ------------------------------------------------------------------------------------------
+# A folder on this machine: lock, finished shards
 
 
 @contextlib.contextmanager
@@ -687,7 +955,12 @@ def _folder_lock(out_dir: Path) -> Iterator[None]:
 
 def _remove_stale_temporaries(out_dir: Path) -> None:
     """Temporary files of a killed run (``.part.parquet.*.tmp`` and the like)."""
-    for pattern in ("scenario=*/episode=*/.*.tmp", f"{RECORDINGS_DIR}/.*.tmp", ".*.tmp"):
+    for pattern in (
+        f"{DATA_DIR}/scenario=*/episode=*/.*.tmp",
+        "scenario=*/episode=*/.*.tmp",
+        f"{RECORDINGS_DIR}/.*.tmp",
+        ".*.tmp",
+    ):
         for path in out_dir.glob(pattern):
             if path.is_dir():
                 shutil.rmtree(path, ignore_errors=True)
@@ -695,13 +968,15 @@ def _remove_stale_temporaries(out_dir: Path) -> None:
                 path.unlink(missing_ok=True)
 
 
-def _finished(out_dir: Path, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:
-    if not shard_path(out_dir, spec.scenario, episode).is_file():
+def _finished(folder: _Folder, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:
+    if not folder.shard(spec.scenario, episode).is_file():
         return False
-    return not save_recordings or _recording_path(out_dir, episode).is_file()
+    return not save_recordings or _recording_path(folder.out, episode).is_file()
 
 
-def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict[int, ShardSummary]:
+def _existing_shards(
+    folder: _Folder, spec: GenerationSpec, episodes: int
+) -> dict[int, ShardSummary]:
     """The summaries of the shards already in the folder, each checked to be its episode's.
 
     A shard copied or moved to another episode's place would otherwise be taken for that
@@ -716,7 +991,7 @@ def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict
     shards: dict[int, ShardSummary] = {}
     problems: list[DataFormatError] = []
     for k in range(episodes):
-        path = shard_path(out_dir, spec.scenario, k)
+        path = folder.shard(spec.scenario, k)
         if not path.is_file():
             continue
         try:
@@ -727,7 +1002,7 @@ def _existing_shards(out_dir: Path, spec: GenerationSpec, episodes: int) -> dict
         shown = "; ".join(str(p) for p in problems[:SHOWN_PROBLEMS])
         more = len(problems) - SHOWN_PROBLEMS
         raise ValueError(
-            f"out_dir {out_dir}: {len(problems)} of the {len(problems) + len(shards)} shards "
+            f"out_dir {folder.out}: {len(problems)} of the {len(problems) + len(shards)} shards "
             f"already there {'is' if len(problems) == 1 else 'are'} not the episode "
             f"{'its place says' if len(problems) == 1 else 'their places say'}: {shown}"
             + (f"; and {more} more" if more > 0 else "")
@@ -836,10 +1111,13 @@ def _card(
     complete: bool,
     resolved_options: Mapping[str, Any] | None,
     files: Mapping[str, Mapping[str, Any]] | None = None,
+    data_dir: str = DATA_DIR,
 ) -> dict[str, Any]:
     """The card; ``files`` (shard path -> ``bytes`` and ``sha256``) are listed with each shard,
-    so that a reader can tell a missing, truncated or altered shard (the final card has them)."""
+    so that a reader can tell a missing, truncated or altered shard (the final card has them).
+    Shards are listed by their path in the folder (under ``data_dir``)."""
     files = files or {}
+    folder = _Folder(Path(), data_dir)
     sizes: Counter[int] = Counter()
     for shard in shards:
         sizes.update(shard.group_sizes)
@@ -850,8 +1128,8 @@ def _card(
         "parameters": spec.parameters(),
         "scenario_options_resolved": resolved_options,
         "episodes": episodes,
-        "layout": f"scenario={spec.scenario}/episode=<k>/{SHARD_FILE}, sequence "
-        f"'{spec.scenario}-<k>'",
+        "layout": f"{data_dir + '/' if data_dir else ''}scenario={spec.scenario}/episode=<k>/"
+        f"{SHARD_FILE}, sequence '{spec.scenario}-<k>'",
         "command": _command(spec, episodes),
         "totals": {
             "shards": len(shards),
@@ -862,18 +1140,18 @@ def _card(
             "group_sizes": {str(k): v for k, v in sorted(sizes.items())},
         },
         "shards": [
-            {**s.to_json(), **files.get(s.path, {})}
+            {**s.to_json(), "path": folder.listed(s), **files.get(s.path, {})}
             for s in sorted(shards, key=lambda s: s.episode)
         ],
     }
 
 
-def _shard_files(out_dir: Path, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
+def _shard_files(folder: _Folder, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
     """Each shard's size and sha256, for the card."""
 
     files = {}
     for shard in shards:
-        path = out_dir / shard.path
+        path = folder.root / shard.path
         digest = hashlib.sha256()
         with open(path, "rb") as handle:
             for block in iter(lambda: handle.read(1 << 20), b""):
@@ -937,10 +1215,47 @@ def _annotation_text(annotation: Any) -> str:
     return f"`{json.dumps(annotation, sort_keys=True)}` (`reform.annotation.AnnotationModel`)"
 
 
+def _size_category(rows: int) -> str:
+    """The Hugging Face size category of a dataset of ``rows`` rows."""
+    for bound, name in SIZE_CATEGORIES:
+        if rows < bound:
+            return name
+    return "n>1B"
+
+
+def _front_matter(card: Mapping[str, Any]) -> list[str]:
+    """The Hugging Face dataset-card metadata (YAML): license, task, tags, size, and the
+    ``configs`` that point the hub at the shards. Strings are JSON, which YAML reads as is."""
+    p = card["parameters"]
+    data = str(card["layout"]).split("scenario=", 1)[0]
+    q = json.dumps
+    return [
+        "---",
+        f"license: {CARD_LICENSE}",
+        f"pretty_name: {q('reform-sim synthetic dataset: ' + p['scenario'])}",
+        "task_categories:",
+        "- robotics",
+        "tags:",
+        *(f"- {t}" for t in ("f-formation", "social-robotics", "group-detection", "synthetic")),
+        *(f"- {t}" for t in ("simulation", "mujoco", "reform-sim")),
+        "size_categories:",
+        f"- {q(_size_category(int(card['totals']['rows'])))}",
+        "configs:",
+        "- config_name: default",
+        "  data_files:",
+        "  - split: train",
+        f"    path: {q(data + 'scenario=*/episode=*/*.parquet')}",
+        "---",
+        "",
+    ]
+
+
 def _markdown(card: Mapping[str, Any]) -> str:
     p = card["parameters"]
     totals = card["totals"]
+    data = str(card["layout"]).split("scenario=", 1)[0]
     lines = [
+        *_front_matter(card),
         f"# Synthetic dataset: {p['scenario']}",
         "",
         f"Generated by {p['package_version']} ({card['kind']}); "
@@ -959,6 +1274,17 @@ def _markdown(card: Mapping[str, Any]) -> str:
         "dataset = read_parquet('DIR')"
         if card["complete"]
         else "dataset = read_parquet('DIR', allow_incomplete=True)  # the episodes written so far",
+        "```",
+        "",
+        "Other tools read the shards (one row per person and frame, columns "
+        "`reform.datasets.COLUMNS`, plus the hive columns `scenario` and `episode`):",
+        "",
+        "```python",
+        "import pandas",
+        f"table = pandas.read_parquet('DIR/{data}')",
+        "import duckdb",
+        f"duckdb.sql(\"SELECT * FROM read_parquet('DIR/{data}**/*.parquet', "
+        'hive_partitioning = true)")',
         "```",
         "",
         "## Parameters",
@@ -1056,7 +1382,7 @@ def _check_size(
     made: Any,
     *,
     episodes: int,
-    out_dir: Path,
+    out_dir: Path | None,
     workers: int,
     save_recordings: bool,
     max_memory: int | None,
@@ -1074,8 +1400,10 @@ def _check_size(
         workers=workers,
         arrays=spec.view == "truth" and not save_recordings,
     )
-    folder = out_dir / f"scenario={spec.scenario}"
-    there = sum(1 for _ in folder.glob(f"episode=*/{SHARD_FILE}")) if folder.is_dir() else 0
+    there = 0
+    if out_dir is not None:
+        folder = _Folder(out_dir, folder_layout(out_dir)).root / f"scenario={spec.scenario}"
+        there = sum(1 for _ in folder.glob(f"episode=*/{SHARD_FILE}")) if folder.is_dir() else 0
     missing = max(0, episodes - there)
     sizing.check(
         estimate,
@@ -1105,21 +1433,21 @@ def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
 
 def _local(
     spec: GenerationSpec,
-    out_dir: Path,
+    folder: _Folder,
     batches: list[list[int]],
     n_jobs: int,
     save_recordings: bool,
 ) -> Iterator[list[ShardSummary]]:
     if n_jobs == 1 or len(batches) == 1:
         for batch in batches:
-            yield _run_batch(spec, str(out_dir), batch, save_recordings)
+            yield _run_batch(spec, folder, batch, save_recordings)
         return
 
     parallel = Parallel(
         n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
     )
     yield from parallel(
-        delayed(_run_batch)(spec, str(out_dir), batch, save_recordings) for batch in batches
+        delayed(_run_batch)(spec, folder, batch, save_recordings) for batch in batches
     )
 
 
@@ -1147,7 +1475,7 @@ def _ray_cpus(address: str | None) -> tuple[Any, bool, int]:
 def _ray(
     ray: Any,
     spec: GenerationSpec,
-    out_dir: Path,
+    folder: _Folder,
     batches: list[list[int]],
     save_recordings: bool,
 ) -> Iterator[list[ShardSummary]]:
@@ -1158,9 +1486,9 @@ def _ray(
         summaries = []
         for summary, shard, recording in ray.get(done[0]):
             if recording is not None:
-                with atomic_path(_recording_path(out_dir, summary.episode)) as tmp:
+                with atomic_path(_recording_path(folder.out, summary.episode)) as tmp:
                     tmp.write_bytes(recording)
-            with atomic_path(out_dir / summary.path) as tmp:
+            with atomic_path(folder.root / summary.path) as tmp:
                 tmp.write_bytes(shard)
             summaries.append(summary)
         yield summaries
@@ -1195,7 +1523,9 @@ def generate_dataset(
         scenario: a registered scenario name (``scenarios.names()``).
         episodes: number of episodes (shards), >= 1.
         seed: master seed, >= 0; episode ``k`` gets `episode_seed`\\ ``(seed, k)``.
-        out_dir: the dataset folder: new, empty, or holding this same dataset (resume/extend).
+        out_dir: the dataset folder: new, empty, or holding this same dataset (resume/extend);
+            a path, or a store's URI (``s3://bucket/prefix``, any fsspec filesystem;
+            credentials from the environment, `reform.datasets.store`).
         options: scenario option overrides (JSON values), as for ``scenarios.make``.
         view: ``"truth"`` or ``"robot"`` (observed by the robot's head sensor).
         sensor: the robot view's sensor model: a ``sim.Sensor`` or a mapping of its fields;
@@ -1220,6 +1550,8 @@ def generate_dataset(
     Raises:
         ValueError: bad parameters, an unknown scenario (the known ones are listed), impossible
             scenario options, or an ``out_dir`` holding something else: before any work.
+        reform.datasets.store.StoreError: (a ValueError) a store that cannot be used: no
+            credentials, unreachable, no such bucket; before any work.
         sim.sizing.RequestTooLarge: (a ValueError) a dataset whose memory, disk or time cannot
             fit this machine (`sim.sizing.check`), before any work.
         ImportError: ``backend="ray"`` without Ray installed.
@@ -1244,32 +1576,55 @@ def generate_dataset(
     )
     if max_memory is not None:
         max_memory = _check_int("max_memory", max_memory, minimum=1)
-    out_dir = Path(out_dir)
+    store = open_store(os.fspath(out_dir)) if is_uri(out_dir) else None
+    if store is None:
+        out_dir = Path(out_dir)
     resolved, made = _check_scenario(spec)
     _check_size(
         spec,
         made,
         episodes=episodes,
-        out_dir=out_dir,
+        out_dir=out_dir if store is None else None,
         workers=1 if backend == "ray" else n_jobs or _cpu_count(),
         save_recordings=save_recordings,
         max_memory=max_memory,
     )
     parameters = spec.parameters()
+    if store is not None:
+        return _generate_store(
+            store,
+            spec,
+            episodes=episodes,
+            resolved=resolved,
+            backend=backend,
+            address=address,
+            n_jobs=n_jobs,
+            save_recordings=save_recordings,
+            progress=progress,
+            started=started,
+        )
     _check_folder(out_dir, parameters, episodes)
     if backend == "ray":
         _import_ray()
 
     with _folder_lock(out_dir):
         _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
+        folder = _Folder(out_dir, folder_layout(out_dir))
         _remove_stale_temporaries(out_dir)
-        existing = _existing_shards(out_dir, spec, episodes)
-        done = [k for k in existing if _finished(out_dir, spec, k, save_recordings)]
+        existing = _existing_shards(folder, spec, episodes)
+        done = [k for k in existing if _finished(folder, spec, k, save_recordings)]
         shards = {k: existing[k] for k in done}
         todo = [k for k in range(episodes) if k not in shards]
         _write_cards(
             out_dir,
-            _card(spec, episodes, list(shards.values()), complete=False, resolved_options=resolved),
+            _card(
+                spec,
+                episodes,
+                list(shards.values()),
+                complete=False,
+                resolved_options=resolved,
+                data_dir=folder.data,
+            ),
         )
         ray = None
         owned = False
@@ -1281,10 +1636,10 @@ def generate_dataset(
         try:
             batches = _batches(todo, workers)
             if backend == "ray":
-                results = _ray(ray, spec, out_dir, batches, save_recordings)
+                results = _ray(ray, spec, folder, batches, save_recordings)
             else:
                 results = _local(
-                    spec, out_dir, batches, min(workers, len(batches) or 1), save_recordings
+                    spec, folder, batches, min(workers, len(batches) or 1), save_recordings
                 )
             _drain(results, shards, episodes, spec.scenario, progress)
         finally:
@@ -1298,7 +1653,8 @@ def generate_dataset(
             summaries,
             complete=True,
             resolved_options=resolved,
-            files=_shard_files(out_dir, summaries),
+            files=_shard_files(folder, summaries),
+            data_dir=folder.data,
         )
         _write_cards(out_dir, card)
     return GenerationReport(
@@ -1314,6 +1670,123 @@ def generate_dataset(
         card=card_path,
         card_markdown=out_dir / CARD_MARKDOWN,
     )
+
+
+def _generate_store(
+    store: Store,
+    spec: GenerationSpec,
+    *,
+    episodes: int,
+    resolved: dict[str, Any],
+    backend: str,
+    address: str | None,
+    n_jobs: int | None,
+    save_recordings: bool,
+    progress: bool,
+    started: float,
+) -> GenerationReport:
+    """`generate_dataset` into a store: the workers write the shards and their commits."""
+    parameters = spec.parameters()
+    _check_store(store, parameters, episodes)
+    if backend == "ray":
+        _import_ray()
+    with _store_lock(store):
+        _check_store(store, parameters, episodes)  # again, now that no other run can write
+        existing = _committed_shards(store, spec, episodes)
+        objects = store.sizes()
+        done = [
+            k
+            for k in existing
+            if not save_recordings or f"{RECORDINGS_DIR}/episode={k}.rrd" in objects
+        ]
+        shards = {k: existing[k][0] for k in done}
+        files = {existing[k][0].path: existing[k][1] for k in done}
+        todo = [k for k in range(episodes) if k not in shards]
+        _write_store_cards(
+            store,
+            _card(spec, episodes, list(shards.values()), complete=False, resolved_options=resolved),
+        )
+        ray = None
+        owned = False
+        if backend == "ray":
+            ray, owned, workers = _ray_cpus(address)
+        else:
+            workers = max(1, min(n_jobs or _cpu_count(), len(todo)))
+        try:
+            batches = _batches(todo, workers)
+            if backend == "ray":
+                results = _ray_store(ray, spec, store.uri, batches, save_recordings)
+            else:
+                results = _local_store(
+                    spec, store.uri, batches, min(workers, len(batches) or 1), save_recordings
+                )
+            _drain(_collect(results, files), shards, episodes, spec.scenario, progress)
+        finally:
+            if owned:
+                ray.shutdown()
+        summaries = [shards[k] for k in range(episodes)]
+        card = _card(
+            spec, episodes, summaries, complete=True, resolved_options=resolved, files=files
+        )
+        _write_store_cards(store, card)
+        store.delete(*store.sizes(COMMITS_DIR))  # the card lists every shard now
+    return GenerationReport(
+        out_dir=store.uri,
+        spec=spec,
+        episodes=episodes,
+        generated=tuple(todo),
+        skipped=tuple(done),
+        shards=tuple(summaries),
+        seconds=time.perf_counter() - started,
+        backend=backend,
+        n_jobs=workers,
+        card=store.url(CARD_JSON),
+        card_markdown=store.url(CARD_MARKDOWN),
+    )
+
+
+def _write_store_cards(store: Store, card: Mapping[str, Any]) -> None:
+    store.write(CARD_JSON, (json.dumps(card, indent=2, allow_nan=False) + "\n").encode())
+    store.write(CARD_MARKDOWN, _markdown(card).encode())
+
+
+def _local_store(
+    spec: GenerationSpec, uri: str, batches: list[list[int]], n_jobs: int, save_recordings: bool
+) -> Iterator[list[tuple[ShardSummary, dict[str, Any]]]]:
+    if n_jobs == 1 or len(batches) == 1:
+        for batch in batches:
+            yield _run_batch_store(spec, uri, batch, save_recordings)
+        return
+    # The workers open the store with the store's variables of this process's environment as
+    # they are now (credentials, endpoint): a pool started before they were set is not reused.
+    environment = {k: v for k, v in os.environ.items() if k.startswith(STORE_ENVIRONMENT)}
+    with parallel_config(backend="loky", initializer=os.environ.update, initargs=(environment,)):
+        parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered", batch_size=1)
+    yield from parallel(
+        delayed(_run_batch_store)(spec, uri, batch, save_recordings) for batch in batches
+    )
+
+
+def _ray_store(
+    ray: Any, spec: GenerationSpec, uri: str, batches: list[list[int]], save_recordings: bool
+) -> Iterator[list[tuple[ShardSummary, dict[str, Any]]]]:
+    """Each Ray worker writes its shards to the store itself; only summaries come back."""
+    task = ray.remote(num_cpus=1, max_retries=2)(_run_batch_store)
+    pending = [task.remote(spec, uri, batch, save_recordings) for batch in batches]
+    while pending:
+        done, pending = ray.wait(pending, num_returns=1)
+        yield ray.get(done[0])
+
+
+def _collect(
+    results: Iterable[list[tuple[ShardSummary, dict[str, Any]]]],
+    files: dict[str, dict[str, Any]],
+) -> Iterator[list[ShardSummary]]:
+    """The summaries of ``results``, their shards' sizes and sha256 kept in ``files``."""
+    for batch in results:
+        for summary, shard in batch:
+            files[summary.path] = shard
+        yield [summary for summary, _ in batch]
 
 
 def _cpu_count() -> int:

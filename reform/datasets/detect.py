@@ -69,6 +69,10 @@ def detect_format(path: str | PathLike[str]) -> str:
         DataFormatError: the path does not exist, matches no format (the message lists them),
             or is a folder matching several.
     """
+    from reform.datasets.store import is_uri
+
+    if is_uri(path):  # in a store: the project's Parquet is the one format written there
+        return "parquet"
     path = Path(path)
     if not path.exists():
         raise DataFormatError(
@@ -115,7 +119,8 @@ def load_dataset(
     """Loads a dataset in any supported format; positions come back in metres.
 
     Args:
-        path: a dataset file or folder.
+        path: a dataset file or folder; or a Parquet file or folder in a store, by its URI
+            (``s3://bucket/prefix``; `reform.datasets.store`).
         format: one of :data:`FORMATS` (or an alias, ``"dante"``); detected from ``path`` when
             None.
         units: length unit of the file's positions, ``"cm"``, ``"m"`` or ``"px"``. Only GCFF
@@ -134,6 +139,18 @@ def load_dataset(
         ValueError: unknown ``format`` or ``units``, units that contradict the format, or
             pixels without their scale.
     """
+    from reform.datasets.store import is_uri
+
+    if is_uri(path):
+        if format not in (None, "parquet"):
+            raise ValueError(
+                f"format: a dataset in a store ({path}) is read as parquet, got format={format!r}"
+            )
+        if units not in (None, "m"):
+            raise ValueError(f"units: the parquet format stores positions in 'm', got {units!r}")
+        from reform.datasets.parquet import read_parquet
+
+        return read_parquet(path, allow_incomplete=allow_incomplete)
     path = Path(path)
     if format is None:
         format = detect_format(path)

@@ -35,12 +35,15 @@ class DataFormatError(ValueError):
         hint: str | None = None,
     ) -> None:
         self.path = Path(path)
+        # A store's URI (s3://bucket/key) stays as given: a Path would fold its "//".
+        shown = path if isinstance(path, str) and "://" in path else str(self.path)
         self.where = where
         self.field = field
         self.expected = expected
         self.found = found
         self.hint = hint
-        parts = [str(self.path)]
+        self._shown = shown
+        parts = [shown]
         if where:
             parts.append(where)
         detail = f"field {field!r}: " if field else ""
@@ -50,5 +53,5 @@ class DataFormatError(ValueError):
 
     def __reduce__(self) -> tuple:
         # Rebuilt from its fields, so that it survives pickling (errors of worker processes).
-        fields = (self.path, self.where, self.field, self.expected, self.found, self.hint)
+        fields = (self._shown, self.where, self.field, self.expected, self.found, self.hint)
         return type(self), fields

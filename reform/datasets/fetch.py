@@ -721,7 +721,8 @@ def resolve(
 ) -> Path:
     """The dataset path a user means by ``name_or_path``.
 
-    In order: an existing file or folder, as given; the cached folder of a fetched public
+    In order: a store's URI (``s3://bucket/prefix``), as given; an existing file or folder, as
+    given; the cached folder of a fetched public
     dataset of that name; a folder of that name among the real datasets
     (:func:`local_datasets_dir`).
 
@@ -734,6 +735,10 @@ def resolve(
         FileNotFoundError: a public dataset that is not fetched (the message says how to fetch
             it), or neither a path nor a dataset name (the message lists the names).
     """
+    from reform.datasets.store import is_uri
+
+    if is_uri(name_or_path):  # a store's URI, as given (a Path would fold its "//")
+        return name_or_path  # type: ignore[return-value]
     path = Path(name_or_path)
     if path.exists():
         return path

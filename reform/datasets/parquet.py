@@ -402,7 +402,8 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
     writes them; anything else is refused rather than reordered.
 
     Args:
-        path: a ``.parquet`` file or a folder of them.
+        path: a ``.parquet`` file or a folder of them, on this machine or in a store
+            (``s3://bucket/prefix``, any fsspec URI; `reform.datasets.store`).
         allow_incomplete: read a folder of ``reform-sim generate`` whose card
             (``dataset.json``) says the run has not finished, with the episodes written so far.
             By default such a folder is refused.
@@ -411,7 +412,15 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
         DataFormatError: a file is missing, empty, not written by this project, of a newer
             format version, or malformed (the message names the file, frame, field), or the
             folder is an unfinished generated dataset.
+        reform.datasets.store.StoreError: a store that cannot be used (no credentials, not
+            reachable, no such bucket), in one line.
     """
+    from reform.datasets.store import is_uri
+
+    if is_uri(path):
+        from reform.datasets.store_dataset import read_store
+
+        return read_store(str(path), allow_incomplete=allow_incomplete)
     path = Path(path)
     if not path.exists():
         raise DataFormatError(
@@ -429,45 +438,87 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
             units="m",
             metadata=header.get("metadata", {}),
         )
-    files = [
-        p
-        for p in path.rglob("*.parquet")
-        if p.is_file()
-        and not any(part.startswith((".", "_")) for part in p.relative_to(path).parts)
-    ]
-    card = _read_card(path)
+    return _read_folder(_LocalFolder(path), allow_incomplete=allow_incomplete)
+
+
+class _LocalFolder:
+    """A dataset folder on this machine, as `_read_folder` and `_check_shards` see it: files by
+    relative path."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.name = folder.name
+
+    def where(self, relative: str = "") -> Path:
+        """What messages name: the file's path."""
+        return self.folder / relative if relative else self.folder
+
+    def card(self) -> dict[str, Any] | None:
+        return _read_card(self.folder)
+
+    def parquet_files(self) -> list[str]:
+        """Every ``.parquet`` file, hidden files and folders (``.``, ``_``) skipped."""
+        return [
+            p.relative_to(self.folder).as_posix()
+            for p in self.folder.rglob("*.parquet")
+            if p.is_file()
+            and not any(part.startswith((".", "_")) for part in p.relative_to(self.folder).parts)
+        ]
+
+    def size(self, relative: str) -> int | str:
+        """The file's size, or what is there instead (``"no such file"``...)."""
+        shard = self.folder / relative
+        try:
+            return shard.stat().st_size if shard.is_file() else file_kind(shard)
+        except OSError as exc:
+            return f"{type(exc).__name__}: {exc}"
+
+    def sha256(self, relative: str) -> str:
+        return _sha256(self.folder / relative)
+
+    def read(self, relative: str) -> tuple[list[Frame], dict[str, Any]]:
+        return _read_file(self.folder / relative)
+
+    def committed(self, card: Mapping[str, Any]) -> tuple[list[str], list[DataFormatError]]:
+        """The shards of an unfinished run that a reader may take: every one there (a shard is
+        renamed into place whole)."""
+        return self.parquet_files(), []
+
+
+def _read_folder(source: Any, *, allow_incomplete: bool) -> Dataset:
+    """A folder of Parquet files (`_LocalFolder`, or `reform.datasets.store` one) as one dataset."""
+    files = source.parquet_files()
+    card = source.card()
     problems: list[DataFormatError] = []
     if card is not None:
         if not allow_incomplete:
-            _check_complete(path, card, len(files))
-        files, problems = _check_shards(path, card, files, allow_incomplete=allow_incomplete)
+            _check_complete(source, card, len(files))
+        files, problems = _check_shards(source, card, files, allow_incomplete=allow_incomplete)
     if not files and not problems:
-        raise DataFormatError(path, None, None, "a folder holding .parquet files", "none")
-    files.sort(key=lambda p: _natural_key(p.relative_to(path)))
+        raise DataFormatError(source.where(), None, None, "a folder holding .parquet files", "none")
+    files.sort(key=lambda p: _natural_key(Path(p)))
     frames: list[Frame] = []
     shards = []
     names = []
-    sequence_file: dict[str, Path] = {}
-    for file in files:
+    sequence_file: dict[str, str] = {}
+    for relative in files:
         try:
-            shard_frames, header = _read_file(file)
+            shard_frames, header = source.read(relative)
         except DataFormatError as exc:
             if not allow_incomplete:
                 raise
             problems.append(exc)
             continue
-        relative = file.relative_to(path).as_posix()
         for sequence in dict.fromkeys(f.sequence for f in shard_frames):
             if sequence in sequence_file:
-                other = sequence_file[sequence].relative_to(path).as_posix()
                 raise DataFormatError(
-                    file,
+                    source.where(relative),
                     None,
                     "sequence",
-                    f"sequence names not used by another file ({other})",
+                    f"sequence names not used by another file ({sequence_file[sequence]})",
                     repr(sequence),
                 )
-            sequence_file[sequence] = file
+            sequence_file[sequence] = relative
         frames.extend(shard_frames)
         names.append(header.get("name", ""))
         shards.append(
@@ -479,7 +530,7 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
                 "metadata": header.get("metadata", {}),
             }
         )
-    name = names[0] if names and len(set(names)) == 1 and names[0] else path.name
+    name = names[0] if names and len(set(names)) == 1 and names[0] else source.name
     metadata: dict[str, Any] = {"shards": shards}
     if problems:
         # Read on purpose (allow_incomplete): what is missing is said, never left out silently.
@@ -487,7 +538,7 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
     return Dataset(
         frames=tuple(frames),
         name=name,
-        source=str(path),
+        source=str(source.where()),
         units="m",
         metadata=metadata,
     )
@@ -544,8 +595,8 @@ def _sha256(path: Path) -> str:
 
 
 def _check_shards(
-    folder: Path, card: Mapping[str, Any], files: list[Path], *, allow_incomplete: bool
-) -> tuple[list[Path], list[DataFormatError]]:
+    source: Any, card: Mapping[str, Any], files: list[str], *, allow_incomplete: bool
+) -> tuple[list[str], list[DataFormatError]]:
     """The card's shards, each checked: listed files that are missing, unreadable, or whose
     size or sha256 differs from the card's, and Parquet files the card does not list.
 
@@ -553,13 +604,13 @@ def _check_shards(
         The files to read and, with ``allow_incomplete``, the problems found (else the first
         problem is raised).
     """
-    card_path = folder / CARD_JSON
+    card_path = source.where(CARD_JSON)
     listed = card.get("shards")
     complete = card.get("complete")
     if not isinstance(complete, bool):
         raise DataFormatError(card_path, None, "complete", "true or false", repr(complete))
     if not complete:
-        return files, []
+        return source.committed(card)
     if not isinstance(listed, list):
         raise DataFormatError(
             card_path, None, "shards", "the list of the dataset's shards", type(listed).__name__
@@ -585,7 +636,7 @@ def _check_shards(
             repr(episodes),
         )
     problems: list[DataFormatError] = []
-    keep: list[Path] = []
+    keep: list[str] = []
     names: set[str] = set()
     for k, entry in enumerate(listed):
         if not isinstance(entry, dict) or not isinstance(entry.get("path"), str):
@@ -615,17 +666,11 @@ def _check_shards(
                 card_path, f"shards[{k}]", "path", "each shard listed once", repr(relative)
             )
         names.add(relative)
-        shard = folder / relative
+        shard = source.where(relative)
         where = f"shard {relative} (shards[{k}] of {CARD_JSON})"
-        try:
-            size = shard.stat().st_size if shard.is_file() else None
-        except OSError as exc:
-            size, error = None, exc
-        else:
-            error = None
-        if size is None:
-            found = file_kind(shard) if error is None else f"{type(error).__name__}: {error}"
-            problems.append(DataFormatError(shard, None, None, f"the {where}", found))
+        size = source.size(relative)
+        if isinstance(size, str):
+            problems.append(DataFormatError(shard, None, None, f"the {where}", size))
             continue
         expected_size = entry.get("bytes")
         if isinstance(expected_size, int) and size != expected_size:
@@ -638,7 +683,7 @@ def _check_shards(
         expected_digest = entry.get("sha256")
         if isinstance(expected_digest, str):
             try:
-                digest = _sha256(shard)
+                digest = source.sha256(relative)
             except OSError as exc:
                 problems.append(DataFormatError(shard, None, None, f"a readable {where}", f"{exc}"))
                 continue
@@ -649,12 +694,12 @@ def _check_shards(
                     )
                 )
                 continue
-        keep.append(shard)
-    strays = [r for r in sorted(f.relative_to(folder).as_posix() for f in files) if r not in names]
+        keep.append(relative)
+    strays = [r for r in sorted(files) if r not in names]
     for relative in strays:
         problems.append(
             DataFormatError(
-                folder / relative,
+                source.where(relative),
                 None,
                 None,
                 f"only the shards {CARD_JSON} lists ({len(listed)})",
@@ -670,18 +715,19 @@ def _check_shards(
             first.field,
             first.expected,
             first.found,
-            hint=f"the dataset is not whole{more}; `reform-sim data verify {folder}` lists every "
-            "problem, allow_incomplete=True (--allow-incomplete) reads the shards that are",
+            hint=f"the dataset is not whole{more}; `reform-sim data verify {source.where()}` "
+            "lists every problem, allow_incomplete=True (--allow-incomplete) reads the shards "
+            "that are",
         )
     return keep, problems
 
 
-def _check_complete(folder: Path, card: Mapping[str, Any], n_files: int) -> None:
+def _check_complete(source: Any, card: Mapping[str, Any], n_files: int) -> None:
     """Refuses a ``reform-sim generate`` folder whose card says the run has not finished."""
-    card_path = folder / CARD_JSON
+    card_path = source.where(CARD_JSON)
     if not isinstance(card, dict) or card.get("complete", True) is not False:
         return
-    command = str(card.get("command", "")).replace("--out DIR", f"--out {folder}")
+    command = str(card.get("command", "")).replace("--out DIR", f"--out {source.where()}")
     raise DataFormatError(
         card_path,
         None,
@@ -702,11 +748,11 @@ def _natural_key(relative: Path) -> tuple:
     )
 
 
-def _check_rows_fit(path: Path, pq: Any) -> None:
+def _check_rows_fit(path: Path | str, pq: Any, source: Any = None) -> None:
     """Refuses, before reading it, a file whose rows cannot fit the memory available (a few MB
     of Parquet can claim a hundred million rows)."""
     try:
-        rows = pq.ParquetFile(path).metadata.num_rows
+        rows = pq.ParquetFile(path if source is None else source).metadata.num_rows
     except Exception:  # noqa: BLE001 - a corrupt footer is named by read_table below
         return
     need = rows * READ_BYTES_PER_ROW
@@ -721,13 +767,18 @@ def _check_rows_fit(path: Path, pq: Any) -> None:
         )
 
 
-def _read_file(path: Path) -> tuple[list[Frame], dict[str, Any]]:
+def _read_file(
+    path: Path | str, content: bytes | None = None
+) -> tuple[list[Frame], dict[str, Any]]:
+    """The frames and header of the file at ``path``, or of its contents ``content`` (read from a
+    store; ``path`` is then its URI, for messages)."""
     pa, pq = _pyarrow()
-    if path.stat().st_size == 0:
+    if (len(content) if content is not None else Path(path).stat().st_size) == 0:
         raise DataFormatError(path, None, None, "a Parquet file", "an empty file")
-    _check_rows_fit(path, pq)
+    source = None if content is None else pa.BufferReader(content)
+    _check_rows_fit(path, pq, source)
     try:
-        table = pq.read_table(path, partitioning=None)
+        table = pq.read_table(path if source is None else source, partitioning=None)
     except Exception as exc:  # pyarrow raises ArrowInvalid, OSError... on corrupt files
         raise DataFormatError(
             path, None, None, "a readable Parquet file", f"{type(exc).__name__}: {exc}"
@@ -1083,31 +1134,47 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
     says the run finished; each shard it lists is there, of its size and sha256; no Parquet
     file is there that it does not list; every shard reads.
 
+    Args:
+        path: the folder, or its URI in a store (``s3://bucket/prefix``,
+            `reform.datasets.store`).
+
     Raises:
         DataFormatError: ``path`` is not a folder with a card (``dataset.json``).
+        reform.datasets.store.StoreError: a store that cannot be used (one line).
     """
-    folder = Path(path)
-    card = _read_card(folder) if folder.is_dir() else None
+    source = _source(path)
+    card = source.card() if source is not None else None
     if card is None:
         raise DataFormatError(
-            folder, None, None, f"a reform-sim generate folder (with {CARD_JSON})", "none"
+            source.where() if source is not None else Path(path),
+            None,
+            None,
+            f"a reform-sim generate folder (with {CARD_JSON})",
+            "none",
         )
     problems: list[str] = []
-    files = [
-        p
-        for p in folder.rglob("*.parquet")
-        if p.is_file()
-        and not any(part.startswith((".", "_")) for part in p.relative_to(folder).parts)
-    ]
+    files = source.parquet_files()
     try:
-        _check_complete(folder, card, len(files))
+        _check_complete(source, card, len(files))
     except DataFormatError as exc:
         problems.append(str(exc))
-    keep, found = _check_shards(folder, card, files, allow_incomplete=True)
+    keep, found = _check_shards(source, card, files, allow_incomplete=True)
     problems += [str(p) for p in found]
-    for file in sorted(keep, key=lambda p: _natural_key(p.relative_to(folder))):
+    for relative in sorted(keep, key=lambda p: _natural_key(Path(p))):
         try:
-            _read_file(file)
+            source.read(relative)
         except DataFormatError as exc:
             problems.append(str(exc))
     return problems
+
+
+def _source(path: str | PathLike[str]) -> Any:
+    """The folder at ``path`` (a `_LocalFolder`, or a store's for a URI); None when none."""
+    from reform.datasets.store import is_uri
+
+    if is_uri(path):
+        from reform.datasets.store_dataset import StoreFolder
+
+        return StoreFolder.open(str(path))
+    folder = Path(path)
+    return _LocalFolder(folder) if folder.is_dir() else None

@@ -170,6 +170,13 @@ def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bo
         return
     if not str(path):
         raise CliError(f"{option}: expected a path, found an empty one")
+    from reform.datasets.store import is_uri
+
+    if is_uri(path):  # never a local folder named "s3:"
+        raise CliError(
+            f"{option} {path}: expected a path on this machine (only reform-sim generate --out "
+            "writes to object storage); write it here and copy it to the store"
+        )
     from reform.atomic import OutputPathError, check_file_path, check_folder_path
 
     try:
@@ -370,7 +377,8 @@ def add_data_argument(
     """``--data PATH|NAME`` alone (required); with ``old_positional``, also the former
     positional spelling, hidden (:func:`data_path` settles the two)."""
     text = (
-        "dataset file or folder, or a dataset's name: a fetched public dataset "
+        "dataset file or folder (or its URI in a store: s3://bucket/prefix, credentials from "
+        "the environment), or a dataset's name: a fetched public dataset "
         f"(reform-sim datasets list) or a folder in ${DATASETS_VARIABLE} (else {DEFAULT_DATASETS})"
     )
     parser.add_argument("--data", required=not old_positional, metavar=metavar, help=text)

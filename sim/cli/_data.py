@@ -58,7 +58,7 @@ def _info_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _verify_arguments(parser: argparse.ArgumentParser) -> None:
-    add_data_argument(parser, old_positional=True, metavar="DIR")
+    add_data_argument(parser, old_positional=True, metavar="DIR|URI")
     parser.set_defaults(handler=run_with("sim.cli.data:run_verify"))
 
 

@@ -16,10 +16,13 @@ from sim.cli._grammar import add_quiet, add_recordings, add_seed, rename, setter
 
 DESCRIPTION = """\
 Simulates EPISODES episodes of a scenario and writes them as hive-partitioned Parquet
-(DIR/scenario=NAME/episode=K/part.parquet) with a dataset card (DIR/dataset.json,
-DIR/README.md). Same seed, same data; finished shards are skipped, so an interrupted run resumes
-and a larger --episodes extends. The run is sized first (memory, disk, time; sim.sizing) and
-refused in one line when it cannot fit this machine.
+(DIR/data/scenario=NAME/episode=K/part.parquet, which pandas, pyarrow, polars and DuckDB read
+as they are) with a dataset card (DIR/dataset.json, and DIR/README.md with Hugging Face front
+matter, so that the folder can be pushed to a hub as it is). DIR may be a store's URI
+(s3://bucket/prefix, gs://..., any fsspec filesystem), credentials from the environment. Same
+seed, same data; finished shards are skipped, so an interrupted run resumes and a larger
+--episodes extends. The run is sized first (memory, disk, time; sim.sizing) and refused in one
+line when it cannot fit this machine.
 """
 
 
@@ -27,7 +30,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
     parser.add_argument("--episodes", required=True, type=int, metavar="N", help="episodes")
     add_seed(parser)
-    parser.add_argument("--out", required=True, metavar="DIR", help="dataset folder")
+    parser.add_argument(
+        "--out",
+        required=True,
+        metavar="DIR|URI",
+        help="dataset folder, or a store's URI (s3://bucket/prefix, gs://..., any fsspec "
+        "filesystem; credentials from the environment, e.g. AWS_ACCESS_KEY_ID)",
+    )
     add_overrides_argument(parser)
     parser.add_argument(
         "--duration", type=float, default=None, metavar="SECONDS", help="episode length"

@@ -8,6 +8,7 @@ import argparse
 import sys
 
 from reform.annotation import AnnotationModel, parse_annotation
+from reform.datasets.store import is_uri
 from sim.cli._common import (
     CliError,
     check_backend,
@@ -36,7 +37,8 @@ def _annotation(items: list[str]) -> AnnotationModel | str | None:
 def _run(args: argparse.Namespace) -> int:
     annotation = _annotation(args.annotation)
     check_backend(args)
-    check_output("--out", args.out, folder=True)
+    if not is_uri(args.out):  # a store is checked when opened, before any work
+        check_output("--out", args.out, folder=True)
     limit = max_memory(args)
     try:
         report = generate_dataset(

@@ -82,6 +82,13 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^ +18 +[\d,]+x +[\d,]+x +[\d.]+ +[\d,]+x +[\d.]+ ",
         r"^18 people: [\d,]+x real time ",
     ),
+    "bench_store": (
+        r"^local disk +[\d,]+ frames/s ",
+        r"^S3 server +[\d,]+ frames/s ",
+        r"^store / disk ratio [\d.]+x$",
+        r"^per shard: [\d.]+ s .* KiB, 2\.0 PUT requests, \d+ bytes of card$",
+        r"^paper: 64 workers x 1,000,000 episodes: [\d.]+ h, .* requests/s to the store ",
+    ),
     "bench_stress": (
         r"^  reform\.evaluate \(baseline\) +[\d.]+ s +1\.0 x baseline$",
         r"^  predict: bagged-trees +[\d.]+ s +[\d.]+ x baseline$",

@@ -111,7 +111,7 @@ def test_shards_load_one_by_one_and_as_one_dataset(reference):
     for k in range(EPISODES):
         path = shard_path(reference, SCENARIO, k)
         assert path.relative_to(reference).as_posix() == (
-            f"scenario={SCENARIO}/episode={k}/part.parquet"
+            f"data/scenario={SCENARIO}/episode={k}/part.parquet"
         )
         shard = read_parquet(path)
         assert len(shard) == DURATION_S * 2  # 2 Hz
@@ -194,7 +194,7 @@ def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference
             os.killpg(process.pid, signal.SIGKILL)
         process.wait(timeout=RUN_TIMEOUT_S)
     assert process.returncode == -signal.SIGKILL, process.stderr.read().decode()[-2000:]
-    written = sorted(out.glob("scenario=*/episode=*/part.parquet"))
+    written = sorted(out.glob("data/scenario=*/episode=*/part.parquet"))
     assert 1 <= len(written) < EPISODES, "the run was not killed mid-way"
     for path in written:  # every shard on disk is whole
         assert len(read_parquet(path)) == DURATION_S * 2
@@ -372,7 +372,7 @@ def test_a_folder_being_written_by_another_run_is_refused(tmp_path):
         fcntl.flock(handle, fcntl.LOCK_EX)
         with pytest.raises(ValueError, match=r"being written by another reform-sim generate run"):
             generate(out, episodes=1, duration=5.0)
-    assert not list(out.glob("scenario=*"))
+    assert not list(out.glob("**/*.parquet"))
 
 
 def test_command_line_errors_are_one_line(tmp_path, capsys):

@@ -95,7 +95,7 @@ def test_a_damaged_shard_is_named_unless_asked_for_what_is_there(folder, damage,
 
 def test_a_parquet_file_the_card_does_not_list_is_refused(folder):
     first = _shards(folder)[0]["path"]
-    stray = folder / "scenario=hri-conversation" / "episode=99" / "part.parquet"
+    stray = folder / "data" / "scenario=hri-conversation" / "episode=99" / "part.parquet"
     stray.parent.mkdir()
     shutil.copy(folder / first, stray)
     with pytest.raises(DataFormatError, match=r"episode=99/part.parquet: expected only the shards"):

@@ -1,0 +1,215 @@
+"""Datasets in object storage: a URI (``s3://bucket/prefix``, ``gs://…``, ``memory://…``, any
+fsspec filesystem) opened as a `Store`, the few operations a generated dataset needs.
+
+Credentials and endpoints come from where each filesystem's own library looks for them, never
+from the URI or the command line: for S3 (s3fs, botocore) the environment variables
+``AWS_ACCESS_KEY_ID``, ``AWS_SECRET_ACCESS_KEY``, ``AWS_SESSION_TOKEN``, ``AWS_PROFILE``,
+``AWS_ENDPOINT_URL`` / ``AWS_ENDPOINT_URL_S3`` (an S3-compatible server), ``AWS_REGION``, and
+the files they name.
+
+Everything that can go wrong before any work (the filesystem's package not installed, no
+credentials, a store that cannot be reached, a bucket that does not exist) is one `StoreError`,
+a ValueError whose message is one line naming the URI.
+
+fsspec is imported only inside these functions.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["StoreError", "Store", "is_uri", "open_store"]
+
+_URI = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
+# The package each common scheme needs (fsspec's own registry knows the rest).
+_PACKAGES = {"s3": "s3fs", "s3a": "s3fs", "gs": "gcsfs", "gcs": "gcsfs", "az": "adlfs"}
+_CREDENTIALS = {
+    "s3fs": "set AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY (or AWS_PROFILE) in the environment",
+    "gcsfs": "set GOOGLE_APPLICATION_CREDENTIALS in the environment",
+    "adlfs": "set AZURE_STORAGE_CONNECTION_STRING (or AZURE_STORAGE_ACCOUNT_NAME and "
+    "AZURE_STORAGE_ACCOUNT_KEY) in the environment",
+}
+
+
+class StoreError(ValueError):
+    """A store that cannot be used: one line naming the URI and what to do."""
+
+
+def is_uri(location: str | os.PathLike[str]) -> bool:
+    """True for ``scheme://…`` (a store); False for a path on this machine."""
+    return isinstance(location, str) and bool(_URI.match(location))
+
+
+@dataclass(frozen=True)
+class Store:
+    """A folder in a filesystem (fsspec): paths relative to it, read and written whole.
+
+    Attributes:
+        uri: the folder's URI as given, without a trailing slash.
+        fs: the fsspec filesystem.
+        root: the folder's path in ``fs`` (the URI without its scheme).
+    """
+
+    uri: str
+    fs: Any
+    root: str
+
+    def url(self, relative: str = "") -> str:
+        """The URI of ``relative`` (in messages and for other tools)."""
+        return f"{self.uri}/{relative}" if relative else self.uri
+
+    def path(self, relative: str) -> str:
+        return f"{self.root}/{relative}" if relative else self.root
+
+    def read(self, relative: str) -> bytes | None:
+        """The object's bytes, or None when there is none."""
+        self._forget(relative)
+        try:
+            return self.fs.cat_file(self.path(relative))
+        except FileNotFoundError:
+            return None
+
+    def _forget(self, relative: str) -> None:
+        """Drops what the filesystem remembers of listings (another process may have written
+        since)."""
+        self.fs.invalidate_cache(self.path(relative))
+
+    def write(self, relative: str, data: bytes) -> None:
+        """Writes the object whole: in object storage it appears complete or not at all."""
+        self.fs.pipe_file(self.path(relative), data)
+
+    def create(self, relative: str, data: bytes) -> bool:
+        """Writes the object only if there is none (S3: a PUT with ``If-None-Match: *``);
+        False when one is there."""
+        try:
+            with self.fs.open(self.path(relative), "xb") as handle:
+                handle.write(data)
+        except FileExistsError:
+            return False
+        return True
+
+    def tag(self, relative: str) -> str | None:
+        """The object's version tag (ETag), or None when the filesystem has none."""
+        self._forget(relative)
+        try:
+            info = self.fs.info(self.path(relative))
+        except FileNotFoundError:
+            return None
+        tag = info.get("ETag") or info.get("etag")
+        return str(tag) if tag else None
+
+    def replace(self, relative: str, data: bytes, tag: str) -> bool:
+        """Overwrites the object only if it is still version ``tag`` (S3: ``If-Match``);
+        False when another writer changed it first."""
+        if type(self.fs).__name__ == "S3FileSystem":
+            bucket, key, _ = self.fs.split_path(self.path(relative))
+            try:
+                self.fs.call_s3("put_object", Bucket=bucket, Key=key, Body=data, IfMatch=tag)
+            except (OSError, FileExistsError):  # PreconditionFailed
+                return False
+            self.fs.invalidate_cache(self.path(relative))
+            return True
+        if self.tag(relative) != tag:
+            return False
+        self.write(relative, data)
+        return True
+
+    def delete(self, *relative: str) -> None:
+        paths = [self.path(r) for r in relative]
+        if paths:
+            self.fs.rm(paths)
+
+    def sizes(self, relative: str = "") -> dict[str, int]:
+        """Every object below ``relative``: its path relative to the folder -> bytes."""
+        base = self.path(relative)
+        self._forget(relative)
+        try:
+            found = self.fs.find(base, detail=True)
+        except FileNotFoundError:
+            return {}
+        prefix = self.root.rstrip("/") + "/"
+        return {
+            name.removeprefix(prefix): int(info.get("size") or 0)
+            for name, info in found.items()
+            if info.get("type", "file") != "directory"
+        }
+
+
+def open_store(uri: str, *, check: bool = True) -> Store:
+    """The store at ``uri``; with ``check``, proven usable first: its filesystem installed,
+    credentials found, the store reached, its bucket (first part of the path) there.
+
+    Raises:
+        StoreError: one line naming ``uri`` and what went wrong.
+    """
+    import fsspec
+
+    uri = uri.rstrip("/")
+    scheme = uri.split("://", 1)[0].lower()
+    package = _PACKAGES.get(scheme)
+    try:
+        fs, root = fsspec.url_to_fs(uri)
+    except (ImportError, ValueError) as exc:
+        install = (
+            "pip install 'reform-sim[s3]'"
+            if package == "s3fs"
+            else f"pip install {package}"
+            if package
+            else "install its fsspec filesystem"
+        )
+        raise StoreError(
+            f"{uri}: cannot open a {scheme}:// store ({_first_line(exc)}); {install}"
+        ) from None
+    store = Store(uri=uri, fs=fs, root=root.rstrip("/"))
+    if check:
+        _check(store, scheme, package)
+    return store
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+def _check(store: Store, scheme: str, package: str | None) -> None:
+    """One listing of the bucket: the cheapest request that needs credentials, a reachable
+    store and the bucket."""
+    if scheme in ("memory", "file", "local"):
+        return
+    bucket = store.root.split("/", 1)[0]
+    endpoint = _endpoint(store.fs)
+    where = f" at {endpoint}" if endpoint else ""
+    try:
+        store.fs.ls(bucket, refresh=True)
+    except FileNotFoundError:
+        raise StoreError(
+            f"{store.uri}: bucket {bucket!r} does not exist{where}; create it first or check "
+            "the URI"
+        ) from None
+    except PermissionError as exc:
+        raise StoreError(
+            f"{store.uri}: access to bucket {bucket!r} denied{where} ({_first_line(exc)}); "
+            f"check the credentials: {_CREDENTIALS.get(package or '', 'see its filesystem')}"
+        ) from None
+    except Exception as exc:  # noqa: BLE001 - every library has its own error classes
+        name = type(exc).__name__
+        if "Credentials" in name or "credentials" in str(exc).lower():
+            raise StoreError(
+                f"{store.uri}: no credentials for {scheme}://; "
+                f"{_CREDENTIALS.get(package or '', 'see its filesystem')}"
+            ) from None
+        raise StoreError(
+            f"{store.uri}: cannot reach the store{where} ({_first_line(exc)}); check the "
+            "endpoint (AWS_ENDPOINT_URL for an S3-compatible server) and the network"
+        ) from None
+
+
+def _endpoint(fs: Any) -> str | None:
+    """The S3 endpoint in use, when it is not AWS's own (for messages)."""
+    endpoint = getattr(fs, "endpoint_url", None) or (getattr(fs, "client_kwargs", None) or {}).get(
+        "endpoint_url"
+    )
+    return endpoint or os.environ.get("AWS_ENDPOINT_URL_S3") or os.environ.get("AWS_ENDPOINT_URL")

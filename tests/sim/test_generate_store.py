@@ -1,0 +1,373 @@
+"""Datasets in object storage, end to end against a real S3-compatible server (moto's server mode,
+on 127.0.0.1): written by local and Ray workers, killed and resumed, read back by reform-sim,
+pyarrow, polars and DuckDB straight from the bucket, and every bad store refused in one line."""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from reform.datasets import read_parquet
+from reform.datasets.errors import DataFormatError
+from reform.datasets.parquet import verify_folder
+from reform.datasets.store import StoreError, open_store
+from sim.cli import main
+from sim.generate import CARD_JSON, CARD_MARKDOWN, generate_dataset, shard_path
+
+moto_server = pytest.importorskip("moto.server")
+pytest.importorskip("s3fs")
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+CLI = [sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())"]
+BUCKET = "lab-data"
+SCENARIO = "hri-conversation"  # two people and the robot: a cheap scene
+EPISODES = 4
+SEED = 3
+DURATION_S = 60.0  # seconds per episode: 120 frames at 2 Hz
+ARGS = ["--scenario", SCENARIO, "--episodes", str(EPISODES), "--seed", str(SEED)]
+ARGS += ["--duration", "60", "--jobs", "1", "--no-progress"]
+RUN_TIMEOUT_S = 300.0  # seconds, generous: the machine is shared
+KILL_EPISODES = 40  # a run long enough to be killed mid-way
+
+
+@pytest.fixture(scope="module")
+def server():
+    """A real S3-compatible server on 127.0.0.1, and the environment that points at it."""
+    started = moto_server.ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
+    started.start()
+    host, port = started.get_host_and_port()
+    env = {
+        "AWS_ACCESS_KEY_ID": "lab-key",
+        "AWS_SECRET_ACCESS_KEY": "lab-secret",
+        "AWS_ENDPOINT_URL": f"http://{host}:{port}",
+        "AWS_DEFAULT_REGION": "us-east-1",
+        "AWS_EC2_METADATA_DISABLED": "true",
+    }
+    saved = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    _clear_cache()
+    import boto3
+
+    boto3.client("s3").create_bucket(Bucket=BUCKET)
+    try:
+        yield env
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+        _clear_cache()
+        started.stop()
+
+
+def _clear_cache() -> None:
+    import s3fs
+
+    s3fs.S3FileSystem.clear_instance_cache()
+
+
+def generate(out, episodes: int = EPISODES, **overrides):
+    kwargs = dict(
+        episodes=episodes, seed=SEED, out_dir=out, duration=DURATION_S, n_jobs=1, progress=False
+    )
+    return generate_dataset(SCENARIO, **(kwargs | overrides))
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    """The same dataset on local disk."""
+    out = tmp_path_factory.mktemp("store") / "local"
+    generate(out)
+    return out
+
+
+def objects(uri: str) -> dict[str, int]:
+    return open_store(uri).sizes()
+
+
+def same_as_reference(uri: str, reference: Path, episodes: int = EPISODES) -> None:
+    store = open_store(uri)
+    for k in range(episodes):
+        relative = shard_path(reference, SCENARIO, k).relative_to(reference).as_posix()
+        assert store.read(relative) == (reference / relative).read_bytes(), relative
+
+
+def test_a_dataset_written_to_s3_is_the_one_written_to_disk(server, reference):
+    uri = f"s3://{BUCKET}/same"
+    report = generate(uri, n_jobs=2)
+    assert report.out_dir == uri and report.card == f"{uri}/{CARD_JSON}"
+    # Nothing but the dataset: no commit left, no lock left, no local folder named "s3:".
+    names = sorted(objects(uri))
+    assert names == sorted(
+        [CARD_MARKDOWN, CARD_JSON]
+        + [f"data/scenario={SCENARIO}/episode={k}/part.parquet" for k in range(EPISODES)]
+    )
+    assert not Path("s3:").exists()
+    same_as_reference(uri, reference)
+    store = open_store(uri)
+    assert store.read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
+    assert store.read(CARD_MARKDOWN) == (reference / CARD_MARKDOWN).read_bytes()
+    # reform-sim reads it straight from the bucket.
+    assert read_parquet(uri).frames == read_parquet(reference).frames
+    assert verify_folder(uri) == []
+    for entry in json.loads(store.read(CARD_JSON))["shards"]:
+        content = store.read(entry["path"])
+        assert hashlib.sha256(content).hexdigest() == entry["sha256"]
+        assert len(content) == entry["bytes"]
+
+
+def test_other_tools_read_the_dataset_straight_from_the_bucket(server, reference):
+    uri = f"s3://{BUCKET}/tools"
+    generate(uri)
+    import pyarrow.dataset as ds
+    import pyarrow.fs
+    import pyarrow.parquet as pq
+
+    rows = sum(pq.ParquetFile(p).metadata.num_rows for p in reference.rglob("*.parquet"))
+
+    s3 = pyarrow.fs.S3FileSystem(
+        endpoint_override=server["AWS_ENDPOINT_URL"], scheme="http", region="us-east-1"
+    )
+    table = ds.dataset(f"{BUCKET}/tools/data", filesystem=s3, partitioning="hive").to_table()
+    assert table.num_rows == rows
+    assert sorted(set(table["episode"].to_pylist())) == list(range(EPISODES))
+
+    polars = pytest.importorskip("polars")
+    frame = polars.scan_parquet(f"{uri}/data/**/*.parquet", hive_partitioning=True).collect()
+    assert frame.height == rows and set(frame["scenario"]) == {SCENARIO}
+
+    duckdb = pytest.importorskip("duckdb")
+    import s3fs
+
+    con = duckdb.connect()
+    con.register_filesystem(s3fs.S3FileSystem())  # httpfs needs a download; fsspec does not
+    counts = con.sql(
+        f"SELECT episode, count(*) FROM read_parquet('{uri}/data/**/*.parquet', "
+        "hive_partitioning = true) GROUP BY episode ORDER BY episode"
+    ).fetchall()
+    local = con.sql(
+        f"SELECT episode, count(*) FROM read_parquet('{reference.as_posix()}/data/**/*.parquet', "
+        "hive_partitioning = true) GROUP BY episode ORDER BY episode"
+    ).fetchall()
+    assert counts == local and len(counts) == EPISODES
+
+
+def test_a_run_killed_mid_shard_resumes_and_no_half_shard_is_ever_read(server, tmp_path):
+    uri = f"s3://{BUCKET}/killed"
+    store = open_store(uri)
+    args = [*ARGS[:3], str(KILL_EPISODES), *ARGS[4:]]
+    process = subprocess.Popen(
+        [*CLI, "generate", *args, "--out", uri],
+        cwd=REPO_ROOT,
+        env=os.environ | server,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    deadline = time.monotonic() + RUN_TIMEOUT_S
+    try:  # killed once two shards are committed: the third is being simulated or written
+        while (
+            len(store.sizes("_commits")) < 2
+            and process.poll() is None
+            and time.monotonic() < deadline
+        ):
+            time.sleep(0.01)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+        process.wait(timeout=RUN_TIMEOUT_S)
+    assert process.returncode == -signal.SIGKILL, process.stderr.read().decode()[-2000:]
+    left = objects(uri)
+    commits = sorted(n for n in left if n.startswith("_commits/"))
+    assert 2 <= len(commits) < KILL_EPISODES, "the run was not killed mid-way"
+    assert ".generate.lock" in left  # the killed run's
+    # A half-written shard (what a store without whole-object writes, or a copy cut short,
+    # leaves) where the next episode goes: never read, never taken for done.
+    k = len(commits)
+    half = f"data/scenario={SCENARIO}/episode={k}/part.parquet"
+    whole = store.read(f"data/scenario={SCENARIO}/episode=0/part.parquet")
+    store.write(half, whole[: len(whole) // 2])
+    with pytest.raises(DataFormatError, match=r"field 'complete': expected true"):
+        read_parquet(uri)
+    partial = read_parquet(uri, allow_incomplete=True)
+    assert partial.sequences() == tuple(f"{SCENARIO}-{i}" for i in range(len(commits)))
+    assert any(half in p and "no commit names" in p for p in partial.metadata["incomplete"])
+
+    # The same command again: the killed run's lock is taken over, the half shard rewritten.
+    run = subprocess.run(
+        [*CLI, "generate", *args, "--out", uri],
+        cwd=REPO_ROOT,
+        env=os.environ | server,
+        capture_output=True,
+        timeout=RUN_TIMEOUT_S,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert f"({KILL_EPISODES - len(commits)} generated, {len(commits)} already there)" in run.stdout
+    after = objects(uri)
+    assert not any(n.startswith(("_commits/", ".generate.lock")) for n in after)
+    assert verify_folder(uri) == []
+    reference = tmp_path / "reference"
+    generate(reference, episodes=KILL_EPISODES)
+    same_as_reference(uri, reference, KILL_EPISODES)
+    assert open_store(uri).read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
+
+
+def test_two_writers_on_one_prefix_are_refused(server):
+    uri = f"s3://{BUCKET}/locked"
+    store = open_store(uri)
+    other = {"host": "node-7", "pid": 4242, "started": "2026-01-01T00:00:00Z"}
+    assert store.create(".generate.lock", json.dumps(other).encode())
+    with pytest.raises(
+        ValueError,
+        match=r"being written by another reform-sim generate run "
+        r"\(host node-7, process 4242",
+    ):
+        generate(uri, episodes=1)
+    assert sorted(objects(uri)) == [".generate.lock"]  # nothing else written
+    # A lock of a run of this machine whose process is gone is taken over.
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    gone = {"host": socket.gethostname(), "pid": int(dead.stdout), "started": "then"}
+    store.write(".generate.lock", json.dumps(gone).encode())
+    report = generate(uri, episodes=1)
+    assert report.generated == (0,) and ".generate.lock" not in objects(uri)
+    # Only one of two writers gets a lock object (S3: a PUT with If-None-Match: *).
+    assert store.create("race", b"first") and not store.create("race", b"second")
+    assert store.read("race") == b"first"
+
+
+def _one_line(capsys, argv) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+def test_a_bad_store_is_refused_in_one_line_before_any_work(server, capsys, monkeypatch):
+    out = ["generate", *ARGS, "--out"]
+    err = _one_line(capsys, [*out, "s3://no-such-bucket/ds"])
+    assert "bucket 'no-such-bucket' does not exist" in err
+    # A prefix holding another dataset, or other objects.
+    uri = f"s3://{BUCKET}/other"
+    generate(uri, episodes=1, seed=SEED + 1)
+    err = _one_line(capsys, [*out, uri])
+    assert f"out_dir {uri} holds another dataset" in err and "seed" in err
+    open_store(f"s3://{BUCKET}/foreign").write("notes.txt", b"mine")
+    err = _one_line(capsys, [*out, f"s3://{BUCKET}/foreign"])
+    assert "holds objects but no dataset card" in err and "notes.txt" in err
+    # No credentials.
+    for key in ("AWS_ACCESS_KEY_ID", "AWS_SECRET_ACCESS_KEY"):
+        monkeypatch.delenv(key)
+    monkeypatch.setenv("AWS_SHARED_CREDENTIALS_FILE", "/nonexistent")
+    monkeypatch.setenv("AWS_CONFIG_FILE", "/nonexistent")
+    _clear_cache()
+    err = _one_line(capsys, [*out, f"s3://{BUCKET}/nocreds"])
+    assert "no credentials for s3://" in err and "AWS_ACCESS_KEY_ID" in err
+    assert main(["data", "info", f"s3://{BUCKET}/same"]) == 2
+    assert "no credentials for s3://" in capsys.readouterr().err
+    monkeypatch.undo()
+    # A store that cannot be reached.
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        closed = sock.getsockname()[1]
+    monkeypatch.setenv("AWS_ENDPOINT_URL", f"http://127.0.0.1:{closed}")
+    _clear_cache()
+    err = _one_line(capsys, [*out, f"s3://{BUCKET}/unreachable"])
+    assert f"cannot reach the store at http://127.0.0.1:{closed}" in err
+    monkeypatch.undo()
+    _clear_cache()
+    assert not any(n.startswith(("nocreds", "unreachable")) for n in objects(f"s3://{BUCKET}"))
+    with pytest.raises(StoreError, match=r"cannot open a nosuch:// store"):
+        open_store("nosuch://x/y")
+
+
+def test_commands_that_write_local_files_refuse_a_uri(reference, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    err = _one_line(capsys, ["data", "convert", str(reference), "--out", "s3://lab-data/x.parquet"])
+    assert "--out s3://lab-data/x.parquet: expected a path on this machine" in err
+    assert not (tmp_path / "s3:").exists()
+
+
+def test_data_commands_read_a_dataset_in_the_store(server, capsys):
+    uri = f"s3://{BUCKET}/cli"
+    assert main(["generate", *ARGS, "--out", uri]) == 0
+    assert uri in capsys.readouterr().out
+    assert main(["data", "verify", uri]) == 0
+    assert "whole" in capsys.readouterr().out
+    assert main(["data", "info", uri, "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["frames"] == EPISODES * int(DURATION_S * 2)
+    # An altered shard is named by its URI.
+    store = open_store(uri)
+    shard = f"data/scenario={SCENARIO}/episode=1/part.parquet"
+    content = bytearray(store.read(shard))
+    content[100] ^= 0xFF
+    store.write(shard, bytes(content))
+    assert main(["data", "verify", uri]) == 1
+    assert f"{uri}/{shard}: field 'sha256'" in capsys.readouterr().out
+
+
+def test_ray_workers_write_their_shards_to_the_store(server, reference):
+    ray = pytest.importorskip("ray")
+    ray.init(
+        num_cpus=2,
+        object_store_memory=100 * 2**20,
+        include_dashboard=False,
+        log_to_driver=False,
+    )
+    try:
+        uri = f"s3://{BUCKET}/ray"
+        report = generate(uri, backend="ray")
+        assert report.backend == "ray" and report.n_jobs == 2
+        same_as_reference(uri, reference)
+        assert open_store(uri).read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
+    finally:
+        ray.shutdown()
+
+
+def test_any_fsspec_filesystem_is_a_store(reference):
+    uri = "memory://reform-sim-test/ds"  # fsspec's in-memory filesystem, this process only
+    generate(uri)
+    same_as_reference(uri, reference)
+    assert read_parquet(uri).frames == read_parquet(reference).frames
+    assert verify_folder(uri) == []
+
+
+def test_a_filesystem_not_installed_is_named_with_its_install_command():
+    try:
+        import gcsfs  # noqa: F401
+    except ImportError:
+        with pytest.raises(StoreError, match=r"gs://lab/ds: cannot open a gs:// store .*gcsfs"):
+            open_store("gs://lab/ds")
+    else:
+        pytest.skip("gcsfs is installed")
+
+
+def test_local_workers_see_the_credentials_as_they_are_now(server, reference, monkeypatch):
+    from joblib import Parallel, delayed
+
+    for key in server:  # a pool of workers started before the credentials were set
+        monkeypatch.delenv(key)
+    assert Parallel(n_jobs=2, backend="loky")(delayed(os.getenv)(k) for k in server) == [
+        None
+    ] * len(server)
+    monkeypatch.undo()
+    uri = f"s3://{BUCKET}/pool"
+    assert generate(uri, n_jobs=2).n_jobs == 2
+    same_as_reference(uri, reference)
