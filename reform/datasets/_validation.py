@@ -25,6 +25,11 @@ WRAPPED_ANGLE_LIMIT_RAD = math.pi + 2e-3
 # realistic scene, so a value beyond this bound means degrees, not a long drift. Radians.
 UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
 
+# Person ids are integers >= 0 in every format of the field: DANTE's ID_<digits> and Babble's
+# participant numbers cannot be negative, the public GCFF sets number people from 1, and
+# generated datasets from 0 (the robot). A negative id is refused with this reason.
+ID_RULE = "person ids are never negative"
+
 
 def require_file(path: Path, *, what: str) -> Path:
     """``path`` if it is an existing, non-empty, readable regular file.

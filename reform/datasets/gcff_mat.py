@@ -28,6 +28,7 @@ import numpy as np
 
 from reform.datasets._isolated import IsolatedFailure, run_isolated
 from reform.datasets._validation import (
+    ID_RULE,
     Repairs,
     check_time_increases,
     check_unique_ids,
@@ -601,6 +602,15 @@ def _frame_rows(
             "an integer",
             repr(float(ids[fractional[0]])),
         )
+    negative = np.flatnonzero(ids < 0)
+    if negative.size:
+        raise DataFormatError(
+            path,
+            f"{where}, row {negative[0] + 1}",
+            "ID",
+            f"an integer >= 0 ({ID_RULE})",
+            repr(float(ids[negative[0]])),
+        )
     ids = ids.astype(np.int64)
     check_unique_ids(ids.tolist(), path=path, where=where)
     limit = POSITION_LIMIT_M * per_metre
@@ -660,6 +670,10 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
             or np.any(np.abs(values) > _ID_LIMIT)
         ):
             raise DataFormatError(path, where, f"group {k}", "integer IDs", str(values.tolist()))
+        if np.any(values < 0):
+            raise DataFormatError(
+                path, where, f"group {k}", f"IDs >= 0 ({ID_RULE})", str(values.tolist())
+            )
         groups.append([int(v) for v in values])
     return groups
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from reform import __version__
 from reform.atomic import atomic_path
-from reform.datasets._validation import check_time_increases, file_kind, make_frame
+from reform.datasets._validation import ID_RULE, check_time_increases, file_kind, make_frame
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.frame_block import FrameBlock
@@ -164,6 +164,7 @@ def write_parquet(
             :data:`CODECS`, or the header is missing or given twice: before anything is written.
     """
     _check_compression(compression)
+    _check_ids_written(dataset)
     if isinstance(dataset, FrameBlock):
         if name is None:
             raise ValueError("write_parquet of a FrameBlock needs name=, the dataset's name")
@@ -798,6 +799,11 @@ def _with_listed_groups(path: Path, frames: list[Frame], listed: Any) -> list[Fr
                 path, None, "listed_groups", f"frame indices below {len(frames)}", repr(key)
             )
         k = int(key)
+        negative = _negative_member(groups)
+        if negative is not None:
+            raise DataFormatError(
+                path, f"frame {k}", "listed_groups", f"ids >= 0 ({ID_RULE})", repr(negative)
+            )
         try:
             frames[k] = frames[k].replace(listed_groups=groups)
         except (TypeError, ValueError) as exc:
@@ -805,6 +811,34 @@ def _with_listed_groups(path: Path, frames: list[Frame], listed: Any) -> list[Fr
                 path, f"frame {k}", "listed_groups", "groups agreeing with the frame", str(exc)
             ) from None
     return frames
+
+
+def _negative_member(groups: Any) -> Any:
+    """The first negative integer member of a list of groups (None when there is none; other
+    malformations are the frame's to refuse)."""
+    if not isinstance(groups, list):
+        return None
+    for group in groups:
+        if isinstance(group, list):
+            for member in group:
+                if isinstance(member, int) and not isinstance(member, bool) and member < 0:
+                    return member
+    return None
+
+
+def _check_ids_written(dataset: Dataset | FrameBlock) -> None:
+    """Refuses a negative person id before anything is written: no reader would take it."""
+    if isinstance(dataset, FrameBlock):
+        if dataset.ids.size and int(dataset.ids.min()) < 0:
+            raise ValueError(
+                f"person ids must be >= 0 ({ID_RULE}), got {int(dataset.ids.min())} in the block"
+            )
+        return
+    for k, frame in enumerate(dataset.frames):
+        low = [int(frame.ids.min())] if frame.ids.size else []
+        low += [m for g in frame.listed_groups or () for m in g if m < 0]
+        if low and min(low) < 0:
+            raise ValueError(f"person ids must be >= 0 ({ID_RULE}), got {min(low)} in frame {k}")
 
 
 def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]) -> list[Frame]:
@@ -849,6 +883,16 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
             repr(float(data["time"][row])),
         )
     _check_unique_ids(path, index, data["person_id"], null["person_id"])
+    negative = np.flatnonzero(~null["person_id"] & (data["person_id"] < 0))
+    if negative.size:
+        row = int(negative[0])
+        raise DataFormatError(
+            path,
+            f"frame {int(index[row])} (row {row})",
+            "person_id",
+            f"an id >= 0 ({ID_RULE})",
+            str(int(data["person_id"][row])),
+        )
     _check_heads(path, index, data, null)
 
     frames = []
