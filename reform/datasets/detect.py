@@ -5,6 +5,7 @@ from __future__ import annotations
 from os import PathLike
 from pathlib import Path
 
+from reform.datasets._walk import find_files
 from reform.datasets.errors import DataFormatError
 from reform.frame import Dataset
 
@@ -26,17 +27,14 @@ _DESCRIPTION = (
     "salsa, alias dante (a folder with the DANTE text files features.txt and group_names.txt), "
     "babble (a folder with Motion-capture-data.csv), "
     "gcff (a folder with features.mat, or a folder of such folders), "
-    "parquet (a .parquet file or a folder of them)"
+    f"parquet (a .parquet file or a folder of them, at most {_PARQUET_DEPTH} levels down)"
 )
 
 
 def _holds_parquet(folder: Path) -> bool:
-    """True if ``folder`` holds a .parquet file at most :data:`_PARQUET_DEPTH` levels down."""
-    for depth in range(_PARQUET_DEPTH + 1):
-        pattern = "/".join(["*"] * depth + ["*.parquet"])
-        if next(folder.glob(pattern), None) is not None:
-            return True
-    return False
+    """True if ``folder`` holds a .parquet file at most :data:`_PARQUET_DEPTH` levels down
+    (looking at :data:`~reform.datasets._walk.MAX_ENTRIES` entries at most)."""
+    return bool(find_files(folder, ".parquet", max_depth=_PARQUET_DEPTH, first=True, strict=False))
 
 
 def _folder_formats(folder: Path) -> dict[str, str]:
@@ -54,8 +52,12 @@ def _folder_formats(folder: Path) -> dict[str, str]:
         sequences = sequence_folders(folder)
         if sequences:
             found["gcff"] = ", ".join(f"{s.name}/features.mat" for s in sequences)
-    if _holds_parquet(folder):
-        found["parquet"] = ".parquet files"
+    try:
+        if _holds_parquet(folder):
+            found["parquet"] = ".parquet files"
+    except DataFormatError:
+        if not found:
+            raise  # too large a folder to tell, and nothing else found: said as such
     return found
 
 

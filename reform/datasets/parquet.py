@@ -36,6 +36,7 @@ import numpy as np
 from reform import __version__
 from reform.atomic import atomic_path
 from reform.datasets._validation import ID_RULE, check_time_increases, file_kind, make_frame
+from reform.datasets._walk import find_files
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.frame_block import FrameBlock
@@ -427,12 +428,7 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
             units="m",
             metadata=header.get("metadata", {}),
         )
-    files = [
-        p
-        for p in path.rglob("*.parquet")
-        if p.is_file()
-        and not any(part.startswith((".", "_")) for part in p.relative_to(path).parts)
-    ]
+    files = find_files(path, ".parquet", what="a Parquet file or a folder of them")
     card = _read_card(path)
     problems: list[DataFormatError] = []
     if card is not None:
@@ -1134,12 +1130,7 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
             folder, None, None, f"a reform-sim generate folder (with {CARD_JSON})", "none"
         )
     problems: list[str] = []
-    files = [
-        p
-        for p in folder.rglob("*.parquet")
-        if p.is_file()
-        and not any(part.startswith((".", "_")) for part in p.relative_to(folder).parts)
-    ]
+    files = find_files(folder, ".parquet", what="a reform-sim generate folder")
     try:
         _check_complete(folder, card, len(files))
     except DataFormatError as exc:
