@@ -51,6 +51,7 @@ from reform.datasets._validation import (
 )
 from reform.datasets.errors import DataFormatError
 from reform.frame import Dataset, Frame, Group
+from reform.path_argument import path_argument
 
 __all__ = ["ANNOTATIONS_FILE", "HEAD_TORSO_MAX_M", "MOTION_FILE", "VICON_RATE_HZ", "load_babble"]
 
@@ -99,7 +100,7 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
         DataFormatError: a file is missing, empty or malformed (the message names the file,
             line or frame, field, what was expected and what was found).
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="load_babble")
     folder = path if path.is_dir() else path.parent
     motion_path = folder / MOTION_FILE if path.is_dir() else path
     annotations_path = folder / ANNOTATIONS_FILE

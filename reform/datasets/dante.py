@@ -46,6 +46,7 @@ from reform.datasets._validation import (
 )
 from reform.datasets.errors import DataFormatError
 from reform.frame import Dataset, Frame, Group, wrap_angle
+from reform.path_argument import path_argument
 
 __all__ = ["FEATURES_FILE", "FIELDS_PER_PERSON", "GROUPS_FILE", "load_dante", "load_salsa"]
 
@@ -120,13 +121,16 @@ def load_dante(
         DataFormatError: a file is missing, empty or malformed (the message names the file,
             line, field, what was expected and what was found).
     """
-    path = Path(path)
+    function = "load_salsa" if name == "salsa" else "load_dante"
+    path = path_argument(path, name="path", function=function)
+    if groups_path is not None:
+        groups_path = path_argument(groups_path, name="groups_path", function=function)
     if path.is_dir():
         features_path = path / FEATURES_FILE
-        groups_file = path / GROUPS_FILE if groups_path is None else Path(groups_path)
+        groups_file = path / GROUPS_FILE if groups_path is None else groups_path
     else:
         features_path = path
-        groups_file = path.parent / GROUPS_FILE if groups_path is None else Path(groups_path)
+        groups_file = path.parent / GROUPS_FILE if groups_path is None else groups_path
     require_file(features_path, what="a DANTE features file")
     require_file(groups_file, what="a DANTE group file")
     repairs = Repairs(strict=strict)

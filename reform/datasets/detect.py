@@ -8,6 +8,7 @@ from pathlib import Path
 from reform.datasets._walk import find_files
 from reform.datasets.errors import DataFormatError
 from reform.frame import Dataset
+from reform.path_argument import path_argument
 
 __all__ = ["FORMATS", "FORMAT_ALIASES", "LENGTH_UNITS", "detect_format", "load_dataset"]
 
@@ -71,7 +72,7 @@ def detect_format(path: str | PathLike[str]) -> str:
         DataFormatError: the path does not exist, matches no format (the message lists them),
             or is a folder matching several.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="detect_format")
     if not path.exists():
         raise DataFormatError(
             path, None, None, "an existing dataset file or folder", "no such file or folder"
@@ -136,7 +137,7 @@ def load_dataset(
         ValueError: unknown ``format`` or ``units``, units that contradict the format, or
             pixels without their scale.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="load_dataset")
     if format is None:
         format = detect_format(path)
     format = FORMAT_ALIASES.get(format, format)

@@ -40,6 +40,7 @@ from reform.datasets._validation import (
 from reform.datasets.errors import DataFormatError
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
 from reform.machine import available_memory
+from reform.path_argument import path_argument
 
 __all__ = [
     "FEATURES_FILE",
@@ -125,8 +126,8 @@ def load_gcff(
             for another unit, or not a positive finite number.
         DataFormatError: a file is missing, unreadable or malformed.
     """
+    path = path_argument(path, name="path", function="load_gcff")
     per_metre = units_per_metre(units, metres_per_pixel)
-    path = Path(path)
     folder = path.parent if path.is_file() else path
     if not folder.is_dir():
         raise DataFormatError(
@@ -382,7 +383,7 @@ def check_inflated_size(path: str | PathLike[str], *, limit: int | None = None) 
         DataFormatError: the variables inflate (or claim to) beyond ``limit``, naming the
             variable's place in the file, or the file cannot be read.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="check_inflated_size")
     if limit is None:
         limit = min(MAT_INFLATED_LIMIT_BYTES, max(available_memory() // 4, 2**20))
     expected = (
@@ -761,7 +762,7 @@ def read_settings(
         DataFormatError: the file is missing or unreadable, a required variable is missing, or
             a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="read_settings")
     mat = _loadmat(path)
     out: dict[str, float] = {}
     for name, (expected, accepts) in _SETTINGS_RULES.items():

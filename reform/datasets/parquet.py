@@ -41,6 +41,7 @@ from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.frame_block import FrameBlock
 from reform.machine import available_memory
+from reform.path_argument import path_argument
 
 __all__ = [
     "CARD_JSON",
@@ -164,6 +165,12 @@ def write_parquet(
         ValueError: the metadata is not JSON-serialisable, ``compression`` is not one of
             :data:`CODECS`, or the header is missing or given twice: before anything is written.
     """
+    if not isinstance(dataset, (Dataset, FrameBlock)):
+        raise TypeError(
+            f"write_parquet: dataset must be a reform.Dataset or a FrameBlock, got "
+            f"{type(dataset).__name__}"
+        )
+    path = path_argument(path, name="path", function="write_parquet")
     _check_compression(compression)
     _check_ids_written(dataset)
     if isinstance(dataset, FrameBlock):
@@ -411,7 +418,7 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
             format version, or malformed (the message names the file, frame, field), or the
             folder is an unfinished generated dataset.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="read_parquet")
     if not path.exists():
         raise DataFormatError(
             path, None, None, "a Parquet file or a folder of them", "no such file or folder"
@@ -1123,7 +1130,7 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
     Raises:
         DataFormatError: ``path`` is not a folder with a card (``dataset.json``).
     """
-    folder = Path(path)
+    folder = path_argument(path, name="path", function="verify_folder")
     card = _read_card(folder) if folder.is_dir() else None
     if card is None:
         raise DataFormatError(
