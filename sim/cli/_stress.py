@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_max_memory_argument, run_with
 from sim.cli._detectors import detector_name
 from sim.experiments.stress_grid import AXES, GRIDS
 
@@ -76,5 +76,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="PATH.rrd",
         help="also save the curves as a Rerun recording; open it with `rerun PATH.rrd`",
+    )
+    add_max_memory_argument(
+        parser, holds="the stress test holds its test episodes and their scores"
     )
     parser.set_defaults(handler=run_with("sim.cli.stress:run"))
