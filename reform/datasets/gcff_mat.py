@@ -134,6 +134,8 @@ def load_gcff(
             folder, None, None, "a GCFF folder (features.mat, groundtruth.mat)", "no such folder"
         )
     sequences = [folder] if (folder / FEATURES_FILE).exists() else sequence_folders(folder)
+    if sequences and sequences[0] != folder:
+        _check_only_sequences(folder, sequences)
     if not sequences:
         raise DataFormatError(
             folder,
@@ -220,6 +222,38 @@ def sequence_folders(folder: Path) -> list[Path]:
             folder, None, None, "a readable folder", f"{type(exc).__name__}: {exc.strerror}"
         ) from None
     return [child for child in children if child.is_dir() and (child / FEATURES_FILE).is_file()]
+
+
+# Files that show a folder holds a dataset of another format (or of this one, deeper).
+_OTHER_DATASET_FILES = ("features.txt", "Motion-capture-data.csv", "dataset.json")
+
+
+def _check_only_sequences(folder: Path, sequences: list[Path]) -> None:
+    """Refuses a folder of GCFF sequences whose other subfolders hold datasets too (a folder of
+    datasets, such as the one all the public sets are fetched into): reading the GCFF ones as
+    one dataset would leave the others out without a word."""
+    others = []
+    for child in sorted(folder.iterdir()):
+        if child in sequences or child.name.startswith((".", "_")) or not child.is_dir():
+            continue
+        try:
+            holds = any((child / name).is_file() for name in _OTHER_DATASET_FILES) or bool(
+                sequence_folders(child)
+            )
+        except (OSError, DataFormatError):
+            holds = False
+        if holds:
+            others.append(child.name)
+    if others:
+        raise DataFormatError(
+            folder,
+            None,
+            None,
+            "a GCFF folder, or a folder of GCFF sequence folders only",
+            f"a folder of datasets: GCFF sequences {[s.name for s in sequences]} beside "
+            f"other datasets {others}",
+            hint="name one dataset's folder",
+        )
 
 
 def _load_sequence(

@@ -365,3 +365,22 @@ def test_negative_ids_are_refused(tmp_path):
         f"{folder / 'groundtruth.mat'}: GT frame 1 (GTtimestamp 10): field 'group 1': expected "
         "IDs >= 0 (person ids are never negative), found [1.0, -2.0]"
     )
+
+
+def test_a_folder_of_datasets_is_not_read_as_its_gcff_ones(tmp_path, shared_datasets):
+    # The real datasets' folder holds one GCFF sequence (synth) beside other datasets.
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(shared_datasets)
+    message = str(caught.value)
+    assert "found a folder of datasets: GCFF sequences ['synth'] beside other datasets" in message
+    assert message.endswith("; name one dataset's folder")
+    # A folder of sequences only (CoffeeBreak's layout) still reads, a README beside them.
+    _write(tmp_path / "set" / "Seq1")
+    _write(tmp_path / "set" / "Seq2")
+    (tmp_path / "set" / "README.md").write_text("two sequences\n")
+    (tmp_path / "set" / "notes").mkdir()
+    assert load_gcff(tmp_path / "set").sequences() == ("Seq1", "Seq2")
+    (tmp_path / "set" / "other").mkdir()
+    (tmp_path / "set" / "other" / "features.txt").write_text("0.2 ID_001 1 1 0 0\n")
+    with pytest.raises(DataFormatError, match=r"beside other datasets \['other'\]"):
+        load_gcff(tmp_path / "set")
