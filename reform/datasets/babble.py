@@ -50,7 +50,7 @@ from reform.datasets._validation import (
     read_lines,
     require_file,
 )
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset, Frame, Group
 from reform.path_argument import path_argument
 
@@ -80,6 +80,7 @@ _CLOCK = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2})$")
 _HALF_DAY_S = 12 * 3600  # the wall clock is 12-hour without AM/PM
 
 
+@file_errors_as_data_errors
 def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> Dataset:
     """Loads the Babble motion capture joined with its annotated frames.
 

@@ -45,7 +45,7 @@ from reform.datasets._validation import (
     read_lines,
     require_file,
 )
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset, Frame, Group, wrap_angle
 from reform.path_argument import path_argument
 
@@ -76,6 +76,7 @@ class _Row:
     head_yaw: np.ndarray | None
 
 
+@file_errors_as_data_errors
 def load_dante(
     path: str | PathLike[str],
     *,
@@ -231,6 +232,7 @@ def load_dante(
     )
 
 
+@file_errors_as_data_errors
 def load_salsa(
     path: str | PathLike[str],
     *,

@@ -6,7 +6,7 @@ from os import PathLike
 from pathlib import Path
 
 from reform.datasets._walk import find_files
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset
 from reform.path_argument import path_argument
 
@@ -62,6 +62,7 @@ def _folder_formats(folder: Path) -> dict[str, str]:
     return found
 
 
+@file_errors_as_data_errors
 def detect_format(path: str | PathLike[str]) -> str:
     """The format of a dataset path: one of :data:`FORMATS`.
 
@@ -106,6 +107,7 @@ def detect_format(path: str | PathLike[str]) -> str:
     )
 
 
+@file_errors_as_data_errors
 def load_dataset(
     path: str | PathLike[str],
     *,

@@ -37,7 +37,7 @@ from reform.datasets._validation import (
     note_absent_members,
     require_file,
 )
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
 from reform.machine import available_memory
 from reform.path_argument import path_argument
@@ -76,6 +76,7 @@ _MI_COMPRESSED = 15
 _INFLATE_CHUNK = 2**20  # bytes inflated at a time while counting
 
 
+@file_errors_as_data_errors
 def load_gcff(
     path: str | PathLike[str],
     *,
@@ -780,6 +781,7 @@ _SETTINGS_RULES = {
 }
 
 
+@file_errors_as_data_errors
 def read_settings(
     path: str | PathLike[str], *, required: tuple[str, ...] = ("stride", "mdl")
 ) -> dict[str, float]:

@@ -37,7 +37,7 @@ from reform import __version__
 from reform.atomic import atomic_path
 from reform.datasets._validation import ID_RULE, check_time_increases, file_kind, make_frame
 from reform.datasets._walk import find_files
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.frame_block import FrameBlock
 from reform.machine import available_memory
@@ -394,6 +394,7 @@ def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarra
     }
 
 
+@file_errors_as_data_errors
 def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -> Dataset:
     """Reads a Parquet file written by :func:`write_parquet`, or a folder of them.
 
@@ -1120,6 +1121,7 @@ def _groups(
     return tuple(out)
 
 
+@file_errors_as_data_errors
 def verify_folder(path: str | PathLike[str]) -> list[str]:
     """Every problem of a ``reform-sim generate`` folder, one line each (empty when whole).
 

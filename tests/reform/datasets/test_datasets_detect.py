@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import pickle
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -115,3 +117,44 @@ def test_data_info_of_the_root_folder_is_one_bounded_line():
     assert len(lines) == 1, process.stderr
     assert lines[0].startswith("reform-sim data: error: /: expected a"), lines[0]
     assert "found more than 100,000 entries" in lines[0] or "found none of them" in lines[0]
+
+
+def _without_permission_override() -> list[str]:
+    """The command prefix under which a file of mode 000 cannot be read: none for a user, and
+    for root (who reads anything) setpriv without the permission-override capabilities."""
+    if os.geteuid() != 0:
+        return []
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        pytest.skip("running as root without setpriv: permissions cannot be denied")
+    caps = "-dac_override,-dac_read_search"
+    return [setpriv, f"--inh-caps={caps}", f"--bounding-set={caps}"]
+
+
+def test_an_unreadable_folder_is_one_data_format_error_from_every_entry_point(tmp_path, salsa_dir):
+    folder = Path(shutil.copytree(salsa_dir, tmp_path / "salsa"))
+    folder.chmod(0)
+    code = (
+        "import sys\n"
+        "from reform.datasets import detect_format, load_dante, load_dataset, read_parquet\n"
+        "from reform import DataFormatError\n"
+        "for f in (detect_format, load_dataset, load_dante, read_parquet):\n"
+        "    for path in (sys.argv[1], sys.argv[1] + '/features.txt'):\n"
+        "        try:\n"
+        "            f(path)\n"
+        "        except DataFormatError as exc:\n"
+        "            print(f.__name__, str(exc))\n"
+    )
+    try:
+        out = subprocess.run(
+            [*_without_permission_override(), sys.executable, "-c", code, str(folder)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    finally:
+        folder.chmod(0o755)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert len(lines) == 8, out.stdout
+    assert all("Permission denied" in line and str(folder) in line for line in lines), lines
