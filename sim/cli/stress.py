@@ -98,7 +98,6 @@ def run(args: argparse.Namespace) -> int:
         if unknown or not axes:
             raise CliError(f"--axes must name axes among {','.join(AXES)}, got {args.axes!r}")
     check_output("--out", args.out, folder=True)
-    _check_size(grid, axes, args)
     check_recording(args)
     plugins = {}
     for name in args.detectors or ():
@@ -110,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
         if name in plugins:
             raise CliError(f"--detector {name} is given twice")
         plugins[name] = make_plugin(name)
+    _check_size(grid, axes, args)  # the last check: its estimate is said once all have passed
 
     def progress(line: str) -> None:
         print(line, file=sys.stderr, flush=True)
