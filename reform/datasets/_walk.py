@@ -31,6 +31,7 @@ def find_files(
     first: bool = False,
     strict: bool = True,
     what: str = "a dataset folder",
+    max_entries: int | None = None,
 ) -> list[Path]:
     """The files named ``*suffix`` in ``folder`` and its subfolders (breadth first).
 
@@ -42,11 +43,13 @@ def find_files(
         strict: a subfolder that cannot be read is an error (a reader must not skip shards
             silently); otherwise it is passed over (detection).
         what: what the folder was expected to be, for the error.
+        max_entries: entries to look at, at most; :data:`MAX_ENTRIES` by default.
 
     Raises:
         DataFormatError: more than :data:`MAX_ENTRIES` entries, or (``strict``) a subfolder
             that cannot be read.
     """
+    limit = MAX_ENTRIES if max_entries is None else max_entries
     found: list[Path] = []
     seen = 0
     queue: deque[tuple[Path, int]] = deque([(folder, 0)])
@@ -67,15 +70,15 @@ def find_files(
             continue
         for entry in children:
             seen += 1
-            if seen > MAX_ENTRIES:
+            if seen > limit:
                 levels = "" if max_depth is None else f" at most {max_depth} levels down"
                 raise DataFormatError(
                     folder,
                     None,
                     None,
                     f"{what} (a search for *{suffix} files{levels} looks at "
-                    f"{MAX_ENTRIES:,} entries at most)",
-                    f"more than {MAX_ENTRIES:,} entries",
+                    f"{limit:,} entries at most)",
+                    f"more than {limit:,} entries",
                     hint="name the dataset's own folder, or a file",
                 )
             if _skipped(entry.name):

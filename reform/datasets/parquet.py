@@ -35,6 +35,7 @@ import numpy as np
 
 from reform import __version__
 from reform.atomic import atomic_path
+from reform.datasets import _walk
 from reform.datasets._validation import ID_RULE, check_time_increases, file_kind, make_frame
 from reform.datasets._walk import find_files
 from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
@@ -436,8 +437,13 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
             units="m",
             metadata=header.get("metadata", {}),
         )
-    files = find_files(path, ".parquet", what="a Parquet file or a folder of them")
     card = _read_card(path)
+    files = find_files(
+        path,
+        ".parquet",
+        what="a Parquet file or a folder of them",
+        max_entries=_entries_of(card),
+    )
     problems: list[DataFormatError] = []
     if card is not None:
         if not allow_incomplete:
@@ -493,6 +499,15 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
         units="m",
         metadata=metadata,
     )
+
+
+def _entries_of(card: Mapping[str, Any] | None) -> int | None:
+    """Entries a search of a folder may look at: the walk's own bound (None), and for a
+    generated dataset a few more per episode its card lists (a folder, a shard, a recording)."""
+    listed = card.get("shards") if card is not None else None
+    if not isinstance(listed, list):
+        return None
+    return _walk.MAX_ENTRIES + 8 * len(listed)
 
 
 def _read_card(folder: Path) -> dict[str, Any] | None:
@@ -1139,7 +1154,9 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
             folder, None, None, f"a reform-sim generate folder (with {CARD_JSON})", "none"
         )
     problems: list[str] = []
-    files = find_files(folder, ".parquet", what="a reform-sim generate folder")
+    files = find_files(
+        folder, ".parquet", what="a reform-sim generate folder", max_entries=_entries_of(card)
+    )
     try:
         _check_complete(folder, card, len(files))
     except DataFormatError as exc:

@@ -158,3 +158,20 @@ def test_an_unreadable_folder_is_one_data_format_error_from_every_entry_point(tm
     lines = out.stdout.splitlines()
     assert len(lines) == 8, out.stdout
     assert all("Permission denied" in line and str(folder) in line for line in lines), lines
+
+
+def test_a_generated_folder_may_hold_more_entries_than_the_bound(tmp_path, monkeypatch):
+    """A card listing its shards vouches for a folder that large: its episodes are read even
+    past the bound a folder of unknown files is held to."""
+    from sim.generate import generate_dataset
+
+    folder = tmp_path / "gen"
+    generate_dataset(
+        "mingle", episodes=3, seed=1, out_dir=folder, n_jobs=1, duration=1.0, progress=False
+    )
+    entries = sum(1 for _ in folder.rglob("*"))
+    monkeypatch.setattr(walk, "MAX_ENTRIES", entries - 2)
+    assert len(load_dataset(folder).sequences()) == 3
+    (folder / "dataset.json").unlink()  # without the card: the bound holds
+    with pytest.raises(DataFormatError, match=rf"found more than {entries - 2} entries"):
+        load_dataset(folder, format="parquet")
