@@ -64,6 +64,7 @@ from reform.datasets.errors import shorten
 from reform.detector import Reform, _check_threshold
 from reform.features import check_features
 from reform.frame import Frame
+from reform.path_argument import path_argument
 from reform.reconstruction import check_reconstruction
 
 FORMAT = "reform-sim model"
@@ -153,6 +154,7 @@ def save_model(model: Reform, path: str | os.PathLike[str]) -> Path:
 
     if not isinstance(model, Reform):
         raise TypeError(f"model must be a reform.Reform, got {type(model).__name__}")
+    path = path_argument(path, name="path", function="save_model")
     check_is_fitted(model, "classifier_")
     sio = _skops_io()
     payload = {
@@ -168,7 +170,6 @@ def save_model(model: Reform, path: str | os.PathLike[str]) -> Path:
         "model": model,
     }
     data = sio.dumps(payload)
-    path = Path(path)
     with atomic_open(path, "wb") as handle:
         handle.write(data)
     return path
@@ -202,7 +203,7 @@ def load_model(
             names, classes other than [0, 1]), whose estimators' arrays are out of range, or
             that cannot classify a frame.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="load_model")
     return _unwrap(path, _read_payload(path, trusted, max_bytes))
 
 
@@ -216,7 +217,7 @@ def model_info(
 
     The file is checked as :func:`load_model` checks it, with the same arguments and errors.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="model_info")
     payload = _read_payload(path, trusted, max_bytes)
     _unwrap(path, payload)
     return {key: value for key, value in payload.items() if key != "model"}

@@ -1386,7 +1386,7 @@ def _check_size(
     workers: int,
     save_recordings: bool,
     max_memory: int | None,
-) -> None:
+) -> sizing.Estimate:
     """Refuses, before any work, a dataset that cannot fit this machine (`sim.sizing.check`):
     its episodes sized like episode 0 (``made``), ``workers`` of them held at once; the disk
     needed is for the episodes whose shards are not there yet."""
@@ -1415,6 +1415,7 @@ def _check_size(
         out_option="out_dir",
         disk_needed=estimate.disk * missing / episodes,
     )
+    return estimate
 
 
 def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
@@ -1580,7 +1581,7 @@ def generate_dataset(
     if store is None:
         out_dir = Path(out_dir)
     resolved, made = _check_scenario(spec)
-    _check_size(
+    estimate = _check_size(
         spec,
         made,
         episodes=episodes,
@@ -1604,6 +1605,9 @@ def generate_dataset(
             started=started,
         )
     _check_folder(out_dir, parameters, episodes)
+    if progress:  # stated once, the time being an estimate a run is not refused on
+        what = f"{sizing.count(episodes)} episode{'s' * (episodes != 1)} of {spec.scenario}"
+        print(sizing.describe(estimate, what), file=sys.stderr, flush=True)
     if backend == "ray":
         _import_ray()
 

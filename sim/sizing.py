@@ -50,6 +50,9 @@ __all__ = [
     "format_size",
     "frame_bytes",
     "free_disk",
+    "gcff_tuning_estimate",
+    "stress_estimate",
+    "describe",
     "measure",
     "parse_size",
     "python_name",
@@ -81,6 +84,19 @@ SECONDS_PER_EPISODE = 0.076  # seconds per generated episode beside its frames (
 # scene, World, shard)
 SCHEDULE_BYTES_PER_STEP = 8  # bytes: the world's step schedule, one int64 per control step of a
 # block of output rows (sim.world.World.rollout, World.step)
+
+# Studies (measured on the same machine, loaded by other work, so on the slow side):
+# `reform-sim stress --grid small --jobs 1` scored 12,348 agent-frames in 7.4 s of wall clock
+# (REFORM three ways, GCFF and the majority baseline, with bootstrap intervals), and GCFF
+# segmented SALSA's first 300 annotated frames (18 people) in 0.62 s.
+SECONDS_PER_SCORED_AGENT_FRAME = 6.0e-4  # seconds per agent of a test frame the stress test
+# scores (every detector, the bootstrap)
+STRESS_RESULT_BYTES = 2_500  # bytes of stress.json per scored test episode (its per-frame counts)
+STRESS_REPORT_BYTES = 1_000_000  # bytes of the stress report beside its episodes (plots, text)
+SECONDS_PER_GCFF_FRAME = 2.1e-3  # seconds GCFF takes to segment one frame of 18 people
+GCFF_SETTING_BYTES = 1_000  # bytes of memory per (stride, mdl) setting a grid search holds (the
+# pair, its scores)
+DEFAULT_DT_S = 0.01  # seconds: the simulator's control step, for studies that do not set it
 
 # Limits.
 MAX_RUN_SECONDS = 7 * 24 * 3600.0  # seconds: a run estimated to take longer here is refused as
@@ -302,6 +318,105 @@ def dataset_estimate(
         seconds=float(episodes) * episode.seconds / workers,
         frames=episodes * episode.frames,
         agents=episode.agents,
+    )
+
+
+def stress_estimate(
+    *,
+    seeds: int,
+    frames: int,
+    rate_hz: float,
+    base_people: int,
+    perturb_levels: int,
+    scene_agents: Sequence[tuple[int, bool]],
+    train_frames: int,
+    workers: int,
+) -> Estimate:
+    """The cost of a stress test (`reform-sim stress`).
+
+    Args:
+        seeds: test episodes per point.
+        frames: frames of each test episode.
+        rate_hz: their frame rate (the simulator steps `DEFAULT_DT_S` between control steps).
+        base_people: people of the party the perturbation axes perturb.
+        perturb_levels: levels of the perturbation axes run, summed over them (each scores
+            every base episode once per level).
+        scene_agents: for each level of the scene axes run, its agents and whether the robot's
+            sensor observes them (each simulates and scores ``seeds`` new episodes).
+        train_frames: frames of the training set simulated and fitted on.
+        workers: processes scoring at once.
+    """
+    for name, value in (("seeds", seeds), ("frames", frames), ("workers", workers)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} must be an int >= 1, got {value!r}")
+    workers = max(1, workers)
+
+    def simulated(agents: int, robot: bool) -> float:
+        return episode_estimate(
+            agents=agents,
+            frames=frames,
+            steps_per_frame=max(1, round(1.0 / (rate_hz * DEFAULT_DT_S))),
+            schedule_rows=1,
+            view="robot" if robot else "truth",
+            held_frames=frames,
+        ).seconds
+
+    base = seeds if perturb_levels else 0
+    agent_frames = float(perturb_levels) * seeds * frames * base_people
+    simulate = base * simulated(base_people, False) + float(train_frames) * base_people * (
+        SECONDS_PER_AGENT_FRAME
+    )
+    largest = base_people
+    for agents, robot in scene_agents:
+        agent_frames += float(seeds) * frames * agents
+        simulate += seeds * simulated(agents, robot)
+        largest = max(largest, agents)
+    scored = (perturb_levels + len(scene_agents)) * float(seeds)
+    held = float(base) * frames * frame_bytes(base_people)
+    parts = {
+        f"{count(base)} test episodes of {base_people} people held to perturb": held,
+        f"the scores of {count(int(scored))} test episodes": scored * frames * 200.0,
+        f"{workers} worker{'s' * (workers != 1)}, each with an episode of {largest} agents": (
+            workers * (BASE_MEMORY_BYTES + float(frames) * frame_bytes(largest, view="robot"))
+        ),
+    }
+    return Estimate(
+        memory=BASE_MEMORY_BYTES + sum(parts.values()),
+        memory_cause=max(parts, key=parts.__getitem__),
+        disk=STRESS_REPORT_BYTES + scored * STRESS_RESULT_BYTES,
+        seconds=(simulate + agent_frames * SECONDS_PER_SCORED_AGENT_FRAME) / workers,
+        frames=int(scored) * frames,
+        agents=largest,
+    )
+
+
+def gcff_tuning_estimate(*, settings: int, tuning_frames: int, scored_frames: int) -> Estimate:
+    """The cost of tuning GCFF by grid search and scoring detectors with it
+    (`reform-sim experiment gcff`).
+
+    Args:
+        settings: (stride, mdl) settings tried.
+        tuning_frames: frames each setting segments.
+        scored_frames: frames segmented after tuning (every detector, every test set).
+    """
+    frames = float(settings) * tuning_frames + scored_frames
+    return Estimate(
+        memory=BASE_MEMORY_BYTES + float(settings) * GCFF_SETTING_BYTES,
+        memory_cause=f"the scores of {count(settings)} GCFF settings",
+        disk=STRESS_REPORT_BYTES,
+        seconds=frames * SECONDS_PER_GCFF_FRAME,
+        frames=int(frames),
+        agents=18,
+    )
+
+
+def describe(estimate: Estimate, what: str) -> str:
+    """One line stating an estimate before a long run starts: ``the stress test: about 12 min
+    on this machine, 1.3 GiB of memory, 2.1 MiB written (estimates)``."""
+    return (
+        f"{what}: about {format_duration(estimate.seconds)} on this machine, "
+        f"{format_size(estimate.memory)} of memory, {format_size(estimate.disk)} written "
+        "(estimates, sim.sizing)"
     )
 
 

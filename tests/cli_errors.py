@@ -15,3 +15,33 @@ def cli_error(argv: list[Any], capsys: Any) -> str:
     assert status == 2, err
     assert len(err.strip().splitlines()) == 1, err
     return err.strip()
+
+
+# Runs a command from a small launcher process and reports the command's own peak memory: a
+# child forked from the test process would count the test process's pages in its peak.
+_LAUNCHER = """
+import json, os, subprocess, sys
+child = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+err = child.stderr.read()
+_, status, usage = os.wait4(child.pid, 0)
+child.stderr.close()
+print(json.dumps({"status": os.waitstatus_to_exitcode(status), "peak": usage.ru_maxrss * 1024,
+                  "stderr": err.decode("utf-8", "replace")}))
+"""
+
+
+def cli_peak(argv: list[Any]) -> tuple[int, str, int]:
+    """Runs ``python -m sim.cli argv`` in a fresh process: its exit status, its stderr and its
+    peak resident memory in bytes (Linux)."""
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", _LAUNCHER, sys.executable, "-m", "sim.cli", *map(str, argv)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    result = json.loads(out.stdout)
+    return result["status"], result["stderr"], result["peak"]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +24,46 @@ WRAPPED_ANGLE_LIMIT_RAD = math.pi + 2e-3
 # annotations drift up to 65.3 rad (about ten turns); angles in degrees reach 90-360 in every
 # realistic scene, so a value beyond this bound means degrees, not a long drift. Radians.
 UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
+
+# Person ids are integers >= 0 in every format of the field: DANTE's ID_<digits> and Babble's
+# participant numbers cannot be negative, the public GCFF sets number people from 1, and
+# generated datasets from 0 (the robot). A negative id is refused with this reason.
+ID_RULE = "person ids are never negative"
+
+# Longest line a text loader reads, characters: a SALSA line of 18 people is 1.3 kB, so this
+# holds about 14,000 people; a longer line is a corrupt file (a missing newline, binary data),
+# refused before it is split into tokens (a 50 MB line split took 1 GB).
+MAX_LINE_CHARS = 1_000_000
+
+
+def read_lines(path: Path) -> Iterator[tuple[int, str]]:
+    """The lines of a text file (line number from 1, the line without its newline), read one
+    at a time as ASCII (other bytes become U+FFFD and are refused where they stand).
+
+    Raises:
+        DataFormatError: a line longer than :data:`MAX_LINE_CHARS`, naming it; or the file
+            cannot be read.
+    """
+    try:
+        with open(path, encoding="ascii", errors="replace", newline=None) as handle:
+            for number in range(1, 2**62):
+                line = handle.readline(MAX_LINE_CHARS + 1)
+                if not line:
+                    return
+                if len(line) > MAX_LINE_CHARS:
+                    raise DataFormatError(
+                        path,
+                        f"line {number}",
+                        None,
+                        f"a line of at most {MAX_LINE_CHARS:,} characters (a longer one is a "
+                        "corrupt file: a missing newline, binary data)",
+                        "a longer line",
+                    )
+                yield number, line.rstrip("\n")
+    except OSError as exc:
+        raise DataFormatError(
+            path, None, None, "a readable text file", f"{type(exc).__name__}: {exc.strerror}"
+        ) from None
 
 
 def require_file(path: Path, *, what: str) -> Path:

@@ -47,10 +47,12 @@ from reform.datasets._validation import (
     check_unique_ids,
     make_frame,
     parse_float,
+    read_lines,
     require_file,
 )
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset, Frame, Group
+from reform.path_argument import path_argument
 
 __all__ = ["ANNOTATIONS_FILE", "HEAD_TORSO_MAX_M", "MOTION_FILE", "VICON_RATE_HZ", "load_babble"]
 
@@ -78,6 +80,7 @@ _CLOCK = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2})$")
 _HALF_DAY_S = 12 * 3600  # the wall clock is 12-hour without AM/PM
 
 
+@file_errors_as_data_errors
 def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> Dataset:
     """Loads the Babble motion capture joined with its annotated frames.
 
@@ -99,7 +102,7 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
         DataFormatError: a file is missing, empty or malformed (the message names the file,
             line or frame, field, what was expected and what was found).
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="load_babble")
     folder = path if path.is_dir() else path.parent
     motion_path = folder / MOTION_FILE if path.is_dir() else path
     annotations_path = folder / ANNOTATIONS_FILE
@@ -279,8 +282,7 @@ def _clock_seconds(text: str, *, path: Path, where: str) -> float:
 
 def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:
     """(participant ids, (T, n, 6) head xyθ + torso xyθ, (T,) FrameNum, (T,) clock seconds)."""
-    with open(path, encoding="ascii", errors="replace") as handle:
-        lines = handle.read().splitlines()
+    lines = [line.rstrip("\r") for _, line in read_lines(path)]
     if not lines or not lines[0].strip():
         raise DataFormatError(
             path, "line 1", "header", "a header line starting with 'Name1'", "an empty line"
@@ -401,73 +403,68 @@ def _read_annotations(
     annotations: dict[int, tuple[Group, ...]] = {}
     first_line: dict[int, int] = {}
     duplicates = 0
-    with open(path, encoding="ascii", errors="replace") as handle:
-        for line_number, line in enumerate(handle, start=1):
-            where = f"line {line_number}"
-            match = _ANNOTATION.match(line)
-            if match is None:
-                raise DataFormatError(
-                    path, where, None, "N,{[id id ...] ...}", repr(line.rstrip("\n"))
-                )
-            number = int(match.group(1))
-            where = f"line {line_number} (frame {number})"
-            if not 1 <= number <= n_frames:
-                raise DataFormatError(
-                    path,
-                    where,
-                    "frame",
-                    f"a frame number in 1..{n_frames} of the motion capture",
-                    str(number),
-                )
-            body = match.group(2)
-            if _GROUP.sub("", body).strip(" ,"):
-                raise DataFormatError(
-                    path, where, "groups", "groups written [id id ...]", repr(body)
-                )
-            groups: list[Group] = []
-            seen: set[int] = set()
-            for g, text in enumerate(_GROUP.findall(body), start=1):
-                members = []
-                for token in text.replace(",", " ").split():
-                    if not token.isdigit():
-                        raise DataFormatError(
-                            path, where, f"group {g}", "participant numbers", repr(token)
-                        )
-                    person = int(token)
-                    if person not in known:
-                        raise DataFormatError(
-                            path,
-                            where,
-                            f"group {g}",
-                            f"members present in the motion capture (participants {sorted(known)})",
-                            f"participant {person}",
-                        )
-                    if person in seen:
-                        raise DataFormatError(
-                            path,
-                            where,
-                            f"group {g}",
-                            "each participant in one group once",
-                            f"participant {person} twice",
-                        )
-                    seen.add(person)
-                    members.append(person)
-                if len(members) >= 2:
-                    groups.append(tuple(members))
-            canonical = tuple(groups)
-            if number in annotations:
-                if annotations[number] != canonical:
+    for line_number, line in read_lines(path):
+        where = f"line {line_number}"
+        match = _ANNOTATION.match(line)
+        if match is None:
+            raise DataFormatError(path, where, None, "N,{[id id ...] ...}", repr(line.rstrip("\n")))
+        number = int(match.group(1))
+        where = f"line {line_number} (frame {number})"
+        if not 1 <= number <= n_frames:
+            raise DataFormatError(
+                path,
+                where,
+                "frame",
+                f"a frame number in 1..{n_frames} of the motion capture",
+                str(number),
+            )
+        body = match.group(2)
+        if _GROUP.sub("", body).strip(" ,"):
+            raise DataFormatError(path, where, "groups", "groups written [id id ...]", repr(body))
+        groups: list[Group] = []
+        seen: set[int] = set()
+        for g, text in enumerate(_GROUP.findall(body), start=1):
+            members = []
+            for token in text.replace(",", " ").split():
+                if not token.isdigit():
+                    raise DataFormatError(
+                        path, where, f"group {g}", "participant numbers", repr(token)
+                    )
+                person = int(token)
+                if person not in known:
                     raise DataFormatError(
                         path,
                         where,
-                        "groups",
-                        f"the groups of line {first_line[number]}, {annotations[number]}",
-                        str(canonical),
+                        f"group {g}",
+                        f"members present in the motion capture (participants {sorted(known)})",
+                        f"participant {person}",
                     )
-                duplicates += 1
-                continue
-            annotations[number] = canonical
-            first_line[number] = line_number
+                if person in seen:
+                    raise DataFormatError(
+                        path,
+                        where,
+                        f"group {g}",
+                        "each participant in one group once",
+                        f"participant {person} twice",
+                    )
+                seen.add(person)
+                members.append(person)
+            if len(members) >= 2:
+                groups.append(tuple(members))
+        canonical = tuple(groups)
+        if number in annotations:
+            if annotations[number] != canonical:
+                raise DataFormatError(
+                    path,
+                    where,
+                    "groups",
+                    f"the groups of line {first_line[number]}, {annotations[number]}",
+                    str(canonical),
+                )
+            duplicates += 1
+            continue
+        annotations[number] = canonical
+        first_line[number] = line_number
     if not annotations:
         raise DataFormatError(path, None, None, "at least one annotated frame", "none")
     return annotations, duplicates

@@ -42,10 +42,12 @@ from reform.datasets._validation import (
     make_frame,
     note_absent_members,
     parse_float,
+    read_lines,
     require_file,
 )
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset, Frame, Group, wrap_angle
+from reform.path_argument import path_argument
 
 __all__ = ["FEATURES_FILE", "FIELDS_PER_PERSON", "GROUPS_FILE", "load_dante", "load_salsa"]
 
@@ -74,6 +76,7 @@ class _Row:
     head_yaw: np.ndarray | None
 
 
+@file_errors_as_data_errors
 def load_dante(
     path: str | PathLike[str],
     *,
@@ -120,13 +123,16 @@ def load_dante(
         DataFormatError: a file is missing, empty or malformed (the message names the file,
             line, field, what was expected and what was found).
     """
-    path = Path(path)
+    function = "load_salsa" if name == "salsa" else "load_dante"
+    path = path_argument(path, name="path", function=function)
+    if groups_path is not None:
+        groups_path = path_argument(groups_path, name="groups_path", function=function)
     if path.is_dir():
         features_path = path / FEATURES_FILE
-        groups_file = path / GROUPS_FILE if groups_path is None else Path(groups_path)
+        groups_file = path / GROUPS_FILE if groups_path is None else groups_path
     else:
         features_path = path
-        groups_file = path.parent / GROUPS_FILE if groups_path is None else Path(groups_path)
+        groups_file = path.parent / GROUPS_FILE if groups_path is None else groups_path
     require_file(features_path, what="a DANTE features file")
     require_file(groups_file, what="a DANTE group file")
     repairs = Repairs(strict=strict)
@@ -226,6 +232,7 @@ def load_dante(
     )
 
 
+@file_errors_as_data_errors
 def load_salsa(
     path: str | PathLike[str],
     *,
@@ -308,18 +315,17 @@ def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
 
 def _read_lines(path: Path) -> list[tuple[int, list[str]]]:
     lines = []
-    with open(path, encoding="ascii", errors="replace") as handle:
-        for line_number, line in enumerate(handle, start=1):
-            tokens = line.split()
-            if not tokens:
-                raise DataFormatError(
-                    path,
-                    f"line {line_number}",
-                    None,
-                    "<t> followed by a block of tokens per person",
-                    "an empty line",
-                )
-            lines.append((line_number, tokens))
+    for line_number, line in read_lines(path):
+        tokens = line.split()
+        if not tokens:
+            raise DataFormatError(
+                path,
+                f"line {line_number}",
+                None,
+                "<t> followed by a block of tokens per person",
+                "an empty line",
+            )
+        lines.append((line_number, tokens))
     if not lines:
         raise DataFormatError(path, None, None, "at least one feature line", "none")
     return lines
@@ -437,49 +443,46 @@ def _read_features(path: Path, *, repairs: Repairs) -> tuple[list[_Row], int, in
 
 def _read_groups(path: Path) -> list[tuple[int, str, list[list[int]]]]:
     out: list[tuple[int, str, list[list[int]]]] = []
-    with open(path, encoding="ascii", errors="replace") as handle:
-        for line_number, line in enumerate(handle, start=1):
-            text = line.rstrip("\n").rstrip("\r")
-            where = f"line {line_number}"
-            tokens = text.split()
-            if not tokens:
-                raise DataFormatError(path, where, None, "<t> < ID ... > ...", "an empty line")
-            parse_float(tokens[0], path=path, where=where, field="t")
-            groups: list[list[int]] = []
-            current: list[int] | None = None
-            for position, token in enumerate(tokens[1:], start=2):
-                if token == "<":
-                    if current is not None:
-                        raise DataFormatError(
-                            path, where, f"token {position}", "'>' closing the group", "'<'"
-                        )
-                    current = []
-                elif token == ">":
-                    if not current:
-                        raise DataFormatError(
-                            path,
-                            where,
-                            f"token {position}",
-                            "'<' then at least one ID before '>'",
-                            "'>'",
-                        )
-                    groups.append(current)
-                    current = None
-                else:
-                    if current is None:
-                        raise DataFormatError(
-                            path, where, f"token {position}", "'<' opening a group", repr(token)
-                        )
-                    current.append(_parse_id(token, path=path, where=where))
-            if current is not None:
-                raise DataFormatError(
-                    path, where, "groups", "'>' closing the last group", "end of line (truncated?)"
-                )
-            if not groups:
-                raise DataFormatError(
-                    path, where, "groups", "at least one group '< ID ... >'", "none"
-                )
-            out.append((line_number, tokens[0], groups))
+    for line_number, line in read_lines(path):
+        text = line.rstrip("\r")
+        where = f"line {line_number}"
+        tokens = text.split()
+        if not tokens:
+            raise DataFormatError(path, where, None, "<t> < ID ... > ...", "an empty line")
+        parse_float(tokens[0], path=path, where=where, field="t")
+        groups: list[list[int]] = []
+        current: list[int] | None = None
+        for position, token in enumerate(tokens[1:], start=2):
+            if token == "<":
+                if current is not None:
+                    raise DataFormatError(
+                        path, where, f"token {position}", "'>' closing the group", "'<'"
+                    )
+                current = []
+            elif token == ">":
+                if not current:
+                    raise DataFormatError(
+                        path,
+                        where,
+                        f"token {position}",
+                        "'<' then at least one ID before '>'",
+                        "'>'",
+                    )
+                groups.append(current)
+                current = None
+            else:
+                if current is None:
+                    raise DataFormatError(
+                        path, where, f"token {position}", "'<' opening a group", repr(token)
+                    )
+                current.append(_parse_id(token, path=path, where=where))
+        if current is not None:
+            raise DataFormatError(
+                path, where, "groups", "'>' closing the last group", "end of line (truncated?)"
+            )
+        if not groups:
+            raise DataFormatError(path, where, "groups", "at least one group '< ID ... >'", "none")
+        out.append((line_number, tokens[0], groups))
     if not out:
         raise DataFormatError(path, None, None, "at least one ground-truth line", "none")
     return out

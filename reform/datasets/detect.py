@@ -5,8 +5,10 @@ from __future__ import annotations
 from os import PathLike
 from pathlib import Path
 
-from reform.datasets.errors import DataFormatError
+from reform.datasets._walk import find_files
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset
+from reform.path_argument import path_argument
 
 __all__ = ["FORMATS", "FORMAT_ALIASES", "LENGTH_UNITS", "detect_format", "load_dataset"]
 
@@ -26,17 +28,14 @@ _DESCRIPTION = (
     "salsa, alias dante (a folder with the DANTE text files features.txt and group_names.txt), "
     "babble (a folder with Motion-capture-data.csv), "
     "gcff (a folder with features.mat, or a folder of such folders), "
-    "parquet (a .parquet file or a folder of them)"
+    f"parquet (a .parquet file or a folder of them, at most {_PARQUET_DEPTH} levels down)"
 )
 
 
 def _holds_parquet(folder: Path) -> bool:
-    """True if ``folder`` holds a .parquet file at most :data:`_PARQUET_DEPTH` levels down."""
-    for depth in range(_PARQUET_DEPTH + 1):
-        pattern = "/".join(["*"] * depth + ["*.parquet"])
-        if next(folder.glob(pattern), None) is not None:
-            return True
-    return False
+    """True if ``folder`` holds a .parquet file at most :data:`_PARQUET_DEPTH` levels down
+    (looking at :data:`~reform.datasets._walk.MAX_ENTRIES` entries at most)."""
+    return bool(find_files(folder, ".parquet", max_depth=_PARQUET_DEPTH, first=True, strict=False))
 
 
 def _folder_formats(folder: Path) -> dict[str, str]:
@@ -54,11 +53,16 @@ def _folder_formats(folder: Path) -> dict[str, str]:
         sequences = sequence_folders(folder)
         if sequences:
             found["gcff"] = ", ".join(f"{s.name}/features.mat" for s in sequences)
-    if _holds_parquet(folder):
-        found["parquet"] = ".parquet files"
+    try:
+        if _holds_parquet(folder):
+            found["parquet"] = ".parquet files"
+    except DataFormatError:
+        if not found:
+            raise  # too large a folder to tell, and nothing else found: said as such
     return found
 
 
+@file_errors_as_data_errors
 def detect_format(path: str | PathLike[str]) -> str:
     """The format of a dataset path: one of :data:`FORMATS`.
 
@@ -73,7 +77,7 @@ def detect_format(path: str | PathLike[str]) -> str:
 
     if is_uri(path):  # in a store: the project's Parquet is the one format written there
         return "parquet"
-    path = Path(path)
+    path = path_argument(path, name="path", function="detect_format")
     if not path.exists():
         raise DataFormatError(
             path, None, None, "an existing dataset file or folder", "no such file or folder"
@@ -107,6 +111,7 @@ def detect_format(path: str | PathLike[str]) -> str:
     )
 
 
+@file_errors_as_data_errors
 def load_dataset(
     path: str | PathLike[str],
     *,
@@ -151,7 +156,7 @@ def load_dataset(
         from reform.datasets.parquet import read_parquet
 
         return read_parquet(path, allow_incomplete=allow_incomplete)
-    path = Path(path)
+    path = path_argument(path, name="path", function="load_dataset")
     if format is None:
         format = detect_format(path)
     format = FORMAT_ALIASES.get(format, format)

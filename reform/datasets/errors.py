@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 # Longest offending value a message quotes whole, characters; longer ones are cut, saying so.
 FOUND_LIMIT = 120
@@ -55,3 +60,25 @@ class DataFormatError(ValueError):
         # Rebuilt from its fields, so that it survives pickling (errors of worker processes).
         fields = (self._shown, self.where, self.field, self.expected, self.found, self.hint)
         return type(self), fields
+
+
+def file_errors_as_data_errors(function: F) -> F:
+    """``function`` with any `OSError` it lets through (a file or folder it cannot stat or
+    open: no permission, a link loop) raised as one `DataFormatError` naming that file, so that
+    a loader's caller meets one error type whatever the file system does."""
+
+    @functools.wraps(function)
+    def wrapped(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return function(*args, **kwargs)
+        except OSError as exc:
+            where = exc.filename if exc.filename is not None else (args[0] if args else "?")
+            raise DataFormatError(
+                where,
+                None,
+                None,
+                "a readable dataset file or folder",
+                f"{type(exc).__name__}: {exc.strerror or exc}",
+            ) from None
+
+    return wrapped  # type: ignore[return-value]

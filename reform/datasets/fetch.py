@@ -40,6 +40,7 @@ from urllib.parse import quote, unquote, urlsplit
 
 from reform.atomic import atomic_open, check_folder_path, file_kind
 from reform.datasets.errors import DataFormatError
+from reform.path_argument import path_argument
 
 __all__ = [
     "DATA_VARIABLE",
@@ -311,7 +312,11 @@ def registry(path: str | PathLike[str] | None = None) -> tuple[PublicDataset, ..
 
 def _read_registry(path: str | PathLike[str] | None) -> tuple[PublicDataset, ...]:
     """:func:`registry`, under a name the functions taking a ``registry=`` argument can call."""
-    source = _packaged_registry() if path is None else Path(path)
+    source = (
+        _packaged_registry()
+        if path is None
+        else path_argument(path, name="registry", function="registry")
+    )
     kind = file_kind(source)
     if kind != "a file":
         raise DataFormatError(source, None, None, "a registry file (JSON)", kind)
@@ -739,7 +744,7 @@ def resolve(
 
     if is_uri(name_or_path):  # a store's URI, as given (a Path would fold its "//")
         return name_or_path  # type: ignore[return-value]
-    path = Path(name_or_path)
+    path = path_argument(name_or_path, name="name_or_path", function="resolve")
     if path.exists():
         return path
     text = os.fspath(name_or_path)

@@ -17,6 +17,8 @@ centimetres unless told otherwise and converts to metres.
 from __future__ import annotations
 
 import math
+import struct
+import zlib
 from collections import Counter
 from os import PathLike
 from pathlib import Path
@@ -26,6 +28,7 @@ import numpy as np
 
 from reform.datasets._isolated import IsolatedFailure, run_isolated
 from reform.datasets._validation import (
+    ID_RULE,
     Repairs,
     check_time_increases,
     check_unique_ids,
@@ -34,12 +37,15 @@ from reform.datasets._validation import (
     note_absent_members,
     require_file,
 )
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
+from reform.machine import available_memory
+from reform.path_argument import path_argument
 
 __all__ = [
     "FEATURES_FILE",
     "GROUNDTRUTH_FILE",
+    "MAT_INFLATED_LIMIT_BYTES",
     "SETTINGS_FILE",
     "load_gcff",
     "read_settings",
@@ -59,8 +65,18 @@ _UNITS_PER_M = {"cm": 100.0, "m": 1.0}
 _ANGLE_LIMIT_RAD = 4.0 * math.pi
 _ID_LIMIT = 2.0**53  # largest |ID| a double holds exactly
 _TIMESTAMP_RTOL = 1e-9  # relative tolerance matching GTtimestamp to timestamp
+# Most bytes a GCFF .mat file's variables may take once inflated, bytes: the public files inflate
+# to 35 kB at most (features.mat of CoffeeBreak and Synth; 2.4 times their compressed size), and
+# a GCFF file of 10,000 frames of 50 people would hold 16 MB of [ID, x, y, θ]; a file claiming
+# more is a compressed bomb or corrupt. Also at most a quarter of the memory available.
+MAT_INFLATED_LIMIT_BYTES = 256 * 2**20
+_MAT_HEADER_BYTES = 128  # a MATLAB 5 file's text header, subsystem offset, version, endianness
+_MI_MATRIX = 14  # data element types of a MATLAB 5 file
+_MI_COMPRESSED = 15
+_INFLATE_CHUNK = 2**20  # bytes inflated at a time while counting
 
 
+@file_errors_as_data_errors
 def load_gcff(
     path: str | PathLike[str],
     *,
@@ -111,14 +127,16 @@ def load_gcff(
             for another unit, or not a positive finite number.
         DataFormatError: a file is missing, unreadable or malformed.
     """
+    path = path_argument(path, name="path", function="load_gcff")
     per_metre = units_per_metre(units, metres_per_pixel)
-    path = Path(path)
     folder = path.parent if path.is_file() else path
     if not folder.is_dir():
         raise DataFormatError(
             folder, None, None, "a GCFF folder (features.mat, groundtruth.mat)", "no such folder"
         )
     sequences = [folder] if (folder / FEATURES_FILE).exists() else sequence_folders(folder)
+    if sequences and sequences[0] != folder:
+        _check_only_sequences(folder, sequences)
     if not sequences:
         raise DataFormatError(
             folder,
@@ -205,6 +223,38 @@ def sequence_folders(folder: Path) -> list[Path]:
             folder, None, None, "a readable folder", f"{type(exc).__name__}: {exc.strerror}"
         ) from None
     return [child for child in children if child.is_dir() and (child / FEATURES_FILE).is_file()]
+
+
+# Files that show a folder holds a dataset of another format (or of this one, deeper).
+_OTHER_DATASET_FILES = ("features.txt", "Motion-capture-data.csv", "dataset.json")
+
+
+def _check_only_sequences(folder: Path, sequences: list[Path]) -> None:
+    """Refuses a folder of GCFF sequences whose other subfolders hold datasets too (a folder of
+    datasets, such as the one all the public sets are fetched into): reading the GCFF ones as
+    one dataset would leave the others out without a word."""
+    others = []
+    for child in sorted(folder.iterdir()):
+        if child in sequences or child.name.startswith((".", "_")) or not child.is_dir():
+            continue
+        try:
+            holds = any((child / name).is_file() for name in _OTHER_DATASET_FILES) or bool(
+                sequence_folders(child)
+            )
+        except (OSError, DataFormatError):
+            holds = False
+        if holds:
+            others.append(child.name)
+    if others:
+        raise DataFormatError(
+            folder,
+            None,
+            None,
+            "a GCFF folder, or a folder of GCFF sequence folders only",
+            f"a folder of datasets: GCFF sequences {[s.name for s in sequences]} beside "
+            f"other datasets {others}",
+            hint="name one dataset's folder",
+        )
 
 
 def _load_sequence(
@@ -331,6 +381,7 @@ def _loadmat(path: Path) -> dict[str, Any]:
     kind = file_kind(path)
     if kind != "a file":
         raise DataFormatError(path, None, None, "a MATLAB .mat file", kind)
+    check_inflated_size(path)
     import scipy.io  # noqa: F401 - imported here, so that no child imports it again
 
     try:
@@ -344,6 +395,137 @@ def _loadmat(path: Path) -> dict[str, Any]:
         # scipy raises ValueError, TypeError, OSError, MemoryError... on corrupt files
         found = exc.message if exc.kind == "crash" else f"{exc.kind}: {exc.message}"
         raise DataFormatError(path, None, None, "a readable MATLAB .mat file", found) from None
+
+
+def check_inflated_size(path: str | PathLike[str], *, limit: int | None = None) -> int:
+    """Bytes the variables of a MATLAB 5 file take once inflated, counted before any is read.
+
+    Each compressed variable is inflated a chunk at a time and only counted, so that a
+    compressed bomb (a few MB inflating to GB) is refused within ``limit`` bytes of work and
+    memory: the variable's own declared size (its first bytes inflated) is checked first, then
+    the bytes it really inflates to. Files of MATLAB 4 and 7.3 (HDF5) are left to the reader,
+    which refuses them or holds no compression.
+
+    Args:
+        path: the ``.mat`` file.
+        limit: most bytes allowed; by default :data:`MAT_INFLATED_LIMIT_BYTES` or a quarter of
+            the memory available, whichever is less.
+
+    Returns:
+        The bytes counted (0 for a file that is not MATLAB 5).
+
+    Raises:
+        DataFormatError: the variables inflate (or claim to) beyond ``limit``, naming the
+            variable's place in the file, or the file cannot be read.
+    """
+    path = path_argument(path, name="path", function="check_inflated_size")
+    if limit is None:
+        limit = min(MAT_INFLATED_LIMIT_BYTES, max(available_memory() // 4, 2**20))
+    expected = (
+        f"a MATLAB file whose variables inflate to at most {limit / 2**20:g} MiB "
+        f"({MAT_INFLATED_LIMIT_BYTES / 2**20:g} MiB or a quarter of the memory available)"
+    )
+    try:
+        with open(path, "rb") as handle:
+            header = handle.read(_MAT_HEADER_BYTES)
+            if len(header) < _MAT_HEADER_BYTES or header[126:128] not in (b"IM", b"MI"):
+                return 0
+            order = "<" if header[126:128] == b"IM" else ">"
+            total = 0
+            position = _MAT_HEADER_BYTES
+            for k in range(1, 2**31):
+                handle.seek(position)
+                tag = handle.read(8)
+                if len(tag) < 8:
+                    break
+                mdtype, nbytes = struct.unpack(order + "II", tag)
+                if mdtype >> 16:  # a small data element: 4 bytes of data in its tag
+                    position += 8
+                    continue
+                where = f"variable {k} (at byte {position})"
+                if mdtype == _MI_COMPRESSED:
+                    total = _count_inflated(
+                        handle,
+                        nbytes,
+                        order,
+                        total,
+                        limit,
+                        path=path,
+                        where=where,
+                        expected=expected,
+                    )
+                    position += 8 + nbytes
+                else:
+                    total += nbytes
+                    position += 8 + nbytes + (-nbytes % 8)
+                if total > limit:
+                    raise DataFormatError(
+                        path, where, None, expected, f"{total:,} bytes (a compressed bomb?)"
+                    )
+    except OSError as exc:
+        raise DataFormatError(
+            path, None, None, "a readable MATLAB .mat file", f"{type(exc).__name__}: {exc}"
+        ) from None
+    return total
+
+
+def _count_inflated(
+    handle: Any,
+    nbytes: int,
+    order: str,
+    total: int,
+    limit: int,
+    *,
+    path: Path,
+    where: str,
+    expected: str,
+) -> int:
+    """``total`` plus the bytes one compressed element of ``nbytes`` inflates to, stopped (and
+    refused) as soon as the sum passes ``limit``, or as soon as the element's declared size
+    does."""
+    inflater = zlib.decompressobj()
+    remaining = nbytes
+    start = total
+    declared_checked = False
+    head = b""
+    while remaining > 0:
+        data = handle.read(min(remaining, 2**16))
+        if not data:
+            break  # truncated: the reader says so
+        remaining -= len(data)
+        try:
+            while data:
+                out = inflater.decompress(data, _INFLATE_CHUNK)
+                data = inflater.unconsumed_tail
+                total += len(out)
+                if not declared_checked:
+                    head += out[:8]
+                    if len(head) >= 8:
+                        declared_checked = True
+                        inner, declared = struct.unpack(order + "II", head[:8])
+                        if inner == _MI_MATRIX and start + 8 + declared > limit:
+                            raise DataFormatError(
+                                path,
+                                where,
+                                None,
+                                expected,
+                                f"a variable declaring {declared:,} bytes inflated "
+                                f"from {nbytes:,} compressed",
+                            )
+                if total > limit:
+                    raise DataFormatError(
+                        path,
+                        where,
+                        None,
+                        expected,
+                        f"more than {limit:,} bytes inflated from {nbytes:,} compressed "
+                        "(a compressed bomb?)",
+                    )
+                if inflater.eof:
+                    return total
+        except zlib.error:
+            return total  # corrupt compression: the reader says so, naming it
+    return total
 
 
 def _read_mat(path: str) -> dict[str, Any]:
@@ -456,6 +638,15 @@ def _frame_rows(
             "an integer",
             repr(float(ids[fractional[0]])),
         )
+    negative = np.flatnonzero(ids < 0)
+    if negative.size:
+        raise DataFormatError(
+            path,
+            f"{where}, row {negative[0] + 1}",
+            "ID",
+            f"an integer >= 0 ({ID_RULE})",
+            repr(float(ids[negative[0]])),
+        )
     ids = ids.astype(np.int64)
     check_unique_ids(ids.tolist(), path=path, where=where)
     limit = POSITION_LIMIT_M * per_metre
@@ -515,6 +706,10 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
             or np.any(np.abs(values) > _ID_LIMIT)
         ):
             raise DataFormatError(path, where, f"group {k}", "integer IDs", str(values.tolist()))
+        if np.any(values < 0):
+            raise DataFormatError(
+                path, where, f"group {k}", f"IDs >= 0 ({ID_RULE})", str(values.tolist())
+            )
         groups.append([int(v) for v in values])
     return groups
 
@@ -586,6 +781,7 @@ _SETTINGS_RULES = {
 }
 
 
+@file_errors_as_data_errors
 def read_settings(
     path: str | PathLike[str], *, required: tuple[str, ...] = ("stride", "mdl")
 ) -> dict[str, float]:
@@ -602,7 +798,7 @@ def read_settings(
         DataFormatError: the file is missing or unreadable, a required variable is missing, or
             a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``.
     """
-    path = Path(path)
+    path = path_argument(path, name="path", function="read_settings")
     mat = _loadmat(path)
     out: dict[str, float] = {}
     for name, (expected, accepts) in _SETTINGS_RULES.items():

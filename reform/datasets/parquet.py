@@ -35,11 +35,14 @@ import numpy as np
 
 from reform import __version__
 from reform.atomic import atomic_path
-from reform.datasets._validation import check_time_increases, file_kind, make_frame
-from reform.datasets.errors import DataFormatError
+from reform.datasets import _walk
+from reform.datasets._validation import ID_RULE, check_time_increases, file_kind, make_frame
+from reform.datasets._walk import find_files
+from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.frame_block import FrameBlock
 from reform.machine import available_memory
+from reform.path_argument import path_argument
 
 __all__ = [
     "CARD_JSON",
@@ -166,7 +169,14 @@ def write_parquet(
         ValueError: the metadata is not JSON-serialisable, ``compression`` is not one of
             :data:`CODECS`, or the header is missing or given twice: before anything is written.
     """
+    if not isinstance(dataset, (Dataset, FrameBlock)):
+        raise TypeError(
+            f"write_parquet: dataset must be a reform.Dataset or a FrameBlock, got "
+            f"{type(dataset).__name__}"
+        )
+    path = path_argument(path, name="path", function="write_parquet")
     _check_compression(compression)
+    _check_ids_written(dataset)
     if isinstance(dataset, FrameBlock):
         if name is None:
             raise ValueError("write_parquet of a FrameBlock needs name=, the dataset's name")
@@ -388,6 +398,7 @@ def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarra
     }
 
 
+@file_errors_as_data_errors
 def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -> Dataset:
     """Reads a Parquet file written by :func:`write_parquet`, or a folder of them.
 
@@ -421,7 +432,7 @@ def read_parquet(path: str | PathLike[str], *, allow_incomplete: bool = False) -
         from reform.datasets.store_dataset import read_store
 
         return read_store(str(path), allow_incomplete=allow_incomplete)
-    path = Path(path)
+    path = path_argument(path, name="path", function="read_parquet")
     if not path.exists():
         raise DataFormatError(
             path, None, None, "a Parquet file or a folder of them", "no such file or folder"
@@ -456,14 +467,12 @@ class _LocalFolder:
     def card(self) -> dict[str, Any] | None:
         return _read_card(self.folder)
 
-    def parquet_files(self) -> list[str]:
-        """Every ``.parquet`` file, hidden files and folders (``.``, ``_``) skipped."""
-        return [
-            p.relative_to(self.folder).as_posix()
-            for p in self.folder.rglob("*.parquet")
-            if p.is_file()
-            and not any(part.startswith((".", "_")) for part in p.relative_to(self.folder).parts)
-        ]
+    def parquet_files(self, what: str = "a Parquet file or a folder of them") -> list[str]:
+        """Every ``.parquet`` file, hidden files and folders (``.``, ``_``) skipped; the search
+        bounded (`reform.datasets._walk.find_files`: more entries than a dataset holds, ``what``
+        the folder was expected to be, is one error)."""
+        found = find_files(self.folder, ".parquet", what=what, max_entries=_entries_of(self.card()))
+        return [p.relative_to(self.folder).as_posix() for p in found]
 
     def size(self, relative: str) -> int | str:
         """The file's size, or what is there instead (``"no such file"``...)."""
@@ -542,6 +551,15 @@ def _read_folder(source: Any, *, allow_incomplete: bool) -> Dataset:
         units="m",
         metadata=metadata,
     )
+
+
+def _entries_of(card: Mapping[str, Any] | None) -> int | None:
+    """Entries a search of a folder may look at: the walk's own bound (None), and for a
+    generated dataset a few more per episode its card lists (a folder, a shard, a recording)."""
+    listed = card.get("shards") if card is not None else None
+    if not isinstance(listed, list):
+        return None
+    return _walk.MAX_ENTRIES + 8 * len(listed)
 
 
 def _read_card(folder: Path) -> dict[str, Any] | None:
@@ -852,6 +870,11 @@ def _with_listed_groups(path: Path, frames: list[Frame], listed: Any) -> list[Fr
                 path, None, "listed_groups", f"frame indices below {len(frames)}", repr(key)
             )
         k = int(key)
+        negative = _negative_member(groups)
+        if negative is not None:
+            raise DataFormatError(
+                path, f"frame {k}", "listed_groups", f"ids >= 0 ({ID_RULE})", repr(negative)
+            )
         try:
             frames[k] = frames[k].replace(listed_groups=groups)
         except (TypeError, ValueError) as exc:
@@ -859,6 +882,34 @@ def _with_listed_groups(path: Path, frames: list[Frame], listed: Any) -> list[Fr
                 path, f"frame {k}", "listed_groups", "groups agreeing with the frame", str(exc)
             ) from None
     return frames
+
+
+def _negative_member(groups: Any) -> Any:
+    """The first negative integer member of a list of groups (None when there is none; other
+    malformations are the frame's to refuse)."""
+    if not isinstance(groups, list):
+        return None
+    for group in groups:
+        if isinstance(group, list):
+            for member in group:
+                if isinstance(member, int) and not isinstance(member, bool) and member < 0:
+                    return member
+    return None
+
+
+def _check_ids_written(dataset: Dataset | FrameBlock) -> None:
+    """Refuses a negative person id before anything is written: no reader would take it."""
+    if isinstance(dataset, FrameBlock):
+        if dataset.ids.size and int(dataset.ids.min()) < 0:
+            raise ValueError(
+                f"person ids must be >= 0 ({ID_RULE}), got {int(dataset.ids.min())} in the block"
+            )
+        return
+    for k, frame in enumerate(dataset.frames):
+        low = [int(frame.ids.min())] if frame.ids.size else []
+        low += [m for g in frame.listed_groups or () for m in g if m < 0]
+        if low and min(low) < 0:
+            raise ValueError(f"person ids must be >= 0 ({ID_RULE}), got {min(low)} in frame {k}")
 
 
 def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]) -> list[Frame]:
@@ -903,6 +954,16 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
             repr(float(data["time"][row])),
         )
     _check_unique_ids(path, index, data["person_id"], null["person_id"])
+    negative = np.flatnonzero(~null["person_id"] & (data["person_id"] < 0))
+    if negative.size:
+        row = int(negative[0])
+        raise DataFormatError(
+            path,
+            f"frame {int(index[row])} (row {row})",
+            "person_id",
+            f"an id >= 0 ({ID_RULE})",
+            str(int(data["person_id"][row])),
+        )
     _check_heads(path, index, data, null)
 
     frames = []
@@ -1127,6 +1188,7 @@ def _groups(
     return tuple(out)
 
 
+@file_errors_as_data_errors
 def verify_folder(path: str | PathLike[str]) -> list[str]:
     """Every problem of a ``reform-sim generate`` folder, one line each (empty when whole).
 
@@ -1142,6 +1204,10 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
         DataFormatError: ``path`` is not a folder with a card (``dataset.json``).
         reform.datasets.store.StoreError: a store that cannot be used (one line).
     """
+    from reform.datasets.store import is_uri
+
+    if not is_uri(path):
+        path_argument(path, name="path", function="verify_folder")
     source = _source(path)
     card = source.card() if source is not None else None
     if card is None:
@@ -1153,7 +1219,7 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
             "none",
         )
     problems: list[str] = []
-    files = source.parquet_files()
+    files = source.parquet_files(what="a reform-sim generate folder")
     try:
         _check_complete(source, card, len(files))
     except DataFormatError as exc:

@@ -56,7 +56,7 @@ class StoreFolder:
             text, self.where(CARD_JSON), field=None, expected="a reform-sim dataset card (JSON)"
         )
 
-    def parquet_files(self) -> list[str]:
+    def parquet_files(self, what: str = "") -> list[str]:  # noqa: ARG002 (a store lists all)
         return [
             name
             for name in self.objects

@@ -23,6 +23,10 @@ def summarise(dataset: Dataset) -> dict[str, Any]:
     keys as strings), ``fformations`` (groups of two or more), and ``report`` (the loader's
     counts, when it made any).
     """
+    if not isinstance(dataset, Dataset):
+        raise TypeError(
+            f"summarise: dataset must be a reform.Dataset, got {type(dataset).__name__}"
+        )
     frames = dataset.frames
     annotated = [f for f in frames if f.groups is not None]
     sequences: dict[str, dict[str, Any]] = {}

@@ -107,7 +107,7 @@ class _VersionAction(argparse._VersionAction):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="reform-sim",
         description=(
             "Simulate social scenes, detect F-formations (REFORM, GCFF), evaluate, log to Rerun."

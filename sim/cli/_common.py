@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 if TYPE_CHECKING:
     from sim.sizing import RequestTooLarge
@@ -65,7 +65,7 @@ class CliError(Exception):
 
 
 class CommandParser(argparse.ArgumentParser):
-    """The parser of a subcommand, its arguments added on first use.
+    """The parser of a subcommand, its arguments added on first use, and its errors in one line.
 
     ``subparsers.add_parser(name, help=..., arguments=add)`` registers the subcommand at once
     (its name and help line) and calls ``add(parser)`` only when the subcommand is parsed or its
@@ -100,6 +100,11 @@ class CommandParser(argparse.ArgumentParser):
     def format_help(self) -> str:
         self._ensure_arguments()
         return super().format_help()
+
+    def error(self, message: str) -> NoReturn:
+        """A malformed command line in one line, as every other error: what was wrong and where
+        the usage is (argparse prints the whole usage first)."""
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import (
+    add_max_memory_argument,
     add_train_fraction_argument,
     run_with,
 )
@@ -58,6 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="evaluation JSON (reform-sim evaluate --json, or a file holding a 'results' list) "
         "of another detector on the same frames; repeatable",
     )
+    add_max_memory_argument(parser, holds="the grid search holds the scores of every setting")
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.experiment_gcff:run"))
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_backend_arguments, run_with
+from sim.cli._common import add_backend_arguments, add_max_memory_argument, run_with
 from sim.cli._detectors import detector_name
 from sim.cli._grammar import add_episodes, add_quiet, add_seed
 from sim.experiments.stress_grid import AXES, GRIDS
@@ -66,5 +66,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder for stress.md, stress.json and the plots (default: ./stress)",
     )
     add_recording_arguments(parser, what="the curves")
+    add_max_memory_argument(
+        parser, holds="the stress test holds its test episodes and their scores"
+    )
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.stress:run"))

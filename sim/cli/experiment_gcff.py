@@ -10,8 +10,17 @@ import shlex
 import sys
 from typing import Any
 
+from reform import Dataset
 from reform.datasets import load_babble, load_salsa, resolve
-from sim.cli._common import CliError, check_train_fraction, read_text
+from reform.gcff import MDL_GRID_M2, STRIDE_GRID_M
+from sim import sizing
+from sim.cli._common import (
+    CliError,
+    check_train_fraction,
+    max_memory,
+    read_text,
+    size_error,
+)
 from sim.cli._experiment_gcff import BASENAME
 from sim.cli._experiment_io import (
     check_report,
@@ -20,7 +29,7 @@ from sim.cli._experiment_io import (
     publish,
     report_stem,
 )
-from sim.experiments.gcff import gcff_comparison
+from sim.experiments.gcff import GCFF_ROWS, gcff_comparison
 from sim.experiments.gcff_report import to_markdown
 
 
@@ -65,22 +74,52 @@ def _read_results(path: str) -> list[dict[str, Any]]:
     return results
 
 
+def _check_size(args: argparse.Namespace, salsa: Dataset, babble: Dataset) -> None:
+    """Refuses, before the grid search, one that cannot fit this machine (its settings' scores
+    in memory, a week of segmenting), and states its estimate once."""
+    strides = STRIDE_GRID_M if args.stride_grid is None else args.stride_grid
+    mdls = MDL_GRID_M2 if args.mdl_grid is None else args.mdl_grid
+    annotated = sum(1 for frame in salsa.frames if frame.groups is not None)
+    tuning = round(args.train_fraction * annotated)
+    scored = GCFF_ROWS * (annotated - tuning + len(babble.annotated()))
+    estimate = sizing.gcff_tuning_estimate(
+        settings=len(strides) * len(mdls), tuning_frames=tuning, scored_frames=scored
+    )
+    what = (
+        f"the GCFF comparison ({len(strides)} strides x {len(mdls)} mdl values tuned on "
+        f"{tuning} SALSA frames)"
+    )
+    try:
+        sizing.check(
+            estimate,
+            what=what,
+            shrink="shorter {stride_grid} or {mdl_grid}",
+            memory_limit=max_memory(args),
+            out=args.out,
+        )
+    except sizing.RequestTooLarge as exc:
+        raise size_error(exc) from None
+    print(sizing.describe(estimate, what), file=sys.stderr, flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     check_train_fraction(args)
     data = named_datasets(args)
     stem = report_stem(args.out, BASENAME)
     check_report(stem)
     extra = [result for path in args.with_results for result in _read_results(path)]
-    if not args.quiet:
-        print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
     grids = {
         name: value
         for name, value in (("stride_grid", args.stride_grid), ("mdl_grid", args.mdl_grid))
         if value is not None
     }
+    salsa, babble = load_salsa(resolve(data["salsa"])), load_babble(resolve(data["babble"]))
+    _check_size(args, salsa, babble)
+    if not args.quiet:
+        print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
     comparison = gcff_comparison(
-        load_salsa(resolve(data["salsa"])),
-        load_babble(resolve(data["babble"])),
+        salsa,
+        babble,
         train_fraction=args.train_fraction,
         orientation=args.gcff_orientation,
         **grids,

@@ -6,12 +6,22 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import shlex
 import sys
 
-from sim.cli._common import CliError, check_output, check_recording, executor_from_args
+from sim import sizing
+from sim.cli._common import (
+    CliError,
+    check_output,
+    check_recording,
+    executor_from_args,
+    max_memory,
+    size_error,
+)
 from sim.cli._detectors import make_plugin
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
+from sim.experiments.stress_grid import BASE_PEOPLE, StressGrid
 from sim.experiments.stress_report import write_report
 from sim.recording import target_from_args
 from sim.sizing import check_episodes
@@ -37,6 +47,45 @@ def _command(args: argparse.Namespace) -> str:
     if args.save is not None:
         words += ["--save", args.save]
     return shlex.join(words)
+
+
+def _check_size(grid: StressGrid, axes: list[str] | None, args: argparse.Namespace) -> None:
+    """Refuses, before any work, a stress test that cannot fit this machine (memory, disk at
+    --out, a week), and states its estimate once."""
+    names = list(AXES) if axes is None else axes
+    scene_agents = []
+    for name in names:
+        if AXES[name].kind != "scene":
+            continue
+        for level in grid.levels(name):
+            if name == "groups":
+                scene_agents.append((int(level), False))
+            elif name == "sensor":
+                scene_agents.append((BASE_PEOPLE + 1, level != "truth"))
+            else:
+                scene_agents.append((BASE_PEOPLE, False))
+    estimate = sizing.stress_estimate(
+        seeds=grid.seeds,
+        frames=max(1, round(grid.duration_s * grid.rate_hz)),
+        rate_hz=grid.rate_hz,
+        base_people=BASE_PEOPLE,
+        perturb_levels=sum(len(grid.levels(a)) for a in names if AXES[a].kind == "perturb"),
+        scene_agents=scene_agents,
+        train_frames=round(grid.train_episodes * grid.train_duration_s * grid.train_rate_hz),
+        workers=args.jobs or os.cpu_count() or 1,
+    )
+    try:
+        sizing.check(
+            estimate,
+            what="the stress test",
+            shrink="fewer {episodes}, fewer {axes} or the small {grid}",
+            memory_limit=max_memory(args),
+            alternative="fewer workers ({jobs})" if (args.jobs or 2) > 1 else "",
+            out=args.out,
+        )
+    except sizing.RequestTooLarge as exc:
+        raise size_error(exc) from None
+    print(sizing.describe(estimate, "the stress test"), file=sys.stderr, flush=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,6 +115,7 @@ def run(args: argparse.Namespace) -> int:
         if name in plugins:
             raise CliError(f"--detector {name} is given twice")
         plugins[name] = make_plugin(name)
+    _check_size(grid, axes, args)  # the last check: its estimate is said once all have passed
 
     def progress(line: str) -> None:
         if not args.quiet:

@@ -35,6 +35,7 @@ from reform.splits import time_split
 from sim.experiments.paper import BABBLE, SALSA_TEST, split_json
 
 __all__ = [
+    "GCFF_ROWS",
     "PAPER_MDL_M2",
     "PAPER_SCORES",
     "PAPER_STRIDE_M",
@@ -47,6 +48,8 @@ __all__ = [
 PAPER_STRIDE_M = 0.7  # metres: the paper's "stride = 0.7"
 PAPER_MDL_M2 = 3.0  # square metres: the paper's "MDL = 30000", read as cm²
 SCHEMA_VERSION = 1  # of GcffComparison.to_json
+GCFF_ROWS = 4  # rows of the comparison that run GCFF on every test frame (paper, reference
+# default, tuned, units ignored): what the run costs beside its tuning
 
 # The REFORM paper's own figures, T = 2/3, precision / recall / F1 in % (definitions.md).
 PAPER_SCORES = {

@@ -175,7 +175,7 @@ def test_a_half_observed_head_is_refused(tmp_path):
 def rosters(draw) -> dict:
     n = draw(st.integers(0, 5))
     t = draw(st.integers(0, 6))
-    ids = np.array(draw(st.lists(st.integers(-3, 10**9), min_size=n, max_size=n, unique=True)))
+    ids = np.array(draw(st.lists(st.integers(0, 10**9), min_size=n, max_size=n, unique=True)))
     present = np.array(draw(st.lists(st.booleans(), min_size=n * t, max_size=n * t)), dtype=bool)
     values = st.floats(-30, 30, allow_nan=False)
     yaws = st.floats(-np.pi, np.pi, allow_nan=False)

@@ -440,13 +440,96 @@ def test_generate_small_run_is_unaffected(tmp_path):
 
 
 def test_a_study_counting_episodes_is_refused_when_even_its_least_cost_is_too_long(capsys):
-    sizing.check_episodes(1000, what="the study", flag="--seeds")  # about a minute: fine
+    sizing.check_episodes(1000, what="the study", flag="--episodes")  # about a minute: fine
     with pytest.raises(sizing.RequestTooLarge, match=r"the study would take at least 2.41 years"):
-        sizing.check_episodes(10**9, what="the study", flag="--seeds")
+        sizing.check_episodes(10**9, what="the study", flag="--episodes")
     for argv in (
         ["calibrate", "--episodes", "1000000000"],
         ["experiment", "hri", "--episodes", "1000000000"],
     ):
         assert main([*argv, "--out", "/tmp/never-written"]) == 2
         err = capsys.readouterr().err
-        assert "would take at least" in err and "(--seeds)" in err and err.count("\n") == 1
+        assert "would take at least" in err and "(--episodes)" in err and err.count("\n") == 1
+
+
+def _one_line(argv, capsys) -> str:
+    assert main([str(a) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    return err.strip()
+
+
+def test_the_stress_test_is_sized_before_it_runs(machine, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "stress"
+    # 100,000 test episodes of 18 people held to perturb: memory, naming the limit's flag.
+    err = _one_line(["stress", "--episodes", 100_000, "--out", out], capsys)
+    assert re.fullmatch(
+        r"reform-sim stress: error: the stress test needs about 5\d\d GiB of memory \(100,000 "
+        r"test episodes of 18 people held to perturb\), more than the 16 GiB of memory this "
+        r"machine has available; ask for less \(fewer --episodes, fewer --axes or the small "
+        r"--grid\), fewer workers \(--jobs\), or change the limit with --max-memory SIZE "
+        r"\(e\.g\. 64G\)",
+        err,
+    ), err
+    # Given the memory, it is the time: months, beyond the week a run may take.
+    err = _one_line(["stress", "--episodes", 100_000, "--max-memory", "1T", "--out", out], capsys)
+    assert "the stress test would take about " in err and "more than the 7 days" in err
+    # Disk at --out.
+    monkeypatch.setattr(sizing, "free_disk", lambda path: 2**20)
+    err = _one_line(["stress", "--out", out], capsys)
+    assert f"more than the 1 MiB free where --out {out} is" in err
+    assert not out.exists()
+
+
+def test_the_stress_estimate_grows_with_its_request():
+    def estimate(seeds, levels):
+        return sizing.stress_estimate(
+            seeds=seeds,
+            frames=301,
+            rate_hz=0.5,
+            base_people=18,
+            perturb_levels=levels,
+            scene_agents=[(18, False), (19, True)],
+            train_frames=1200,
+            workers=2,
+        )
+
+    small, more_seeds, more_levels = estimate(5, 19), estimate(50, 19), estimate(5, 38)
+    assert 9 < more_seeds.seconds / small.seconds < 10.1  # all but the training: x10
+    assert more_levels.seconds > small.seconds
+    assert small.memory < more_levels.memory < more_seeds.memory  # scores held; episodes held
+    # What it holds: 5 episodes of 301 frames of 18 people, each frame sizing.frame_bytes.
+    held = 5 * 301 * sizing.frame_bytes(18)
+    assert more_seeds.memory - small.memory > 9 * held
+
+
+def test_the_gcff_grid_search_is_sized_before_it_runs(
+    machine, salsa_dir, babble_dir, tmp_path, capsys
+):
+    grid = ",".join(f"{0.1 + k * 1e-4:.4f}" for k in range(3000))
+    err = _one_line(
+        ["experiment", "gcff", "--salsa", salsa_dir, "--babble", babble_dir]
+        + ["--stride-grid", grid, "--mdl-grid", grid.replace("0.", "1."), "--out", tmp_path / "g"],
+        capsys,
+    )
+    assert err.startswith(
+        "reform-sim experiment: error: the GCFF comparison (3000 strides x 3000 mdl values tuned "
+        "on 686 SALSA frames) would take about "
+    ), err
+    assert "ask for less (shorter --stride-grid or --mdl-grid)" in err
+    assert list(tmp_path.iterdir()) == []
+    estimate = sizing.gcff_tuning_estimate(settings=49, tuning_frames=686, scored_frames=0)
+    assert estimate.seconds == pytest.approx(49 * 686 * sizing.SECONDS_PER_GCFF_FRAME)
+
+
+def test_generate_states_its_estimate_once(machine, tmp_path, capsys):
+    generate_dataset(
+        "mingle", episodes=1, seed=1, out_dir=tmp_path / "d", n_jobs=1, duration=2.0, progress=True
+    )
+    err = capsys.readouterr().err
+    assert err.count("1 episode of mingle: about ") == 1
+    assert re.search(
+        r"1 episode of mingle: about [\d.]+ s on this machine, [\d.]+ MiB of memory, "
+        r"[\d.]+ KiB written \(estimates, sim.sizing\)",
+        err,
+    ), err

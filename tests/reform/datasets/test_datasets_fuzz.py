@@ -195,3 +195,191 @@ def test_parquet_garbage(tmp_path, size):
     path = tmp_path / "x.parquet"
     path.write_bytes(b"PAR1" + rng.bytes(size) + b"PAR1")
     _load(path)
+
+
+# --------------------------------------------------------------------------------------------
+# Mutations of real small files, Parquet and generated folders, detection, and the CLI's
+# conversion (a file whole or not at all).
+
+
+def _splice(data: bytes, position: int, value: bytes, replace: bool) -> bytes:
+    position = position % (len(data) + 1)
+    end = position + len(value) if replace else position
+    return data[:position] + value + data[end:]
+
+
+SPLICES = {
+    "position": st.integers(0, 10**6),
+    "value": st.binary(min_size=1, max_size=8),
+    "replace": st.booleans(),
+}
+
+
+def _babble_head(babble_dir: Path) -> tuple[bytes, bytes]:
+    lines = (babble_dir / "Motion-capture-data.csv").read_bytes().splitlines(keepends=True)
+    return b"".join(lines[:21]), b"16,{[1 2 3 4 5 6 7]}\n"
+
+
+@SETTINGS
+@given(**SPLICES)
+def test_babble_files_with_one_splice(babble_dir, position, value, replace):
+    motion, annotations = _babble_head(babble_dir)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "Motion-capture-data.csv").write_bytes(_splice(motion, position, value, replace))
+        (folder / "annotated-frames.csv").write_bytes(annotations)
+        _load(folder, format="babble")
+
+
+def _small_dataset() -> Dataset:
+    from reform import Frame
+
+    frames = (
+        Frame(
+            ids=[1, 2, 3],
+            position=[[0.0, 0.0], [1.0, 0.0], [3.0, 3.0]],
+            yaw=[0.0, 3.1, -1.5],
+            groups=((1, 2), (3,)),
+            time=0.0,
+        ),
+        Frame(ids=[], position=np.zeros((0, 2)), yaw=[], time=0.5),
+        Frame(ids=[2], position=[[1.0, 0.5]], yaw=[1.0], time=1.0),
+    )
+    return Dataset(frames=frames, name="small", metadata={"note": "é"})
+
+
+@pytest.fixture(scope="module")
+def parquet_bytes(tmp_path_factory) -> bytes:
+    from reform.datasets import write_parquet
+
+    path = write_parquet(_small_dataset(), tmp_path_factory.mktemp("pq") / "small.parquet")
+    return path.read_bytes()
+
+
+@SETTINGS
+@given(data=st.binary(max_size=600))
+def test_parquet_bytes(data):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "x.parquet"
+        path.write_bytes(data)
+        _load(path)
+
+
+@SETTINGS
+@given(**SPLICES)
+def test_parquet_with_one_splice(parquet_bytes, position, value, replace):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "x.parquet"
+        path.write_bytes(_splice(parquet_bytes, position, value, replace))
+        _load(path)
+
+
+@pytest.fixture(scope="module")
+def generated(tmp_path_factory) -> tuple[Path, int]:
+    """A real folder of ``generate``: two short episodes, and its frame count."""
+    from sim.generate import generate_dataset
+
+    folder = tmp_path_factory.mktemp("gen") / "d"
+    generate_dataset(
+        "mingle", episodes=2, seed=3, out_dir=folder, n_jobs=1, duration=2.0, progress=False
+    )
+    return folder, len(load_dataset(folder))
+
+
+def _copy(folder: Path, into: Path) -> Path:
+    import shutil
+
+    return Path(shutil.copytree(folder, into / "copy"))
+
+
+@settings(SETTINGS, max_examples=25)
+@given(target=st.integers(0, 2), **SPLICES)
+def test_generated_folder_with_one_splice(generated, target, position, value, replace):
+    """The card or a shard spliced: the folder reads whole (every frame) or is refused, naming
+    the file; never read with fewer frames."""
+    from reform.datasets.parquet import verify_folder
+
+    folder, n_frames = generated
+    with tempfile.TemporaryDirectory() as tmp:
+        copy = _copy(folder, Path(tmp))
+        files = [copy / "dataset.json", *sorted(copy.rglob("*.parquet"))]
+        path = files[target % len(files)]
+        data = path.read_bytes()
+        changed = _splice(data, position, value, replace)
+        path.write_bytes(changed)
+        try:
+            dataset = load_dataset(copy)
+        except DataFormatError as exc:
+            assert "\n" not in str(exc) and len(str(exc)) < 2000
+        else:
+            assert len(dataset) == n_frames  # nothing lost in silence
+            assert path.name == "dataset.json" or changed == data
+        try:
+            problems = verify_folder(copy)
+        except DataFormatError as exc:  # a card it cannot read
+            problems = [str(exc)]
+        assert all("\n" not in p for p in problems)
+        if path.name != "dataset.json":
+            assert bool(problems) == (changed != data)  # an altered shard is always named
+
+
+NAMES = st.sampled_from(
+    [
+        "features.txt",
+        "group_names.txt",
+        "Motion-capture-data.csv",
+        "annotated-frames.csv",
+        "features.mat",
+        "groundtruth.mat",
+        "a.parquet",
+        "dataset.json",
+        "sub/features.mat",
+        "sub/groundtruth.mat",
+        "scenario=x/episode=0/part.parquet",
+    ]
+)
+
+
+@SETTINGS
+@given(files=st.dictionaries(NAMES, st.binary(max_size=200), max_size=5))
+def test_detection_of_any_folder(files):
+    """Any set of the formats' file names holding any bytes: a format and a dataset, or one
+    clean error, from detection and from loading."""
+    from reform.datasets import detect_format
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "d"
+        folder.mkdir()
+        for name, data in files.items():
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            (folder / name).write_bytes(data)
+        try:
+            assert detect_format(folder) in ("salsa", "babble", "gcff", "parquet")
+        except DataFormatError as exc:
+            assert "\n" not in str(exc)
+        _load(folder)
+
+
+@SETTINGS
+@given(features=st.one_of(st.binary(max_size=300), DANTE_LINES.map(str.encode)))
+def test_convert_writes_a_whole_file_or_none(features, capsys):
+    """``reform-sim data convert``: exit 0 and a file that reads back as the input, or exit 2,
+    one line, and no file (never a partial write)."""
+    from reform.datasets import read_parquet
+    from sim.cli import main
+
+    _, groups = _valid_dante()
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "in"
+        folder.mkdir()
+        (folder / "features.txt").write_bytes(features)
+        (folder / "group_names.txt").write_text(groups)
+        out = Path(tmp) / "out" / "x.parquet"
+        status = main(["data", "convert", str(folder), "--format", "dante", "--out", str(out)])
+        err = capsys.readouterr().err
+        if status == 0:
+            assert read_parquet(out).frames == load_dataset(folder, format="dante").frames
+        else:
+            assert status == 2 and len(err.strip().splitlines()) == 1, err
+            assert not out.exists()  # no file, and no temporary beside it
+            assert not out.parent.exists() or not any(out.parent.iterdir())

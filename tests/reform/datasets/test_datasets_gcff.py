@@ -333,3 +333,54 @@ def test_settings_file_that_does_not_exist(tmp_path):
         read_settings(tmp_path)
     scipy.io.savemat(tmp_path / "settings_gc.mat", {"stride": 70.0, "mdl": 10000.0})
     assert read_settings(tmp_path / "settings_gc.mat") == {"stride": 70.0, "mdl": 10000.0}
+
+
+def test_negative_ids_are_refused(tmp_path):
+    # Person ids are never negative in the field's formats (formats.md: ID_<digits>,
+    # participant numbers, GCFF sets numbered from 1): a negative one is refused, named.
+    features = [np.array([[1, 100.0, 200.0, 0.5], [-2, 150.0, 200.0, 3.0]])]
+    folder = _write(
+        tmp_path / "f",
+        features=features,
+        timestamps=[10],
+        gt_groups=[_gt([1, 3])],
+        gt_timestamps=[10],
+    )
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(folder)
+    assert str(caught.value) == (
+        f"{folder / 'features.mat'}: frame 1, row 2: field 'ID': expected an integer >= 0 "
+        "(person ids are never negative), found -2.0"
+    )
+    folder = _write(
+        tmp_path / "g",
+        features=[FEATURES[0]],
+        timestamps=[10],
+        gt_groups=[_gt([1, -2])],
+        gt_timestamps=[10],
+    )
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(folder)
+    assert str(caught.value) == (
+        f"{folder / 'groundtruth.mat'}: GT frame 1 (GTtimestamp 10): field 'group 1': expected "
+        "IDs >= 0 (person ids are never negative), found [1.0, -2.0]"
+    )
+
+
+def test_a_folder_of_datasets_is_not_read_as_its_gcff_ones(tmp_path, shared_datasets):
+    # The real datasets' folder holds one GCFF sequence (synth) beside other datasets.
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(shared_datasets)
+    message = str(caught.value)
+    assert "found a folder of datasets: GCFF sequences ['synth'] beside other datasets" in message
+    assert message.endswith("; name one dataset's folder")
+    # A folder of sequences only (CoffeeBreak's layout) still reads, a README beside them.
+    _write(tmp_path / "set" / "Seq1")
+    _write(tmp_path / "set" / "Seq2")
+    (tmp_path / "set" / "README.md").write_text("two sequences\n")
+    (tmp_path / "set" / "notes").mkdir()
+    assert load_gcff(tmp_path / "set").sequences() == ("Seq1", "Seq2")
+    (tmp_path / "set" / "other").mkdir()
+    (tmp_path / "set" / "other" / "features.txt").write_text("0.2 ID_001 1 1 0 0\n")
+    with pytest.raises(DataFormatError, match=r"beside other datasets \['other'\]"):
+        load_gcff(tmp_path / "set")

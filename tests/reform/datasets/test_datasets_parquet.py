@@ -128,7 +128,7 @@ _yaw = st.floats(min_value=-np.pi, max_value=np.pi, allow_nan=False)
 @st.composite
 def _frames(draw) -> Frame:
     n = draw(st.integers(0, 5))
-    ids = draw(st.lists(st.integers(-5, 10**12), min_size=n, max_size=n, unique=True))
+    ids = draw(st.lists(st.integers(0, 10**12), min_size=n, max_size=n, unique=True))
     position = [[draw(_finite), draw(_finite)] for _ in range(n)]
     yaw = [draw(_yaw) for _ in range(n)]
     kinds = tuple(draw(st.sampled_from(["human", "robot"])) for _ in range(n))
@@ -651,3 +651,18 @@ def test_a_file_whose_rows_cannot_fit_memory_is_refused_before_it_is_read(tmp_pa
     monkeypatch.setattr(parquet, "READ_BYTES_PER_ROW", 2**50)
     with pytest.raises(DataFormatError, match=r"d.parquet: expected a file whose rows fit the"):
         read_parquet(path)
+
+
+def test_negative_person_ids_are_refused_and_never_written(tmp_path):
+    path = _rewrite(tmp_path, lambda t: _set(t, "person_id", 1, -5))
+    with pytest.raises(DataFormatError) as caught:
+        read_parquet(path)
+    assert str(caught.value) == (
+        f"{path}: frame 0 (row 1): field 'person_id': expected an id >= 0 (person ids are never "
+        "negative), found -5"
+    )
+    frame = Frame(ids=[3, -1], position=[[0.0, 0.0], [1.0, 0.0]], yaw=[0.0, 3.0])
+    out = tmp_path / "negative.parquet"
+    with pytest.raises(ValueError, match=r"person ids must be >= 0 .*got -1 in frame 0"):
+        write_parquet(Dataset(frames=(frame,), name="n"), out)
+    assert not out.exists()

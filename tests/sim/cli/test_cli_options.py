@@ -151,3 +151,33 @@ def test_a_system_error_is_one_line_naming_the_path(tmp_path, capsys):
     assert main(["data", "info", "--data", str(long / "features.txt")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("reform-sim data: error: ") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["simulate", "--scenario", "mingle", "--seed", "1", "--duration", "abc"],
+            "reform-sim simulate: error: argument --duration: invalid float value: 'abc' "
+            "(see reform-sim simulate --help)",
+        ),
+        (
+            ["stress", "--episodes", "1e9"],
+            "reform-sim stress: error: argument --episodes: invalid int value: '1e9' "
+            "(see reform-sim stress --help)",
+        ),
+        (
+            ["data"],
+            "reform-sim data: error: the following arguments are required: ACTION "
+            "(see reform-sim data --help)",
+        ),
+        (["nope"], "reform-sim: error: argument COMMAND: invalid choice: 'nope' "),
+    ],
+    ids=["float", "int", "missing", "command"],
+)
+def test_a_malformed_command_line_is_one_line(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(message), err

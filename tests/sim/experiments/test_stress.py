@@ -206,9 +206,13 @@ def test_cli_runs_one_axis(tmp_path, capsys) -> None:
     )
     assert code == 0
     markdown = (out / "stress.md").read_text()
-    assert "reform-sim stress --grid small --seeds 1 --axes dropout --jobs 1 --out" in markdown
+    assert "reform-sim stress --grid small --episodes 1 --axes dropout --jobs 1 --out" in markdown
     assert (out / "stress-dropout.png").is_file()
-    assert f"wrote markdown: {out / 'stress.md'}" in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert f"wrote markdown: {out / 'stress.md'}" in captured.out
+    # Its estimate, stated once before the work.
+    assert captured.err.count("the stress test: about ") == 1
+    assert "(estimates, sim.sizing)" in captured.err.splitlines()[0]
 
 
 @pytest.mark.parametrize(
