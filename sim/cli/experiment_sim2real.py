@@ -52,7 +52,6 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    data = named_datasets(args)
     if not (math.isfinite(args.episodes_scale) and args.episodes_scale > 0):
         raise CliError(f"--episodes-scale must be a finite number > 0, got {args.episodes_scale}")
     if args.seed < 0:
@@ -66,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
                 f"--classifiers must be among {','.join(CLASSIFIER_NAMES)}, "
                 f"got {args.classifiers!r}"
             )
+    data = named_datasets(args)
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_report(out, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_output("--synthetic", args.synthetic, folder=True)

@@ -305,13 +305,22 @@ def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
         (["--episodes-scale", "0"], "--episodes-scale must be a finite number > 0, got 0.0"),
         (["--episodes-scale", "inf"], "--episodes-scale must be a finite number > 0, got inf"),
         (["--classifiers", "svm"], "--classifiers must be among"),
-        ([], "give --datasets DIR"),
+        (["--data", "/nonexistent"], "--data /nonexistent: expected one of salsa, babble"),
     ],
 )
 def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
-    extra = [] if not argv else ["--data", "/nonexistent"]
-    assert main(["experiment", "sim2real", "--out", str(tmp_path), *extra, *argv]) == 2
+    data = ["--data", "salsa=/nonexistent/s", "--data", "babble=/nonexistent/b"]
+    assert main(["experiment", "sim2real", "--out", str(tmp_path), *data, *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_cli_without_datasets_says_how_to_fetch_them(tmp_path, monkeypatch, capsys) -> None:
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "none"))
+    monkeypatch.setenv("REFORM_SIM_DATA", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    assert main(["experiment", "sim2real", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "reform-sim datasets fetch salsa" in err and err.count("\n") == 1
 
 
 def test_nearest_neighbour_quantiles() -> None:
