@@ -279,7 +279,7 @@ def test_a_bad_store_is_refused_in_one_line_before_any_work(server, capsys, monk
     _clear_cache()
     err = _one_line(capsys, [*out, f"s3://{BUCKET}/nocreds"])
     assert "no credentials for s3://" in err and "AWS_ACCESS_KEY_ID" in err
-    assert main(["data", "info", f"s3://{BUCKET}/same"]) == 2
+    assert main(["data", "info", "--data", f"s3://{BUCKET}/same"]) == 2
     assert "no credentials for s3://" in capsys.readouterr().err
     monkeypatch.undo()
     # A store that cannot be reached.
@@ -299,7 +299,9 @@ def test_a_bad_store_is_refused_in_one_line_before_any_work(server, capsys, monk
 
 def test_commands_that_write_local_files_refuse_a_uri(reference, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    err = _one_line(capsys, ["data", "convert", str(reference), "--out", "s3://lab-data/x.parquet"])
+    err = _one_line(
+        capsys, ["data", "convert", "--data", str(reference), "--out", "s3://lab-data/x.parquet"]
+    )
     assert "--out s3://lab-data/x.parquet: expected a path on this machine" in err
     assert not (tmp_path / "s3:").exists()
 
@@ -308,9 +310,9 @@ def test_data_commands_read_a_dataset_in_the_store(server, capsys):
     uri = f"s3://{BUCKET}/cli"
     assert main(["generate", *ARGS, "--out", uri]) == 0
     assert uri in capsys.readouterr().out
-    assert main(["data", "verify", uri]) == 0
+    assert main(["data", "verify", "--data", uri]) == 0
     assert "whole" in capsys.readouterr().out
-    assert main(["data", "info", uri, "--json"]) == 0
+    assert main(["data", "info", "--data", uri, "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["frames"] == EPISODES * int(DURATION_S * 2)
     # An altered shard is named by its URI.
@@ -319,7 +321,7 @@ def test_data_commands_read_a_dataset_in_the_store(server, capsys):
     content = bytearray(store.read(shard))
     content[100] ^= 0xFF
     store.write(shard, bytes(content))
-    assert main(["data", "verify", uri]) == 1
+    assert main(["data", "verify", "--data", uri]) == 1
     assert f"{uri}/{shard}: field 'sha256'" in capsys.readouterr().out
 
 

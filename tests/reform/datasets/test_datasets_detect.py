@@ -107,7 +107,7 @@ def test_detection_looks_within_bounds_and_says_so(tmp_path, monkeypatch):
 def test_data_info_of_the_root_folder_is_one_bounded_line():
     """``reform-sim data info /``: the whole file system is not walked; one line, exit 2."""
     process = subprocess.run(
-        [sys.executable, "-m", "sim.cli", "data", "info", "/"],
+        [sys.executable, "-m", "sim.cli", "data", "info", "--data", "/"],
         capture_output=True,
         text=True,
         timeout=120,

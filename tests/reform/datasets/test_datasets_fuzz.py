@@ -375,7 +375,9 @@ def test_convert_writes_a_whole_file_or_none(features, capsys):
         (folder / "features.txt").write_bytes(features)
         (folder / "group_names.txt").write_text(groups)
         out = Path(tmp) / "out" / "x.parquet"
-        status = main(["data", "convert", str(folder), "--format", "dante", "--out", str(out)])
+        status = main(
+            ["data", "convert", "--data", str(folder), "--format", "dante", "--out", str(out)]
+        )
         err = capsys.readouterr().err
         if status == 0:
             assert read_parquet(out).frames == load_dataset(folder, format="dante").frames

@@ -100,7 +100,7 @@ def test_bomb_through_the_cli_in_bounded_memory(tmp_path):
     _write_bomb(tmp_path / "features.mat", zeros=4 * 2**30 - 2**20, declared=200)
     _groundtruth(tmp_path)
     start = time.perf_counter()
-    status, err, peak = cli_peak(["data", "info", tmp_path, "--format", "gcff"])
+    status, err, peak = cli_peak(["data", "info", "--data", tmp_path, "--format", "gcff"])
     assert status == 2, err
     assert len(err.strip().splitlines()) == 1, err
     assert "found more than" in err and "a compressed bomb" in err

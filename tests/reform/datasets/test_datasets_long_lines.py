@@ -47,7 +47,7 @@ def test_babble_lines_are_bounded_too(tmp_path, babble_dir):
 def test_a_50_mb_line_through_the_cli(tmp_path):
     """Was over a minute and 1.1 GB before its error; now refused having read 1 MB."""
     folder = _dante(tmp_path / "d", "0.2 " + PERSON * 2_200_000 + "\n")
-    status, err, peak = cli_peak(["data", "info", folder])
+    status, err, peak = cli_peak(["data", "info", "--data", folder])
     assert status == 2, err
     assert len(err.strip().splitlines()) == 1 and "found a longer line" in err, err
     assert peak < 400 * 2**20, peak
