@@ -115,13 +115,14 @@ def run(args: argparse.Namespace) -> int:
         if name in plugins:
             raise CliError(f"--detector {name} is given twice")
         plugins[name] = make_plugin(name)
+    executor = executor_from_args(args)  # a Ray address is probed here, before the estimate
     _check_size(grid, axes, args)  # the last check: its estimate is said once all have passed
 
     def progress(line: str) -> None:
         if not args.quiet:
             print(line, file=sys.stderr, flush=True)
 
-    with executor_from_args(args) as executor:
+    with executor:
         results = run_stress(
             grid, seed=args.seed, axes=axes, plugins=plugins, progress=progress, executor=executor
         )

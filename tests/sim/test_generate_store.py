@@ -35,7 +35,7 @@ EPISODES = 4
 SEED = 3
 DURATION_S = 60.0  # seconds per episode: 120 frames at 2 Hz
 ARGS = ["--scenario", SCENARIO, "--episodes", str(EPISODES), "--seed", str(SEED)]
-ARGS += ["--duration", "60", "--jobs", "1", "--no-progress"]
+ARGS += ["--duration", "60", "--jobs", "1", "--quiet"]
 RUN_TIMEOUT_S = 300.0  # seconds, generous: the machine is shared
 KILL_EPISODES = 40  # a run long enough to be killed mid-way
 

@@ -508,7 +508,7 @@ def test_the_gcff_grid_search_is_sized_before_it_runs(
 ):
     grid = ",".join(f"{0.1 + k * 1e-4:.4f}" for k in range(3000))
     err = _one_line(
-        ["experiment", "gcff", "--salsa", salsa_dir, "--babble", babble_dir]
+        ["experiment", "gcff", "--data", f"salsa={salsa_dir}", "--data", f"babble={babble_dir}"]
         + ["--stride-grid", grid, "--mdl-grid", grid.replace("0.", "1."), "--out", tmp_path / "g"],
         capsys,
     )

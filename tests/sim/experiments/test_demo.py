@@ -35,7 +35,7 @@ def _entities(path: Path) -> set[str]:
 def test_says_where_everything_is(demo, capsys) -> None:
     # The fixture ran first in this module; its stdout is gone, so look at the files it names.
     report = (demo / "report.md").read_text()
-    assert "reform-sim demo --datasets" in report and "--quick" in report and "--seed 3" in report
+    assert "reform-sim demo --data" in report and "--quick" in report and "--seed 3" in report
     for section in ("## What ran", "## Scenarios", "## Scores", "## Stress tests", "## Files"):
         assert section in report
     assert "The paper's HRI experiment, re-enacted" in report

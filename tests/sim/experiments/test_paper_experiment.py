@@ -193,7 +193,7 @@ def test_train_can_tune(toy_dataset, tmp_path, capsys):
     assert "trained REFORM (weighted-knn, {'n_neighbors':" in captured.out
 
 
-def test_commands_report_bad_input(toy_dataset, tmp_path, capsys):
+def test_commands_report_bad_input(toy_dataset, tmp_path, capsys, monkeypatch):
     assert main(["evaluate", "--data", str(toy_dataset)]) == 2
     assert "give --detector NAME, or --model MODEL" in capsys.readouterr().err
     assert main(["evaluate", "--detector", "reform", "--data", str(toy_dataset)]) == 2
@@ -209,6 +209,8 @@ def test_commands_report_bad_input(toy_dataset, tmp_path, capsys):
     assert "features must be among" in capsys.readouterr().err
     assert main([*args, "--threshold", "2"]) == 2
     assert "--threshold must be a probability in (0, 1), got 2" in capsys.readouterr().err
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "none"))  # no datasets anywhere
+    monkeypatch.setenv("REFORM_SIM_DATA", str(tmp_path / "cache"))
     assert main(["experiment", "paper", "--out", str(tmp_path / "x")]) == 2
-    assert "give --datasets DIR" in capsys.readouterr().err
+    assert "reform-sim datasets fetch salsa" in capsys.readouterr().err
     assert not (tmp_path / "m.skops").exists()
