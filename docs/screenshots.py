@@ -30,7 +30,7 @@ SHOTS = (
         "viewer-conversation.png",
         [
             "reform-sim simulate --scenario hri-conversation --seed 1 --out conversation.parquet "
-            "--no-progress",
+            "--quiet",
             "reform-sim evaluate --detector gcff --data conversation.parquet "
             "--save conversation-gcff.rrd",
         ],
@@ -41,7 +41,7 @@ SHOTS = (
         "viewer-party.png",
         [
             "reform-sim simulate --scenario mingle --seed 3 --duration 60 --set people=12 "
-            "--out party.parquet --no-progress",
+            "--out party.parquet --quiet",
             "reform-sim evaluate --detector gcff --data party.parquet --save party-gcff.rrd",
         ],
         "party-gcff.rrd",
