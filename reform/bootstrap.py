@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from reform.json_values import json_float
+from reform.json_values import json_float, json_record
 from reform.metrics import Evaluation
 
 __all__ = [
@@ -77,13 +77,7 @@ class ScoreIntervals:
     sequences: int
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "precision": self.precision.to_json(),
-            "recall": self.recall.to_json(),
-            "f1": self.f1.to_json(),
-            "frames": self.frames,
-            "sequences": self.sequences,
-        }
+        return json_record(self)
 
 
 def bootstrap_weights(

@@ -33,6 +33,7 @@ from scipy import stats
 from reform.characterisation import GroupShapes, characterise
 from reform.features import DISTANCE, EFFORT_ANGLE, batch_pair_features, pair_indices
 from reform.frame import Dataset, Frame
+from reform.json_values import json_float, json_record
 
 __all__ = [
     "CONFIDENCE_LEVEL",
@@ -87,10 +88,6 @@ def _readonly(array: np.ndarray) -> np.ndarray:
     array = np.array(array, copy=True)
     array.flags.writeable = False
     return array
-
-
-def _finite_or_none(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
 
 
 # --------------------------------------------------------------------------------------------
@@ -205,14 +202,15 @@ class SizeStats:
         return self.tightness_std if _check_measure(measure) == TIGHTNESS else self.symmetry_std
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "size": self.size,
-            "count": self.count,
-            "tightness_mean_m": self.tightness_mean,
-            "tightness_std_m": _finite_or_none(self.tightness_std),
-            "symmetry_mean_deg": self.symmetry_mean,
-            "symmetry_std_deg": _finite_or_none(self.symmetry_std),
-        }
+        return json_record(
+            self,
+            {
+                "tightness_mean": "tightness_mean_m",
+                "tightness_std": "tightness_std_m",
+                "symmetry_mean": "symmetry_mean_deg",
+                "symmetry_std": "symmetry_std_deg",
+            },
+        )
 
 
 def _check_measure(measure: str) -> str:
@@ -414,14 +412,7 @@ class Anova:
     df_within: int
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "measure": self.measure,
-            "sizes": list(self.sizes),
-            "F": _finite_or_none(self.statistic),
-            "p": _finite_or_none(self.pvalue),
-            "df_between": self.df_between,
-            "df_within": self.df_within,
-        }
+        return json_record(self, {"statistic": "F", "pvalue": "p"})
 
 
 def anova_by_size(
@@ -481,14 +472,7 @@ class TukeyPair:
     ci_high: float
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "size_a": self.size_a,
-            "size_b": self.size_b,
-            "difference": self.difference,
-            "p": _finite_or_none(self.pvalue),
-            "ci_low": _finite_or_none(self.ci_low),
-            "ci_high": _finite_or_none(self.ci_high),
-        }
+        return json_record(self, {"pvalue": "p"})
 
 
 @dataclass(frozen=True)
@@ -605,12 +589,12 @@ class KsResult:
             "feature": self.feature,
             "kind": self.kind,
             "unit": UNITS[self.feature],
-            "statistic": _finite_or_none(self.statistic),
-            "p": _finite_or_none(self.pvalue),
+            "statistic": json_float(self.statistic),
+            "p": json_float(self.pvalue),
             "candidate_n": self.candidate_n,
             "reference_n": self.reference_n,
-            "candidate_median": _finite_or_none(self.candidate_median),
-            "reference_median": _finite_or_none(self.reference_median),
+            "candidate_median": json_float(self.candidate_median),
+            "reference_median": json_float(self.reference_median),
         }
 
 
@@ -742,9 +726,9 @@ class Comparison:
             for measure in MEASURES:
                 unit = UNITS[measure]
                 c, r = self.candidate.mean(measure, s), self.reference.mean(measure, s)
-                entry[f"{measure}_candidate_{unit}"] = _finite_or_none(c)
-                entry[f"{measure}_reference_{unit}"] = _finite_or_none(r)
-                entry[f"{measure}_difference_{unit}"] = _finite_or_none(c - r)
+                entry[f"{measure}_candidate_{unit}"] = json_float(c)
+                entry[f"{measure}_reference_{unit}"] = json_float(r)
+                entry[f"{measure}_difference_{unit}"] = json_float(c - r)
             by_size.append(entry)
         failures = self.failures(tol_m, min_groups=min_groups)
         return {
@@ -804,12 +788,7 @@ class PaperAnova:
     pvalue_bound: float  # the paper prints "p < bound"
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "df_between": self.df_between,
-            "df_within": self.df_within,
-            "F": self.statistic,
-            "p_below": self.pvalue_bound,
-        }
+        return json_record(self, {"statistic": "F", "pvalue_bound": "p_below"})
 
 
 @dataclass(frozen=True)

@@ -1052,6 +1052,16 @@ def _classes(where: str, estimator: Any) -> np.ndarray:
     return classes
 
 
+def _n_classes(where: str, estimator: Any, classes: np.ndarray) -> int:
+    """The estimator's ``n_classes_``, which must count its ``classes``."""
+    return _int(
+        f"{where}.n_classes_",
+        getattr(estimator, "n_classes_", None),
+        low=classes.size,
+        high=classes.size,
+    )
+
+
 def _check_pipeline(where: str, pipeline: Any, n_features: int | None) -> None:
     steps = pipeline.steps
     if not isinstance(steps, list) or not steps:
@@ -1208,12 +1218,7 @@ def _check_decision_tree(where: str, model: Any, n_features: int | None) -> None
     n_classes = None
     if is_classifier(model):
         classes = _classes(where, model)
-        n_classes = _int(
-            f"{where}.n_classes_",
-            getattr(model, "n_classes_", None),
-            low=classes.size,
-            high=classes.size,
-        )
+        n_classes = _n_classes(where, model, classes)
     tree = getattr(model, "tree_", None)
     if type(tree) is not Tree:
         raise _Broken(f"{where}.tree_", f"expected a Tree, found a {type(tree).__name__}")
@@ -1304,12 +1309,7 @@ def _check_tree(
 def _check_bagging(where: str, model: Any, n_features: int | None) -> None:
     n = _n_in(where, model, n_features)
     classes = _classes(where, model)
-    n_classes = _int(
-        f"{where}.n_classes_",
-        getattr(model, "n_classes_", None),
-        low=classes.size,
-        high=classes.size,
-    )
+    n_classes = _n_classes(where, model, classes)
     estimators = getattr(model, "estimators_", None)
     columns = getattr(model, "estimators_features_", None)
     if not isinstance(estimators, list) or not estimators:

@@ -20,7 +20,7 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import MEAN_UTTERANCE_S, converse, standing
 from scenarios.formation import circle_places, facing_centre
-from scenarios.registry import MAX_SCENE_S, Range, register
+from scenarios.registry import PlaceNoise, Range, SceneSeconds, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Role, Stage
@@ -37,6 +37,10 @@ SETTLE_S = 2.5  # seconds allowed beyond distance / speed to stop and turn
 EXIT_GAP_M = 0.45  # metres from a wall where people leave the room
 START_DELAY_S = (0.0, 1.0)  # seconds, when each person sets off
 TRIANGLE_JITTER_RAD = 0.15  # radians, spread of the people's places around the even triangle
+# Options the HRI scenes share: the standard deviation of a facing, radians, and the mean
+# length of one speaker's turn, seconds.
+_FacingNoise = Annotated[float, Range(0.0, 0.5, unit="rad")]
+_UtteranceSeconds = Annotated[float, Range(0.5, 30.0, unit="s")]
 
 
 def _robot(room: tuple[float, float]) -> RobotPlace:
@@ -179,12 +183,12 @@ def hri_conversation(
     *,
     seed: int,
     radius: Annotated[float, Range(0.3, 1.5, unit="m")] = 0.6,
-    talk_duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 40.0,
+    talk_duration: SceneSeconds = 40.0,
     approach: Literal["front", "left", "right", "random"] = "random",
     leave: bool = True,
-    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
-    orientation_noise: Annotated[float, Range(0.0, 0.5, unit="rad")] = 0.1,
-    mean_utterance: Annotated[float, Range(0.5, 30.0, unit="s")] = MEAN_UTTERANCE_S,
+    position_noise: PlaceNoise = 0.03,
+    orientation_noise: _FacingNoise = 0.1,
+    mean_utterance: _UtteranceSeconds = MEAN_UTTERANCE_S,
 ) -> Scenario:
     """Two people walk up to the Directions Robot and converse with it (an F-formation of 3).
 
@@ -252,12 +256,12 @@ def hri_robot_excluded(
     seed: int,
     distance: Annotated[float, Range(1.0, 4.0, unit="m")] = 1.8,
     radius: Annotated[float, Range(0.3, 1.0, unit="m")] = 0.42,
-    talk_duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 40.0,
+    talk_duration: SceneSeconds = 40.0,
     walk_in: bool = True,
     leave: bool = True,
-    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
-    orientation_noise: Annotated[float, Range(0.0, 0.5, unit="rad")] = 0.1,
-    mean_utterance: Annotated[float, Range(0.5, 30.0, unit="s")] = MEAN_UTTERANCE_S,
+    position_noise: PlaceNoise = 0.03,
+    orientation_noise: _FacingNoise = 0.1,
+    mean_utterance: _UtteranceSeconds = MEAN_UTTERANCE_S,
 ) -> Scenario:
     """Two people stand in front of the robot and talk to each other; the robot is left out.
 

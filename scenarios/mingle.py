@@ -36,7 +36,7 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import RadiusLaw, circle_places, min_radius
-from scenarios.registry import MAX_SCENE_S, Range, check_ranges, register
+from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
@@ -113,7 +113,7 @@ class MingleParams:
     """
 
     people: Annotated[int, Range(2, 100)] = 18
-    duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 600.0
+    duration: SceneSeconds = 600.0
     room_side: Annotated[float, Range(0.0, 100.0, unit="m")] = 0.0
     max_group_size: Annotated[int, Range(2, 12)] = 8
     robot: bool = False
@@ -121,7 +121,7 @@ class MingleParams:
     radius_base: Annotated[float, Range(0.3, 2.0, unit="m")] = SALSA_RADIUS.base
     radius_per_member: Annotated[float, Range(0.0, 0.5)] = SALSA_RADIUS.per_member
     radius_spread: Annotated[float, Range(0.0, 0.5)] = 0.10
-    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.05
+    position_noise: PlaceNoise = 0.05
     orientation_noise: Annotated[float, Range(0.0, 1.0)] = 0.7
     head_noise: Annotated[float, Range(0.0, 1.0, unit="rad")] = 0.2
     mean_stay: Annotated[float, Range(1.0, unit="s")] = 300.0

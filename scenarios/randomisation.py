@@ -18,7 +18,7 @@ from typing import Annotated
 import numpy as np
 
 from scenarios.mingle import MingleParams, build_mingle_in_room
-from scenarios.registry import MAX_SCENE_S, Range, register
+from scenarios.registry import Range, SceneSeconds, register
 from scenarios.scenario import Scenario, check_option
 
 __all__ = ["RANGES", "draw_params", "mingle_randomised"]
@@ -75,7 +75,7 @@ def mingle_randomised(
     seed: int,
     people_min: Annotated[int, Range(2, 100)] = 6,
     people_max: Annotated[int, Range(2, 100)] = 30,
-    duration: Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)] = 300.0,
+    duration: SceneSeconds = 300.0,
     robot: bool = False,
 ) -> Scenario:
     """Domain-randomised mingling: group shape, noise, sizes and crowd density drawn per seed.

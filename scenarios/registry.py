@@ -34,8 +34,10 @@ from scenarios.scenario import Scenario, check_option
 __all__ = [
     "MAX_SCENE_S",
     "Option",
+    "PlaceNoise",
     "Range",
     "ScenarioInfo",
+    "SceneSeconds",
     "check_options",
     "check_ranges",
     "describe",
@@ -77,6 +79,13 @@ class Range:
         check_option(
             scenario, name, value, low=self.low, high=self.high, unit=self.unit, above=self.above
         )
+
+
+# Option types several scenarios declare alike.
+SceneSeconds = Annotated[float, Range(0.0, MAX_SCENE_S, unit="s", above=True)]
+"""A length of scene, seconds: more than 0, at most :data:`MAX_SCENE_S`."""
+PlaceNoise = Annotated[float, Range(0.0, 0.3, unit="m")]
+"""The standard deviation of a person's place, metres: 0 to 0.3."""
 
 
 @dataclass(frozen=True)

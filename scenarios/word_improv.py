@@ -30,7 +30,7 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import RadiusLaw, circle_places
-from scenarios.registry import Range, register
+from scenarios.registry import PlaceNoise, Range, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Stage
@@ -67,7 +67,7 @@ def word_improv(
     radius_base: Annotated[float, Range(0.3, 2.0, unit="m")] = BABBLE_RADIUS.base,
     radius_per_member: Annotated[float, Range(0.0, 0.5, unit="m")] = BABBLE_RADIUS.per_member,
     radius_spread: Annotated[float, Range(0.0, 0.5)] = 0.03,
-    position_noise: Annotated[float, Range(0.0, 0.3, unit="m")] = 0.03,
+    position_noise: PlaceNoise = 0.03,
     orientation_noise: Annotated[float, Range(0.0, 0.8, unit="rad")] = 0.08,
     head_noise: Annotated[float, Range(0.0, 0.8, unit="rad")] = 0.0,
     mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 5.0,

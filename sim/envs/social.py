@@ -75,6 +75,7 @@ from gymnasium.error import InvalidAction, ResetNeeded
 import scenarios
 from reform.detectors import DetectorError, detector_names, make_detector, run_detector
 from reform.frame import Frame, Group
+from reform.json_values import json_float
 from reform.metrics import T_TWO_THIRDS, evaluate
 from scenarios import PlannedGroup, Scenario, Stage
 from scenarios.mingle import NoFloorError
@@ -806,7 +807,7 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             "precision": float(at.precision),
             "recall": float(at.recall),
             "f1": float(at.f1),
-            "pairwise_accuracy": _finite_or_none(scores.pairwise_accuracy),
+            "pairwise_accuracy": json_float(scores.pairwise_accuracy),
             "recording": None,
         }
         if self._record_dir is not None:
@@ -869,11 +870,6 @@ def _frame_scores(frame: Frame, partition: tuple[Group, ...]) -> dict[str, float
     truth = tuple(tuple(int(m) for m in g) for g in frame.groups or ())
     partition = tuple(tuple(int(m) for m in g) for g in partition)
     return dict(_scores(tuple(frame.ids.tolist()), truth, partition))
-
-
-def _finite_or_none(value: float) -> float | None:
-    value = float(value)
-    return value if math.isfinite(value) else None
 
 
 def _robot_start(value: Any) -> str:

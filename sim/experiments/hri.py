@@ -55,7 +55,7 @@ from reform.classifiers import BAGGED_TREES, WEIGHTED_KNN
 from reform.detectors import make_detector, run_detector
 from reform.frame import Frame
 from reform.gcff import MDL_M2, STRIDE_M
-from reform.json_values import json_float
+from reform.json_values import json_record
 from reform.metrics import Evaluation, evaluate
 from reform.seeding import Role, derive_int, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
@@ -344,16 +344,8 @@ class HriRow:
     pairwise_accuracy: float
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "detector": self.detector,
-            "label": self.label,
-            "training": self.training,
-            "view": self.view,
-            "scenario": self.scenario,
-            "scores": {t: s.to_json() for t, s in self.scores.items()},
-            "micro": {t: list(v) for t, v in self.micro.items()},
-            "pairwise_accuracy": json_float(self.pairwise_accuracy),
-        }
+        # the micro scores are written as they are, not through json_float
+        return json_record(self, micro={t: list(v) for t, v in self.micro.items()})
 
 
 @dataclass(frozen=True)

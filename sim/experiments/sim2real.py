@@ -69,6 +69,7 @@ from reform.datasets import read_parquet
 from reform.detector import Reform, training_pairs
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
+from reform.json_values import json_record
 from reform.metrics import PROTOCOL, T_TWO_THIRDS, Evaluation, evaluate
 from reform.perturb import Perturbation
 from reform.seeding import Role, derive_rng
@@ -610,12 +611,7 @@ class Goal:
     detail: str
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "description": self.description,
-            "met": self.met,
-            "detail": self.detail,
-        }
+        return json_record(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -57,7 +57,7 @@ from reform.detector import Reform
 from reform.detectors import fit_detector, run_detector
 from reform.frame import Frame
 from reform.gcff import Gcff
-from reform.json_values import json_float
+from reform.json_values import json_float, json_record
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
 from reform.seeding import Role, derive_int, derive_rng
@@ -487,21 +487,7 @@ class StressPoint:
     notes: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "value": self.value,
-            "label": self.label,
-            "episodes": self.episodes,
-            "frames": self.frames,
-            "people_per_frame": json_float(self.people_per_frame),
-            "people_per_m2": json_float(self.people_per_m2),
-            "fformations_per_frame": json_float(self.fformations_per_frame),
-            "fformation_size": json_float(self.fformation_size),
-            "scores": {
-                d: {t: s.to_json() for t, s in by_t.items()} for d, by_t in self.scores.items()
-            },
-            "pairwise_accuracy": {d: json_float(v) for d, v in self.pairwise_accuracy.items()},
-            "notes": list(self.notes),
-        }
+        return json_record(self)
 
 
 @dataclass(frozen=True)
@@ -528,13 +514,7 @@ class StressAxis:
         return out
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "title": self.title,
-            "x_label": self.x_label,
-            "description": self.description,
-            "points": [p.to_json() for p in self.points],
-        }
+        return json_record(self)
 
 
 @dataclass(frozen=True)

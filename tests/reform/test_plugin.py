@@ -205,30 +205,24 @@ def test_evaluate_an_installed_plugin_by_name(lab):
 
 @pytest.mark.slow
 def test_evaluate_a_plugin_by_its_path_without_installing_it(lab):
-    run = reform_sim(
-        "evaluate",
-        "--detector",
-        "myplugin:make",
-        "--data",
-        lab["data"],
-        lab=lab,
-        installed=False,
-        cwd=lab["source"],
-    )
+    def evaluate_from(cwd):
+        return reform_sim(
+            "evaluate",
+            "--detector",
+            "myplugin:make",
+            "--data",
+            lab["data"],
+            lab=lab,
+            installed=False,
+            cwd=cwd,
+        )
+
+    run = evaluate_from(lab["source"])
     assert run.returncode == 0, run.stderr
     assert "myplugin:make" in run.stdout
     elsewhere = lab["root"] / "elsewhere"
     elsewhere.mkdir()
-    not_here = reform_sim(
-        "evaluate",
-        "--detector",
-        "myplugin:make",
-        "--data",
-        lab["data"],
-        lab=lab,
-        installed=False,
-        cwd=elsewhere,
-    )
+    not_here = evaluate_from(elsewhere)
     assert not_here.returncode == 2
     assert not_here.stderr == (
         "reform-sim evaluate: error: detector 'myplugin:make': cannot import module 'myplugin': "

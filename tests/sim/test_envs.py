@@ -795,33 +795,23 @@ def test_assessment_and_terms_by_hand() -> None:
     task = JoinTask()
     circle = OSpace(centre=[0.0, 0.0], radius=0.5)
     people = np.array([[-0.5, 0.0], [0.5, 0.0]])
-    placed = assess(
-        task,
-        robot_position=[0.0, -0.6],
-        robot_yaw=math.pi / 2,
-        people_ids=[1, 2],
-        people_position=people,
-        o_space=circle,
-    )
+
+    def robot_at(position: list[float], yaw: float):
+        return assess(
+            task,
+            robot_position=position,
+            robot_yaw=yaw,
+            people_ids=[1, 2],
+            people_position=people,
+            o_space=circle,
+        )
+
+    placed = robot_at([0.0, -0.6], math.pi / 2)
     assert placed.placed and placed.distance_to_circle == pytest.approx(0.1)
     assert placed.facing_error == pytest.approx(0.0)
-    turned = assess(
-        task,
-        robot_position=[0.0, -0.6],
-        robot_yaw=0.0,
-        people_ids=[1, 2],
-        people_position=people,
-        o_space=circle,
-    )
+    turned = robot_at([0.0, -0.6], 0.0)
     assert turned.on_circle and not turned.facing and not turned.placed
-    inside = assess(
-        task,
-        robot_position=[0.0, -0.1],
-        robot_yaw=math.pi / 2,
-        people_ids=[1, 2],
-        people_position=people,
-        o_space=circle,
-    )
+    inside = robot_at([0.0, -0.1], math.pi / 2)
     assert inside.in_o_space and inside.intruded == (1, 2)
     terms = reward_terms(task, turned, placed, joined=True)
     assert terms["progress"] == pytest.approx(0.0)
