@@ -1544,14 +1544,15 @@ def generate_dataset(
     if max_memory is not None:
         max_memory = _check_int("max_memory", max_memory, minimum=1)
     local = backend == "local"
-    # Local workers write to a store with its variables as this process has them now.
-    environment = {k: v for k, v in os.environ.items() if k.startswith(STORE_ENVIRONMENT)}
-    executor = Executor(  # a Ray address is probed here, before any work
+    environment = None
+    if local and is_uri(out_dir):  # local workers write to the store with its variables as now
+        environment = {k: v for k, v in os.environ.items() if k.startswith(STORE_ENVIRONMENT)}
+    executor = Executor(  # a Ray address is probed here, before any work; _drain draws the bar
         backend,
         jobs=n_jobs if local else None,
         address=address,
         progress=False,
-        environment=environment if local and is_uri(out_dir) else None,
+        environment=environment,
     )
     store = open_store(os.fspath(out_dir)) if is_uri(out_dir) else None
     if store is None:
