@@ -3,10 +3,11 @@ arguments, and the ratio.
 
 A Ray instance is started in this process on this machine's cores (its start is timed apart),
 then each command's library call runs on the local backend (``jobs`` = every core, joblib's
-loky) and on Ray (`sim.executor.Executor("ray")` for stress; generate's own ``backend="ray"``),
-each backend's workers warmed up first (a smaller run of the same work), medians over
-``--repeats`` runs. The outputs must be the same on both backends (checked: stress's curves and
-training summary as JSON; every generated shard and the card, byte for byte).
+loky) and on Ray (both through `sim.executor.Executor`: stress is given one, generate is asked
+for ``backend="ray"``), each backend's workers warmed up first (a smaller run of the same work),
+medians over ``--repeats`` runs. The outputs must be the same on both backends (checked:
+stress's curves and training summary as JSON; every generated shard and the card, byte for
+byte).
 
 The ratio ray / local is the cost of Ray's scheduling, serialisation and object store on one
 machine, where it brings no extra cores; on a cluster the same run spreads over every node's

@@ -35,7 +35,7 @@ from __future__ import annotations
 import os
 import socket
 import sys
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -213,6 +213,12 @@ def _not_a_cluster(host: str, port: int) -> str | None:
     return None
 
 
+def _set_environment(values: dict[str, str]) -> None:
+    """A local worker's initializer: ``os.environ.update`` itself would travel as a bound
+    method of a copy of this process's ``os.environ``, and update that copy."""
+    os.environ.update(values)
+
+
 def _apply(function: Callable[..., Any], unit: Any, *shared: Any) -> Any:
     return function(unit, *shared)
 
@@ -236,10 +242,15 @@ class Executor:
             at once (:func:`check_address`). A process already joined to a Ray instance keeps
             it (Ray joins one per process).
         progress: show a tqdm bar on stderr for each `map` given a ``desc``.
+        environment: variables every local worker process sets before its first unit (the
+            store credentials a unit reads, as this process has them now): local worker
+            processes outlive a run and are reused by the next, and keep the environment they
+            were started with; a pool started with other values is not reused. Local backend
+            only: Ray's workers take their node's environment.
 
     Raises:
-        ValueError: an unknown backend, ``jobs`` < 1, ``jobs`` or ``address`` with the wrong
-            backend.
+        ValueError: an unknown backend, ``jobs`` < 1, ``jobs``, ``address`` or
+            ``environment`` with the wrong backend.
         ClusterError: an ``address`` where no cluster answers.
         ImportError: ``"ray"`` without Ray installed.
     """
@@ -251,6 +262,7 @@ class Executor:
         jobs: int | None = None,
         address: str | None = None,
         progress: bool = True,
+        environment: Mapping[str, str] | None = None,
     ) -> None:
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
@@ -265,8 +277,14 @@ class Executor:
             raise ValueError(
                 f"address is for backend 'ray', got address={address!r} with {backend!r}"
             )
+        if environment is not None and backend != "local":
+            raise ValueError(
+                f"environment is for backend 'local' (Ray's workers take their node's), got "
+                f"{sorted(environment)} with {backend!r}"
+            )
         self.backend = backend
         self.jobs = jobs
+        self.environment = None if environment is None else dict(environment)
         self.address = address
         self.progress = progress
         self._ray: Any = None
@@ -401,8 +419,11 @@ class Executor:
             return
         from joblib import Parallel, delayed
 
+        setup = {}
+        if self.environment is not None:
+            setup = {"initializer": _set_environment, "initargs": (self.environment,)}
         parallel = Parallel(
-            n_jobs=workers, backend="loky", return_as="generator_unordered", batch_size=1
+            n_jobs=workers, backend="loky", return_as="generator_unordered", batch_size=1, **setup
         )
         yield from parallel(
             delayed(_indexed)(function, k, item, *shared) for k, item in enumerate(units)

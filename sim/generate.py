@@ -40,11 +40,12 @@ the file, and nothing is changed. Asking for more episodes than a folder holds e
 holding another dataset (a card with other parameters) or other files is refused before any work
 starts, and so is a folder another run is writing.
 
-**Parallelism.** Episodes run in batches (tiny tasks are slower in parallel) on local processes
-(joblib's loky backend, every core by default), or as Ray remote tasks on an existing cluster
-(``backend="ray"``, ``address=...``). Ray workers writing to a folder on this machine send each
-shard back as bytes and this process writes it, so the cluster needs no shared file system, only
-reform-sim installed on every node.
+**Parallelism.** Episodes run in batches (tiny tasks are slower in parallel) through
+`sim.executor.Executor`: on local processes (joblib's loky backend, every core by default), or as
+Ray remote tasks on a cluster (``backend="ray"``, ``address=...``; a batch whose worker died is
+run again, up to `sim.executor.MAX_RETRIES` times). The address is probed before any work. Ray
+workers writing to a folder on this machine send each shard back as bytes and this process
+writes it, so the cluster needs no shared file system, only reform-sim installed on every node.
 
 **Object storage.** ``out_dir`` may be a URI (``s3://bucket/prefix``, ``gs://…``, any fsspec
 filesystem; `reform.datasets.store`), credentials from the environment. Every worker (local or
@@ -82,7 +83,6 @@ from typing import Any
 
 import numpy as np
 import pyarrow.parquet as pq
-from joblib import Parallel, cpu_count, delayed, parallel_config
 from tqdm import tqdm
 
 import scenarios
@@ -105,6 +105,7 @@ from sim.episode import (
     scene_spec,
     simulate_episode,
 )
+from sim.executor import BACKENDS, Executor, cpu_count
 from sim.recording import FieldOfView, record_episode
 from sim.sensor import Sensor
 
@@ -125,7 +126,6 @@ __all__ = [
 ]
 
 VIEWS = ("truth", "robot")  # ground truth, or what the robot's head sensor observes
-BACKENDS = ("local", "ray")
 CARD_MARKDOWN = "README.md"  # the dataset card, for people
 CARD_VERSION = 1
 SHARD_FILE = "part.parquet"
@@ -666,14 +666,14 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
 
 
 def _run_batch(
-    spec: GenerationSpec, folder: _Folder, episodes: Sequence[int], save_recordings: bool
+    episodes: Sequence[int], spec: GenerationSpec, folder: _Folder, save_recordings: bool
 ) -> list[ShardSummary]:
     """A batch of episodes, written straight into ``folder`` (local workers)."""
     return [_write_episode(spec, folder, k, save_recordings=save_recordings) for k in episodes]
 
 
 def _run_batch_bytes(
-    spec: GenerationSpec, episodes: Sequence[int], save_recordings: bool
+    episodes: Sequence[int], spec: GenerationSpec, save_recordings: bool
 ) -> list[tuple[ShardSummary, bytes, bytes | None]]:
     """A batch of episodes, sent back as file contents (Ray workers, maybe on other machines)."""
     out = []
@@ -690,7 +690,7 @@ def _run_batch_bytes(
 
 
 def _run_batch_store(
-    spec: GenerationSpec, uri: str, episodes: Sequence[int], save_recordings: bool
+    episodes: Sequence[int], spec: GenerationSpec, uri: str, save_recordings: bool
 ) -> list[tuple[ShardSummary, dict[str, Any]]]:
     """A batch of episodes written to the store at ``uri`` by this worker: each shard, then its
     commit. Returns each summary with its shard's ``bytes`` and ``sha256``."""
@@ -1432,67 +1432,31 @@ def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
 # Backends
 
 
-def _local(
-    spec: GenerationSpec,
-    folder: _Folder,
-    batches: list[list[int]],
-    n_jobs: int,
-    save_recordings: bool,
+def _plan(
+    executor: Executor, todo: Sequence[int], n_jobs: int | None
+) -> tuple[int, list[list[int]]]:
+    """The workers that run the episodes ``todo`` (every CPU of a Ray cluster; else no more
+    local processes than episodes: the report says how many ran), and their batches."""
+    if executor.remote:
+        workers = executor.workers
+    else:
+        workers = max(1, min(n_jobs or cpu_count(), len(todo)))
+    return workers, _batches(todo, workers)
+
+
+def _written(
+    results: Iterable[tuple[int, list[tuple[ShardSummary, bytes, bytes | None]]]], folder: _Folder
 ) -> Iterator[list[ShardSummary]]:
-    if n_jobs == 1 or len(batches) == 1:
-        for batch in batches:
-            yield _run_batch(spec, folder, batch, save_recordings)
-        return
-
-    parallel = Parallel(
-        n_jobs=n_jobs, backend="loky", return_as="generator_unordered", batch_size=1
-    )
-    yield from parallel(
-        delayed(_run_batch)(spec, folder, batch, save_recordings) for batch in batches
-    )
-
-
-def _import_ray():
-    try:
-        import ray
-    except ImportError as exc:
-        raise ImportError(
-            "backend='ray' needs Ray: pip install 'reform-sim[ray]' (or pip install ray)"
-        ) from exc
-    return ray
-
-
-def _ray_cpus(address: str | None) -> tuple[Any, bool, int]:
-    """Connects to Ray (``address``, or the instance already running in this process)."""
-    ray = _import_ray()
-    owned = False
-    if not ray.is_initialized():
-        ray.init(address=address, log_to_driver=False, include_dashboard=False)
-        owned = True
-    cpus = int(ray.cluster_resources().get("CPU", 1)) or 1
-    return ray, owned, cpus
-
-
-def _ray(
-    ray: Any,
-    spec: GenerationSpec,
-    folder: _Folder,
-    batches: list[list[int]],
-    save_recordings: bool,
-) -> Iterator[list[ShardSummary]]:
-    task = ray.remote(num_cpus=1, max_retries=2)(_run_batch_bytes)
-    pending = [task.remote(spec, batch, save_recordings) for batch in batches]
-    while pending:
-        done, pending = ray.wait(pending, num_returns=1)
-        summaries = []
-        for summary, shard, recording in ray.get(done[0]):
+    """Writes the shards (and recordings) that remote workers send back as bytes into
+    ``folder``, each atomically, as they come (``results``: `Executor.imap_unordered`'s)."""
+    for _, batch in results:
+        for summary, shard, recording in batch:
             if recording is not None:
                 with atomic_path(_recording_path(folder.out, summary.episode)) as tmp:
                     tmp.write_bytes(recording)
             with atomic_path(folder.root / summary.path) as tmp:
                 tmp.write_bytes(shard)
-            summaries.append(summary)
-        yield summaries
+        yield [summary for summary, _, _ in batch]
 
 
 # ------------------------------------------------------------------------------------------
@@ -1539,6 +1503,7 @@ def generate_dataset(
         backend: ``"local"`` (processes on this machine) or ``"ray"`` (remote tasks).
         address: the Ray cluster's address (``"auto"``, ``"ray://host:10001"``, ``host:6379``);
             ``None`` joins the Ray instance already running in this process, else starts one.
+            Probed before any work (`sim.executor.check_address`).
         n_jobs: local worker processes (default: every core); ignored by Ray.
         save_recordings: also write one Rerun ``.rrd`` per episode under ``recordings/``.
         progress: show a progress bar on stderr.
@@ -1555,6 +1520,8 @@ def generate_dataset(
             credentials, unreachable, no such bucket; before any work.
         sim.sizing.RequestTooLarge: (a ValueError) a dataset whose memory, disk or time cannot
             fit this machine (`sim.sizing.check`), before any work.
+        sim.executor.ClusterError: an ``address`` where no Ray cluster answers (one line, within
+            seconds, before any work), or a batch whose worker was lost more often than retried.
         ImportError: ``backend="ray"`` without Ray installed.
     """
     started = time.perf_counter()
@@ -1577,6 +1544,17 @@ def generate_dataset(
     )
     if max_memory is not None:
         max_memory = _check_int("max_memory", max_memory, minimum=1)
+    local = backend == "local"
+    environment = None
+    if local and is_uri(out_dir):  # local workers write to the store with its variables as now
+        environment = {k: v for k, v in os.environ.items() if k.startswith(STORE_ENVIRONMENT)}
+    executor = Executor(  # a Ray address is probed here, before any work; _drain draws the bar
+        backend,
+        jobs=n_jobs if local else None,
+        address=address,
+        progress=False,
+        environment=environment,
+    )
     store = open_store(os.fspath(out_dir)) if is_uri(out_dir) else None
     if store is None:
         out_dir = Path(out_dir)
@@ -1586,7 +1564,7 @@ def generate_dataset(
         made,
         episodes=episodes,
         out_dir=out_dir if store is None else None,
-        workers=1 if backend == "ray" else n_jobs or _cpu_count(),
+        workers=(n_jobs or cpu_count()) if local else 1,
         save_recordings=save_recordings,
         max_memory=max_memory,
     )
@@ -1595,10 +1573,9 @@ def generate_dataset(
         return _generate_store(
             store,
             spec,
+            executor,
             episodes=episodes,
             resolved=resolved,
-            backend=backend,
-            address=address,
             n_jobs=n_jobs,
             save_recordings=save_recordings,
             progress=progress,
@@ -1608,10 +1585,8 @@ def generate_dataset(
     if progress:  # stated once, the time being an estimate a run is not refused on
         what = f"{sizing.count(episodes)} episode{'s' * (episodes != 1)} of {spec.scenario}"
         print(sizing.describe(estimate, what), file=sys.stderr, flush=True)
-    if backend == "ray":
-        _import_ray()
 
-    with _folder_lock(out_dir):
+    with _folder_lock(out_dir), executor:
         _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
         folder = _Folder(out_dir, folder_layout(out_dir))
         _remove_stale_temporaries(out_dir)
@@ -1630,25 +1605,17 @@ def generate_dataset(
                 data_dir=folder.data,
             ),
         )
-        ray = None
-        owned = False
-        if backend == "ray":
-            ray, owned, workers = _ray_cpus(address)
+        workers, batches = _plan(executor, todo, n_jobs)
+        if executor.remote:  # the shards come back as bytes, written here
+            shared: tuple[Any, ...] = (spec, save_recordings)
+            results = _written(
+                executor.imap_unordered(_run_batch_bytes, batches, shared=shared), folder
+            )
         else:
-            # No more processes than episodes to write (the report says how many ran).
-            workers = max(1, min(n_jobs or _cpu_count(), len(todo)))
-        try:
-            batches = _batches(todo, workers)
-            if backend == "ray":
-                results = _ray(ray, spec, folder, batches, save_recordings)
-            else:
-                results = _local(
-                    spec, folder, batches, min(workers, len(batches) or 1), save_recordings
-                )
+            shared = (spec, folder, save_recordings)
+            results = (b for _, b in executor.imap_unordered(_run_batch, batches, shared=shared))
+        with contextlib.closing(results):  # stops the workers, if interrupted, while they run
             _drain(results, shards, episodes, spec.scenario, progress)
-        finally:
-            if owned:
-                ray.shutdown()
         summaries = [shards[k] for k in range(episodes)]
         card_path = out_dir / CARD_JSON
         card = _card(
@@ -1679,11 +1646,10 @@ def generate_dataset(
 def _generate_store(
     store: Store,
     spec: GenerationSpec,
+    executor: Executor,
     *,
     episodes: int,
     resolved: dict[str, Any],
-    backend: str,
-    address: str | None,
     n_jobs: int | None,
     save_recordings: bool,
     progress: bool,
@@ -1692,9 +1658,7 @@ def _generate_store(
     """`generate_dataset` into a store: the workers write the shards and their commits."""
     parameters = spec.parameters()
     _check_store(store, parameters, episodes)
-    if backend == "ray":
-        _import_ray()
-    with _store_lock(store):
+    with _store_lock(store), executor:
         _check_store(store, parameters, episodes)  # again, now that no other run can write
         existing = _committed_shards(store, spec, episodes)
         objects = store.sizes()
@@ -1710,24 +1674,12 @@ def _generate_store(
             store,
             _card(spec, episodes, list(shards.values()), complete=False, resolved_options=resolved),
         )
-        ray = None
-        owned = False
-        if backend == "ray":
-            ray, owned, workers = _ray_cpus(address)
-        else:
-            workers = max(1, min(n_jobs or _cpu_count(), len(todo)))
-        try:
-            batches = _batches(todo, workers)
-            if backend == "ray":
-                results = _ray_store(ray, spec, store.uri, batches, save_recordings)
-            else:
-                results = _local_store(
-                    spec, store.uri, batches, min(workers, len(batches) or 1), save_recordings
-                )
-            _drain(_collect(results, files), shards, episodes, spec.scenario, progress)
-        finally:
-            if owned:
-                ray.shutdown()
+        # Every worker writes its shards to the store itself; only summaries come back.
+        workers, batches = _plan(executor, todo, n_jobs)
+        shared = (spec, store.uri, save_recordings)
+        results = _collect(executor.imap_unordered(_run_batch_store, batches, shared=shared), files)
+        with contextlib.closing(results):  # stops the workers, if interrupted, while they run
+            _drain(results, shards, episodes, spec.scenario, progress)
         summaries = [shards[k] for k in range(episodes)]
         card = _card(
             spec, episodes, summaries, complete=True, resolved_options=resolved, files=files
@@ -1742,7 +1694,7 @@ def _generate_store(
         skipped=tuple(done),
         shards=tuple(summaries),
         seconds=time.perf_counter() - started,
-        backend=backend,
+        backend=executor.backend,
         n_jobs=workers,
         card=store.url(CARD_JSON),
         card_markdown=store.url(CARD_MARKDOWN),
@@ -1754,47 +1706,16 @@ def _write_store_cards(store: Store, card: Mapping[str, Any]) -> None:
     store.write(CARD_MARKDOWN, _markdown(card).encode())
 
 
-def _local_store(
-    spec: GenerationSpec, uri: str, batches: list[list[int]], n_jobs: int, save_recordings: bool
-) -> Iterator[list[tuple[ShardSummary, dict[str, Any]]]]:
-    if n_jobs == 1 or len(batches) == 1:
-        for batch in batches:
-            yield _run_batch_store(spec, uri, batch, save_recordings)
-        return
-    # The workers open the store with the store's variables of this process's environment as
-    # they are now (credentials, endpoint): a pool started before they were set is not reused.
-    environment = {k: v for k, v in os.environ.items() if k.startswith(STORE_ENVIRONMENT)}
-    with parallel_config(backend="loky", initializer=os.environ.update, initargs=(environment,)):
-        parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered", batch_size=1)
-    yield from parallel(
-        delayed(_run_batch_store)(spec, uri, batch, save_recordings) for batch in batches
-    )
-
-
-def _ray_store(
-    ray: Any, spec: GenerationSpec, uri: str, batches: list[list[int]], save_recordings: bool
-) -> Iterator[list[tuple[ShardSummary, dict[str, Any]]]]:
-    """Each Ray worker writes its shards to the store itself; only summaries come back."""
-    task = ray.remote(num_cpus=1, max_retries=2)(_run_batch_store)
-    pending = [task.remote(spec, uri, batch, save_recordings) for batch in batches]
-    while pending:
-        done, pending = ray.wait(pending, num_returns=1)
-        yield ray.get(done[0])
-
-
 def _collect(
-    results: Iterable[list[tuple[ShardSummary, dict[str, Any]]]],
+    results: Iterable[tuple[int, list[tuple[ShardSummary, dict[str, Any]]]]],
     files: dict[str, dict[str, Any]],
 ) -> Iterator[list[ShardSummary]]:
-    """The summaries of ``results``, their shards' sizes and sha256 kept in ``files``."""
-    for batch in results:
+    """The summaries of ``results`` (`Executor.imap_unordered`'s), their shards' sizes and
+    sha256 kept in ``files``."""
+    for _, batch in results:
         for summary, shard in batch:
             files[summary.path] = shard
         yield [summary for summary, _ in batch]
-
-
-def _cpu_count() -> int:
-    return max(1, int(cpu_count()))
 
 
 def _drain(

@@ -81,17 +81,30 @@ def gcff_reference_dir(shared_datasets: Path) -> Path:
     return path
 
 
-@pytest.fixture(scope="session")
+# The local Ray instance of the tests: 2 CPUs, as this machine has.
+RAY_TEST_INSTANCE = dict(
+    num_cpus=2, object_store_memory=100 * 2**20, include_dashboard=False, log_to_driver=False
+)
+
+
+@pytest.fixture
 def ray_instance():
-    """A real local Ray instance (2 CPUs, as this machine has), started once per test session
-    and joined by every ``backend="ray"`` run in it; the ``ray`` module."""
+    """A real local Ray instance (`RAY_TEST_INSTANCE`), started once and joined by every
+    ``backend="ray"`` run (started again if a test shut it down); the ``ray`` module. Ray shuts
+    it down when the session ends."""
     ray = pytest.importorskip("ray")
     if not ray.is_initialized():
-        ray.init(
-            num_cpus=2,
-            object_store_memory=100 * 2**20,
-            include_dashboard=False,
-            log_to_driver=False,
-        )
+        ray.init(**RAY_TEST_INSTANCE)
+    return ray
+
+
+@pytest.fixture
+def ray_restarted():
+    """The Ray instance of `ray_instance` started again now: its workers take this process's
+    environment as it is now (credentials a fixture set after it was first started); shut down
+    at the end."""
+    ray = pytest.importorskip("ray")
+    ray.shutdown()
+    ray.init(**RAY_TEST_INSTANCE)
     yield ray
     ray.shutdown()

@@ -128,6 +128,17 @@ def test_a_ray_worker_lost_every_time_fails_in_one_line(ray_instance) -> None:
     assert "\n" not in str(info.value)
 
 
+def test_local_workers_take_the_environment_as_given_now(monkeypatch) -> None:
+    """A pool started before a variable was set (and reused between runs) is not reused by an
+    executor that gives the variable: its workers see the value."""
+    monkeypatch.delenv("REFORM_SIM_TEST_VALUE", raising=False)
+    names = ["REFORM_SIM_TEST_VALUE"] * 3
+    assert Executor("local", jobs=2).map(os.getenv, names) == [None] * 3
+    given = Executor("local", jobs=2, environment={"REFORM_SIM_TEST_VALUE": "now"})
+    assert given.map(os.getenv, names) == ["now"] * 3
+    assert os.getenv("REFORM_SIM_TEST_VALUE") is None  # this process's own is left alone
+
+
 def test_bad_arguments() -> None:
     with pytest.raises(ValueError, match=r"backend must be one of \('local', 'ray'\), got 'dask'"):
         Executor("dask")
@@ -137,6 +148,8 @@ def test_bad_arguments() -> None:
         Executor("ray", jobs=2)
     with pytest.raises(ValueError, match="address is for backend 'ray'"):
         Executor("local", address="127.0.0.1:6379")
+    with pytest.raises(ValueError, match=r"environment is for backend 'local'.*\['AWS_REGION'\]"):
+        Executor("ray", environment={"AWS_REGION": "eu-west-1"})
 
 
 # --------------------------------------------------------------------------------------------

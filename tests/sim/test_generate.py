@@ -8,6 +8,7 @@ import os
 import shlex
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -235,6 +236,34 @@ def test_ray_backend_gives_the_local_data(reference, tmp_path, ray_instance):
     assert run.returncode == 0, run.stderr[-3000:]
     assert "CPUs (Ray)" in run.stdout
     assert contents(tmp_path / "cli") == contents(reference)
+
+
+@pytest.mark.parametrize("where", ["folder", "store"])
+def test_an_unreachable_cluster_is_one_line_before_any_work(tmp_path, where):
+    """The library call probes the address first: one line, no folder, no object, no Ray."""
+    ray = pytest.importorskip("ray")
+    from sim.executor import ClusterError
+
+    joined = ray.is_initialized()
+
+    with socket.socket() as s:  # a port on 127.0.0.1 where nothing listens
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    out = tmp_path / "data" if where == "folder" else f"memory://reform-sim-test/{tmp_path.name}"
+    for address, message in [
+        (f"127.0.0.1:{port}", f"nothing listens at 127.0.0.1:{port}"),
+        ("bogus", "host 'bogus' is not known"),
+    ]:
+        with pytest.raises(ClusterError, match=rf"^address {address}: .*{message}") as info:
+            generate(out, backend="ray", address=address)
+        assert "\n" not in str(info.value)
+    assert ray.is_initialized() == joined  # no Ray instance was started or joined
+    if where == "folder":
+        assert not (tmp_path / "data").exists()
+    else:
+        from reform.datasets.store import open_store
+
+        assert open_store(out).sizes() == {}
 
 
 def test_command_line_writes_the_dataset_and_train_reads_it(tmp_path, capsys):

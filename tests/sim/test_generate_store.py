@@ -325,22 +325,12 @@ def test_data_commands_read_a_dataset_in_the_store(server, capsys):
     assert f"{uri}/{shard}: field 'sha256'" in capsys.readouterr().out
 
 
-def test_ray_workers_write_their_shards_to_the_store(server, reference):
-    ray = pytest.importorskip("ray")
-    ray.init(
-        num_cpus=2,
-        object_store_memory=100 * 2**20,
-        include_dashboard=False,
-        log_to_driver=False,
-    )
-    try:
-        uri = f"s3://{BUCKET}/ray"
-        report = generate(uri, backend="ray")
-        assert report.backend == "ray" and report.n_jobs == 2
-        same_as_reference(uri, reference)
-        assert open_store(uri).read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
-    finally:
-        ray.shutdown()
+def test_ray_workers_write_their_shards_to_the_store(server, reference, ray_restarted):
+    uri = f"s3://{BUCKET}/ray"
+    report = generate(uri, backend="ray")
+    assert report.backend == "ray" and report.n_jobs == 2
+    same_as_reference(uri, reference)
+    assert open_store(uri).read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
 
 
 def test_any_fsspec_filesystem_is_a_store(reference):
