@@ -350,6 +350,17 @@ def check_backend(args: argparse.Namespace) -> None:
         raise CliError(f"--backend ray: {exc}") from None
 
 
+def backend_words(args: argparse.Namespace) -> list[str]:
+    """``--jobs``, ``--backend`` and ``--address`` as given, as command-line words (for the
+    command a report records)."""
+    words = [] if args.jobs is None else ["--jobs", str(args.jobs)]
+    if args.backend != "local":
+        words += ["--backend", args.backend]
+    if args.address is not None:
+        words += ["--address", args.address]
+    return words
+
+
 def executor_from_args(args: argparse.Namespace, *, progress: bool = True):
     """The `sim.executor.Executor` that ``--backend``, ``--jobs`` and ``--address`` ask for,
     checked first (:func:`check_backend`); use it as a context manager."""

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from reform.datasets import load_babble, load_salsa, resolve
 from sim.cli._calibrate import BASENAME
-from sim.cli._common import CliError, check_backend, check_output, executor_from_args
+from sim.cli._common import CliError, backend_words, check_output, executor_from_args
 from sim.cli._experiment_io import dataset_words, named_datasets, write_report
 from sim.experiments.calibration import DEFAULT_SEEDS, calibrate_scenarios
 from sim.experiments.calibration_report import to_markdown
@@ -25,12 +25,7 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--episodes", str(args.episodes)]
     if args.check:
         words.append("--check")
-    if args.jobs is not None:
-        words += ["--jobs", str(args.jobs)]
-    if args.backend != "local":
-        words += ["--backend", args.backend]
-    if args.address is not None:
-        words += ["--address", args.address]
+    words += backend_words(args)
     return shlex.join(words)
 
 
@@ -39,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     if seeds < 1:
         raise CliError(f"--episodes must be >= 1, got {seeds}")
     check_episodes(seeds, what="the calibration", flag="--episodes")
-    check_backend(args)
+    executor = executor_from_args(args, progress=not args.quiet)  # the Ray address probed
     folders = {}
     for name, given in named_datasets(args).items():
         try:
@@ -52,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     check_output("--out", args.out, folder=True)
     stem = Path(args.out) / BASENAME
     salsa, babble = load_salsa(folders["salsa"]), load_babble(folders["babble"])
-    with executor_from_args(args, progress=not args.quiet) as executor:
+    with executor:
         report = calibrate_scenarios(
             salsa, babble, seeds=seeds, command=_command(args), executor=executor
         )

@@ -11,7 +11,7 @@ import sys
 import time
 
 from reform.datasets import load_salsa, resolve
-from sim.cli._common import CliError, check_backend, check_output, executor_from_args
+from sim.cli._common import CliError, backend_words, check_output, executor_from_args
 from sim.cli._experiment_hri import BASENAME
 from sim.cli._experiment_io import (
     check_report,
@@ -34,12 +34,7 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--seed", str(args.seed)]
     if args.views != ",".join(VIEW_NAMES):
         words += ["--views", args.views]
-    if args.jobs is not None:
-        words += ["--jobs", str(args.jobs)]
-    if args.backend != "local":
-        words += ["--backend", args.backend]
-    if args.address is not None:
-        words += ["--address", args.address]
+    words += backend_words(args)
     if args.recordings:
         words.append("--recordings")
     words += ["--out", args.out]
@@ -58,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
     out = report_stem(args.out, BASENAME)
     check_report(out)
-    check_backend(args)
+    executor = executor_from_args(args, progress=not args.quiet)  # the Ray address probed
     recordings = None
     if args.recordings:
         recordings = (
@@ -85,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
             print(line, file=sys.stderr, flush=True)
 
     start = time.perf_counter()
-    with executor_from_args(args, progress=not args.quiet) as executor:
+    with executor:
         detectors, training = hri_detectors(
             salsa=salsa, seed=args.seed, progress=progress, executor=executor
         )

@@ -12,7 +12,7 @@ import sys
 import time
 
 from reform.datasets import load_babble, load_salsa, resolve
-from sim.cli._common import CliError, check_backend, check_output, executor_from_args
+from sim.cli._common import CliError, check_output, executor_from_args
 from sim.cli._experiment_io import (
     REPORT_SUFFIXES,
     check_report,
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_report(out, suffixes=(*REPORT_SUFFIXES, ".png"))
     check_output("--synthetic", args.synthetic, folder=True)
-    check_backend(args)
+    executor = executor_from_args(args, progress=not args.quiet)  # the Ray address probed
     sources = tuple(
         dataclasses.replace(s, episodes=max(1, round(s.episodes * args.episodes_scale)))
         for s in DEFAULT_SOURCES
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
                 f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
             )
 
-    with executor_from_args(args, progress=not args.quiet) as executor:
+    with executor:
         result = sim_to_real(
             load_salsa(resolve(data["salsa"])),
             load_babble(resolve(data["babble"])),

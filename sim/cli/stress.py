@@ -13,6 +13,7 @@ import sys
 from sim import sizing
 from sim.cli._common import (
     CliError,
+    backend_words,
     check_output,
     check_recording,
     executor_from_args,
@@ -35,12 +36,7 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--seed", str(args.seed)]
     if args.axes is not None:
         words += ["--axes", args.axes]
-    if args.jobs is not None:
-        words += ["--jobs", str(args.jobs)]
-    if args.backend != "local":
-        words += ["--backend", args.backend]
-    if args.address is not None:
-        words += ["--address", args.address]
+    words += backend_words(args)
     for name in args.detectors or ():
         words += ["--detector", name]
     words += ["--out", args.out]
