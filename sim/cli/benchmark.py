@@ -11,7 +11,6 @@ import sys
 
 from tqdm import tqdm
 
-from reform.datasets import detect_format, is_fetched, local_datasets_dir, registry
 from reform.detectors import make_detector
 from reform.splits import DEFAULT_TRAIN_FRACTION
 from sim.cli._benchmark import DEFAULT_DETECTORS, DEFAULT_OUT
@@ -20,30 +19,20 @@ from sim.cli._common import (
     check_backend,
     check_output,
 )
-from sim.experiments.benchmark import dataset_spec, detector_spec, model_spec, run_benchmark
+from sim.experiments.benchmark import (
+    dataset_spec,
+    detector_spec,
+    found_datasets,
+    model_spec,
+    run_benchmark,
+)
 from sim.experiments.benchmark_report import write_report
-
-
-def _found_datasets() -> list[str]:
-    """Every dataset name on this machine: the fetched public ones, then the local folders."""
-
-    names = [entry.name for entry in registry() if is_fetched(entry.name)]
-    local = local_datasets_dir()
-    if local is not None and local.is_dir():
-        for child in sorted(local.iterdir()):
-            if child.is_dir() and child.name not in names:
-                try:
-                    detect_format(child)
-                except ValueError:
-                    continue
-                names.append(child.name)
-    return names
 
 
 def _run(args: argparse.Namespace) -> int:
     check_backend(args)
     check_output("--out", args.out, folder=True)
-    names = args.data or _found_datasets()
+    names = args.data or found_datasets()
     if not names:
         raise CliError(
             "no datasets found: fetch the public ones with `reform-sim datasets fetch --all`, "

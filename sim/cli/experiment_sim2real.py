@@ -5,48 +5,84 @@ Its arguments are `sim.cli._experiment_sim2real`."""
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import shlex
 import sys
 import time
+from pathlib import Path
 
-from reform.datasets import load_babble, load_salsa, resolve
-from sim.cli._common import CliError, check_output, executor_from_args
-from sim.cli._experiment_io import (
-    REPORT_SUFFIXES,
-    check_report,
-    dataset_words,
-    named_datasets,
-    report_stem,
-    write_report,
-)
+from reform.datasets import DataFormatError, detect_format, load_dataset, resolve
+from reform.frame import Dataset
+from sim.cli._common import CliError, backend_words, check_output, executor_from_args
+from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
 from sim.cli._experiment_sim2real import BASENAME
-from sim.experiments.sim2real import (
-    CLASSIFIER_NAMES,
-    DEFAULT_SOURCES,
-    RANDOMISED_SOURCES,
-    sim_to_real,
+from sim.experiments.benchmark import found_datasets
+from sim.experiments.sim2real import CLASSIFIER_NAMES, RECIPES, SALSA, sim_to_real
+from sim.experiments.sim2real_report import (
+    calibration_figure,
+    rank_figure,
+    sim2real_figure,
+    to_markdown,
 )
-from sim.experiments.sim2real_report import sim2real_figure, to_markdown
+
+FIGURES = (".png", "-rank.png", "-calibration.png")
+MODEL = "recommended.skops"
+
+
+def _folder_of_datasets(exc: DataFormatError) -> bool:
+    return str(exc.found or "").startswith("a folder of datasets")
+
+
+def load_named(entries: list[str]) -> dict[str, Dataset]:
+    """``--data`` values (or every dataset found) loaded: dataset name -> dataset. A folder of
+    datasets gives each dataset in it, named by its folder."""
+    named: dict[str, str] = {}
+    for value in entries or found_datasets():
+        name, sep, path = value.partition("=")
+        if sep and (not name or not path):
+            raise CliError(f"--data {value}: expected NAME=PATH, got an empty side")
+        where = path if sep else value
+        named[(name if sep else Path(value).name or value).lower()] = where
+    out: dict[str, Dataset] = {}
+    for name, where in named.items():
+        try:
+            out[name] = load_dataset(resolve(where))
+        except FileNotFoundError as exc:
+            raise CliError(f"--data {where}: {exc}") from None
+        except DataFormatError as exc:
+            if not _folder_of_datasets(exc):
+                raise CliError(str(exc)) from None
+            for child in sorted(Path(where).iterdir()):
+                if not child.is_dir() or child.name.startswith((".", "_")):
+                    continue
+                try:
+                    detect_format(child)
+                except ValueError:
+                    continue  # holds no dataset (a format none reads): not one of them
+                try:
+                    out.setdefault(child.name.lower(), load_dataset(child))
+                except DataFormatError as inner:
+                    raise CliError(str(inner)) from None
+    if SALSA not in out:
+        raise CliError(
+            "the experiment needs SALSA (its training split is the one real set the choice may "
+            f"see), got {', '.join(out) or 'no dataset'}: fetch it with `reform-sim datasets "
+            "fetch salsa` or give --data salsa=PATH"
+        )
+    return out
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "experiment", "sim2real", *dataset_words(args)]
+    words = ["reform-sim", "experiment", "sim2real"]
+    for value in args.data:
+        words += ["--data", value]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
     if args.episodes_scale != 1.0:
         words += ["--episodes-scale", f"{args.episodes_scale:g}"]
     if args.classifiers:
         words += ["--classifiers", args.classifiers]
-    if args.no_diagnostics:
-        words.append("--no-diagnostics")
-    if args.no_randomised:
-        words.append("--no-randomised")
-    if args.backend != "local":
-        words += ["--backend", args.backend]
-    if args.address is not None:
-        words += ["--address", args.address]
+    words += backend_words(args)
     words += ["--out", args.out]
     return shlex.join(words)
 
@@ -65,15 +101,12 @@ def run(args: argparse.Namespace) -> int:
                 f"--classifiers must be among {','.join(CLASSIFIER_NAMES)}, "
                 f"got {args.classifiers!r}"
             )
-    data = named_datasets(args)
-    out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, ".png"))
-    check_report(out, suffixes=(*REPORT_SUFFIXES, ".png"))
+    out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, *FIGURES))
+    check_report(out, suffixes=(*REPORT_SUFFIXES, *FIGURES))
     check_output("--synthetic", args.synthetic, folder=True)
     executor = executor_from_args(args, progress=not args.quiet)  # the Ray address probed
-    sources = tuple(
-        dataclasses.replace(s, episodes=max(1, round(s.episodes * args.episodes_scale)))
-        for s in DEFAULT_SOURCES
-    )
+    real = load_named(args.data)
+    recipes = tuple(r.scaled(args.episodes_scale) for r in RECIPES)
     started = time.perf_counter()
 
     def progress(message: str) -> None:
@@ -84,22 +117,26 @@ def run(args: argparse.Namespace) -> int:
 
     with executor:
         result = sim_to_real(
-            load_salsa(resolve(data["salsa"])),
-            load_babble(resolve(data["babble"])),
+            real,
             synthetic_root=args.synthetic,
-            sources=sources,
-            seed=args.seed,
+            recipes=recipes,
             classifiers=classifiers,
-            diagnostics=not args.no_diagnostics,
-            randomised=() if args.no_randomised else RANDOMISED_SOURCES,
+            seed=args.seed,
+            out_model=out.parent / MODEL,
             progress=progress,
             progress_bars=not args.quiet,
             executor=executor,
         )
     command = _command(args)
-    figure = sim2real_figure(result, out.with_name(out.name + ".png"))
-    markdown = to_markdown(result, command=command, figure=figure.name)
+    names = []
+    drawings = (sim2real_figure, rank_figure, calibration_figure)
+    for suffix, draw in zip(FIGURES, drawings, strict=True):
+        names.append(draw(result, out.with_name(out.name + suffix)).name)
+    markdown = to_markdown(result, command=command, figures=names)
     write_report(out, markdown, result.to_json(command=command))
     print(markdown, end="")
-    print(f"wrote {out}.md, {out}.json and {out}.png", file=sys.stderr)
+    print(
+        f"wrote {out}.md, {out}.json, {', '.join(names)} and {out.parent / MODEL}",
+        file=sys.stderr,
+    )
     return 0

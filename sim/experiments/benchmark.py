@@ -33,7 +33,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from reform.datasets import load_dataset, resolve
+from reform.datasets import (
+    detect_format,
+    is_fetched,
+    load_dataset,
+    local_datasets_dir,
+    registry,
+    resolve,
+)
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame, Group
 from reform.gcff import Gcff, GcffBySequence
@@ -55,6 +62,7 @@ __all__ = [
     "DetectorSpec",
     "dataset_spec",
     "detector_spec",
+    "found_datasets",
     "run_benchmark",
 ]
 
@@ -209,6 +217,22 @@ def _classifier_kind(representation: str) -> str:
         if marker in representation:
             return kind
     return ""
+
+
+def found_datasets() -> list[str]:
+    """Every dataset name on this machine: the fetched public ones, then the local folders
+    (`reform.datasets.local_datasets_dir`) whose format is recognised."""
+    names = [entry.name for entry in registry() if is_fetched(entry.name)]
+    local = local_datasets_dir()
+    if local is not None and local.is_dir():
+        for child in sorted(local.iterdir()):
+            if child.is_dir() and child.name not in names:
+                try:
+                    detect_format(child)
+                except ValueError:
+                    continue
+                names.append(child.name)
+    return names
 
 
 def dataset_spec(

@@ -66,7 +66,11 @@ from sim.experiments.hri import (
     reform_detectors,
 )
 from sim.experiments.hri_report import to_markdown as hri_markdown
-from sim.experiments.sim2real import (
+from sim.experiments.stress import GCFF as STRESS_GCFF
+from sim.experiments.stress import GRIDS, StressResults, run_stress
+from sim.experiments.stress_report import record as record_stress
+from sim.experiments.stress_report import write_report as write_stress
+from sim.experiments.synthetic import (
     NoiseCalibration,
     SyntheticSource,
     balance_pairs,
@@ -74,10 +78,6 @@ from sim.experiments.sim2real import (
     count_pairs,
     generate_sources,
 )
-from sim.experiments.stress import GCFF as STRESS_GCFF
-from sim.experiments.stress import GRIDS, StressResults, run_stress
-from sim.experiments.stress_report import record as record_stress
-from sim.experiments.stress_report import write_report as write_stress
 from sim.recording import record_episode, record_evaluation
 
 __all__ = [

@@ -1,545 +1,275 @@
-"""The sim-to-real results (:class:`sim.experiments.sim2real.SimToReal`) as a Markdown page and
-a figure (``docs/results/sim2real.md``, ``sim2real.png``)."""
+"""The sim-to-real experiment's report: Markdown tables and plots of a :class:`SimToReal`.
+
+Three figures beside ``NAME.md``: ``NAME.png`` (F1 per real dataset, with intervals),
+``NAME-rank.png`` (each detector's F1 in simulation against its mean on the real datasets) and
+``NAME-calibration.png`` (Tightness and Symmetry by group size and the pair features, the
+recommended recipe's synthetic data against each real dataset).
+"""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
-from typing import Any
+from pathlib import Path
 
-from sim.experiments.figures import Bar, score_bars
-from sim.experiments.sim2real import (
-    BABBLE,
-    BABBLE_EMPTY,
-    DISPLAY,
-    NEIGHBOUR_QUANTILES,
-    PAPER_BABBLE_F1,
-    SALSA_TEST,
-    SALSA_TRAIN,
-    SALSA_WITHIN_F1,
-    SYNTHETIC,
-    Row,
-    SimToReal,
-    half_training,
-)
+import numpy as np
+
+from sim.experiments.figures import WIDTH_IN, Bar, pyplot, save_png, score_bars
+from sim.experiments.sim2real import SIM_PARTY, SimToReal
 from sim.experiments.tables import command_block, percent, render_table
 
-__all__ = ["rows_table", "sim2real_figure", "to_markdown"]
+__all__ = ["calibration_figure", "rank_figure", "sim2real_figure", "to_markdown"]
 
-_TRAINING_TEXT = {
-    "synthetic": "synthetic only",
-    "salsa-train": "SALSA train",
-    "none": "-",
-}
+MAIN_ROLES = ("recommended", "salsa-trained", "gcff-one", "gcff-own", "leave-one-out")
 
 
-def rows_table(rows: Sequence[Row]) -> str:
-    """A Markdown table of rows: detector, training data, pair accuracy, P / R / F1 at T = 2/3
-    with F1's bootstrap interval, F1 at T = 1."""
-    headers = [
-        "detector",
-        "trained on",
-        "pair acc.",
-        "P@2/3",
-        "R@2/3",
-        "F1@2/3",
-        "95% interval",
-        "F1@1",
-    ]
-    body = []
-    for row in rows:
-        result = row.result
-        two_thirds, one = result["2/3"], result["1"]
-        low, high = row.f1_interval
-        body.append(
-            [
-                row.detector,
-                _TRAINING_TEXT.get(row.training, row.training),
-                percent(result["pairwise_accuracy"]),
-                percent(two_thirds["precision"]),
-                percent(two_thirds["recall"]),
-                f"**{percent(two_thirds['f1'])}**"
-                if row.training == "synthetic"
-                else percent(two_thirds["f1"]),
-                f"{percent(low)}-{percent(high)}",
-                percent(one["f1"]),
-            ]
-        )
-    return render_table(headers, body, style="markdown")
+def _main_rows(result: SimToReal) -> tuple[str, ...]:
+    return result.detectors(*MAIN_ROLES)
 
 
-def _options(options: dict[str, Any]) -> str:
-    return ", ".join(f"{k}={v}" for k, v in sorted(options.items())) or "defaults"
-
-
-def to_markdown(result: SimToReal, *, command: str | None = None, figure: str | None = None) -> str:
-    """The page: command, summary, goals, tables per test set, training data, calibration,
-    tuning, diagnostics."""
-    met = sum(g.met for g in result.goals)
-    lines = ["# Sim-to-real: REFORM trained on synthetic crowds, tested on SALSA and Babble", ""]
-    if command:
-        lines += command_block(command)
-    sources = " and ".join(f"`{s.scenario}`" for s in result.sources)
-    lines += [
-        f"REFORM trained only on simulated {sources} episodes, beside REFORM trained on SALSA's "
-        "training split, GCFF and the majority baseline, on the SALSA test split "
-        f"({result.frames[SALSA_TEST]} frames: per session, the last 40 % of annotated frames "
-        f"by time, `reform.time_split`) and on every annotated Babble frame "
-        f"({result.frames[BABBLE]}). Protocol: GCFF's `ff_evalgroups` as `reform.evaluate` "
-        "implements it (singletons dropped; P and R are means of the per-frame values; F1 of "
-        "those means); scores in %. Intervals: 95 % block bootstrap (stretches of time "
-        "resampled, then frames within them). No test score informed any choice: the synthetic "
-        "data's tracker noise was calibrated on SALSA's *training* split, hyper-parameters were "
-        "chosen by time-blocked cross-validation on each model's own training data.",
-        "",
-        f"**Goals met: {met} of {len(result.goals)}.**",
-        "",
-    ]
-    if figure:
-        lines += [f"![F1 at T = 2/3 with 95 % intervals]({figure})", ""]
-    lines += ["## Goals", ""]
-    lines += [
-        render_table(
-            ["goal", "required", "met", "figures (F1 at T = 2/3, %)"],
-            [[g.name, g.description, "yes" if g.met else "**no**", g.detail] for g in result.goals],
-            style="markdown",
-        ),
-        "",
-    ]
-    lines += _reading(result)
-    empty = result.frames.get(BABBLE_EMPTY)
-    if empty:
-        share = (result.frames[BABBLE] - empty) / result.frames[BABBLE]
-        lines += [
-            f"On Babble, {empty} of the {result.frames[BABBLE]} annotated frames hold no "
-            "F-formation. A detector that finds every F-formation and reports a group in each "
-            f"of those {empty} frames scores P {100 * share:.1f}, R 100.0, F1 "
-            f"{100 * 2 * share / (share + 1):.1f}: to score above that it must also report "
-            "nobody together there.",
-            "",
-        ]
-    titles = {SALSA_TEST: "SALSA test split", BABBLE: "Babble (every annotated frame)"}
-    paper = {
-        SALSA_TEST: "The paper (trained on ~60 % of SALSA, random split; T = 2/3, P / R / F1): "
-        "GCFF 63.8 / 64.2 / 64.2; Weighted KNN 78.1 / 82.7 / 80.3; Bagged Trees 78.3 / 84.3 / "
-        "81.2; Logistic Regression 71.3 / 78.6 / 74.8.",
-        BABBLE: "The paper (trained on SALSA): GCFF 65.0 / 75.0 / 69.6; Weighted KNN 74.3 / "
-        f"87.5 / 80.4; Bagged Trees 75.6 / 90.0 / {100 * PAPER_BABBLE_F1:.1f}; Logistic "
-        "Regression 65.6 / 80.0 / 72.1.",
-    }
-    for dataset in (SALSA_TEST, BABBLE):
-        rows = [r for r in result.rows if r.dataset == dataset and not r.diagnostic]
-        lines += [f"## {titles[dataset]}", "", rows_table(rows), "", paper[dataset], ""]
-        diffs = [
-            f"{row_name(c)} {100 * d:+.1f} ({100 * lo:+.1f} to {100 * hi:+.1f})"
-            for (c, ds), (d, lo, hi) in result.differences.items()
-            if ds == dataset
-        ]
-        lines += [
-            "Synthetic-trained minus SALSA-trained F1 at T = 2/3, with 95 % intervals: "
-            + "; ".join(diffs)
-            + ".",
-            "",
-        ]
-    lines += ["## Synthetic training data", ""]
-    body = []
-    for source in result.sources:
-        counts = result.training[source.scenario]
-        body.append(
-            [
-                f"`{source.scenario}`",
-                _options(dict(source.options)),
-                str(source.episodes),
-                f"{source.rate:.3g}",
-                f"{counts['frames_generated']:,}",
-                f"{counts['pairs_generated']:,}",
-                f"{counts['frames_kept']:,}",
-                f"{counts['pairs_kept']:,}",
-                "calibrated" if source.tracker_noise else "none (motion capture)",
-            ]
-        )
-    lines += [
-        render_table(
-            [
-                "scenario",
-                "options",
-                "episodes",
-                "rate (Hz)",
-                "frames",
-                "pairs",
-                "frames kept",
-                "pairs kept",
-                "tracker noise",
-            ],
-            body,
-            style="markdown",
-        ),
-        "",
-        f"Generated with `reform-sim generate` (`sim.generate.generate_dataset`), master seed "
-        f"{result.seed}; each source is cut to the same number of pairs by an even subset of "
-        "its frames.",
-        "",
-    ]
-    if result.noise is not None:
-        noise = result.noise
-        ks, total = noise.ks_at(noise.position_noise, noise.yaw_noise)
-        ks0, total0 = noise.ks_at(0.0, 0.0) if _on_grid(noise, 0.0, 0.0) else ((), float("nan"))
-        lines += [
-            "## Tracker noise",
-            "",
-            "SALSA's positions and orientations were annotated from video; Babble's come from "
-            "motion capture. The sources marked above get Gaussian noise on positions (per "
-            "axis) and body yaw, at the levels whose pair features are closest to those of "
-            "SALSA's training split: the smallest sum of the two-sample Kolmogorov-Smirnov "
-            "statistics of Distance and Effort Angle, in-group and out-of-group "
-            "(`reform.calibration.compare`), over a grid of "
-            f"{len({p for p, _, _ in noise.grid})} x {len({y for _, y, _ in noise.grid})} "
-            "levels.",
-            "",
-            render_table(
-                [
-                    "noise",
-                    "position (m)",
-                    "yaw (rad)",
-                    "KS d in",
-                    "KS d out",
-                    "KS EA in",
-                    "KS EA out",
-                    "sum",
-                ],
-                [
-                    ["none", "0", "0", *(f"{k:.3f}" for k in ks0), f"{total0:.3f}"]
-                    if ks0
-                    else ["none", "0", "0", "-", "-", "-", "-", "-"],
-                    [
-                        "chosen",
-                        f"{noise.position_noise:g}",
-                        f"{noise.yaw_noise:g}",
-                        *(f"{k:.3f}" for k in ks),
-                        f"{total:.3f}",
-                    ],
-                ],
-                style="markdown",
-            ),
-            "",
-        ]
-    lines += ["## Synthetic data beside the real data", ""]
-    lines += [
-        "Each source (before any noise) against its real counterpart: mean Tightness by group "
-        "size (m; sizes with at least 5 F-formations in the real data) and KS statistics of "
-        "the pair features.",
-        "",
-    ]
-    for scenario, comparison in result.calibration.items():
-        sizes = [e for e in comparison["by_size"] if e["checked"]]
-        ks = {(k["feature"], k["kind"]): k["statistic"] for k in comparison["ks"]}
-        lines += [
-            f"`{scenario}` vs {comparison['reference']}: Tightness "
-            + ", ".join(
-                f"f{e['size']} {_m(e['tightness_candidate_m'])} / {_m(e['tightness_reference_m'])}"
-                for e in sizes
-            )
-            + "; KS "
-            + ", ".join(f"{f} {k} {v:.3f}" for (f, k), v in ks.items())
-            + ".",
-            "",
-        ]
-    lines += _realism_section(result)
-    lines += ["## Hyper-parameters", ""]
-    body = []
-    for training, by_classifier in result.tuning.items():
-        for name, tuning in by_classifier.items():
-            best = ", ".join(f"{k}={v}" for k, v in tuning["best_params"].items())
-            score = max(g["mean"] for g in tuning["grid"])
-            body.append(
-                [row_name(name), _TRAINING_TEXT.get(training, training), best, f"{100 * score:.1f}"]
-            )
-    lines += [
-        render_table(
-            ["classifier", "tuned on", "chosen", "cross-validated pair accuracy"],
-            body,
-            style="markdown",
-        ),
-        "",
-        "Cross-validation: `reform.tuning.tune`, folds that are stretches of time of every "
-        "sequence (episode or session).",
-        "",
-        "GCFF tuned on SALSA's training split (`sim.experiments.gcff.gcff_comparison`): "
-        f"stride {result.gcff_tuning['stride_m']:g} m, mdl {result.gcff_tuning['mdl_m2']:g} m² "
-        f"(training F1 {100 * result.gcff_tuning['training_f1']:.1f}).",
-        "",
-    ]
-    lines += _cross_period_section(result)
-    diagnostics = [r for r in result.rows if r.diagnostic and not _is_half(r)]
-    if diagnostics:
-        lines += [
-            "## Diagnostics",
-            "",
-            "Bagged Trees with the synthetic model's hyper-parameters, trained on variants of "
-            "the synthetic data: each source alone, both without tracker noise, and the "
-            "randomised mode (`mingle-randomised`, no tracker noise) in place of `mingle`. They "
-            "show what each part contributes; they informed no choice.",
-            "",
-        ]
-        for dataset in (SALSA_TEST, BABBLE):
-            rows = [r for r in diagnostics if r.dataset == dataset]
-            lines += [f"### {titles[dataset]}", "", rows_table(rows), ""]
-    lines += [f"Run time: {result.seconds / 60:.1f} min.", ""]
-    return "\n".join(lines)
-
-
-def _reading(result: SimToReal) -> list[str]:
-    """The goals in words, from the numbers."""
-    salsa = {c: v for (c, d), v in result.differences.items() if d == SALSA_TEST}
-    babble = {c: v for (c, d), v in result.differences.items() if d == BABBLE}
-    if not salsa:
-        return []
-    lines = ["Reading the results:", ""]
-    worst = min(v[0] for v in salsa.values())
-    best = max(v[0] for v in salsa.values())
-    below = all(v[2] < 0 for v in salsa.values())
-    lines.append(
-        f"- SALSA test split: synthetic-only training lands {100 * -best:.1f} to "
-        f"{100 * -worst:.1f} F1 points below SALSA-trained REFORM"
-        + (" (every 95 % interval of the difference below zero)" if below else "")
-        + (
-            "; the 2-point goal is missed."
-            if best < -0.02
-            else "; within 2 points for at least one classifier."
-        )
-    )
-    gcff_rows = [
-        r for r in result.rows if not r.diagnostic and r.dataset == BABBLE and "GCFF" in r.detector
-    ]
-    synthetic_babble = [
-        r.f1()
-        for r in result.rows
-        if not r.diagnostic and r.dataset == BABBLE and r.training == "synthetic"
-    ]
-    if babble and synthetic_babble and gcff_rows:
-        lines.append(
-            f"- Babble: synthetic-only training scores {_span(synthetic_babble)}, "
-            f"{100 * min(v[0] for v in babble.values()):.1f} "
-            f"to {100 * max(v[0] for v in babble.values()):.1f} points above SALSA-trained REFORM "
-            "and above the paper's 82.1; against GCFF: "
-            + ", ".join(f"{r.detector} {100 * r.f1():.1f}" for r in gcff_rows)
-            + "."
-        )
-    realism = result.realism
-    noisy = [k for k in realism if k.endswith("tracker noise")]
-    if SALSA_TRAIN in realism and noisy and best < -0.02:
-        real_nn = realism[SALSA_TRAIN]["nearest_neighbour_m"]
-        plain = noisy[0].replace(" + tracker noise", "")
-        sim_nn = realism[plain]["nearest_neighbour_m"]
-        lines.append(
-            "- Why SALSA is missed (training data only, see *Where the synthetic parties still "
-            f"differ*): SALSA's people stand closer (nearest neighbour q10 {real_nn[0]:.2f} m "
-            f"against {sim_nn[0]:.2f} m: the simulated bodies are discs that keep people about "
-            "0.6 m apart) and its groups are far less even around their centre (Symmetry below). "
-            "The calibrated tracker noise brings each pair feature's distribution close to "
-            "SALSA's, but not their joint distribution, which is what the pair classifier "
-            f"learns (TV {realism[plain]['joint_tv_in_group']:.2f} / "
-            f"{realism[plain]['joint_tv_out_of_group']:.2f} before noise, "
-            f"{realism[noisy[0]]['joint_tv_in_group']:.2f} / "
-            f"{realism[noisy[0]]['joint_tv_out_of_group']:.2f} after). The randomised mode "
-            "(wider group shapes, the same bodies) does not close the gap either (Diagnostics)."
-        )
-    return [*lines, ""]
-
-
-def _cross_period_section(result: SimToReal) -> list[str]:
-    """The synthetic model beside SALSA-trained models across periods of the training split."""
-    if not result.cross_period:
-        return []
-    body = [
-        [
-            row_name(c.classifier),
-            c.held_out,
-            f"{c.frames:,}",
-            percent(c.salsa),
-            percent(c.synthetic),
-            f"{100 * c.difference[0]:+.1f} ({100 * c.difference[1]:+.1f} to "
-            f"{100 * c.difference[2]:+.1f})",
-            f"{percent(c.pairwise[0])} / {percent(c.pairwise[1])}",
-        ]
-        for c in result.cross_period
-    ]
-    gaps = [c.difference[0] for c in result.cross_period]
-    within = sum(g >= -SALSA_WITHIN_F1 - 1e-12 for g in gaps)
-    return [
-        "## Across periods of SALSA's training split",
-        "",
-        "SALSA's training split cut in time (per session) into an earlier and a later half. "
-        "REFORM trained on one half (the hyper-parameters tuned on the training split) is scored "
-        "on the other, beside the synthetic-trained REFORM of the tables above on the same "
-        "frames: both models now meet people they did not learn from. No test frame is used.",
-        "",
-        render_table(
-            [
-                "classifier",
-                "half scored",
-                "frames",
-                "F1@2/3 SALSA other half",
-                "F1@2/3 synthetic",
-                "synthetic - SALSA (95% interval)",
-                "pair acc. SALSA / synthetic",
-            ],
-            body,
-            style="markdown",
-        ),
-        "",
-        f"Synthetic minus SALSA-trained: {100 * min(gaps):+.1f} to {100 * max(gaps):+.1f} F1 "
-        f"points; within 2 points in {within} of {len(gaps)} cases.",
-        "",
-        *_halves_on_test(result),
-    ]
-
-
-def _is_half(row: Row) -> bool:
-    return row.training in (half_training("earlier"), half_training("later"))
-
-
-def _halves_on_test(result: SimToReal) -> list[str]:
-    """The half models on the SALSA test split beside the whole split's and the synthetic."""
-
-    def f1(classifier: str, training: str) -> float | None:
-        for row in result.rows:
-            if (row.classifier, row.training, row.dataset) == (classifier, training, SALSA_TEST):
-                return row.f1()
-        return None
-
-    columns = {
-        "earlier half": half_training("earlier"),
-        "later half": half_training("later"),
-        "whole training split": SALSA_TRAIN,
-        "synthetic only": SYNTHETIC,
-    }
-    classifiers = list(dict.fromkeys(c.classifier for c in result.cross_period))
-    table = {c: {k: f1(c, t) for k, t in columns.items()} for c in classifiers}
-    if not classifiers or any(v is None for c in table.values() for v in c.values()):
-        return []
-    body = [[row_name(c)] + [percent(v) for v in table[c].values()] for c in classifiers]
-
-    def span(column: str) -> str:
-        return _span([table[c][column] for c in classifiers])
-
-    def mean_gap(a: str, b: str) -> float:
-        return 100 * sum(table[c][a] - table[c][b] for c in classifiers) / len(classifiers)
-
-    return [
-        "The same half models scored on the SALSA test split (diagnostic: reported, never used "
-        "to choose anything), F1 at T = 2/3, beside the models of the main table:",
-        "",
-        render_table(["classifier", *columns], body, style="markdown"),
-        "",
-        f"Trained on the later half, the stretch of the party just before the test frames, "
-        f"SALSA-trained REFORM scores {span('later half')}; trained on the earlier half, "
-        f"{span('earlier half')}; on the whole split, {span('whole training split')}; "
-        f"synthetic-only, {span('synthetic only')}. Averaged over the classifiers, the later "
-        f"half leads the earlier by {mean_gap('later half', 'earlier half'):+.1f} points, and "
-        f"the earlier half leads synthetic-only training by "
-        f"{mean_gap('earlier half', 'synthetic only'):+.1f}.",
-        "",
-    ]
-
-
-def _span(values: list[float]) -> str:
-    low, high = min(values), max(values)
-    return (
-        f"{100 * low:.1f}"
-        if f"{100 * low:.1f}" == f"{100 * high:.1f}"
-        else (f"{100 * low:.1f}-{100 * high:.1f}")
-    )
-
-
-def _realism_section(result: SimToReal) -> list[str]:
-    """Where the SALSA-like synthetic data still differ from SALSA's training split."""
-    realism = result.realism
-    if SALSA_TRAIN not in realism or len(realism) < 2:
-        return []
-    quantiles = " / ".join(f"q{round(100 * q)}" for q in NEIGHBOUR_QUANTILES)
-    rows = []
-    for name, stats in realism.items():
-        rows.append(
-            [
-                "SALSA training split" if name == SALSA_TRAIN else f"`{name}`",
-                " / ".join(f"{v:.2f}" for v in stats["nearest_neighbour_m"]),
-                _m3(stats.get("joint_tv_in_group")),
-                _m3(stats.get("joint_tv_out_of_group")),
-            ]
-        )
-    lines = [
-        "## Where the synthetic parties still differ from SALSA",
-        "",
-        "Statistics of training data only (SALSA's training split), no detection scores. "
-        "Nearest neighbour: every person's distance to the closest other person in the frame. "
-        "Joint TV: total-variation distance between the (Distance, Effort Angle) histograms "
-        "of the pairs (bins: 11 distances x 8 Effort Angles), in-group and out-of-group; the "
-        "KS statistics above compare the two features one at a time, the joint is what a pair "
-        "classifier learns from.",
-        "",
-        render_table(
-            ["data", f"nearest neighbour {quantiles} (m)", "joint TV in-group", "joint TV out"],
-            rows,
-            style="markdown",
-        ),
-        "",
-    ]
-    for scenario, comparison in result.calibration.items():
-        if comparison.get("reference") != SALSA_TRAIN:
-            continue
-        sizes = [
-            e
-            for e in comparison["by_size"]
-            if e["checked"] and e["size"] >= 3 and e["symmetry_candidate_deg"] is not None
-        ]
-        if sizes:
-            lines += [
-                f"Symmetry (deg, 0 = members evenly around the centre), `{scenario}` / SALSA "
-                "training split: "
-                + ", ".join(
-                    f"f{e['size']} {e['symmetry_candidate_deg']:.0f} / "
-                    f"{e['symmetry_reference_deg']:.0f}"
-                    for e in sizes
-                )
-                + ".",
-                "",
-            ]
-    return lines
-
-
-def _m3(value: float | None) -> str:
-    return "-" if value is None else f"{value:.3f}"
-
-
-def row_name(classifier: str) -> str:
-    return DISPLAY.get(classifier, classifier)
-
-
-def _m(value: float | None) -> str:
-    return "-" if value is None else f"{value:.2f}"
-
-
-def _on_grid(noise: Any, position: float, yaw: float) -> bool:
-    return any(p == position and y == yaw for p, y, _ in noise.grid)
-
-
-def sim2real_figure(result: SimToReal, path: Any) -> Any:
-    """F1 at T = 2/3 with bootstrap intervals: every main row, grouped by test set (PNG)."""
-    groups = {}
-    for dataset, title in ((SALSA_TEST, "SALSA test split"), (BABBLE, "Babble")):
+def sim2real_figure(result: SimToReal, path: str | os.PathLike[str]) -> Path:
+    """F1 at T = 2/3 with 95 % intervals: one group per real dataset, one bar per main row."""
+    groups: dict[str, list[Bar]] = {}
+    for dataset in result.datasets:
         bars = []
-        for row in result.rows:
-            if row.dataset != dataset or row.diagnostic or row.detector == "Majority":
+        for detector in _main_rows(result):
+            try:
+                score = result.score(detector, dataset)
+            except KeyError:
                 continue
-            training = _TRAINING_TEXT.get(row.training, row.training)
-            label = row.detector.split(" (")[0] + ("" if training == "-" else f" [{training}]")
-            low, high = row.f1_interval
-            bars.append(Bar(label, 100 * row.f1(), 100 * low, 100 * high))
-        groups[title] = bars
+            low, high = score.f1_interval
+            bars.append(Bar(_short(result, detector), 100 * score.f1, 100 * low, 100 * high))
+        groups[dataset] = bars
     return score_bars(
         groups,
         path,
         ylabel="F1 at T = 2/3 (%)",
-        title="REFORM trained on synthetic crowds vs on SALSA; GCFF",
-        reference={"paper, Babble (Bagged Trees)": 100 * PAPER_BABBLE_F1},
+        title="Trained once on simulation, scored on real data",
     )
+
+
+def _short(result: SimToReal, detector: str) -> str:
+    if detector == result.recommended.label:
+        return f"recommended: {detector}"
+    return detector
+
+
+def rank_figure(result: SimToReal, path: str | os.PathLike[str]) -> Path:
+    """Each ranked detector's F1 on the simulated party against its mean on the real data."""
+    plt = pyplot()
+    rank = result.rank
+    fig, ax = plt.subplots(figsize=(WIDTH_IN * 0.75, 4.5))
+    x = 100 * np.asarray(rank.simulated)
+    y = 100 * np.asarray(rank.real)
+    ax.scatter(x, y, color="tab:blue")
+    for name, a, b in zip(rank.detectors, x, y, strict=True):
+        ax.annotate(name, (a, b), fontsize=6, xytext=(3, 2), textcoords="offset points")
+    ax.set_xlabel(f"F1 at T = 2/3 on the {SIM_PARTY} (%)")
+    ax.set_ylabel("mean F1 at T = 2/3 over the real datasets (%)")
+    low, high = rank.interval
+    ax.set_title(f"Kendall's tau {rank.tau:.2f} (95% interval {low:.2f} to {high:.2f})")
+    ax.grid(alpha=0.3)
+    return save_png(fig, path)
+
+
+def calibration_figure(result: SimToReal, path: str | os.PathLike[str]) -> Path:
+    """Tightness and Symmetry by group size, and the in-group pair features' distributions, of
+    the recommended recipe's synthetic data and of each real dataset."""
+    plt = pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(WIDTH_IN, 6.5))
+    colours = plt.get_cmap("tab10")
+    for k, (name, stats) in enumerate(result.calibration.items()):
+        style = {"color": colours(k % 10), "label": name}
+        if name.startswith("synthetic"):
+            style.update(linewidth=2.5, color="black")
+        for ax, key, label in (
+            (axes[0, 0], "tightness_m", "mean Tightness (m)"),
+            (axes[0, 1], "symmetry", "mean Symmetry (deg)"),
+        ):
+            sizes = sorted(int(s) for s in stats[key] if stats["groups_by_size"][s] >= 5)
+            ax.plot(sizes, [stats[key][str(s)] for s in sizes], marker="o", **style)
+            ax.set_xlabel("group size")
+            ax.set_ylabel(label)
+        for ax, key, unit in (
+            (axes[1, 0], "distance_shares", "edges_m"),
+            (axes[1, 1], "effort_angle_shares", "edges_rad"),
+        ):
+            edges = np.asarray(stats[key][unit])
+            centres = (edges[:-1] + edges[1:]) / 2
+            ax.plot(centres, stats[key]["in_group"], **style)
+        axes[1, 0].set_xlabel("Distance of in-group pairs (m)")
+        axes[1, 1].set_xlabel("Effort Angle of in-group pairs (rad)")
+        for ax in axes[1]:
+            ax.set_ylabel("share of pairs")
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=6)
+    fig.suptitle("Synthetic training data against each real dataset (sizes with 5 groups or more)")
+    fig.tight_layout()
+    return save_png(fig, path)
+
+
+def _score_cells(result: SimToReal, detector: str, dataset: str) -> list[str]:
+    try:
+        s = result.score(detector, dataset)
+    except KeyError:
+        return ["-"] * 6
+    p, r, f = s.at["2/3"]
+    low, high = s.f1_interval
+    return [
+        percent(p),
+        percent(r),
+        f"**{percent(f)}**" if s.role == "recommended" else percent(f),
+        f"{percent(low)}-{percent(high)}",
+        percent(s.at["1"][2]),
+        s.note or "",
+    ]
+
+
+def to_markdown(
+    result: SimToReal,
+    *,
+    command: str,
+    figures: Sequence[str] = (),
+) -> str:
+    """The results page."""
+    rec = result.recommended
+    lines = [
+        "# Sim-to-real: one detector trained on simulation alone, scored on every real dataset",
+        "",
+        *command_block(command),
+        "REFORM trained only on generated data, chosen among "
+        f"{len(result.selection)} candidates (recipes of synthetic data x classifiers x REFORM's "
+        "options) on SALSA's training split and simulated validation episodes only, and scored "
+        f"on every real dataset found ({', '.join(result.datasets)}). Protocol: the field's "
+        "(GCFF's `ff_evalgroups` as `reform.evaluate` implements it); figures in %; intervals: "
+        "95 % block bootstrap (stretches of time resampled, then frames within them).",
+        "",
+        f"**Recommended: {rec.label}**, saved as `recommended.skops` beside these results. Use it "
+        "with `reform-sim detect --model recommended.skops --data DATASET` or "
+        '`reform.load_model("recommended.skops")`.',
+        "",
+    ]
+    met = sum(g.met for g in result.goals)
+    lines += [f"**Goals met: {met} of {len(result.goals)}.**", ""]
+    lines += [
+        render_table(
+            ["goal", "required", "met", "figures (F1 at T = 2/3, %)"],
+            [[g.name, g.required, "yes" if g.met else "**no**", g.figures] for g in result.goals],
+            style="markdown",
+        ),
+        "",
+    ]
+    for name in figures:
+        lines += [f"![{name}]({name})", ""]
+
+    lines += ["## Mean over the real datasets", ""]
+    rows = []
+    for detector in result.detectors():
+        mean = result.mean_f1(detector)
+        mean1 = result.mean_f1(detector, "1")
+        scored = sum(
+            1 for s in result.scores if s.detector == detector and s.dataset in result.datasets
+        )
+        rows.append([detector, str(scored), percent(mean), percent(mean1)])
+    lines += [
+        render_table(["detector", "datasets", "F1 @2/3", "F1 @1"], rows, style="markdown"),
+        "",
+        "Candidates other than the recommended one are reported for the rank agreement; their "
+        "scores on real data chose nothing.",
+        "",
+    ]
+
+    for dataset in result.datasets:
+        lines += [f"## {dataset} ({result.frames.get(dataset, 0):,} frames)", ""]
+        rows = [[d, *_score_cells(result, d, dataset)] for d in _main_rows(result)]
+        lines += [
+            render_table(
+                ["detector", "P@2/3", "R@2/3", "F1@2/3", "95% interval", "F1@1", "note"],
+                rows,
+                style="markdown",
+            ),
+            "",
+        ]
+
+    lines += [
+        "## How the recommended model was chosen",
+        "",
+        "Selection score: the mean of a candidate's F1 (T = 2/3) on SALSA's training split and "
+        "its mean F1 over the simulated validation sources (episodes of another master seed, "
+        "never trained on). No scored frame is seen by the choice.",
+        "",
+    ]
+    names = list(result.selection[0]["validation_f1"]) if result.selection else []
+    rows = []
+    for entry in result.selection:
+        rows.append(
+            [
+                entry["label"] + (" **(chosen)**" if entry["chosen"] else ""),
+                percent(entry["salsa_train_f1"]),
+                *[percent(entry["validation_f1"][n]) for n in names],
+                percent(entry["score"]),
+            ]
+        )
+    lines += [
+        render_table(["candidate", "SALSA train", *names, "score"], rows, style="markdown"),
+        "",
+        "Recipes:",
+        "",
+    ]
+    for entry in result.recipes:
+        pairs = result.training[entry.name]
+        lines.append(
+            f"- `{entry.name}`: {entry.text}; "
+            + ", ".join(f"`{s.scenario}` x {s.episodes}" for s in entry.sources)
+            + f" ({pairs['frames']:,} frames, {pairs['pairs']:,} pairs after balancing)."
+        )
+    lines.append("")
+
+    rank = result.rank
+    low, high = rank.interval
+    lines += [
+        "## Does simulation rank detectors as real data does?",
+        "",
+        f"Kendall's tau between F1 on the {SIM_PARTY} (held-out `mingle` episodes, its defaults) "
+        f"and mean F1 over the real datasets: **{rank.tau:.2f}** (95 % interval {low:.2f} to "
+        f"{high:.2f}, every set's frames resampled at once), over {len(rank.detectors)} "
+        "detectors.",
+        "",
+        render_table(
+            ["detector", f"F1 {SIM_PARTY}", "mean F1 real"],
+            [
+                [d, percent(s), percent(r)]
+                for d, s, r in zip(rank.detectors, rank.simulated, rank.real, strict=True)
+            ],
+            style="markdown",
+        ),
+        "",
+        "## Synthetic data beside each real dataset",
+        "",
+    ]
+    rows = []
+    for name, stats in result.calibration.items():
+        q = stats["nearest_neighbour_m"]
+        tight = stats["tightness_m"]
+        sym = stats["symmetry"]
+        shown = [s for s in ("3", "5", "7") if s in tight]
+        rows.append(
+            [
+                name,
+                " / ".join(f"{v:.2f}" for v in q),
+                ", ".join(f"f{s} {tight[s]:.2f}" for s in shown) or "-",
+                ", ".join(f"f{s} {sym[s]:.0f}" for s in shown) or "-",
+            ]
+        )
+    lines += [
+        render_table(
+            ["data", "nearest neighbour q10/q25/q50 (m)", "Tightness (m)", "Symmetry (deg)"],
+            rows,
+            style="markdown",
+        ),
+        "",
+        f"Seed {result.seed}; {result.seconds / 60:.1f} min.",
+        "",
+    ]
+    return "\n".join(lines)
