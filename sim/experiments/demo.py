@@ -6,11 +6,12 @@ Stages, each announced on stderr:
    MuJoCo (ground truth).
 2. **Synthetic training set.** ``mingle`` and ``word-improv`` episodes generated as
    hive-partitioned Parquet (:func:`sim.generate.generate_dataset`) under ``OUT/synthetic``,
-   with the sim-to-real recipe of :mod:`sim.experiments.sim2real`: tracker noise on ``mingle``
-   calibrated on SALSA's training split when SALSA is at hand, sources balanced by pairs.
+   with the recipe :mod:`sim.experiments.sim2real` recommends (``RECOMMENDED``: its
+   scenarios and annotation models) at the demo's smaller budget, sources balanced by pairs.
 3. **Training.** REFORM with the paper's three classifiers on the synthetic set (their
-   ready-made hyper-parameters); Bagged Trees is saved as ``OUT/model.skops``. With SALSA at
-   hand, Bagged Trees trained on SALSA's training split is added for reference.
+   ready-made hyper-parameters); the recommended classifier, with the recommended REFORM
+   options, is saved as ``OUT/model.skops``. With SALSA at hand, the same classifier trained on
+   SALSA's training split is added for reference.
 4. **Evaluation.** REFORM and GCFF (the paper's setting) on held-back synthetic episodes (seeds
    never trained on) and, when the datasets are found, on the SALSA test split and every
    annotated Babble frame.
@@ -52,7 +53,6 @@ from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
 from reform.persistence import save_model
-from reform.seeding import Role, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import simulate_episode
 from sim.experiments.demo_files import DEFAULT_OUT, FIGURES, MODEL, RECORDINGS, SYNTHETIC
@@ -66,15 +66,14 @@ from sim.experiments.hri import (
     reform_detectors,
 )
 from sim.experiments.hri_report import to_markdown as hri_markdown
+from sim.experiments.sim2real import RECOMMENDED, recipe
 from sim.experiments.stress import GCFF as STRESS_GCFF
 from sim.experiments.stress import GRIDS, StressResults, run_stress
 from sim.experiments.stress_report import record as record_stress
 from sim.experiments.stress_report import write_report as write_stress
 from sim.experiments.synthetic import (
-    NoiseCalibration,
     SyntheticSource,
     balance_pairs,
-    calibrate_tracker_noise,
     count_pairs,
     generate_sources,
 )
@@ -91,7 +90,7 @@ __all__ = [
 
 HELD_BACK_SEED_OFFSET = 1_000_003  # held-back episodes: master seed + this (never trained on)
 CLASSIFIERS = ("bagged-trees", "weighted-knn", "logistic-regression")
-SAVED_CLASSIFIER = "bagged-trees"  # the paper's best; saved as model.skops
+SAVED_CLASSIFIER = RECOMMENDED.classifier  # the sim-to-real experiment's; saved as model.skops
 GCFF_LABEL = "GCFF (paper: 70 cm, 30000 cm²)"
 MAJORITY_LABEL = "Majority"
 CLASSIFIER_TEXT = {
@@ -99,6 +98,17 @@ CLASSIFIER_TEXT = {
     "weighted-knn": "Weighted KNN",
     "logistic-regression": "Logistic Regression",
 }
+
+
+def recommended_sources(
+    *, episodes: int, duration: float, rate: float | None = None
+) -> tuple[SyntheticSource, ...]:
+    """The recommended recipe's sources (`sim.experiments.sim2real.RECOMMENDED`) at a budget:
+    ``episodes`` episodes of ``duration`` seconds each (at ``rate`` Hz, else the recipe's)."""
+    return tuple(
+        replace(s, episodes=episodes, duration=duration, rate=s.rate if rate is None else rate)
+        for s in recipe(RECOMMENDED.recipe).sources
+    )
 
 
 @dataclass(frozen=True)
@@ -110,8 +120,6 @@ class DemoBudget:
         scenario_s: seconds of each registered scenario simulated for its recording.
         train: the synthetic training set's sources.
         held_back: the held-back synthetic sources (another master seed).
-        noise_position_grid: tracker-noise position levels calibrated over, metres.
-        noise_yaw_grid: tracker-noise yaw levels, radians.
         stress_grid: a name of :data:`sim.experiments.stress.GRIDS` or a ``StressGrid``.
         stress_axes: stress axes run (None: all).
         hri_seeds: episodes per HRI scene.
@@ -127,8 +135,6 @@ class DemoBudget:
     scenario_s: float
     train: tuple[SyntheticSource, ...]
     held_back: tuple[SyntheticSource, ...]
-    noise_position_grid: tuple[float, ...]
-    noise_yaw_grid: tuple[float, ...]
     stress_grid: Any
     stress_axes: tuple[str, ...] | None
     hri_seeds: int
@@ -141,17 +147,11 @@ class DemoBudget:
 FULL = DemoBudget(
     name="full",
     scenario_s=60.0,
-    train=(
-        SyntheticSource("mingle", episodes=4, duration=300.0, tracker_noise=True),
-        SyntheticSource("word-improv", episodes=6),
-    ),
+    train=recommended_sources(episodes=4, duration=300.0),
     held_back=(
         SyntheticSource("mingle", episodes=2, duration=300.0),
         SyntheticSource("word-improv", episodes=2),
     ),
-    # A coarser grid than the documented experiment's (sim.experiments.sim2real), for time.
-    noise_position_grid=(0.0, 0.1, 0.2, 0.3),
-    noise_yaw_grid=(0.0, 0.3, 0.6, 0.9),
     stress_grid="small",
     stress_axes=None,
     hri_seeds=2,
@@ -162,16 +162,11 @@ FULL = DemoBudget(
 QUICK = DemoBudget(
     name="quick",
     scenario_s=15.0,
-    train=(
-        SyntheticSource("mingle", episodes=1, duration=90.0, rate=0.5, tracker_noise=True),
-        SyntheticSource("word-improv", episodes=1, duration=240.0, rate=0.5),
-    ),
+    train=recommended_sources(episodes=1, duration=90.0, rate=0.5),
     held_back=(
         SyntheticSource("mingle", episodes=1, duration=60.0, rate=0.5),
         SyntheticSource("word-improv", episodes=1, duration=120.0, rate=0.5),
     ),
-    noise_position_grid=(0.0, 0.15),
-    noise_yaw_grid=(0.0, 0.4),
     stress_grid="quick",
     stress_axes=("position-noise",),
     hri_seeds=1,
@@ -201,7 +196,6 @@ class DemoResult:
         scenarios: per registered scenario, what its recording and figure show (people,
             seconds, groups per frame, REFORM's and GCFF's F1, the files).
         training: per synthetic source, the frames and pairs kept after balancing.
-        noise: the tracker noise calibrated on SALSA's training split (None without SALSA).
         tests: frames per test set.
         detectors: the detectors scored, in order.
         evaluations: ``(detector, test set) ->`` the scores the report tabulates.
@@ -223,7 +217,6 @@ class DemoResult:
     command: str
     scenarios: tuple[Mapping[str, Any], ...]
     training: Mapping[str, Mapping[str, int]]
-    noise: NoiseCalibration | None
     tests: Mapping[str, int]
     detectors: tuple[str, ...]
     evaluations: Mapping[tuple[str, str], Mapping[str, float]]
@@ -378,23 +371,6 @@ def run_demo(
     salsa_test: tuple[Frame, ...] = ()
     if "salsa" in real:
         salsa_train, salsa_test = time_split(real["salsa"].annotated(), DEFAULT_TRAIN_FRACTION)
-    noise = None
-    if salsa_train and any(s.tracker_noise for s in budget.train):
-        noisy_sources = [s for s in budget.train if s.tracker_noise]
-        pooled = [f for s in noisy_sources for f in train_frames[s.scenario]]
-        noise = calibrate_tracker_noise(
-            pooled,
-            salsa_train,
-            seed=seed,
-            position_grid=budget.noise_position_grid,
-            yaw_grid=budget.noise_yaw_grid,
-        )
-        for k, source in enumerate(budget.train):
-            if source.tracker_noise:
-                rng = derive_rng(seed, Role.TRAINING_NOISE, k)
-                train_frames[source.scenario] = tuple(
-                    noise.perturbation().apply_all(train_frames[source.scenario], rng)
-                )
     kept = balance_pairs(train_frames)
     synthetic = tuple(f for frames in kept.values() for f in frames)
     training_summary = {
@@ -405,7 +381,8 @@ def run_demo(
     stages.begin("training", f"training REFORM on {len(synthetic)} synthetic frames")
     models: dict[str, Any] = {}
     for name in _bar(CLASSIFIERS, desc="classifiers", show=progress_bars):
-        models[name] = Reform(_classifier(name, jobs)).fit(synthetic)
+        options = dict(RECOMMENDED.options) if name == SAVED_CLASSIFIER else {}
+        models[name] = Reform(_classifier(name, jobs), **options).fit(synthetic)
     model_path = save_model(models[SAVED_CLASSIFIER], out / MODEL)
     salsa_model = None
     if salsa_train:
@@ -598,7 +575,6 @@ def run_demo(
         command=command,
         scenarios=tuple(scenario_rows),
         training=training_summary,
-        noise=noise,
         tests={d: len(f) for d, f in tests.items()},
         detectors=tuple(detectors),
         evaluations={k: _scores_row(v) for k, v in evaluations.items()},

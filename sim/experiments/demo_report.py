@@ -9,10 +9,13 @@ from typing import Any
 
 from reform import __version__
 from reform.atomic import atomic_open
-from sim.experiments.demo import DemoResult
+from sim.experiments.demo import CLASSIFIER_TEXT, SAVED_CLASSIFIER, DemoResult
 from sim.experiments.demo_files import REPORT, RESULTS
 from sim.experiments.hri import PAPER_HRI
+from sim.experiments.sim2real import RECOMMENDED, recipe
 from sim.experiments.tables import command_block, percent, render_table
+
+SAVED_TEXT = CLASSIFIER_TEXT[SAVED_CLASSIFIER]  # the saved model's classifier, in words
 
 __all__ = ["to_json", "to_markdown", "write_report"]
 
@@ -57,7 +60,7 @@ def to_markdown(result: DemoResult) -> str:
         "## Scenarios",
         "",
         "Every registered scenario, simulated briefly in MuJoCo (ground truth), with the groups "
-        "REFORM (Bagged Trees, trained on the synthetic set below) and GCFF (the paper's "
+        f"REFORM ({SAVED_TEXT}, trained on the synthetic set below) and GCFF (the paper's "
         "setting) find. F1 at T = 2/3 over the episode's annotated frames (`-`: no "
         "F-formation to find and none found scores no frame). Open a recording with "
         "`rerun <file>`.",
@@ -115,23 +118,17 @@ def to_markdown(result: DemoResult) -> str:
         "Hive-partitioned Parquet under `synthetic/train` (read it with "
         "`reform.datasets.read_parquet`); held-back episodes, from another master seed, under "
         "`synthetic/held-back`. The sources are balanced by pairs "
-        "(`sim.experiments.sim2real.balance_pairs`).",
+        "(`sim.experiments.synthetic.balance_pairs`).",
         "",
     ]
-    noise = result.noise
-    if noise is not None:
-        lines += [
-            f"Tracker noise on `mingle`, calibrated on SALSA's training split "
-            "(`sim.experiments.sim2real.calibrate_tracker_noise`): "
-            f"{noise.position_noise:g} m per axis, "
-            f"{noise.yaw_noise:g} rad of yaw (sum of KS statistics {noise.objective:.3f}).",
-            "",
-        ]
-    else:
-        lines += ["No tracker noise: SALSA was not found to calibrate it on.", ""]
     lines += [
-        f"Model: [`{_rel(result, result.model)}`]({_rel(result, result.model)}) (REFORM Bagged "
-        "Trees, skops; load it with `reform.persistence.load_model`).",
+        f"The recipe `sim.experiments.sim2real` recommends: `{RECOMMENDED.recipe}` "
+        f"({recipe(RECOMMENDED.recipe).text}), at this smaller budget.",
+        "",
+    ]
+    lines += [
+        f"Model: [`{_rel(result, result.model)}`]({_rel(result, result.model)}) (REFORM "
+        f"{SAVED_TEXT}, skops; load it with `reform.persistence.load_model`).",
         "",
         "## Scores",
         "",
@@ -181,12 +178,12 @@ def to_markdown(result: DemoResult) -> str:
     stress = result.stress
     rows = []
     for axis in stress.axes:
-        for detector in ("bagged-trees", "gcff"):
+        for detector in (SAVED_CLASSIFIER, "gcff"):
             curve = axis.curve(detector)[0]
             rows.append(
                 [
                     axis.title,
-                    "REFORM Bagged Trees" if detector == "bagged-trees" else "GCFF",
+                    f"REFORM {SAVED_TEXT}" if detector == SAVED_CLASSIFIER else "GCFF",
                     " / ".join(percent(v) for v in curve),
                     " / ".join(p.label for p in axis.points),
                 ]
@@ -246,7 +243,6 @@ def to_markdown(result: DemoResult) -> str:
 
 def to_json(result: DemoResult) -> dict[str, Any]:
     """Every number of the demo, JSON-ready."""
-    noise = result.noise
     return {
         "kind": "reform-sim/demo",
         "schema_version": 1,
@@ -258,7 +254,7 @@ def to_json(result: DemoResult) -> dict[str, Any]:
         "timings_s": {k: round(v, 2) for k, v in result.timings.items()},
         "scenarios": list(result.scenarios),
         "training": {k: dict(v) for k, v in result.training.items()},
-        "tracker_noise": None if noise is None else noise.to_json(),
+        "recommended": RECOMMENDED.to_json(),
         "tests": dict(result.tests),
         "scores": [dict(v) for v in result.scores.values()],
         "stress": result.stress.to_json(command=result.command),

@@ -13,8 +13,11 @@ from reform.datasets import read_parquet
 from reform.metrics import T_TWO_THIRDS
 from reform.persistence import load_model
 from sim.cli import main
-from sim.experiments.demo import FULL, QUICK, run_demo
+from sim.experiments.demo import CLASSIFIER_TEXT, FULL, QUICK, SAVED_CLASSIFIER, run_demo
 from sim.experiments.demo_report import write_report
+from sim.experiments.sim2real import RECOMMENDED, recipe
+
+SAVED = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]}"
 
 
 @pytest.fixture(scope="module")
@@ -63,15 +66,15 @@ def test_results_json_holds_every_score(demo) -> None:
     pairs = {(s["detector"], s["dataset"]) for s in data["scores"]}
     for dataset in ("held-back synthetic", "SALSA test split", "Babble"):
         for detector in (
-            "REFORM Bagged Trees (synthetic)",
-            "REFORM Bagged Trees (SALSA train)",
+            f"{SAVED} (synthetic)",
+            f"{SAVED} (SALSA train)",
             "GCFF (paper: 70 cm, 30000 cm²)",
             "Majority",
         ):
             assert (detector, dataset) in pairs
     for score in data["scores"]:
         assert 0.0 <= score["2/3"]["f1"] <= 1.0
-    assert data["tracker_noise"]["reference"] == "salsa-train"
+    assert data["recommended"] == RECOMMENDED.to_json()
     assert data["stress"]["kind"] == "reform-sim/stress"
     assert data["hri"]["kind"] == "reform-sim/hri-experiment"
     assert set(data["timings_s"]) >= {"scenarios", "training", "evaluation", "total"}
@@ -102,8 +105,7 @@ def test_model_reproduces_the_reported_scores(demo) -> None:
     (reported,) = [
         s
         for s in data["scores"]
-        if s["detector"] == "REFORM Bagged Trees (synthetic)"
-        and s["dataset"] == "held-back synthetic"
+        if s["detector"] == f"{SAVED} (synthetic)" and s["dataset"] == "held-back synthetic"
     ]
     assert reported["frames"] == evaluation.n_frames
     assert reported["2/3"]["f1"] == pytest.approx(evaluation.at(T_TWO_THIRDS).f1, abs=1e-12)
@@ -115,7 +117,7 @@ def test_model_reproduces_the_reported_scores(demo) -> None:
 
 
 def test_without_real_data(tmp_path) -> None:
-    """No datasets: the synthetic parts run, the real rows are left out, no noise calibrated."""
+    """No datasets: the synthetic parts run, the real rows are left out."""
     result = run_demo(
         out_dir=tmp_path / "out",
         datasets=None,
@@ -135,14 +137,18 @@ def test_without_real_data(tmp_path) -> None:
         "json": tmp_path / "out" / "results.json",
     }
     data = json.loads(written["json"].read_text())
-    assert data["tracker_noise"] is None
     assert data["files"]["report"] == "report.md"
-    assert "No tracker noise" in written["markdown"].read_text()
+    assert f"`{RECOMMENDED.recipe}`" in written["markdown"].read_text()
 
 
 def test_budgets() -> None:
     assert QUICK.scenario_s < FULL.scenario_s
-    assert {s.scenario for s in FULL.train} == {"mingle", "word-improv"}
+    # The demo trains on the recipe the sim-to-real experiment recommends, at a smaller budget.
+    wanted = recipe(RECOMMENDED.recipe).sources
+    for budget in (FULL, QUICK):
+        assert [s.scenario for s in budget.train] == [s.scenario for s in wanted]
+        assert [s.annotation for s in budget.train] == [s.annotation for s in wanted]
+        assert all(s.episodes <= w.episodes for s, w in zip(budget.train, wanted, strict=True))
     assert FULL.stress_grid == "small"
 
 
