@@ -7,6 +7,12 @@ people into F-formations and singletons.
 Within a frame, people are taken in order of their ids, so Greedy Reconstruction's tie-break
 ("lowest pair first") refers to ids and a frame's prediction does not depend on the order its
 rows are stored in.
+
+The defaults are the paper's method. Three options go beyond it, each compared in
+``docs/guide/reform.md`` ("Options beyond the paper"): scale-free pair features
+(``features="relative"``, :mod:`reform.features`), correlation clustering over the pair
+probabilities (``reconstruction="correlation"``, :mod:`reform.reconstruction`) and calibrated
+probabilities (``calibration="sigmoid"`` or ``"isotonic"``).
 """
 
 from __future__ import annotations
@@ -33,7 +39,14 @@ from reform.features import (
 )
 from reform.frame import Frame, Group, check_frames
 from reform.metrics import pair_labels
-from reform.reconstruction import UNION, batch_greedy_labels, check_reconstruction
+from reform.reconstruction import (
+    CORRELATION,
+    UNION,
+    batch_correlation_labels,
+    batch_greedy_labels,
+    check_reconstruction,
+)
+from reform.splits import time_blocks
 
 CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
 MAX_FRAME_BYTES = 8 * 2**30  # bytes: the most predicting (or fitting on) one frame may take; a
@@ -44,6 +57,11 @@ PAIR_BYTES = 40  # bytes per pair predicted: indices, features, labels, temporar
 PAIR_WORD_BYTES = 40  # bytes per pair predicted per 64 people of the frame: Greedy
 # Reconstruction compares the two members' belief sets (reform.reconstruction), a bit a person
 TRAINING_PAIR_BYTES = 88  # bytes per pair of training_pairs: features, labels, indices
+CALIBRATIONS = ("sigmoid", "isotonic")  # sklearn.calibration.CalibratedClassifierCV methods
+CALIBRATION_FOLDS = 5  # stretches of time per sequence (reform.time_blocks), one fold each
+# Options added after the first model files: left out of a saved model while at their default,
+# so that a default model's file stays the one earlier versions wrote (see __getstate__).
+_LATER_DEFAULTS = {"calibration": None}
 
 Partition = tuple[Group, ...]
 
@@ -58,12 +76,28 @@ class Reform(BaseEstimator):
             the ready-made bagged trees (:func:`reform.classifiers.bagged_trees`).
         features: pair features, names from :data:`reform.features.FEATURES`; the paper's are
             Distance and Effort Angle (the default).
-        reconstruction: ``"union"`` (the paper's Greedy Reconstruction) or ``"intersection"``.
+            A feature set's name is accepted too: ``"paper"`` (the same two) or ``"relative"``
+            (scale-free: distances divided by the frame's own scale, see
+            :mod:`reform.features`), for models that must work on datasets of other scales.
+        reconstruction: ``"union"`` (the paper's Greedy Reconstruction), ``"intersection"``, or
+            ``"correlation"``: correlation clustering over the pair probabilities (needs a
+            classifier with ``predict_proba``; :mod:`reform.reconstruction`).
         threshold: None to take the classifier's own decision; else a probability in (0, 1): a
             pair is together when ``predict_proba`` gives it at least this. Needs a classifier
-            with ``predict_proba``.
+            with ``predict_proba``. With ``"correlation"``, the probability at which a pair
+            weighs nothing (None: 0.5).
         fast: classify with the compiled classifier of :mod:`reform.fast` (same labels, much
             faster); False calls the scikit-learn classifier once per batch.
+        calibration: None (the classifier's own probabilities), ``"sigmoid"`` (Platt) or
+            ``"isotonic"``: the classifier is wrapped in scikit-learn's
+            ``CalibratedClassifierCV``, whose folds are stretches of time
+            (:func:`reform.time_blocks`, `CALIBRATION_FOLDS` per sequence, ``GroupKFold``): in
+            each fold a copy of the classifier is fitted on the other stretches and calibrated
+            on the held-out one, so no calibration is learnt on the neighbours of the frames
+            its classifier trained on; the probability is the folds' average (scikit-learn's
+            ``ensemble=True``: one classifier per fold, so predicting costs that many times
+            more). Changes the decision (argmax of the calibrated probability) and what
+            ``"correlation"`` weighs.
 
     Attributes:
         classifier_: the fitted pair classifier.
@@ -80,12 +114,14 @@ class Reform(BaseEstimator):
         reconstruction: str = UNION,
         threshold: float | None = None,
         fast: bool = True,
+        calibration: str | None = None,
     ) -> None:
         self.classifier = classifier
         self.features = features
         self.reconstruction = reconstruction
         self.threshold = threshold
         self.fast = fast
+        self.calibration = calibration
 
     # ----------------------------------------------------------------------------------------
     # scikit-learn protocol
@@ -108,8 +144,14 @@ class Reform(BaseEstimator):
         frames = check_frames(frames, caller="fit")
         features = check_features(self.features)
         check_reconstruction(self.reconstruction)
+        check_calibration(self.calibration)
         classifier = bagged_trees() if self.classifier is None else clone(self.classifier)
         _check_threshold(self.threshold, classifier)
+        if self.reconstruction == CORRELATION and not hasattr(classifier, "predict_proba"):
+            raise ValueError(
+                f"reconstruction={CORRELATION!r} needs a classifier with predict_proba, "
+                f"got {type(classifier).__name__}, which has none"
+            )
         if not frames:
             raise ValueError("fit needs annotated frames, got none")
         missing = [k for k, frame in enumerate(frames) if frame.groups is None]
@@ -122,7 +164,7 @@ class Reform(BaseEstimator):
                 "pass only annotated frames, e.g. dataset.annotated()"
             )
         _check_frame_sizes(frames, predict=False)
-        x, y_all, _ = training_pairs(frames, features=features)
+        x, y_all, frame_of_pair = training_pairs(frames, features=features)
         if y_all.size == 0:
             raise ValueError(
                 f"fit needs frames with at least 2 people, got {len(frames)} frames of 0 or 1"
@@ -131,7 +173,12 @@ class Reform(BaseEstimator):
         if together in (0, y_all.size):
             kind = "apart (the ground truth holds no F-formation)" if together == 0 else "together"
             raise ValueError(f"fit needs pairs of both kinds, got {y_all.size} pairs, all {kind}")
-        classifier.fit(x, y_all)
+        if self.calibration is None:
+            classifier.fit(x, y_all)
+        else:
+            classifier = _calibrated_fit(
+                classifier, self.calibration, x, y_all, time_blocks_of(frames)[frame_of_pair]
+            )
         classes = np.asarray(classifier.classes_)
         if classes.tolist() != [0, 1]:
             raise ValueError(f"classifier must learn classes [0, 1], got {classes.tolist()}")
@@ -193,15 +240,56 @@ class Reform(BaseEstimator):
             step = max(1, CHUNK_PAIRS // i.size)
             for start in range(0, len(positions), step):
                 chunk = positions[start : start + step]
-                ids, pair_labels = self._classify_chunk([frames[k] for k in chunk], n)
+                chunk_frames = [frames[k] for k in chunk]
+                correlation = partitions and self.reconstruction == CORRELATION
+                if correlation:
+                    ids, probability = self._classify_chunk(chunk_frames, n, proba=True)
+                    labels = batch_correlation_labels(probability, n, threshold=self.threshold)
+                if pairs or not correlation:
+                    ids, pair_labels = self._classify_chunk(chunk_frames, n)
                 if partitions:
-                    labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
+                    if not correlation:
+                        labels = batch_greedy_labels(pair_labels, n, variant=self.reconstruction)
                     for k, partition in zip(chunk, _partitions(labels, ids), strict=True):
                         out[k] = partition
                 if pairs:
                     for k, row in zip(chunk, pair_labels, strict=True):
                         out_pairs[k] = _frame_order(row, frames[k].ids, i, j)
         return out, out_pairs
+
+    def predict_pair_proba(self, frames: Iterable[Frame]) -> list[np.ndarray]:
+        """The classifier's pair probabilities (of being together), before reconstruction.
+
+        Args:
+            frames: frames.
+
+        Returns:
+            Per frame, (n(n-1)/2,) float64 probabilities over the frame's rows in
+            :func:`reform.features.pair_indices` order.
+
+        Raises:
+            ValueError: the classifier has no ``predict_proba``.
+        """
+        check_is_fitted(self, "classifier_")
+        frames = check_frames(frames, caller="predict_pair_proba")
+        if not hasattr(self.classifier_, "predict_proba"):
+            raise ValueError(
+                f"predict_pair_proba needs a classifier with predict_proba, "
+                f"got {type(self.classifier_).__name__}, which has none"
+            )
+        _check_frame_sizes(frames, predict=True)
+        out = [np.zeros(0)] * len(frames)
+        for n, positions in _by_size(frames).items():
+            if n < 2:
+                continue
+            i, j = pair_indices(n)
+            step = max(1, CHUNK_PAIRS // i.size)
+            for start in range(0, len(positions), step):
+                chunk = positions[start : start + step]
+                _, probability = self._classify_chunk([frames[k] for k in chunk], n, proba=True)
+                for k, row in zip(chunk, probability, strict=True):
+                    out[k] = _frame_order(row, frames[k].ids, i, j)
+        return out
 
     def predict_relation_matrix(self, frame: Frame) -> np.ndarray:
         """The Relation Matrix of one frame, rows and columns in the frame's row order.
@@ -221,9 +309,15 @@ class Reform(BaseEstimator):
     # internals
 
     def __getstate__(self) -> dict[str, Any]:
-        state = super().__getstate__()
+        state = dict(super().__getstate__())  # object.__getstate__ gives the live __dict__
         state.pop("_compiled", None)  # derived from classifier_, rebuilt on demand
+        for name, default in _LATER_DEFAULTS.items():
+            if name in state and state[name] is default:
+                del state[name]
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        super().__setstate__({**_LATER_DEFAULTS, **state})
 
     def _pair_classifier(self) -> PairClassifier | None:
         compiled = getattr(self, "_compiled", None)
@@ -232,8 +326,11 @@ class Reform(BaseEstimator):
             self._compiled = compiled
         return compiled
 
-    def _classify_chunk(self, frames: list[Frame], n: int) -> tuple[np.ndarray, np.ndarray]:
-        """(F, n) ids in id order and (F, n(n-1)/2) bool pair labels of frames of n people."""
+    def _classify_chunk(
+        self, frames: list[Frame], n: int, *, proba: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(F, n) ids in id order and (F, n(n-1)/2) bool pair labels of frames of n people
+        (float64 probabilities of being together with ``proba``)."""
         count = len(frames)
         ids = np.concatenate([frame.ids for frame in frames]).reshape(count, n)
         position = np.concatenate([frame.position for frame in frames]).reshape(count, n, 2)
@@ -271,6 +368,10 @@ class Reform(BaseEstimator):
             is_robot=is_robot,
         )
         flat = x.reshape(-1, x.shape[-1])
+        if proba:
+            column = int(np.flatnonzero(np.asarray(self.classifier_.classes_) == 1)[0])
+            probability = np.asarray(self.classifier_.predict_proba(flat), dtype=np.float64)
+            return ids, probability[:, column].reshape(len(frames), -1)
         compiled = self._pair_classifier()
         if compiled is None:
             labels = sklearn_pair_labels(self.classifier_, flat, threshold=self.threshold)
@@ -312,14 +413,15 @@ def training_pairs(
 
 
 def _frame_order(labels: np.ndarray, ids: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Pair labels over people in id order -> the same pairs over the frame's own rows."""
+    """Pair values (labels or probabilities) over people in id order -> the same pairs over the
+    frame's own rows."""
     if np.all(ids[1:] > ids[:-1]):
         return labels.copy()
     n = ids.size
     order = np.argsort(ids, kind="stable")  # row s in id order is frame row order[s]
-    matrix = np.zeros((n, n), dtype=bool)
+    matrix = np.zeros((n, n), dtype=labels.dtype)
     matrix[order[i], order[j]] = labels
-    matrix |= matrix.T
+    matrix[order[j], order[i]] = labels
     return matrix[i, j]
 
 
@@ -349,6 +451,52 @@ def _check_frame_sizes(frames: Sequence[Frame], *, predict: bool) -> None:
             f"to {work}, more than reform.detector.MAX_FRAME_BYTES = {MAX_FRAME_BYTES / 2**30:g} "
             "GiB"
         )
+
+
+def check_calibration(calibration: str | None) -> str | None:
+    """Validates the ``calibration`` option: None or one of `CALIBRATIONS`."""
+    if calibration is not None and (
+        not isinstance(calibration, str) or calibration not in CALIBRATIONS
+    ):
+        raise ValueError(f"calibration must be None or one of {CALIBRATIONS}, got {calibration!r}")
+    return calibration
+
+
+def time_blocks_of(frames: Sequence[Frame]) -> np.ndarray:
+    """The calibration folds' groups: each frame's stretch of time (`CALIBRATION_FOLDS` per
+    sequence, :func:`reform.time_blocks`)."""
+    return time_blocks(frames, CALIBRATION_FOLDS)
+
+
+def _calibrated_fit(
+    classifier: Any, method: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray
+) -> Any:
+    """``CalibratedClassifierCV(classifier, method)`` fitted on the pairs, its folds the
+    stretches of time ``groups`` (``GroupKFold``). (``ensemble=False`` would keep one classifier,
+    but scikit-learn 1.9 does not hand the groups to its folds there.)"""
+    from sklearn import config_context
+    from sklearn.calibration import CalibratedClassifierCV
+    from sklearn.model_selection import GroupKFold
+
+    n_groups = np.unique(groups).size
+    if n_groups < 2:
+        raise ValueError(
+            f"calibration={method!r} needs training frames spread over at least 2 stretches of "
+            f"time (reform.time_blocks), got {n_groups}"
+        )
+    folds = GroupKFold(n_splits=min(CALIBRATION_FOLDS, n_groups))
+    for k, (_, held_out) in enumerate(folds.split(x, y, groups)):
+        kinds = np.unique(y[held_out]).size
+        rest = np.unique(np.delete(y, held_out)).size
+        if kinds < 2 or rest < 2:
+            raise ValueError(
+                f"calibration={method!r}: fold {k} of {folds.n_splits} (stretches of time) "
+                "holds pairs of one label only, on its held-out or its training side; train "
+                "on more frames, or without calibration"
+            )
+    calibrated = CalibratedClassifierCV(classifier, method=method, cv=folds, ensemble=True)
+    with config_context(enable_metadata_routing=True):  # hands the groups to the folds
+        return calibrated.fit(x, y, groups=groups)
 
 
 def _check_threshold(threshold: float | None, classifier: Any) -> None:

@@ -11,6 +11,34 @@ The paper's two features (see the project's reference definitions):
 Optional extras, off by default: the same two computed from the head (falling back to the body
 for a person whose head was not observed) and a flag for pairs that involve a robot.
 
+**Scale-free features** (the ``"relative"`` set, :data:`FEATURE_SETS`), for a classifier trained
+on one kind of data (simulated crowds, one dataset) that must work on datasets measured at other
+scales: group radii differ about twofold between the field's datasets, and positions estimated
+from video carry a per-dataset scale error. Distances are divided by the **frame's scale**
+:func:`frame_scale`, measured from the frame itself: the median, over the frame's people, of the
+distance to their nearest neighbour. Most people of a social scene stand in a group and their
+nearest neighbour is a group mate, so the median nearest-neighbour distance is the frame's
+conversational distance, and it scales with the positions: multiplying every position of a frame
+by any factor leaves these features unchanged. (The median, not the mean, so that a few people
+standing alone do not move it; the statistic is a fixed definition, not fitted on any data.)
+
+* **Relative distance** ``d_ij / s``, dimensionless.
+* **O-space distance** ``||o_i - o_j|| / s`` with ``o_i = p_i + (s / 2) u_i``, ``u_i`` the unit
+  vector of ``theta_i``: how far apart the two people's o-space centres are, each placed half
+  the frame's scale in front of its person (two people face to face at distance ``s`` share one
+  centre, the midpoint, and score 0). It joins distance and orientation in one number, as GCFF's
+  votes do, without GCFF's stride in metres.
+* **Larger turn** ``max(a_i, a_j)`` in radians, ``[0, pi]``: the turn of the member who faces
+  the other least. With the Effort Angle (their sum) it separates "both half-turned" from "one
+  faces the other, who looks away". Angles of the line between two people survive coarse
+  orientation coding (4 or 8 directions) as well as the Effort Angle does.
+
+The frame's scale of a frame of 2 people is their distance (each is the other's nearest
+neighbour), so their relative distance is 1 and only the orientations and the o-space distance
+tell them apart; a frame of 0 or 1 person has no pairs. People at one spot (a nearest
+neighbour at distance 0) are left out of the median; a frame in which everyone shares a spot
+with someone has scale 1 (its distances are all 0 anyway).
+
 Pairs are always listed in the order of :func:`pair_indices`: ``(0, 1), (0, 2), ..., (n-2, n-1)``
 over the rows of the frame's arrays. Every function here is vectorised over pairs and, for the
 batch functions, over frames too.
@@ -19,7 +47,9 @@ batch functions, over frames too.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+import warnings
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 
 import numpy as np
 import numpy.typing as npt
@@ -31,9 +61,32 @@ EFFORT_ANGLE = "effort_angle"  # radians, [0, 2*pi]
 HEAD_DISTANCE = "head_distance"  # metres, head positions (body where the head is unknown)
 HEAD_EFFORT_ANGLE = "head_effort_angle"  # radians, head yaws (body where the head is unknown)
 INVOLVES_ROBOT = "involves_robot"  # 1.0 when either member of the pair is a robot, else 0.0
+RELATIVE_DISTANCE = "relative_distance"  # Distance / frame_scale, dimensionless
+OSPACE_DISTANCE = "ospace_distance"  # o-space centres' distance / frame_scale, dimensionless
+LARGER_TURN = "larger_turn"  # radians, [0, pi]: max(a_i, a_j)
 
-FEATURES = (DISTANCE, EFFORT_ANGLE, HEAD_DISTANCE, HEAD_EFFORT_ANGLE, INVOLVES_ROBOT)
+FEATURES = (
+    DISTANCE,
+    EFFORT_ANGLE,
+    HEAD_DISTANCE,
+    HEAD_EFFORT_ANGLE,
+    INVOLVES_ROBOT,
+    RELATIVE_DISTANCE,
+    OSPACE_DISTANCE,
+    LARGER_TURN,
+)
 DEFAULT_FEATURES = (DISTANCE, EFFORT_ANGLE)
+PAPER = "paper"
+RELATIVE = "relative"
+# Named feature sets, accepted wherever a feature list is (``Reform(features="relative")``).
+FEATURE_SETS: Mapping[str, tuple[str, ...]] = MappingProxyType(
+    {
+        PAPER: DEFAULT_FEATURES,
+        RELATIVE: (RELATIVE_DISTANCE, EFFORT_ANGLE, OSPACE_DISTANCE),
+    }
+)
+OSPACE_STRIDE = 0.5  # o-space centre in front of each person, in units of the frame's scale
+_SCALE_MATRIX_PEOPLE = 512  # up to this many people: nearest neighbours from the pair distances
 MAX_PAIRS = 2**30  # pairs of one frame (46,341 people): pair_indices refuses more before any
 # array is made, as their two index arrays alone would take 16 GiB
 
@@ -42,30 +95,45 @@ __all__ = [
     "DISTANCE",
     "EFFORT_ANGLE",
     "FEATURES",
+    "FEATURE_SETS",
     "HEAD_DISTANCE",
     "HEAD_EFFORT_ANGLE",
     "INVOLVES_ROBOT",
+    "LARGER_TURN",
     "MAX_PAIRS",
+    "OSPACE_DISTANCE",
+    "OSPACE_STRIDE",
+    "PAPER",
+    "RELATIVE",
+    "RELATIVE_DISTANCE",
     "batch_pair_features",
     "check_features",
     "effort_angle",
+    "frame_scale",
     "frame_pair_features",
     "pair_indices",
 ]
 
 
-def check_features(features: Sequence[str]) -> tuple[str, ...]:
-    """Validates a feature list: known names, no repeats, at least one.
+def check_features(features: str | Sequence[str]) -> tuple[str, ...]:
+    """Validates a feature list: known names, no repeats, at least one; or a feature set's name.
+
+    Args:
+        features: names from :data:`FEATURES`, or one name of :data:`FEATURE_SETS`
+            (``"paper"``, ``"relative"``).
 
     Returns:
-        The features as a tuple.
+        The features as a tuple (a set's name resolved to its features).
 
     Raises:
         ValueError: naming the unknown or repeated feature.
     """
     if isinstance(features, str):
+        if features in FEATURE_SETS:
+            return FEATURE_SETS[features]
         raise ValueError(
-            f"features must be a sequence of feature names, got the string {features!r}"
+            f"features must be a feature set ({', '.join(map(repr, FEATURE_SETS))}) or a "
+            f"sequence of feature names from {FEATURES}, got the string {features!r}"
         )
     features = tuple(features)
     if not features:
@@ -218,6 +286,7 @@ def batch_pair_features(
         return out
     body = None
     head = None
+    relative = None
     for column, name in enumerate(features):
         if name in (DISTANCE, EFFORT_ANGLE):
             if body is None:
@@ -228,13 +297,97 @@ def batch_pair_features(
                 head_pos, head_th = _head_or_body(position, yaw, head_position, head_yaw)
                 head = _distance_and_effort(head_pos, head_th, i, j)
             out[..., column] = head[0] if name == HEAD_DISTANCE else head[1]
-        else:  # INVOLVES_ROBOT
+        elif name == INVOLVES_ROBOT:
             if is_robot is None:
                 out[..., column] = 0.0
             else:
                 robot = np.asarray(is_robot, dtype=bool)
                 out[..., column] = robot[..., i] | robot[..., j]
+        else:  # the scale-free features
+            if relative is None:
+                if body is None:
+                    body = _distance_and_effort(position, yaw, i, j)
+                relative = _Relative(position, yaw, i, j, body[0])
+            out[..., column] = relative.feature(name)
     return out
+
+
+class _Relative:
+    """The scale-free features of (F, n) frames' pairs, each computed when first asked for."""
+
+    def __init__(
+        self,
+        position: np.ndarray,
+        yaw: np.ndarray,
+        i: np.ndarray,
+        j: np.ndarray,
+        distance: np.ndarray,
+    ) -> None:
+        self.position, self.yaw, self.i, self.j, self.distance = position, yaw, i, j, distance
+        self.scale = _scale_from_pairs(position, distance, i, j)[:, None]  # (F, 1)
+
+    def feature(self, name: str) -> np.ndarray:
+        if name == RELATIVE_DISTANCE:
+            return self.distance / self.scale
+        if name == OSPACE_DISTANCE:
+            # (o_i - o_j) / s = (p_i - p_j) / s + OSPACE_STRIDE * (u_i - u_j)
+            i, j, yaw = self.i, self.j, self.yaw
+            delta = (self.position[:, i] - self.position[:, j]) / self.scale[..., None]
+            delta[..., 0] += OSPACE_STRIDE * (np.cos(yaw[:, i]) - np.cos(yaw[:, j]))
+            delta[..., 1] += OSPACE_STRIDE * (np.sin(yaw[:, i]) - np.sin(yaw[:, j]))
+            return np.hypot(delta[..., 0], delta[..., 1])
+        # LARGER_TURN: a_i = |wrap(phi_ij - theta_i)|, a_j = pi - |wrap(phi_ij - theta_j)|
+        delta = self.position[:, self.j] - self.position[:, self.i]
+        phi = np.arctan2(delta[..., 1], delta[..., 0])
+        a_i = _fold(phi - self.yaw[:, self.i])
+        a_j = np.pi - _fold(phi - self.yaw[:, self.j])
+        return np.maximum(a_i, a_j)
+
+
+def frame_scale(position: npt.ArrayLike) -> np.ndarray:
+    """The scale of frames measured from the frames themselves: the median, over each frame's
+    people, of the distance to their nearest neighbour (see the module notes).
+
+    Args:
+        position: (F, n, 2) positions, any unit; or (n, 2) for one frame.
+
+    Returns:
+        (F,) float64 scales in the positions' unit (a float for one frame). People whose nearest
+        neighbour stands at the same spot are left out of the median; a frame with fewer than 2
+        people, or where everyone shares a spot with someone, has scale 1.
+    """
+    position = np.asarray(position, dtype=np.float64)
+    single = position.ndim == 2
+    frames = position[None] if single else position
+    if frames.ndim != 3 or frames.shape[2] != 2:
+        raise ValueError(f"position must have shape (frames, people, 2), got {position.shape}")
+    i, j = pair_indices(frames.shape[1])
+    distance = np.hypot(*np.moveaxis(frames[:, j] - frames[:, i], -1, 0))
+    scale = _scale_from_pairs(frames, distance, i, j)
+    return float(scale[0]) if single else scale
+
+
+def _scale_from_pairs(
+    position: np.ndarray, distance: np.ndarray, i: np.ndarray, j: np.ndarray
+) -> np.ndarray:
+    """(F,) frame scales from (F, n, 2) positions and their (F, P) pair distances."""
+    n_frames, n = position.shape[:2]
+    if n < 2:
+        return np.ones(n_frames)
+    if n <= _SCALE_MATRIX_PEOPLE:
+        matrix = np.full((n_frames, n, n), np.inf)
+        matrix[:, i, j] = distance
+        matrix[:, j, i] = distance
+        nearest = matrix.min(axis=2)
+    else:  # a large frame: a k-d tree per frame rather than an (n, n) matrix
+        from scipy.spatial import cKDTree
+
+        nearest = np.stack([cKDTree(frame).query(frame, k=2)[0][:, 1] for frame in position])
+    nearest = np.where(nearest > 0, nearest, np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a frame of people sharing spots
+        scale = np.nanmedian(nearest, axis=1)
+    return np.where(np.isfinite(scale) & (scale > 0), scale, 1.0)
 
 
 def _head_or_body(

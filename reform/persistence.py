@@ -47,8 +47,10 @@ from typing import Any, NoReturn
 import numpy as np
 import sklearn
 from sklearn.base import BaseEstimator, is_classifier
+from sklearn.calibration import CalibratedClassifierCV, _CalibratedClassifier, _SigmoidCalibration
 from sklearn.ensemble import BaggingClassifier, ExtraTreesClassifier, RandomForestClassifier
 from sklearn.exceptions import InconsistentVersionWarning, NotFittedError
+from sklearn.isotonic import IsotonicRegression
 from sklearn.linear_model import LogisticRegression
 from sklearn.neighbors import BallTree, KDTree, KNeighborsClassifier
 from sklearn.pipeline import Pipeline
@@ -61,7 +63,7 @@ from skops.io._protocol import PROTOCOL
 import reform
 from reform.atomic import atomic_open
 from reform.datasets.errors import shorten
-from reform.detector import Reform, _check_threshold
+from reform.detector import Reform, _check_threshold, check_calibration
 from reform.features import check_features
 from reform.frame import Frame
 from reform.path_argument import path_argument
@@ -74,6 +76,9 @@ FORMAT_VERSION = 1
 # the compiled internals of scikit-learn's trees and neighbour searches.
 TRUSTED_TYPES = (
     "reform.detector.Reform",
+    "sklearn.calibration._CalibratedClassifier",  # Reform(calibration=...): one per fold
+    "sklearn.calibration._SigmoidCalibration",
+    "sklearn.model_selection._split.GroupKFold",  # the calibration's folds (n_splits only)
     "sklearn.tree._tree.Tree",
     "sklearn.neighbors._kd_tree.KDTree",
     "sklearn.neighbors._ball_tree.BallTree",
@@ -169,6 +174,8 @@ def save_model(model: Reform, path: str | os.PathLike[str]) -> Path:
         "training": model.training_summary_,
         "model": model,
     }
+    if model.calibration is not None:  # absent at the default: a default file stays as it was
+        payload["calibration"] = model.calibration
     data = sio.dumps(payload)
     with atomic_open(path, "wb") as handle:
         handle.write(data)
@@ -213,14 +220,17 @@ def model_info(
     trusted: Iterable[str] = (),
     max_bytes: int = MAX_MODEL_BYTES,
 ) -> dict[str, Any]:
-    """The metadata of a model file (versions, features, classifier, training summary).
+    """The metadata of a model file (versions, features, classifier, reconstruction, threshold,
+    calibration, training summary).
 
     The file is checked as :func:`load_model` checks it, with the same arguments and errors.
     """
     path = path_argument(path, name="path", function="model_info")
     payload = _read_payload(path, trusted, max_bytes)
-    _unwrap(path, payload)
-    return {key: value for key, value in payload.items() if key != "model"}
+    model = _unwrap(path, payload)
+    info = {key: value for key, value in payload.items() if key != "model"}
+    info["calibration"] = model.calibration
+    return info
 
 
 def _read_payload(path: Path, trusted: Iterable[str], max_bytes: int) -> Any:
@@ -908,6 +918,15 @@ def _check_model(path: Path, model: Reform, listed: Any) -> None:
     try:
         check_reconstruction(getattr(model, "reconstruction", None))
         _check_threshold(getattr(model, "threshold", None), classifier)
+        calibration = check_calibration(getattr(model, "calibration", None))
+        calibrated = isinstance(classifier, CalibratedClassifierCV)
+        if calibrated != (calibration is not None) or (
+            calibrated and classifier.method != calibration
+        ):
+            found = classifier.method if calibrated else "none"
+            raise ValueError(
+                f"calibration {calibration!r} disagrees with the classifier's ({found!r})"
+            )
         if not isinstance(getattr(model, "fast", None), bool):
             raise ValueError(f"fast must be True or False, got {getattr(model, 'fast', None)!r}")
     except Exception as exc:  # _check_threshold asks the classifier for predict_proba
@@ -1030,6 +1049,8 @@ def _check_estimator(where: str, estimator: Any, n_features: int | None) -> None
         _check_neighbors(where, estimator, n_features)
     elif isinstance(estimator, StandardScaler):
         _check_scaler(where, estimator, n_features)
+    elif isinstance(estimator, CalibratedClassifierCV):
+        _check_calibrated(where, estimator, n_features)
     else:  # another estimator: the trees it holds, wherever they sit
         if hasattr(estimator, "n_features_in_") and n_features is not None:
             _n_in(where, estimator, n_features)
@@ -1339,6 +1360,48 @@ def _check_bagging(where: str, model: Any, n_features: int | None) -> None:
                 f"expected class indices in "
                 f"[0, {n_classes}), found {shorten(str(labels.tolist()))}",
             )
+
+
+def _check_calibrated(where: str, model: Any, n_features: int | None) -> None:
+    """A CalibratedClassifierCV (Reform's ``calibration``): per fold, a classifier checked as
+    any, and one calibrator of finite parameters for the positive class."""
+    _n_in(where, model, n_features)
+    classes = _classes(where, model)
+    folds = getattr(model, "calibrated_classifiers_", None)
+    if not isinstance(folds, list) or not folds:
+        raise _Broken(f"{where}.calibrated_classifiers_", "expected a list of calibrated folds")
+    for k, fold in enumerate(folds):
+        at = f"{where}.calibrated_classifiers_[{k}]"
+        if type(fold) is not _CalibratedClassifier:
+            raise _Broken(at, f"expected a _CalibratedClassifier, found a {type(fold).__name__}")
+        _check_estimator(f"{at}.estimator", fold.estimator, n_features)
+        calibrators = fold.calibrators
+        rows = 1 if classes.size == 2 else classes.size
+        if not isinstance(calibrators, list) or len(calibrators) != rows:
+            raise _Broken(f"{at}.calibrators", f"expected a list of {rows} calibrator(s)")
+        for c, calibrator in enumerate(calibrators):
+            here = f"{at}.calibrators[{c}]"
+            if type(calibrator) is _SigmoidCalibration:
+                for name in ("a_", "b_"):
+                    value = getattr(calibrator, name, None)
+                    if not isinstance(value, (float, np.floating)) or not math.isfinite(value):
+                        raise _Broken(
+                            f"{here}.{name}", f"expected a finite number, found {value!r}"
+                        )
+            elif type(calibrator) is IsotonicRegression:
+                x = _array(f"{here}.X_thresholds_", calibrator.X_thresholds_, ndim=1, kind="f")
+                _array(
+                    f"{here}.y_thresholds_",
+                    calibrator.y_thresholds_,
+                    ndim=1,
+                    kind="f",
+                    shape=(x.size,),
+                )
+            else:
+                raise _Broken(
+                    here,
+                    f"expected a sigmoid or isotonic calibrator, found {type(calibrator).__name__}",
+                )
 
 
 def _check_forest(where: str, model: Any, n_features: int | None) -> None:

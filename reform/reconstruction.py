@@ -19,12 +19,27 @@ Two implementations give the same partitions:
   order; and the greedy loop never mixes components, so only the people of inconsistent
   components go through the loop, all frames in lock-step.
 
+**Correlation clustering** (``"correlation"``, an option beyond the paper) uses the classifier's
+pair probabilities rather than its hard votes. Each pair gets the weight
+``w_ij = logit(p_ij) - logit(t)`` (:func:`pair_weights`; ``t`` the detector's threshold, 0.5 by
+default, so a pair at probability ``t`` weighs nothing, a likely pair pulls its members together
+and an unlikely one pushes them apart, each in proportion to the classifier's confidence), and
+the partition sought maximises the summed weight of the pairs it puts together
+(:func:`correlation_clustering`). Finding the best partition is NP-hard; the heuristic here is
+deterministic: greedy agglomeration (start from singletons, repeatedly merge the two groups whose
+summed cross weight is the largest positive one, ties to the lowest pair of groups), then local
+moves (each person in row order may move to the group, or to a group of their own, that raises
+the total most; passes repeat until none does). Unlike Greedy Reconstruction, a pair the
+classifier gives 0.51 and one it gives 0.99 count differently, and one confident "apart" can
+keep two otherwise linked people out of one group.
+
 Partitions are canonical: groups ordered by their first member, members in row order,
 singletons included.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -34,25 +49,149 @@ from reform.features import pair_indices
 
 UNION = "union"
 INTERSECTION = "intersection"
-RECONSTRUCTIONS = (UNION, INTERSECTION)
+CORRELATION = "correlation"
+GREEDY_VARIANTS = (UNION, INTERSECTION)  # reconstructions from hard pair labels
+RECONSTRUCTIONS = (UNION, INTERSECTION, CORRELATION)
+PROBABILITY_CLIP = 1e-3  # pair probabilities are clipped to [this, 1 - this] before the
+# log-odds, so that a pair of probability 0 or 1 weighs about 6.9 rather than infinitely much
+MOVE_TOLERANCE = 1e-9  # a local move must raise the total weight by more than this
 
 __all__ = [
+    "CORRELATION",
+    "GREEDY_VARIANTS",
     "INTERSECTION",
+    "PROBABILITY_CLIP",
     "RECONSTRUCTIONS",
     "UNION",
+    "batch_correlation_labels",
     "batch_greedy_labels",
     "check_reconstruction",
+    "correlation_clustering",
     "greedy_reconstruction",
+    "pair_weights",
     "partition_from_labels",
     "relation_matrix",
 ]
 
 
-def check_reconstruction(variant: str) -> str:
-    """Validates a reconstruction variant name."""
-    if variant not in RECONSTRUCTIONS:
-        raise ValueError(f"reconstruction must be one of {RECONSTRUCTIONS}, got {variant!r}")
+def check_reconstruction(variant: str, allowed: Sequence[str] = RECONSTRUCTIONS) -> str:
+    """Validates a reconstruction name against ``allowed``."""
+    if not isinstance(variant, str) or variant not in allowed:
+        raise ValueError(f"reconstruction must be one of {tuple(allowed)}, got {variant!r}")
     return variant
+
+
+def pair_weights(probability: npt.ArrayLike, *, threshold: float | None = None) -> np.ndarray:
+    """Correlation-clustering weights of pairs: ``logit(p) - logit(t)``.
+
+    Args:
+        probability: (...) pair probabilities of being together, clipped to
+            ``[PROBABILITY_CLIP, 1 - PROBABILITY_CLIP]``.
+        threshold: the probability ``t`` that weighs nothing; None for 0.5.
+
+    Returns:
+        (...) float64 weights: positive pulls the pair together, negative pushes it apart.
+    """
+    p = np.clip(np.asarray(probability, dtype=np.float64), PROBABILITY_CLIP, 1 - PROBABILITY_CLIP)
+    weight = np.log(p) - np.log1p(-p)
+    if threshold is not None:
+        weight -= math.log(threshold) - math.log1p(-threshold)
+    return weight
+
+
+def correlation_clustering(weights: npt.ArrayLike) -> np.ndarray:
+    """Correlation clustering of one frame: agglomeration, then local moves (module notes).
+
+    Args:
+        weights: (n, n) symmetric pair weights (the diagonal is ignored).
+
+    Returns:
+        (n,) intp group labels, each person's the row of their group's first member.
+    """
+    w = np.array(weights, dtype=np.float64)
+    if w.ndim != 2 or w.shape[0] != w.shape[1]:
+        raise ValueError(f"weights must be a square (n, n) matrix, got shape {w.shape}")
+    if not np.all(np.isfinite(w)):
+        raise ValueError("weights must be finite")
+    n = w.shape[0]
+    np.fill_diagonal(w, 0.0)
+    labels = np.arange(n, dtype=np.intp)
+    if n < 2:
+        return labels
+    # Agglomeration: cluster-to-cluster summed weights, clusters named by a member row.
+    between = w.copy()
+    alive = np.ones(n, dtype=bool)
+    upper = np.triu(np.ones((n, n), dtype=bool), k=1)
+    while True:
+        gain = np.where(upper & alive[:, None] & alive[None, :], between, -np.inf)
+        a, b = divmod(int(np.argmax(gain)), n)  # first maximum: lowest (a, b)
+        if not gain[a, b] > 0:
+            break
+        between[a] += between[b]
+        between[:, a] += between[:, b]
+        alive[b] = False
+        labels[labels == b] = a
+    # Local moves: S[v, c] = summed weight of v to the members of cluster c.
+    member = labels[:, None] == np.arange(n)[None, :]
+    support = w @ member
+    counts = member.sum(axis=0)
+    moved = True
+    while moved:  # the total weight rises by > MOVE_TOLERANCE each move: this ends
+        moved = False
+        for v in range(n):
+            c = labels[v]
+            own = support[v, c]
+            options = np.where(counts > 0, support[v], -np.inf)
+            options[c] = -np.inf
+            d = int(np.argmax(options))
+            best = options[d] - own
+            alone = -own if counts[c] > 1 else -np.inf
+            if alone > best:
+                d, best = int(np.flatnonzero(counts == 0)[0]), alone
+            if best > MOVE_TOLERANCE:
+                support[:, c] -= w[:, v]
+                support[:, d] += w[:, v]
+                counts[c] -= 1
+                counts[d] += 1
+                labels[v] = d
+                moved = True
+    # Canonical labels: the first member's row.
+    first = np.full(n, n, dtype=np.intp)
+    np.minimum.at(first, labels, np.arange(n, dtype=np.intp))
+    return first[labels]
+
+
+def batch_correlation_labels(
+    probabilities: npt.ArrayLike, n: int, *, threshold: float | None = None
+) -> np.ndarray:
+    """Correlation clustering of many frames of ``n`` people from their pair probabilities.
+
+    Args:
+        probabilities: (F, n(n-1)/2) pair probabilities, pairs in
+            :func:`reform.features.pair_indices` order.
+        n: number of people in every frame.
+        threshold: the probability that weighs nothing (:func:`pair_weights`); None for 0.5.
+
+    Returns:
+        (F, n) intp group labels, as :func:`batch_greedy_labels` gives them.
+    """
+    weights = pair_weights(probabilities, threshold=threshold)
+    i, j = pair_indices(n)
+    if weights.ndim != 2 or weights.shape[1] != i.size:
+        raise ValueError(
+            f"probabilities must have shape (frames, {i.size}) for n={n}, got {weights.shape}"
+        )
+    out = np.broadcast_to(np.arange(n, dtype=np.intp), (weights.shape[0], n)).copy()
+    if n < 2:
+        return out
+    matrix = np.zeros((n, n))
+    for f, row in enumerate(weights):
+        if not (row > 0).any():  # nobody pulls: everyone alone
+            continue
+        matrix[i, j] = row
+        matrix[j, i] = row
+        out[f] = correlation_clustering(matrix)
+    return out
 
 
 def relation_matrix(pair_labels: npt.ArrayLike, n: int) -> np.ndarray:
@@ -91,7 +230,7 @@ def greedy_reconstruction(
         The partition of the rows ``0..n-1``: groups ordered by their first member, members
         ascending, singletons included.
     """
-    check_reconstruction(variant)
+    check_reconstruction(variant, GREEDY_VARIANTS)
     matrix = np.asarray(relation)
     if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1]:
         raise ValueError(f"relation must be a square (n, n) matrix, got shape {matrix.shape}")
@@ -193,7 +332,7 @@ def batch_greedy_labels(pair_labels: npt.ArrayLike, n: int, *, variant: str = UN
         group (their own row for a singleton). Same partitions as :func:`greedy_reconstruction`
         on each frame's Relation Matrix.
     """
-    check_reconstruction(variant)
+    check_reconstruction(variant, GREEDY_VARIANTS)
     labels_in = np.asarray(pair_labels).astype(bool, copy=False)
     i, j = pair_indices(n)
     if labels_in.ndim != 2 or labels_in.shape[1] != i.size:

@@ -24,7 +24,11 @@ from reform.features import (
     HEAD_DISTANCE,
     HEAD_EFFORT_ANGLE,
     INVOLVES_ROBOT,
+    LARGER_TURN,
+    OSPACE_DISTANCE,
+    RELATIVE_DISTANCE,
     check_features,
+    frame_scale,
 )
 
 PI = math.pi
@@ -133,7 +137,7 @@ def test_check_features_rejects_bad_lists():
         check_features(("distance", "speed"))
     with pytest.raises(ValueError, match="must not repeat, got \\['distance'\\]"):
         check_features(("distance", "distance"))
-    with pytest.raises(ValueError, match="sequence of feature names, got the string"):
+    with pytest.raises(ValueError, match="a feature set .* or a sequence of feature names"):
         check_features("distance")
     with pytest.raises(ValueError, match="at least one"):
         check_features(())
@@ -169,3 +173,82 @@ def test_features_are_invariant_under_moving_the_scene(xi, yi, xj, yj, yaw_i, ya
     after = batch_pair_features(moved[None], wrap_angle(yaw + turn)[None])[0, 0]
     assert 0.0 <= before[1] <= 2 * PI
     np.testing.assert_allclose(after, before, atol=1e-9)
+
+
+# ------------------------------------------------------------------------------------------------
+# Scale-free features (the "relative" set)
+
+SCALE_FREE = (RELATIVE_DISTANCE, OSPACE_DISTANCE, LARGER_TURN, EFFORT_ANGLE)
+
+
+def test_feature_sets_resolve_by_name():
+    assert check_features("paper") == DEFAULT_FEATURES
+    assert check_features("relative") == (RELATIVE_DISTANCE, EFFORT_ANGLE, OSPACE_DISTANCE)
+    with pytest.raises(ValueError, match=r"features must be a feature set \('paper', 'relative'\)"):
+        check_features("scale-free")
+
+
+def test_frame_scale_is_the_median_nearest_neighbour_distance():
+    # Hand-computed: nearest neighbours 1, 1, 2 (the third person 2 m from the second) and 5.
+    position = np.array([[0.0, 0.0], [1.0, 0.0], [3.0, 0.0], [3.0, 5.0]])
+    assert frame_scale(position) == pytest.approx(1.5)  # median of 1, 1, 2, 5
+    assert frame_scale(position[:2]) == 1.0  # two people: their distance
+    assert frame_scale(np.array([[0.0, 0.0], [3.0, 4.0]])) == 5.0
+    assert frame_scale(position[:1]) == 1.0  # one person: no scale to measure
+    assert frame_scale(np.zeros((0, 2))) == 1.0
+    # People sharing a spot are left out of the median; all sharing: scale 1.
+    shared = np.array([[0.0, 0.0], [0.0, 0.0], [2.0, 0.0], [2.0, 3.0]])
+    assert frame_scale(shared) == pytest.approx(2.5)  # median of 2 and 3
+    assert frame_scale(np.zeros((3, 2))) == 1.0
+    with pytest.raises(ValueError, match=r"position must have shape \(frames, people, 2\)"):
+        frame_scale(np.zeros((2, 3)))
+
+
+def test_two_people_face_to_face_share_an_o_space():
+    # Hand-computed: 2 m apart, facing each other: scale 2, relative distance 1, the o-space
+    # centres (1 m in front of each) coincide, neither turns.
+    x = batch_pair_features(
+        np.array([[[0.0, 0.0], [2.0, 0.0]]]), np.array([[0.0, PI]]), features=SCALE_FREE
+    )[0, 0]
+    assert x == pytest.approx([1.0, 0.0, 0.0, 0.0], abs=1e-12)
+    # Back to back: centres 1 m behind each, 4 m apart = 2 scales; each turns pi.
+    x = batch_pair_features(
+        np.array([[[0.0, 0.0], [2.0, 0.0]]]), np.array([[PI, 0.0]]), features=SCALE_FREE
+    )[0, 0]
+    assert x == pytest.approx([1.0, 2.0, PI, 2 * PI], abs=1e-12)
+
+
+def test_large_frames_measure_their_scale_with_a_tree():
+    # Above _SCALE_MATRIX_PEOPLE the nearest neighbours come from a k-d tree: same scale.
+    rng = np.random.default_rng(3)
+    position = rng.uniform(0, 40, (1, 600, 2))
+    i, j = pair_indices(600)
+    d = np.hypot(*np.moveaxis(position[:, j] - position[:, i], -1, 0))
+    matrix = np.full((600, 600), np.inf)
+    matrix[i, j] = d[0]
+    matrix[j, i] = d[0]
+    assert frame_scale(position)[0] == pytest.approx(np.median(matrix.min(axis=1)), rel=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(2, 9),
+    factor=st.floats(1e-3, 1e3),
+    turn=st.floats(-PI, PI),
+    shift=st.tuples(st.floats(-100, 100), st.floats(-100, 100)),
+)
+def test_scale_free_features_ignore_scale_and_rigid_motion(seed, n, factor, turn, shift):
+    rng = np.random.default_rng(seed)
+    position = rng.uniform(-5, 5, (1, n, 2))
+    yaw = rng.uniform(-PI, PI, (1, n))
+    before = batch_pair_features(position, yaw, features=SCALE_FREE)
+    c, s = math.cos(turn), math.sin(turn)
+    moved = factor * position @ np.array([[c, s], [-s, c]]) + np.array(shift)
+    after = batch_pair_features(moved, wrap_angle(yaw + turn), features=SCALE_FREE)
+    np.testing.assert_allclose(after, before, atol=1e-7)
+    # The paper's Distance is not scale-free (a check that the test can fail):
+    if abs(factor - 1) > 1e-3:
+        d_before = batch_pair_features(position, yaw, features=(DISTANCE,))
+        d_after = batch_pair_features(factor * position, yaw, features=(DISTANCE,))
+        assert not np.allclose(d_after, d_before)

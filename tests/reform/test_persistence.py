@@ -57,6 +57,55 @@ def test_file_says_what_it_holds(tmp_path):
     assert info["training"]["pairs"] == 60 * 55
 
 
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"features": "relative"},
+        {"reconstruction": "correlation", "threshold": 0.4},
+        {"calibration": "sigmoid"},
+        {"classifier": "weighted-knn", "calibration": "isotonic", "reconstruction": "correlation"},
+        {"classifier": "logistic-regression", "features": "relative", "calibration": "isotonic"},
+    ],
+    ids=lambda options: ",".join(f"{k}={v}" for k, v in options.items()),
+)
+def test_options_round_trip_and_are_described(options, tmp_path):
+    options = dict(options)
+    classifier = make_classifier(options.pop("classifier", "bagged-trees"))
+    model = Reform(classifier, **options).fit(toy_frames(0, 60))
+    path = save_model(model, tmp_path / "model.skops")
+    loaded = load_model(path)
+    frames = toy_frames(9, 30, sizes=(2, 3, 4), loners=3)
+    assert loaded.predict(frames) == model.predict(frames)
+    pairs = zip(loaded.predict_pair_proba(frames), model.predict_pair_proba(frames), strict=True)
+    for a, b in pairs:
+        np.testing.assert_array_equal(a, b)
+    assert loaded.get_params(deep=False) | {"classifier": None} == model.get_params(deep=False) | {
+        "classifier": None
+    }
+    info = model_info(path)
+    assert info["features"] == list(model.features_)
+    assert info["reconstruction"] == model.reconstruction
+    assert info["threshold"] == model.threshold
+    assert info["calibration"] == model.calibration
+
+
+def test_a_default_model_says_it_is_uncalibrated(tmp_path):
+    path = save_model(fitted("bagged-trees"), tmp_path / "model.skops")
+    assert model_info(path)["calibration"] is None
+    assert load_model(path).calibration is None
+    with zipfile.ZipFile(path) as archive:  # the option is left out of a default file
+        assert '"calibration"' not in archive.read("schema.json").decode()
+
+
+def test_a_calibration_that_disagrees_with_its_classifier_is_refused(tmp_path):
+    model = Reform(calibration="sigmoid").fit(toy_frames(0, 30))
+    vars(model).update(calibration="isotonic")
+    path = tmp_path / "model.skops"
+    path.write_bytes(sio.dumps(payload(model)))
+    with pytest.raises(ValueError, match="calibration 'isotonic' disagrees with the classifier"):
+        load_model(path)
+
+
 def test_the_compiled_table_is_not_stored(tmp_path):
     model = fitted("bagged-trees")
     model.predict(toy_frames(3, 2))
