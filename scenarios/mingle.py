@@ -35,11 +35,11 @@ import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
-from scenarios.formation import RadiusLaw, circle_places, min_radius
+from scenarios.formation import RadiusLaw, circle_places, ellipse_offsets, min_radius
 from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
-from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
+from scenarios.stage import CLEARANCE_M, PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
 from scenarios.timeline import TimelineBuilder
 
 __all__ = [
@@ -82,6 +82,8 @@ ROBOT_ID = 0
 ROBOT_WALL_GAP_M = 0.6  # metres from the west wall to the watching robot
 ROBOT_CLAIM_M = 0.6  # metres of floor kept free around the robot
 ANGLE_JITTER = 0.4  # share of the even gap a member's angle may deviate by
+MAX_ASPECT = 4.0  # longest over shortest o-space axis of a group at unevenness 1
+GAP_CONCENTRATION = 0.4  # Dirichlet concentration of uneven gaps (below 1: a few wide gaps)
 
 
 class NoFloorError(ValueError):
@@ -110,6 +112,16 @@ class MingleParams:
         mean_alone: mean time someone stays alone before acting, seconds.
         alone_share: share of the guests alone at the start.
         mean_utterance: mean length of one speaker's turn, seconds.
+        spacing: closest two people's places may be, metres; below the default 0.63 (bodies
+            as discs that enclose the arms) people get body discs of radius
+            ``(spacing - 0.03) / 2`` and can stand shoulder to shoulder (SALSA's
+            nearest-neighbour distance q10 is 0.44 m).
+        unevenness: how unevenly a group's members spread round its o-space circle: each
+            angular gap is ``1 - unevenness`` of the even gap plus ``unevenness`` of a gap
+            drawn from a Dirichlet of concentration 0.4 (a few wide gaps; never closer than
+            ``spacing``), so groups open on one side and bunch on another; and each group
+            of three or more is an ellipse of axes ratio drawn uniform in
+            [1, 1 + 3 unevenness]; 0: evenly spread round a circle, as before.
     """
 
     people: Annotated[int, Range(2, 100)] = 18
@@ -128,6 +140,8 @@ class MingleParams:
     mean_alone: Annotated[float, Range(1.0, unit="s")] = 10.0
     alone_share: Annotated[float, Range(0.0, 1.0)] = 0.08
     mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 4.0
+    spacing: Annotated[float, Range(0.43, 1.0, unit="m")] = SPACING_M
+    unevenness: Annotated[float, Range(0.0, 1.0)] = 0.0
 
     def check(self, name: str) -> None:
         """`ValueError` naming the option for impossible values: each out of its range
@@ -164,11 +178,15 @@ class _Group:
     angles: dict[int, float]
     record: int = -1  # index of its current record
     version: int = 0
+    aspect: float = 1.0  # long over short axis of its o-space (1: a circle)
+    axis: float = 0.0  # direction of the long axis, radians
 
     def place_of(self, m: int) -> np.ndarray:
         """(2,) where member ``m`` stands on the o-space circle (before noise), metres."""
         angle = self.angles[m]
-        return self.centre + self.radius * np.array([math.cos(angle), math.sin(angle)])
+        if self.aspect == 1.0:
+            return self.centre + self.radius * np.array([math.cos(angle), math.sin(angle)])
+        return self.centre + self.radius * ellipse_offsets([angle], self.aspect, self.axis)[0]
 
 
 @dataclass
@@ -207,7 +225,7 @@ class _Party:
         self.keep_clear = keep_clear  # spots no group or person may take (the robot's)
         self.rng = rng
         self.half = 0.5 * side
-        self.law = RadiusLaw(params.radius_base, params.radius_per_member)
+        self.law = RadiusLaw(params.radius_base, params.radius_per_member, params.spacing)
         self.ids = list(range(1, params.people + 1))
         self.records: list[_Record] = []
         self.alone: list[_Alone] = []
@@ -226,7 +244,10 @@ class _Party:
     # -- floor space ------------------------------------------------------------------------
 
     def reach(self, radius: float) -> float:
-        """Radius of the floor a group of o-space ``radius`` occupies."""
+        """Radius of the floor a group of o-space ``radius`` occupies (with unevenness: of
+        its longest axis at most)."""
+        if self.p.unevenness > 0.0:
+            radius *= math.sqrt(1.0 + self.p.unevenness * (MAX_ASPECT - 1.0))
         return radius + PLANNING_RADIUS_M + GROUP_MARGIN_M
 
     def fits(
@@ -277,24 +298,48 @@ class _Party:
 
     def draw_radius(self, n: int) -> float:
         spread = max(1.0 + self.rng.normal() * self.p.radius_spread, 0.6)
-        return max(self.law(n) * spread, min_radius(n))
+        return max(self.law(n) * spread, min_radius(n, spacing=self.p.spacing))
 
     def spread(
         self, members: list[int], angles: dict[int, float], radius: float
     ) -> dict[int, float]:
         """Even angles in the members' order around the circle, rotated to move them least,
         each moved at random by up to `ANGLE_JITTER` of the gap, or less where neighbours
-        would come closer than `SPACING_M`."""
+        would come closer than the option ``spacing`` (with ``unevenness``: `uneven`)."""
         order = sorted(members, key=lambda m: angles[m] % (2.0 * math.pi))
         n = len(order)
+        if self.p.unevenness > 0.0 and n > 2:
+            return self.uneven(order, angles, radius)
         gap = 2.0 * math.pi / n
         offsets = np.array([angles[m] - k * gap for k, m in enumerate(order)])
         base = float(np.angle(np.exp(1j * offsets).mean()))
         chord = 2.0 * radius * math.sin(min(gap, math.pi) / 2.0)
-        room = max(0.0, 1.0 - SPACING_M / chord) if n > 2 else ANGLE_JITTER
+        room = max(0.0, 1.0 - self.p.spacing / chord) if n > 2 else ANGLE_JITTER
         share = min(ANGLE_JITTER, room)
         jitter = self.rng.uniform(-share, share, size=n) * gap
         return {m: base + k * gap + float(jitter[k]) for k, m in enumerate(order)}
+
+    def uneven(self, order: list[int], angles: dict[int, float], radius: float) -> dict[int, float]:
+        """Angles of the members (``order``: by angle) with uneven gaps: each gap is
+        ``1 - unevenness`` of the even one plus ``unevenness`` of a gap drawn from a
+        Dirichlet of concentration `GAP_CONCENTRATION`, then squeezed so that no gap brings
+        neighbours closer than ``spacing``; the widest drawn gap goes where the members'
+        widest gap was, and the whole is rotated to move them least."""
+        n = len(order)
+        u = self.p.unevenness
+        drawn = (1.0 - u) / n + u * self.rng.dirichlet(np.full(n, GAP_CONCENTRATION))
+        closest = 2.0 * math.asin(min(1.0, self.p.spacing / (2.0 * radius)))
+        closest = min(closest, 2.0 * math.pi / n)
+        gaps = closest + (2.0 * math.pi - n * closest) * drawn
+        gaps = np.roll(gaps, n - 1 - int(np.argmax(gaps)))  # the widest gap closes the ring
+        turns = [angles[m] % (2.0 * math.pi) for m in order]
+        widths = np.diff(turns, append=turns[0] + 2.0 * math.pi)
+        first = (int(np.argmax(widths)) + 1) % n  # the member after the widest gap
+        order = order[first:] + order[:first]
+        at = np.concatenate([[0.0], np.cumsum(gaps[:-1])])
+        offsets = np.array([angles[m] for m in order]) - at
+        base = float(np.angle(np.exp(1j * offsets).mean()))
+        return {m: base + float(at[k]) for k, m in enumerate(order)}
 
     def record(self, gid: int, t: float, speeds: dict[int, float] | None = None) -> None:
         """A new planned record of group ``gid``'s current shape from ``t``."""
@@ -308,6 +353,9 @@ class _Party:
             self.rng,
             position_noise=self.p.position_noise,
             orientation_noise=self.p.orientation_noise,
+            spacing=self.p.spacing,
+            aspect=g.aspect,
+            axis=g.axis,
         )
         edge = self.half - PLANNING_RADIUS_M - WALL_MARGIN_M
         places = np.clip(places, -edge, edge)
@@ -335,6 +383,9 @@ class _Party:
             d = self.position[m] - centre
             angles[m] = math.atan2(d[1], d[0]) if np.hypot(*d) > 1e-6 else self.rng.uniform(-3, 3)
         g = _Group(list(members), centre.copy(), radius, {})
+        if self.p.unevenness > 0.0 and len(members) > 2:
+            g.aspect = 1.0 + self.p.unevenness * (MAX_ASPECT - 1.0) * float(self.rng.random())
+            g.axis = float(self.rng.uniform(-math.pi, math.pi))
         g.angles = self.spread(members, angles, radius)
         self.groups[gid] = g
         for m in members:
@@ -788,6 +839,9 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
         edge = 0.5 * side - WALL_GAP_M - PLANNING_RADIUS_M
         spots = np.array([[edge, -edge + 0.7 * k] for k in range(len(passers))])
         roles += cast(rng, passers, spots, [0.0] * len(passers), parts="passer-by", present=False)
+    if params.spacing < SPACING_M:  # bodies that let people stand shoulder to shoulder
+        body = 0.5 * (params.spacing - CLEARANCE_M)
+        roles = tuple(dataclasses.replace(role, radius=body) for role in roles)
     return Scenario(
         name=name,
         seed=seed,

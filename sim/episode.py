@@ -106,6 +106,7 @@ def scene_spec(stage: Stage, *, name: str = "scene") -> SceneSpec:
             height=p.height,
             width=p.width,
             present=p.present,
+            body_radius=p.radius,
         )
         for p in stage.people
     ]

@@ -33,6 +33,7 @@ PERSON_REFERENCE_WIDTH_M = 0.44  # metres, between the shoulder joints of the sh
 PERSON_HEIGHT_RANGE_M = (1.0, 2.3)  # metres, accepted person heights
 PERSON_WIDTH_RANGE_M = (0.30, 0.70)  # metres, accepted shoulder widths
 BODY_RADIUS_PER_WIDTH = 0.64  # body radius / shoulder width: the disc encloses arms and hands
+BODY_RADIUS_RANGE_M = (0.15, 0.5)  # metres, accepted explicit body radii
 HEAD_REACH_PER_WIDTH = 0.07  # nose tip reach = this * width + HEAD_REACH_PER_HEIGHT * height
 HEAD_REACH_PER_HEIGHT = 0.098  # (the head is set forward by the width, sized by the height)
 ROBOT_REFERENCE_HEIGHT_M = 1.30  # metres, height of the shipped robot model
@@ -143,6 +144,9 @@ class PersonSpec:
         color: shirt colour, RGB or RGBA in [0, 1]; ``None`` picks a distinct one.
         present: whether the person is in the room at the start (absent people can enter later).
         asset: name of the shipped model to use (see ``sim.assets.asset_names``).
+        body_radius: the body disc's radius, metres (within ``BODY_RADIUS_RANGE_M``), or
+            ``None`` for a disc enclosing arms, hands and nose; a smaller one lets people stand
+            shoulder to shoulder (arms and noses may then touch).
     """
 
     id: int
@@ -153,6 +157,7 @@ class PersonSpec:
     color: tuple[float, ...] | None = None
     present: bool = True
     asset: str = PERSON_ASSET
+    body_radius: float | None = None
 
     kind: ClassVar[str] = HUMAN
 
@@ -177,10 +182,19 @@ class PersonSpec:
             object.__setattr__(self, "color", color if len(color) == 4 else (*color, 1.0))
         object.__setattr__(self, "present", bool(self.present))
         _check_asset(f"{label}: asset", self.asset)
+        if self.body_radius is not None:
+            object.__setattr__(
+                self,
+                "body_radius",
+                _in_range(f"{label}: body_radius", self.body_radius, BODY_RADIUS_RANGE_M, "m"),
+            )
 
     @property
     def radius(self) -> float:
-        """Body radius, metres: a disc enclosing the arms and hands (0.28 m by default)."""
+        """Body radius, metres: ``body_radius`` when given, else a disc enclosing the arms and
+        hands (0.28 m by default)."""
+        if self.body_radius is not None:
+            return self.body_radius
         return max(
             BODY_RADIUS_PER_WIDTH * self.width,
             HEAD_REACH_PER_WIDTH * self.width + HEAD_REACH_PER_HEIGHT * self.height,
