@@ -35,7 +35,13 @@ import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
-from scenarios.formation import RadiusLaw, circle_places, ellipse_offsets, min_radius
+from scenarios.formation import (
+    RadiusLaw,
+    circle_places,
+    ellipse_offsets,
+    facing_centre,
+    min_radius,
+)
 from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
@@ -84,6 +90,11 @@ ROBOT_CLAIM_M = 0.6  # metres of floor kept free around the robot
 ANGLE_JITTER = 0.4  # share of the even gap a member's angle may deviate by
 MAX_ASPECT = 4.0  # longest over shortest o-space axis of a group at unevenness 1
 GAP_CONCENTRATION = 0.4  # Dirichlet concentration of uneven gaps (below 1: a few wide gaps)
+ROW_STRETCH = 1.8  # a side-by-side row stands on an arc this much wider than a circle's radius
+ROW_MAX = 4  # largest side-by-side row; larger groups form circles or presenter and audience
+AUDIENCE_ARC = math.radians(150.0)  # radians, widest arc an audience stands on
+SHOULDER_GAP_M = 0.05  # metres between neighbours of a row or an audience beyond the spacing
+CIRCLE, ROW, AUDIENCE = "circle", "side-by-side", "presenter-audience"
 
 
 class NoFloorError(ValueError):
@@ -122,6 +133,10 @@ class MingleParams:
             ``spacing``), so groups open on one side and bunch on another; and each group
             of three or more is an ellipse of axes ratio drawn uniform in
             [1, 1 + 3 unevenness]; 0: evenly spread round a circle, as before.
+        arrangements: share of the groups formed that are not circles: half of them (groups
+            of up to 4) stand side by side on a wide arc facing one point (at a bar), the
+            others as presenter and audience (one faces the rest, who face them, as at a
+            poster); a group that outgrows its arrangement becomes a circle.
     """
 
     people: Annotated[int, Range(2, 100)] = 18
@@ -142,6 +157,7 @@ class MingleParams:
     mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 4.0
     spacing: Annotated[float, Range(0.43, 1.0, unit="m")] = SPACING_M
     unevenness: Annotated[float, Range(0.0, 1.0)] = 0.0
+    arrangements: Annotated[float, Range(0.0, 1.0)] = 0.0
 
     def check(self, name: str) -> None:
         """`ValueError` naming the option for impossible values: each out of its range
@@ -180,13 +196,17 @@ class _Group:
     version: int = 0
     aspect: float = 1.0  # long over short axis of its o-space (1: a circle)
     axis: float = 0.0  # direction of the long axis, radians
+    kind: str = CIRCLE  # CIRCLE, ROW (side by side) or AUDIENCE (presenter and audience)
+    stretch: float = 1.0  # places stand on a circle of radius * stretch (a row's is wider)
+    presenter: int = -1  # the presenter of an AUDIENCE
 
     def place_of(self, m: int) -> np.ndarray:
         """(2,) where member ``m`` stands on the o-space circle (before noise), metres."""
         angle = self.angles[m]
+        radius = self.radius * self.stretch
         if self.aspect == 1.0:
-            return self.centre + self.radius * np.array([math.cos(angle), math.sin(angle)])
-        return self.centre + self.radius * ellipse_offsets([angle], self.aspect, self.axis)[0]
+            return self.centre + radius * np.array([math.cos(angle), math.sin(angle)])
+        return self.centre + radius * ellipse_offsets([angle], self.aspect, self.axis)[0]
 
 
 @dataclass
@@ -248,6 +268,8 @@ class _Party:
         its longest axis at most)."""
         if self.p.unevenness > 0.0:
             radius *= math.sqrt(1.0 + self.p.unevenness * (MAX_ASPECT - 1.0))
+        if self.p.arrangements > 0.0:
+            radius *= ROW_STRETCH
         return radius + PLANNING_RADIUS_M + GROUP_MARGIN_M
 
     def fits(
@@ -300,6 +322,54 @@ class _Party:
         spread = max(1.0 + self.rng.normal() * self.p.radius_spread, 0.6)
         return max(self.law(n) * spread, min_radius(n, spacing=self.p.spacing))
 
+    def layout(self, g: _Group, angles: dict[int, float]) -> dict[int, float]:
+        """The members' angles round ``g``'s centre for its kind (a circle, `spread`; a row
+        or presenter and audience, `arc`); a kind the group no longer suits (a row grown past
+        `ROW_MAX`, an audience of fewer than two or whose presenter left) becomes a circle."""
+        n = len(g.members)
+        if (
+            g.kind == ROW
+            and n > ROW_MAX
+            or g.kind == AUDIENCE
+            and (n < 3 or g.presenter not in g.members and g.presenter >= 0)
+        ):
+            g.kind, g.stretch = CIRCLE, 1.0
+        if g.kind == CIRCLE:
+            return self.spread(g.members, angles, g.radius)
+        return self.arc(g, angles)
+
+    def arc(self, g: _Group, angles: dict[int, float]) -> dict[int, float]:
+        """A row: the members side by side on an arc of radius `ROW_STRETCH` times the group's
+        radius, facing its centre (a bar, a shared view). Presenter and audience: the
+        presenter on the circle, the audience side by side on the far side (an arc of at most
+        `AUDIENCE_ARC`), in the members' order round the centre."""
+        members = sorted(g.members, key=lambda m: angles[m] % (2.0 * math.pi))
+        step_m = self.p.spacing + SHOULDER_GAP_M
+        if g.kind == ROW:
+            g.stretch = ROW_STRETCH
+            radius = g.radius * g.stretch
+            step = 2.0 * math.asin(min(1.0, step_m / (2.0 * radius)))
+            mid = float(np.angle(np.exp(1j * np.array([angles[m] for m in members])).mean()))
+            turns = [angles[m] % (2.0 * math.pi) for m in members]
+            widths = np.diff(turns, append=turns[0] + 2.0 * math.pi)
+            first = (int(np.argmax(widths)) + 1) % len(members)
+            row = members[first:] + members[:first]
+            start = mid - 0.5 * step * (len(row) - 1)
+            return {m: start + k * step for k, m in enumerate(row)}
+        if g.presenter not in g.members:
+            g.presenter = members[int(self.rng.integers(len(members)))]
+        audience = [m for m in members if m != g.presenter]
+        facing = angles[g.presenter]
+        step = 2.0 * math.asin(min(1.0, step_m / (2.0 * g.radius)))
+        step = min(step, AUDIENCE_ARC / max(len(audience) - 1, 1))
+        start = facing + math.pi - 0.5 * step * (len(audience) - 1)
+        # the audience keeps its order round the centre, starting past the presenter
+        k0 = members.index(g.presenter)
+        order = members[k0 + 1 :] + members[:k0]
+        out = {g.presenter: facing}
+        out.update({m: start + k * step for k, m in enumerate(order)})
+        return out
+
     def spread(
         self, members: list[int], angles: dict[int, float], radius: float
     ) -> dict[int, float]:
@@ -348,7 +418,7 @@ class _Party:
         angles = np.array([g.angles[m] for m in members])
         places, facings = circle_places(
             g.centre,
-            g.radius,
+            g.radius * g.stretch,
             angles,
             self.rng,
             position_noise=self.p.position_noise,
@@ -357,6 +427,13 @@ class _Party:
             aspect=g.aspect,
             axis=g.axis,
         )
+        if g.kind == AUDIENCE:  # the audience faces the presenter, who faces the audience
+            noise = facings - facing_centre(places, g.centre)
+            k = members.index(g.presenter)
+            targets = np.repeat(places[k : k + 1], len(members), axis=0)
+            targets[k] = np.delete(places, k, axis=0).mean(axis=0)
+            d = targets - places
+            facings = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) + noise)))
         edge = self.half - PLANNING_RADIUS_M - WALL_MARGIN_M
         places = np.clip(places, -edge, edge)
         self.records.append(
@@ -364,6 +441,11 @@ class _Party:
         )
         g.record = len(self.records) - 1
         g.version += 1
+        if g.kind == ROW:
+            self.events.append((t, "arrange", f"group {sorted(members)} stands side by side"))
+        elif g.kind == AUDIENCE:
+            audience = sorted(m for m in members if m != g.presenter)
+            self.events.append((t, "arrange", f"person {g.presenter} presents to {audience}"))
         for k, m in enumerate(members):
             self.position[m] = places[k]
 
@@ -383,10 +465,12 @@ class _Party:
             d = self.position[m] - centre
             angles[m] = math.atan2(d[1], d[0]) if np.hypot(*d) > 1e-6 else self.rng.uniform(-3, 3)
         g = _Group(list(members), centre.copy(), radius, {})
-        if self.p.unevenness > 0.0 and len(members) > 2:
+        if self.p.arrangements > 0.0 and self.rng.random() < self.p.arrangements:
+            g.kind = ROW if len(members) <= ROW_MAX and self.rng.random() < 0.5 else AUDIENCE
+        if self.p.unevenness > 0.0 and len(members) > 2 and g.kind == CIRCLE:
             g.aspect = 1.0 + self.p.unevenness * (MAX_ASPECT - 1.0) * float(self.rng.random())
             g.axis = float(self.rng.uniform(-math.pi, math.pi))
-        g.angles = self.spread(members, angles, radius)
+        g.angles = self.layout(g, angles)
         self.groups[gid] = g
         for m in members:
             self.group_of[m] = gid
@@ -537,7 +621,7 @@ class _Party:
         g = self.groups[gid]
         if len(g.members) >= 2:
             g.radius = self.draw_radius(len(g.members))
-            g.angles = self.spread(g.members, g.angles, g.radius)
+            g.angles = self.layout(g, g.angles)
             self.record(gid, t)
             self.schedule_group(gid, t)
             return
@@ -576,7 +660,7 @@ class _Party:
         angles[m] = math.atan2(d[1], d[0])
         g.members.append(m)
         g.radius = radius
-        g.angles = self.spread(g.members, angles, radius)
+        g.angles = self.layout(g, angles)
         self.group_of[m] = gid
         speed, arrive = self.walk(m, g.place_of(m), t)
         shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
@@ -663,7 +747,7 @@ class _Party:
         self.events.append((t, "split", f"group {sorted(g.members)} splits off {sorted(moving)}"))
         g.members = staying
         g.radius = stay_radius
-        g.angles = self.spread(staying, {m: g.angles[m] for m in staying}, stay_radius)
+        g.angles = self.layout(g, {m: g.angles[m] for m in staying})
         for m in moving:
             self.group_of.pop(m)
         new = self.new_group(moving, centre, radius, t)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+import re
+
 import numpy as np
 import pytest
 
@@ -68,6 +71,10 @@ def test_unevenness_raises_symmetry_into_salsas_range():
     [
         ({"spacing": 0.3}, r"^mingle: option spacing must be within \[0.43, 1\] m, got 0.3$"),
         ({"unevenness": 1.5}, r"^mingle: option unevenness must be within \[0, 1\], got 1.5$"),
+        (
+            {"arrangements": -0.1},
+            r"^mingle: option arrangements must be within \[0, 1\], got -0.1$",
+        ),
     ],
 )
 def test_bad_crowd_options_give_one_line(options, message):
@@ -78,3 +85,40 @@ def test_bad_crowd_options_give_one_line(options, message):
 def test_a_body_radius_out_of_range_is_refused():
     with pytest.raises(ValueError, match=r"person 3: body_radius must be within \[0.15, 0.5\] m"):
         PersonSpec(id=3, position=(0.0, 0.0), body_radius=0.1)
+
+
+def _turn(a: np.ndarray) -> np.ndarray:
+    return np.angle(np.exp(1j * a))
+
+
+def test_arrangements_stand_side_by_side_or_face_a_presenter():
+    options = {"arrangements": 1.0, "spacing": 0.46, "orientation_noise": 0.05}
+    episode = simulate_episode("mingle", seed=0, rate=1.0, options={**PARTY, **options})
+    frames = list(episode.dataset)
+    seen = {"side by side": 0, "presents": 0}
+    for event in episode.events:
+        if event.kind != "arrange":
+            continue
+        ids = [int(x) for x in re.findall(r"\d+", event.detail)]
+        frame = min(frames, key=lambda f: abs(f.time - (event.time + 10.0)))
+        if not any(set(g) == set(ids) for g in frame.groups):
+            continue  # the group changed within 10 s
+        row = {p: i for i, p in enumerate(frame.ids.tolist())}
+        yaw = frame.yaw[[row[p] for p in ids]]
+        if "side by side" in event.detail:
+            mean = np.angle(np.exp(1j * yaw).mean())
+            assert np.abs(_turn(yaw - mean)).max() < math.radians(60.0), event.detail
+            seen["side by side"] += 1
+        else:  # "person P presents to [...]": P faces the audience, who face P
+            audience = np.angle(np.exp(1j * yaw[1:]).mean())
+            assert abs(_turn(yaw[0] - audience)) > math.radians(120.0), event.detail
+            seen["presents"] += 1
+    assert min(seen.values()) >= 1, seen
+    default = simulate_episode("mingle", seed=0, rate=1.0, options=PARTY)
+    assert not [e for e in default.events if e.kind == "arrange"]
+
+
+def test_mingle_randomised_draws_spacing_and_unevenness():
+    drawn = [scenarios.make("mingle-randomised", seed=s).options["drawn"] for s in range(8)]
+    assert all(0.43 <= d["spacing"] <= 0.63 and 0.0 <= d["unevenness"] <= 1.0 for d in drawn)
+    assert len({d["spacing"] for d in drawn}) == 8
