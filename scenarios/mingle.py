@@ -45,7 +45,14 @@ from scenarios.formation import (
 from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
-from scenarios.stage import CLEARANCE_M, PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
+from scenarios.stage import (
+    CLEARANCE_M,
+    PLANNING_RADIUS_M,
+    SPACING_M,
+    Furniture,
+    RobotPlace,
+    Stage,
+)
 from scenarios.timeline import TimelineBuilder
 
 __all__ = [
@@ -95,6 +102,11 @@ ROW_MAX = 4  # largest side-by-side row; larger groups form circles or presenter
 AUDIENCE_ARC = math.radians(150.0)  # radians, widest arc an audience stands on
 SHOULDER_GAP_M = 0.05  # metres between neighbours of a row or an audience beyond the spacing
 CIRCLE, ROW, AUDIENCE = "circle", "side-by-side", "presenter-audience"
+TABLE_SIZE_M = (0.8, 0.8, 0.75)  # metres: diameter, diameter, height of a round table
+BAR_SIZE_M = (2.0, 0.5, 1.1)  # metres: length, depth, height of a bar counter at a wall
+POSTER_SIZE_M = (1.0, 0.05, 1.8)  # metres: width, depth, height of a poster board at a wall
+FURNITURE_GAP_M = 0.08  # metres between a body's disc and the furniture it stands at
+FURNITURE_WALL_END_M = 0.4  # metres, a bar or a poster keeps this far from the room's corners
 
 
 class NoFloorError(ValueError):
@@ -137,6 +149,12 @@ class MingleParams:
             of up to 4) stand side by side on a wide arc facing one point (at a bar), the
             others as presenter and audience (one faces the rest, who face them, as at a
             poster); a group that outgrows its arrangement becomes a circle.
+        furniture: pieces of furniture, in turn a round table, a bar counter at a wall and a
+            poster at a wall, each with a group standing at it from the start (a ring round
+            the table, a row along the bar facing it, a presenter at the poster and an
+            audience facing them); people leave and (at a table) join these groups, which
+            never merge, split or move. The furniture is in the MuJoCo scene; people walking
+            do not collide with it.
     """
 
     people: Annotated[int, Range(2, 100)] = 18
@@ -158,6 +176,7 @@ class MingleParams:
     spacing: Annotated[float, Range(0.43, 1.0, unit="m")] = SPACING_M
     unevenness: Annotated[float, Range(0.0, 1.0)] = 0.0
     arrangements: Annotated[float, Range(0.0, 1.0)] = 0.0
+    furniture: Annotated[int, Range(0, 6)] = 0
 
     def check(self, name: str) -> None:
         """`ValueError` naming the option for impossible values: each out of its range
@@ -199,6 +218,10 @@ class _Group:
     kind: str = CIRCLE  # CIRCLE, ROW (side by side) or AUDIENCE (presenter and audience)
     stretch: float = 1.0  # places stand on a circle of radius * stretch (a row's is wider)
     presenter: int = -1  # the presenter of an AUDIENCE
+    mid: float | None = None  # fixed direction of a row's middle or the presenter (furniture)
+    hold: float = 0.0  # smallest radius, metres (a ring round a table)
+    anchor: int = -1  # the furniture it stands at (it never merges, splits or moves)
+    spot: np.ndarray | None = None  # centre of the floor it takes, if not its centre (a bar)
 
     def place_of(self, m: int) -> np.ndarray:
         """(2,) where member ``m`` stands on the o-space circle (before noise), metres."""
@@ -260,6 +283,7 @@ class _Party:
         self.queue: list[tuple[float, int, str, tuple]] = []
         self.count = 0
         self.next_gid = 0
+        self.furniture: list[Furniture] = []
 
     # -- floor space ------------------------------------------------------------------------
 
@@ -289,7 +313,8 @@ class _Party:
         for gid, g in self.groups.items():
             if gid in ignore_groups:
                 continue
-            if hypot(x - g.centre[0], y - g.centre[1]) < claim + self.reach(g.radius):
+            c = g.centre if g.spot is None else g.spot
+            if hypot(x - c[0], y - c[1]) < claim + self.reach(g.radius):
                 return False
         for pid, a in self.alone_at.items():
             if pid in ignore_people:
@@ -327,6 +352,7 @@ class _Party:
         or presenter and audience, `arc`); a kind the group no longer suits (a row grown past
         `ROW_MAX`, an audience of fewer than two or whose presenter left) becomes a circle."""
         n = len(g.members)
+        g.radius = max(g.radius, g.hold)
         if (
             g.kind == ROW
             and n > ROW_MAX
@@ -349,7 +375,9 @@ class _Party:
             g.stretch = ROW_STRETCH
             radius = g.radius * g.stretch
             step = 2.0 * math.asin(min(1.0, step_m / (2.0 * radius)))
-            mid = float(np.angle(np.exp(1j * np.array([angles[m] for m in members])).mean()))
+            mid = g.mid
+            if mid is None:
+                mid = float(np.angle(np.exp(1j * np.array([angles[m] for m in members])).mean()))
             turns = [angles[m] % (2.0 * math.pi) for m in members]
             widths = np.diff(turns, append=turns[0] + 2.0 * math.pi)
             first = (int(np.argmax(widths)) + 1) % len(members)
@@ -359,7 +387,7 @@ class _Party:
         if g.presenter not in g.members:
             g.presenter = members[int(self.rng.integers(len(members)))]
         audience = [m for m in members if m != g.presenter]
-        facing = angles[g.presenter]
+        facing = angles[g.presenter] if g.mid is None else g.mid
         step = 2.0 * math.asin(min(1.0, step_m / (2.0 * g.radius)))
         step = min(step, AUDIENCE_ARC / max(len(audience) - 1, 1))
         start = facing + math.pi - 0.5 * step * (len(audience) - 1)
@@ -457,7 +485,17 @@ class _Party:
                 rec.end = t
                 rec.talk_end = min(rec.talk_end, t)
 
-    def new_group(self, members: list[int], centre: np.ndarray, radius: float, t: float) -> int:
+    def new_group(
+        self,
+        members: list[int],
+        centre: np.ndarray,
+        radius: float,
+        t: float,
+        *,
+        anchored: _Group | None = None,
+    ) -> int:
+        """A group of ``members`` round ``centre``; ``anchored``: the kind, direction, radius
+        floor and furniture of a group standing at furniture (not drawn)."""
         gid = self.next_gid
         self.next_gid += 1
         angles = {}
@@ -465,7 +503,14 @@ class _Party:
             d = self.position[m] - centre
             angles[m] = math.atan2(d[1], d[0]) if np.hypot(*d) > 1e-6 else self.rng.uniform(-3, 3)
         g = _Group(list(members), centre.copy(), radius, {})
-        if self.p.arrangements > 0.0 and self.rng.random() < self.p.arrangements:
+        if anchored is not None:
+            g.kind, g.mid, g.hold, g.anchor = (
+                anchored.kind,
+                anchored.mid,
+                anchored.hold,
+                anchored.anchor,
+            )
+        elif self.p.arrangements > 0.0 and self.rng.random() < self.p.arrangements:
             g.kind = ROW if len(members) <= ROW_MAX and self.rng.random() < 0.5 else AUDIENCE
         if self.p.unevenness > 0.0 and len(members) > 2 and g.kind == CIRCLE:
             g.aspect = 1.0 + self.p.unevenness * (MAX_ASPECT - 1.0) * float(self.rng.random())
@@ -538,6 +583,8 @@ class _Party:
         unplaced = unplaced[n_alone:]
         largest = self.p.max_group_size  # shrinks when groups keep finding no floor
         misses = 0
+        for k in range(self.p.furniture):
+            unplaced = self.furnish(k, unplaced)
         while len(unplaced) >= 2:
             n = int(min(rng.choice(sizes, p=share), len(unplaced)))
             if len(unplaced) - n == 1:  # leave nobody as the odd one out, where sizes allow
@@ -583,6 +630,87 @@ class _Party:
             self.start_alone(m, spot, 0.0)
             self.start_yaw[m] = self.alone_at[m].facing
         self.start_position = dict(self.position)
+
+    def furnish(self, k: int, unplaced: list[int]) -> list[int]:
+        """Furniture ``k`` (a table, a bar, a poster, in turn) and the group that stands at it
+        from the start, taken from ``unplaced``: a ring round a table, a row along a bar
+        facing it, an audience facing a presenter at a poster. Returns who is left."""
+        kind = ("table", "bar", "poster")[k % 3]
+        rng = self.rng
+        body = 0.5 * self.p.spacing
+        if kind == "table":
+            n = int(rng.integers(3, 7))
+        elif kind == "bar":
+            n = int(rng.integers(2, ROW_MAX + 1))
+        else:
+            n = int(rng.integers(3, 7))
+        n = min(n, len(unplaced))
+        if n < 2:
+            return unplaced
+        radius = self.draw_radius(n)
+        anchored = _Group([], np.zeros(2), radius, {}, anchor=k)
+        if kind == "table":
+            size = TABLE_SIZE_M
+            anchored.hold = 0.5 * size[0] + body + FURNITURE_GAP_M
+            radius = max(radius, anchored.hold)
+            centre = self.free_spot(self.reach(radius))
+            if centre is None:
+                raise NoFloorError(
+                    f"mingle: no free floor for a table in a {2 * self.half:g} m room"
+                )
+            item = Furniture(kind, (float(centre[0]), float(centre[1])), size)
+        else:
+            size = BAR_SIZE_M if kind == "bar" else POSTER_SIZE_M
+            front = size[1] + FURNITURE_GAP_M + body  # from the wall to where people stand
+            for _ in range(PLACE_TRIES):
+                wall = int(rng.integers(4))
+                inward = wall * 0.5 * math.pi + math.pi  # the wall's normal into the room
+                normal = np.array([math.cos(inward), math.sin(inward)])
+                along = np.array([-normal[1], normal[0]])
+                reach = self.half - 0.5 * size[0] - FURNITURE_WALL_END_M
+                offset = float(rng.uniform(-reach, reach)) * along
+                spot = (self.half - 0.5 * size[1]) * -normal + offset
+                if kind == "bar":  # the row's arc centre lies beyond the counter: they face it
+                    stand = radius * ROW_STRETCH
+                    centre = offset - normal * (self.half - front + stand)
+                    floor = centre + normal * stand
+                else:  # the presenter between the poster and the centre, the audience beyond
+                    centre = offset - normal * (self.half - front - radius)
+                    floor = centre
+                if self.clear(floor, self.reach(radius)):
+                    break
+            else:
+                raise NoFloorError(
+                    f"mingle: no free wall for a {kind} in a {2 * self.half:g} m room"
+                )
+            anchored.kind = ROW if kind == "bar" else AUDIENCE
+            anchored.mid = inward if kind == "bar" else inward + math.pi
+            item = Furniture(
+                kind, (float(spot[0]), float(spot[1])), size, yaw=float(inward + 0.5 * math.pi)
+            )
+        self.furniture.append(item)
+        members, rest = unplaced[:n], unplaced[n:]
+        for j, m in enumerate(members):
+            angle = 2.0 * math.pi * j / n
+            self.position[m] = centre + radius * np.array([math.cos(angle), math.sin(angle)])
+        gid = self.new_group(members, centre, radius, 0.0, anchored=anchored)
+        if kind == "bar":
+            self.groups[gid].spot = floor
+        self.events.append((0.0, "furnish", f"group {sorted(members)} stands at the {kind}"))
+        self.record(gid, 0.0)
+        self.schedule_group(gid, 0.0)
+        for m in members:
+            self.schedule_member(m, 0.0)
+        return rest
+
+    def clear(self, centre: np.ndarray, claim: float) -> bool:
+        """Whether floor of radius ``claim`` round ``centre`` is clear of every group and kept
+        spot (walls aside: furniture stands at them)."""
+        for g in self.groups.values():
+            c = g.centre if g.spot is None else g.spot
+            if np.hypot(*(centre - c)) < claim + self.reach(g.radius):
+                return False
+        return all(np.hypot(*(centre - k)) >= claim + ROBOT_CLAIM_M for k in self.keep_clear)
 
     def run(self) -> None:
         self.start()
@@ -716,7 +844,7 @@ class _Party:
 
     def on_split(self, t: float, gid: int, version: int) -> None:
         g = self.groups.get(gid)
-        if g is None or g.version != version or len(g.members) < 4:
+        if g is None or g.version != version or len(g.members) < 4 or g.anchor >= 0:
             return
         if any(self.busy_until.get(m, 0.0) > t for m in g.members):
             self.schedule_group(gid, t)
@@ -760,11 +888,13 @@ class _Party:
 
     def on_merge(self, t: float, gid: int, version: int) -> None:
         g = self.groups.get(gid)
-        if g is None or g.version != version:
+        if g is None or g.version != version or g.anchor >= 0:
             return
         best, best_d = None, MERGE_REACH_M
         for hid, h in self.groups.items():
             if hid == gid or len(g.members) + len(h.members) > self.p.max_group_size:
+                continue
+            if h.anchor >= 0:
                 continue
             d = float(np.hypot(*(h.centre - g.centre))) - g.radius - h.radius
             if d < best_d:
@@ -929,7 +1059,12 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
     return Scenario(
         name=name,
         seed=seed,
-        stage=Stage(room=(side, side), people=tuple(roles), robot=robot),
+        stage=Stage(
+            room=(side, side),
+            people=tuple(roles),
+            robot=robot,
+            furniture=tuple(party.furniture),
+        ),
         timeline=builder.build(),
         duration=params.duration,
         description="a SALSA-like party: groups forming, merging, splitting; people alone",

@@ -21,9 +21,11 @@ __all__ = [
     "PERSON_HEIGHT_M",
     "PERSON_WIDTH_M",
     "PLANNING_RADIUS_M",
+    "FURNITURE_KINDS",
     "MIN_BODY_RADIUS_M",
     "ROBOT_RADIUS_M",
     "SPACING_M",
+    "Furniture",
     "RobotPlace",
     "Role",
     "Stage",
@@ -36,6 +38,27 @@ ROBOT_RADIUS_M = 0.28  # metres, the robot's base disc (planning only)
 CLEARANCE_M = 0.03  # metres, gap the motion keeps between two bodies (covers idle sway)
 SPACING_M = 2 * PLANNING_RADIUS_M + CLEARANCE_M  # metres, closest two people's places may be
 MIN_BODY_RADIUS_M = 0.20  # metres, smallest body disc a scenario may give (shoulder to shoulder)
+FURNITURE_KINDS = ("table", "bar", "poster")  # what a scene may furnish a room with
+
+
+@dataclass(frozen=True)
+class Furniture:
+    """A static object people stand around or along (it does not move, and people walking
+    plan around the floor it takes only through the scenario's plan).
+
+    Attributes:
+        kind: one of `FURNITURE_KINDS`: a round ``"table"``, a ``"bar"`` counter, a
+            ``"poster"`` board.
+        position: (x, y) of its centre on the floor, metres.
+        size: (length along its yaw, depth across it, height), metres; a table's length is
+            its diameter.
+        yaw: direction of its length, radians.
+    """
+
+    kind: str
+    position: tuple[float, float]
+    size: tuple[float, float, float]
+    yaw: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -87,11 +110,13 @@ class Stage:
         room: (x extent, y extent) of the floor, metres, centred on the origin.
         people: the people, in the order they appear in every Frame.
         robot: where the robot starts, or ``None`` for people only.
+        furniture: tables, bar counters and posters standing in the room.
     """
 
     room: tuple[float, float]
     people: tuple[Role, ...]
     robot: RobotPlace | None = None
+    furniture: tuple[Furniture, ...] = ()
 
     @property
     def ids(self) -> tuple[int, ...]:

@@ -122,3 +122,39 @@ def test_mingle_randomised_draws_spacing_and_unevenness():
     drawn = [scenarios.make("mingle-randomised", seed=s).options["drawn"] for s in range(8)]
     assert all(0.43 <= d["spacing"] <= 0.63 and 0.0 <= d["unevenness"] <= 1.0 for d in drawn)
     assert len({d["spacing"] for d in drawn}) == 8
+
+
+def test_groups_stand_at_furniture_in_the_scene():
+    options = {"furniture": 3, "spacing": 0.46, "orientation_noise": 0.05, "duration": 40.0}
+    checked = set()
+    for seed in (0, 2):
+        episode = simulate_episode("mingle", seed=seed, rate=1.0, options={**PARTY, **options})
+        assert [episode.model.geom(f"furniture{k}").name for k in range(3)] == [
+            "furniture0",
+            "furniture1",
+            "furniture2",
+        ]
+        frame = next(f for f in episode.dataset if abs(f.time - 20.0) < 0.6)
+        row = {p: i for i, p in enumerate(frame.ids.tolist())}
+        for event in episode.events:
+            if event.kind != "furnish":
+                continue
+            ids = [int(x) for x in re.findall(r"\d+", event.detail)]
+            if not any(set(g) == set(ids) for g in frame.groups):
+                continue  # someone left within 20 s
+            kind = event.detail.split()[-1]
+            (item,) = [f for f in episode.scenario.stage.furniture if f.kind == kind]
+            offset = np.array(item.position) - frame.position[[row[p] for p in ids]]
+            distance = np.hypot(offset[:, 0], offset[:, 1])
+            off = np.abs(
+                _turn(frame.yaw[[row[p] for p in ids]] - np.arctan2(offset[:, 1], offset[:, 0]))
+            )
+            if kind in ("table", "bar"):  # a ring round the table, a row along the bar
+                assert distance.max() < (0.9 if kind == "table" else 1.2), event.detail
+                assert off.max() < math.radians(45.0), event.detail
+            else:  # the presenter at the poster, turned to the audience, who face the poster
+                presenter = int(np.argmin(distance))
+                assert distance[presenter] < 0.6 and off[presenter] > math.radians(120.0)
+                assert np.delete(off, presenter).max() < math.radians(60.0), event.detail
+            checked.add(kind)
+    assert checked == {"table", "bar", "poster"}
