@@ -49,12 +49,15 @@ REAL_DATASETS: Mapping[str, str] = {
     "CoffeeBreak": "coffeebreak",
     "Synth": "synth",
 }
-# row label -> mingle options
-SIMULATED: Mapping[str, Mapping[str, Any]] = {
-    "mingle (default)": {},
-    "mingle spacing=0.46": {"spacing": 0.46},
-    "mingle unevenness=0.7": {"unevenness": 0.7},
-    "mingle spacing=0.46 unevenness=0.7": {"spacing": 0.46, "unevenness": 0.7},
+# row label -> (scenario, options): mingle's default and its crowd options, mingle-randomised
+SIMULATED: Mapping[str, tuple[str, Mapping[str, Any]]] = {
+    "mingle (default)": ("mingle", {}),
+    "mingle spacing=0.46": ("mingle", {"spacing": 0.46}),
+    "mingle spacing=0.46 unevenness=0.75": ("mingle", {"spacing": 0.46, "unevenness": 0.75}),
+    "mingle spacing=0.46 unevenness=1": ("mingle", {"spacing": 0.46, "unevenness": 1.0}),
+    "mingle spacing=0.46 arrangements=0.5": ("mingle", {"spacing": 0.46, "arrangements": 0.5}),
+    "mingle spacing=0.46 furniture=3": ("mingle", {"spacing": 0.46, "furniture": 3}),
+    "mingle-randomised": ("mingle-randomised", {}),
 }
 
 
@@ -107,15 +110,21 @@ def real_shapes(root: str | Path) -> list[CrowdShapes]:
 
 
 def simulated_shapes(
-    options: Mapping[str, Any], *, label: str, seeds: int = 2, duration: float = 300.0
+    scenario: str,
+    options: Mapping[str, Any],
+    *,
+    label: str,
+    seeds: int = 6,
+    duration: float = 300.0,
 ) -> CrowdShapes:
-    """The shapes of ``seeds`` ``mingle`` episodes (seeds 0 ..) with ``options``."""
+    """The shapes of ``seeds`` episodes (seeds 0 ..) of ``scenario`` with ``options``, each
+    ``duration`` seconds, measured every 2 s."""
     from sim.episode import simulate_episode  # the simulator only where simulated rows are asked
 
     frames: list[Frame] = []
     for seed in range(seeds):
         episode = simulate_episode(
-            "mingle", seed=seed, rate=RATE_HZ, options={"duration": duration, **options}
+            scenario, seed=seed, rate=RATE_HZ, options={"duration": duration, **options}
         )
         frames.extend(episode.dataset)
     return crowd_shapes(frames, label)
@@ -143,7 +152,7 @@ def table(rows: Sequence[CrowdShapes]) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m sim.experiments.crowd_shapes")
-    parser.add_argument("--seeds", type=int, default=2, help="episodes per simulated row")
+    parser.add_argument("--seeds", type=int, default=6, help="episodes per simulated row")
     parser.add_argument("--duration", type=float, default=300.0, help="seconds per episode")
     parser.add_argument("--real-only", action="store_true", help="only the real datasets")
     parser.add_argument("--sim-only", action="store_true", help="only the simulated rows")
@@ -155,9 +164,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.exit(2, "crowd_shapes: set REFORM_SIM_DATASETS to the datasets' folder\n")
         rows += real_shapes(root)
     if not args.real_only:
-        for label, options in SIMULATED.items():
+        for label, (scenario, options) in SIMULATED.items():
             rows.append(
-                simulated_shapes(options, label=label, seeds=args.seeds, duration=args.duration)
+                simulated_shapes(
+                    scenario, options, label=label, seeds=args.seeds, duration=args.duration
+                )
             )
     print(table(rows))
     return 0
