@@ -17,6 +17,12 @@ are -0.035 to +0.036 m. SALSA holds 25 groups of 8, so
 follow SALSA's wider spread of Tightness (sd 0.08-0.18 m) and in-group Effort Angles (median
 1.62 rad).
 
+Four options widen what a party looks like (`docs/guide/crowds.md`), each off by default:
+``spacing`` lets people stand shoulder to shoulder (smaller body discs), ``unevenness`` spreads
+members unevenly round elliptical o-spaces (SALSA's Symmetry by size), ``arrangements`` makes a
+share of the groups stand side by side or as presenter and audience, and ``furniture`` puts
+tables, bar counters and posters in the room with groups standing at them.
+
 Everything is drawn when the scenario is made: an event-driven planner (`_Party`) walks
 through the party's timeline (joins, leaves, merges, splits, pairings, passers-by), reserving
 floor space for every group so that groups never overlap, then the conversations and glances
@@ -288,13 +294,37 @@ class _Party:
     # -- floor space ------------------------------------------------------------------------
 
     def reach(self, radius: float) -> float:
-        """Radius of the floor a group of o-space ``radius`` occupies (with unevenness: of
-        its longest axis at most)."""
-        if self.p.unevenness > 0.0:
-            radius *= math.sqrt(1.0 + self.p.unevenness * (MAX_ASPECT - 1.0))
-        if self.p.arrangements > 0.0:
-            radius *= ROW_STRETCH
+        """Radius of the floor a group whose members stand within ``radius`` occupies."""
         return radius + PLANNING_RADIUS_M + GROUP_MARGIN_M
+
+    def extent(self, g: _Group, radius: float | None = None) -> float:
+        """How far from its floor centre (`floor_centre`) group ``g``'s members stand, with
+        o-space ``radius`` (default its own): its long semi-axis; a row's half length."""
+        radius = g.radius if radius is None else radius
+        if g.kind == ROW:
+            return max(radius, 0.5 * (ROW_MAX - 1) * (self.p.spacing + SHOULDER_GAP_M))
+        return radius * math.sqrt(g.aspect)
+
+    def floor_centre(self, g: _Group) -> np.ndarray:
+        """The middle of the floor ``g`` takes: its centre, or a row's middle."""
+        return g.centre if g.spot is None else g.spot
+
+    def draw_shape(self, n: int, radius: float) -> _Group:
+        """The kind and o-space shape of a new group of ``n`` and o-space ``radius`` (drawn
+        only when the options ``arrangements`` and ``unevenness`` ask), as a template."""
+        shape = _Group([], np.zeros(2), radius, {})
+        if self.p.arrangements > 0.0 and self.rng.random() < self.p.arrangements:
+            shape.kind = ROW if n <= ROW_MAX and self.rng.random() < 0.5 else AUDIENCE
+            if shape.kind == ROW:
+                shape.mid = float(self.rng.uniform(-math.pi, math.pi))
+        if self.p.unevenness > 0.0 and n > 2 and shape.kind == CIRCLE:
+            shape.aspect = 1.0 + self.p.unevenness * (MAX_ASPECT - 1.0) * float(self.rng.random())
+            shape.axis = float(self.rng.uniform(-math.pi, math.pi))
+        return shape
+
+    def claim(self, shape: _Group) -> float:
+        """The floor radius a new group of template ``shape`` claims."""
+        return self.reach(self.extent(shape))
 
     def fits(
         self,
@@ -313,8 +343,8 @@ class _Party:
         for gid, g in self.groups.items():
             if gid in ignore_groups:
                 continue
-            c = g.centre if g.spot is None else g.spot
-            if hypot(x - c[0], y - c[1]) < claim + self.reach(g.radius):
+            c = self.floor_centre(g)
+            if hypot(x - c[0], y - c[1]) < claim + self.reach(self.extent(g)):
                 return False
         for pid, a in self.alone_at.items():
             if pid in ignore_people:
@@ -359,6 +389,8 @@ class _Party:
             or g.kind == AUDIENCE
             and (n < 3 or g.presenter not in g.members and g.presenter >= 0)
         ):
+            if g.kind == ROW and g.spot is not None and g.anchor < 0:
+                g.centre, g.spot, g.mid = g.spot, None, None  # the circle forms where it stood
             g.kind, g.stretch = CIRCLE, 1.0
         if g.kind == CIRCLE:
             return self.spread(g.members, angles, g.radius)
@@ -492,29 +524,27 @@ class _Party:
         radius: float,
         t: float,
         *,
-        anchored: _Group | None = None,
+        shape: _Group | None = None,
     ) -> int:
-        """A group of ``members`` round ``centre``; ``anchored``: the kind, direction, radius
-        floor and furniture of a group standing at furniture (not drawn)."""
+        """A group of ``members`` round ``centre`` (a row: ``centre`` is its middle, and it
+        faces a point `ROW_STRETCH` times ``radius`` beyond); ``shape``: the template of its
+        kind, o-space shape, direction, radius floor and furniture (`draw_shape`, `furnish`),
+        else a circle."""
         gid = self.next_gid
         self.next_gid += 1
+        g = _Group(list(members), centre.copy(), radius, {})
+        if shape is not None:
+            g.kind, g.mid, g.hold, g.anchor = shape.kind, shape.mid, shape.hold, shape.anchor
+            g.aspect, g.axis = shape.aspect, shape.axis
+            if g.kind == ROW and g.anchor < 0 and g.mid is not None:
+                g.spot = centre.copy()
+                g.centre = centre - radius * ROW_STRETCH * np.array(
+                    [math.cos(g.mid), math.sin(g.mid)]
+                )
         angles = {}
         for m in members:
-            d = self.position[m] - centre
+            d = self.position[m] - g.centre
             angles[m] = math.atan2(d[1], d[0]) if np.hypot(*d) > 1e-6 else self.rng.uniform(-3, 3)
-        g = _Group(list(members), centre.copy(), radius, {})
-        if anchored is not None:
-            g.kind, g.mid, g.hold, g.anchor = (
-                anchored.kind,
-                anchored.mid,
-                anchored.hold,
-                anchored.anchor,
-            )
-        elif self.p.arrangements > 0.0 and self.rng.random() < self.p.arrangements:
-            g.kind = ROW if len(members) <= ROW_MAX and self.rng.random() < 0.5 else AUDIENCE
-        if self.p.unevenness > 0.0 and len(members) > 2 and g.kind == CIRCLE:
-            g.aspect = 1.0 + self.p.unevenness * (MAX_ASPECT - 1.0) * float(self.rng.random())
-            g.axis = float(self.rng.uniform(-math.pi, math.pi))
         g.angles = self.layout(g, angles)
         self.groups[gid] = g
         for m in members:
@@ -593,7 +623,8 @@ class _Party:
                 elif n > 2:
                     n -= 1
             radius = self.draw_radius(n)
-            centre = self.free_spot(self.reach(radius))
+            shape = self.draw_shape(n, radius)
+            centre = self.free_spot(self.claim(shape))
             if centre is None:
                 if n > 2:
                     misses += 1
@@ -609,7 +640,7 @@ class _Party:
             for k, m in enumerate(members):
                 angle = 2.0 * math.pi * k / n
                 self.position[m] = centre + radius * np.array([math.cos(angle), math.sin(angle)])
-            gid = self.new_group(members, centre, radius, 0.0)
+            gid = self.new_group(members, centre, radius, 0.0, shape=shape)
             self.record(gid, 0.0)
             self.schedule_group(gid, 0.0)
             for m in members:
@@ -693,7 +724,7 @@ class _Party:
         for j, m in enumerate(members):
             angle = 2.0 * math.pi * j / n
             self.position[m] = centre + radius * np.array([math.cos(angle), math.sin(angle)])
-        gid = self.new_group(members, centre, radius, 0.0, anchored=anchored)
+        gid = self.new_group(members, centre, radius, 0.0, shape=anchored)
         if kind == "bar":
             self.groups[gid].spot = floor
         self.events.append((0.0, "furnish", f"group {sorted(members)} stands at the {kind}"))
@@ -707,8 +738,8 @@ class _Party:
         """Whether floor of radius ``claim`` round ``centre`` is clear of every group and kept
         spot (walls aside: furniture stands at them)."""
         for g in self.groups.values():
-            c = g.centre if g.spot is None else g.spot
-            if np.hypot(*(centre - c)) < claim + self.reach(g.radius):
+            c = self.floor_centre(g)
+            if np.hypot(*(centre - c)) < claim + self.reach(self.extent(g)):
                 return False
         return all(np.hypot(*(centre - k)) >= claim + ROBOT_CLAIM_M for k in self.keep_clear)
 
@@ -780,7 +811,8 @@ class _Party:
         n = len(g.members) + 1
         radius = self.draw_radius(n)
         centre = g.centre
-        if not self.fits(centre, self.reach(radius), ignore_groups=(gid,), ignore_people=(m,)):
+        claim = self.reach(self.extent(g, radius))
+        if not self.fits(self.floor_centre(g), claim, ignore_groups=(gid,), ignore_people=(m,)):
             return False
         self.end_alone(m, t)
         d = self.position[m] - centre
@@ -830,13 +862,14 @@ class _Party:
     def pair(self, a: int, b: int, t: float) -> bool:
         radius = self.draw_radius(2)
         centre = 0.5 * (self.position[a] + self.position[b])
-        claim = self.reach(radius)
+        shape = self.draw_shape(2, radius)
+        claim = self.claim(shape)
         if not self.fits(centre, claim, ignore_people=(a, b)):
             spot = self.free_spot(claim, near=centre, within=2.0, ignore_people=(a, b))
             if spot is None:
                 return False
             centre = spot
-        self.gather(self.new_group([a, b], centre, radius, t), t)
+        self.gather(self.new_group([a, b], centre, radius, t, shape=shape), t)
         for m in (a, b):
             self.schedule_member(m, t)
         self.events.append((t, "pair", f"people {a} and {b} start talking"))
@@ -856,17 +889,20 @@ class _Party:
         moving = [order[(first + j) % n] for j in range(k)]
         staying = [m for m in order if m not in moving]
         radius = self.draw_radius(len(moving))
-        claim = self.reach(radius)
+        shape = self.draw_shape(len(moving), radius)
+        claim = self.claim(shape)
         stay_radius = self.draw_radius(len(staying))
+        stay_claim = self.reach(self.extent(g, stay_radius))
+        here = self.floor_centre(g)
         # The moving part settles beside the group, on the side it stood.
-        side = np.mean([self.position[m] for m in moving], axis=0) - g.centre
+        side = np.mean([self.position[m] for m in moving], axis=0) - here
         side = side / max(float(np.hypot(*side)), 1e-9)
         centre = None
         for extra in (0.2, 0.6, 1.2):
-            guess = g.centre + side * (self.reach(stay_radius) + claim + extra)
+            guess = here + side * (stay_claim + claim + extra)
             if self.fits(
                 guess, claim, ignore_groups=(gid,), ignore_people=tuple(g.members)
-            ) and self.fits_pair(guess, claim, g.centre, self.reach(stay_radius)):
+            ) and self.fits_pair(guess, claim, here, stay_claim):
                 centre = guess
                 break
         if centre is None:
@@ -878,7 +914,7 @@ class _Party:
         g.angles = self.layout(g, {m: g.angles[m] for m in staying})
         for m in moving:
             self.group_of.pop(m)
-        new = self.new_group(moving, centre, radius, t)
+        new = self.new_group(moving, centre, radius, t, shape=shape)
         self.record(gid, t)
         self.schedule_group(gid, t)
         self.gather(new, t)
@@ -909,8 +945,9 @@ class _Party:
             return
         radius = self.draw_radius(len(members))
         ng, nh = len(g.members), len(h.members)
-        centre = (ng * g.centre + nh * h.centre) / (ng + nh)
-        claim = self.reach(radius)
+        centre = (ng * self.floor_centre(g) + nh * self.floor_centre(h)) / (ng + nh)
+        shape = self.draw_shape(len(members), radius)
+        claim = self.claim(shape)
         if not self.fits(centre, claim, ignore_groups=(gid, best), ignore_people=tuple(members)):
             self.schedule_group(gid, t)
             return
@@ -922,7 +959,7 @@ class _Party:
         del self.groups[best]
         for m in members:
             self.group_of.pop(m, None)
-        self.gather(self.new_group(members, centre, radius, t), t)
+        self.gather(self.new_group(members, centre, radius, t, shape=shape), t)
 
 
 def _glances(
