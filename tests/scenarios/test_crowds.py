@@ -158,3 +158,11 @@ def test_groups_stand_at_furniture_in_the_scene():
                 assert np.delete(off, presenter).max() < math.radians(60.0), event.detail
             checked.add(kind)
     assert checked == {"table", "bar", "poster"}
+
+
+def test_crowd_options_fit_the_default_room():
+    # 18 guests at 0.4 per m^2: uneven, arranged and furnished parties need no larger room
+    crowd = {"spacing": 0.46, "unevenness": 1.0, "arrangements": 0.5, "furniture": 3}
+    for seed in range(4):
+        default = scenarios.make("mingle", seed=seed).stage.room
+        assert scenarios.make("mingle", seed=seed, **crowd).stage.room == default
