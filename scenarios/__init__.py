@@ -41,7 +41,7 @@ from scenarios.registry import (
 )
 from scenarios.scenario import Scenario
 from scenarios.script import WALK_SPEED_M_S, Intent, Script
-from scenarios.stage import PLANNING_RADIUS_M, RobotPlace, Role, Stage
+from scenarios.stage import PLANNING_RADIUS_M, Furniture, RobotPlace, Role, Stage
 from scenarios.timeline import PlannedGroup, ScenarioEvent, Timeline, TimelineBuilder
 from scenarios.truth import FACING_TOLERANCE_RAD, PLACE_TOLERANCE_M, GroundTruth
 
@@ -50,6 +50,7 @@ __all__ = [
     "PLACE_TOLERANCE_M",
     "PLANNING_RADIUS_M",
     "WALK_SPEED_M_S",
+    "Furniture",
     "GroundTruth",
     "Intent",
     "Option",

@@ -19,6 +19,7 @@ from scenarios.stage import SPACING_M
 __all__ = [
     "RadiusLaw",
     "circle_places",
+    "ellipse_offsets",
     "facing_centre",
     "min_radius",
     "separate",
@@ -41,10 +42,12 @@ class RadiusLaw:
     Attributes:
         base: radius of a pair, metres (half the distance between the two).
         per_member: growth per extra member, metres.
+        spacing: closest two evenly spread members may stand, metres (`min_radius`).
     """
 
     base: float
     per_member: float
+    spacing: float = SPACING_M
 
     def __post_init__(self) -> None:
         for name in ("base", "per_member"):
@@ -54,7 +57,7 @@ class RadiusLaw:
             object.__setattr__(self, name, value)
 
     def __call__(self, n: int) -> float:
-        return max(self.base + self.per_member * (n - 2), min_radius(n))
+        return max(self.base + self.per_member * (n - 2), min_radius(n, spacing=self.spacing))
 
 
 def spread_angles(n: int, rng: np.random.Generator, *, jitter: float = 0.0) -> np.ndarray:
@@ -80,6 +83,9 @@ def circle_places(
     *,
     position_noise: float = 0.0,
     orientation_noise: float = 0.0,
+    spacing: float = SPACING_M,
+    aspect: float = 1.0,
+    axis: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Places on an o-space circle and the way each member faces.
 
@@ -90,19 +96,34 @@ def circle_places(
         rng: draws the noise.
         position_noise: standard deviation of a place's offset per axis, metres.
         orientation_noise: standard deviation of a facing's deviation from the centre, radians.
+        spacing: closest two places may come after the noise, metres (`separate`).
+        aspect: the o-space's long axis over its short one: 1, a circle; above, an ellipse of
+            axes ``radius * sqrt(aspect)`` and ``radius / sqrt(aspect)`` (members still face
+            its centre).
+        axis: direction of the long axis, radians.
 
     Returns:
         (places (k, 2) metres, facings (k,) radians).
     """
     angles = np.asarray(angles, dtype=np.float64)
     k = angles.size
-    places = np.asarray(centre, dtype=np.float64) + radius * np.stack(
-        [np.cos(angles), np.sin(angles)], axis=1
-    )
-    places = separate(places + rng.normal(0.0, 1.0, size=(k, 2)) * position_noise)
+    places = np.asarray(centre, dtype=np.float64) + radius * ellipse_offsets(angles, aspect, axis)
+    places = separate(places + rng.normal(0.0, 1.0, size=(k, 2)) * position_noise, spacing=spacing)
     facings = facing_centre(places, centre) + rng.normal(0.0, 1.0, size=k) * orientation_noise
     facings = np.angle(np.exp(1j * facings))
     return places, facings
+
+
+def ellipse_offsets(angles: np.ndarray, aspect: float = 1.0, axis: float = 0.0) -> np.ndarray:
+    """(k, 2) points at parameter ``angles`` (radians) of an ellipse of mean radius 1 (axes
+    ``sqrt(aspect)`` and ``1 / sqrt(aspect)``, the long one toward ``axis``)."""
+    angles = np.asarray(angles, dtype=np.float64)
+    if aspect == 1.0:
+        return np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    long, short = math.sqrt(aspect), 1.0 / math.sqrt(aspect)
+    u, v = long * np.cos(angles - axis), short * np.sin(angles - axis)
+    c, s = math.cos(axis), math.sin(axis)
+    return np.stack([c * u - s * v, s * u + c * v], axis=1)
 
 
 def separate(places: np.ndarray, *, spacing: float = SPACING_M, iterations: int = 20) -> np.ndarray:

@@ -17,6 +17,12 @@ are -0.035 to +0.036 m. SALSA holds 25 groups of 8, so
 follow SALSA's wider spread of Tightness (sd 0.08-0.18 m) and in-group Effort Angles (median
 1.62 rad).
 
+Four options widen what a party looks like (`docs/guide/crowds.md`), each off by default:
+``spacing`` lets people stand shoulder to shoulder (smaller body discs), ``unevenness`` spreads
+members unevenly round elliptical o-spaces (SALSA's Symmetry by size), ``arrangements`` makes a
+share of the groups stand side by side or as presenter and audience, and ``furniture`` puts
+tables, bar counters and posters in the room with groups standing at them.
+
 Everything is drawn when the scenario is made: an event-driven planner (`_Party`) walks
 through the party's timeline (joins, leaves, merges, splits, pairings, passers-by), reserving
 floor space for every group so that groups never overlap, then the conversations and glances
@@ -35,11 +41,24 @@ import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
-from scenarios.formation import RadiusLaw, circle_places, min_radius
+from scenarios.formation import (
+    RadiusLaw,
+    circle_places,
+    ellipse_offsets,
+    facing_centre,
+    min_radius,
+)
 from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
-from scenarios.stage import PLANNING_RADIUS_M, SPACING_M, RobotPlace, Stage
+from scenarios.stage import (
+    CLEARANCE_M,
+    PLANNING_RADIUS_M,
+    SPACING_M,
+    Furniture,
+    RobotPlace,
+    Stage,
+)
 from scenarios.timeline import TimelineBuilder
 
 __all__ = [
@@ -82,6 +101,18 @@ ROBOT_ID = 0
 ROBOT_WALL_GAP_M = 0.6  # metres from the west wall to the watching robot
 ROBOT_CLAIM_M = 0.6  # metres of floor kept free around the robot
 ANGLE_JITTER = 0.4  # share of the even gap a member's angle may deviate by
+MAX_ASPECT = 4.0  # longest over shortest o-space axis of a group at unevenness 1
+GAP_CONCENTRATION = 0.4  # Dirichlet concentration of uneven gaps (below 1: a few wide gaps)
+ROW_STRETCH = 1.8  # a side-by-side row stands on an arc this much wider than a circle's radius
+ROW_MAX = 4  # largest side-by-side row; larger groups form circles or presenter and audience
+AUDIENCE_ARC = math.radians(150.0)  # radians, widest arc an audience stands on
+SHOULDER_GAP_M = 0.05  # metres between neighbours of a row or an audience beyond the spacing
+CIRCLE, ROW, AUDIENCE = "circle", "side-by-side", "presenter-audience"
+TABLE_SIZE_M = (0.8, 0.8, 0.75)  # metres: diameter, diameter, height of a round table
+BAR_SIZE_M = (2.0, 0.5, 1.1)  # metres: length, depth, height of a bar counter at a wall
+POSTER_SIZE_M = (1.0, 0.05, 1.8)  # metres: width, depth, height of a poster board at a wall
+FURNITURE_GAP_M = 0.08  # metres between a body's disc and the furniture it stands at
+FURNITURE_WALL_END_M = 0.4  # metres, a bar or a poster keeps this far from the room's corners
 
 
 class NoFloorError(ValueError):
@@ -110,6 +141,26 @@ class MingleParams:
         mean_alone: mean time someone stays alone before acting, seconds.
         alone_share: share of the guests alone at the start.
         mean_utterance: mean length of one speaker's turn, seconds.
+        spacing: closest two people's places may be, metres; below the default 0.63 (bodies
+            as discs that enclose the arms) people get body discs of radius
+            ``(spacing - 0.03) / 2`` and can stand shoulder to shoulder (SALSA's
+            nearest-neighbour distance q10 is 0.44 m).
+        unevenness: how unevenly a group's members spread round its o-space circle: each
+            angular gap is ``1 - unevenness`` of the even gap plus ``unevenness`` of a gap
+            drawn from a Dirichlet of concentration 0.4 (a few wide gaps; never closer than
+            ``spacing``), so groups open on one side and bunch on another; and each group
+            of three or more is an ellipse of axes ratio drawn uniform in
+            [1, 1 + 3 unevenness]; 0: evenly spread round a circle, as before.
+        arrangements: share of the groups formed that are not circles: half of them (groups
+            of up to 4) stand side by side on a wide arc facing one point (at a bar), the
+            others as presenter and audience (one faces the rest, who face them, as at a
+            poster); a group that outgrows its arrangement becomes a circle.
+        furniture: pieces of furniture, in turn a round table, a bar counter at a wall and a
+            poster at a wall, each with a group standing at it from the start (a ring round
+            the table, a row along the bar facing it, a presenter at the poster and an
+            audience facing them); people leave and (at a table) join these groups, which
+            never merge, split or move. The furniture is in the MuJoCo scene; people walking
+            do not collide with it.
     """
 
     people: Annotated[int, Range(2, 100)] = 18
@@ -128,6 +179,10 @@ class MingleParams:
     mean_alone: Annotated[float, Range(1.0, unit="s")] = 10.0
     alone_share: Annotated[float, Range(0.0, 1.0)] = 0.08
     mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 4.0
+    spacing: Annotated[float, Range(0.43, 1.0, unit="m")] = SPACING_M
+    unevenness: Annotated[float, Range(0.0, 1.0)] = 0.0
+    arrangements: Annotated[float, Range(0.0, 1.0)] = 0.0
+    furniture: Annotated[int, Range(0, 6)] = 0
 
     def check(self, name: str) -> None:
         """`ValueError` naming the option for impossible values: each out of its range
@@ -164,11 +219,23 @@ class _Group:
     angles: dict[int, float]
     record: int = -1  # index of its current record
     version: int = 0
+    aspect: float = 1.0  # long over short axis of its o-space (1: a circle)
+    axis: float = 0.0  # direction of the long axis, radians
+    kind: str = CIRCLE  # CIRCLE, ROW (side by side) or AUDIENCE (presenter and audience)
+    stretch: float = 1.0  # places stand on a circle of radius * stretch (a row's is wider)
+    presenter: int = -1  # the presenter of an AUDIENCE
+    mid: float | None = None  # fixed direction of a row's middle or the presenter (furniture)
+    hold: float = 0.0  # smallest radius, metres (a ring round a table)
+    anchor: int = -1  # the furniture it stands at (it never merges, splits or moves)
+    spot: np.ndarray | None = None  # centre of the floor it takes, if not its centre (a bar)
 
     def place_of(self, m: int) -> np.ndarray:
         """(2,) where member ``m`` stands on the o-space circle (before noise), metres."""
         angle = self.angles[m]
-        return self.centre + self.radius * np.array([math.cos(angle), math.sin(angle)])
+        radius = self.radius * self.stretch
+        if self.aspect == 1.0:
+            return self.centre + radius * np.array([math.cos(angle), math.sin(angle)])
+        return self.centre + radius * ellipse_offsets([angle], self.aspect, self.axis)[0]
 
 
 @dataclass
@@ -207,7 +274,7 @@ class _Party:
         self.keep_clear = keep_clear  # spots no group or person may take (the robot's)
         self.rng = rng
         self.half = 0.5 * side
-        self.law = RadiusLaw(params.radius_base, params.radius_per_member)
+        self.law = RadiusLaw(params.radius_base, params.radius_per_member, params.spacing)
         self.ids = list(range(1, params.people + 1))
         self.records: list[_Record] = []
         self.alone: list[_Alone] = []
@@ -222,12 +289,42 @@ class _Party:
         self.queue: list[tuple[float, int, str, tuple]] = []
         self.count = 0
         self.next_gid = 0
+        self.furniture: list[Furniture] = []
 
     # -- floor space ------------------------------------------------------------------------
 
     def reach(self, radius: float) -> float:
-        """Radius of the floor a group of o-space ``radius`` occupies."""
+        """Radius of the floor a group whose members stand within ``radius`` occupies."""
         return radius + PLANNING_RADIUS_M + GROUP_MARGIN_M
+
+    def extent(self, g: _Group, radius: float | None = None) -> float:
+        """How far from its floor centre (`floor_centre`) group ``g``'s members stand, with
+        o-space ``radius`` (default its own): its long semi-axis; a row's half length."""
+        radius = g.radius if radius is None else radius
+        if g.kind == ROW:
+            return max(radius, 0.5 * (ROW_MAX - 1) * (self.p.spacing + SHOULDER_GAP_M))
+        return radius * math.sqrt(g.aspect)
+
+    def floor_centre(self, g: _Group) -> np.ndarray:
+        """The middle of the floor ``g`` takes: its centre, or a row's middle."""
+        return g.centre if g.spot is None else g.spot
+
+    def draw_shape(self, n: int, radius: float) -> _Group:
+        """The kind and o-space shape of a new group of ``n`` and o-space ``radius`` (drawn
+        only when the options ``arrangements`` and ``unevenness`` ask), as a template."""
+        shape = _Group([], np.zeros(2), radius, {})
+        if self.p.arrangements > 0.0 and self.rng.random() < self.p.arrangements:
+            shape.kind = ROW if n <= ROW_MAX and self.rng.random() < 0.5 else AUDIENCE
+            if shape.kind == ROW:
+                shape.mid = float(self.rng.uniform(-math.pi, math.pi))
+        if self.p.unevenness > 0.0 and n > 2 and shape.kind == CIRCLE:
+            shape.aspect = 1.0 + self.p.unevenness * (MAX_ASPECT - 1.0) * float(self.rng.random())
+            shape.axis = float(self.rng.uniform(-math.pi, math.pi))
+        return shape
+
+    def claim(self, shape: _Group) -> float:
+        """The floor radius a new group of template ``shape`` claims."""
+        return self.reach(self.extent(shape))
 
     def fits(
         self,
@@ -246,7 +343,8 @@ class _Party:
         for gid, g in self.groups.items():
             if gid in ignore_groups:
                 continue
-            if hypot(x - g.centre[0], y - g.centre[1]) < claim + self.reach(g.radius):
+            c = self.floor_centre(g)
+            if hypot(x - c[0], y - c[1]) < claim + self.reach(self.extent(g)):
                 return False
         for pid, a in self.alone_at.items():
             if pid in ignore_people:
@@ -277,24 +375,101 @@ class _Party:
 
     def draw_radius(self, n: int) -> float:
         spread = max(1.0 + self.rng.normal() * self.p.radius_spread, 0.6)
-        return max(self.law(n) * spread, min_radius(n))
+        return max(self.law(n) * spread, min_radius(n, spacing=self.p.spacing))
+
+    def layout(self, g: _Group, angles: dict[int, float]) -> dict[int, float]:
+        """The members' angles round ``g``'s centre for its kind (a circle, `spread`; a row
+        or presenter and audience, `arc`); a kind the group no longer suits (a row grown past
+        `ROW_MAX`, an audience of fewer than two or whose presenter left) becomes a circle."""
+        n = len(g.members)
+        g.radius = max(g.radius, g.hold)
+        if (
+            g.kind == ROW
+            and n > ROW_MAX
+            or g.kind == AUDIENCE
+            and (n < 3 or g.presenter not in g.members and g.presenter >= 0)
+        ):
+            if g.kind == ROW and g.spot is not None and g.anchor < 0:
+                g.centre, g.spot, g.mid = g.spot, None, None  # the circle forms where it stood
+            g.kind, g.stretch = CIRCLE, 1.0
+        if g.kind == CIRCLE:
+            return self.spread(g.members, angles, g.radius)
+        return self.arc(g, angles)
+
+    def arc(self, g: _Group, angles: dict[int, float]) -> dict[int, float]:
+        """A row: the members side by side on an arc of radius `ROW_STRETCH` times the group's
+        radius, facing its centre (a bar, a shared view). Presenter and audience: the
+        presenter on the circle, the audience side by side on the far side (an arc of at most
+        `AUDIENCE_ARC`), in the members' order round the centre."""
+        members = sorted(g.members, key=lambda m: angles[m] % (2.0 * math.pi))
+        step_m = self.p.spacing + SHOULDER_GAP_M
+        if g.kind == ROW:
+            g.stretch = ROW_STRETCH
+            radius = g.radius * g.stretch
+            step = 2.0 * math.asin(min(1.0, step_m / (2.0 * radius)))
+            mid = g.mid
+            if mid is None:
+                mid = float(np.angle(np.exp(1j * np.array([angles[m] for m in members])).mean()))
+            turns = [angles[m] % (2.0 * math.pi) for m in members]
+            widths = np.diff(turns, append=turns[0] + 2.0 * math.pi)
+            first = (int(np.argmax(widths)) + 1) % len(members)
+            row = members[first:] + members[:first]
+            start = mid - 0.5 * step * (len(row) - 1)
+            return {m: start + k * step for k, m in enumerate(row)}
+        if g.presenter not in g.members:
+            g.presenter = members[int(self.rng.integers(len(members)))]
+        audience = [m for m in members if m != g.presenter]
+        facing = angles[g.presenter] if g.mid is None else g.mid
+        step = 2.0 * math.asin(min(1.0, step_m / (2.0 * g.radius)))
+        step = min(step, AUDIENCE_ARC / max(len(audience) - 1, 1))
+        start = facing + math.pi - 0.5 * step * (len(audience) - 1)
+        # the audience keeps its order round the centre, starting past the presenter
+        k0 = members.index(g.presenter)
+        order = members[k0 + 1 :] + members[:k0]
+        out = {g.presenter: facing}
+        out.update({m: start + k * step for k, m in enumerate(order)})
+        return out
 
     def spread(
         self, members: list[int], angles: dict[int, float], radius: float
     ) -> dict[int, float]:
         """Even angles in the members' order around the circle, rotated to move them least,
         each moved at random by up to `ANGLE_JITTER` of the gap, or less where neighbours
-        would come closer than `SPACING_M`."""
+        would come closer than the option ``spacing`` (with ``unevenness``: `uneven`)."""
         order = sorted(members, key=lambda m: angles[m] % (2.0 * math.pi))
         n = len(order)
+        if self.p.unevenness > 0.0 and n > 2:
+            return self.uneven(order, angles, radius)
         gap = 2.0 * math.pi / n
         offsets = np.array([angles[m] - k * gap for k, m in enumerate(order)])
         base = float(np.angle(np.exp(1j * offsets).mean()))
         chord = 2.0 * radius * math.sin(min(gap, math.pi) / 2.0)
-        room = max(0.0, 1.0 - SPACING_M / chord) if n > 2 else ANGLE_JITTER
+        room = max(0.0, 1.0 - self.p.spacing / chord) if n > 2 else ANGLE_JITTER
         share = min(ANGLE_JITTER, room)
         jitter = self.rng.uniform(-share, share, size=n) * gap
         return {m: base + k * gap + float(jitter[k]) for k, m in enumerate(order)}
+
+    def uneven(self, order: list[int], angles: dict[int, float], radius: float) -> dict[int, float]:
+        """Angles of the members (``order``: by angle) with uneven gaps: each gap is
+        ``1 - unevenness`` of the even one plus ``unevenness`` of a gap drawn from a
+        Dirichlet of concentration `GAP_CONCENTRATION`, then squeezed so that no gap brings
+        neighbours closer than ``spacing``; the widest drawn gap goes where the members'
+        widest gap was, and the whole is rotated to move them least."""
+        n = len(order)
+        u = self.p.unevenness
+        drawn = (1.0 - u) / n + u * self.rng.dirichlet(np.full(n, GAP_CONCENTRATION))
+        closest = 2.0 * math.asin(min(1.0, self.p.spacing / (2.0 * radius)))
+        closest = min(closest, 2.0 * math.pi / n)
+        gaps = closest + (2.0 * math.pi - n * closest) * drawn
+        gaps = np.roll(gaps, n - 1 - int(np.argmax(gaps)))  # the widest gap closes the ring
+        turns = [angles[m] % (2.0 * math.pi) for m in order]
+        widths = np.diff(turns, append=turns[0] + 2.0 * math.pi)
+        first = (int(np.argmax(widths)) + 1) % n  # the member after the widest gap
+        order = order[first:] + order[:first]
+        at = np.concatenate([[0.0], np.cumsum(gaps[:-1])])
+        offsets = np.array([angles[m] for m in order]) - at
+        base = float(np.angle(np.exp(1j * offsets).mean()))
+        return {m: base + float(at[k]) for k, m in enumerate(order)}
 
     def record(self, gid: int, t: float, speeds: dict[int, float] | None = None) -> None:
         """A new planned record of group ``gid``'s current shape from ``t``."""
@@ -303,12 +478,22 @@ class _Party:
         angles = np.array([g.angles[m] for m in members])
         places, facings = circle_places(
             g.centre,
-            g.radius,
+            g.radius * g.stretch,
             angles,
             self.rng,
             position_noise=self.p.position_noise,
             orientation_noise=self.p.orientation_noise,
+            spacing=self.p.spacing,
+            aspect=g.aspect,
+            axis=g.axis,
         )
+        if g.kind == AUDIENCE:  # the audience faces the presenter, who faces the audience
+            noise = facings - facing_centre(places, g.centre)
+            k = members.index(g.presenter)
+            targets = np.repeat(places[k : k + 1], len(members), axis=0)
+            targets[k] = np.delete(places, k, axis=0).mean(axis=0)
+            d = targets - places
+            facings = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) + noise)))
         edge = self.half - PLANNING_RADIUS_M - WALL_MARGIN_M
         places = np.clip(places, -edge, edge)
         self.records.append(
@@ -316,6 +501,11 @@ class _Party:
         )
         g.record = len(self.records) - 1
         g.version += 1
+        if g.kind == ROW:
+            self.events.append((t, "arrange", f"group {sorted(members)} stands side by side"))
+        elif g.kind == AUDIENCE:
+            audience = sorted(m for m in members if m != g.presenter)
+            self.events.append((t, "arrange", f"person {g.presenter} presents to {audience}"))
         for k, m in enumerate(members):
             self.position[m] = places[k]
 
@@ -327,15 +517,35 @@ class _Party:
                 rec.end = t
                 rec.talk_end = min(rec.talk_end, t)
 
-    def new_group(self, members: list[int], centre: np.ndarray, radius: float, t: float) -> int:
+    def new_group(
+        self,
+        members: list[int],
+        centre: np.ndarray,
+        radius: float,
+        t: float,
+        *,
+        shape: _Group | None = None,
+    ) -> int:
+        """A group of ``members`` round ``centre`` (a row: ``centre`` is its middle, and it
+        faces a point `ROW_STRETCH` times ``radius`` beyond); ``shape``: the template of its
+        kind, o-space shape, direction, radius floor and furniture (`draw_shape`, `furnish`),
+        else a circle."""
         gid = self.next_gid
         self.next_gid += 1
+        g = _Group(list(members), centre.copy(), radius, {})
+        if shape is not None:
+            g.kind, g.mid, g.hold, g.anchor = shape.kind, shape.mid, shape.hold, shape.anchor
+            g.aspect, g.axis = shape.aspect, shape.axis
+            if g.kind == ROW and g.anchor < 0 and g.mid is not None:
+                g.spot = centre.copy()
+                g.centre = centre - radius * ROW_STRETCH * np.array(
+                    [math.cos(g.mid), math.sin(g.mid)]
+                )
         angles = {}
         for m in members:
-            d = self.position[m] - centre
+            d = self.position[m] - g.centre
             angles[m] = math.atan2(d[1], d[0]) if np.hypot(*d) > 1e-6 else self.rng.uniform(-3, 3)
-        g = _Group(list(members), centre.copy(), radius, {})
-        g.angles = self.spread(members, angles, radius)
+        g.angles = self.layout(g, angles)
         self.groups[gid] = g
         for m in members:
             self.group_of[m] = gid
@@ -403,6 +613,8 @@ class _Party:
         unplaced = unplaced[n_alone:]
         largest = self.p.max_group_size  # shrinks when groups keep finding no floor
         misses = 0
+        for k in range(self.p.furniture):
+            unplaced = self.furnish(k, unplaced)
         while len(unplaced) >= 2:
             n = int(min(rng.choice(sizes, p=share), len(unplaced)))
             if len(unplaced) - n == 1:  # leave nobody as the odd one out, where sizes allow
@@ -411,7 +623,8 @@ class _Party:
                 elif n > 2:
                     n -= 1
             radius = self.draw_radius(n)
-            centre = self.free_spot(self.reach(radius))
+            shape = self.draw_shape(n, radius)
+            centre = self.free_spot(self.claim(shape))
             if centre is None:
                 if n > 2:
                     misses += 1
@@ -427,7 +640,7 @@ class _Party:
             for k, m in enumerate(members):
                 angle = 2.0 * math.pi * k / n
                 self.position[m] = centre + radius * np.array([math.cos(angle), math.sin(angle)])
-            gid = self.new_group(members, centre, radius, 0.0)
+            gid = self.new_group(members, centre, radius, 0.0, shape=shape)
             self.record(gid, 0.0)
             self.schedule_group(gid, 0.0)
             for m in members:
@@ -448,6 +661,87 @@ class _Party:
             self.start_alone(m, spot, 0.0)
             self.start_yaw[m] = self.alone_at[m].facing
         self.start_position = dict(self.position)
+
+    def furnish(self, k: int, unplaced: list[int]) -> list[int]:
+        """Furniture ``k`` (a table, a bar, a poster, in turn) and the group that stands at it
+        from the start, taken from ``unplaced``: a ring round a table, a row along a bar
+        facing it, an audience facing a presenter at a poster. Returns who is left."""
+        kind = ("table", "bar", "poster")[k % 3]
+        rng = self.rng
+        body = 0.5 * self.p.spacing
+        if kind == "table":
+            n = int(rng.integers(3, 7))
+        elif kind == "bar":
+            n = int(rng.integers(2, ROW_MAX + 1))
+        else:
+            n = int(rng.integers(3, 7))
+        n = min(n, len(unplaced))
+        if n < 2:
+            return unplaced
+        radius = self.draw_radius(n)
+        anchored = _Group([], np.zeros(2), radius, {}, anchor=k)
+        if kind == "table":
+            size = TABLE_SIZE_M
+            anchored.hold = 0.5 * size[0] + body + FURNITURE_GAP_M
+            radius = max(radius, anchored.hold)
+            centre = self.free_spot(self.reach(radius))
+            if centre is None:
+                raise NoFloorError(
+                    f"mingle: no free floor for a table in a {2 * self.half:g} m room"
+                )
+            item = Furniture(kind, (float(centre[0]), float(centre[1])), size)
+        else:
+            size = BAR_SIZE_M if kind == "bar" else POSTER_SIZE_M
+            front = size[1] + FURNITURE_GAP_M + body  # from the wall to where people stand
+            for _ in range(PLACE_TRIES):
+                wall = int(rng.integers(4))
+                inward = wall * 0.5 * math.pi + math.pi  # the wall's normal into the room
+                normal = np.array([math.cos(inward), math.sin(inward)])
+                along = np.array([-normal[1], normal[0]])
+                reach = self.half - 0.5 * size[0] - FURNITURE_WALL_END_M
+                offset = float(rng.uniform(-reach, reach)) * along
+                spot = (self.half - 0.5 * size[1]) * -normal + offset
+                if kind == "bar":  # the row's arc centre lies beyond the counter: they face it
+                    stand = radius * ROW_STRETCH
+                    centre = offset - normal * (self.half - front + stand)
+                    floor = centre + normal * stand
+                else:  # the presenter between the poster and the centre, the audience beyond
+                    centre = offset - normal * (self.half - front - radius)
+                    floor = centre
+                if self.clear(floor, self.reach(radius)):
+                    break
+            else:
+                raise NoFloorError(
+                    f"mingle: no free wall for a {kind} in a {2 * self.half:g} m room"
+                )
+            anchored.kind = ROW if kind == "bar" else AUDIENCE
+            anchored.mid = inward if kind == "bar" else inward + math.pi
+            item = Furniture(
+                kind, (float(spot[0]), float(spot[1])), size, yaw=float(inward + 0.5 * math.pi)
+            )
+        self.furniture.append(item)
+        members, rest = unplaced[:n], unplaced[n:]
+        for j, m in enumerate(members):
+            angle = 2.0 * math.pi * j / n
+            self.position[m] = centre + radius * np.array([math.cos(angle), math.sin(angle)])
+        gid = self.new_group(members, centre, radius, 0.0, shape=anchored)
+        if kind == "bar":
+            self.groups[gid].spot = floor
+        self.events.append((0.0, "furnish", f"group {sorted(members)} stands at the {kind}"))
+        self.record(gid, 0.0)
+        self.schedule_group(gid, 0.0)
+        for m in members:
+            self.schedule_member(m, 0.0)
+        return rest
+
+    def clear(self, centre: np.ndarray, claim: float) -> bool:
+        """Whether floor of radius ``claim`` round ``centre`` is clear of every group and kept
+        spot (walls aside: furniture stands at them)."""
+        for g in self.groups.values():
+            c = self.floor_centre(g)
+            if np.hypot(*(centre - c)) < claim + self.reach(self.extent(g)):
+                return False
+        return all(np.hypot(*(centre - k)) >= claim + ROBOT_CLAIM_M for k in self.keep_clear)
 
     def run(self) -> None:
         self.start()
@@ -486,7 +780,7 @@ class _Party:
         g = self.groups[gid]
         if len(g.members) >= 2:
             g.radius = self.draw_radius(len(g.members))
-            g.angles = self.spread(g.members, g.angles, g.radius)
+            g.angles = self.layout(g, g.angles)
             self.record(gid, t)
             self.schedule_group(gid, t)
             return
@@ -517,7 +811,8 @@ class _Party:
         n = len(g.members) + 1
         radius = self.draw_radius(n)
         centre = g.centre
-        if not self.fits(centre, self.reach(radius), ignore_groups=(gid,), ignore_people=(m,)):
+        claim = self.reach(self.extent(g, radius))
+        if not self.fits(self.floor_centre(g), claim, ignore_groups=(gid,), ignore_people=(m,)):
             return False
         self.end_alone(m, t)
         d = self.position[m] - centre
@@ -525,7 +820,7 @@ class _Party:
         angles[m] = math.atan2(d[1], d[0])
         g.members.append(m)
         g.radius = radius
-        g.angles = self.spread(g.members, angles, radius)
+        g.angles = self.layout(g, angles)
         self.group_of[m] = gid
         speed, arrive = self.walk(m, g.place_of(m), t)
         shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
@@ -567,13 +862,14 @@ class _Party:
     def pair(self, a: int, b: int, t: float) -> bool:
         radius = self.draw_radius(2)
         centre = 0.5 * (self.position[a] + self.position[b])
-        claim = self.reach(radius)
+        shape = self.draw_shape(2, radius)
+        claim = self.claim(shape)
         if not self.fits(centre, claim, ignore_people=(a, b)):
             spot = self.free_spot(claim, near=centre, within=2.0, ignore_people=(a, b))
             if spot is None:
                 return False
             centre = spot
-        self.gather(self.new_group([a, b], centre, radius, t), t)
+        self.gather(self.new_group([a, b], centre, radius, t, shape=shape), t)
         for m in (a, b):
             self.schedule_member(m, t)
         self.events.append((t, "pair", f"people {a} and {b} start talking"))
@@ -581,7 +877,7 @@ class _Party:
 
     def on_split(self, t: float, gid: int, version: int) -> None:
         g = self.groups.get(gid)
-        if g is None or g.version != version or len(g.members) < 4:
+        if g is None or g.version != version or len(g.members) < 4 or g.anchor >= 0:
             return
         if any(self.busy_until.get(m, 0.0) > t for m in g.members):
             self.schedule_group(gid, t)
@@ -593,17 +889,20 @@ class _Party:
         moving = [order[(first + j) % n] for j in range(k)]
         staying = [m for m in order if m not in moving]
         radius = self.draw_radius(len(moving))
-        claim = self.reach(radius)
+        shape = self.draw_shape(len(moving), radius)
+        claim = self.claim(shape)
         stay_radius = self.draw_radius(len(staying))
+        stay_claim = self.reach(self.extent(g, stay_radius))
+        here = self.floor_centre(g)
         # The moving part settles beside the group, on the side it stood.
-        side = np.mean([self.position[m] for m in moving], axis=0) - g.centre
+        side = np.mean([self.position[m] for m in moving], axis=0) - here
         side = side / max(float(np.hypot(*side)), 1e-9)
         centre = None
         for extra in (0.2, 0.6, 1.2):
-            guess = g.centre + side * (self.reach(stay_radius) + claim + extra)
+            guess = here + side * (stay_claim + claim + extra)
             if self.fits(
                 guess, claim, ignore_groups=(gid,), ignore_people=tuple(g.members)
-            ) and self.fits_pair(guess, claim, g.centre, self.reach(stay_radius)):
+            ) and self.fits_pair(guess, claim, here, stay_claim):
                 centre = guess
                 break
         if centre is None:
@@ -612,10 +911,10 @@ class _Party:
         self.events.append((t, "split", f"group {sorted(g.members)} splits off {sorted(moving)}"))
         g.members = staying
         g.radius = stay_radius
-        g.angles = self.spread(staying, {m: g.angles[m] for m in staying}, stay_radius)
+        g.angles = self.layout(g, {m: g.angles[m] for m in staying})
         for m in moving:
             self.group_of.pop(m)
-        new = self.new_group(moving, centre, radius, t)
+        new = self.new_group(moving, centre, radius, t, shape=shape)
         self.record(gid, t)
         self.schedule_group(gid, t)
         self.gather(new, t)
@@ -625,11 +924,13 @@ class _Party:
 
     def on_merge(self, t: float, gid: int, version: int) -> None:
         g = self.groups.get(gid)
-        if g is None or g.version != version:
+        if g is None or g.version != version or g.anchor >= 0:
             return
         best, best_d = None, MERGE_REACH_M
         for hid, h in self.groups.items():
             if hid == gid or len(g.members) + len(h.members) > self.p.max_group_size:
+                continue
+            if h.anchor >= 0:
                 continue
             d = float(np.hypot(*(h.centre - g.centre))) - g.radius - h.radius
             if d < best_d:
@@ -644,8 +945,9 @@ class _Party:
             return
         radius = self.draw_radius(len(members))
         ng, nh = len(g.members), len(h.members)
-        centre = (ng * g.centre + nh * h.centre) / (ng + nh)
-        claim = self.reach(radius)
+        centre = (ng * self.floor_centre(g) + nh * self.floor_centre(h)) / (ng + nh)
+        shape = self.draw_shape(len(members), radius)
+        claim = self.claim(shape)
         if not self.fits(centre, claim, ignore_groups=(gid, best), ignore_people=tuple(members)):
             self.schedule_group(gid, t)
             return
@@ -657,7 +959,7 @@ class _Party:
         del self.groups[best]
         for m in members:
             self.group_of.pop(m, None)
-        self.gather(self.new_group(members, centre, radius, t), t)
+        self.gather(self.new_group(members, centre, radius, t, shape=shape), t)
 
 
 def _glances(
@@ -788,10 +1090,18 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
         edge = 0.5 * side - WALL_GAP_M - PLANNING_RADIUS_M
         spots = np.array([[edge, -edge + 0.7 * k] for k in range(len(passers))])
         roles += cast(rng, passers, spots, [0.0] * len(passers), parts="passer-by", present=False)
+    if params.spacing < SPACING_M:  # bodies that let people stand shoulder to shoulder
+        body = 0.5 * (params.spacing - CLEARANCE_M)
+        roles = tuple(dataclasses.replace(role, radius=body) for role in roles)
     return Scenario(
         name=name,
         seed=seed,
-        stage=Stage(room=(side, side), people=tuple(roles), robot=robot),
+        stage=Stage(
+            room=(side, side),
+            people=tuple(roles),
+            robot=robot,
+            furniture=tuple(party.furniture),
+        ),
         timeline=builder.build(),
         duration=params.duration,
         description="a SALSA-like party: groups forming, merging, splitting; people alone",

@@ -6,7 +6,11 @@ radii, place, facing and gaze noise, the largest group, how long people stay and
 crowd's size and density and the passers-by, each uniformly within the ranges below. The
 ranges cover both real datasets this project measures: SALSA's tight, noisy groups (radius law
 0.444 + 0.067 (n - 2) m, facings noisy) and Babble's wide, regular circles (0.674 + 0.086
-(n - 2) m, facings within 5 degrees of the centre), and go beyond them on both sides.
+(n - 2) m, facings within 5 degrees of the centre), and go beyond them on both sides. The
+closest spacing of people (SALSA's nearest-neighbour q10: 0.44 m) and how unevenly groups spread
+round their centre (from Babble's even circles to beyond SALSA's Symmetry), the share of
+side-by-side and presenter-audience groups and the furniture groups stand at are drawn too
+(`docs/guide/crowds.md`).
 """
 
 from __future__ import annotations
@@ -37,8 +41,12 @@ RANGES: dict[str, tuple[float, float]] = {
     "alone_share": (0.0, 0.3),
     "density": (0.2, 0.8),  # people per m^2
     "passers_by": (0, 3),  # people
+    "spacing": (0.43, 0.63),  # metres (shoulder to shoulder .. bodies as arm-enclosing discs)
+    "unevenness": (0.0, 1.0),  # (even circles, as Babble .. beyond SALSA's uneven groups)
+    "arrangements": (0.0, 0.4),  # share of side-by-side and presenter-audience groups
+    "furniture": (0, 3),  # pieces: a table, a bar, a poster
 }
-_INTEGERS = ("max_group_size", "passers_by")
+_INTEGERS = ("max_group_size", "passers_by", "furniture")
 
 
 def draw_params(

@@ -57,7 +57,7 @@ from reform.seeding import SENSOR, WORLD, derive_seed
 from scenarios import Scenario, ScenarioEvent, Stage
 from scenarios.script import Intent
 from sim import sizing
-from sim.scene import PersonSpec, RobotSpec, SceneSpec
+from sim.scene import FurnitureSpec, PersonSpec, RobotSpec, SceneSpec
 from sim.sensor import Sensor
 from sim.world import (
     DEFAULT_BLOCK_ROWS,
@@ -106,13 +106,18 @@ def scene_spec(stage: Stage, *, name: str = "scene") -> SceneSpec:
             height=p.height,
             width=p.width,
             present=p.present,
+            body_radius=p.radius,
         )
         for p in stage.people
     ]
     robot = None
     if stage.robot is not None:
         robot = RobotSpec(id=stage.robot.id, position=stage.robot.position, yaw=stage.robot.yaw)
-    return SceneSpec(people=people, robot=robot, room=stage.room, name=name)
+    furniture = [
+        FurnitureSpec(kind=f.kind, position=f.position, size=f.size, yaw=f.yaw)
+        for f in stage.furniture
+    ]
+    return SceneSpec(people=people, robot=robot, room=stage.room, name=name, furniture=furniture)
 
 
 def prepare(

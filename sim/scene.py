@@ -33,6 +33,9 @@ PERSON_REFERENCE_WIDTH_M = 0.44  # metres, between the shoulder joints of the sh
 PERSON_HEIGHT_RANGE_M = (1.0, 2.3)  # metres, accepted person heights
 PERSON_WIDTH_RANGE_M = (0.30, 0.70)  # metres, accepted shoulder widths
 BODY_RADIUS_PER_WIDTH = 0.64  # body radius / shoulder width: the disc encloses arms and hands
+BODY_RADIUS_RANGE_M = (0.15, 0.5)  # metres, accepted explicit body radii
+FURNITURE_KINDS = ("table", "bar", "poster")
+FURNITURE_SIZE_RANGE_M = (0.02, 10.0)  # metres, accepted furniture sizes
 HEAD_REACH_PER_WIDTH = 0.07  # nose tip reach = this * width + HEAD_REACH_PER_HEIGHT * height
 HEAD_REACH_PER_HEIGHT = 0.098  # (the head is set forward by the width, sized by the height)
 ROBOT_REFERENCE_HEIGHT_M = 1.30  # metres, height of the shipped robot model
@@ -143,6 +146,9 @@ class PersonSpec:
         color: shirt colour, RGB or RGBA in [0, 1]; ``None`` picks a distinct one.
         present: whether the person is in the room at the start (absent people can enter later).
         asset: name of the shipped model to use (see ``sim.assets.asset_names``).
+        body_radius: the body disc's radius, metres (within ``BODY_RADIUS_RANGE_M``), or
+            ``None`` for a disc enclosing arms, hands and nose; a smaller one lets people stand
+            shoulder to shoulder (arms and noses may then touch).
     """
 
     id: int
@@ -153,6 +159,7 @@ class PersonSpec:
     color: tuple[float, ...] | None = None
     present: bool = True
     asset: str = PERSON_ASSET
+    body_radius: float | None = None
 
     kind: ClassVar[str] = HUMAN
 
@@ -177,10 +184,19 @@ class PersonSpec:
             object.__setattr__(self, "color", color if len(color) == 4 else (*color, 1.0))
         object.__setattr__(self, "present", bool(self.present))
         _check_asset(f"{label}: asset", self.asset)
+        if self.body_radius is not None:
+            object.__setattr__(
+                self,
+                "body_radius",
+                _in_range(f"{label}: body_radius", self.body_radius, BODY_RADIUS_RANGE_M, "m"),
+            )
 
     @property
     def radius(self) -> float:
-        """Body radius, metres: a disc enclosing the arms and hands (0.28 m by default)."""
+        """Body radius, metres: ``body_radius`` when given, else a disc enclosing the arms and
+        hands (0.28 m by default)."""
+        if self.body_radius is not None:
+            return self.body_radius
         return max(
             BODY_RADIUS_PER_WIDTH * self.width,
             HEAD_REACH_PER_WIDTH * self.width + HEAD_REACH_PER_HEIGHT * self.height,
@@ -234,6 +250,36 @@ Agent = PersonSpec | RobotSpec
 
 
 @dataclass(frozen=True)
+class FurnitureSpec:
+    """A static object in the room (visual only: the motion does not collide with it).
+
+    Attributes:
+        kind: ``"table"`` (a cylinder), ``"bar"`` or ``"poster"`` (boxes).
+        position: (x, y) of its centre on the floor, metres.
+        size: (length, depth, height), metres, each within ``FURNITURE_SIZE_RANGE_M``.
+        yaw: direction of its length, radians.
+    """
+
+    kind: str
+    position: tuple[float, float]
+    size: tuple[float, float, float]
+    yaw: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in FURNITURE_KINDS:
+            raise ValueError(
+                f"furniture: kind must be one of {list(FURNITURE_KINDS)}, got {self.kind!r}"
+            )
+        label = f"furniture {self.kind}"
+        object.__setattr__(self, "position", _pair(f"{label}: position", self.position))
+        if len(tuple(self.size)) != 3:
+            raise ValueError(f"{label}: size must be (length, depth, height), got {self.size!r}")
+        size = tuple(_in_range(f"{label}: size", v, FURNITURE_SIZE_RANGE_M, "m") for v in self.size)
+        object.__setattr__(self, "size", size)
+        object.__setattr__(self, "yaw", _finite(f"{label}: yaw", self.yaw))
+
+
+@dataclass(frozen=True)
 class SceneSpec:
     """A room with people and, optionally, the Directions Robot.
 
@@ -244,6 +290,7 @@ class SceneSpec:
             the origin. Babble's play area was 5 m x 5 m.
         wall_height: metres.
         name: model name.
+        furniture: static tables, bar counters and posters (geoms named ``furniture<k>``).
     """
 
     people: Sequence[PersonSpec] = ()
@@ -251,6 +298,7 @@ class SceneSpec:
     room: tuple[float, float] = (5.0, 5.0)
     wall_height: float = 1.0
     name: str = "scene"
+    furniture: Sequence[FurnitureSpec] = ()
     _agents: tuple[Agent, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -261,6 +309,13 @@ class SceneSpec:
         if self.robot is not None and not isinstance(self.robot, RobotSpec):
             raise ValueError(f"robot must be a RobotSpec or None, got {type(self.robot).__name__}")
         object.__setattr__(self, "people", people)
+        furniture = tuple(self.furniture)
+        for k, item in enumerate(furniture):
+            if not isinstance(item, FurnitureSpec):
+                raise ValueError(
+                    f"furniture[{k}] must be a FurnitureSpec, got {type(item).__name__}"
+                )
+        object.__setattr__(self, "furniture", furniture)
         room = _pair("room", self.room)
         if not (0.0 < room[0] <= ROOM_MAX_M and 0.0 < room[1] <= ROOM_MAX_M):
             raise ValueError(
@@ -458,6 +513,26 @@ def _add_room(spec: mujoco.MjSpec, scene: SceneSpec) -> None:
             conaffinity=0,
             group=GEOM_GROUP_ROOM,
         )
+    if scene.furniture:
+        spec.add_material(name="furniture", rgba=[0.55, 0.38, 0.24, 1.0])
+    for k, item in enumerate(scene.furniture):
+        length, depth, height = item.size
+        x, y = item.position
+        if item.kind == "table":
+            shape, size = mujoco.mjtGeom.mjGEOM_CYLINDER, [0.5 * length, 0.5 * height, 0.0]
+        else:
+            shape, size = mujoco.mjtGeom.mjGEOM_BOX, [0.5 * length, 0.5 * depth, 0.5 * height]
+        world.add_geom(
+            name=f"furniture{k}",
+            type=shape,
+            pos=[x, y, 0.5 * height],
+            quat=[math.cos(0.5 * item.yaw), 0.0, 0.0, math.sin(0.5 * item.yaw)],
+            size=size,
+            material="furniture",
+            contype=0,
+            conaffinity=0,
+            group=GEOM_GROUP_ROOM,
+        )
     span = max(sx, sy)
     world.add_light(
         name="sun",
@@ -511,6 +586,8 @@ def build_scene(scene: SceneSpec, *, geometry: bool = True) -> mujoco.MjModel:
     if not geometry:
         for name in ("wall_east", "wall_west", "wall_north", "wall_south"):
             spec.delete(spec.geom(name))
+        for k in range(len(scene.furniture)):
+            spec.delete(spec.geom(f"furniture{k}"))
     for index, person in enumerate(scene.people):
         child = _load(person.asset, _PERSON_PARTS)
         if not geometry:

@@ -239,3 +239,19 @@ def test_the_kinematic_twin_has_the_same_bodies_and_poses() -> None:
         mujoco.mj_kinematics(model, data)
     np.testing.assert_array_equal(datas[0].xpos, datas[1].xpos)
     np.testing.assert_array_equal(datas[0].xquat, datas[1].xquat)
+
+
+def test_furniture_is_in_the_scene_and_bad_furniture_is_one_line():
+    from sim.scene import FurnitureSpec
+
+    spec = SceneSpec(
+        people=[PersonSpec(id=1, position=(0.0, 0.0))],
+        furniture=[FurnitureSpec("table", (1.0, 1.0), (0.8, 0.8, 0.75))],
+    )
+    model = build_scene(spec)
+    assert model.geom("furniture0").size[0] == pytest.approx(0.4)
+    assert build_scene(spec, geometry=False).ngeom < model.ngeom
+    with pytest.raises(ValueError, match=r"^furniture: kind must be one of \['table', 'bar', "):
+        FurnitureSpec("sofa", (0.0, 0.0), (1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match=r"^furniture bar: size must be within \[0.02, 10.0\] m"):
+        FurnitureSpec("bar", (0.0, 0.0), (2.0, -0.5, 1.0))

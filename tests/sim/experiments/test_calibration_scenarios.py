@@ -118,7 +118,9 @@ def test_randomised_draws_span_both_real_datasets(report):
 def test_randomised_episodes_spread_wider_than_either_dataset(report):
     from reform.calibration import characterise_dataset
 
-    measured = characterise_dataset(scenario_frames(RANDOMISED, seeds=TEST_SEEDS, rate=0.5))
+    # The spread is over parties, and a party may hold few groups of a size (a furnished room,
+    # one drawn crowd): measured on the docs' DEFAULT_SEEDS parties (about 10 s).
+    measured = characterise_dataset(scenario_frames(RANDOMISED, seeds=DEFAULT_SEEDS, rate=0.5))
     for size in range(2, 5):
         values = measured.samples(TIGHTNESS, size)
         assert values.size >= MIN_GROUPS, size
