@@ -113,8 +113,19 @@ BOOTSTRAP_RESAMPLES = 1000
 CONFIDENCE = 0.95
 SCHEMA_VERSION = 2
 
-# REFORM's options compared (keyword arguments of reform.Reform); {} is the paper's method.
-OPTION_SETS: tuple[Mapping[str, Any], ...] = (MappingProxyType({}),)
+# REFORM's options compared (keyword arguments of reform.Reform, docs/guide/reform.md): {} is
+# the paper's method; then scale-free pair features, correlation clustering over the pair
+# probabilities, both, and both over calibrated probabilities.
+OPTION_SETS: tuple[Mapping[str, Any], ...] = tuple(
+    MappingProxyType(o)
+    for o in (
+        {},
+        {"features": "relative"},
+        {"reconstruction": "correlation"},
+        {"features": "relative", "reconstruction": "correlation"},
+        {"features": "relative", "reconstruction": "correlation", "calibration": "sigmoid"},
+    )
+)
 
 
 @dataclass(frozen=True)

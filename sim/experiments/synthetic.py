@@ -36,7 +36,7 @@ from reform.frame import Frame
 from reform.perturb import Perturbation
 from reform.seeding import Role, derive_rng
 from sim.executor import Executor
-from sim.generate import generate_dataset
+from sim.generate import CARD_JSON, generate_dataset
 
 __all__ = [
     "JOINT_DISTANCE_EDGES_M",
@@ -153,6 +153,16 @@ def _check_synthetic_root(root: Path) -> None:
             )
 
 
+def _episodes_held(folder: Path) -> int:
+    """Episodes a generated dataset's card says the folder holds (0: none, or no card)."""
+    try:
+        card = json.loads((folder / CARD_JSON).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return 0
+    held = card.get("episodes") if isinstance(card, dict) else None
+    return held if isinstance(held, int) and not isinstance(held, bool) and held > 0 else 0
+
+
 def generate_sources(
     sources: Sequence[SyntheticSource],
     *,
@@ -192,7 +202,7 @@ def generate_sources(
         folder = Path(root) / source.folder(seed)
         generate_dataset(
             source.scenario,
-            episodes=source.episodes,
+            episodes=max(source.episodes, _episodes_held(folder)),  # a larger set is reused
             seed=seed,
             out_dir=folder,
             options=dict(source.options),
