@@ -6,7 +6,6 @@ import functools
 import io
 import json
 import struct
-import tracemalloc
 import zipfile
 import zlib
 from fractions import Fraction
@@ -19,6 +18,7 @@ from sklearn.exceptions import NotFittedError
 from sklearn.linear_model import LogisticRegression
 from sklearn.tree import DecisionTreeClassifier
 from toy_scenes import toy_frames
+from traced import traced_peak
 
 import reform
 from reform import Reform, persistence
@@ -409,12 +409,7 @@ def test_a_member_inflating_beyond_its_entry_is_read_no_further(small_file, tmp_
         _splice_member(small_file.read_bytes(), name, bomb, zlib.crc32(array), len(array))
     )
     assert path.stat().st_size < 300_000
-    tracemalloc.start()
-    try:
-        model = load_model(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    model, peak = traced_peak(lambda: load_model(path))
     assert peak < 16 << 20, f"{peak:,} bytes at the peak"
     assert model.predict(toy_frames(9, 3)) == fitted("logistic-regression").predict(
         toy_frames(9, 3)
