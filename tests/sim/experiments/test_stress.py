@@ -213,16 +213,3 @@ def test_cli_runs_one_axis(tmp_path, capsys) -> None:
     # Its estimate, stated once before the work.
     assert captured.err.count("the stress test: about ") == 1
     assert "(estimates, sim.sizing)" in captured.err.splitlines()[0]
-
-
-@pytest.mark.parametrize(
-    ("argv", "message"),
-    [
-        (["--axes", "weather"], "--axes must name axes among"),
-        (["--episodes", "0"], "--episodes must be >= 1, got 0"),
-        (["--save", "curves.txt"], "--save must be a path ending in .rrd"),
-    ],
-)
-def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
-    assert main(["stress", "--grid", "small", "--out", str(tmp_path), *argv]) == 2
-    assert message in capsys.readouterr().err
