@@ -21,20 +21,16 @@ from sim.experiments.stress import (
 )
 from sim.experiments.stress_report import recording_names, write_report
 
-# Two levels per axis, short episodes: every code path, a few seconds of work.
+# Two levels per axis (the small grid's ends), short episodes: every code path, a few seconds.
+SMALL = GRIDS["small"]
 TINY = dataclasses.replace(
-    GRIDS["small"],
-    position_noise_m=(0.0, 0.5),
-    orientation_noise_deg=(0.0, 60.0),
-    dropout=(0.0, 0.5),
-    density_per_m2=(0.2, 0.4),
+    SMALL,
+    **{
+        axis: (getattr(SMALL, axis)[0], getattr(SMALL, axis)[-1])
+        for axis in ("position_noise_m", "orientation_noise_deg", "dropout")
+    },
     people=(8, 24),
-    max_group_size=(3, 8),
-    sensors=("truth", "occlusion"),
-    seeds=2,
     duration_s=30.0,
-    rate_hz=0.5,
-    train_episodes=1,
     train_duration_s=60.0,
     resamples=100,
 )
