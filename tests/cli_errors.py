@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
 from typing import Any
 
 from sim.cli import main
@@ -12,6 +14,14 @@ def run_cli(argv: list[Any], capsys: Any) -> tuple[int, str, str]:
     status = main([str(a) for a in argv])
     captured = capsys.readouterr()
     return status, captured.out, captured.err
+
+
+def cli_json(argv: list[Any], path: Path, capsys: Any) -> tuple[Any, str, str]:
+    """Runs ``reform-sim argv`` to success (exit status 0) and reads the JSON file ``path`` it
+    wrote: the JSON document, stdout and stderr."""
+    status, out, err = run_cli(argv, capsys)
+    assert status == 0, err
+    return json.loads(path.read_text()), out, err
 
 
 def cli_error(argv: list[Any], capsys: Any) -> str:

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from cli_errors import run_cli
+from cli_errors import cli_json, run_cli
 
 from reform import Dataset, Frame
 from reform.datasets import write_parquet
@@ -16,7 +16,7 @@ from sim.experiments.characterisation_report import format_calibration, format_c
 def test_characterize_salsa_and_babble_beside_the_paper(salsa_dir, babble_dir, tmp_path, capsys):
     out_json, out_md, notes = tmp_path / "c.json", tmp_path / "c.md", tmp_path / "notes.md"
     notes.write_text("Our numbers differ because of X.\n")
-    status, out, err = run_cli(
+    result, out, err = cli_json(
         [
             "characterize",
             "--data",
@@ -32,10 +32,9 @@ def test_characterize_salsa_and_babble_beside_the_paper(salsa_dir, babble_dir, t
             "--notes",
             notes,
         ],
+        out_json,
         capsys,
     )
-    assert status == 0, err
-    result = json.loads(out_json.read_text())
     assert result["schema_version"] == 1 and result["min_groups"] == 5
     assert result["command"].startswith("reform-sim characterize --data ")
     salsa, babble = result["datasets"]

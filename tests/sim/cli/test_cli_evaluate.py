@@ -6,7 +6,7 @@ import argparse
 import json
 
 import pytest
-from cli_errors import run_cli
+from cli_errors import cli_json, run_cli
 
 from reform.datasets import load_dataset
 from sim.cli import main
@@ -33,7 +33,7 @@ def as_majority(monkeypatch):
 
 def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
     out_json, out_md = tmp_path / "r" / "salsa.json", tmp_path / "salsa.md"
-    status, out, err = run_cli(
+    result, out, err = cli_json(
         [
             "evaluate",
             "--detector",
@@ -45,10 +45,9 @@ def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
             "--markdown",
             out_md,
         ],
+        out_json,
         capsys,
     )
-    assert status == 0, err
-    result = json.loads(out_json.read_text())
     assert result["schema_version"] == 1
     assert (result["detector"], result["dataset"], result["frames"]) == ("majority", "salsa", 1143)
     assert result["sequences"] == {"session1": 644, "session2": 499}
@@ -73,7 +72,7 @@ def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
 
 def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):
     out_json = tmp_path / "babble.json"
-    status, out, err = run_cli(
+    result, out, err = cli_json(
         [
             "evaluate",
             "--detector",
@@ -84,10 +83,9 @@ def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):
             out_json,
             "--per-frame",
         ],
+        out_json,
         capsys,
     )
-    assert status == 0, err
-    result = json.loads(out_json.read_text())
     assert result["dataset"] == "babble" and result["frames"] == len(result["per_frame"])
     frames = load_dataset(babble_dir).annotated()
     assert result["frames"] == len(frames)
@@ -100,11 +98,9 @@ def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):
 
 def test_detect_majority_writes_every_frame(salsa_dir, tmp_path, capsys):
     out = tmp_path / "groups.json"
-    status, _, err = run_cli(
-        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out], capsys
+    result, _, err = cli_json(
+        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out], out, capsys
     )
-    assert status == 0, err
-    result = json.loads(out.read_text())
     assert result["kind"] == "reform-sim/detections" and result["schema_version"] == 1
     assert len(result["frames"]) == 1145  # every frame, the two without ground truth included
     first = result["frames"][0]
