@@ -1,17 +1,33 @@
-"""Running ``reform-sim`` in a test and taking its one-line error."""
+"""Running ``reform-sim`` in a test: its status and output, or its one-line error."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
 from typing import Any
 
 from sim.cli import main
 
 
+def run_cli(argv: list[Any], capsys: Any) -> tuple[int, str, str]:
+    """Runs ``reform-sim argv`` (each item made a string): its exit status, stdout and stderr."""
+    status = main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def cli_json(argv: list[Any], path: Path, capsys: Any) -> tuple[Any, str, str]:
+    """Runs ``reform-sim argv`` to success (exit status 0) and reads the JSON file ``path`` it
+    wrote: the JSON document, stdout and stderr."""
+    status, out, err = run_cli(argv, capsys)
+    assert status == 0, err
+    return json.loads(path.read_text()), out, err
+
+
 def cli_error(argv: list[Any], capsys: Any) -> str:
     """Runs ``reform-sim argv`` (each item made a string), asserts exit status 2 and a single
     line on stderr, and returns that line."""
-    status = main([str(a) for a in argv])
-    err = capsys.readouterr().err
+    status, _, err = run_cli(argv, capsys)
     assert status == 2, err
     assert len(err.strip().splitlines()) == 1, err
     return err.strip()

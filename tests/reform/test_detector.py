@@ -5,7 +5,6 @@ from __future__ import annotations
 import functools
 import math
 import re
-import tracemalloc
 
 import numpy as np
 import pytest
@@ -16,6 +15,7 @@ from sklearn.exceptions import NotFittedError
 from sklearn.linear_model import Perceptron
 from sklearn.tree import DecisionTreeClassifier
 from toy_scenes import toy_frame, toy_frames
+from traced import raised_peak
 
 import reform.detector
 import reform.gcff
@@ -334,18 +334,6 @@ def crowd() -> Frame:
     )
 
 
-def traced_peak(call) -> tuple[ValueError, int]:
-    """The ValueError ``call`` raises and the bytes it allocated at the peak (traced)."""
-    tracemalloc.start()
-    try:
-        with pytest.raises(ValueError) as info:
-            call()
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    return info.value, peak
-
-
 def test_frame_bytes_follow_the_measured_costs():
     # Hand-computed: 64 people make 2,016 pairs, one word of beliefs; 65 make 2,080, two words.
     assert frame_bytes(64) == 2_016 * (40 + 40)
@@ -367,7 +355,7 @@ def test_frame_bytes_follow_the_measured_costs():
 def test_reform_refuses_a_frame_whose_pairs_cannot_fit(call, work):
     crowd()
     fitted()
-    error, peak = traced_peak(call)
+    error, peak = raised_peak(call, ValueError)
     assert re.fullmatch(
         r"the frame at time 12.5 s of sequence 'stadium' holds 2,000,000 people: "
         r"1,999,999,000,000 pairs, which would take about [\d,.]+ GiB to " + work + r", more "
@@ -399,7 +387,7 @@ def test_pair_indices_refuse_more_than_max_pairs():
 
 def test_gcff_refuses_a_frame_whose_costs_cannot_fit():
     crowd()
-    error, peak = traced_peak(lambda: Gcff().predict([held_out_frames()[0], crowd()]))
+    error, peak = raised_peak(lambda: Gcff().predict([held_out_frames()[0], crowd()]), ValueError)
     assert str(error) == (
         "the frame at time 12.5 s of sequence 'stadium' (2,000,000 people): GCFF's costs for "
         "2,000,000 people and 2,000,000 candidate groups would take about 119,209.3 GiB, more "

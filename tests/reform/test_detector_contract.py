@@ -55,26 +55,23 @@ def test_reform_finds_the_groups_of_the_check_scenes(model_path):
 # Detectors that break one check each
 
 
+def _in_pairs(ids: list[int]) -> list[tuple[int, ...]]:
+    """``ids`` grouped two by two in their order (the last alone when they are odd)."""
+    return [tuple(ids[k : k + 2]) for k in range(0, len(ids), 2)]
+
+
 class _Pairs(Majority):
     """Pairs people in the order they are listed: depends on the order and the ids."""
 
     def predict(self, frames):
-        out = []
-        for frame in frames:
-            ids = [int(i) for i in frame.ids]
-            out.append([tuple(ids[k : k + 2]) for k in range(0, len(ids), 2)])
-        return out
+        return [_in_pairs([int(i) for i in frame.ids]) for frame in frames]
 
 
 class _Sorted(Majority):
     """Pairs people by id: the same for any listing order, not for other ids."""
 
     def predict(self, frames):
-        out = []
-        for frame in frames:
-            ids = sorted(int(i) for i in frame.ids)
-            out.append([tuple(ids[k : k + 2]) for k in range(0, len(ids), 2)])
-        return out
+        return [_in_pairs(sorted(int(i) for i in frame.ids)) for frame in frames]
 
 
 class _LeftAndRight(Majority):
@@ -114,6 +111,20 @@ class _NoBodyFails(Majority):
         return [[(0,)] if f.n_people == 0 else [(int(i),) for i in f.ids] for f in frames]
 
 
+class _AnswersNothing(Majority):
+    """Answers an empty batch with one empty partition."""
+
+    def predict(self, frames):
+        return [[(int(i),) for i in f.ids] for f in frames] or [[]]
+
+
+class _LosesTheOnlyPerson(Majority):
+    """Leaves a person alone in a frame out of the partition."""
+
+    def predict(self, frames):
+        return [[] if f.n_people == 1 else [(int(i),) for i in f.ids] for f in frames]
+
+
 @pytest.mark.parametrize(
     ("detector", "check", "message"),
     [
@@ -123,12 +134,31 @@ class _NoBodyFails(Majority):
             r"broken: detector output for frame 0 .* person 2 is in no group",
         ),
         (_NoBodyFails(), check_no_frames_nobody_and_one_person, r"broken: detector output"),
+        (
+            _AnswersNothing(),
+            check_no_frames_nobody_and_one_person,
+            r"broken: detector returned 1 partitions for 0 frames",
+        ),
+        (
+            _LosesTheOnlyPerson(),
+            check_no_frames_nobody_and_one_person,
+            r"broken: detector output for frame 1 .* person 7 is in no group",
+        ),
         (_Coin(), check_the_same_answer_twice, r"broken: fails the same answer twice: frame 0"),
         (_Pairs(), check_relabelling, r"broken: fails relabelling: frame 0: \[.*\] became"),
         (_Sorted(), check_relabelling, r"broken: fails relabelling: frame 0"),
         (_LeftAndRight(), check_rigid_motion, r"broken: fails rigid motion: frame 0 turned"),
     ],
-    ids=["forgets", "nobody", "coin", "listing-order", "ids", "where-it-stands"],
+    ids=[
+        "forgets",
+        "nobody",
+        "empty-batch",
+        "one-person",
+        "coin",
+        "listing-order",
+        "ids",
+        "where-it-stands",
+    ],
 )
 def test_a_detector_that_breaks_a_check_fails_it(detector, check, message):
     with pytest.raises(DetectorError, match=message):

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from gcff_reference import read_reference_partitions
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.base import clone
@@ -52,19 +53,8 @@ def label_sets(labels) -> frozenset[frozenset[int]]:
 
 
 def read_reference(path: Path) -> list[tuple[tuple[str, float], frozenset[frozenset[int]]]]:
-    """``session time id:label ...`` lines -> [((sequence, time), partition as sets)]."""
-    out = []
-    for line in path.read_text().splitlines():
-        if not line.strip() or line.startswith("#"):
-            continue
-        session, time, *pairs = line.split()
-        groups: dict[int, set[int]] = {}
-        for pair in pairs:
-            person, label = pair.split(":")
-            groups.setdefault(int(label), set()).add(int(person))
-        key = (f"session{session}", round(float(time), 1))
-        out.append((key, frozenset(frozenset(g) for g in groups.values())))
-    return out
+    """The reference file's partitions as sets: [((sequence, time), partition)]."""
+    return [(key, as_sets(groups)) for key, groups in read_reference_partitions(path)]
 
 
 @pytest.fixture(scope="module")

@@ -2,33 +2,23 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
+from toy_scenes import line_frame
 
-from reform import T_ONE, T_TWO_THIRDS, Frame, Majority, evaluate, pair_labels
+from reform import T_ONE, T_TWO_THIRDS, Majority, evaluate, pair_labels
 from reform.datasets import load_salsa
 
 
-def make_frame(ids, groups):
-    n = len(ids)
-    return Frame(
-        ids=ids,
-        position=np.c_[np.arange(n, dtype=float), np.zeros(n)],
-        yaw=np.zeros(n),
-        groups=groups,
-    )
-
-
 def test_predicts_everyone_alone():
-    frames = [make_frame([4, 2, 9], [(4, 2)]), make_frame([1], None)]
+    frames = [line_frame([4, 2, 9], [(4, 2)]), line_frame([1], None)]
     detector = Majority().fit(frames)
     assert detector.predict(frames) == [((4,), (2,), (9,)), ((1,),)]
 
 
 def test_every_pair_not_together():
-    f = make_frame([1, 2, 3, 4], [(1, 2, 3)])
+    f = line_frame([1, 2, 3, 4], [(1, 2, 3)])
     (partition,) = Majority().predict([f])
     assert pair_labels(f, partition).tolist() == [0] * 6
 
@@ -47,7 +37,7 @@ def test_rejects_non_frames():
 def test_scores_on_a_toy_frame():
     # hand-computed: truth {1,2,3},{4}: 3 of 6 pairs together, majority labels the other 3 right.
     # No detections and one true group: P = 1, R = 0 at both thresholds.
-    f = make_frame([1, 2, 3, 4], [(1, 2, 3)])
+    f = line_frame([1, 2, 3, 4], [(1, 2, 3)])
     ev = evaluate([f], Majority().predict([f]))
     assert ev.pairwise_accuracy == pytest.approx(0.5)
     for t in (T_TWO_THIRDS, T_ONE):

@@ -6,31 +6,18 @@ from __future__ import annotations
 import json
 import math
 from fractions import Fraction
-from pathlib import Path
 
 import numpy as np
 import pytest
+from gcff_reference import read_reference_partitions
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from toy_scenes import line_frame as frame
 
-from reform import T_ONE, T_TWO_THIRDS, Frame, evaluate
+from reform import T_ONE, T_TWO_THIRDS, evaluate
 from reform.datasets import load_salsa
 from reform.json_values import json_float
 from reform.metrics import MicroScores, f1_score, pair_labels
-
-
-def frame(ids, groups, *, time=0.0, sequence="s"):
-    """A frame with people on a line; only ids and groups matter to the metrics."""
-    ids = list(ids)
-    n = len(ids)
-    return Frame(
-        ids=ids,
-        position=np.c_[np.arange(n, dtype=float), np.zeros(n)],
-        yaw=np.zeros(n),
-        groups=groups,
-        time=time,
-        sequence=sequence,
-    )
 
 
 def complete(groups, ids):
@@ -332,23 +319,6 @@ def test_to_json_schema():
 
 
 # --- the protocol pinned on the original GCFF code's output ------------------------------------
-
-
-def read_reference_partitions(path: Path):
-    """``session time id:label ...`` lines -> list of ((sequence, time), partition)."""
-    out = []
-    for line in path.read_text().splitlines():
-        if not line.strip() or line.startswith("#"):
-            continue
-        session, time, *pairs = line.split()
-        groups: dict[int, list[int]] = {}
-        for pair in pairs:
-            person, label = pair.split(":")
-            groups.setdefault(int(label), []).append(int(person))
-        out.append(
-            ((f"session{session}", round(float(time), 1)), tuple(map(tuple, groups.values())))
-        )
-    return out
 
 
 @pytest.mark.parametrize(

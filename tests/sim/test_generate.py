@@ -2,21 +2,17 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
 import shlex
 import shutil
-import signal
 import socket
 import subprocess
-import sys
-import time
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
 import pytest
+from killed_run import CLI, RUN_TIMEOUT_S, kill_when
 
 from reform.annotation import AnnotationModel
 from reform.datasets import load_dataset, read_parquet, write_parquet
@@ -57,8 +53,6 @@ ARGS = [
     "--dropout",
     "0.1",
 ]
-RUN_TIMEOUT_S = 300.0  # seconds, generous: the machine is shared
-CLI = [sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())"]
 
 
 def generate(out_dir: Path, **overrides):
@@ -186,15 +180,7 @@ def test_a_killed_run_leaves_whole_shards_and_resumes_to_the_same_data(reference
         start_new_session=True,
     )
     first = shard_path(out, SCENARIO, 0)
-    deadline = time.monotonic() + RUN_TIMEOUT_S
-    try:
-        while not first.exists() and process.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.005)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)
-        process.wait(timeout=RUN_TIMEOUT_S)
-    assert process.returncode == -signal.SIGKILL, process.stderr.read().decode()[-2000:]
+    kill_when(process, first.exists, poll_s=0.005)
     written = sorted(out.glob("data/scenario=*/episode=*/part.parquet"))
     assert 1 <= len(written) < EPISODES, "the run was not killed mid-way"
     for path in written:  # every shard on disk is whole
@@ -529,25 +515,9 @@ def test_an_annotation_model_records_each_episode_as_it_says(tmp_path):
     """--annotation: the shards hold the frames as the model records them, the card and each
     shard record it, the card's command reproduces the data byte for byte."""
     model = AnnotationModel(directions=4, scale_sd=0.05, position_noise=0.03, dropout=0.05)
-    plain = generate_dataset(
-        "word-improv",
-        episodes=2,
-        seed=3,
-        out_dir=tmp_path / "plain",
-        duration=20,
-        n_jobs=1,
-        progress=False,
-    )
-    made = generate_dataset(
-        "word-improv",
-        episodes=2,
-        seed=3,
-        out_dir=tmp_path / "coded",
-        duration=20,
-        n_jobs=1,
-        progress=False,
-        annotation=model,
-    )
+    run = dict(episodes=2, seed=3, duration=20, n_jobs=1, progress=False)
+    plain = generate_dataset("word-improv", out_dir=tmp_path / "plain", **run)
+    made = generate_dataset("word-improv", out_dir=tmp_path / "coded", annotation=model, **run)
     card = read_card(made.out_dir)
     assert card["parameters"]["annotation"] == model.to_json()
     assert "annotation" not in read_card(plain.out_dir)["parameters"]

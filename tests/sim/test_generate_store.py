@@ -4,18 +4,16 @@ pyarrow, polars and DuckDB straight from the bucket, and every bad store refused
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
-import signal
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
+from killed_run import CLI, RUN_TIMEOUT_S, kill_when
 
 from reform.datasets import read_parquet
 from reform.datasets.errors import DataFormatError
@@ -28,7 +26,6 @@ moto_server = pytest.importorskip("moto.server")
 pytest.importorskip("s3fs")
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-CLI = [sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())"]
 BUCKET = "lab-data"
 SCENARIO = "hri-conversation"  # two people and the robot: a cheap scene
 EPISODES = 4
@@ -36,7 +33,6 @@ SEED = 3
 DURATION_S = 60.0  # seconds per episode: 120 frames at 2 Hz
 ARGS = ["--scenario", SCENARIO, "--episodes", str(EPISODES), "--seed", str(SEED)]
 ARGS += ["--duration", "60", "--jobs", "1", "--quiet"]
-RUN_TIMEOUT_S = 300.0  # seconds, generous: the machine is shared
 KILL_EPISODES = 40  # a run long enough to be killed mid-way
 
 
@@ -175,19 +171,8 @@ def test_a_run_killed_mid_shard_resumes_and_no_half_shard_is_ever_read(server, t
         stderr=subprocess.PIPE,
         start_new_session=True,
     )
-    deadline = time.monotonic() + RUN_TIMEOUT_S
-    try:  # killed once two shards are committed: the third is being simulated or written
-        while (
-            len(store.sizes("_commits")) < 2
-            and process.poll() is None
-            and time.monotonic() < deadline
-        ):
-            time.sleep(0.01)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)
-        process.wait(timeout=RUN_TIMEOUT_S)
-    assert process.returncode == -signal.SIGKILL, process.stderr.read().decode()[-2000:]
+    # Killed once two shards are committed: the third is being simulated or written.
+    kill_when(process, lambda: len(store.sizes("_commits")) >= 2, poll_s=0.01)
     left = objects(uri)
     commits = sorted(n for n in left if n.startswith("_commits/"))
     assert 2 <= len(commits) < KILL_EPISODES, "the run was not killed mid-way"

@@ -4,11 +4,11 @@ generator's requests sized before they run, and the streamed episode that keeps 
 from __future__ import annotations
 
 import re
-import tracemalloc
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from traced import raised_peak
 
 import reform.machine
 import sim.episode
@@ -26,37 +26,6 @@ from sim.sizing import RequestTooLarge
 
 GiB = 2**30
 REFUSAL_PEAK_BYTES = 50 * 2**20  # bytes: what a refused request may allocate while refused
-
-
-@pytest.fixture
-def machine(monkeypatch):
-    """A machine with 16 GiB of memory available (32 GiB with swap) and 100 GiB of free disk,
-    whatever runs the tests."""
-    monkeypatch.setattr(sizing, "available_memory", lambda: 16 * GiB)
-    monkeypatch.setattr(sizing, "total_memory", lambda: 32 * GiB)
-    monkeypatch.setattr(sizing, "free_disk", lambda path: 100 * GiB)
-
-
-@pytest.fixture
-def no_work(monkeypatch):
-    """Fails any test whose request builds a world: refusals come before any work."""
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a World was built: the request was not refused first")
-
-    monkeypatch.setattr(sim.episode, "World", refuse)
-
-
-def refused_peak(call) -> tuple[RequestTooLarge, int]:
-    """The refusal ``call`` raises and the bytes it allocated at the peak (traced)."""
-    tracemalloc.start()
-    try:
-        with pytest.raises(RequestTooLarge) as info:
-            call()
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    return info.value, peak
 
 
 # --------------------------------------------------------------------------------------------
@@ -322,7 +291,7 @@ def test_an_episode_is_estimated_from_its_arguments():
     ids=["tiny-dt", "held-forever", "streamed-forever", "smallest-dt"],
 )
 def test_the_library_refuses_what_can_never_fit_before_any_work(machine, no_work, call, match):
-    refusal, peak = refused_peak(call)
+    refusal, peak = raised_peak(call, RequestTooLarge)
     assert re.search(match, str(refusal)), str(refusal)
     assert peak < REFUSAL_PEAK_BYTES
 
@@ -378,8 +347,9 @@ def test_a_frame_spanning_many_steps_takes_fewer_rows_per_block(monkeypatch):
 
 def test_generate_refuses_a_billion_episodes_before_any_work(machine, no_work, tmp_path):
     out = tmp_path / "huge"
-    refusal, peak = refused_peak(
-        lambda: generate_dataset("mingle", episodes=10**9, seed=1, out_dir=out, n_jobs=2)
+    refusal, peak = raised_peak(
+        lambda: generate_dataset("mingle", episodes=10**9, seed=1, out_dir=out, n_jobs=2),
+        RequestTooLarge,
     )
     assert refusal.resource == "memory"
     assert re.fullmatch(

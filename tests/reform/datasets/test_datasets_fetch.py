@@ -178,6 +178,21 @@ def _assert_nothing_looks_complete(cache: Path, name: str, registry_file: Path) 
         assert path.read_bytes() == expected[local][2], f"unverified file left: {local}"
 
 
+def _assert_fetch_fails(
+    base: str, name: str, k: int, found: str, cache: Path, registry_file: Path, *, ends=True
+) -> FetchError:
+    """Fetching ``name`` from ``base`` fails on its file ``k`` with the one message
+    ``<file>: dataset '<name>' from <url>: <found>`` (followed by more when not ``ends``), and
+    leaves nothing that looks complete (`_assert_nothing_looks_complete`)."""
+    expected = f"{FILES[name][k][0]}: dataset '{name}' from {_url(base, name, k)}: {found}"
+    with pytest.raises(
+        FetchError, match=f"^{re.escape(expected)}" + ("$" if ends else "")
+    ) as caught:
+        fetch(name, mirror=base, cache=cache, registry=registry_file)
+    _assert_nothing_looks_complete(cache, name, registry_file)
+    return caught.value
+
+
 # --- fetching ------------------------------------------------------------------------------
 
 
@@ -300,14 +315,9 @@ def test_a_wrong_checksum(http_mirror, mirror_dir, cache, registry_file):
     path, commit, data = FILES["tiny"][1]
     forged = b"S" + data[1:]
     (mirror_dir / REPO / commit / path).write_bytes(forged)
-    expected = (
-        f"{path}: dataset 'tiny' from {_url(base, 'tiny', 1)}: "
-        f"expected sha256 {_sha256(data)}, found sha256 {_sha256(forged)}"
-    )
-    with pytest.raises(FetchError, match=f"^{re.escape(expected)}$") as caught:
-        fetch("tiny", mirror=base, cache=cache, registry=registry_file)
-    assert (caught.value.dataset, caught.value.file) == ("tiny", path)
-    _assert_nothing_looks_complete(cache, "tiny", registry_file)
+    found = f"expected sha256 {_sha256(data)}, found sha256 {_sha256(forged)}"
+    error = _assert_fetch_fails(base, "tiny", 1, found, cache, registry_file)
+    assert (error.dataset, error.file) == ("tiny", path)
     assert not (cache / "tiny" / TINY_LOCAL[1]).exists()
 
 
@@ -315,39 +325,24 @@ def test_a_truncated_download_with_an_honest_length(http_mirror, cache, registry
     base, server = http_mirror
     path, commit, data = FILES["tiny"][0]
     server.truncate[f"/{REPO}/{commit}/{path}"] = (100, 100)
-    expected = (
-        f"{path}: dataset 'tiny' from {_url(base, 'tiny', 0)}: "
-        f"expected {len(data)} bytes, found 100 bytes"
-    )
-    with pytest.raises(FetchError, match=f"^{re.escape(expected)}$"):
-        fetch("tiny", mirror=base, cache=cache, registry=registry_file)
-    _assert_nothing_looks_complete(cache, "tiny", registry_file)
+    found = f"expected {len(data)} bytes, found 100 bytes"
+    _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file)
 
 
 def test_a_download_that_breaks_off(http_mirror, cache, registry_file):
     base, server = http_mirror
     path, commit, data = FILES["tiny"][0]
     server.truncate[f"/{REPO}/{commit}/{path}"] = (100, len(data))
-    expected = (
-        f"{path}: dataset 'tiny' from {_url(base, 'tiny', 0)}: "
-        f"expected {len(data)} bytes, found 100 bytes, then the download broke off"
-    )
-    with pytest.raises(FetchError, match=f"^{re.escape(expected)}"):
-        fetch("tiny", mirror=base, cache=cache, registry=registry_file)
-    _assert_nothing_looks_complete(cache, "tiny", registry_file)
+    found = f"expected {len(data)} bytes, found 100 bytes, then the download broke off"
+    _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file, ends=False)
 
 
 def test_a_file_missing_from_the_http_mirror(http_mirror, mirror_dir, cache, registry_file):
     base, _ = http_mirror
     path, commit, _ = FILES["tiny"][2]
     (mirror_dir / REPO / commit / path).unlink()
-    expected = (
-        f"{path}: dataset 'tiny' from {_url(base, 'tiny', 2)}: "
-        "expected HTTP 200 with the file, found HTTP 404 File not found"
-    )
-    with pytest.raises(FetchError, match=f"^{re.escape(expected)}$"):
-        fetch("tiny", mirror=base, cache=cache, registry=registry_file)
-    _assert_nothing_looks_complete(cache, "tiny", registry_file)
+    found = "expected HTTP 200 with the file, found HTTP 404 File not found"
+    _assert_fetch_fails(base, "tiny", 2, found, cache, registry_file)
     assert (cache / "tiny" / TINY_LOCAL[0]).exists()  # verified files stay for the next fetch
 
 
@@ -356,27 +351,16 @@ def test_a_host_nobody_listens_on(cache, registry_file):
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     base = f"http://127.0.0.1:{port}"
-    path = FILES["tiny"][0][0]
-    expected = (
-        f"{path}: dataset 'tiny' from {_url(base, 'tiny', 0)}: "
-        f"expected an answer from 127.0.0.1:{port}, found Connection refused"
-    )
-    with pytest.raises(FetchError, match=f"^{re.escape(expected)}$"):
-        fetch("tiny", mirror=base, cache=cache, registry=registry_file)
-    _assert_nothing_looks_complete(cache, "tiny", registry_file)
+    found = f"expected an answer from 127.0.0.1:{port}, found Connection refused"
+    _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file)
 
 
 def test_a_file_missing_from_a_file_mirror(mirror_dir, cache, registry_file):
     path, commit, _ = FILES["flat"][1]
     (mirror_dir / REPO / commit / path).unlink()
     base = mirror_dir.as_uri()
-    expected = (
-        f"{path}: dataset 'flat' from {_url(base, 'flat', 1)}: "
-        "expected a file at that path, found no such file"
-    )
-    with pytest.raises(FetchError, match=f"^{re.escape(expected)}$"):
-        fetch("flat", mirror=base, cache=cache, registry=registry_file)
-    _assert_nothing_looks_complete(cache, "flat", registry_file)
+    found = "expected a file at that path, found no such file"
+    _assert_fetch_fails(base, "flat", 1, found, cache, registry_file)
 
 
 def test_a_failed_fetch_unmarks_a_dataset_whose_registry_changed(

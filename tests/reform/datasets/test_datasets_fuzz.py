@@ -71,17 +71,25 @@ def _load(folder: Path, **kwargs) -> None:
     assert isinstance(dataset, Dataset)
 
 
+def _load_files(files: dict[str, bytes | str], **kwargs) -> None:
+    """Writes ``files`` (name -> bytes, or text) into a fresh folder and loads it (`_load`)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for name, content in files.items():
+            if isinstance(content, str):
+                (folder / name).write_text(content)
+            else:
+                (folder / name).write_bytes(content)
+        _load(folder, **kwargs)
+
+
 @SETTINGS
 @given(
     features=st.one_of(st.binary(max_size=400), DANTE_LINES.map(str.encode)),
     groups=st.one_of(st.binary(max_size=200), DANTE_LINES.map(str.encode)),
 )
 def test_dante_files(features, groups):
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "features.txt").write_bytes(features)
-        (folder / "group_names.txt").write_bytes(groups)
-        _load(folder, format="dante")
+    _load_files({"features.txt": features, "group_names.txt": groups}, format="dante")
 
 
 def _valid_dante() -> tuple[str, str]:
@@ -96,11 +104,7 @@ def test_dante_files_with_one_splice(position, value):
     features, groups = _valid_dante()
     data = features.encode()
     data = data[:position] + value + data[position:]
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "features.txt").write_bytes(data)
-        (folder / "group_names.txt").write_text(groups)
-        _load(folder, format="dante")
+    _load_files({"features.txt": data, "group_names.txt": groups}, format="dante")
 
 
 def _mat_bytes(variables: dict) -> bytes:
@@ -142,21 +146,15 @@ def test_gcff_mat_variables(features, stamps, groups, gt_stamps, units):
         gt_bytes = _mat_bytes({"GTgroups": gt, "GTtimestamp": np.array([gt_stamps], dtype=float)})
     except (ValueError, TypeError):
         return  # scipy cannot write this combination: nothing to load
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "features.mat").write_bytes(feature_bytes)
-        (folder / "groundtruth.mat").write_bytes(gt_bytes)
-        _load(folder, format="gcff", units=units)
+    _load_files(
+        {"features.mat": feature_bytes, "groundtruth.mat": gt_bytes}, format="gcff", units=units
+    )
 
 
 @SETTINGS
 @given(features=st.binary(max_size=600), groundtruth=st.binary(max_size=300))
 def test_gcff_mat_bytes(features, groundtruth):
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "features.mat").write_bytes(features)
-        (folder / "groundtruth.mat").write_bytes(groundtruth)
-        _load(folder, format="gcff")
+    _load_files({"features.mat": features, "groundtruth.mat": groundtruth}, format="gcff")
 
 
 @SETTINGS
@@ -172,21 +170,15 @@ def test_gcff_mat_with_one_splice(position, value):
         {"GTgroups": _cell([_cell([np.array([[1.0, 2.0]])])]), "GTtimestamp": np.array([[1.0]])}
     )
     data = feature_bytes[:position] + value + feature_bytes[position + len(value) :]
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "features.mat").write_bytes(data)
-        (folder / "groundtruth.mat").write_bytes(gt_bytes)
-        _load(folder, format="gcff")
+    _load_files({"features.mat": data, "groundtruth.mat": gt_bytes}, format="gcff")
 
 
 @SETTINGS
 @given(motion=st.binary(max_size=800), annotations=st.binary(max_size=120))
 def test_babble_files(motion, annotations):
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "Motion-capture-data.csv").write_bytes(motion)
-        (folder / "annotated-frames.csv").write_bytes(annotations)
-        _load(folder, format="babble")
+    _load_files(
+        {"Motion-capture-data.csv": motion, "annotated-frames.csv": annotations}, format="babble"
+    )
 
 
 @pytest.mark.parametrize("size", [0, 1, 100, 5000])
@@ -224,11 +216,13 @@ def _babble_head(babble_dir: Path) -> tuple[bytes, bytes]:
 @given(**SPLICES)
 def test_babble_files_with_one_splice(babble_dir, position, value, replace):
     motion, annotations = _babble_head(babble_dir)
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "Motion-capture-data.csv").write_bytes(_splice(motion, position, value, replace))
-        (folder / "annotated-frames.csv").write_bytes(annotations)
-        _load(folder, format="babble")
+    _load_files(
+        {
+            "Motion-capture-data.csv": _splice(motion, position, value, replace),
+            "annotated-frames.csv": annotations,
+        },
+        format="babble",
+    )
 
 
 def _small_dataset() -> Dataset:

@@ -335,36 +335,40 @@ def test_settings_file_that_does_not_exist(tmp_path):
     assert read_settings(tmp_path / "settings_gc.mat") == {"stride": 70.0, "mdl": 10000.0}
 
 
-def test_negative_ids_are_refused(tmp_path):
-    # Person ids are never negative in the field's formats (formats.md: ID_<digits>,
-    # participant numbers, GCFF sets numbered from 1): a negative one is refused, named.
-    features = [np.array([[1, 100.0, 200.0, 0.5], [-2, 150.0, 200.0, 3.0]])]
+# Person ids are never negative in the field's formats (formats.md: ID_<digits>, participant
+# numbers, GCFF sets numbered from 1): a negative one is refused, named.
+@pytest.mark.parametrize(
+    ("features", "members", "file", "message"),
+    [
+        pytest.param(
+            [np.array([[1, 100.0, 200.0, 0.5], [-2, 150.0, 200.0, 3.0]])],
+            [1, 3],
+            "features.mat",
+            "frame 1, row 2: field 'ID': expected an integer >= 0 (person ids are never "
+            "negative), found -2.0",
+            id="person",
+        ),
+        pytest.param(
+            [FEATURES[0]],
+            [1, -2],
+            "groundtruth.mat",
+            "GT frame 1 (GTtimestamp 10): field 'group 1': expected IDs >= 0 (person ids are "
+            "never negative), found [1.0, -2.0]",
+            id="group-member",
+        ),
+    ],
+)
+def test_negative_ids_are_refused(tmp_path, features, members, file, message):
     folder = _write(
         tmp_path / "f",
         features=features,
         timestamps=[10],
-        gt_groups=[_gt([1, 3])],
+        gt_groups=[_gt(members)],
         gt_timestamps=[10],
     )
     with pytest.raises(DataFormatError) as caught:
         load_gcff(folder)
-    assert str(caught.value) == (
-        f"{folder / 'features.mat'}: frame 1, row 2: field 'ID': expected an integer >= 0 "
-        "(person ids are never negative), found -2.0"
-    )
-    folder = _write(
-        tmp_path / "g",
-        features=[FEATURES[0]],
-        timestamps=[10],
-        gt_groups=[_gt([1, -2])],
-        gt_timestamps=[10],
-    )
-    with pytest.raises(DataFormatError) as caught:
-        load_gcff(folder)
-    assert str(caught.value) == (
-        f"{folder / 'groundtruth.mat'}: GT frame 1 (GTtimestamp 10): field 'group 1': expected "
-        "IDs >= 0 (person ids are never negative), found [1.0, -2.0]"
-    )
+    assert str(caught.value) == f"{folder / file}: {message}"
 
 
 def test_a_folder_of_datasets_is_not_read_as_its_gcff_ones(tmp_path, shared_datasets):

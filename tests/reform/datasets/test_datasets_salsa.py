@@ -251,23 +251,26 @@ def test_bad_small_file(tmp_path, features, groups, message):
         load_salsa(folder)
 
 
-def test_truncated_group_line(salsa_dir, tmp_path):
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        pytest.param(
+            lambda line: line[: line.rindex(">")].rstrip(),
+            r"group_names.txt: line 2: field 'groups': expected '>' closing",
+            id="truncated-group-line",
+        ),
+        pytest.param(
+            lambda line: "7.7" + line[line.index(" ") :],
+            r"group_names.txt: line 2: field 'time': .*found '7.7'",
+            id="group-time-matching-no-feature-line",
+        ),
+    ],
+)
+def test_an_edited_group_line_is_refused(salsa_dir, tmp_path, edit, message):
     features, groups = _copy_head(salsa_dir, tmp_path)
-    groups[1] = groups[1][: groups[1].rindex(">")].rstrip()
+    groups[1] = edit(groups[1])
     folder = _write(tmp_path, features, groups)
-    with pytest.raises(
-        DataFormatError, match=r"group_names.txt: line 2: field 'groups': expected '>' closing"
-    ):
-        load_salsa(folder)
-
-
-def test_group_time_matching_no_feature_line(salsa_dir, tmp_path):
-    features, groups = _copy_head(salsa_dir, tmp_path)
-    groups[1] = "7.7" + groups[1][groups[1].index(" ") :]
-    folder = _write(tmp_path, features, groups)
-    with pytest.raises(
-        DataFormatError, match=r"group_names.txt: line 2: field 'time': .*found '7.7'"
-    ):
+    with pytest.raises(DataFormatError, match=message):
         load_salsa(folder)
 
 

@@ -6,23 +6,17 @@ import json
 
 import numpy as np
 import pytest
+from cli_errors import cli_json, run_cli
 
 from reform import Dataset, Frame
 from reform.datasets import write_parquet
-from sim.cli import main
 from sim.experiments.characterisation_report import format_calibration, format_characterisation
-
-
-def run(argv, capsys):
-    status = main([str(a) for a in argv])
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err
 
 
 def test_characterize_salsa_and_babble_beside_the_paper(salsa_dir, babble_dir, tmp_path, capsys):
     out_json, out_md, notes = tmp_path / "c.json", tmp_path / "c.md", tmp_path / "notes.md"
     notes.write_text("Our numbers differ because of X.\n")
-    status, out, err = run(
+    result, out, err = cli_json(
         [
             "characterize",
             "--data",
@@ -38,10 +32,9 @@ def test_characterize_salsa_and_babble_beside_the_paper(salsa_dir, babble_dir, t
             "--notes",
             notes,
         ],
+        out_json,
         capsys,
     )
-    assert status == 0, err
-    result = json.loads(out_json.read_text())
     assert result["schema_version"] == 1 and result["min_groups"] == 5
     assert result["command"].startswith("reform-sim characterize --data ")
     salsa, babble = result["datasets"]
@@ -110,49 +103,26 @@ def test_check_fails_only_when_tightness_misses_the_tolerance(tmp_path, capsys):
     close = _parquet(tmp_path / "close.parquet", "close", 0.85)
     far = _parquet(tmp_path / "far.parquet", "far", 1.0)
     # On a circle the Tightness is the radius: close is 0.05 m off, far 0.2 m.
-    status, out, err = run(
+    status, out, err = run_cli(
         ["characterize", "--data", close, "--compare-to", reference, "--check"], capsys
     )
     assert status == 0, err
     assert "close against reference" in out and "for every size the reference holds" in out
-    status, out, err = run(
-        [
-            "characterize",
-            "--data",
-            far,
-            "--compare-to",
-            reference,
-            "--check",
-            "--json",
-            tmp_path / "f.json",
-        ],
-        capsys,
-    )
+    check_far = ["characterize", "--data", far, "--compare-to", reference, "--check"]
+    status, out, err = run_cli([*check_far, "--json", tmp_path / "f.json"], capsys)
     assert status == 1
     assert "misses the tolerance" in err
     assert "size 2: mean Tightness 1.000 m vs reference 0.800 m (difference +0.200 m" in out
     (comparison,) = json.loads((tmp_path / "f.json").read_text())["comparisons"]
     assert [e["tightness_difference_m"] for e in comparison["by_size"]] == pytest.approx([0.2] * 3)
     # A wider tolerance lets it pass.
-    status, _, err = run(
-        [
-            "characterize",
-            "--data",
-            far,
-            "--compare-to",
-            reference,
-            "--check",
-            "--tolerance",
-            "0.25",
-        ],
-        capsys,
-    )
+    status, _, err = run_cli([*check_far, "--tolerance", "0.25"], capsys)
     assert status == 0, err
 
 
 def test_one_group_size_prints_no_tests(tmp_path, capsys):
     pairs = _parquet(tmp_path / "pairs.parquet", "pairs", 0.5, sizes=(2, 2))
-    status, out, err = run(["characterize", "--data", pairs], capsys)
+    status, out, err = run_cli(["characterize", "--data", pairs], capsys)
     assert status == 0, err
     assert "fewer than 2 with >= 5 groups" in out
     assert "Tukey" not in out
@@ -168,7 +138,7 @@ def test_one_group_size_prints_no_tests(tmp_path, capsys):
 )
 def test_bad_options_are_refused(tmp_path, capsys, extra, message):
     data = _parquet(tmp_path / "d.parquet", "d", 0.5)
-    status, _, err = run(["characterize", "--data", data, *extra], capsys)
+    status, _, err = run_cli(["characterize", "--data", data, *extra], capsys)
     assert status == 2
     assert message in err
 
@@ -176,7 +146,7 @@ def test_bad_options_are_refused(tmp_path, capsys, extra, message):
 def test_unannotated_data_and_missing_paths_are_refused(tmp_path, capsys):
     frame = _circle_frame(0.5, (2,), time=0.0).replace(groups=None)
     path = write_parquet(Dataset(frames=(frame,), name="raw"), tmp_path / "raw.parquet")
-    status, _, err = run(["characterize", "--data", path], capsys)
+    status, _, err = run_cli(["characterize", "--data", path], capsys)
     assert status == 2 and "no annotated frames, nothing to characterise" in err
-    status, _, err = run(["characterize", "--data", tmp_path / "nowhere.parquet"], capsys)
+    status, _, err = run_cli(["characterize", "--data", tmp_path / "nowhere.parquet"], capsys)
     assert status == 2 and "nowhere.parquet" in err

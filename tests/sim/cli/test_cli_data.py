@@ -13,22 +13,31 @@ from reform.datasets import load_salsa, read_parquet, write_parquet
 from sim.cli import main
 
 
-def test_info_salsa(salsa_dir, capsys):
-    assert main(["data", "info", "--data", str(salsa_dir)]) == 0
+def _info_says(data, lines, capsys, *options) -> None:
+    """``reform-sim data info --data DATA OPTIONS`` exits 0 and prints each of ``lines``."""
+    assert main(["data", "info", "--data", str(data), *options]) == 0
     out = capsys.readouterr().out
-    assert "dataset          salsa (format salsa)" in out
-    assert "frames           1145" in out
-    assert "annotated frames 1143" in out
-    assert "units            m" in out
-    assert "18 distinct ids" in out
-    assert "session1: 645 frames, 644 annotated" in out
-    assert "session2: 500 frames, 499 annotated" in out
-    # The canonical group-size table of the SALSA README.
-    assert "  size      1    2    3    4    5    6    7    8   12" in out
-    assert "  groups 1684 1554 1705  952  539  381  238   25    1" in out
-    assert "F-formations     5395" in out
-    assert "missing_from_groundtruth: 129" in out
-    assert "duplicate_singletons: 3" in out
+    missing = [line for line in lines if line not in out]
+    assert not missing, out
+
+
+def test_info_salsa(salsa_dir, capsys):
+    lines = [
+        "dataset          salsa (format salsa)",
+        "frames           1145",
+        "annotated frames 1143",
+        "units            m",
+        "18 distinct ids",
+        "session1: 645 frames, 644 annotated",
+        "session2: 500 frames, 499 annotated",
+        # The canonical group-size table of the SALSA README.
+        "  size      1    2    3    4    5    6    7    8   12",
+        "  groups 1684 1554 1705  952  539  381  238   25    1",
+        "F-formations     5395",
+        "missing_from_groundtruth: 129",
+        "duplicate_singletons: 3",
+    ]
+    _info_says(salsa_dir, lines, capsys)
 
 
 def test_info_babble_json(babble_dir, capsys):
@@ -63,12 +72,13 @@ def _gcff_folder(folder):
 
 def test_info_gcff_units(tmp_path, capsys):
     folder = _gcff_folder(tmp_path / "tiny")
-    assert main(["data", "info", "--data", str(folder)]) == 0
-    out = capsys.readouterr().out
-    assert "units            m (file in cm, converted)" in out
-    assert "frames           2" in out
-    assert "annotated frames 1" in out
-    assert '"stride_m": 0.7' in out
+    lines = [
+        "units            m (file in cm, converted)",
+        "frames           2",
+        "annotated frames 1",
+        '"stride_m": 0.7',
+    ]
+    _info_says(folder, lines, capsys)
     assert main(["data", "info", "--data", str(folder), "--units", "m", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["group_sizes"] == {"2": 1}
@@ -79,9 +89,7 @@ def test_convert_then_info(tmp_path, salsa_dir, capsys):
     assert main(["data", "convert", "--data", str(salsa_dir), "--out", str(out)]) == 0
     assert read_parquet(out).frames == load_salsa(salsa_dir).frames
     capsys.readouterr()
-    assert main(["data", "info", "--data", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert "(format parquet)" in text and "frames           1145" in text
+    _info_says(out, ["(format parquet)", "frames           1145"], capsys)
 
 
 def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
@@ -96,10 +104,7 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
         Frame(ids=[], position=np.zeros((0, 2)), yaw=[], time=1.0),
     )
     path = write_parquet(Dataset(frames=frames, name="tiny"), tmp_path / "tiny.parquet")
-    assert main(["data", "info", "--data", str(path)]) == 0
-    out = capsys.readouterr().out
-    assert "robots           in 1 frames" in out
-    assert "per frame min 0, median 1, max 2" in out
+    _info_says(path, ["robots           in 1 frames", "per frame min 0, median 1, max 2"], capsys)
 
 
 @pytest.mark.parametrize(

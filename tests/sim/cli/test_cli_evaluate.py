@@ -6,6 +6,7 @@ import argparse
 import json
 
 import pytest
+from cli_errors import cli_json, run_cli
 
 from reform.datasets import load_dataset
 from sim.cli import main
@@ -19,15 +20,20 @@ from sim.cli._detectors import (
 from sim.experiments.tables import format_comparison, format_report
 
 
-def run(argv, capsys):
-    status = main([str(a) for a in argv])
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err
+@pytest.fixture
+def as_majority(monkeypatch):
+    """Installs a detector object under the name ``majority`` for one test."""
+
+    def install(detector) -> None:
+        spec = DetectorSpec("majority", "test", lambda args: detector)
+        monkeypatch.setitem(DETECTORS, "majority", spec)
+
+    return install
 
 
 def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
     out_json, out_md = tmp_path / "r" / "salsa.json", tmp_path / "salsa.md"
-    status, out, err = run(
+    result, out, err = cli_json(
         [
             "evaluate",
             "--detector",
@@ -39,10 +45,9 @@ def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
             "--markdown",
             out_md,
         ],
+        out_json,
         capsys,
     )
-    assert status == 0, err
-    result = json.loads(out_json.read_text())
     assert result["schema_version"] == 1
     assert (result["detector"], result["dataset"], result["frames"]) == ("majority", "salsa", 1143)
     assert result["sequences"] == {"session1": 644, "session2": 499}
@@ -67,7 +72,7 @@ def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
 
 def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):
     out_json = tmp_path / "babble.json"
-    status, out, err = run(
+    result, out, err = cli_json(
         [
             "evaluate",
             "--detector",
@@ -78,10 +83,9 @@ def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):
             out_json,
             "--per-frame",
         ],
+        out_json,
         capsys,
     )
-    assert status == 0, err
-    result = json.loads(out_json.read_text())
     assert result["dataset"] == "babble" and result["frames"] == len(result["per_frame"])
     frames = load_dataset(babble_dir).annotated()
     assert result["frames"] == len(frames)
@@ -94,18 +98,16 @@ def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):
 
 def test_detect_majority_writes_every_frame(salsa_dir, tmp_path, capsys):
     out = tmp_path / "groups.json"
-    status, _, err = run(
-        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out], capsys
+    result, _, err = cli_json(
+        ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out], out, capsys
     )
-    assert status == 0, err
-    result = json.loads(out.read_text())
     assert result["kind"] == "reform-sim/detections" and result["schema_version"] == 1
     assert len(result["frames"]) == 1145  # every frame, the two without ground truth included
     first = result["frames"][0]
     assert first == {"index": 0, "sequence": "session1", "time": 0.2, "groups": []}
     assert "1,145 frames, 0 F-formations" in err
 
-    status, _, err = run(
+    status, _, err = run_cli(
         ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out, "--frames", "all"],
         capsys,
     )
@@ -113,7 +115,7 @@ def test_detect_majority_writes_every_frame(salsa_dir, tmp_path, capsys):
     assert len(json.loads(out.read_text())["frames"]) == 1143
 
 
-def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, capsys, monkeypatch):
+def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, capsys, as_majority):
     class Oracle:
         """Predicts the ground truth, shuffled: groups in reverse, members descending."""
 
@@ -122,13 +124,9 @@ def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, cap
                 tuple(tuple(sorted(g, reverse=True)) for g in f.partition()[::-1]) for f in frames
             ]
 
-    monkeypatch.setitem(
-        DETECTORS,
-        "majority",
-        DetectorSpec("majority", "test", lambda a: Oracle()),
-    )
+    as_majority(Oracle())
     out = tmp_path / "groups.json"
-    status, _, err = run(
+    status, _, err = run_cli(
         ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out, "--frames", "all"],
         capsys,
     )
@@ -141,19 +139,15 @@ def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, cap
 
 
 def test_detect_rejects_a_detector_that_returns_no_partition(
-    salsa_dir, tmp_path, capsys, monkeypatch
+    salsa_dir, tmp_path, capsys, as_majority
 ):
     class Broken:
         def predict(self, frames):
             return [((1, 2),) for _ in frames]  # forgets everyone else
 
-    monkeypatch.setitem(
-        DETECTORS,
-        "majority",
-        DetectorSpec("majority", "test", lambda a: Broken()),
-    )
+    as_majority(Broken())
     out = tmp_path / "groups.json"
-    status, _, err = run(
+    status, _, err = run_cli(
         ["detect", "--detector", "majority", "--data", salsa_dir, "--out", out], capsys
     )
     assert status == 2
@@ -162,7 +156,7 @@ def test_detect_rejects_a_detector_that_returns_no_partition(
 
 
 def test_bad_data_path_is_one_clear_line(tmp_path, capsys):
-    status, out, err = run(
+    status, out, err = run_cli(
         ["evaluate", "--detector", "majority", "--data", tmp_path / "missing"], capsys
     )
     assert status == 2 and out == ""
@@ -196,7 +190,7 @@ def test_detector_registry():
 
 def test_comparison_table_from_results(salsa_dir, tmp_path, capsys):
     out_json = tmp_path / "salsa.json"
-    run(["evaluate", "--detector", "majority", "--data", salsa_dir, "--json", out_json], capsys)
+    run_cli(["evaluate", "--detector", "majority", "--data", salsa_dir, "--json", out_json], capsys)
     result = json.loads(out_json.read_text())
     table = format_comparison([result], style="markdown").splitlines()
     assert [c.strip() for c in table[0].split("|")[1:-1]] == [

@@ -47,6 +47,13 @@ def detect(tmp_path: Path, *args: str) -> tuple[list[list[list[int]]], dict]:
     return [record["groups"] for record in result["frames"]], result
 
 
+def detect_error(tmp_path: Path, capsys, *args: str) -> str:
+    """``reform-sim detect --detector gcff ARGS`` exits with status 2: its stderr."""
+    code = main(["detect", "--detector", "gcff", *args, "--out", str(tmp_path / "x.json")])
+    assert code == 2
+    return capsys.readouterr().err
+
+
 # The pair costs 2 x 100 cm² together; together it saves one label cost (mdl). With mdl =
 # 10,000 cm² (the default) it is a group; with mdl = 100 cm² it is not worth it.
 PAIR = [[[1, 2]], [[1, 2]]]
@@ -105,44 +112,17 @@ def test_evaluate_writes_scores(tmp_path):
 
 def test_conflicting_sources_are_an_error(tmp_path, capsys):
     folder = write_gcff_folder(tmp_path / "Scene", settings=None)
-    code = main(
-        [
-            "detect",
-            "--detector",
-            "gcff",
-            "--data",
-            str(folder),
-            "--stride",
-            "0.6",
-            "--tune-on",
-            str(folder),
-            "--out",
-            str(tmp_path / "x.json"),
-        ]
+    err = detect_error(
+        tmp_path, capsys, "--data", str(folder), "--stride", "0.6", "--tune-on", str(folder)
     )
-    assert code == 2
-    assert "gcff takes one of --stride/--mdl, --settings, --tune-on" in capsys.readouterr().err
+    assert "gcff takes one of --stride/--mdl, --settings, --tune-on" in err
 
 
 def test_bad_settings_file_is_named(tmp_path, capsys):
     folder = write_gcff_folder(tmp_path / "Scene", settings=None)
     settings = tmp_path / "broken.mat"
     scipy.io.savemat(settings, {"stride": 70.0})
-    code = main(
-        [
-            "detect",
-            "--detector",
-            "gcff",
-            "--data",
-            str(folder),
-            "--settings",
-            str(settings),
-            "--out",
-            str(tmp_path / "x.json"),
-        ]
-    )
-    assert code == 2
-    err = capsys.readouterr().err
+    err = detect_error(tmp_path, capsys, "--data", str(folder), "--settings", str(settings))
     assert "broken.mat" in err and "expected a variable 'mdl'" in err
 
 

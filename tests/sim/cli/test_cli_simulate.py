@@ -4,19 +4,18 @@ from __future__ import annotations
 
 import json
 import re
-import tracemalloc
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
 import tqdm  # noqa: F401 - imported before the memory of a refusal is traced
 from rerun.chunk import RrdReader
+from traced import traced_peak
 
 import scenarios
 import sim.episode
 import sim.recording  # noqa: F401 - imported before the memory of a refusal is traced
 from reform.datasets import read_parquet
-from sim import sizing
 from sim.cli import main
 from sim.episode import simulate_episode
 
@@ -197,25 +196,8 @@ def test_calibrate_reads_the_datasets_named_by_the_environment(tmp_path, monkeyp
 # --------------------------------------------------------------------------------------------
 # Requests sized before they run (sim.sizing)
 
-GiB = 2**30
 REFUSAL_PEAK_BYTES = 50 * 2**20  # bytes: what a refused request may allocate while refused
 SHRINK = r"ask for less \(a shorter --duration, a lower --rate or a larger --dt\)"
-
-
-@pytest.fixture
-def machine(monkeypatch):
-    """16 GiB of memory available and 100 GiB of free disk, whatever runs the tests."""
-    monkeypatch.setattr(sizing, "available_memory", lambda: 16 * GiB)
-    monkeypatch.setattr(sizing, "total_memory", lambda: 32 * GiB)
-    monkeypatch.setattr(sizing, "free_disk", lambda path: 100 * GiB)
-
-
-@pytest.fixture
-def no_work(monkeypatch):
-    def refuse(*args, **kwargs):
-        raise AssertionError("a World was built: the request was not refused first")
-
-    monkeypatch.setattr(sim.episode, "World", refuse)
 
 
 @pytest.mark.parametrize(
@@ -266,12 +248,7 @@ def test_simulate_refuses_what_cannot_fit_before_any_work(
     out, rrd = tmp_path / "never.parquet", tmp_path / "never.rrd"
     extra = [str(rrd) if e == "REC" else e for e in extra]
     argv = ["simulate", "--scenario", "mingle", "--seed", "1", "--out", str(out), *extra]
-    tracemalloc.start()
-    try:
-        code = main(argv)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    code, peak = traced_peak(lambda: main(argv))
     assert code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1

@@ -152,19 +152,6 @@ def test_budgets() -> None:
     assert FULL.stress_grid == "small"
 
 
-@pytest.mark.parametrize(
-    ("argv", "message"),
-    [
-        (["--seed", "-1"], "--seed must be >= 0, got -1"),
-        (["--jobs", "0"], "--jobs must be >= 1, got 0"),
-        (["--data", "/nonexistent/datasets"], "/nonexistent/datasets is not a folder"),
-    ],
-)
-def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
-    assert main(["demo", "--quick", "--out", str(tmp_path / "o"), *argv]) == 2
-    assert message in capsys.readouterr().err
-
-
 def test_the_real_datasets_are_found_without_a_flag(tmp_path, monkeypatch, capsys) -> None:
     """No --datasets: $REFORM_SIM_DATASETS, else ../shared/datasets beside the working folder."""
     from sim.cli._common import default_datasets

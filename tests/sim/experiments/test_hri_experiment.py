@@ -9,7 +9,6 @@ import pytest
 from reform import Reform, time_split
 from reform.classifiers import make_classifier
 from reform.detectors import DetectorError
-from sim.cli import main
 from sim.experiments.hri import (
     HRI_SCENARIOS,
     PAPER_HRI,
@@ -165,19 +164,6 @@ def test_a_broken_detector_is_one_line_naming_it_the_view_and_the_frame() -> Non
         hri_experiment(
             seed=0, seeds=1, views=("truth",), detectors=[broken], resamples=10, rate=1.0
         )
-
-
-@pytest.mark.parametrize(
-    ("argv", "message"),
-    [
-        (["--views", "sonar"], "--views must name views among"),
-        (["--episodes", "0"], "--episodes must be >= 1, got 0"),
-        (["--data", "salsa=/nonexistent/salsa"], "SALSA not found at /nonexistent/salsa"),
-    ],
-)
-def test_cli_bad_input(argv, message, tmp_path, capsys) -> None:
-    assert main(["experiment", "hri", "--out", str(tmp_path / "hri"), *argv]) == 2
-    assert message in capsys.readouterr().err
 
 
 def test_bad_arguments() -> None:

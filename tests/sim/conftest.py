@@ -1,0 +1,29 @@
+"""Fixtures of the simulator's tests: a machine of known size, and a guard that no work starts."""
+
+from __future__ import annotations
+
+import pytest
+
+import sim.episode
+from sim import sizing
+
+GiB = 2**30
+
+
+@pytest.fixture
+def machine(monkeypatch):
+    """A machine with 16 GiB of memory available (32 GiB with swap) and 100 GiB of free disk,
+    whatever runs the tests."""
+    monkeypatch.setattr(sizing, "available_memory", lambda: 16 * GiB)
+    monkeypatch.setattr(sizing, "total_memory", lambda: 32 * GiB)
+    monkeypatch.setattr(sizing, "free_disk", lambda path: 100 * GiB)
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Fails any test whose request builds a world: refusals come before any work."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a World was built: the request was not refused first")
+
+    monkeypatch.setattr(sim.episode, "World", refuse)
