@@ -28,6 +28,7 @@ from sim.experiments.sim2real_report import (
 from sim.experiments.synthetic import SyntheticSource
 
 GRIDS = {"stride_grid": (0.6, 0.7), "mdl_grid": (1.0, 3.0)}
+OPTIONS = ({}, {"features": "relative", "reconstruction": "correlation"})
 TINY = (
     Recipe(
         "party",
@@ -62,6 +63,7 @@ def _run(real, root, **kwargs):
         synthetic_root=root,
         recipes=TINY,
         classifiers=("logistic-regression",),
+        option_sets=OPTIONS,
         party_episodes=1,
         seed=3,
         gcff_grids=GRIDS,
@@ -81,7 +83,7 @@ def tiny(tmp_path_factory, salsa_dataset, babble_dataset, coffeebreak):
 def test_the_choice_is_the_best_selection_score(tiny) -> None:
     result, _, _, _ = tiny
     assert [s["label"] for s in result.selection] == [
-        c.label for c in candidates(TINY, ("logistic-regression",))
+        c.label for c in candidates(TINY, ("logistic-regression",), OPTIONS)
     ]
     for entry in result.selection:
         validation = list(entry["validation_f1"].values())
@@ -148,13 +150,21 @@ def test_the_saved_model_is_the_recommended_one(tiny) -> None:
 def test_rank_agreement_is_kendalls_tau_of_the_rows(tiny) -> None:
     result, _, _, _ = tiny
     rank = result.rank
-    assert len(rank.detectors) == len(TINY) + 1 + 1  # candidates, SALSA-trained, GCFF one
+    assert len(rank.detectors) == len(TINY) * len(OPTIONS) + 2  # candidates, SALSA-trained, GCFF
     assert rank.tau == pytest.approx(kendalltau(rank.simulated, rank.real).statistic)
     for name, sim, real in zip(rank.detectors, rank.simulated, rank.real, strict=True):
         assert sim == pytest.approx(result.score(name, SIM_PARTY).f1)
         assert real == pytest.approx(result.mean_f1(name))
     low, high = rank.interval
     assert -1.0 <= low <= high <= 1.0
+    field = result.rank_field
+    assert field.detectors == rank.detectors and field.real == rank.real
+    validation = ("validation: mingle", "validation: mingle-randomised")
+    for name, sim in zip(field.detectors, field.simulated, strict=True):
+        if name in {s["label"] for s in result.selection}:
+            (entry,) = [s for s in result.selection if s["label"] == name]
+            assert sim == pytest.approx(np.mean([entry["validation_f1"][v] for v in validation]))
+    assert field.tau == pytest.approx(kendalltau(field.simulated, field.real).statistic)
 
 
 def test_goals_follow_from_the_scores(tiny) -> None:
