@@ -231,8 +231,13 @@ class _Folder:
         return f"{self.data}/{summary.path}" if self.data else summary.path
 
 
+def _recording_name(episode: int) -> str:
+    """The episode's recording, relative to the dataset folder."""
+    return f"{RECORDINGS_DIR}/episode={int(episode)}.rrd"
+
+
 def _recording_path(out_dir: Path, episode: int) -> Path:
-    return out_dir / RECORDINGS_DIR / f"episode={int(episode)}.rrd"
+    return out_dir / _recording_name(episode)
 
 
 def _json_value(name: str, value: Any) -> Any:
@@ -676,17 +681,7 @@ def _run_batch_bytes(
     episodes: Sequence[int], spec: GenerationSpec, save_recordings: bool
 ) -> list[tuple[ShardSummary, bytes, bytes | None]]:
     """A batch of episodes, sent back as file contents (Ray workers, maybe on other machines)."""
-    out = []
-    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
-        folder = _Folder(Path(scratch))
-        for k in episodes:
-            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
-            shard = (folder.root / summary.path).read_bytes()
-            recording = None
-            if save_recordings:
-                recording = _recording_path(folder.out, k).read_bytes()
-            out.append((summary, shard, recording))
-    return out
+    return list(_episode_files(episodes, spec, save_recordings))
 
 
 def _run_batch_store(
@@ -696,24 +691,39 @@ def _run_batch_store(
     commit. Returns each summary with its shard's ``bytes`` and ``sha256``."""
     store = open_store(uri, check=False)
     out = []
-    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
-        folder = _Folder(Path(scratch))
-        for k in episodes:
-            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
-            local = folder.root / summary.path
-            shard = local.read_bytes()
-            local.unlink()
-            if save_recordings:
-                recording = _recording_path(folder.out, k)
-                store.write(recording.relative_to(folder.out).as_posix(), recording.read_bytes())
-                recording.unlink()
+    with contextlib.closing(_episode_files(episodes, spec, save_recordings)) as made:
+        for summary, shard, recording in made:
+            if recording is not None:
+                store.write(_recording_name(summary.episode), recording)
             listed = f"{DATA_DIR}/{summary.path}"
             store.write(listed, shard)
             files = {"bytes": len(shard), "sha256": hashlib.sha256(shard).hexdigest()}
             entry = {**summary.to_json(), "path": listed, **files}
-            store.write(commit_name(k), json.dumps(entry, sort_keys=True).encode())
+            store.write(commit_name(summary.episode), json.dumps(entry, sort_keys=True).encode())
             out.append((summary, files))
     return out
+
+
+def _episode_files(
+    episodes: Sequence[int], spec: GenerationSpec, save_recordings: bool
+) -> Iterator[tuple[ShardSummary, bytes, bytes | None]]:
+    """Each episode of a batch simulated in a scratch folder, as its summary and the contents
+    of its shard and of its recording (None unless asked for): for workers that do not write
+    into the dataset folder. One episode's files are held at a time."""
+    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
+        folder = _Folder(Path(scratch))
+        for k in episodes:
+            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
+            shard = _take(folder.root / summary.path)
+            recording = _take(_recording_path(folder.out, k)) if save_recordings else None
+            yield summary, shard, recording
+
+
+def _take(path: Path) -> bytes:
+    """The file's contents; the file removed."""
+    content = path.read_bytes()
+    path.unlink()
+    return content
 
 
 # ------------------------------------------------------------------------------------------
@@ -1662,11 +1672,7 @@ def _generate_store(
         _check_store(store, parameters, episodes)  # again, now that no other run can write
         existing = _committed_shards(store, spec, episodes)
         objects = store.sizes()
-        done = [
-            k
-            for k in existing
-            if not save_recordings or f"{RECORDINGS_DIR}/episode={k}.rrd" in objects
-        ]
+        done = [k for k in existing if not save_recordings or _recording_name(k) in objects]
         shards = {k: existing[k][0] for k in done}
         files = {existing[k][0].path: existing[k][1] for k in done}
         todo = [k for k in range(episodes) if k not in shards]
