@@ -747,9 +747,15 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
         raise ValueError(
             f"{path}: expected a reform-sim dataset card (JSON), got JSON nested too deep to read"
         ) from None
+    return _checked_card(card, path)
+
+
+def _checked_card(card: Any, where: object) -> dict[str, Any]:
+    """``card`` (parsed JSON) when it is a reform-sim dataset card, else a ValueError naming
+    ``where``."""
     if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
         raise ValueError(
-            f"{path}: expected a reform-sim dataset card with a 'parameters' object, "
+            f"{where}: expected a reform-sim dataset card with a 'parameters' object, "
             f"got {type(card).__name__}"
         )
     return card
@@ -830,12 +836,7 @@ def _store_card(store: Store) -> dict[str, Any] | None:
             f"{store.url(CARD_JSON)}: expected a reform-sim dataset card (JSON), got "
             f"{type(exc).__name__}"
         ) from None
-    if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
-        raise ValueError(
-            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card with a 'parameters' "
-            f"object, got {type(card).__name__}"
-        )
-    return card
+    return _checked_card(card, store.url(CARD_JSON))
 
 
 def _check_store(store: Store, parameters: Mapping[str, Any], episodes: int) -> None:
