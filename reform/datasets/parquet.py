@@ -208,27 +208,20 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
                 member[rows[index_of[int(person)]]] = m
 
     counts = np.bincount(t_of, minlength=n_frames)
-    has_head_rows = np.full(n_rows, has_head)
-    no_head = empty | ~has_head_rows
-    no_group = group < 0
-    nothing = np.zeros(n_rows, dtype=bool)
-    return {
-        "sequence": (np.full(n_rows, block.sequence, dtype=object), nothing),
-        "frame": (t_of.astype(np.int64), nothing),
-        "time": (np.repeat(time, counts), nothing),
-        "annotated": (np.repeat(annotated_frame, counts), nothing),
-        "has_head": (has_head_rows, nothing),
-        "person_id": (person_id.astype(np.int64), empty),
-        "kind": (kind, empty),
-        "x": (body[:, 0], empty),
-        "y": (body[:, 1], empty),
-        "yaw": (body[:, 2], empty),
-        "head_x": (head[:, 0], no_head),
-        "head_y": (head[:, 1], no_head),
-        "head_yaw": (head[:, 2], no_head),
-        "group": (group, no_group),
-        "group_member": (member, no_group),
-    }
+    return _long_columns(
+        sequence=np.full(n_rows, block.sequence, dtype=object),
+        frame=t_of.astype(np.int64),
+        time=np.repeat(time, counts),
+        annotated=np.repeat(annotated_frame, counts),
+        has_head=np.full(n_rows, has_head),
+        person_id=person_id.astype(np.int64),
+        kind=kind,
+        body=body,
+        head=head,
+        group=group,
+        member=member,
+        empty=empty,
+    )
 
 
 def _header_json(
@@ -324,12 +317,46 @@ def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarra
                         group[row_of[person]] = g
                         member[row_of[person]] = m
         start += count
+    return _long_columns(
+        sequence=sequence,
+        frame=frame_index,
+        time=time,
+        annotated=annotated,
+        has_head=has_head,
+        person_id=person_id,
+        kind=kind,
+        body=body,
+        head=head,
+        group=group,
+        member=member,
+        empty=empty,
+    )
+
+
+def _long_columns(
+    *,
+    sequence: np.ndarray,
+    frame: np.ndarray,
+    time: np.ndarray,
+    annotated: np.ndarray,
+    has_head: np.ndarray,
+    person_id: np.ndarray,
+    kind: np.ndarray,
+    body: np.ndarray,
+    head: np.ndarray,
+    group: np.ndarray,
+    member: np.ndarray,
+    empty: np.ndarray,
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The long table's columns, values and null masks (True = null), from its rows' arrays:
+    ``body`` and ``head`` (n_rows, 3) x, y, yaw; ``group`` and ``member`` -1 for no group;
+    ``empty`` the rows of frames with nobody (their person columns null)."""
     no_head = empty | ~has_head
     no_group = group < 0
-    nothing = np.zeros(n_rows, dtype=bool)
+    nothing = np.zeros(empty.size, dtype=bool)
     return {
         "sequence": (sequence, nothing),
-        "frame": (frame_index, nothing),
+        "frame": (frame, nothing),
         "time": (time, nothing),
         "annotated": (annotated, nothing),
         "has_head": (has_head, nothing),
