@@ -177,24 +177,21 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
     row_of = np.full(slots.shape, -1, dtype=np.int64)
     row_of[t_of, a_of] = np.arange(n_rows)
 
-    person_id = np.where(empty, 0, ids[a_safe] if n else 0)
-    kind = np.empty(n_rows, dtype=object)
+    out = _PersonRows(n_rows)
+    out.empty[:] = empty
+    out.person_id[:] = np.where(empty, 0, ids[a_safe] if n else 0)
     if n:
-        kind[:] = np.array(block.kinds, dtype=object)[a_safe]
-    kind[empty] = None
-    body = np.zeros((n_rows, 3))
-    head = np.zeros((n_rows, 3))
+        out.kind[:] = np.array(block.kinds, dtype=object)[a_safe]
+    out.kind[empty] = None
     if n:
-        body[:, :2] = block.position[t_of, a_safe]
-        body[:, 2] = block.yaw[t_of, a_safe]
+        out.body[:, :2] = block.position[t_of, a_safe]
+        out.body[:, 2] = block.yaw[t_of, a_safe]
         if has_head:
-            head[:, :2] = block.head_position[t_of, a_safe]
-            head[:, 2] = block.head_yaw[t_of, a_safe]
-    body[empty] = 0.0
-    head[empty] = 0.0
+            out.head[:, :2] = block.head_position[t_of, a_safe]
+            out.head[:, 2] = block.head_yaw[t_of, a_safe]
+    out.body[empty] = 0.0
+    out.head[empty] = 0.0
 
-    group = np.full(n_rows, -1, dtype=np.int32)
-    member = np.full(n_rows, -1, dtype=np.int32)
     annotated_frame = np.zeros(n_frames, dtype=bool)
     index_of = {int(i): a for a, i in enumerate(ids.tolist())}
     for t, frame_groups in enumerate(block.present_groups()):
@@ -204,23 +201,16 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
         rows = row_of[t]
         for g, members in enumerate(frame_groups):
             for m, person in enumerate(members):
-                group[rows[index_of[int(person)]]] = g
-                member[rows[index_of[int(person)]]] = m
+                out.group[rows[index_of[int(person)]]] = g
+                out.member[rows[index_of[int(person)]]] = m
 
     counts = np.bincount(t_of, minlength=n_frames)
-    return _long_columns(
+    return out.columns(
         sequence=np.full(n_rows, block.sequence, dtype=object),
         frame=t_of.astype(np.int64),
         time=np.repeat(time, counts),
         annotated=np.repeat(annotated_frame, counts),
         has_head=np.full(n_rows, has_head),
-        person_id=person_id.astype(np.int64),
-        kind=kind,
-        body=body,
-        head=head,
-        group=group,
-        member=member,
-        empty=empty,
     )
 
 
@@ -288,89 +278,80 @@ def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarra
         np.array([f.head_position is not None for f in frames], dtype=bool), counts
     )
 
-    person_id = np.zeros(n_rows, dtype=np.int64)
-    kind = np.empty(n_rows, dtype=object)
-    body = np.zeros((n_rows, 3))
-    head = np.zeros((n_rows, 3))
-    group = np.full(n_rows, -1, dtype=np.int32)
-    member = np.full(n_rows, -1, dtype=np.int32)
-    empty = np.zeros(n_rows, dtype=bool)
+    out = _PersonRows(n_rows)
     start = 0
     for frame, count in zip(frames, counts.tolist(), strict=True):
         n = frame.n_people
         rows = slice(start, start + count)
         if n == 0:
-            empty[start] = True
-            kind[start] = None
+            out.empty[start] = True
+            out.kind[start] = None
         else:
-            person_id[rows] = frame.ids
-            kind[rows] = frame.kinds
-            body[rows, :2] = frame.position
-            body[rows, 2] = frame.yaw
+            out.person_id[rows] = frame.ids
+            out.kind[rows] = frame.kinds
+            out.body[rows, :2] = frame.position
+            out.body[rows, 2] = frame.yaw
             if frame.head_position is not None:
-                head[rows, :2] = frame.head_position
-                head[rows, 2] = frame.head_yaw
+                out.head[rows, :2] = frame.head_position
+                out.head[rows, 2] = frame.head_yaw
             if frame.groups:
                 row_of = {int(i): start + r for r, i in enumerate(frame.ids.tolist())}
                 for g, members in enumerate(frame.groups):
                     for m, person in enumerate(members):
-                        group[row_of[person]] = g
-                        member[row_of[person]] = m
+                        out.group[row_of[person]] = g
+                        out.member[row_of[person]] = m
         start += count
-    return _long_columns(
-        sequence=sequence,
-        frame=frame_index,
-        time=time,
-        annotated=annotated,
-        has_head=has_head,
-        person_id=person_id,
-        kind=kind,
-        body=body,
-        head=head,
-        group=group,
-        member=member,
-        empty=empty,
+    return out.columns(
+        sequence=sequence, frame=frame_index, time=time, annotated=annotated, has_head=has_head
     )
 
 
-def _long_columns(
-    *,
-    sequence: np.ndarray,
-    frame: np.ndarray,
-    time: np.ndarray,
-    annotated: np.ndarray,
-    has_head: np.ndarray,
-    person_id: np.ndarray,
-    kind: np.ndarray,
-    body: np.ndarray,
-    head: np.ndarray,
-    group: np.ndarray,
-    member: np.ndarray,
-    empty: np.ndarray,
-) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The long table's columns, values and null masks (True = null), from its rows' arrays:
-    ``body`` and ``head`` (n_rows, 3) x, y, yaw; ``group`` and ``member`` -1 for no group;
-    ``empty`` the rows of frames with nobody (their person columns null)."""
-    no_head = empty | ~has_head
-    no_group = group < 0
-    nothing = np.zeros(empty.size, dtype=bool)
-    return {
-        "sequence": (sequence, nothing),
-        "frame": (frame, nothing),
-        "time": (time, nothing),
-        "annotated": (annotated, nothing),
-        "has_head": (has_head, nothing),
-        "person_id": (person_id, empty),
-        "kind": (kind, empty),
-        "x": (body[:, 0], empty),
-        "y": (body[:, 1], empty),
-        "yaw": (body[:, 2], empty),
-        "head_x": (head[:, 0], no_head),
-        "head_y": (head[:, 1], no_head),
-        "head_yaw": (head[:, 2], no_head),
-        "group": (group, no_group),
-        "group_member": (member, no_group),
-    }
+class _PersonRows:
+    """The long table's per-person arrays, one entry a row, while a writer fills them: ids,
+    kinds, ``body`` and ``head`` poses ((n_rows, 3): x, y, yaw), the group and the place in it
+    (-1: in none), and ``empty``: the one row of a frame with nobody (person columns null)."""
+
+    def __init__(self, n_rows: int) -> None:
+        self.person_id = np.zeros(n_rows, dtype=np.int64)
+        self.kind = np.empty(n_rows, dtype=object)
+        self.body = np.zeros((n_rows, 3))
+        self.head = np.zeros((n_rows, 3))
+        self.group = np.full(n_rows, -1, dtype=np.int32)
+        self.member = np.full(n_rows, -1, dtype=np.int32)
+        self.empty = np.zeros(n_rows, dtype=bool)
+
+    def columns(
+        self,
+        *,
+        sequence: np.ndarray,
+        frame: np.ndarray,
+        time: np.ndarray,
+        annotated: np.ndarray,
+        has_head: np.ndarray,
+    ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Every column of the long table, values and null masks (True = null), given the
+        frame-level ones (one entry a row)."""
+        empty = self.empty
+        no_head = empty | ~has_head
+        no_group = self.group < 0
+        nothing = np.zeros(empty.size, dtype=bool)
+        return {
+            "sequence": (sequence, nothing),
+            "frame": (frame, nothing),
+            "time": (time, nothing),
+            "annotated": (annotated, nothing),
+            "has_head": (has_head, nothing),
+            "person_id": (self.person_id, empty),
+            "kind": (self.kind, empty),
+            "x": (self.body[:, 0], empty),
+            "y": (self.body[:, 1], empty),
+            "yaw": (self.body[:, 2], empty),
+            "head_x": (self.head[:, 0], no_head),
+            "head_y": (self.head[:, 1], no_head),
+            "head_yaw": (self.head[:, 2], no_head),
+            "group": (self.group, no_group),
+            "group_member": (self.member, no_group),
+        }
 
 
 @file_errors_as_data_errors
