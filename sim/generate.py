@@ -773,21 +773,44 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
         raise ValueError(f"out_dir must be a folder, got a file: {out_dir}")
     if not out_dir.exists():
         return
-    card = read_card(out_dir)
+    _check_contents(
+        str(out_dir),
+        [p.name for p in out_dir.iterdir()],
+        read_card(out_dir),
+        parameters,
+        episodes,
+        things="files",
+        instead="an empty or new folder, or one made by reform-sim generate",
+    )
+
+
+def _check_contents(
+    out: str,
+    names: Iterable[str],
+    card: Mapping[str, Any] | None,
+    parameters: Mapping[str, Any],
+    episodes: int,
+    *,
+    things: str,
+    instead: str,
+    also_ours: tuple[str, ...] = (),
+) -> None:
+    """Refuses a dataset folder or store prefix ``out`` whose top-level ``names`` are anything
+    but this dataset (``things``, ``instead``: the words of the messages)."""
     if card is None:
-        foreign = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+        foreign = sorted(n for n in names if not n.startswith("."))
         if foreign:
             shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
             raise ValueError(
-                f"out_dir {out_dir} holds files but no dataset card ({CARD_JSON}): expected an "
-                f"empty or new folder, or one made by reform-sim generate, found {shown}"
+                f"out_dir {out} holds {things} but no dataset card ({CARD_JSON}): expected "
+                f"{instead}, found {shown}"
             )
         return
-    _check_card(str(out_dir), card, parameters, episodes)
-    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+    _check_card(out, card, parameters, episodes)
+    extra = sorted(n for n in names if not _is_ours(n) and n not in also_ours)
     if extra:
         raise ValueError(
-            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"out_dir {out} holds {things} that are not part of a generated dataset: "
             f"{', '.join(extra[:5])}"
         )
 
@@ -841,24 +864,16 @@ def _store_card(store: Store) -> dict[str, Any] | None:
 
 def _check_store(store: Store, parameters: Mapping[str, Any], episodes: int) -> None:
     """`_check_folder` of a prefix in a store: empty, or holding this dataset alone."""
-    names = {name.split("/", 1)[0] for name in store.sizes()}
-    card = _store_card(store)
-    if card is None:
-        foreign = sorted(n for n in names if not n.startswith("."))
-        if foreign:
-            shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
-            raise ValueError(
-                f"out_dir {store.uri} holds objects but no dataset card ({CARD_JSON}): expected "
-                f"an empty prefix or one written by reform-sim generate, found {shown}"
-            )
-        return
-    _check_card(store.uri, card, parameters, episodes)
-    extra = sorted(n for n in names if not _is_ours(n) and n != COMMITS_DIR)
-    if extra:
-        raise ValueError(
-            f"out_dir {store.uri} holds objects that are not part of a generated dataset: "
-            f"{', '.join(extra[:5])}"
-        )
+    _check_contents(
+        store.uri,
+        {name.split("/", 1)[0] for name in store.sizes()},
+        _store_card(store),
+        parameters,
+        episodes,
+        things="objects",
+        instead="an empty prefix or one written by reform-sim generate",
+        also_ours=(COMMITS_DIR,),
+    )
 
 
 def _alive(pid: int) -> bool:
