@@ -289,14 +289,19 @@ def _optional_equal(a: np.ndarray | None, b: np.ndarray | None) -> bool:
     return np.array_equal(a, b, equal_nan=True)
 
 
+def _members(group: Any, name: str) -> Group:
+    """``group`` as a tuple of person ids; errors name it ``name`` (``groups[2]``)."""
+    if isinstance(group, (str, bytes)) or not isinstance(group, Iterable):
+        raise ValueError(f"{name} must be a sequence of person ids, got {group!r}")
+    return tuple(_person_id(m, name) for m in group)
+
+
 def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[Group, ...]:
     known = set(ids.tolist())
     seen: set[int] = set()
     out = []
     for g, group in enumerate(groups):
-        if isinstance(group, (str, bytes)) or not isinstance(group, Iterable):
-            raise ValueError(f"groups[{g}] must be a sequence of person ids, got {group!r}")
-        members = tuple(_person_id(m, f"groups[{g}]") for m in group)
+        members = _members(group, f"groups[{g}]")
         if not members:
             raise ValueError(f"groups[{g}] is empty")
         for m in members:
@@ -320,9 +325,7 @@ def _validate_listed(
     seen: set[int] = set()
     out = []
     for g, group in enumerate(listed):
-        if isinstance(group, (str, bytes)) or not isinstance(group, Iterable):
-            raise ValueError(f"listed_groups[{g}] must be a sequence of person ids, got {group!r}")
-        members = tuple(_person_id(m, f"listed_groups[{g}]") for m in group)
+        members = _members(group, f"listed_groups[{g}]")
         if len(members) < 2:
             raise ValueError(f"listed_groups[{g}] must have two or more members, got {members}")
         for m in members:

@@ -231,8 +231,13 @@ class _Folder:
         return f"{self.data}/{summary.path}" if self.data else summary.path
 
 
+def _recording_name(episode: int) -> str:
+    """The episode's recording, relative to the dataset folder."""
+    return f"{RECORDINGS_DIR}/episode={int(episode)}.rrd"
+
+
 def _recording_path(out_dir: Path, episode: int) -> Path:
-    return out_dir / RECORDINGS_DIR / f"episode={int(episode)}.rrd"
+    return out_dir / _recording_name(episode)
 
 
 def _json_value(name: str, value: Any) -> Any:
@@ -676,17 +681,7 @@ def _run_batch_bytes(
     episodes: Sequence[int], spec: GenerationSpec, save_recordings: bool
 ) -> list[tuple[ShardSummary, bytes, bytes | None]]:
     """A batch of episodes, sent back as file contents (Ray workers, maybe on other machines)."""
-    out = []
-    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
-        folder = _Folder(Path(scratch))
-        for k in episodes:
-            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
-            shard = (folder.root / summary.path).read_bytes()
-            recording = None
-            if save_recordings:
-                recording = _recording_path(folder.out, k).read_bytes()
-            out.append((summary, shard, recording))
-    return out
+    return list(_episode_files(episodes, spec, save_recordings))
 
 
 def _run_batch_store(
@@ -696,24 +691,39 @@ def _run_batch_store(
     commit. Returns each summary with its shard's ``bytes`` and ``sha256``."""
     store = open_store(uri, check=False)
     out = []
-    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
-        folder = _Folder(Path(scratch))
-        for k in episodes:
-            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
-            local = folder.root / summary.path
-            shard = local.read_bytes()
-            local.unlink()
-            if save_recordings:
-                recording = _recording_path(folder.out, k)
-                store.write(recording.relative_to(folder.out).as_posix(), recording.read_bytes())
-                recording.unlink()
+    with contextlib.closing(_episode_files(episodes, spec, save_recordings)) as made:
+        for summary, shard, recording in made:
+            if recording is not None:
+                store.write(_recording_name(summary.episode), recording)
             listed = f"{DATA_DIR}/{summary.path}"
             store.write(listed, shard)
             files = {"bytes": len(shard), "sha256": hashlib.sha256(shard).hexdigest()}
             entry = {**summary.to_json(), "path": listed, **files}
-            store.write(commit_name(k), json.dumps(entry, sort_keys=True).encode())
+            store.write(commit_name(summary.episode), json.dumps(entry, sort_keys=True).encode())
             out.append((summary, files))
     return out
+
+
+def _episode_files(
+    episodes: Sequence[int], spec: GenerationSpec, save_recordings: bool
+) -> Iterator[tuple[ShardSummary, bytes, bytes | None]]:
+    """Each episode of a batch simulated in a scratch folder, as its summary and the contents
+    of its shard and of its recording (None unless asked for): for workers that do not write
+    into the dataset folder. One episode's files are held at a time."""
+    with tempfile.TemporaryDirectory(prefix="reform-sim-generate-") as scratch:
+        folder = _Folder(Path(scratch))
+        for k in episodes:
+            summary = _write_episode(spec, folder, k, save_recordings=save_recordings)
+            shard = _take(folder.root / summary.path)
+            recording = _take(_recording_path(folder.out, k)) if save_recordings else None
+            yield summary, shard, recording
+
+
+def _take(path: Path) -> bytes:
+    """The file's contents; the file removed."""
+    content = path.read_bytes()
+    path.unlink()
+    return content
 
 
 # ------------------------------------------------------------------------------------------
@@ -737,9 +747,15 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
         raise ValueError(
             f"{path}: expected a reform-sim dataset card (JSON), got JSON nested too deep to read"
         ) from None
+    return _checked_card(card, path)
+
+
+def _checked_card(card: Any, where: object) -> dict[str, Any]:
+    """``card`` (parsed JSON) when it is a reform-sim dataset card, else a ValueError naming
+    ``where``."""
     if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
         raise ValueError(
-            f"{path}: expected a reform-sim dataset card with a 'parameters' object, "
+            f"{where}: expected a reform-sim dataset card with a 'parameters' object, "
             f"got {type(card).__name__}"
         )
     return card
@@ -757,21 +773,44 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
         raise ValueError(f"out_dir must be a folder, got a file: {out_dir}")
     if not out_dir.exists():
         return
-    card = read_card(out_dir)
+    _check_contents(
+        str(out_dir),
+        [p.name for p in out_dir.iterdir()],
+        read_card(out_dir),
+        parameters,
+        episodes,
+        things="files",
+        instead="an empty or new folder, or one made by reform-sim generate",
+    )
+
+
+def _check_contents(
+    out: str,
+    names: Iterable[str],
+    card: Mapping[str, Any] | None,
+    parameters: Mapping[str, Any],
+    episodes: int,
+    *,
+    things: str,
+    instead: str,
+    also_ours: tuple[str, ...] = (),
+) -> None:
+    """Refuses a dataset folder or store prefix ``out`` whose top-level ``names`` are anything
+    but this dataset (``things``, ``instead``: the words of the messages)."""
     if card is None:
-        foreign = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+        foreign = sorted(n for n in names if not n.startswith("."))
         if foreign:
             shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
             raise ValueError(
-                f"out_dir {out_dir} holds files but no dataset card ({CARD_JSON}): expected an "
-                f"empty or new folder, or one made by reform-sim generate, found {shown}"
+                f"out_dir {out} holds {things} but no dataset card ({CARD_JSON}): expected "
+                f"{instead}, found {shown}"
             )
         return
-    _check_card(str(out_dir), card, parameters, episodes)
-    extra = sorted(p.name for p in out_dir.iterdir() if not _is_ours(p.name))
+    _check_card(out, card, parameters, episodes)
+    extra = sorted(n for n in names if not _is_ours(n) and n not in also_ours)
     if extra:
         raise ValueError(
-            f"out_dir {out_dir} holds files that are not part of a generated dataset: "
+            f"out_dir {out} holds {things} that are not part of a generated dataset: "
             f"{', '.join(extra[:5])}"
         )
 
@@ -820,34 +859,21 @@ def _store_card(store: Store) -> dict[str, Any] | None:
             f"{store.url(CARD_JSON)}: expected a reform-sim dataset card (JSON), got "
             f"{type(exc).__name__}"
         ) from None
-    if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
-        raise ValueError(
-            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card with a 'parameters' "
-            f"object, got {type(card).__name__}"
-        )
-    return card
+    return _checked_card(card, store.url(CARD_JSON))
 
 
 def _check_store(store: Store, parameters: Mapping[str, Any], episodes: int) -> None:
     """`_check_folder` of a prefix in a store: empty, or holding this dataset alone."""
-    names = {name.split("/", 1)[0] for name in store.sizes()}
-    card = _store_card(store)
-    if card is None:
-        foreign = sorted(n for n in names if not n.startswith("."))
-        if foreign:
-            shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
-            raise ValueError(
-                f"out_dir {store.uri} holds objects but no dataset card ({CARD_JSON}): expected "
-                f"an empty prefix or one written by reform-sim generate, found {shown}"
-            )
-        return
-    _check_card(store.uri, card, parameters, episodes)
-    extra = sorted(n for n in names if not _is_ours(n) and n != COMMITS_DIR)
-    if extra:
-        raise ValueError(
-            f"out_dir {store.uri} holds objects that are not part of a generated dataset: "
-            f"{', '.join(extra[:5])}"
-        )
+    _check_contents(
+        store.uri,
+        {name.split("/", 1)[0] for name in store.sizes()},
+        _store_card(store),
+        parameters,
+        episodes,
+        things="objects",
+        instead="an empty prefix or one written by reform-sim generate",
+        also_ours=(COMMITS_DIR,),
+    )
 
 
 def _alive(pid: int) -> bool:
@@ -1662,11 +1688,7 @@ def _generate_store(
         _check_store(store, parameters, episodes)  # again, now that no other run can write
         existing = _committed_shards(store, spec, episodes)
         objects = store.sizes()
-        done = [
-            k
-            for k in existing
-            if not save_recordings or f"{RECORDINGS_DIR}/episode={k}.rrd" in objects
-        ]
+        done = [k for k in existing if not save_recordings or _recording_name(k) in objects]
         shards = {k: existing[k][0] for k in done}
         files = {existing[k][0].path: existing[k][1] for k in done}
         todo = [k for k in range(episodes) if k not in shards]

@@ -620,33 +620,16 @@ def _frame_rows(
                 repr(float(array[bad[0], column])),
             )
     ids = array[:, 0]
-    huge = np.flatnonzero(np.abs(ids) > _ID_LIMIT)
-    if huge.size:
-        raise DataFormatError(
-            path,
-            f"{where}, row {huge[0] + 1}",
-            "ID",
-            f"an integer with |ID| <= 2^53 ({_ID_LIMIT:g})",
-            repr(float(ids[huge[0]])),
-        )
-    fractional = np.flatnonzero(ids != np.round(ids))
-    if fractional.size:
-        raise DataFormatError(
-            path,
-            f"{where}, row {fractional[0] + 1}",
-            "ID",
-            "an integer",
-            repr(float(ids[fractional[0]])),
-        )
-    negative = np.flatnonzero(ids < 0)
-    if negative.size:
-        raise DataFormatError(
-            path,
-            f"{where}, row {negative[0] + 1}",
-            "ID",
-            f"an integer >= 0 ({ID_RULE})",
-            repr(float(ids[negative[0]])),
-        )
+    for bad, expected in (
+        (np.abs(ids) > _ID_LIMIT, f"an integer with |ID| <= 2^53 ({_ID_LIMIT:g})"),
+        (ids != np.round(ids), "an integer"),
+        (ids < 0, f"an integer >= 0 ({ID_RULE})"),
+    ):
+        rows = np.flatnonzero(bad)
+        if rows.size:
+            raise DataFormatError(
+                path, f"{where}, row {rows[0] + 1}", "ID", expected, repr(float(ids[rows[0]]))
+            )
     ids = ids.astype(np.int64)
     check_unique_ids(ids.tolist(), path=path, where=where)
     limit = POSITION_LIMIT_M * per_metre

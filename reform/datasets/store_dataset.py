@@ -16,8 +16,8 @@ import hashlib
 from pathlib import PurePosixPath
 from typing import Any
 
+from reform.datasets._parquet_read import CARD_JSON, _json_object, _read_file, _read_folder
 from reform.datasets.errors import DataFormatError
-from reform.datasets.parquet import CARD_JSON, _json_object, _read_file, _read_folder
 from reform.datasets.store import Store, open_store
 from reform.frame import Dataset
 

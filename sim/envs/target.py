@@ -39,7 +39,6 @@ __all__ = [
     "Target",
     "choose_target",
     "circle_of",
-    "is_joinable",
     "joinable_place",
 ]
 
@@ -107,17 +106,6 @@ def joinable_place(
     return place
 
 
-def is_joinable(
-    group: PlannedGroup,
-    robot_id: int,
-    task: JoinTask,
-    bounds: tuple[float, float, float, float] | None = None,
-    others: np.ndarray | None = None,
-) -> bool:
-    """Whether `joinable_place` finds a place."""
-    return joinable_place(group, robot_id, task, bounds, others) is not None
-
-
 def choose_target(
     plan: Sequence[PlannedGroup],
     robot_id: int,
@@ -144,7 +132,7 @@ def choose_target(
             if h is not g and h.start < g.end and h.end > g.start and h.start <= TARGET_HORIZON_S
         ]
         crowd = np.vstack(others) if others else None
-        if is_joinable(g, robot_id, task, bounds, crowd):
+        if joinable_place(g, robot_id, task, bounds, crowd) is not None:
             candidates.append(g)
     if not candidates:
         return None

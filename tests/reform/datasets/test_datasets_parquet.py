@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from reform import DataFormatError, Dataset, Frame
-from reform.datasets import detect_format, load_babble, load_dataset, load_salsa
+from reform.datasets import _parquet_read, detect_format, load_babble, load_dataset, load_salsa
 from reform.datasets.parquet import (
     COLUMNS,
     FORMAT_VERSION,
@@ -643,12 +643,10 @@ def test_a_header_of_the_wrong_shape_is_one_error(tmp_path, header, message):
 
 
 def test_a_file_whose_rows_cannot_fit_memory_is_refused_before_it_is_read(tmp_path, monkeypatch):
-    import reform.datasets.parquet as parquet
-
     path = write_parquet(_mixed_dataset(), tmp_path / "d.parquet")
     # A machine with far less memory than the file's rows need (a few MB of Parquet can claim a
     # hundred million rows): refused from the footer's row count, nothing read.
-    monkeypatch.setattr(parquet, "READ_BYTES_PER_ROW", 2**50)
+    monkeypatch.setattr(_parquet_read, "READ_BYTES_PER_ROW", 2**50)
     with pytest.raises(DataFormatError, match=r"d.parquet: expected a file whose rows fit the"):
         read_parquet(path)
 
