@@ -40,7 +40,9 @@ RENAMED: dict[str, str] = {}
 
 
 class _Renamed(argparse.Action):
-    """An old spelling: says which spelling replaces it, then applies the value as that does."""
+    """An old spelling: says which spelling replaces it, then applies the value as that does.
+
+    ``options`` are argparse's own (`rename` passes ``nargs``, ``metavar`` and ``type``)."""
 
     def __init__(
         self,
@@ -49,18 +51,9 @@ class _Renamed(argparse.Action):
         *,
         new: str,
         apply: Callable[[argparse.Namespace, Any], None],
-        nargs: int | str | None = None,
-        metavar: str | None = None,
-        type: Callable[[str], Any] | None = None,  # noqa: A002
+        **options: Any,
     ) -> None:
-        super().__init__(
-            option_strings,
-            argparse.SUPPRESS,
-            nargs=nargs,
-            metavar=metavar,
-            type=type,
-            help=argparse.SUPPRESS,
-        )
+        super().__init__(option_strings, argparse.SUPPRESS, help=argparse.SUPPRESS, **options)
         self.new = new
         self.apply = apply
 
