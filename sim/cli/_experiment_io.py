@@ -4,7 +4,6 @@ report each writes (DIR/NAME.md and DIR/NAME.json)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -118,10 +117,7 @@ def publish(markdown: str, document: dict[str, Any], *, stem: Path) -> None:
 
 def write_report(stem: Path, markdown: str, document: dict[str, Any], *, indent: int = 2) -> None:
     """Writes ``STEM.md`` and ``STEM.json`` (atomically; missing folders are created)."""
-    from reform.atomic import atomic_open
+    from sim.experiments.report_files import write_json, write_markdown
 
-    with atomic_open(stem.with_name(stem.name + ".md")) as handle:
-        handle.write(markdown)
-    with atomic_open(stem.with_name(stem.name + ".json")) as handle:
-        json.dump(document, handle, indent=indent, allow_nan=False)
-        handle.write("\n")
+    write_markdown(stem.with_name(stem.name + ".md"), markdown)
+    write_json(stem.with_name(stem.name + ".json"), document, indent=indent)
