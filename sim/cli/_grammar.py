@@ -245,6 +245,19 @@ def report_outputs(args: argparse.Namespace, basename: str) -> dict[str, tuple[s
     return outputs
 
 
+def write_outputs(
+    outputs: dict[str, tuple[str, Path]], *, document: Any, markdown: Callable[[], str]
+) -> None:
+    """Writes the files `report_outputs` named: the JSON ``document`` and the Markdown page
+    ``markdown()`` (made only when asked for), each atomically, saying so on stderr."""
+    from sim.experiments.report_files import write_json, write_markdown
+
+    if "json" in outputs:
+        print(f"wrote {write_json(outputs['json'][1], document, indent=2)}", file=sys.stderr)
+    if "markdown" in outputs:
+        print(f"wrote {write_markdown(outputs['markdown'][1], markdown())}", file=sys.stderr)
+
+
 def add_recordings(
     parser: argparse.ArgumentParser, *, default: bool, each: str, folder: bool = False
 ) -> None:
