@@ -1,9 +1,10 @@
-"""What the ``experiment`` subcommands share: where SALSA and Babble are (``--data``), and the
-report each writes (DIR/NAME.md and DIR/NAME.json)."""
+"""What the ``experiment`` subcommands share: where SALSA and Babble are (``--data``), the
+report each writes (DIR/NAME.md and DIR/NAME.json) and the command line it records."""
 
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,18 @@ DATA_HELP = (
     "a dataset (repeatable): NAME=PATH, a fetched or local dataset's name ({names}), its folder, "
     "or a folder holding {folders} (default: the fetched or local {names})"
 )
+
+
+def add_io_arguments(
+    parser: argparse.ArgumentParser,
+    *,
+    basename: str,
+    names: tuple[str, ...] = ("salsa", "babble"),
+) -> None:
+    """What an experiment reads and writes: ``--data`` naming the datasets ``names``
+    (`add_dataset_arguments`) and ``--out DIR`` for its report (`add_out_argument`)."""
+    add_dataset_arguments(parser, names=names)
+    add_out_argument(parser, basename=basename)
 
 
 def add_dataset_arguments(
@@ -72,6 +85,15 @@ def dataset_words(args: argparse.Namespace) -> list[str]:
     return [word for value in args.data for word in ("--data", value)]
 
 
+def experiment_command(name: str, args: argparse.Namespace, options: list[str]) -> str:
+    """The command line an experiment's report records: ``reform-sim experiment NAME``, the
+    ``--data`` given, ``options`` (the words of the options that differ from their defaults)
+    and ``--out``."""
+    return shlex.join(
+        ["reform-sim", "experiment", name, *dataset_words(args), *options, "--out", args.out]
+    )
+
+
 def add_out_argument(parser: argparse.ArgumentParser, *, basename: str) -> None:
     """The required ``--out DIR``: the folder of BASENAME.md and BASENAME.json."""
     parser.add_argument(
@@ -95,6 +117,14 @@ def report_stem(out: str, basename: str, *, suffixes: tuple[str, ...] = REPORT_S
         )
         return path.with_suffix("")
     return path / basename
+
+
+def report_target(out: str, basename: str) -> Path:
+    """Where ``--out`` puts the report (`report_stem`), checked writable up front
+    (`check_report`): DIR/BASENAME, without its extension."""
+    stem = report_stem(out, basename)
+    check_report(stem)
+    return stem
 
 
 def check_report(
