@@ -35,10 +35,12 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff check reform sim scenarios tests benchmarks
 
 ## bench: every benchmark in full (figures beside a same-run baseline); stops at the first failure
+# BENCH_ARGS go to every script: `make bench BENCH_ARGS=--quick` is each one's smoke run.
+BENCH_ARGS ?=
 bench: $(VENV)/.installed-test
 	@for script in benchmarks/bench_*.py; do \
 		echo "== $$script"; \
-		REFORM_SIM_DATASETS=$${REFORM_SIM_DATASETS:-$(DATASETS)} $(BIN)/python $$script \
+		REFORM_SIM_DATASETS=$${REFORM_SIM_DATASETS:-$(DATASETS)} $(BIN)/python $$script $(BENCH_ARGS) \
 			|| { status=$$?; echo "make bench: $$script failed (exit status $$status)" >&2; exit 1; }; \
 	done
 

@@ -79,14 +79,9 @@ def _world_run(env: gym.Env, seed: int, steps: int) -> float:
 
 def main() -> None:
     parser = BenchmarkParser(__doc__, repeats=5)
-    parser.add_argument(
-        "--steps",
-        type=int,
-        default=None,
-        help=f"env steps per timed run (default {STEPS}; {QUICK_STEPS} with --quick)",
-    )
+    parser.add_sized("--steps", default=STEPS, quick=QUICK_STEPS, help="env steps per timed run")
     args = parser.parse_args()
-    steps = args.steps or (QUICK_STEPS if args.quick else STEPS)
+    steps = args.steps
 
     print(f"{steps} control steps (10 Hz) per run, {args.repeats} runs, median (best)")
     print(

@@ -16,7 +16,7 @@ import math
 import statistics
 
 import numpy as np
-from circles import circle, wrap_yaws
+from circles import crowd
 from timing import BenchmarkParser, timed
 
 from reform.gcff import MAX_REFITS, VISIBILITY_BASE, VISIBILITY_COSINE, energy, gcff_labels
@@ -32,26 +32,18 @@ QUICK_SCENES = 2  # scenes per size below 200 people with --quick (1 of 200)
 
 
 def scene(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """``n`` people (positions in metres, yaws in radians) in circles of 1-5."""
-    position, yaw = [], []
+    """``n`` people (positions in metres, yaws in radians) in circles of 1-5, on a grid."""
     side = math.ceil(math.sqrt(n / 3)) + 1
-    cell = 0
-    while len(position) < n:
-        size = int(min(rng.integers(1, 6), n - len(position)))
-        centre = GRID_SPACING_M * np.array([cell % side, cell // side], dtype=float)
-        cell += 1
-        members, facing = circle(
-            rng,
-            centre=centre,
-            size=size,
-            radius=0.45 + 0.12 * size,
-            angle_sd=0.15,
-            position_sd=0.05,
-            yaw_sd=0.2,
-        )
-        position += members
-        yaw += facing
-    return np.asarray(position), wrap_yaws(yaw)
+    return crowd(
+        rng,
+        n,
+        draw_size=lambda: rng.integers(1, 6),
+        centre=lambda k: GRID_SPACING_M * np.array([k % side, k // side], dtype=float),
+        radius_per_person_m=0.12,
+        angle_sd=0.15,
+        position_sd=0.05,
+        yaw_sd=0.2,
+    )
 
 
 def loop_gcff(position_m: np.ndarray, yaw: np.ndarray) -> np.ndarray:

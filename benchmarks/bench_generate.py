@@ -149,17 +149,14 @@ def end_to_end(
 
 def main() -> None:
     parser = BenchmarkParser(__doc__, repeats=3)
-    parser.add_argument(
-        "--episodes",
-        type=int,
-        default=None,
-        help=f"episodes per timed run (default {EPISODES}; {QUICK_EPISODES} with --quick)",
+    parser.add_sized(
+        "--episodes", default=EPISODES, quick=QUICK_EPISODES, help="episodes per timed run"
     )
     parser.add_argument("--jobs", type=int, default=2, help="processes of the parallel runs")
     parser.add_argument("--seed", type=int, default=SEED, help="master seed")
     args = parser.parse_args()
     seed = args.seed
-    episodes = args.episodes or (QUICK_EPISODES if args.quick else EPISODES)
+    episodes = args.episodes
     repeats = args.repeats
     duration = QUICK_DURATION_S if args.quick else None
 

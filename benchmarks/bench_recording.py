@@ -345,17 +345,17 @@ def bench_rate(
 
 def main() -> None:
     parser = BenchmarkParser(__doc__, repeats=5)
-    parser.add_argument(
+    parser.add_sized(
         "--rates",
+        default=RATES_HZ,
+        quick=QUICK_RATES_HZ,
+        help="frame rates, Hz",
         type=float,
         nargs="+",
-        default=None,
-        help=f"frame rates, Hz (default {' '.join(f'{r:g}' for r in RATES_HZ)}; "
-        f"{' '.join(f'{r:g}' for r in QUICK_RATES_HZ)} with --quick)",
     )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    rates = args.rates or list(QUICK_RATES_HZ if args.quick else RATES_HZ)
+    rates = list(args.rates)
     duration = QUICK_DURATION_S if args.quick else DURATION_S
     train_duration = QUICK_TRAIN_DURATION_S if args.quick else TRAIN_DURATION_S
 

@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from circles import circle, wrap_yaws
+from circles import crowd
 from timing import BenchmarkParser, default_datasets, timed_each
 
 import reform
@@ -68,28 +68,26 @@ QUICK_CHECKED_PAIRS = 20_000  # pairs checked with --quick (at most)
 
 def scene(rng: np.random.Generator, n: int) -> Frame:
     """``n`` people in circles of 2-5 facing their centre, and some loners."""
-    position, yaw = [], []
     side = math.ceil(math.sqrt(n / 2.5)) + 1
     cells = rng.permutation(side * side)
-    k = 0
-    while len(position) < n:
-        size = int(min(rng.choice([1, 2, 2, 3, 3, 4, 5]), n - len(position)))
+
+    def centre(k: int) -> np.ndarray:
+        """Circle ``k`` in a shuffled grid cell, jittered; a second round of cells shifted."""
         cell = cells[k % cells.size]
-        k += 1
-        centre = GRID_SPACING_M * np.array([cell % side, cell // side], dtype=float)
-        centre += rng.normal(0.0, 0.3, 2) + (k // cells.size) * 0.9
-        members, facing = circle(
-            rng,
-            centre=centre,
-            size=size,
-            radius=0.45 + 0.1 * size,
-            angle_sd=0.2,
-            position_sd=0.08,
-            yaw_sd=0.35,
-        )
-        position += members
-        yaw += facing
-    return Frame(ids=np.arange(1, n + 1), position=np.asarray(position), yaw=wrap_yaws(yaw))
+        at = GRID_SPACING_M * np.array([cell % side, cell // side], dtype=float)
+        return at + (rng.normal(0.0, 0.3, 2) + ((k + 1) // cells.size) * 0.9)
+
+    position, yaw = crowd(
+        rng,
+        n,
+        draw_size=lambda: rng.choice([1, 2, 2, 3, 3, 4, 5]),
+        centre=centre,
+        radius_per_person_m=0.1,
+        angle_sd=0.2,
+        position_sd=0.08,
+        yaw_sd=0.35,
+    )
+    return Frame(ids=np.arange(1, n + 1), position=position, yaw=yaw)
 
 
 def training_frames(quick: bool) -> tuple[tuple[Frame, ...], str]:

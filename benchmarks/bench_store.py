@@ -85,9 +85,9 @@ def _counting() -> Counter:
 
 def main() -> int:
     parser = BenchmarkParser(__doc__, repeats=3)
-    parser.add_argument("--episodes", type=int, default=None, help=f"episodes ({EPISODES})")
+    parser.add_sized("--episodes", default=EPISODES, quick=QUICK_EPISODES, help="episodes")
     args = parser.parse_args()
-    episodes = args.episodes or (QUICK_EPISODES if args.quick else EPISODES)
+    episodes = args.episodes
     duration = QUICK_DURATION_S if args.quick else None
     counts = _counting()
     server, endpoint = _server()

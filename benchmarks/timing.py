@@ -35,7 +35,8 @@ class BenchmarkParser(argparse.ArgumentParser):
     """A benchmark's command line: ``--quick``, and ``--repeats`` when it repeats its timings.
 
     ``--repeats`` defaults to ``repeats``, or to ``quick_repeats`` with ``--quick``; given
-    explicitly it wins over both.
+    explicitly it wins over both. A script's own sizes that ``--quick`` shrinks are declared
+    the same way, with :meth:`add_sized`.
 
     Args:
         doc: The script's docstring; its first paragraph is the description.
@@ -46,16 +47,42 @@ class BenchmarkParser(argparse.ArgumentParser):
 
     def __init__(self, doc: str, *, repeats: int | None = None, quick_repeats: int = 1) -> None:
         super().__init__(description=doc.split("\n\n")[0])
-        self._repeats = repeats
-        self._quick_repeats = quick_repeats
+        self._sizes: dict[str, tuple[Any, Any]] = {}  # dest -> (default, default with --quick)
         self.add_argument("--quick", action="store_true", help=QUICK_HELP)
         if repeats is not None:
-            self.add_argument(
-                "--repeats",
-                type=_at_least_one,
-                default=None,
-                help=f"timed runs per measure (default {repeats}; {quick_repeats} with --quick)",
+            self.add_sized(
+                "--repeats", default=repeats, quick=quick_repeats, help="timed runs per measure"
             )
+
+    def add_sized(
+        self,
+        option: str,
+        *,
+        default: Any,
+        quick: Any,
+        help: str,  # noqa: A002
+        type: Callable[[str], Any] | None = None,  # noqa: A002
+        nargs: str | None = None,
+    ) -> None:
+        """Adds ``option``, a size of the run: ``default``, or ``quick`` with ``--quick``; given
+        explicitly it wins over both.
+
+        Args:
+            option: The flag, e.g. ``"--episodes"``.
+            default: Its value in a full run (a number, or a tuple of numbers with ``nargs``).
+            quick: Its value with ``--quick``.
+            help: What it is; its two defaults are added.
+            type: Converts each word; None: an integer >= 1.
+            nargs: As argparse's (``"+"`` for several values), None for one value.
+        """
+        action = self.add_argument(
+            option,
+            type=_at_least_one if type is None else type,
+            nargs=nargs,
+            default=None,
+            help=f"{help} (default {_shown(default)}; {_shown(quick)} with --quick)",
+        )
+        self._sizes[action.dest] = (default, quick)
 
     def add_datasets_argument(self) -> None:
         """Adds ``--datasets DIR``: the real datasets' folder (see :func:`datasets_folder`)."""
@@ -70,11 +97,19 @@ class BenchmarkParser(argparse.ArgumentParser):
     def parse_args(
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> argparse.Namespace:
-        """Parses the command line; fills ``repeats`` from ``--quick`` when not given."""
+        """Parses the command line; fills each size not given from ``--quick``."""
         parsed = super().parse_args(args, namespace)
-        if self._repeats is not None and parsed.repeats is None:
-            parsed.repeats = self._quick_repeats if parsed.quick else self._repeats
+        for dest, (default, quick) in self._sizes.items():
+            if getattr(parsed, dest) is None:
+                setattr(parsed, dest, quick if parsed.quick else default)
         return parsed
+
+
+def _shown(value: Any) -> str:
+    """A default as the help prints it: ``2`` and ``0.5``; a tuple as ``2 10``."""
+    if isinstance(value, tuple):
+        return " ".join(_shown(v) for v in value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _at_least_one(text: str) -> int:

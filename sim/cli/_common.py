@@ -138,6 +138,45 @@ def add_commands(subparsers: argparse._SubParsersAction, commands: Sequence[Comm
         )
 
 
+@dataclass(frozen=True)
+class Action:
+    """One action of a subcommand that has several (``reform-sim data info``).
+
+    Attributes:
+        name: what is typed after the subcommand.
+        help: its line in the subcommand's help.
+        description: its own help's text.
+        arguments: adds its arguments to its parser and sets the ``handler`` default
+            (`run_with`); called when the action is parsed or its help shown.
+        as_written: the description is shown as written (False: argparse re-wraps it).
+    """
+
+    name: str
+    help: str
+    description: str
+    arguments: Callable[[argparse.ArgumentParser], None]
+    as_written: bool = True
+
+
+def add_actions(
+    parser: argparse.ArgumentParser, actions: Sequence[Action], *, required: bool = True
+) -> None:
+    """Adds ``actions`` to ``parser`` as its ``ACTION`` (``args.action``), in order."""
+    subparsers = parser.add_subparsers(dest="action", metavar="ACTION", required=required)
+    for action in actions:
+        subparsers.add_parser(
+            action.name,
+            help=action.help,
+            description=action.description,
+            formatter_class=(
+                argparse.RawDescriptionHelpFormatter
+                if action.as_written
+                else argparse.HelpFormatter
+            ),
+            arguments=action.arguments,
+        )
+
+
 def _arguments_of(module_name: str) -> Callable[[argparse.ArgumentParser], None]:
     def add(parser: argparse.ArgumentParser) -> None:
         module = importlib.import_module(module_name)

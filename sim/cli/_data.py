@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_data_argument, add_data_arguments, run_with
+from sim.cli._common import Action, add_actions, add_data_argument, add_data_arguments, run_with
 
 _INFO_DESCRIPTION = """\
 Loads a dataset (SALSA / DANTE text, Babble, a GCFF MATLAB folder, or the project's Parquet)
@@ -25,30 +25,7 @@ Inspect a dataset (info) or convert it to Parquet (convert).
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
-    actions.add_parser(
-        "info",
-        help="print frames, people, annotation, group sizes, units and the loader's report",
-        description=_INFO_DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        arguments=_info_arguments,
-    )
-    actions.add_parser(
-        "verify",
-        help="check that a generated dataset folder is whole: every shard there, unaltered",
-        description="Checks a `reform-sim generate` folder against its card (dataset.json): the "
-        "run finished, every shard it lists is there with its size and sha256, no other Parquet "
-        "file is there, every shard reads. Prints each problem on a line; exit status 1 when "
-        "there is one.",
-        arguments=_verify_arguments,
-    )
-    actions.add_parser(
-        "convert",
-        help="write a dataset in the project's Parquet format",
-        description=_CONVERT_DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        arguments=_convert_arguments,
-    )
+    add_actions(parser, ACTIONS)
 
 
 def _info_arguments(parser: argparse.ArgumentParser) -> None:
@@ -68,3 +45,28 @@ def _convert_arguments(parser: argparse.ArgumentParser) -> None:
         "--out", required=True, metavar="FILE.parquet", help="the .parquet file to write"
     )
     parser.set_defaults(handler=run_with("sim.cli.data:run_convert"))
+
+
+ACTIONS = (
+    Action(
+        "info",
+        "print frames, people, annotation, group sizes, units and the loader's report",
+        _INFO_DESCRIPTION,
+        _info_arguments,
+    ),
+    Action(
+        "verify",
+        "check that a generated dataset folder is whole: every shard there, unaltered",
+        "Checks a `reform-sim generate` folder against its card (dataset.json): the run finished, "
+        "every shard it lists is there with its size and sha256, no other Parquet file is there, "
+        "every shard reads. Prints each problem on a line; exit status 1 when there is one.",
+        _verify_arguments,
+        as_written=False,
+    ),
+    Action(
+        "convert",
+        "write a dataset in the project's Parquet format",
+        _CONVERT_DESCRIPTION,
+        _convert_arguments,
+    ),
+)

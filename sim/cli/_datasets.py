@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import Action, add_actions, run_with
 from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
@@ -40,25 +40,9 @@ def _common_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    actions = parser.add_subparsers(dest="action", metavar="ACTION")
+    add_actions(parser, ACTIONS, required=False)  # no action: list
     parser.set_defaults(
         handler=run_with("sim.cli.datasets:run_list"), cache=None, registry=None, json=False
-    )
-    actions.add_parser(
-        "list",
-        help="name, title, format, size, licence note, and where it is on this machine",
-        description=(
-            "Lists the public datasets: name, title, format, size, licence note, and whether "
-            "each is fetched on this machine (and where)."
-        ),
-        arguments=_list_arguments,
-    )
-    actions.add_parser(
-        "fetch",
-        help="download datasets into the cache, verified",
-        description=_FETCH_DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        arguments=_fetch_arguments,
     )
 
 
@@ -80,3 +64,21 @@ def _fetch_arguments(parser: argparse.ArgumentParser) -> None:
     _common_arguments(parser)
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.datasets:run_fetch"))
+
+
+ACTIONS = (
+    Action(
+        "list",
+        "name, title, format, size, licence note, and where it is on this machine",
+        "Lists the public datasets: name, title, format, size, licence note, and whether each is "
+        "fetched on this machine (and where).",
+        _list_arguments,
+        as_written=False,
+    ),
+    Action(
+        "fetch",
+        "download datasets into the cache, verified",
+        _FETCH_DESCRIPTION,
+        _fetch_arguments,
+    ),
+)

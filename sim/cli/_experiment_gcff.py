@@ -9,7 +9,7 @@ from sim.cli._common import (
     add_train_fraction_argument,
     run_with,
 )
-from sim.cli._experiment_io import add_dataset_arguments, add_out_argument
+from sim.cli._experiment_io import add_io_arguments
 from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
@@ -25,8 +25,7 @@ BASENAME = "gcff-comparison"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_dataset_arguments(parser)
-    add_out_argument(parser, basename=BASENAME)
+    add_io_arguments(parser, basename=BASENAME)
     add_train_fraction_argument(
         parser,
         help="share of each SALSA session's annotated frames, by time, used to tune (default 0.6)",

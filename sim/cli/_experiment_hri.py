@@ -5,10 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import add_backend_arguments, run_with
-from sim.cli._experiment_io import (
-    add_dataset_arguments,
-    add_out_argument,
-)
+from sim.cli._experiment_io import add_io_arguments
 from sim.cli._grammar import add_episodes, add_quiet, add_recordings, add_seed
 from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
@@ -27,8 +24,7 @@ BASENAME = "hri"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_dataset_arguments(parser, names=("salsa",))
-    add_out_argument(parser, basename=BASENAME)
+    add_io_arguments(parser, basename=BASENAME, names=("salsa",))
     add_episodes(
         parser,
         default=DEFAULT_SEEDS,

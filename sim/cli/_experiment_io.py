@@ -1,10 +1,10 @@
-"""What the ``experiment`` subcommands share: where SALSA and Babble are (``--data``), and the
-report each writes (DIR/NAME.md and DIR/NAME.json)."""
+"""What the ``experiment`` subcommands share: where SALSA and Babble are (``--data``), the
+report each writes (DIR/NAME.md and DIR/NAME.json) and the command line it records."""
 
 from __future__ import annotations
 
 import argparse
-import json
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -17,6 +17,18 @@ DATA_HELP = (
     "a dataset (repeatable): NAME=PATH, a fetched or local dataset's name ({names}), its folder, "
     "or a folder holding {folders} (default: the fetched or local {names})"
 )
+
+
+def add_io_arguments(
+    parser: argparse.ArgumentParser,
+    *,
+    basename: str,
+    names: tuple[str, ...] = ("salsa", "babble"),
+) -> None:
+    """What an experiment reads and writes: ``--data`` naming the datasets ``names``
+    (`add_dataset_arguments`) and ``--out DIR`` for its report (`add_out_argument`)."""
+    add_dataset_arguments(parser, names=names)
+    add_out_argument(parser, basename=basename)
 
 
 def add_dataset_arguments(
@@ -73,6 +85,15 @@ def dataset_words(args: argparse.Namespace) -> list[str]:
     return [word for value in args.data for word in ("--data", value)]
 
 
+def experiment_command(name: str, args: argparse.Namespace, options: list[str]) -> str:
+    """The command line an experiment's report records: ``reform-sim experiment NAME``, the
+    ``--data`` given, ``options`` (the words of the options that differ from their defaults)
+    and ``--out``."""
+    return shlex.join(
+        ["reform-sim", "experiment", name, *dataset_words(args), *options, "--out", args.out]
+    )
+
+
 def add_out_argument(parser: argparse.ArgumentParser, *, basename: str) -> None:
     """The required ``--out DIR``: the folder of BASENAME.md and BASENAME.json."""
     parser.add_argument(
@@ -98,6 +119,14 @@ def report_stem(out: str, basename: str, *, suffixes: tuple[str, ...] = REPORT_S
     return path / basename
 
 
+def report_target(out: str, basename: str) -> Path:
+    """Where ``--out`` puts the report (`report_stem`), checked writable up front
+    (`check_report`): DIR/BASENAME, without its extension."""
+    stem = report_stem(out, basename)
+    check_report(stem)
+    return stem
+
+
 def check_report(
     stem: Path, *, suffixes: tuple[str, ...] = REPORT_SUFFIXES, option: str = "--out"
 ) -> None:
@@ -118,10 +147,7 @@ def publish(markdown: str, document: dict[str, Any], *, stem: Path) -> None:
 
 def write_report(stem: Path, markdown: str, document: dict[str, Any], *, indent: int = 2) -> None:
     """Writes ``STEM.md`` and ``STEM.json`` (atomically; missing folders are created)."""
-    from reform.atomic import atomic_open
+    from sim.experiments.report_files import write_json, write_markdown
 
-    with atomic_open(stem.with_name(stem.name + ".md")) as handle:
-        handle.write(markdown)
-    with atomic_open(stem.with_name(stem.name + ".json")) as handle:
-        json.dump(document, handle, indent=indent, allow_nan=False)
-        handle.write("\n")
+    write_markdown(stem.with_name(stem.name + ".md"), markdown)
+    write_json(stem.with_name(stem.name + ".json"), document, indent=indent)

@@ -40,7 +40,9 @@ RENAMED: dict[str, str] = {}
 
 
 class _Renamed(argparse.Action):
-    """An old spelling: says which spelling replaces it, then applies the value as that does."""
+    """An old spelling: says which spelling replaces it, then applies the value as that does.
+
+    ``options`` are argparse's own (`rename` passes ``nargs``, ``metavar`` and ``type``)."""
 
     def __init__(
         self,
@@ -49,18 +51,9 @@ class _Renamed(argparse.Action):
         *,
         new: str,
         apply: Callable[[argparse.Namespace, Any], None],
-        nargs: int | str | None = None,
-        metavar: str | None = None,
-        type: Callable[[str], Any] | None = None,  # noqa: A002
+        **options: Any,
     ) -> None:
-        super().__init__(
-            option_strings,
-            argparse.SUPPRESS,
-            nargs=nargs,
-            metavar=metavar,
-            type=type,
-            help=argparse.SUPPRESS,
-        )
+        super().__init__(option_strings, argparse.SUPPRESS, help=argparse.SUPPRESS, **options)
         self.new = new
         self.apply = apply
 
@@ -250,6 +243,19 @@ def report_outputs(args: argparse.Namespace, basename: str) -> dict[str, tuple[s
     for option, path in outputs.values():
         check_output(option, path)
     return outputs
+
+
+def write_outputs(
+    outputs: dict[str, tuple[str, Path]], *, document: Any, markdown: Callable[[], str]
+) -> None:
+    """Writes the files `report_outputs` named: the JSON ``document`` and the Markdown page
+    ``markdown()`` (made only when asked for), each atomically, saying so on stderr."""
+    from sim.experiments.report_files import write_json, write_markdown
+
+    if "json" in outputs:
+        print(f"wrote {write_json(outputs['json'][1], document, indent=2)}", file=sys.stderr)
+    if "markdown" in outputs:
+        print(f"wrote {write_markdown(outputs['markdown'][1], markdown())}", file=sys.stderr)
 
 
 def add_recordings(

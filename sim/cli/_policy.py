@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import Action, add_actions, run_with
 from sim.cli._grammar import add_episodes, add_quiet, add_seed, rename, setter
 
 DESCRIPTION = """\
@@ -18,14 +18,7 @@ policy's upper bound).
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
-    actions.add_parser(
-        "evaluate",
-        help="success rate of the scripted baseline over seeded episodes",
-        description=DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        arguments=_evaluate_arguments,
-    )
+    add_actions(parser, ACTIONS)
 
 
 def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
@@ -51,3 +44,13 @@ def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
     add_quiet(parser, old=())
     rename(parser, "--progress", "(progress is shown by default)", setter("quiet", False), nargs=0)
     parser.set_defaults(handler=run_with("sim.cli.policy:_evaluate"))
+
+
+ACTIONS = (
+    Action(
+        "evaluate",
+        "success rate of the scripted baseline over seeded episodes",
+        DESCRIPTION,
+        _evaluate_arguments,
+    ),
+)

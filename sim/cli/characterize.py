@@ -5,18 +5,16 @@ Its arguments are `sim.cli._characterize`."""
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 import sys
 from pathlib import Path
 from typing import Any
 
-from reform.atomic import atomic_open
 from reform.calibration import MIN_GROUPS, TIGHTNESS_TOLERANCE_M, characterise_dataset, compare
 from reform.datasets import detect_format, load_dataset, resolve
 from sim.cli._characterize import BASENAME
 from sim.cli._common import CliError, read_text
-from sim.cli._grammar import report_outputs
+from sim.cli._grammar import report_outputs, write_outputs
 from sim.experiments.characterisation_report import (
     characterisation_summary,
     format_calibration,
@@ -116,28 +114,22 @@ def run(args: argparse.Namespace) -> int:
     command = _command(args)
     summaries = [item["summary"] for item in datasets]
     print(_report(summaries, comparisons, command=command, style="text"), end="")
-    if "json" in outputs:
-        path = outputs["json"][1]
-        document = {
-            "schema_version": CHARACTERISATION_SCHEMA_VERSION,
-            "command": command,
-            "min_groups": min_groups,
-            "tolerance_m": tolerance,
-            "datasets": summaries,
-            "comparisons": comparisons,
-        }
-        with atomic_open(path) as handle:
-            json.dump(document, handle, indent=2, allow_nan=False)
-            handle.write("\n")
-        print(f"wrote {path}", file=sys.stderr)
-    if "markdown" in outputs:
-        path = outputs["markdown"][1]
+    document = {
+        "schema_version": CHARACTERISATION_SCHEMA_VERSION,
+        "command": command,
+        "min_groups": min_groups,
+        "tolerance_m": tolerance,
+        "datasets": summaries,
+        "comparisons": comparisons,
+    }
+
+    def markdown() -> str:
         text = _report(summaries, comparisons, command=command, style="markdown")
         if notes:
             text += "\n## Discussion\n\n" + notes.strip() + "\n"
-        with atomic_open(path) as handle:
-            handle.write(text)
-        print(f"wrote {path}", file=sys.stderr)
+        return text
+
+    write_outputs(outputs, document=document, markdown=markdown)
     if args.check and any(not c["within_tolerance"] for c in comparisons):
         print(
             "reform-sim characterize: the mean Tightness misses the tolerance (see above)",

@@ -5,16 +5,13 @@ Its arguments are `sim.cli._evaluate`."""
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 
-from reform.atomic import atomic_open
 from reform.metrics import evaluate
 from sim.cli._common import check_frames, check_recording, load_data, select_frames
 from sim.cli._detection import detect_frames, record_detection
 from sim.cli._detectors import check_detector, detector_params
 from sim.cli._evaluate import BASENAME
-from sim.cli._grammar import report_outputs
+from sim.cli._grammar import report_outputs, write_outputs
 from sim.experiments.tables import format_report
 
 
@@ -35,17 +32,9 @@ def run(args: argparse.Namespace) -> int:
         per_frame=args.per_frame,
     )
     print(format_report(result, style="text"), end="")
-    if "json" in outputs:
-        path = outputs["json"][1]
-        with atomic_open(path) as handle:
-            json.dump(result, handle, indent=2, allow_nan=False)
-            handle.write("\n")
-        print(f"wrote {path}", file=sys.stderr)
-    if "markdown" in outputs:
-        path = outputs["markdown"][1]
-        with atomic_open(path) as handle:
-            handle.write(format_report(result, style="markdown"))
-        print(f"wrote {path}", file=sys.stderr)
+    write_outputs(
+        outputs, document=result, markdown=lambda: format_report(result, style="markdown")
+    )
     record_detection(
         args,
         command="evaluate",

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import shlex
 import sys
 from typing import Any
 
@@ -22,26 +21,13 @@ from sim.cli._common import (
     size_error,
 )
 from sim.cli._experiment_gcff import BASENAME
-from sim.cli._experiment_io import (
-    check_report,
-    dataset_words,
-    named_datasets,
-    publish,
-    report_stem,
-)
+from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
 from sim.experiments.gcff import GCFF_ROWS, gcff_comparison
 from sim.experiments.gcff_report import to_markdown
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = [
-        "reform-sim",
-        "experiment",
-        "gcff",
-        *dataset_words(args),
-        "--train-fraction",
-        f"{args.train_fraction:g}",
-    ]
+    words = ["--train-fraction", f"{args.train_fraction:g}"]
     for flag, grid in (("--stride-grid", args.stride_grid), ("--mdl-grid", args.mdl_grid)):
         if grid is not None:
             words += [flag, ",".join(f"{v:g}" for v in grid)]
@@ -49,8 +35,7 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--gcff-orientation", args.gcff_orientation]
     for path in args.with_results:
         words += ["--with-results", path]
-    words += ["--out", args.out]
-    return shlex.join(words)
+    return experiment_command("gcff", args, words)
 
 
 def _read_results(path: str) -> list[dict[str, Any]]:
@@ -105,8 +90,7 @@ def _check_size(args: argparse.Namespace, salsa: Dataset, babble: Dataset) -> No
 def run(args: argparse.Namespace) -> int:
     check_train_fraction(args)
     data = named_datasets(args)
-    stem = report_stem(args.out, BASENAME)
-    check_report(stem)
+    stem = report_target(args.out, BASENAME)
     extra = [result for path in args.with_results for result in _read_results(path)]
     grids = {
         name: value

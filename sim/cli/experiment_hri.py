@@ -6,20 +6,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import shlex
 import sys
 import time
 
 from reform.datasets import load_salsa, resolve
 from sim.cli._common import CliError, backend_words, check_output, executor_from_args
 from sim.cli._experiment_hri import BASENAME
-from sim.cli._experiment_io import (
-    check_report,
-    dataset_words,
-    named_datasets,
-    report_stem,
-    write_report,
-)
+from sim.cli._experiment_io import experiment_command, named_datasets, report_target, write_report
 from sim.experiments.hri import VIEWS, hri_detectors, hri_experiment, record_scenes
 from sim.experiments.hri_report import to_markdown
 from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
@@ -27,7 +20,7 @@ from sim.sizing import check_episodes
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "experiment", "hri", *dataset_words(args)]
+    words = []
     if args.episodes != DEFAULT_SEEDS:
         words += ["--episodes", str(args.episodes)]
     if args.seed != 0:
@@ -37,8 +30,7 @@ def _command(args: argparse.Namespace) -> str:
     words += backend_words(args)
     if args.recordings:
         words.append("--recordings")
-    words += ["--out", args.out]
-    return shlex.join(words)
+    return experiment_command("hri", args, words)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -51,8 +43,7 @@ def run(args: argparse.Namespace) -> int:
     unknown = [v for v in views if v not in VIEWS]
     if unknown or not views:
         raise CliError(f"--views must name views among {','.join(VIEWS)}, got {args.views!r}")
-    out = report_stem(args.out, BASENAME)
-    check_report(out)
+    out = report_target(args.out, BASENAME)
     executor = executor_from_args(args, progress=not args.quiet)  # the Ray address probed
     recordings = None
     if args.recordings:

@@ -5,7 +5,6 @@ Its arguments are `sim.cli._experiment_paper`."""
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 import time
 
@@ -15,20 +14,14 @@ from sim.cli._common import (
     CliError,
     check_train_fraction,
 )
-from sim.cli._experiment_io import (
-    check_report,
-    dataset_words,
-    named_datasets,
-    publish,
-    report_stem,
-)
+from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
 from sim.cli._experiment_paper import BASENAME
 from sim.experiments.paper import paper_experiment
 from sim.experiments.paper_report import to_markdown
 
 
 def _command(args: argparse.Namespace) -> str:
-    words = ["reform-sim", "experiment", "paper", *dataset_words(args)]
+    words = []
     if args.train_fraction != TRAIN_FRACTION:
         words += ["--train-fraction", f"{args.train_fraction:g}"]
     if args.folds != 5:
@@ -37,8 +30,7 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--jobs", str(args.jobs)]
     if args.no_diagnostics:
         words.append("--no-diagnostics")
-    words += ["--out", args.out]
-    return shlex.join(words)
+    return experiment_command("paper", args, words)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,8 +38,7 @@ def run(args: argparse.Namespace) -> int:
     if args.folds < 2:
         raise CliError(f"--folds must be at least 2, got {args.folds}")
     data = named_datasets(args)
-    stem = report_stem(args.out, BASENAME)
-    check_report(stem)
+    stem = report_target(args.out, BASENAME)
     started = time.perf_counter()
 
     def progress(message: str) -> None:

@@ -13,9 +13,10 @@ nothing below imports this package, and only the command line (`sim.cli`) sits a
 * ``reform-sim experiment gcff``: `gcff` → `gcff_report`;
 * ``reform-sim benchmark``: `benchmark` → `benchmark_report`;
 
-and what the reports share: `tables` (Markdown and text tables, percentages) and `figures`
-(matplotlib plots). `demo_files`, `hri_views` and `stress_grid` import neither MuJoCo nor
-scikit-learn, so that the command line's help lists their choices fast.
+and what the reports share: `tables` (Markdown and text tables, percentages), `figures`
+(matplotlib plots) and `report_files` (a page and its JSON written to disk). `demo_files`,
+`hri_views` and `stress_grid` import neither MuJoCo nor scikit-learn, so that the command
+line's help lists their choices fast.
 
 The names below (each study's run and its result) are loaded on first use, so that
 ``import sim.experiments`` stays light; a study's report is imported from its module.

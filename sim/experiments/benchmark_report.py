@@ -5,14 +5,12 @@ Imports the run (:mod:`sim.experiments.benchmark`); the run never imports its re
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from reform.atomic import atomic_open
 from sim.experiments.benchmark import (
     ORIGINAL_GCFF_OWN,
     THRESHOLDS,
@@ -21,6 +19,7 @@ from sim.experiments.benchmark import (
     percent,
 )
 from sim.experiments.figures import pyplot, save_png
+from sim.experiments.report_files import write_json, write_markdown
 from sim.recording import record_evaluation
 
 __all__ = [
@@ -317,15 +316,10 @@ def write_report(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Path] = {"plot": plot(benchmark, out / PLOT_NAME)}
-    markdown = out / MARKDOWN_NAME
-    with atomic_open(markdown) as handle:
-        handle.write(to_markdown(benchmark, command=command, plot_name=PLOT_NAME))
-    written["markdown"] = markdown
-    data = out / JSON_NAME
-    with atomic_open(data) as handle:
-        json.dump(to_json(benchmark, command=command), handle, indent=1, allow_nan=False)
-        handle.write("\n")
-    written["json"] = data
+    written["markdown"] = write_markdown(
+        out / MARKDOWN_NAME, to_markdown(benchmark, command=command, plot_name=PLOT_NAME)
+    )
+    written["json"] = write_json(out / JSON_NAME, to_json(benchmark, command=command), indent=1)
     if recordings:
         for label, path in record(benchmark, out / RECORDINGS).items():
             written[f"recording:{label}"] = path

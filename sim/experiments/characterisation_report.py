@@ -167,38 +167,35 @@ def _versus_paper(
     return [_number(theirs, paper_digits), _number(difference, digits, signed=True)]
 
 
+# The measures of the by-size table: heading, key in the summary (``{key}_mean_{unit}``,
+# ``{key}_std_{unit}``; the paper's ``{key}_{unit}``), unit, digits shown, the paper's digits.
+_BY_SIZE_MEASURES = (
+    ("Tightness (m)", "tightness", "m", 3, 2),
+    ("Symmetry (deg)", "symmetry", "deg", 1, 0),
+)
+
+
 def _by_size_table(summary: Mapping[str, Any], style: str) -> str:
     paper = summary.get("paper")
-    headers = ["size", "groups", "Tightness (m)", "sd"]
-    if paper:
-        headers += ["paper", "ours - paper"]
-    headers += ["Symmetry (deg)", "sd"]
-    if paper:
-        headers += ["paper", "ours - paper"]
+    headers = ["size", "groups"]
+    for heading, *_ in _BY_SIZE_MEASURES:
+        headers += [heading, "sd"]
+        if paper:
+            headers += ["paper", "ours - paper"]
     rows = []
     for entry in summary["by_size"]:
         size = entry["size"]
-        row = [
-            str(size),
-            _count(entry["count"]),
-            _number(entry["tightness_mean_m"], 3),
-            _number(entry["tightness_std_m"], 3),
-        ]
-        if paper:
-            row += _versus_paper(
-                entry["tightness_mean_m"],
-                paper["tightness_m"].get(str(size)),
-                digits=3,
-                paper_digits=2,
-            )
-        row += [_number(entry["symmetry_mean_deg"], 1), _number(entry["symmetry_std_deg"], 1)]
-        if paper:
-            row += _versus_paper(
-                entry["symmetry_mean_deg"],
-                paper["symmetry_deg"].get(str(size)),
-                digits=1,
-                paper_digits=0,
-            )
+        row = [str(size), _count(entry["count"])]
+        for _, key, unit, digits, paper_digits in _BY_SIZE_MEASURES:
+            mean = entry[f"{key}_mean_{unit}"]
+            row += [_number(mean, digits), _number(entry[f"{key}_std_{unit}"], digits)]
+            if paper:
+                row += _versus_paper(
+                    mean,
+                    paper[f"{key}_{unit}"].get(str(size)),
+                    digits=digits,
+                    paper_digits=paper_digits,
+                )
         rows.append(row)
     return render_table(headers, rows, style=style)
 

@@ -45,7 +45,6 @@ import numpy as np
 from tqdm import tqdm
 
 import scenarios
-from reform.atomic import atomic_open
 from reform.classifiers import BAGGED_TREES, make_classifier
 from reform.datasets import fetch, is_fetched, load_babble, load_salsa
 from reform.detector import Reform
@@ -64,8 +63,10 @@ from sim.experiments.hri import (
     hri_experiment,
     record_scenes,
     reform_detectors,
+    salsa_training,
 )
 from sim.experiments.hri_report import to_markdown as hri_markdown
+from sim.experiments.report_files import write_markdown
 from sim.experiments.sim2real import RECOMMENDED, recipe
 from sim.experiments.stress import GCFF as STRESS_GCFF
 from sim.experiments.stress import GRIDS, StressResults, run_stress
@@ -455,11 +456,7 @@ def run_demo(
     # the demo's report: its training set is not sim.experiments.stress's).
     hri_training: dict[str, Any] = {}
     if salsa_model is not None:
-        hri_training["salsa"] = {
-            "frames": salsa_model.training_summary_["frames"],
-            "train_fraction": DEFAULT_TRAIN_FRACTION,
-            "pairs": salsa_model.training_summary_["pairs"],
-        }
+        hri_training["salsa"] = salsa_training(salsa_model, DEFAULT_TRAIN_FRACTION)
     hri = hri_experiment(
         seed=seed,
         seeds=budget.hri_seeds,
@@ -468,8 +465,7 @@ def run_demo(
         detectors=hri_detectors,
         training=hri_training,
     )
-    with atomic_open(out / "hri.md") as handle:
-        handle.write(hri_markdown(hri, command=command))
+    write_markdown(out / "hri.md", hri_markdown(hri, command=command))
     recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
 
     # 7. Recordings, figures, report.

@@ -3,15 +3,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 from reform import __version__
-from reform.atomic import atomic_open
 from sim.experiments.demo import CLASSIFIER_TEXT, SAVED_CLASSIFIER, DemoResult
 from sim.experiments.demo_files import REPORT, RESULTS
 from sim.experiments.hri import PAPER_HRI
+from sim.experiments.report_files import write_json, write_markdown
 from sim.experiments.sim2real import RECOMMENDED, recipe
 from sim.experiments.tables import command_block, percent, render_table
 
@@ -274,10 +273,7 @@ def write_report(result: DemoResult) -> dict[str, Path]:
     Returns:
         What was written: ``"markdown"`` and ``"json"``.
     """
-    written = {"markdown": result.out_dir / REPORT, "json": result.out_dir / RESULTS}
-    with atomic_open(written["markdown"]) as handle:
-        handle.write(to_markdown(result))
-    with atomic_open(written["json"]) as handle:
-        json.dump(to_json(result), handle, indent=1, allow_nan=False)
-        handle.write("\n")
-    return written
+    return {
+        "markdown": write_markdown(result.out_dir / REPORT, to_markdown(result)),
+        "json": write_json(result.out_dir / RESULTS, to_json(result), indent=1),
+    }

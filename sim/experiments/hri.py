@@ -162,6 +162,17 @@ def reform_detectors(fitted: Mapping[str, Any], *, training: str) -> list[HriDet
     ]
 
 
+def salsa_training(model: Any, train_fraction: float) -> dict[str, Any]:
+    """What the HRI page says of a model trained on SALSA's training split: its frames, the
+    share of each session they are (``train_fraction``) and its training pairs."""
+    summary = model.training_summary_
+    return {
+        "frames": summary["frames"],
+        "train_fraction": train_fraction,
+        "pairs": summary["pairs"],
+    }
+
+
 def baseline_detectors(*, reference: bool = True) -> list[HriDetector]:
     """The untrained detectors, from the detector registry (`reform.detectors.make_detector`):
     GCFF at the paper's setting (`sim.experiments.gcff.PAPER_STRIDE_M`, ``PAPER_MDL_M2``), at
@@ -287,11 +298,7 @@ def hri_detectors(
         say(f"training REFORM on the SALSA training split ({len(train)} frames)")
         fitted = train_detectors(train, names=CLASSIFIERS, executor=executor)
         detectors += reform_detectors(fitted, training="salsa")
-        info["salsa"] = {
-            "frames": len(train),
-            "train_fraction": train_fraction,
-            "pairs": fitted[WEIGHTED_KNN].training_summary_["pairs"],
-        }
+        info["salsa"] = salsa_training(fitted[WEIGHTED_KNN], train_fraction)
     _, grid = resolve_grid(grid)
     say(
         f"simulating the synthetic training set ({grid.train_episodes} episodes each of mingle "

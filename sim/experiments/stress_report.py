@@ -13,7 +13,6 @@ order of :data:`sim.experiments.stress.DETECTOR_LABELS`, then the plugins given 
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -21,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from reform.atomic import atomic_open, atomic_path
+from reform.atomic import atomic_path
 from sim.experiments.figures import pyplot
+from sim.experiments.report_files import write_json, write_markdown
 from sim.experiments.stress import (
     AXES,
     DETECTOR_LABELS,
@@ -390,15 +390,10 @@ def write_report(
         path = plot_axis(axis, plot_path(out, axis.name), detectors=results.detectors)
         written[f"plot:{axis.name}"] = path
         plots[axis.name] = path.name
-    markdown = out / MARKDOWN_NAME
-    with atomic_open(markdown) as handle:
-        handle.write(to_markdown(results, command=command, plots=plots))
-    written["markdown"] = markdown
-    data = out / JSON_NAME
-    with atomic_open(data) as handle:
-        json.dump(results.to_json(command=command), handle, indent=1, allow_nan=False)
-        handle.write("\n")
-    written["json"] = data
+    written["markdown"] = write_markdown(
+        out / MARKDOWN_NAME, to_markdown(results, command=command, plots=plots)
+    )
+    written["json"] = write_json(out / JSON_NAME, results.to_json(command=command), indent=1)
     if save is not None:
         saved = record(results, save)
         if saved is not None:
