@@ -50,9 +50,8 @@ OPTION_SETS: tuple[dict[str, Any], ...] = (
     {"features": "relative"},
     {"reconstruction": "correlation"},
     {"features": "relative", "reconstruction": "correlation"},
-    {"calibration": "sigmoid"},
     {"calibration": "isotonic"},
-    {"reconstruction": "correlation", "calibration": "sigmoid"},
+    {"reconstruction": "correlation", "calibration": "isotonic"},
     {"features": "relative", "reconstruction": "correlation", "calibration": "isotonic"},
 )
 
