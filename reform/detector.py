@@ -110,7 +110,7 @@ class Reform(BaseEstimator):
         self,
         classifier: Any = None,
         *,
-        features: Sequence[str] = DEFAULT_FEATURES,
+        features: str | Sequence[str] = DEFAULT_FEATURES,
         reconstruction: str = UNION,
         threshold: float | None = None,
         fast: bool = True,

@@ -11,7 +11,8 @@ The paper's two features (see the project's reference definitions):
 Optional extras, off by default: the same two computed from the head (falling back to the body
 for a person whose head was not observed) and a flag for pairs that involve a robot.
 
-**Scale-free features** (the ``"relative"`` set, :data:`FEATURE_SETS`), for a classifier trained
+**Scale-free features** (the ``"relative"`` set, :data:`FEATURE_SETS`: relative distance and
+o-space distance), for a classifier trained
 on one kind of data (simulated crowds, one dataset) that must work on datasets measured at other
 scales: group radii differ about twofold between the field's datasets, and positions estimated
 from video carry a per-dataset scale error. Distances are divided by the **frame's scale**
@@ -32,6 +33,15 @@ standing alone do not move it; the statistic is a fixed definition, not fitted o
   the other least. With the Effort Angle (their sum) it separates "both half-turned" from "one
   faces the other, who looks away". Angles of the line between two people survive coarse
   orientation coding (4 or 8 directions) as well as the Effort Angle does.
+
+What chose the set (SALSA's training split only, time-blocked cross-validation, Bagged Trees,
+``sim.experiments.reform_options`` and ``docs/guide/reform-options.md``): relative distance with
+the o-space distance scores as relative distance + Effort Angle + o-space distance (pair
+accuracy 0.927 against 0.928; with orientations coded in 8 or 4 directions 0.921 against 0.922
+and 0.907 against 0.908) and better than relative distance + Effort Angle (0.919); the Larger
+Turn added nothing. Of the two, the set of two features is kept: a tree ensemble on two features
+compiles into one exact lookup table (:mod:`reform.fast`), ten times faster than evaluating its
+trees on three.
 
 The frame's scale of a frame of 2 people is their distance (each is the other's nearest
 neighbour), so their relative distance is 1 and only the orientations and the o-space distance
@@ -82,7 +92,7 @@ RELATIVE = "relative"
 FEATURE_SETS: Mapping[str, tuple[str, ...]] = MappingProxyType(
     {
         PAPER: DEFAULT_FEATURES,
-        RELATIVE: (RELATIVE_DISTANCE, EFFORT_ANGLE, OSPACE_DISTANCE),
+        RELATIVE: (RELATIVE_DISTANCE, OSPACE_DISTANCE),
     }
 )
 OSPACE_STRIDE = 0.5  # o-space centre in front of each person, in units of the frame's scale

@@ -77,6 +77,7 @@ FIGURES: dict[str, tuple[str, ...]] = {
     "bench_reform": (
         *(rf"^{name} +18 +[\d.]+ +[\d.]+ +[\d.]+ " for name in ("weighted-knn", "bagged-trees")),
         r"^Targets, Bagged Trees, 18 people: .* predictions identical: yes$",
+        r"^  reconstruction='correlation' +30 people: +[\d.]+ ms/frame, +[\d.]+x the defaults' ",
     ),
     "bench_sim": (
         r"^ +18 +[\d,]+x +[\d,]+x +[\d.]+ +[\d,]+x +[\d.]+ ",

@@ -11,6 +11,7 @@ import pytest
 from sklearn.linear_model import Perceptron
 from sklearn.metrics import log_loss
 from sklearn.model_selection import GroupKFold
+from test_detector import as_sets, held_out_frames, training_frames
 from toy_scenes import toy_frames
 
 from reform import (
@@ -30,16 +31,6 @@ from reform.reconstruction import correlation_clustering, pair_weights
 
 
 @functools.cache
-def training_frames() -> tuple[Frame, ...]:
-    return tuple(toy_frames(0, 120))
-
-
-@functools.cache
-def held_out_frames() -> tuple[Frame, ...]:
-    return tuple(toy_frames(1, 40, sizes=(2, 5, 3), loners=3))
-
-
-@functools.cache
 def fitted(**options) -> Reform:
     return Reform(**options).fit(training_frames())
 
@@ -54,10 +45,6 @@ def noisy_frames(seed: int, count: int) -> tuple[Frame, ...]:
         )
         for f in toy_frames(seed, count)
     )
-
-
-def as_sets(partition) -> set[frozenset[int]]:
-    return {frozenset(group) for group in partition}
 
 
 def scaled(frame: Frame, factor: float) -> Frame:

@@ -183,7 +183,7 @@ SCALE_FREE = (RELATIVE_DISTANCE, OSPACE_DISTANCE, LARGER_TURN, EFFORT_ANGLE)
 
 def test_feature_sets_resolve_by_name():
     assert check_features("paper") == DEFAULT_FEATURES
-    assert check_features("relative") == (RELATIVE_DISTANCE, EFFORT_ANGLE, OSPACE_DISTANCE)
+    assert check_features("relative") == (RELATIVE_DISTANCE, OSPACE_DISTANCE)
     with pytest.raises(ValueError, match=r"features must be a feature set \('paper', 'relative'\)"):
         check_features("scale-free")
 
