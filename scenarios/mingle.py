@@ -676,9 +676,10 @@ class _Party:
         self.start_position = dict(self.position)
 
     def furnish(self, k: int, unplaced: list[int]) -> list[int]:
-        """Furniture ``k`` (a table, a bar, a poster, in turn) and the group that stands at it
-        from the start, taken from ``unplaced``: a ring round a table, a row along a bar
-        facing it, an audience facing a presenter at a poster. Returns who is left."""
+        """Furniture ``k`` (a table, a bar, a poster, a corner, in turn) and the group that
+        stands at it from the start, taken from ``unplaced``: a ring round a table, a row along
+        a bar facing it, an audience facing a presenter at a poster, a half circle facing a
+        corner. Returns who is left."""
         kind = ("table", "bar", "poster", "corner")[k % 4]
         rng = self.rng
         body = 0.5 * self.p.spacing
