@@ -47,6 +47,7 @@ from scenarios.formation import (
     ellipse_offsets,
     facing_centre,
     min_radius,
+    separate,
 )
 from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
@@ -108,6 +109,8 @@ ROW_MAX = 4  # largest side-by-side row; larger groups form circles or presenter
 AUDIENCE_ARC = math.radians(150.0)  # radians, widest arc an audience stands on
 SHOULDER_GAP_M = 0.05  # metres between neighbours of a row or an audience beyond the spacing
 CIRCLE, ROW, AUDIENCE = "circle", "side-by-side", "presenter-audience"
+CORNER = "corner"  # a half circle in a room's corner, facing into it
+CORNER_ARC = math.pi  # radians, the arc a group in a corner stands on
 TABLE_SIZE_M = (0.8, 0.8, 0.75)  # metres: diameter, diameter, height of a round table
 BAR_SIZE_M = (2.0, 0.5, 1.1)  # metres: length, depth, height of a bar counter at a wall
 POSTER_SIZE_M = (1.0, 0.05, 1.8)  # metres: width, depth, height of a poster board at a wall
@@ -155,12 +158,13 @@ class MingleParams:
             of up to 4) stand side by side on a wide arc facing one point (at a bar), the
             others as presenter and audience (one faces the rest, who face them, as at a
             poster); a group that outgrows its arrangement becomes a circle.
-        furniture: pieces of furniture, in turn a round table, a bar counter at a wall and a
-            poster at a wall, each with a group standing at it from the start (a ring round
-            the table, a row along the bar facing it, a presenter at the poster and an
-            audience facing them); people leave and (at a table) join these groups, which
-            never merge, split or move. The furniture is in the MuJoCo scene; people walking
-            do not collide with it.
+        furniture: pieces of furniture, in turn a round table, a bar counter at a wall, a
+            poster at a wall and a room's corner, each with a group standing at it from the
+            start (a ring round the table, a row along the bar facing it, a presenter at the
+            poster and an audience facing them, a half circle in the corner facing it);
+            people leave and (at a table) join these groups, which never merge, split or
+            move. The furniture is in the MuJoCo scene; people walking do not collide with
+            it.
     """
 
     people: Annotated[int, Range(2, 100)] = 18
@@ -400,9 +404,15 @@ class _Party:
         """A row: the members side by side on an arc of radius `ROW_STRETCH` times the group's
         radius, facing its centre (a bar, a shared view). Presenter and audience: the
         presenter on the circle, the audience side by side on the far side (an arc of at most
-        `AUDIENCE_ARC`), in the members' order round the centre."""
+        `AUDIENCE_ARC`), in the members' order round the centre. In a corner: a half circle
+        toward the room, facing the corner."""
         members = sorted(g.members, key=lambda m: angles[m] % (2.0 * math.pi))
         step_m = self.p.spacing + SHOULDER_GAP_M
+        if g.kind == CORNER:  # a half circle facing the corner, the walls at its back
+            step = CORNER_ARC / (len(members) - 1)
+            g.radius = max(g.radius, step_m / (2.0 * math.sin(0.5 * step)))
+            start = g.mid - 0.5 * CORNER_ARC
+            return {m: start + k * step for k, m in enumerate(members)}
         if g.kind == ROW:
             g.stretch = ROW_STRETCH
             radius = g.radius * g.stretch
@@ -496,6 +506,9 @@ class _Party:
             facings = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) + noise)))
         edge = self.half - PLANNING_RADIUS_M - WALL_MARGIN_M
         places = np.clip(places, -edge, edge)
+        if g.anchor >= 0:  # at a wall: the clip may bring two closer than the spacing
+            for _ in range(10):
+                places = np.clip(separate(places, spacing=self.p.spacing), -edge, edge)
         self.records.append(
             _Record(tuple(members), places, facings, g.centre.copy(), t, speeds=speeds or {})
         )
@@ -663,14 +676,17 @@ class _Party:
         self.start_position = dict(self.position)
 
     def furnish(self, k: int, unplaced: list[int]) -> list[int]:
-        """Furniture ``k`` (a table, a bar, a poster, in turn) and the group that stands at it
-        from the start, taken from ``unplaced``: a ring round a table, a row along a bar
-        facing it, an audience facing a presenter at a poster. Returns who is left."""
-        kind = ("table", "bar", "poster")[k % 3]
+        """Furniture ``k`` (a table, a bar, a poster, a corner, in turn) and the group that
+        stands at it from the start, taken from ``unplaced``: a ring round a table, a row along
+        a bar facing it, an audience facing a presenter at a poster, a half circle facing a
+        corner. Returns who is left."""
+        kind = ("table", "bar", "poster", "corner")[k % 4]
         rng = self.rng
         body = 0.5 * self.p.spacing
         if kind == "table":
             n = int(rng.integers(3, 7))
+        elif kind == "corner":
+            n = int(rng.integers(3, 6))
         elif kind == "bar":
             n = int(rng.integers(2, ROW_MAX + 1))
         else:
@@ -680,7 +696,22 @@ class _Party:
             return unplaced
         radius = self.draw_radius(n)
         anchored = _Group([], np.zeros(2), radius, {}, anchor=k)
-        if kind == "table":
+        if kind == "corner":  # the walls are the furniture: no object
+            step = CORNER_ARC / (n - 1)
+            chord = (self.p.spacing + SHOULDER_GAP_M) / (2.0 * math.sin(0.5 * step))
+            radius = anchored.hold = max(radius, chord)
+            for _ in range(PLACE_TRIES):
+                signs = np.array([1.0, 1.0]) - 2.0 * rng.integers(2, size=2)
+                off = math.sqrt(0.5) * radius + PLANNING_RADIUS_M + WALL_MARGIN_M + FURNITURE_GAP_M
+                centre = signs * (self.half - off)
+                if self.clear(centre, self.reach(radius)):
+                    break
+            else:
+                raise NoFloorError(f"mingle: no free corner in a {2 * self.half:g} m room")
+            anchored.kind = CORNER
+            anchored.mid = math.atan2(-signs[1], -signs[0])  # the members stand toward the room
+            item: Furniture | None = None
+        elif kind == "table":
             size = TABLE_SIZE_M
             anchored.hold = 0.5 * size[0] + body + FURNITURE_GAP_M
             radius = max(radius, anchored.hold)
@@ -719,7 +750,8 @@ class _Party:
             item = Furniture(
                 kind, (float(spot[0]), float(spot[1])), size, yaw=float(inward + 0.5 * math.pi)
             )
-        self.furniture.append(item)
+        if item is not None:
+            self.furniture.append(item)
         members, rest = unplaced[:n], unplaced[n:]
         for j, m in enumerate(members):
             angle = 2.0 * math.pi * j / n

@@ -44,7 +44,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "spacing": (0.43, 0.63),  # metres (shoulder to shoulder .. bodies as arm-enclosing discs)
     "unevenness": (0.0, 1.0),  # (even circles, as Babble .. beyond SALSA's uneven groups)
     "arrangements": (0.0, 0.4),  # share of side-by-side and presenter-audience groups
-    "furniture": (0, 3),  # pieces: a table, a bar, a poster
+    "furniture": (0, 3),  # pieces: a table, a bar, a poster (corners: mingle only)
 }
 _INTEGERS = ("max_group_size", "passers_by", "furniture")
 

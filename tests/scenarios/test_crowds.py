@@ -166,3 +166,24 @@ def test_crowd_options_fit_the_default_room():
     for seed in range(4):
         default = scenarios.make("mingle", seed=seed).stage.room
         assert scenarios.make("mingle", seed=seed, **crowd).stage.room == default
+
+
+def test_a_group_in_a_corner_stands_in_a_half_circle_facing_it():
+    options = {"furniture": 4, "spacing": 0.46, "orientation_noise": 0.05, "duration": 20.0}
+    episode = simulate_episode(
+        "mingle", seed=2, rate=1.0, options={**PARTY, "people": 18, **options}
+    )
+    half = 0.5 * episode.scenario.stage.room[0]
+    (event,) = [e for e in episode.events if e.kind == "furnish" and "corner" in e.detail]
+    ids = [int(x) for x in re.findall(r"\d+", event.detail)]
+    frame = next(f for f in episode.dataset if abs(f.time - 15.0) < 0.6)
+    assert any(set(g) == set(ids) for g in frame.groups)
+    row = {p: i for i, p in enumerate(frame.ids.tolist())}
+    places = frame.position[[row[p] for p in ids]]
+    corner = np.sign(places.mean(axis=0)) * half
+    offset = corner - places
+    assert np.hypot(offset[:, 0], offset[:, 1]).max() < 2.0  # in the corner
+    facing = frame.yaw[[row[p] for p in ids]]
+    off = np.abs(_turn(facing - np.arctan2(offset[:, 1], offset[:, 0])))
+    assert off.max() < math.radians(80.0)  # every member faces into the corner
+    assert len(episode.scenario.stage.furniture) == 3  # the walls are the corner's furniture
