@@ -87,7 +87,16 @@ def test_the_choice_is_the_best_selection_score(tiny) -> None:
     ]
     for entry in result.selection:
         validation = list(entry["validation_f1"].values())
-        assert entry["score"] == pytest.approx((entry["salsa_train_f1"] + np.mean(validation)) / 2)
+        views = entry["salsa_views_f1"]
+        assert list(views) == [
+            "salsa (training split)",
+            "salsa (training split), positions x0.6",
+            "salsa (training split), positions x1.6",
+            "salsa (training split), 4 directions",
+        ]
+        assert entry["salsa_train_f1"] == views["salsa (training split)"]
+        salsa = np.mean(list(views.values()))
+        assert entry["score"] == pytest.approx((salsa + np.mean(validation)) / 2)
         assert set(entry["validation_f1"]) == {
             "validation: mingle",
             "validation: mingle-randomised",
@@ -204,6 +213,23 @@ def test_report_and_determinism(tiny, salsa_dataset, babble_dataset, coffeebreak
         assert f"## {dataset}" in markdown
     assert f"**Recommended: {result.recommended.label}**" in markdown
     assert "Kendall's tau" in markdown and "recommended.skops" in markdown
+
+
+def test_salsa_views_are_the_training_split_recorded_otherwise(salsa_dataset) -> None:
+    from reform.splits import time_split
+    from sim.experiments.sim2real import salsa_views
+
+    train, _ = time_split(salsa_dataset.annotated(), 0.6)
+    views = salsa_views(train[:20])
+    recorded, small, large, coded = views.values()
+    assert recorded == tuple(train[:20])
+    for a, b, c, d in zip(recorded, small, large, coded, strict=True):
+        assert np.allclose(b.position, 0.6 * a.position) and np.allclose(
+            c.position, 1.6 * a.position
+        )
+        assert b.groups == a.groups == d.groups and np.array_equal(d.position, a.position)
+        steps = np.round(d.yaw / (np.pi / 2))
+        assert np.allclose(np.cos(d.yaw - steps * np.pi / 2), 1.0)  # multiples of 90 degrees
 
 
 def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
