@@ -9,10 +9,13 @@ import pytest
 from scipy.stats import kendalltau
 
 from reform.datasets import load_dataset
+from reform.features import FEATURE_SETS
 from reform.metrics import T_TWO_THIRDS, evaluate
-from reform.persistence import load_model
+from reform.persistence import load_model, model_info
 from sim.cli import main
 from sim.experiments.sim2real import (
+    RECIPES,
+    RECOMMENDED,
     SIM_PARTY,
     Candidate,
     Recipe,
@@ -230,6 +233,23 @@ def test_salsa_views_are_the_training_split_recorded_otherwise(salsa_dataset) ->
         assert b.groups == a.groups == d.groups and np.array_equal(d.position, a.position)
         steps = np.round(d.yaw / (np.pi / 2))
         assert np.allclose(np.cos(d.yaw - steps * np.pi / 2), 1.0)  # multiples of 90 degrees
+
+
+def test_the_documented_recipes_and_choice() -> None:
+    """RECOMMENDED is what the documented run chose (docs/results/sim2real.json)."""
+    from pathlib import Path
+
+    document = json.loads(
+        (Path(__file__).parents[3] / "docs" / "results" / "sim2real.json").read_text()
+    )
+    assert document["recommended"]["label"] == RECOMMENDED.label
+    assert [r["name"] for r in document["recipes"]] == [r.name for r in RECIPES]
+    chosen = [s for s in document["selection"] if s["chosen"]]
+    assert [s["label"] for s in chosen] == [RECOMMENDED.label]
+    assert max(s["score"] for s in document["selection"]) == chosen[0]["score"]
+    # The documented model file is that candidate.
+    info = model_info(Path(__file__).parents[3] / "docs" / "results" / "recommended.skops")
+    assert info["features"] == list(FEATURE_SETS["relative"])
 
 
 def test_bad_input(salsa_dataset, babble_dataset, tmp_path) -> None:
