@@ -63,6 +63,14 @@ class PairClassifier(Protocol):
         ...
 
 
+class _Exact:
+    """A compiled form of this module: its labels equal the classifier's own, by construction
+    (each names its ``kind``)."""
+
+    kind: str
+    exact = True
+
+
 def sklearn_pair_labels(
     classifier: Any, features: np.ndarray, *, threshold: float | None = None
 ) -> np.ndarray:
@@ -86,13 +94,12 @@ def sklearn_pair_labels(
 
 
 @dataclass(frozen=True, eq=False)
-class _SklearnPairs:
+class _SklearnPairs(_Exact):
     """Any classifier: one call per batch."""
 
     classifier: Any
     threshold: float | None
-    kind: str = "sklearn"
-    exact: bool = True
+    kind = "sklearn"
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         return sklearn_pair_labels(self.classifier, features, threshold=self.threshold)
@@ -207,7 +214,7 @@ def _is_neighbors(estimator: Any) -> bool:
 
 
 @dataclass(frozen=True, eq=False)
-class _LinearPairs:
+class _LinearPairs(_Exact):
     """Logistic regression as an elementwise dot product.
 
     scikit-learn computes ``X @ coef_.T + intercept_`` with BLAS, which for two columns is
@@ -220,8 +227,7 @@ class _LinearPairs:
     scalers: tuple[Any, ...]
     model: Any
     threshold: float | None
-    kind: str = "linear"
-    exact: bool = True
+    kind = "linear"
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         features = np.asarray(features, dtype=np.float64)
@@ -258,11 +264,10 @@ def _logit(p: float) -> float:
 
 
 @dataclass(frozen=True, eq=False)
-class _NeighborsPairs:
+class _NeighborsPairs(_Exact):
     scalers: tuple[Any, ...]
     model: Any
-    kind: str = "neighbors"
-    exact: bool = True
+    kind = "neighbors"
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         model = self.model
@@ -332,14 +337,13 @@ def _decide(
 
 
 @dataclass(frozen=True, eq=False)
-class _TreeApply:
+class _TreeApply(_Exact):
     """Each tree evaluated with its own compiled ``apply``; ties settled by the classifier."""
 
     classifier: Any
     ensemble: _TreeEnsemble
     threshold: float | None
-    kind: str = "tree-apply"
-    exact: bool = True
+    kind = "tree-apply"
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         features = np.asarray(features, dtype=np.float64)
@@ -504,7 +508,7 @@ def _range_reduce(
 
 
 @dataclass(frozen=True, eq=False)
-class _TreeTable:
+class _TreeTable(_Exact):
     """A two-feature tree ensemble compiled into one decision table over its threshold grid.
 
     In front of it sits a coarse table over buckets of the features' float32 keys: where a
@@ -517,8 +521,7 @@ class _TreeTable:
     width: int  # cells along feature 1
     coarse: tuple[_Coarse, _Coarse]
     coarse_table: np.ndarray  # (count_0 * count_1,) uint8: 0, 1 or _MIXED
-    kind: str = "tree-table"
-    exact: bool = True
+    kind = "tree-table"
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         features = np.asarray(features, dtype=np.float64)

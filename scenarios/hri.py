@@ -31,6 +31,7 @@ __all__ = ["hri_conversation", "hri_passing", "hri_robot_excluded"]
 ROOM_M = (6.0, 5.0)  # metres, the HRI room
 PASSING_ROOM_M = (8.0, 6.0)  # metres, room of hri-passing
 ROBOT_ID = 0
+_GUESTS = (1, 2)  # the two people of hri-conversation and hri-robot-excluded
 ROBOT_WALL_GAP_M = 1.0  # metres from the west wall to the robot
 WALK_SPEED_RANGE_M_S = (1.0, 1.3)  # m/s, people's walking speeds
 SETTLE_S = 2.5  # seconds allowed beyond distance / speed to stop and turn
@@ -101,6 +102,42 @@ def _take_places(
         if walk_in:
             arrive = max(arrive, delay + _walk_time(starts[k], places[k], speed))
     return arrive
+
+
+def _guests(
+    rng: np.random.Generator,
+    robot: RobotPlace,
+    centre: np.ndarray,
+    radius: float,
+    angles: np.ndarray,
+    *,
+    approach: str | None,
+    position_noise: float,
+    orientation_noise: float,
+) -> tuple[TimelineBuilder, tuple[Role, ...], np.ndarray, np.ndarray, float]:
+    """The two guests of an HRI scene take their places at ``angles`` on the o-space circle
+    around ``centre``, walking in from ``approach`` (`_approach`; None: they stand there from the
+    start); returns the scene's builder, their roles, their (2, 2) places and (2,) facings, and
+    when the last has arrived, seconds."""
+    places, facings = circle_places(
+        centre,
+        radius,
+        angles,
+        rng,
+        position_noise=position_noise,
+        orientation_noise=orientation_noise,
+    )
+    if approach is None:
+        starts, start_yaws = places.copy(), facings.copy()
+    else:
+        starts, places, facings = _approach(rng, approach, robot, places, facings)
+        start_yaws = facing_centre(starts, centre)
+    people = list(_GUESTS)
+    roles = cast(rng, people, starts, start_yaws, parts="guest")
+    builder = TimelineBuilder([*people, ROBOT_ID])
+    walk_in = approach is not None
+    arrive = _take_places(builder, people, starts, places, facings, rng, walk_in=walk_in)
+    return builder, roles, places, facings, arrive
 
 
 def _leave(
@@ -209,19 +246,17 @@ def hri_conversation(
     centre = robot_xy + radius * np.array([math.cos(robot.yaw), math.sin(robot.yaw)])
     gap = 2.0 * math.pi / 3.0 + rng.uniform(-TRIANGLE_JITTER_RAD, TRIANGLE_JITTER_RAD, size=2)
     angles = np.array([math.pi - gap[0], math.pi + gap[1]])  # left of the robot, then right
-    places, facings = circle_places(
+    builder, roles, places, facings, arrive = _guests(
+        rng,
+        robot,
         centre,
         radius,
         angles,
-        rng,
+        approach=approach,
         position_noise=position_noise,
         orientation_noise=orientation_noise,
     )
-    starts, places, facings = _approach(rng, approach, robot, places, facings)
-    people = [1, 2]
-    roles = cast(rng, people, starts, facing_centre(starts, centre), parts="guest")
-    builder = TimelineBuilder([*people, ROBOT_ID])
-    arrive = _take_places(builder, people, starts, places, facings, rng)
+    people = list(_GUESTS)
     members = [ROBOT_ID, *people]
     all_places = np.vstack([robot_xy, places])
     all_facings = np.concatenate([[robot.yaw], facings])
@@ -283,23 +318,17 @@ def hri_robot_excluded(
     bearing = rng.uniform(-0.3, 0.3)
     centre = robot_xy + distance * np.array([math.cos(bearing), math.sin(bearing)])
     axis = bearing + math.pi / 2.0 + rng.uniform(-0.5, 0.5)
-    places, facings = circle_places(
+    builder, roles, places, facings, arrive = _guests(
+        rng,
+        robot,
         centre,
         radius,
         np.array([axis, axis + math.pi]),
-        rng,
+        approach="random" if walk_in else None,
         position_noise=position_noise,
         orientation_noise=orientation_noise,
     )
-    people = [1, 2]
-    if walk_in:
-        starts, places, facings = _approach(rng, "random", robot, places, facings)
-        start_yaws = facing_centre(starts, centre)
-    else:
-        starts, start_yaws = places.copy(), facings.copy()
-    roles = cast(rng, people, starts, start_yaws, parts="guest")
-    builder = TimelineBuilder([*people, ROBOT_ID])
-    arrive = _take_places(builder, people, starts, places, facings, rng, walk_in=walk_in)
+    people = list(_GUESTS)
     talk_end, turns = _talk(
         builder,
         people,
