@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError, add_train_fraction_argument, check_output
+from sim.cli._common import CliError, add_train_fraction_argument, check_output, warn_deprecated
 from sim.cli._grammar import appender, data_entries, rename
 
 REPORT_SUFFIXES = (".md", ".json")
@@ -120,10 +120,9 @@ def report_stem(out: str, basename: str, *, suffixes: tuple[str, ...] = REPORT_S
     warning naming the new one)."""
     path = Path(out)
     if path.suffix in suffixes:
-        print(
-            f"warning: --out {out} (a file name) is deprecated and goes in the next release; "
-            f"use --out {path.parent} (a folder: {path.parent / basename}.md and .json)",
-            file=sys.stderr,
+        warn_deprecated(
+            f"--out {out} (a file name)",
+            f"--out {path.parent} (a folder: {path.parent / basename}.md and .json)",
         )
         return path.with_suffix("")
     return path / basename
