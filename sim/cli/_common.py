@@ -441,6 +441,12 @@ def add_data_argument(
         parser.add_argument("old_path", nargs="?", default=None, help=argparse.SUPPRESS)
 
 
+def warn_deprecated(old: str, new: str) -> None:
+    """The line on stderr with which a former spelling ``old`` still works for one release:
+    it names ``new``, the spelling that replaces it."""
+    print(f"warning: {old} is deprecated and goes in the next release; use {new}", file=sys.stderr)
+
+
 def data_path(args: argparse.Namespace) -> str:
     """``--data``, or the positional path of the former spelling (with a warning); sets
     ``args.data``."""
@@ -448,11 +454,7 @@ def data_path(args: argparse.Namespace) -> str:
     if old is not None:
         if args.data is not None:
             raise CliError(f"give the dataset once: --data {args.data}, or {old}, not both")
-        print(
-            f"warning: the dataset as a positional path ({old}) is deprecated and goes in the "
-            f"next release; use --data {old}",
-            file=sys.stderr,
-        )
+        warn_deprecated(f"the dataset as a positional path ({old})", f"--data {old}")
         args.data, args.old_path = old, None
     if args.data is None:
         raise CliError("--data PATH|NAME is required: the dataset to read")

@@ -4,12 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import (
-    add_max_memory_argument,
-    add_train_fraction_argument,
-    run_with,
-)
-from sim.cli._experiment_io import add_io_arguments
+from sim.cli._common import add_max_memory_argument, run_with
+from sim.cli._experiment_io import add_salsa_split_arguments
 from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
@@ -25,11 +21,7 @@ BASENAME = "gcff-comparison"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_io_arguments(parser, basename=BASENAME)
-    add_train_fraction_argument(
-        parser,
-        help="share of each SALSA session's annotated frames, by time, used to tune (default 0.6)",
-    )
+    add_salsa_split_arguments(parser, basename=BASENAME, use="used to tune (default 0.6)")
     parser.add_argument(
         "--gcff-orientation",
         choices=("body", "head"),

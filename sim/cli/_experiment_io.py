@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, add_train_fraction_argument, check_output, warn_deprecated
 from sim.cli._grammar import appender, data_entries, rename
 
 REPORT_SUFFIXES = (".md", ".json")
@@ -29,6 +29,16 @@ def add_io_arguments(
     (`add_dataset_arguments`) and ``--out DIR`` for its report (`add_out_argument`)."""
     add_dataset_arguments(parser, names=names)
     add_out_argument(parser, basename=basename)
+
+
+def add_salsa_split_arguments(parser: argparse.ArgumentParser, *, basename: str, use: str) -> None:
+    """What an experiment fitted on SALSA's time split reads and writes (`add_io_arguments`) and
+    its ``--train-fraction``: the share of each SALSA session's annotated frames, by time, and
+    ``use``, what that share is for (with its default)."""
+    add_io_arguments(parser, basename=basename)
+    add_train_fraction_argument(
+        parser, help=f"share of each SALSA session's annotated frames, by time, {use}"
+    )
 
 
 def add_dataset_arguments(
@@ -110,10 +120,9 @@ def report_stem(out: str, basename: str, *, suffixes: tuple[str, ...] = REPORT_S
     warning naming the new one)."""
     path = Path(out)
     if path.suffix in suffixes:
-        print(
-            f"warning: --out {out} (a file name) is deprecated and goes in the next release; "
-            f"use --out {path.parent} (a folder: {path.parent / basename}.md and .json)",
-            file=sys.stderr,
+        warn_deprecated(
+            f"--out {out} (a file name)",
+            f"--out {path.parent} (a folder: {path.parent / basename}.md and .json)",
         )
         return path.with_suffix("")
     return path / basename

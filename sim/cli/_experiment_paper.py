@@ -4,11 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import (
-    add_train_fraction_argument,
-    run_with,
-)
-from sim.cli._experiment_io import add_io_arguments
+from sim.cli._common import run_with
+from sim.cli._experiment_io import add_salsa_split_arguments
 from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
@@ -25,11 +22,7 @@ BASENAME = "paper-experiment"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_io_arguments(parser, basename=BASENAME)
-    add_train_fraction_argument(
-        parser,
-        help="share of each SALSA session's annotated frames, by time, for training (0.6)",
-    )
+    add_salsa_split_arguments(parser, basename=BASENAME, use="for training (0.6)")
     parser.add_argument("--folds", type=int, default=5, metavar="K", help="CV folds (5)")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel CV fits")
     parser.add_argument(

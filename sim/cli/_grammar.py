@@ -30,7 +30,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import TRAIN_FRACTION, check_output
+from sim.cli._common import TRAIN_FRACTION, check_output, warn_deprecated
 
 DEFAULT_SEED = 0
 FRAME_CHOICES = ("all", "train", "test")
@@ -64,10 +64,7 @@ class _Renamed(argparse.Action):
         values: Any,
         option_string: str | None = None,
     ) -> None:
-        print(
-            f"warning: {option_string} is deprecated and goes in the next release; use {self.new}",
-            file=sys.stderr,
-        )
+        warn_deprecated(option_string, self.new)
         self.apply(namespace, values)
 
 
@@ -198,11 +195,7 @@ class _Recordings(argparse.Action):
         if option_string is not None and option_string.startswith("--no-"):
             setattr(namespace, self.dest, False)
         elif values:
-            print(
-                f"warning: {option_string} {values} is deprecated and goes in the next release; "
-                f"use {option_string} (OUT/recordings/)",
-                file=sys.stderr,
-            )
+            warn_deprecated(f"{option_string} {values}", f"{option_string} (OUT/recordings/)")
             setattr(namespace, self.dest, values)
         else:
             setattr(namespace, self.dest, True)

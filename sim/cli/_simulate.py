@@ -14,8 +14,6 @@ from sim.cli._common import (
 from sim.cli._grammar import add_quiet, add_seed
 from sim.recording import add_recording_arguments
 
-# How sizing's messages name the simulation's parameters here.
-
 DESCRIPTION = """\
 Runs one episode of a registered scenario (reform-sim scenarios lists them and their options)
 in the MuJoCo world and writes its frames, ground truth included, to a Parquet file in the

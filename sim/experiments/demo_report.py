@@ -12,7 +12,7 @@ from sim.experiments.demo_files import REPORT, RESULTS
 from sim.experiments.hri import PAPER_HRI
 from sim.experiments.report_files import write_json, write_markdown
 from sim.experiments.sim2real import RECOMMENDED, recipe
-from sim.experiments.tables import command_block, percent, render_table
+from sim.experiments.tables import command_block, markdown_table, percent
 
 SAVED_TEXT = CLASSIFIER_TEXT[SAVED_CLASSIFIER]  # the saved model's classifier, in words
 
@@ -50,12 +50,10 @@ def to_markdown(result: DemoResult) -> str:
         "",
         "## What ran",
         "",
-        render_table(
+        *markdown_table(
             ["stage", "seconds"],
             [[_STAGE_TEXT.get(k, k), f"{v:.1f}"] for k, v in result.timings.items()],
-            style="markdown",
         ),
-        "",
         "## Scenarios",
         "",
         "Every registered scenario, simulated briefly in MuJoCo (ground truth), with the groups "
@@ -78,29 +76,25 @@ def to_markdown(result: DemoResult) -> str:
         ]
         for s in result.scenarios
     ]
-    lines += [
-        render_table(
-            [
-                "scenario",
-                "what it is",
-                "agents",
-                "seconds",
-                "groups / frame",
-                "REFORM F1",
-                "GCFF F1",
-                "recording",
-            ],
-            rows,
-            style="markdown",
-        ),
-        "",
-    ]
+    lines += markdown_table(
+        [
+            "scenario",
+            "what it is",
+            "agents",
+            "seconds",
+            "groups / frame",
+            "REFORM F1",
+            "GCFF F1",
+            "recording",
+        ],
+        rows,
+    )
     for s in result.scenarios:
         lines += [f"![{s['scenario']}]({s['figure']})", ""]
     lines += ["## Synthetic training set", ""]
     training = result.training
     lines += [
-        render_table(
+        *markdown_table(
             ["scenario", "episodes", "frames kept", "pairs kept"],
             [
                 [
@@ -111,9 +105,7 @@ def to_markdown(result: DemoResult) -> str:
                 ]
                 for src in budget.train
             ],
-            style="markdown",
         ),
-        "",
         "Hive-partitioned Parquet under `synthetic/train` (read it with "
         "`reform.datasets.read_parquet`); held-back episodes, from another master seed, under "
         "`synthetic/held-back`. The sources are balanced by pairs "
@@ -155,12 +147,9 @@ def to_markdown(result: DemoResult) -> str:
                 ]
             )
     lines += [
-        render_table(
-            ["detector", "test set (frames)", "pair acc.", "P@2/3", "R@2/3", "F1@2/3", "F1@1"],
-            rows,
-            style="markdown",
+        *markdown_table(
+            ["detector", "test set (frames)", "pair acc.", "P@2/3", "R@2/3", "F1@2/3", "F1@1"], rows
         ),
-        "",
         "![F1 at T = 2/3](figures/scores.png)",
         "",
         "The full sim-to-real experiment (more data, tuned hyper-parameters, GCFF tuned, "
@@ -187,12 +176,7 @@ def to_markdown(result: DemoResult) -> str:
                     " / ".join(p.label for p in axis.points),
                 ]
             )
-    lines += [
-        render_table(
-            ["axis", "detector", "F1@2/3 at each level", "levels"], rows, style="markdown"
-        ),
-        "",
-    ]
+    lines += markdown_table(["axis", "detector", "F1@2/3 at each level", "levels"], rows)
     for axis, plot in result.stress_plots.items():
         lines += [f"![{axis}]({plot})", ""]
     hri = result.hri
@@ -223,8 +207,7 @@ def to_markdown(result: DemoResult) -> str:
     for name, (p, r, f1) in PAPER_HRI.items():
         rows.append([f"paper: {name}", "Kinect", f"{p:.1f}", f"{r:.1f}", f"{f1:.1f}"])
     lines += [
-        render_table(["detector", "view", "P@2/3", "R@2/3", "F1@2/3"], rows, style="markdown"),
-        "",
+        *markdown_table(["detector", "view", "P@2/3", "R@2/3", "F1@2/3"], rows),
         "## Files",
         "",
         f"Everything is under `{result.out_dir}`:",

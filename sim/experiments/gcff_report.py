@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from reform.gcff import MDL_M2, STRIDE_M
 from sim.experiments.gcff import BABBLE, PAPER_SCORES, SALSA_TEST, GcffComparison
-from sim.experiments.tables import command_block, format_comparison, render_table
+from sim.experiments.tables import command_block, format_comparison, markdown_table
 
 __all__ = ["to_markdown"]
 
@@ -61,7 +61,7 @@ def to_markdown(comparison: GcffComparison, *, command: str | None = None) -> st
         for s in strides
     ]
     headers = ["stride (m) \\ mdl (m²)"] + [f"{m:g}" for m in mdls]
-    lines += [render_table(headers, table, style="markdown"), ""]
+    lines += markdown_table(headers, table)
     notes = comparison.all_notes()
     if notes:
         lines += ["## Notes", ""] + [f"- {note}" for note in notes] + [""]

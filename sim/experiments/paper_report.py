@@ -30,7 +30,7 @@ from sim.experiments.paper import (
     TUNED,
     PaperExperiment,
 )
-from sim.experiments.tables import command_block, percent, render_table
+from sim.experiments.tables import command_block, markdown_table, percent
 
 __all__ = ["to_markdown"]
 
@@ -110,7 +110,7 @@ def to_markdown(experiment: PaperExperiment, *, command: str | None = None) -> s
             )
         return rows
 
-    lines += [render_table(headers, salsa_rows("2/3", True), style="markdown"), ""]
+    lines += markdown_table(headers, salsa_rows("2/3", True))
     lines += [
         "Pairwise accuracy: share of test pairs whose label, read from the detected groups, is "
         "right (the protocol's); classifier accuracy: the same for the classifier's own pair "
@@ -118,8 +118,7 @@ def to_markdown(experiment: PaperExperiment, *, command: str | None = None) -> s
         "",
         "## SALSA, T = 1 (exact match; the paper gives no figures)",
         "",
-        render_table(headers, salsa_rows("1", False), style="markdown"),
-        "",
+        *markdown_table(headers, salsa_rows("1", False)),
         "## Babble (trained on SALSA only)",
         "",
     ]
@@ -147,7 +146,7 @@ def to_markdown(experiment: PaperExperiment, *, command: str | None = None) -> s
             + [_pct(one[m]) for m in ("precision", "recall", "f1")]
             + [_pct(result["pairwise_accuracy"])]
         )
-    lines += [render_table(babble_headers, babble_rows, style="markdown"), ""]
+    lines += markdown_table(babble_headers, babble_rows)
     lines += ["## Hyper-parameters (time-blocked cross-validation on the training part)", ""]
     tuning_rows = []
     for tuning in experiment.tuning:
@@ -168,14 +167,10 @@ def to_markdown(experiment: PaperExperiment, *, command: str | None = None) -> s
                 chosen,
             ]
         )
-    lines += [
-        render_table(
-            ["classifier", "parameter", "grid: mean CV pairwise accuracy (%)", "chosen"],
-            tuning_rows,
-            style="markdown",
-        ),
-        "",
-    ]
+    lines += markdown_table(
+        ["classifier", "parameter", "grid: mean CV pairwise accuracy (%)", "chosen"],
+        tuning_rows,
+    )
     lines += _diagnostic_lines(experiment)
     return "\n".join(lines)
 
@@ -227,7 +222,7 @@ def _diagnostic_lines(experiment: PaperExperiment) -> list[str]:
         "R test",
         "F1 test",
     ]
-    lines += [render_table(headers, rows, style="markdown"), ""]
+    lines += markdown_table(headers, rows)
     lines += ["Findings:", ""] + [f"- {note}" for note in _findings(experiment, main)] + [""]
     return lines
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from sim.experiments.figures import WIDTH_IN, Bar, pyplot, save_png, score_bars
 from sim.experiments.sim2real import SIM_FIELD, SIM_PARTY, SimToReal
-from sim.experiments.tables import command_block, percent, render_table
+from sim.experiments.tables import command_block, markdown_table, percent
 
 __all__ = ["calibration_figure", "rank_figure", "sim2real_figure", "to_markdown"]
 
@@ -167,14 +167,10 @@ def to_markdown(
     ]
     met = sum(g.met for g in result.goals)
     lines += [f"**Goals met: {met} of {len(result.goals)}.**", ""]
-    lines += [
-        render_table(
-            ["goal", "required", "met", "figures (F1 at T = 2/3, %)"],
-            [[g.name, g.required, "yes" if g.met else "**no**", g.figures] for g in result.goals],
-            style="markdown",
-        ),
-        "",
-    ]
+    lines += markdown_table(
+        ["goal", "required", "met", "figures (F1 at T = 2/3, %)"],
+        [[g.name, g.required, "yes" if g.met else "**no**", g.figures] for g in result.goals],
+    )
     for name in figures:
         lines += [f"![{name}]({name})", ""]
 
@@ -188,8 +184,7 @@ def to_markdown(
         )
         rows.append([detector, str(scored), percent(mean), percent(mean1)])
     lines += [
-        render_table(["detector", "datasets", "F1 @2/3", "F1 @1"], rows, style="markdown"),
-        "",
+        *markdown_table(["detector", "datasets", "F1 @2/3", "F1 @1"], rows),
         "Candidates other than the recommended one are reported for the rank agreement; their "
         "scores on real data chose nothing.",
         "",
@@ -198,14 +193,9 @@ def to_markdown(
     for dataset in result.datasets:
         lines += [f"## {dataset} ({result.frames.get(dataset, 0):,} frames)", ""]
         rows = [[d, *_score_cells(result, d, dataset)] for d in _main_rows(result)]
-        lines += [
-            render_table(
-                ["detector", "P@2/3", "R@2/3", "F1@2/3", "95% interval", "F1@1", "note"],
-                rows,
-                style="markdown",
-            ),
-            "",
-        ]
+        lines += markdown_table(
+            ["detector", "P@2/3", "R@2/3", "F1@2/3", "95% interval", "F1@1", "note"], rows
+        )
 
     lines += [
         "## How the recommended model was chosen",
@@ -232,7 +222,7 @@ def to_markdown(
             ]
         )
     lines += [
-        render_table(
+        *markdown_table(
             [
                 "candidate",
                 "SALSA train",
@@ -241,9 +231,7 @@ def to_markdown(
                 "score",
             ],
             rows,
-            style="markdown",
         ),
-        "",
         "Recipes:",
         "",
     ]
@@ -269,7 +257,7 @@ def to_markdown(
         ]
     lines.append("")
     lines += [
-        render_table(
+        *markdown_table(
             ["detector", f"F1 {SIM_PARTY}", f"F1 {SIM_FIELD}", "mean F1 real"],
             [
                 [d, percent(s), percent(f), percent(r)]
@@ -281,9 +269,7 @@ def to_markdown(
                     strict=True,
                 )
             ],
-            style="markdown",
         ),
-        "",
         "## Synthetic data beside each real dataset",
         "",
     ]
@@ -302,12 +288,9 @@ def to_markdown(
             ]
         )
     lines += [
-        render_table(
-            ["data", "nearest neighbour q10/q25/q50 (m)", "Tightness (m)", "Symmetry (deg)"],
-            rows,
-            style="markdown",
+        *markdown_table(
+            ["data", "nearest neighbour q10/q25/q50 (m)", "Tightness (m)", "Symmetry (deg)"], rows
         ),
-        "",
         f"Seed {result.seed}; {result.seconds / 60:.1f} min.",
         "",
     ]

@@ -18,6 +18,7 @@ __all__ = [
     "command_block",
     "format_comparison",
     "format_report",
+    "markdown_table",
     "percent",
     "render_table",
 ]
@@ -80,6 +81,11 @@ def render_table(
     else:
         rule = "  ".join("-" * w for w in widths)
     return "\n".join([line(headers), rule, *(line(row) for row in rows)])
+
+
+def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """A page's lines for a GitHub table (`render_table`) and the blank line after it."""
+    return [render_table(headers, rows, style="markdown"), ""]
 
 
 def _title(result: Mapping[str, Any], style: str) -> str:

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from dataset_refusals import assert_refused_by_each
 
 from reform import DataFormatError, Dataset, Frame
 from reform.datasets import _walk as walk
@@ -37,10 +38,7 @@ def test_a_folder_of_two_formats_is_refused(salsa_dir, babble_dir, tmp_path):
         r"group_names.txt\); babble \(Motion-capture-data.csv\); name the format to read: "
         r"format='salsa' or format='babble' \(--format on the command line\)"
     )
-    with pytest.raises(DataFormatError, match=message):
-        detect_format(folder)
-    with pytest.raises(DataFormatError, match=message):
-        load_dataset(folder)
+    assert_refused_by_each((detect_format, load_dataset), folder, message)
     assert load_dataset(folder, format="salsa").name == "both"  # named after its folder
     assert len(load_dataset(folder, format="babble")) == 20
 

@@ -11,6 +11,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from dataset_refusals import assert_refused_by_each
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -513,10 +514,7 @@ def test_an_unfinished_generated_folder_is_refused(tmp_path, salsa_dataset):
         r"reform-sim generate command again to finish it \(reform-sim generate --scenario walk "
         rf"--episodes 30 --seed 0 --out {re.escape(str(folder))}\), or pass allow_incomplete=True"
     )
-    with pytest.raises(DataFormatError, match=message):
-        read_parquet(folder)
-    with pytest.raises(DataFormatError, match=message):
-        load_dataset(folder)
+    assert_refused_by_each((read_parquet, load_dataset), folder, message)
     partial = read_parquet(folder, allow_incomplete=True)
     assert partial.sequences() == tuple(f"walk-{k}" for k in range(7))
     assert load_dataset(folder, allow_incomplete=True).frames == partial.frames

@@ -1,10 +1,11 @@
-"""The tables the reports share (sim.experiments.tables): percentages and the command block."""
+"""The tables the reports share (sim.experiments.tables): percentages, the command block and a
+page's Markdown table."""
 
 from __future__ import annotations
 
 import math
 
-from sim.experiments.tables import command_block, percent
+from sim.experiments.tables import command_block, markdown_table, percent
 
 
 def test_percent_and_command_block() -> None:
@@ -20,3 +21,19 @@ def test_percent_and_command_block() -> None:
         "```",
         "",
     ]
+
+
+def test_markdown_table_is_the_table_then_a_blank_line() -> None:
+    lines = [
+        "## Scores",
+        "",
+        *markdown_table(["detector", "F1"], [["gcff", "81.2"], ["reform", "9.0"]]),
+    ]
+    assert "\n".join(lines) == (
+        "## Scores\n"
+        "\n"
+        "| detector |   F1 |\n"
+        "|:---------|-----:|\n"
+        "| gcff     | 81.2 |\n"
+        "| reform   |  9.0 |\n"
+    )
