@@ -1594,9 +1594,8 @@ def generate_dataset(
         save_recordings=save_recordings,
         max_memory=max_memory,
     )
-    parameters = spec.parameters()
     if store is not None:
-        return _generate_store(
+        todo, done, summaries, workers = _generate_store(
             store,
             spec,
             executor,
@@ -1605,57 +1604,61 @@ def generate_dataset(
             n_jobs=n_jobs,
             save_recordings=save_recordings,
             progress=progress,
-            started=started,
         )
-    _check_folder(out_dir, parameters, episodes)
-    if progress:  # stated once, the time being an estimate a run is not refused on
-        what = f"{sizing.count(episodes)} episode{'s' * (episodes != 1)} of {spec.scenario}"
-        print(sizing.describe(estimate, what), file=sys.stderr, flush=True)
+        where, card_url = store.uri, store.url
+    else:
+        parameters = spec.parameters()
+        _check_folder(out_dir, parameters, episodes)
+        if progress:  # stated once, the time being an estimate a run is not refused on
+            what = f"{sizing.count(episodes)} episode{'s' * (episodes != 1)} of {spec.scenario}"
+            print(sizing.describe(estimate, what), file=sys.stderr, flush=True)
 
-    with _folder_lock(out_dir), executor:
-        _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
-        folder = _Folder(out_dir, folder_layout(out_dir))
-        _remove_stale_temporaries(out_dir)
-        existing = _existing_shards(folder, spec, episodes)
-        done = [k for k in existing if _finished(folder, spec, k, save_recordings)]
-        shards = {k: existing[k] for k in done}
-        todo = [k for k in range(episodes) if k not in shards]
-        _write_cards(
-            out_dir,
-            _card(
+        with _folder_lock(out_dir), executor:
+            _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
+            folder = _Folder(out_dir, folder_layout(out_dir))
+            _remove_stale_temporaries(out_dir)
+            existing = _existing_shards(folder, spec, episodes)
+            done = [k for k in existing if _finished(folder, spec, k, save_recordings)]
+            shards = {k: existing[k] for k in done}
+            todo = [k for k in range(episodes) if k not in shards]
+            _write_cards(
+                out_dir,
+                _card(
+                    spec,
+                    episodes,
+                    list(shards.values()),
+                    complete=False,
+                    resolved_options=resolved,
+                    data_dir=folder.data,
+                ),
+            )
+            workers, batches = _plan(executor, todo, n_jobs)
+            if executor.remote:  # the shards come back as bytes, written here
+                shared: tuple[Any, ...] = (spec, save_recordings)
+                results = _written(
+                    executor.imap_unordered(_run_batch_bytes, batches, shared=shared), folder
+                )
+            else:
+                shared = (spec, folder, save_recordings)
+                results = (
+                    b for _, b in executor.imap_unordered(_run_batch, batches, shared=shared)
+                )
+            with contextlib.closing(results):  # stops the workers, if interrupted, while they run
+                _drain(results, shards, episodes, spec.scenario, progress)
+            summaries = [shards[k] for k in range(episodes)]
+            card = _card(
                 spec,
                 episodes,
-                list(shards.values()),
-                complete=False,
+                summaries,
+                complete=True,
                 resolved_options=resolved,
+                files=_shard_files(folder, summaries),
                 data_dir=folder.data,
-            ),
-        )
-        workers, batches = _plan(executor, todo, n_jobs)
-        if executor.remote:  # the shards come back as bytes, written here
-            shared: tuple[Any, ...] = (spec, save_recordings)
-            results = _written(
-                executor.imap_unordered(_run_batch_bytes, batches, shared=shared), folder
             )
-        else:
-            shared = (spec, folder, save_recordings)
-            results = (b for _, b in executor.imap_unordered(_run_batch, batches, shared=shared))
-        with contextlib.closing(results):  # stops the workers, if interrupted, while they run
-            _drain(results, shards, episodes, spec.scenario, progress)
-        summaries = [shards[k] for k in range(episodes)]
-        card_path = out_dir / CARD_JSON
-        card = _card(
-            spec,
-            episodes,
-            summaries,
-            complete=True,
-            resolved_options=resolved,
-            files=_shard_files(folder, summaries),
-            data_dir=folder.data,
-        )
-        _write_cards(out_dir, card)
+            _write_cards(out_dir, card)
+        where, card_url = out_dir, out_dir.joinpath
     return GenerationReport(
-        out_dir=out_dir,
+        out_dir=where,
         spec=spec,
         episodes=episodes,
         generated=tuple(todo),
@@ -1664,8 +1667,8 @@ def generate_dataset(
         seconds=time.perf_counter() - started,
         backend=backend,
         n_jobs=workers,
-        card=card_path,
-        card_markdown=out_dir / CARD_MARKDOWN,
+        card=card_url(CARD_JSON),
+        card_markdown=card_url(CARD_MARKDOWN),
     )
 
 
@@ -1679,9 +1682,12 @@ def _generate_store(
     n_jobs: int | None,
     save_recordings: bool,
     progress: bool,
-    started: float,
-) -> GenerationReport:
-    """`generate_dataset` into a store: the workers write the shards and their commits."""
+) -> tuple[list[int], list[int], list[ShardSummary], int]:
+    """`generate_dataset` into a store: the workers write the shards and their commits.
+
+    Returns:
+        The episodes simulated, those found finished, every episode's shard, and the workers.
+    """
     parameters = spec.parameters()
     _check_store(store, parameters, episodes)
     with _store_lock(store), executor:
@@ -1708,19 +1714,7 @@ def _generate_store(
         )
         _write_store_cards(store, card)
         store.delete(*store.sizes(COMMITS_DIR))  # the card lists every shard now
-    return GenerationReport(
-        out_dir=store.uri,
-        spec=spec,
-        episodes=episodes,
-        generated=tuple(todo),
-        skipped=tuple(done),
-        shards=tuple(summaries),
-        seconds=time.perf_counter() - started,
-        backend=executor.backend,
-        n_jobs=workers,
-        card=store.url(CARD_JSON),
-        card_markdown=store.url(CARD_MARKDOWN),
-    )
+    return todo, done, summaries, workers
 
 
 def _write_store_cards(store: Store, card: Mapping[str, Any]) -> None:
