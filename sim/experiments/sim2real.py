@@ -95,6 +95,7 @@ __all__ = [
     "SimToReal",
     "candidates",
     "recipe",
+    "recorded_views",
     "salsa_views",
     "sim_to_real",
     "train_candidate",
@@ -109,6 +110,7 @@ DISPLAY = {
 SALSA = "salsa"  # the dataset whose training split is the one real set choices may see
 SIM_PARTY = "simulated party"  # label of the default simulated party (held-out mingle)
 SIM_FIELD = "simulated field"  # the mean over the validation sources (every recipe's scenes)
+SIM_RECORDED = "simulated party, recorded as the field's datasets"  # its recorded_views' mean
 MAX_TRAINING_PAIRS = 200_000  # pairs a recipe's training set holds at most (an even subset)
 SALSA_TRAIN_SET = "salsa (training split)"
 # How the field's other datasets would record SALSA's training split, for the choice: positions
@@ -382,8 +384,8 @@ class RankAgreement:
     """Do the detectors rank in simulation as they rank on the real datasets?
 
     Attributes:
-        benchmark: the simulated benchmark (:data:`SIM_PARTY`, or :data:`SIM_FIELD`: the mean
-            over the validation sources).
+        benchmark: the simulated benchmark (:data:`SIM_PARTY`; :data:`SIM_FIELD`, the mean
+            over the validation sources; :data:`SIM_RECORDED`, the party's `recorded_views`).
         detectors: the detectors ranked.
         simulated: each one's F1 at T = 2/3 on the simulated benchmark.
         real: each one's mean F1 at T = 2/3 over the real datasets.
@@ -489,6 +491,8 @@ class SimToReal:
         scores: every detector on every real dataset and on the simulated party.
         rank: the rank agreement between the default simulated party and the real datasets.
         rank_field: the same for the mean over the simulated validation sources.
+        rank_recorded: the same for the default party as the field's datasets would record it
+            (:func:`recorded_views`: rescaled, orientation coded).
         goals: the issue's goals, checked.
         calibration: set -> shape and pair statistics (the recommended recipe's synthetic
             data and each real dataset).
@@ -506,6 +510,7 @@ class SimToReal:
     scores: tuple[Score, ...]
     rank: RankAgreement
     rank_field: RankAgreement
+    rank_recorded: RankAgreement
     goals: tuple[Goal, ...]
     calibration: Mapping[str, Any]
     training: Mapping[str, Any]
@@ -550,7 +555,11 @@ class SimToReal:
             "gcff_own": dict(self.gcff_own),
             "scores": [s.to_json() for s in self.scores],
             "means": {d: {t: self.mean_f1(d, t) for t in ("2/3", "1")} for d in self.detectors()},
-            "rank_agreement": [self.rank.to_json(), self.rank_field.to_json()],
+            "rank_agreement": [
+                self.rank.to_json(),
+                self.rank_field.to_json(),
+                self.rank_recorded.to_json(),
+            ],
             "goals": [g.to_json() for g in self.goals],
             "calibration": dict(self.calibration),
         }
@@ -618,13 +627,14 @@ def _gcff_own(
     return Gcff(stride=search.best_stride, mdl=search.best_mdl), note
 
 
-def salsa_views(frames: Sequence[Frame]) -> dict[str, tuple[Frame, ...]]:
-    """SALSA's training split as recorded and as the field's other datasets would record it
-    (:data:`SALSA_SCALES`, :data:`SALSA_DIRECTIONS`): the real frames the choice sees."""
+def recorded_views(frames: Sequence[Frame], name: str) -> dict[str, tuple[Frame, ...]]:
+    """Frames as recorded and as the field's other datasets would record them: positions
+    scaled by each of :data:`SALSA_SCALES`, orientation coded in :data:`SALSA_DIRECTIONS`
+    directions. Keys: ``name``, then ``name`` with what changed."""
     frames = tuple(frames)
-    views = {SALSA_TRAIN_SET: frames}
+    views = {name: frames}
     for factor in SALSA_SCALES:
-        views[f"{SALSA_TRAIN_SET}, positions x{factor:g}"] = tuple(
+        views[f"{name}, positions x{factor:g}"] = tuple(
             f.replace(
                 position=f.position * factor,
                 head_position=None if f.head_position is None else f.head_position * factor,
@@ -632,11 +642,17 @@ def salsa_views(frames: Sequence[Frame]) -> dict[str, tuple[Frame, ...]]:
             for f in frames
         )
     coded = AnnotationModel(directions=SALSA_DIRECTIONS)
-    views[f"{SALSA_TRAIN_SET}, {SALSA_DIRECTIONS} directions"] = coded.apply(
+    views[f"{name}, {SALSA_DIRECTIONS} directions"] = coded.apply(
         frames,
         np.random.default_rng(0),  # coding draws nothing
     )
     return views
+
+
+def salsa_views(frames: Sequence[Frame]) -> dict[str, tuple[Frame, ...]]:
+    """SALSA's training split as recorded and as the field's other datasets would record it
+    (:func:`recorded_views`): the real frames the choice sees."""
+    return recorded_views(frames, SALSA_TRAIN_SET)
 
 
 def _sum_of(frames_by_source: Mapping[str, Sequence[Frame]]) -> tuple[Frame, ...]:
@@ -779,10 +795,11 @@ def sim_to_real(
         training_json[entry.name] = {"frames": len(frames), "pairs": count_pairs(frames)}
 
     views = salsa_views(salsa_train)
+    party_views = recorded_views(party, SIM_PARTY)
     sets: dict[str, tuple[Frame, ...]] = {
         **views,
         **{f"validation: {name}": tuple(frames) for name, frames in validation.items()},
-        SIM_PARTY: tuple(party),
+        **party_views,
         **tests,
     }
     validation_names = [f"validation: {name}" for name in validation]
@@ -793,7 +810,10 @@ def sim_to_real(
             resamples=BOOTSTRAP_RESAMPLES,
         )
         for k, (name, frames) in enumerate(sets.items())
+        if name not in party_views or name == SIM_PARTY
     }
+    for name in party_views:  # the same frames: the same resamples
+        weights[name] = weights[SIM_PARTY]
 
     pool = candidates(recipes, classifiers, option_sets)
     say(f"{len(pool)} candidates: fitting each on its recipe and scoring it on every set")
@@ -829,7 +849,7 @@ def sim_to_real(
         save_model(fitted[best][0], out_model)
 
     say("REFORM trained on SALSA's training split, GCFF with one setting and with each own")
-    scored_sets = [SIM_PARTY, *validation_names, *tests]
+    scored_sets = [*party_views, *validation_names, *tests]
     units: list[tuple[str, Any, Sequence[str]]] = []
     roles: dict[str, str] = {}
     for name in classifiers:
@@ -908,6 +928,9 @@ def sim_to_real(
     rank_field = rank_agreement(
         ranked, weights, tuple(tests), simulated=validation_names, benchmark=SIM_FIELD
     )
+    rank_recorded = rank_agreement(
+        ranked, weights, tuple(tests), simulated=tuple(party_views), benchmark=SIM_RECORDED
+    )
 
     say("calibration: the recommended recipe's data against each real dataset")
     calibration = {
@@ -926,6 +949,7 @@ def sim_to_real(
         scores=tuple(scores),
         rank=rank,
         rank_field=rank_field,
+        rank_recorded=rank_recorded,
         goals=(),
         calibration=calibration,
         training=training_json,

@@ -55,11 +55,13 @@ def _short(result: SimToReal, detector: str) -> str:
 
 
 def rank_figure(result: SimToReal, path: str | os.PathLike[str]) -> Path:
-    """Each ranked detector's F1 in simulation against its mean on the real data: one panel
-    for the default simulated party, one for the simulated field (the validation sources)."""
+    """Each ranked detector's F1 in simulation against its mean on the real data: one panel per
+    simulated benchmark (the default party, the simulated field, the party as the field's
+    datasets would record it)."""
     plt = pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(WIDTH_IN * 1.3, 4.5), sharey=True)
-    for ax, rank in zip(axes, (result.rank, result.rank_field), strict=True):
+    ranks = (result.rank, result.rank_field, result.rank_recorded)
+    fig, axes = plt.subplots(1, len(ranks), figsize=(WIDTH_IN * 1.6, 4.5), sharey=True)
+    for ax, rank in zip(axes, ranks, strict=True):
         x = 100 * np.asarray(rank.simulated)
         y = 100 * np.asarray(rank.real)
         colours = [_colour(result, d) for d in rank.detectors]
@@ -67,7 +69,7 @@ def rank_figure(result: SimToReal, path: str | os.PathLike[str]) -> Path:
         for name, a, b in zip(rank.detectors, x, y, strict=True):
             if not name.startswith("REFORM") or name == result.recommended.label:
                 ax.annotate(name, (a, b), fontsize=6, xytext=(3, 2), textcoords="offset points")
-        ax.set_xlabel(f"F1 at T = 2/3, {rank.benchmark} (%)")
+        ax.set_xlabel(f"F1 at T = 2/3 (%), {rank.benchmark}", fontsize=7)
         low, high = rank.interval
         ax.set_title(f"tau {rank.tau:.2f} (95% interval {low:.2f} to {high:.2f})", fontsize=9)
         ax.grid(alpha=0.3)
@@ -248,6 +250,11 @@ def to_markdown(
     for rank, what in (
         (result.rank, "held-out `mingle` episodes with its defaults, the stress tests' party"),
         (result.rank_field, "the mean over the simulated validation sources of every recipe"),
+        (
+            result.rank_recorded,
+            "the same party as recorded and rescaled by 0.6 and by 1.6 and with orientation "
+            "coded in 4 directions, averaged",
+        ),
     ):
         low, high = rank.interval
         lines += [
@@ -258,13 +265,20 @@ def to_markdown(
     lines.append("")
     lines += [
         *markdown_table(
-            ["detector", f"F1 {SIM_PARTY}", f"F1 {SIM_FIELD}", "mean F1 real"],
             [
-                [d, percent(s), percent(f), percent(r)]
-                for d, s, f, r in zip(
+                "detector",
+                f"F1 {SIM_PARTY}",
+                f"F1 {SIM_FIELD}",
+                "F1 party, recorded",
+                "mean F1 real",
+            ],
+            [
+                [d, percent(s), percent(f), percent(v), percent(r)]
+                for d, s, f, v, r in zip(
                     result.rank.detectors,
                     result.rank.simulated,
                     result.rank_field.simulated,
+                    result.rank_recorded.simulated,
                     result.rank.real,
                     strict=True,
                 )

@@ -177,6 +177,19 @@ def test_rank_agreement_is_kendalls_tau_of_the_rows(tiny) -> None:
             (entry,) = [s for s in result.selection if s["label"] == name]
             assert sim == pytest.approx(np.mean([entry["validation_f1"][v] for v in validation]))
     assert field.tau == pytest.approx(kendalltau(field.simulated, field.real).statistic)
+    recorded = result.rank_recorded
+    assert recorded.detectors == rank.detectors and recorded.real == rank.real
+    assert recorded.tau == pytest.approx(kendalltau(recorded.simulated, recorded.real).statistic)
+    # The party's four views: as recorded (the default party itself), rescaled twice, recoded.
+    document = result.to_json()
+    assert [r["benchmark"] for r in document["rank_agreement"]] == [
+        "simulated party",
+        "simulated field",
+        "simulated party, recorded as the field's datasets",
+    ]
+    # GCFF's stride is in metres: rescaled parties score it otherwise than the party itself.
+    gcff = rank.detectors.index(result.detectors("gcff-one")[0])
+    assert recorded.simulated[gcff] != pytest.approx(rank.simulated[gcff])
 
 
 def test_goals_follow_from_the_scores(tiny) -> None:
