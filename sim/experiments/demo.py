@@ -76,6 +76,7 @@ from sim.experiments.synthetic import (
     SyntheticSource,
     balance_pairs,
     count_pairs,
+    even_subset,
     generate_sources,
 )
 from sim.recording import record_episode, record_evaluation
@@ -284,11 +285,7 @@ def _find_datasets(datasets: str | os.PathLike[str] | None) -> dict[str, Dataset
 
 
 def _even(frames: Sequence[Frame], most: int | None) -> tuple[Frame, ...]:
-    frames = tuple(frames)
-    if most is None or len(frames) <= most:
-        return frames
-    keep = np.unique(np.linspace(0, len(frames) - 1, most).round().astype(int))
-    return tuple(frames[k] for k in keep)
+    return tuple(frames) if most is None else even_subset(frames, most)
 
 
 def _snapshot_index(frames: Sequence[Frame]) -> int:

@@ -65,17 +65,20 @@ from reform.detector import Reform
 from reform.detectors import make_detector, run_detector
 from reform.frame import Dataset, Frame
 from reform.gcff import Gcff, GcffBySequence, grid_search
-from reform.metrics import PROTOCOL, T_ONE, T_TWO_THIRDS, Evaluation, evaluate
+from reform.json_values import json_float
+from reform.metrics import PROTOCOL, T_TWO_THIRDS, Evaluation, evaluate
 from reform.persistence import save_model
 from reform.seeding import Role, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_blocks, time_split
 from sim.executor import Executor
+from sim.experiments.benchmark import Scores
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from sim.experiments.synthetic import (
     SALSA_RATE_HZ,
     SyntheticSource,
     balance_pairs,
     count_pairs,
+    even_subset,
     generate_sources,
     nearest_neighbour_quantiles,
 )
@@ -338,14 +341,6 @@ def _evaluate(name: str, detector: Any, frames: Sequence[Frame]) -> Evaluation:
     return evaluate(frames, run_detector(name, detector, frames))
 
 
-def _figures(evaluation: Evaluation) -> dict[str, tuple[float, float, float]]:
-    out = {}
-    for key, threshold in (("2/3", T_TWO_THIRDS), ("1", T_ONE)):
-        s = evaluation.at(threshold)
-        out[key] = (float(s.precision), float(s.recall), float(s.f1))
-    return out
-
-
 def _candidate_unit(
     unit: tuple[Candidate, str],
     training: Mapping[str, Sequence[Frame]],
@@ -371,7 +366,7 @@ def _leave_one_out_unit(
     """The recommended configuration trained on every real dataset but one, scored on it."""
     held_out, candidate = unit
     frames = tuple(f for name, fr in training.items() if name != held_out for f in fr)
-    model = Reform(make_classifier(candidate.classifier), **dict(candidate.options)).fit(frames)
+    model = train_candidate(candidate, frames)
     return _evaluate(f"{candidate.label} without {held_out}", model, sets[held_out])
 
 
@@ -403,8 +398,8 @@ class RankAgreement:
     def to_json(self) -> dict[str, Any]:
         return {
             "benchmark": self.benchmark,
-            "tau": self.tau,
-            "interval": list(self.interval),
+            "tau": json_float(self.tau),
+            "interval": [json_float(v) for v in self.interval],
             "rows": [
                 {"detector": d, "simulated_f1": s, "real_mean_f1": r}
                 for d, s, r in zip(self.detectors, self.simulated, self.real, strict=True)
@@ -413,8 +408,8 @@ class RankAgreement:
 
 
 def _tau(x: np.ndarray, y: np.ndarray) -> float:
-    value = kendalltau(x, y).statistic
-    return 0.0 if not math.isfinite(value) else float(value)
+    """Kendall's tau-b; NaN where it is undefined (every detector tied on one side)."""
+    return float(kendalltau(x, y).statistic)
 
 
 def _mean_f1(evaluations: Mapping[str, Evaluation], sets: Sequence[str]) -> float:
@@ -451,13 +446,14 @@ def rank_agreement(
     taus = np.array(
         [_tau(sim_samples[:, b], real_samples[:, b]) for b in range(sim_samples.shape[1])]
     )
+    taus = taus[np.isfinite(taus)]  # resamples where tau is undefined say nothing either way
     return RankAgreement(
         benchmark=benchmark,
         detectors=names,
         simulated=tuple(float(v) for v in sim_points),
         real=tuple(float(v) for v in real_points),
         tau=_tau(sim_points, real_points),
-        interval=_interval(taus),
+        interval=_interval(taus) if taus.size else (math.nan, math.nan),
     )
 
 
@@ -663,11 +659,7 @@ def _cap(frames: Sequence[Frame], most: int) -> tuple[Frame, ...]:
     """An even subset of ``frames`` (in order) holding at most ``most`` pairs."""
     frames = tuple(frames)
     total = count_pairs(frames)
-    if total <= most:
-        return frames
-    keep = max(1, math.floor(len(frames) * most / total))
-    positions = np.unique(np.linspace(0, len(frames) - 1, keep).round().astype(int))
-    return tuple(frames[k] for k in positions)
+    return frames if total <= most else even_subset(frames, math.floor(len(frames) * most / total))
 
 
 def sim_to_real(
@@ -911,7 +903,7 @@ def sim_to_real(
                     detector=detector,
                     dataset=dataset,
                     frames=int(evaluation.n_frames),
-                    at=_figures(evaluation),
+                    at=Scores.of(evaluation).at,
                     f1_interval=_interval(_resampled_f1(evaluation, weights[dataset])),
                     role=role,
                     note=notes.get(dataset, "") if role == "gcff-own" else "",
@@ -936,7 +928,7 @@ def sim_to_real(
     calibration = {
         f"synthetic: {recommended.recipe}": shape_statistics(training[recommended.recipe])
     }
-    calibration["salsa (training split)"] = shape_statistics(salsa_train)
+    calibration[SALSA_TRAIN_SET] = shape_statistics(salsa_train)
     for name in real:
         if name != SALSA:
             calibration[labels[name]] = shape_statistics(tests[labels[name]])

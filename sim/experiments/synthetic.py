@@ -36,7 +36,7 @@ from reform.frame import Frame
 from reform.perturb import Perturbation
 from reform.seeding import Role, derive_rng
 from sim.executor import Executor
-from sim.generate import CARD_JSON, generate_dataset
+from sim.generate import generate_dataset, read_card
 
 __all__ = [
     "JOINT_DISTANCE_EDGES_M",
@@ -49,6 +49,7 @@ __all__ = [
     "balance_pairs",
     "calibrate_tracker_noise",
     "count_pairs",
+    "even_subset",
     "generate_sources",
     "joint_distances",
     "nearest_neighbour_quantiles",
@@ -153,14 +154,20 @@ def _check_synthetic_root(root: Path) -> None:
             )
 
 
+def even_subset(frames: Sequence[Frame], count: int) -> tuple[Frame, ...]:
+    """``count`` frames (at least 1, at most all) at evenly spaced positions of ``frames``, in
+    order, so every episode and every stretch of time keeps its share."""
+    frames = tuple(frames)
+    if count >= len(frames):
+        return frames
+    positions = np.unique(np.linspace(0, len(frames) - 1, max(1, count)).round().astype(int))
+    return tuple(frames[k] for k in positions)
+
+
 def _episodes_held(folder: Path) -> int:
-    """Episodes a generated dataset's card says the folder holds (0: none, or no card)."""
-    try:
-        card = json.loads((folder / CARD_JSON).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return 0
-    held = card.get("episodes") if isinstance(card, dict) else None
-    return held if isinstance(held, int) and not isinstance(held, bool) and held > 0 else 0
+    """Episodes the generated dataset in ``folder`` holds, by its card (0: no card yet)."""
+    card = read_card(folder)
+    return int(card.get("episodes") or 0) if card else 0
 
 
 def generate_sources(
@@ -239,9 +246,7 @@ def balance_pairs(
         if counts[name] <= target:
             out[name] = frames
             continue
-        keep_count = max(1, round(len(frames) * target / counts[name]))
-        positions = np.unique(np.linspace(0, len(frames) - 1, keep_count).round().astype(int))
-        out[name] = tuple(frames[k] for k in positions)
+        out[name] = even_subset(frames, round(len(frames) * target / counts[name]))
     return out
 
 

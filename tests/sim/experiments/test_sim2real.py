@@ -315,3 +315,16 @@ def test_cli_reads_a_folder_of_datasets(shared_datasets) -> None:
     named = load_named([str(shared_datasets)])
     assert {"salsa", "babble", "coffeebreak", "synth"} <= set(named)
     assert named["salsa"].name.lower().startswith("salsa")
+
+
+def test_an_undefined_tau_is_said_not_invented() -> None:
+    """Every detector tied in simulation: Kendall's tau is undefined, and the JSON says null
+    rather than a made-up 0."""
+    from sim.experiments.sim2real import RankAgreement, _tau
+
+    tau = _tau(np.array([0.5, 0.5, 0.5]), np.array([0.2, 0.4, 0.9]))
+    assert np.isnan(tau)
+    rank = RankAgreement(SIM_PARTY, ("a", "b", "c"), (0.5,) * 3, (0.2, 0.4, 0.9), tau, (tau, tau))
+    document = rank.to_json()
+    assert document["tau"] is None and document["interval"] == [None, None]
+    json.dumps(document, allow_nan=False)
