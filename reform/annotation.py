@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from reform._checks import check_levels
 from reform.frame import Frame, Group, wrap_angle
 from reform.perturb import TrackerNoise
 
@@ -71,16 +72,6 @@ ANNOTATION_RANGES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
     }
 )
 _CHOICES = ("orientation", "directions")  # drawn from a list; the others uniformly
-
-
-def _number(name: str, value: Any, *, high: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"annotation {name} must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0 or (high is not None and value > high):
-        bound = f"within [0, {high:g}]" if high is not None else ">= 0"
-        raise ValueError(f"annotation {name} must be {bound}, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -119,9 +110,8 @@ class AnnotationModel:
                     f"annotation directions must be a whole number >= 1 (or continuous), got {k!r}"
                 )
             object.__setattr__(self, "directions", int(k))
-        for name in ("scale_sd", "position_noise", "yaw_noise", "min_group_seconds"):
-            object.__setattr__(self, name, _number(name, getattr(self, name)))
-        object.__setattr__(self, "dropout", _number("dropout", self.dropout, high=1.0))
+        levels = ("scale_sd", "position_noise", "yaw_noise", "min_group_seconds")
+        check_levels(self, "annotation ", levels, probabilities=("dropout",))
 
     @property
     def identity(self) -> bool:

@@ -31,12 +31,12 @@ Conventions:
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
+from reform._checks import check_levels
 from reform.frame import Frame, Group, wrap_angle
 
 __all__ = ["NoisyPoses", "Perturbation", "TrackerNoise", "restrict_groups"]
@@ -58,16 +58,6 @@ def restrict_groups(
         if members:
             out.append(members)
     return tuple(out)
-
-
-def _level(owner: str, name: str, value: float, *, high: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{owner}.{name} must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0 or (high is not None and value > high):
-        bound = f"in [0, {high:g}]" if high is not None else ">= 0 and finite"
-        raise ValueError(f"{owner}.{name} must be {bound}, got {value!r}")
-    return value
 
 
 def _mask(name: str, value: np.ndarray | None, n: int, default: np.ndarray) -> np.ndarray:
@@ -116,10 +106,8 @@ class TrackerNoise:
     dropout: float = 0.0
 
     def __post_init__(self) -> None:
-        owner = type(self).__name__
-        object.__setattr__(self, "position_std", _level(owner, "position_std", self.position_std))
-        object.__setattr__(self, "yaw_std", _level(owner, "yaw_std", self.yaw_std))
-        object.__setattr__(self, "dropout", _level(owner, "dropout", self.dropout, high=1.0))
+        levels = ("position_std", "yaw_std")
+        check_levels(self, f"{type(self).__name__}.", levels, probabilities=("dropout",))
 
     @property
     def is_identity(self) -> bool:
@@ -260,10 +248,8 @@ class Perturbation:
     perturb_robots: bool = False
 
     def __post_init__(self) -> None:
-        owner = type(self).__name__
-        for name in ("position_noise", "yaw_noise"):
-            object.__setattr__(self, name, _level(owner, name, getattr(self, name)))
-        object.__setattr__(self, "dropout", _level(owner, "dropout", self.dropout, high=1.0))
+        levels = ("position_noise", "yaw_noise")
+        check_levels(self, f"{type(self).__name__}.", levels, probabilities=("dropout",))
         object.__setattr__(self, "perturb_robots", bool(self.perturb_robots))
 
     @property

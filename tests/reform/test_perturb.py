@@ -125,8 +125,11 @@ def test_real_frames(salsa_dataset) -> None:
     ("kwargs", "message"),
     [
         ({"dropout": 1.5}, r"Perturbation.dropout must be in \[0, 1\], got 1.5"),
-        ({"position_noise": -0.1}, r"Perturbation.position_noise must be >= 0 and finite"),
-        ({"yaw_noise": math.inf}, r"Perturbation.yaw_noise must be >= 0 and finite"),
+        (
+            {"position_noise": -0.1},
+            r"Perturbation.position_noise must be a finite number >= 0, got -0.1",
+        ),
+        ({"yaw_noise": math.inf}, r"Perturbation.yaw_noise must be a finite number >= 0, got inf"),
         ({"yaw_noise": "0.1"}, r"Perturbation.yaw_noise must be a number, got '0.1'"),
     ],
 )
@@ -271,7 +274,10 @@ def test_restrict_groups() -> None:
     ("kwargs", "message"),
     [
         ({"dropout": -0.1}, r"TrackerNoise.dropout must be in \[0, 1\], got -0.1"),
-        ({"position_std": math.nan}, r"TrackerNoise.position_std must be >= 0 and finite"),
+        (
+            {"position_std": math.nan},
+            r"TrackerNoise.position_std must be a finite number >= 0, got nan",
+        ),
         ({"yaw_std": None}, r"TrackerNoise.yaw_std must be a number, got None"),
     ],
 )

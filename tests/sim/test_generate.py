@@ -564,7 +564,10 @@ def test_a_randomised_annotation_draws_one_model_per_episode(tmp_path):
     ("flags", "message"),
     [
         (["--annotation", "directions=0"], "directions must be a whole number >= 1"),
-        (["--annotation", "scale_sd=-1"], "annotation scale_sd must be >= 0, got -1.0"),
+        (
+            ["--annotation", "scale_sd=-1"],
+            "annotation scale_sd must be a finite number >= 0, got -1.0",
+        ),
         (["--annotation", "random", "--annotation", "dropout=0.1"], "takes no other"),
         (["--annotation", "depth=3"], "annotation setting 'depth=3': expected KEY=VALUE"),
     ],
