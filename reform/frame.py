@@ -170,7 +170,9 @@ class Frame:
 
         groups = None
         if self.groups is not None:
-            groups = _validate_groups(self.groups, ids)
+            groups = check_groups(
+                (_members(group, f"groups[{g}]") for g, group in enumerate(self.groups)), ids
+            )
         listed = None
         if self.listed_groups is not None:
             if groups is None:
@@ -296,21 +298,46 @@ def _members(group: Any, name: str) -> Group:
     return tuple(_person_id(m, name) for m in group)
 
 
-def _validate_groups(groups: Iterable[Iterable[int]], ids: np.ndarray) -> tuple[Group, ...]:
-    known = set(ids.tolist())
+def check_groups(
+    groups: Iterable[Group],
+    ids: npt.ArrayLike,
+    *,
+    at: str = "",
+    noun: str = "person",
+    place: str = "frame",
+) -> tuple[Group, ...]:
+    """``groups`` as a tuple, checked to be non-empty, disjoint groups of ids among ``ids``.
+
+    The ids named in no group stand alone: the groups need not cover ``ids``.
+
+    Args:
+        groups: the groups, each a tuple of int ids.
+        ids: the ids there are.
+        at: when or where the groups hold, after their name in messages (``" at t=2 s"``).
+        noun: what an id stands for in messages (``"agent"``).
+        place: what holds the ids, in messages (``"scene"``).
+
+    Raises:
+        ValueError: naming the first fault, e.g. ``"groups[1] is empty"``, ``"groups[0] names
+            person 7, who is not in the frame (ids [1, 2, 3])"`` or ``"groups must be disjoint,
+            person 1 appears twice (groups[1])"``.
+    """
+    known = set(np.asarray(ids).tolist())
     seen: set[int] = set()
     out = []
-    for g, group in enumerate(groups):
-        members = _members(group, f"groups[{g}]")
+    for g, members in enumerate(groups):
         if not members:
-            raise ValueError(f"groups[{g}] is empty")
+            raise ValueError(f"groups[{g}]{at} is empty")
         for m in members:
             if m not in known:
                 raise ValueError(
-                    f"groups[{g}] names person {m}, who is not in the frame (ids {sorted(known)})"
+                    f"groups[{g}]{at} names {noun} {m}, who is not in the {place} "
+                    f"(ids {sorted(known)})"
                 )
             if m in seen:
-                raise ValueError(f"groups must be disjoint, person {m} appears twice (groups[{g}])")
+                raise ValueError(
+                    f"groups{at} must be disjoint, {noun} {m} appears twice (groups[{g}])"
+                )
             seen.add(m)
         out.append(members)
     return tuple(out)

@@ -43,7 +43,7 @@ import mujoco
 import numpy as np
 from mujoco import batch as mj_batch
 
-from reform.frame import ROBOT, Frame, Group, wrap_angle
+from reform.frame import ROBOT, Frame, Group, check_groups, wrap_angle
 from reform.frame_block import FrameBlock
 from reform.perturb import restrict_groups
 from scenarios.script import WALK_SPEED_M_S, Intent, Point, Script
@@ -728,28 +728,13 @@ class World:
     def _validate_groups(self, groups: Any, t: float) -> tuple[Group, ...] | None:
         if groups is None:
             return None
-        seen: set[int] = set()
-        out = []
         try:
             items = [tuple(int(m) for m in g) for g in groups]
         except (TypeError, ValueError) as exc:
             raise ValueError(
                 f"groups at t={t:g} s must be a sequence of sequences of agent ids, got {groups!r}"
             ) from exc
-        for g, members in enumerate(items):
-            if not members:
-                raise ValueError(f"groups at t={t:g} s: group {g} is empty")
-            for m in members:
-                if m not in self._index:
-                    raise ValueError(
-                        f"groups at t={t:g} s: group {g} names agent {m}, who is not in the scene "
-                        f"(ids {self._ids.tolist()})"
-                    )
-                if m in seen:
-                    raise ValueError(f"groups at t={t:g} s must be disjoint: agent {m} is in two")
-                seen.add(m)
-            out.append(members)
-        return tuple(out)
+        return check_groups(items, self._ids, at=f" at t={t:g} s", noun="agent", place="scene")
 
     def _apply_intents(self, intents: Mapping[int, Intent], t: float) -> None:
         last, index = self._last_intents, self._index

@@ -32,6 +32,20 @@ def _circle(n: int, radius: float = 1.6, *, robot: bool = True) -> SceneSpec:
     return SceneSpec(people=people, robot=RobotSpec(id=0) if robot else None, room=(5.0, 5.0))
 
 
+class _Constant:
+    """A script whose intents and groups are the same at every time."""
+
+    def __init__(self, *, intents: Mapping[int, object] | None = None, groups: object = None):
+        self._intents = {} if intents is None else intents
+        self._groups = groups
+
+    def intents(self, t: float) -> Mapping[int, object]:
+        return self._intents
+
+    def groups(self, t: float) -> object:
+        return self._groups
+
+
 class Shuffle:
     """Everyone walks to a new random spot every 3 s; pairs are declared as groups."""
 
@@ -184,27 +198,27 @@ def test_set_groups_without_script() -> None:
     ],
 )
 def test_bad_intents_fail_before_simulating(intents, message: str) -> None:
-    class Script:
-        def intents(self, t: float):
-            return intents
-
-        def groups(self, t: float):
-            return None
-
     with pytest.raises(ValueError, match=message):
-        World(_circle(3), seed=0, script=Script())
+        World(_circle(3), seed=0, script=_Constant(intents=intents))
 
 
-def test_bad_groups_fail() -> None:
-    class Script:
-        def intents(self, t: float):
-            return {}
-
-        def groups(self, t: float):
-            return ((1, 2), (2, 3))
-
-    with pytest.raises(ValueError, match=r"groups at t=0 s must be disjoint: agent 2 is in two"):
-        World(_circle(3), seed=0, script=Script())
+@pytest.mark.parametrize(
+    ("groups", "message"),
+    [
+        (
+            ((1, 2), (2, 3)),
+            r"groups at t=0 s must be disjoint, agent 2 appears twice \(groups\[1\]\)",
+        ),
+        (((1, 2), ()), r"groups\[1\] at t=0 s is empty"),
+        (
+            ((1, 9),),
+            r"groups\[0\] at t=0 s names agent 9, who is not in the scene \(ids \[0, 1, 2, 3\]\)",
+        ),
+    ],
+)
+def test_bad_groups_fail(groups, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        World(_circle(3), seed=0, script=_Constant(groups=groups))
 
 
 @pytest.mark.parametrize(
