@@ -11,6 +11,7 @@ pyarrow is imported only inside these functions.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -500,9 +501,10 @@ def _read_file(
         ):
             raise DataFormatError(path, None, name, f"type {expected}", f"{column.type}")
         mask = column.is_null().to_numpy(zero_copy_only=False)
-        if not nullable and mask.any():
-            row = int(np.flatnonzero(mask)[0])
-            raise DataFormatError(path, f"row {row}", name, "a value", "null")
+        if not nullable:
+            DataFormatError.check_rows(
+                mask, path, lambda row: f"row {row}", name, "a value", mask, lambda _: "null"
+            )
         null[name] = mask
         if type_name == "string":
             data[name] = np.array(column.to_pylist(), dtype=object)
@@ -575,7 +577,7 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
             bad |= ~null[name] & (np.abs(values) > POSITION_LIMIT_M)
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            where = f"frame {int(index[row])} (row {row})"
+            where = _frame_row(index, row)
             value = float(values[row])
             if not math.isfinite(value):
                 expected = "a finite number" + (" or NaN" if name.startswith("head") else "")
@@ -587,26 +589,15 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
                     "value)"
                 )
             raise DataFormatError(path, where, name, expected, repr(value))
-    if np.any(np.isnan(data["time"])) or np.any(np.isinf(data["time"])):
-        row = int(np.flatnonzero(~np.isfinite(data["time"]))[0])
-        raise DataFormatError(
-            path,
-            f"frame {int(index[row])} (row {row})",
-            "time",
-            "a finite number",
-            repr(float(data["time"][row])),
-        )
-    _check_unique_ids(path, index, data["person_id"], null["person_id"])
-    negative = np.flatnonzero(~null["person_id"] & (data["person_id"] < 0))
-    if negative.size:
-        row = int(negative[0])
-        raise DataFormatError(
-            path,
-            f"frame {int(index[row])} (row {row})",
-            "person_id",
-            f"an id >= 0 ({ID_RULE})",
-            str(int(data["person_id"][row])),
-        )
+    at_row = functools.partial(_frame_row, index)
+    times, person_id = data["time"], data["person_id"]
+    DataFormatError.check_rows(~np.isfinite(times), path, at_row, "time", "a finite number", times)
+    _check_unique_ids(path, index, person_id, null["person_id"])
+    negative = ~null["person_id"] & (person_id < 0)
+    rule = f"an id >= 0 ({ID_RULE})"
+    DataFormatError.check_rows(
+        negative, path, at_row, "person_id", rule, person_id, lambda value: str(int(value))
+    )
     _check_heads(path, index, data, null)
 
     frames = []
@@ -707,6 +698,11 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
     return frames
 
 
+def _frame_row(index: np.ndarray, row: int) -> str:
+    """Where row ``row`` (0-based) is in a file whose frame of each row is ``index``."""
+    return f"frame {int(index[row])} (row {row})"
+
+
 def _check_frame_runs(path: Path, index: np.ndarray) -> None:
     """Refuses rows not grouped by frame: each frame's rows together, frames 0, 1, 2, ..."""
     rule = "rows grouped by frame, frames 0, 1, 2, ... in order"
@@ -744,7 +740,7 @@ def _check_unique_ids(
     first, row = int(ordered[k]), int(ordered[k + 1])
     raise DataFormatError(
         path,
-        f"frame {int(index[row])} (row {row})",
+        _frame_row(index, row),
         "person_id",
         "ids unique within the frame",
         f"{int(person_id[row])}, already on row {first}",
@@ -767,7 +763,7 @@ def _check_heads(
     others = " and ".join(n for c, n in enumerate(names) if c != column)
     raise DataFormatError(
         path,
-        f"frame {int(index[row])} (row {row})",
+        _frame_row(index, row),
         names[column],
         f"{'a number' if odd_nan else 'NaN'}, as {others} (a head is observed in full or not "
         "at all)",

@@ -5,7 +5,10 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
+
+if TYPE_CHECKING:
+    import numpy as np
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -19,6 +22,10 @@ def shorten(text: str, limit: int = FOUND_LIMIT) -> str:
     if len(text) <= limit:
         return text
     return f"{text[: limit - 20]}… ({len(text):,} characters)"
+
+
+def _float_repr(value: Any) -> str:
+    return repr(float(value))
 
 
 class DataFormatError(ValueError):
@@ -55,6 +62,33 @@ class DataFormatError(ValueError):
         parts.append(f"{detail}expected {expected}, found {shorten(found)}")
         message = ": ".join(parts)
         super().__init__(f"{message}; {hint}" if hint else message)
+
+    @classmethod
+    def check_rows(
+        cls,
+        bad: np.ndarray,
+        path: str | Path,
+        where: Callable[[int], str],
+        field: str | None,
+        expected: str,
+        values: np.ndarray,
+        show: Callable[[Any], str] = _float_repr,
+    ) -> None:
+        """Raises one naming the first row where ``bad`` holds; returns when none does.
+
+        Args:
+            bad: (n,) bool, the rows (or elements) that break the rule.
+            path: the file.
+            where: the message's place for that row's 0-based index (``f"row {row + 1}"``).
+            field: the field, or None.
+            expected: what the rule asks.
+            values: (n,) the values checked: the message shows that row's, written by ``show``
+                (by default ``repr(float(value))``).
+        """
+        rows = bad.nonzero()[0]
+        if rows.size:
+            row = int(rows[0])
+            raise cls(path, where(row), field, expected, show(values[row]))
 
     def __reduce__(self) -> tuple:
         # Rebuilt from its fields, so that it survives pickling (errors of worker processes).

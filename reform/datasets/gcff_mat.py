@@ -560,11 +560,9 @@ def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
     if array.ndim > 2 or (array.ndim == 2 and array.size and 1 not in array.shape):
         raise DataFormatError(path, None, field, "a 1×K vector", f"shape {array.shape}")
     vector = array.astype(np.float64).ravel()
-    bad = np.flatnonzero(~np.isfinite(vector))
-    if bad.size:
-        raise DataFormatError(
-            path, f"element {bad[0] + 1}", field, "a finite number", repr(float(vector[bad[0]]))
-        )
+    DataFormatError.check_rows(
+        ~np.isfinite(vector), path, lambda k: f"element {k + 1}", field, "a finite number", vector
+    )
     return vector
 
 
@@ -586,15 +584,13 @@ def _frame_rows(
             path, where, "features", "an N×4 matrix [ID, x, y, θ]", f"shape {array.shape}"
         )
     array = array.astype(np.float64)
-    bad_id = np.flatnonzero(~np.isfinite(array[:, 0]))
-    if bad_id.size:
-        raise DataFormatError(
-            path,
-            f"{where}, row {bad_id[0] + 1}",
-            "ID",
-            "a finite number",
-            repr(array[bad_id[0], 0]),
-        )
+
+    def at_row(row: int) -> str:
+        return f"{where}, row {row + 1}"
+
+    DataFormatError.check_rows(
+        ~np.isfinite(array[:, 0]), path, at_row, "ID", "a finite number", array[:, 0], repr
+    )
     unposed = np.isnan(array[:, 1:]).any(axis=1)
     if unposed.any():
         row = int(np.flatnonzero(unposed)[0])
@@ -602,7 +598,7 @@ def _frame_rows(
         repairs.note(
             "people_dropped_nan",
             path=path,
-            where=f"{where}, row {row + 1} (ID {array[row, 0]:g})",
+            where=f"{at_row(row)} (ID {array[row, 0]:g})",
             field=("x", "y", "θ")[column],
             expected="a number (a NaN pose: that person is dropped from the frame)",
             found="NaN",
@@ -610,26 +606,17 @@ def _frame_rows(
         )
         array = array[~unposed]
     for column, name in enumerate(("x", "y", "θ"), start=1):
-        bad = np.flatnonzero(~np.isfinite(array[:, column]))
-        if bad.size:
-            raise DataFormatError(
-                path,
-                f"{where}, row {bad[0] + 1}",
-                name,
-                "a finite number",
-                repr(float(array[bad[0], column])),
-            )
+        values = array[:, column]
+        DataFormatError.check_rows(
+            ~np.isfinite(values), path, at_row, name, "a finite number", values
+        )
     ids = array[:, 0]
     for bad, expected in (
         (np.abs(ids) > _ID_LIMIT, f"an integer with |ID| <= 2^53 ({_ID_LIMIT:g})"),
         (ids != np.round(ids), "an integer"),
         (ids < 0, f"an integer >= 0 ({ID_RULE})"),
     ):
-        rows = np.flatnonzero(bad)
-        if rows.size:
-            raise DataFormatError(
-                path, f"{where}, row {rows[0] + 1}", "ID", expected, repr(float(ids[rows[0]]))
-            )
+        DataFormatError.check_rows(bad, path, at_row, "ID", expected, ids)
     ids = ids.astype(np.int64)
     check_unique_ids(ids.tolist(), path=path, where=where)
     limit = POSITION_LIMIT_M * per_metre
@@ -638,23 +625,21 @@ def _frame_rows(
         row, column = (int(v) for v in far[0])
         raise DataFormatError(
             path,
-            f"{where}, row {row + 1} (ID {ids[row]})",
+            f"{at_row(row)} (ID {ids[row]})",
             "xy"[column],
             f"a position with |value| <= {limit:g} file units ({POSITION_LIMIT_M:g} m; "
             "farther looks like a corrupt value)",
             repr(float(array[row, column + 1])),
         )
     theta = array[:, 3]
-    wild = np.flatnonzero(np.abs(theta) > _ANGLE_LIMIT_RAD)
-    if wild.size:
-        row = int(wild[0])
-        raise DataFormatError(
-            path,
-            f"{where}, row {row + 1} (ID {ids[row]})",
-            "θ",
-            "radians with |θ| <= 4π (values beyond look like degrees)",
-            repr(float(theta[row])),
-        )
+    DataFormatError.check_rows(
+        np.abs(theta) > _ANGLE_LIMIT_RAD,
+        path,
+        lambda row: f"{at_row(row)} (ID {ids[row]})",
+        "θ",
+        "radians with |θ| <= 4π (values beyond look like degrees)",
+        theta,
+    )
     return ids, array[:, 1:3], theta
 
 
