@@ -1,4 +1,4 @@
-"""A dataset refused alike by every reader of it: the same one DataFormatError from each."""
+"""A dataset refused by its readers: the same one DataFormatError from each."""
 
 from __future__ import annotations
 
@@ -11,11 +11,16 @@ import pytest
 from reform import DataFormatError
 
 
+def assert_refused(read: Callable[[Path], Any], path: Path, message: str) -> None:
+    """``read(path)`` raises a DataFormatError matching the regular expression ``message``."""
+    with pytest.raises(DataFormatError, match=message):
+        read(path)
+
+
 def assert_refused_by_each(
     readers: Iterable[Callable[[Path], Any]], path: Path, message: str
 ) -> None:
     """Each of ``readers`` (called with ``path`` alone) raises a DataFormatError matching the
     regular expression ``message``."""
     for read in readers:
-        with pytest.raises(DataFormatError, match=message):
-            read(path)
+        assert_refused(read, path, message)

@@ -106,34 +106,21 @@ def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = N
     lines += ["## Per dataset", "", *_table(header, rows), ""]
 
     mean_header = ["detector", "datasets", "P 2/3", "R 2/3", "F1 2/3", "P 1", "R 1", "F1 1"]
-    mean_rows = []
-    for detector in benchmark.detectors:
-        entry = benchmark.means()[detector.label]
-        mean_rows.append(
-            [detector.label, str(entry["datasets"])] + _row(entry["2/3"]) + _row(entry["1"])
-        )
     lines += [
         "## Mean over datasets",
         "",
         "The plain mean of the per-dataset figures, over the datasets each detector ran on.",
         "",
-        *_table(mean_header, mean_rows),
+        *_table(mean_header, _mean_rows(benchmark.means())),
         "",
     ]
     common = benchmark.common_datasets()
     if common and len(common) < len(benchmark.datasets):
-        means = benchmark.means(common)
-        rows = [
-            [d.label, str(means[d.label]["datasets"])]
-            + _row(means[d.label]["2/3"])
-            + _row(means[d.label]["1"])
-            for d in benchmark.detectors
-        ]
         lines += [
             f"Over the datasets every detector ran on ({', '.join(common)}), comparable across "
             "rows:",
             "",
-            *_table(mean_header, rows),
+            *_table(mean_header, _mean_rows(benchmark.means(common))),
             "",
         ]
 
@@ -184,6 +171,32 @@ def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = N
     return "\n".join(lines) + "\n"
 
 
+def _mean_rows(means: Mapping[str, Mapping[str, Any]]) -> list[list[str]]:
+    """The rows of a table of ``Benchmark.means``: a detector's label, its datasets, then P, R
+    and F1 at T = 2/3 and at T = 1."""
+    return [
+        [label, str(entry["datasets"])] + _row(entry["2/3"]) + _row(entry["1"])
+        for label, entry in means.items()
+    ]
+
+
+def _means_json(means: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """``Benchmark.means`` as the report's JSON: per detector, its datasets and a
+    ``{"precision", "recall", "f1"}`` object (or None) per threshold."""
+    return {
+        label: {
+            "datasets": entry["datasets"],
+            **{
+                f"T={t}": None
+                if entry[t] is None
+                else dict(zip(("precision", "recall", "f1"), entry[t], strict=True))
+                for t in THRESHOLDS
+            },
+        }
+        for label, entry in means.items()
+    }
+
+
 def _original(dataset: Any, cell: Cell) -> bool:
     return any((dataset.name, s) in ORIGINAL_GCFF_OWN for s in cell.by_sequence)
 
@@ -209,17 +222,6 @@ def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
                 }
             )
     common = benchmark.common_datasets()
-    means_common = benchmark.means(common)
-    means = {}
-    for label, entry in benchmark.means().items():
-        means[label] = {"datasets": entry["datasets"]}
-        for t in THRESHOLDS:
-            values = entry[t]
-            means[label][f"T={t}"] = (
-                None
-                if values is None
-                else dict(zip(("precision", "recall", "f1"), values, strict=True))
-            )
     return {
         "schema_version": JSON_SCHEMA_VERSION,
         "command": command,
@@ -237,20 +239,9 @@ def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
             {"label": m.label, "spec": m.spec, "kind": m.kind} for m in benchmark.detectors
         ],
         "cells": cells,
-        "mean_over_datasets": means,
+        "mean_over_datasets": _means_json(benchmark.means()),
         "common_datasets": list(common),
-        "mean_over_common_datasets": {
-            label: {
-                "datasets": entry["datasets"],
-                **{
-                    f"T={t}": None
-                    if entry[t] is None
-                    else dict(zip(("precision", "recall", "f1"), entry[t], strict=True))
-                    for t in THRESHOLDS
-                },
-            }
-            for label, entry in means_common.items()
-        },
+        "mean_over_common_datasets": _means_json(benchmark.means(common)),
         "seconds": round(benchmark.seconds, 3),
     }
 

@@ -747,25 +747,21 @@ def log_groups(
     )
     times = clock.columns(rows)
     person_class = np.append(tracks, 0)[layout.group_of_person]  # -1 (alone) picks the 0
-    send_rows(
+    _send_cylinders(
         rec,
         f"{root}/members",
-        rr.Cylinders3D.from_fields(
-            lengths=[DISC_HEIGHT_M],
-            radii=[disc],
-            fill_mode=rr.components.FillMode.Solid,
-            show_labels=False,
-        ),
         times,
-        [
-            *rr.Cylinders3D.columns(
-                centers=at_height(layout.person_position, z),
-                class_ids=person_class.astype(np.uint16),
-            ).partition(layout.counts),
-            *value_columns(
-                layout.counts, person_id=layout.person_id, group_index=layout.person_group
-            ),
-        ],
+        layout.counts,
+        centres=layout.person_position,
+        z=z,
+        height=DISC_HEIGHT_M,
+        fill_mode=rr.components.FillMode.Solid,
+        radius=disc,
+        show_labels=False,
+        class_ids=person_class.astype(np.uint16),
+        extra=value_columns(
+            layout.counts, person_id=layout.person_id, group_index=layout.person_group
+        ),
     )
     group_class = tracks.astype(np.uint16)
     send_rows(
@@ -777,21 +773,19 @@ def log_groups(
             positions=at_height(layout.group_centre, z + 0.005), class_ids=group_class
         ).partition(layout.group_counts),
     )
-    send_rows(
+    _send_cylinders(
         rec,
         f"{root}/circles",
-        rr.Cylinders3D.from_fields(
-            lengths=[RING_HEIGHT_M],
-            line_radii=[RING_LINE_M],
-            fill_mode=rr.components.FillMode.MajorWireframe,
-            show_labels=False,
-        ),
         times,
-        rr.Cylinders3D.columns(
-            centers=at_height(layout.group_centre, z + RING_HEIGHT_M / 2),
-            radii=np.maximum(layout.group_radius, MIN_CIRCLE_M).astype(np.float32),
-            class_ids=group_class,
-        ).partition(layout.group_counts),
+        layout.group_counts,
+        centres=layout.group_centre,
+        z=z + RING_HEIGHT_M / 2,
+        height=RING_HEIGHT_M,
+        fill_mode=rr.components.FillMode.MajorWireframe,
+        radii=np.maximum(layout.group_radius, MIN_CIRCLE_M),
+        line_radius=RING_LINE_M,
+        show_labels=False,
+        class_ids=group_class,
     )
     if matches is not None:
         _log_mistakes(rec, root, layout, true_layout, matches, times, z=z)
@@ -901,29 +895,25 @@ def _log_mistakes(
     wrong_colour = np.array([_colours.EXTRA_MEMBER, _colours.MISSING_MEMBER], dtype=np.uint8)[kind]
     wrong_counts = np.bincount(true_layout.group_frame[wrong[owner]], minlength=n).astype(np.int64)
 
-    _log_rings(
-        rec,
-        f"{root}/mistakes/missed",
-        centres=true_layout.group_centre[missed],
-        radii=true_layout.group_radius[missed],
-        labels=_labels("missed", true_layout, missed),
-        counts=np.bincount(true_layout.group_frame[missed], minlength=n).astype(np.int64),
-        colour=_colours.MISSED,
-        times=times,
-        z=z,
-    )
     spurious = np.flatnonzero(~matches.detected_matched & matches.evaluated[layout.group_frame])
-    _log_rings(
-        rec,
-        f"{root}/mistakes/spurious",
-        centres=layout.group_centre[spurious],
-        radii=layout.group_radius[spurious],
-        labels=_labels("spurious", layout, spurious),
-        counts=np.bincount(layout.group_frame[spurious], minlength=n).astype(np.int64),
-        colour=_colours.SPURIOUS,
-        times=times,
-        z=z,
-    )
+    for kind, where, picked, colour in (
+        ("missed", true_layout, missed, _colours.MISSED),
+        ("spurious", layout, spurious, _colours.SPURIOUS),
+    ):
+        _send_cylinders(
+            rec,
+            f"{root}/mistakes/{kind}",
+            times,
+            np.bincount(where.group_frame[picked], minlength=n).astype(np.int64),
+            centres=where.group_centre[picked],
+            z=z + RING_HEIGHT_M,
+            height=RING_HEIGHT_M,
+            fill_mode=rr.components.FillMode.MajorWireframe,
+            radii=np.maximum(where.group_radius[picked], MIN_CIRCLE_M) + MISTAKE_MARGIN_M,
+            line_radius=2 * RING_LINE_M,
+            colour=colour,
+            labels=_labels(kind, where, picked),
+        )
     send_rows(
         rec,
         f"{root}/mistakes/wrong_members",
@@ -945,32 +935,51 @@ def _labels(kind: str, layout: GroupLayout, rows: np.ndarray) -> list[str]:
     return [text[k] for k in keys.tolist()]
 
 
-def _log_rings(
+def _send_cylinders(
     rec: rr.RecordingStream,
     entity: str,
+    times: list[rr.TimeColumn],
+    counts: np.ndarray,
     *,
     centres: np.ndarray,
-    radii: np.ndarray,
-    labels: list[str],
-    counts: np.ndarray,
-    colour: tuple[int, int, int, int],
-    times: list[rr.TimeColumn],
     z: float,
+    height: float,
+    fill_mode: rr.components.FillMode,
+    radius: float | None = None,
+    radii: np.ndarray | None = None,
+    line_radius: float | None = None,
+    colour: tuple[int, int, int, int] | None = None,
+    show_labels: bool | None = None,
+    class_ids: np.ndarray | None = None,
+    labels: list[str] | None = None,
+    extra: Sequence[Any] = (),
 ) -> None:
-    rings = np.maximum(radii, MIN_CIRCLE_M) + MISTAKE_MARGIN_M
+    """Logs a layer of upright cylinders on ``entity``: ``counts[k]`` of them at the k-th time,
+    centred over ``centres`` (m, 2) at height ``z``.
+
+    ``height``, ``fill_mode``, ``radius`` (one for all), ``line_radius``, ``colour`` and
+    ``show_labels`` are static, logged once; ``radii`` (m,), ``class_ids`` and ``labels`` are
+    per cylinder; ``extra`` are further time-varying columns. None leaves a field unset.
+    """
     send_rows(
         rec,
         entity,
         rr.Cylinders3D.from_fields(
-            lengths=[RING_HEIGHT_M],
-            line_radii=[2 * RING_LINE_M],
-            colors=[colour],
-            fill_mode=rr.components.FillMode.MajorWireframe,
+            lengths=[height],
+            radii=None if radius is None else [radius],
+            colors=None if colour is None else [colour],
+            line_radii=None if line_radius is None else [line_radius],
+            fill_mode=fill_mode,
+            show_labels=show_labels,
         ),
         times,
-        rr.Cylinders3D.columns(
-            centers=at_height(centres, z + RING_HEIGHT_M),
-            radii=rings.astype(np.float32),
-            labels=labels,
-        ).partition(counts),
+        [
+            *rr.Cylinders3D.columns(
+                centers=at_height(centres, z),
+                radii=None if radii is None else radii.astype(np.float32),
+                labels=labels,
+                class_ids=class_ids,
+            ).partition(counts),
+            *extra,
+        ],
     )

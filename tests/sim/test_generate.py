@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from killed_run import CLI, RUN_TIMEOUT_S, kill_when
+from quiet_generate import generate_quietly
 
 from reform.annotation import AnnotationModel
 from reform.datasets import load_dataset, read_parquet, write_parquet
@@ -23,7 +24,6 @@ from sim.generate import (
     CARD_JSON,
     CARD_MARKDOWN,
     episode_seed,
-    generate_dataset,
     read_card,
     shard_path,
 )
@@ -56,18 +56,8 @@ ARGS = [
 
 
 def generate(out_dir: Path, **overrides):
-    kwargs = dict(
-        episodes=EPISODES,
-        seed=SEED,
-        out_dir=out_dir,
-        duration=DURATION_S,
-        view="robot",
-        sensor=SENSOR,
-        n_jobs=1,
-        progress=False,
-    )
-    kwargs.update(overrides)
-    return generate_dataset(SCENARIO, **kwargs)
+    kwargs = dict(episodes=EPISODES, seed=SEED, duration=DURATION_S, view="robot", sensor=SENSOR)
+    return generate_quietly(SCENARIO, out_dir, **(kwargs | overrides))
 
 
 def contents(folder: Path) -> dict[str, bytes]:
@@ -345,12 +335,9 @@ def test_recordings_hold_each_episode(tmp_path):
     ids=lambda value: str(value)[:40],
 )
 def test_bad_input_fails_before_any_work(tmp_path, scenario, overrides, match):
-    kwargs = dict(
-        episodes=2, seed=1, out_dir=tmp_path / "data", view="robot", n_jobs=1, progress=False
-    )
-    kwargs.update(overrides)
+    kwargs = dict(episodes=2, seed=1, view="robot")
     with pytest.raises(ValueError, match=match):
-        generate_dataset(scenario, **kwargs)
+        generate_quietly(scenario, tmp_path / "data", **(kwargs | overrides))
     assert not (tmp_path / "data").exists()
 
 
@@ -515,9 +502,9 @@ def test_an_annotation_model_records_each_episode_as_it_says(tmp_path):
     """--annotation: the shards hold the frames as the model records them, the card and each
     shard record it, the card's command reproduces the data byte for byte."""
     model = AnnotationModel(directions=4, scale_sd=0.05, position_noise=0.03, dropout=0.05)
-    run = dict(episodes=2, seed=3, duration=20, n_jobs=1, progress=False)
-    plain = generate_dataset("word-improv", out_dir=tmp_path / "plain", **run)
-    made = generate_dataset("word-improv", out_dir=tmp_path / "coded", annotation=model, **run)
+    run = dict(episodes=2, seed=3, duration=20)
+    plain = generate_quietly("word-improv", tmp_path / "plain", **run)
+    made = generate_quietly("word-improv", tmp_path / "coded", annotation=model, **run)
     card = read_card(made.out_dir)
     assert card["parameters"]["annotation"] == model.to_json()
     assert "annotation" not in read_card(plain.out_dir)["parameters"]
@@ -539,15 +526,8 @@ def test_an_annotation_model_records_each_episode_as_it_says(tmp_path):
 
 
 def test_a_randomised_annotation_draws_one_model_per_episode(tmp_path):
-    made = generate_dataset(
-        "mingle",
-        episodes=3,
-        seed=5,
-        out_dir=tmp_path / "r",
-        duration=10,
-        n_jobs=1,
-        progress=False,
-        annotation="random",
+    made = generate_quietly(
+        "mingle", tmp_path / "r", episodes=3, seed=5, duration=10, annotation="random"
     )
     card = read_card(made.out_dir)
     assert card["parameters"]["annotation"] == "random"

@@ -8,6 +8,7 @@ import re
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from quiet_generate import generate_quietly
 from traced import raised_peak
 
 import reform.machine
@@ -395,15 +396,8 @@ def test_generate_command_names_its_flags(machine, tmp_path, capsys):
 
 
 def test_generate_small_run_is_unaffected(tmp_path):
-    report = generate_dataset(
-        "hri-passing",
-        episodes=2,
-        seed=1,
-        out_dir=tmp_path / "small",
-        n_jobs=1,
-        duration=3.0,
-        progress=False,
-        max_memory=8 * GiB,
+    report = generate_quietly(
+        "hri-passing", tmp_path / "small", episodes=2, seed=1, duration=3.0, max_memory=8 * GiB
     )
     assert report.frames == 12
     assert np.all([s.frames == 6 for s in report.shards])

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from dataset_refusals import assert_refused
 
-from reform import DataFormatError
 from reform.datasets import load_babble, load_dataset
 
 
@@ -156,14 +156,12 @@ def test_truncated_line(babble_dir, tmp_path):
     folder, lines, annotations = _copy(babble_dir, tmp_path)
     lines[5] = lines[5][: lines[5].index(",6,")]
     _write(folder, lines, annotations)
-    with pytest.raises(
-        DataFormatError,
-        match=(
-            r"Motion-capture-data.csv: line 6 \(frame 5\)"
-            r": field 'fields': expected 70 .*found 50 fields"
-        ),
-    ):
-        load_babble(folder)
+    assert_refused(
+        load_babble,
+        folder,
+        r"Motion-capture-data.csv: line 6 \(frame 5\)"
+        r": field 'fields': expected 70 .*found 50 fields",
+    )
 
 
 @pytest.mark.parametrize(
@@ -230,8 +228,7 @@ def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
     folder, lines, annotations = _copy(babble_dir, tmp_path)
     _set_field(lines, line, field, value)
     _write(folder, lines, annotations)
-    with pytest.raises(DataFormatError, match=message):
-        load_babble(folder)
+    assert_refused(load_babble, folder, message)
 
 
 def test_repeated_frame_number(babble_dir, tmp_path):
@@ -240,12 +237,12 @@ def test_repeated_frame_number(babble_dir, tmp_path):
     for block in range(7):  # every participant of line 4 carries line 3's FrameNum
         _set_field(lines, 4, 10 * block + 8, previous)
     _write(folder, lines, annotations)
-    with pytest.raises(
-        DataFormatError,
-        match=r"line 4 \(frame 3\): field 'FrameNum': expected a Vicon frame number above "
+    assert_refused(
+        load_babble,
+        folder,
+        r"line 4 \(frame 3\): field 'FrameNum': expected a Vicon frame number above "
         rf"{previous} \(line 3\): time increases, found {previous}",
-    ):
-        load_babble(folder)
+    )
 
 
 def test_identical_duplicate_annotation_is_counted(babble_dir, tmp_path):
@@ -283,28 +280,18 @@ def test_identical_duplicate_annotation_is_counted(babble_dir, tmp_path):
 def test_bad_annotations(babble_dir, tmp_path, annotations, message):
     folder, lines, _ = _copy(babble_dir, tmp_path)
     _write(folder, lines, annotations)
-    with pytest.raises(DataFormatError, match=message):
-        load_babble(folder)
+    assert_refused(load_babble, folder, message)
 
 
 def test_empty_and_missing_files(babble_dir, tmp_path):
     folder = _write(*_copy(babble_dir, tmp_path / "a"))
     (folder / "annotated-frames.csv").write_text("")
-    with pytest.raises(
-        DataFormatError, match=r"annotated-frames.csv: expected .*found an empty file"
-    ):
-        load_babble(folder)
+    assert_refused(load_babble, folder, r"annotated-frames.csv: expected .*found an empty file")
     folder = _write(*_copy(babble_dir, tmp_path / "b"))
     (folder / "annotated-frames.csv").unlink()
-    with pytest.raises(
-        DataFormatError, match=r"annotated-frames.csv: expected .*found no such file"
-    ):
-        load_babble(folder)
+    assert_refused(load_babble, folder, r"annotated-frames.csv: expected .*found no such file")
     folder = _write(*_copy(babble_dir, tmp_path / "c", rows=0))
-    with pytest.raises(
-        DataFormatError, match=r"Motion-capture-data.csv: expected at least one data line"
-    ):
-        load_babble(folder)
+    assert_refused(load_babble, folder, r"Motion-capture-data.csv: expected at least one data line")
 
 
 def test_an_annotated_member_tracked_nowhere_stays_in_the_ground_truth(babble_dir, tmp_path):

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from dataset_refusals import assert_refused
 
 from reform import DataFormatError
 from reform.datasets import detect_format, load_dataset, load_gcff
@@ -141,56 +142,44 @@ def test_unknown_units(tmp_path):
 def test_missing_files(tmp_path):
     folder = _write(tmp_path / "m1")
     (folder / "groundtruth.mat").unlink()
-    with pytest.raises(
-        DataFormatError,
-        match=r"groundtruth.mat: expected the GCFF ground-truth file .*no such file",
-    ):
-        load_gcff(folder)
-    with pytest.raises(DataFormatError, match=r"nowhere: expected a GCFF folder"):
-        load_gcff(tmp_path / "nowhere")
-    with pytest.raises(
-        DataFormatError, match=r"nowhere: expected an existing dataset file or folder"
-    ):
-        load_dataset(tmp_path / "nowhere")
+    assert_refused(
+        load_gcff, folder, r"groundtruth.mat: expected the GCFF ground-truth file .*no such file"
+    )
+    assert_refused(load_gcff, tmp_path / "nowhere", r"nowhere: expected a GCFF folder")
+    assert_refused(
+        load_dataset, tmp_path / "nowhere", r"nowhere: expected an existing dataset file or folder"
+    )
 
 
 def test_empty_and_corrupt_files(tmp_path):
     folder = _write(tmp_path / "e")
     (folder / "features.mat").write_bytes(b"")
-    with pytest.raises(
-        DataFormatError, match=r"features.mat: expected the GCFF features file \(a non-empty file\)"
-    ):
-        load_gcff(folder)
+    assert_refused(
+        load_gcff, folder, r"features.mat: expected the GCFF features file \(a non-empty file\)"
+    )
     (folder / "features.mat").write_bytes(b"this is not a MATLAB file at all" * 10)
-    with pytest.raises(
-        DataFormatError, match=r"features.mat: expected a readable MATLAB .mat file"
-    ):
-        load_gcff(folder)
+    assert_refused(load_gcff, folder, r"features.mat: expected a readable MATLAB .mat file")
 
 
 def test_missing_variable(tmp_path):
     folder = _write(tmp_path / "v", features_vars={"features": _cell(FEATURES)})
-    with pytest.raises(
-        DataFormatError,
-        match=(
-            r"features.mat"
-            r": field 'timestamp': expected a variable 'timestamp', found variables \['features'\]"
-        ),
-    ):
-        load_gcff(folder)
+    assert_refused(
+        load_gcff,
+        folder,
+        r"features.mat"
+        r": field 'timestamp': expected a variable 'timestamp', found variables \['features'\]",
+    )
 
 
 def test_wrong_column_count(tmp_path):
     features = [FEATURES[0][:, :3], FEATURES[1], FEATURES[2]]
     folder = _write(tmp_path / "c", features=features)
-    with pytest.raises(
-        DataFormatError,
-        match=(
-            r"features.mat: frame 1"
-            r": field 'features': expected an N×4 matrix .*found shape \(3, 3\)"
-        ),
-    ):
-        load_gcff(folder)
+    assert_refused(
+        load_gcff,
+        folder,
+        r"features.mat: frame 1"
+        r": field 'features': expected an N×4 matrix .*found shape \(3, 3\)",
+    )
 
 
 @pytest.mark.parametrize(
@@ -231,8 +220,7 @@ def test_bad_feature_value(tmp_path, row, column, value, message):
     bad = FEATURES[0].copy()
     bad[row, column] = value
     folder = _write(tmp_path / "bad", features=[bad, FEATURES[1], FEATURES[2]])
-    with pytest.raises(DataFormatError, match=message):
-        load_gcff(folder)
+    assert_refused(load_gcff, folder, message)
 
 
 @pytest.mark.parametrize(
@@ -255,25 +243,22 @@ def test_bad_feature_value(tmp_path, row, column, value, message):
 )
 def test_bad_ground_truth(tmp_path, gt_groups, gt_timestamps, message):
     folder = _write(tmp_path / "gt", gt_groups=gt_groups, gt_timestamps=gt_timestamps)
-    with pytest.raises(DataFormatError, match=message):
-        load_gcff(folder)
+    assert_refused(load_gcff, folder, message)
 
 
 def test_length_mismatch(tmp_path):
     folder = _write(tmp_path / "len", timestamps=[10, 20])
-    with pytest.raises(
-        DataFormatError, match=r"features.mat: field 'timestamp': expected 3 values .*found 2"
-    ):
-        load_gcff(folder)
+    assert_refused(
+        load_gcff, folder, r"features.mat: field 'timestamp': expected 3 values .*found 2"
+    )
 
 
 def test_features_not_a_cell(tmp_path):
     features_vars = {"features": np.zeros((3, 4)), "timestamp": np.array([[1.0]])}
     folder = _write(tmp_path / "nocell", features_vars=features_vars)
-    with pytest.raises(
-        DataFormatError, match=r"field 'features': expected a cell array, found a float64 array"
-    ):
-        load_gcff(folder)
+    assert_refused(
+        load_gcff, folder, r"field 'features': expected a cell array, found a float64 array"
+    )
 
 
 @pytest.mark.parametrize(
@@ -294,8 +279,7 @@ def test_features_not_a_cell(tmp_path):
 )
 def test_time_must_increase(tmp_path, timestamps, message):
     folder = _write(tmp_path / "t", timestamps=timestamps, gt_timestamps=[10, 20, 30])
-    with pytest.raises(DataFormatError, match=message):
-        load_gcff(folder)
+    assert_refused(load_gcff, folder, message)
 
 
 @pytest.mark.parametrize(
@@ -320,17 +304,16 @@ def test_time_must_increase(tmp_path, timestamps, message):
 )
 def test_bad_folder_settings_are_refused_at_load(tmp_path, settings, message):
     folder = _write(tmp_path / "s", settings=settings)
-    with pytest.raises(DataFormatError, match=message):
-        load_gcff(folder)
+    assert_refused(load_gcff, folder, message)
 
 
 def test_settings_file_that_does_not_exist(tmp_path):
-    with pytest.raises(
-        DataFormatError, match=r"nope.mat: expected a MATLAB .mat file, found no such file"
-    ):
-        read_settings(tmp_path / "nope.mat")
-    with pytest.raises(DataFormatError, match=r"expected a MATLAB .mat file, found a folder"):
-        read_settings(tmp_path)
+    assert_refused(
+        read_settings,
+        tmp_path / "nope.mat",
+        r"nope.mat: expected a MATLAB .mat file, found no such file",
+    )
+    assert_refused(read_settings, tmp_path, r"expected a MATLAB .mat file, found a folder")
     scipy.io.savemat(tmp_path / "settings_gc.mat", {"stride": 70.0, "mdl": 10000.0})
     assert read_settings(tmp_path / "settings_gc.mat") == {"stride": 70.0, "mdl": 10000.0}
 
@@ -386,5 +369,4 @@ def test_a_folder_of_datasets_is_not_read_as_its_gcff_ones(tmp_path, shared_data
     assert load_gcff(tmp_path / "set").sequences() == ("Seq1", "Seq2")
     (tmp_path / "set" / "other").mkdir()
     (tmp_path / "set" / "other" / "features.txt").write_text("0.2 ID_001 1 1 0 0\n")
-    with pytest.raises(DataFormatError, match=r"beside other datasets \['other'\]"):
-        load_gcff(tmp_path / "set")
+    assert_refused(load_gcff, tmp_path / "set", r"beside other datasets \['other'\]")
