@@ -519,10 +519,7 @@ def tukey_by_size(
     """Tukey's honestly significant difference test of ``measure`` between group sizes.
 
     Args:
-        characterisation: from :func:`characterise_dataset`.
-        measure: ``"tightness"`` or ``"symmetry"``.
-        sizes: the sizes to compare; default :func:`eligible_sizes`.
-        min_groups: fewest F-formations a size needs to be included by default.
+        characterisation, measure, sizes, min_groups: as for :func:`anova_by_size`.
         confidence_level: of the simultaneous confidence intervals, in (0, 1).
 
     Returns:
