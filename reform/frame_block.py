@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from reform.frame import KINDS, POSITION_LIMIT_M, Frame, Group
+from reform.frame import KINDS, POSITION_LIMIT_M, Frame, Group, check_groups
 from reform.perturb import restrict_groups
 
 __all__ = ["FrameBlock"]
@@ -46,8 +46,8 @@ class FrameBlock:
         head_position: (T, n, 2) head position, metres (NaN: head not observed), or None when
             the source has no heads.
         head_yaw: (T, n) head yaw, radians, NaN exactly where ``head_position`` is; None with it.
-        groups: T entries: the groups declared at each instant (tuples of roster ids, disjoint),
-            or ``None`` where the instant is not annotated.
+        groups: T entries: the groups declared at each instant (non-empty tuples of roster ids,
+            disjoint), or ``None`` where the instant is not annotated.
         sequence: the name of the sequence.
     """
 
@@ -116,26 +116,12 @@ class FrameBlock:
         return block
 
     def _check_groups(self) -> None:
-        roster = set(self.ids.tolist())
         before: Any = None
         for t, declared in enumerate(self.groups):
             if declared is None or declared is before or declared == before:
                 continue
             before = declared
-            seen: set[int] = set()
-            for k, members in enumerate(declared):
-                for person in members:
-                    if int(person) not in roster:
-                        raise ValueError(
-                            f"groups[{t}][{k}] names person {person}, who is not in the roster "
-                            f"(ids {sorted(roster)})"
-                        )
-                    if int(person) in seen:
-                        raise ValueError(
-                            f"groups[{t}] must be disjoint, person {person} appears twice "
-                            f"(group {k})"
-                        )
-                    seen.add(int(person))
+            check_groups(declared, self.ids, at=f" at row {t}", place="roster")
 
     def _check_values(self) -> None:
         present = self.present

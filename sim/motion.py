@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from reform._checks import non_negative
 from sim._numba_cache import use_a_writable_cache
 
 use_a_writable_cache()  # before the kernel's functions are compiled and cached
@@ -166,9 +167,7 @@ class MotionLimits:
                 raise ValueError(f"MotionLimits.{name} must be positive and finite, got {value}")
             object.__setattr__(self, name, value)
         for name in ("head_limit", "tilt_limit", "tilt_rate"):
-            value = float(getattr(self, name))
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"MotionLimits.{name} must be >= 0 and finite, got {value}")
+            value = non_negative(f"MotionLimits.{name}", float(getattr(self, name)))
             object.__setattr__(self, name, value)
         if self.head_limit > math.pi:
             raise ValueError(f"MotionLimits.head_limit must be <= pi, got {self.head_limit}")

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from reform._checks import non_negative
 from reform.frame import Frame, wrap_angle
 from reform.perturb import TrackerNoise
 from sim.scene import GEOM_GROUP_PEOPLE, GEOM_GROUP_ROOM
@@ -86,11 +87,7 @@ class Sensor:
             "dropout",
             "occluder_radius",
         ):
-            value = float(getattr(self, name))
-            if not math.isfinite(value) or value < 0.0:
-                raise ValueError(
-                    f"Sensor.{name} must be >= 0 and finite, got {getattr(self, name)!r}"
-                )
+            value = non_negative(f"Sensor.{name}", float(getattr(self, name)))
             object.__setattr__(self, name, value)
         if not 0.0 < self.fov_deg <= 360.0:
             raise ValueError(f"Sensor.fov_deg must be within (0, 360] degrees, got {self.fov_deg}")
@@ -99,8 +96,7 @@ class Sensor:
                 f"Sensor.max_range must exceed min_range, "
                 f"got {self.max_range} <= {self.min_range} m"
             )
-        if self.dropout > 1.0:
-            raise ValueError(f"Sensor.dropout must be a probability in [0, 1], got {self.dropout}")
+        non_negative("Sensor.dropout", self.dropout, high=1.0)
         object.__setattr__(self, "occlusion", bool(self.occlusion))
         object.__setattr__(self, "include_robot", bool(self.include_robot))
 

@@ -150,8 +150,15 @@ def test_without_heads_and_without_frames(tmp_path):
         ({"position": np.full((5, 4, 2), 1e200)}, r"position must be metres with \|x\|, \|y\|"),
         ({"present": np.ones((5, 3), dtype=bool)}, r"present must have shape \(5, 4\)"),
         ({"groups": [None] * 4}, r"groups must have 5 entries"),
-        ({"groups": [((4, 7),)] + [None] * 4}, r"names person 7, who is not in the roster"),
-        ({"groups": [((4, 9), (9,))] + [None] * 4}, r"disjoint, person 9 appears twice"),
+        (
+            {"groups": [None, ((4, 7),)] + [None] * 3},
+            r"groups\[0\] at row 1 names person 7, who is not in the roster \(ids \[0, 2, 4, 9\]\)",
+        ),
+        (
+            {"groups": [((4, 9), (9,))] + [None] * 4},
+            r"groups at row 0 must be disjoint, person 9 appears twice \(groups\[1\]\)",
+        ),
+        ({"groups": [((4, 9), ())] + [None] * 4}, r"groups\[1\] at row 0 is empty"),
         ({"head_yaw": None}, r"given together"),
     ],
     ids=lambda value: str(value)[:30],

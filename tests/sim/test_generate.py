@@ -325,7 +325,7 @@ def test_recordings_hold_each_episode(tmp_path):
         (SCENARIO, {"episodes": -2}, r"episodes must be an int >= 1, got -2"),
         (SCENARIO, {"seed": -1}, r"seed must be an int >= 0"),
         (SCENARIO, {"view": "truth", "sensor": {"dropout": 0.2}}, r"view='robot' only"),
-        (SCENARIO, {"sensor": {"dropout": 2.0}}, r"dropout must be a probability"),
+        (SCENARIO, {"sensor": {"dropout": 2.0}}, r"dropout must be in \[0, 1\], got 2.0"),
         (SCENARIO, {"sensor": {"zoom": 2.0}}, r"sensor options must be among"),
         ("word-improv", {"options": {"robot": "none"}}, r"view='robot' needs a robot"),
         (SCENARIO, {"backend": "dask"}, r"backend must be one of \('local', 'ray'\)"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 
@@ -19,7 +20,7 @@ from sim import (
     SceneSpec,
     World,
 )
-from sim.motion import SWAY_POS_M, SWAY_YAW_RAD
+from sim.motion import ROBOT_LIMITS, SWAY_POS_M, SWAY_YAW_RAD
 
 # Idle sway moves the rendered torso by at most SWAY_POS_M per axis at a few tenths of a hertz
 # (asset-independent motion constants): a velocity of at most ~0.04 m/s on top of walking.
@@ -170,6 +171,10 @@ def test_motion_limits_are_validated() -> None:
         MotionLimits(
             max_speed=-1.0, max_accel=1.0, max_turn_rate=1.0, head_limit=1.0, head_rate=1.0
         )
+    with pytest.raises(
+        ValueError, match=r"MotionLimits.tilt_rate must be a finite number >= 0, got -1.0"
+    ):
+        dataclasses.replace(ROBOT_LIMITS, tilt_rate=-1)
     with pytest.raises(ValueError, match=r"MotionLimits.head_limit must be <= pi"):
         MotionLimits(max_speed=1.0, max_accel=1.0, max_turn_rate=1.0, head_limit=4.0, head_rate=1.0)
 

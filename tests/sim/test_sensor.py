@@ -195,8 +195,12 @@ def test_observing_a_bare_frame_keeps_its_listed_groups() -> None:
     [
         (lambda: Sensor(fov_deg=0.0), r"Sensor.fov_deg must be within \(0, 360\]"),
         (lambda: Sensor(min_range=5.0), r"Sensor.max_range must exceed min_range"),
-        (lambda: Sensor(dropout=1.5), r"Sensor.dropout must be a probability"),
-        (lambda: Sensor(position_noise=-0.1), r"Sensor.position_noise must be >= 0"),
+        (lambda: Sensor(dropout=1.5), r"Sensor.dropout must be in \[0, 1\], got 1.5"),
+        (
+            lambda: Sensor(position_noise=-0.1),
+            r"Sensor.position_noise must be a finite number >= 0, got -0.1",
+        ),
+        (lambda: Sensor(max_range=-1), r"Sensor.max_range must be a finite number >= 0, got -1.0"),
     ],
 )
 def test_bad_sensor_settings_fail(make, message: str) -> None:
