@@ -60,7 +60,7 @@ from scenarios.stage import (
     RobotPlace,
     Stage,
 )
-from scenarios.timeline import TimelineBuilder
+from scenarios.timeline import PlannedGroup, TimelineBuilder
 
 __all__ = [
     "SALSA_RADIUS",
@@ -244,13 +244,12 @@ class _Group:
 
 @dataclass
 class _Record:
-    members: tuple[int, ...]
-    places: np.ndarray
-    facings: np.ndarray
-    centre: np.ndarray
-    start: float
+    """A group's shape from one moment on, as planned: ``group`` (open-ended) and its ``end``,
+    which comes earlier as members are sent away (at or before the start: it never forms), and
+    the speeds of the members walking up to it."""
+
+    group: PlannedGroup
     end: float = math.inf
-    talk_end: float = math.inf
     speeds: dict[int, float] = field(default_factory=dict)
 
 
@@ -509,9 +508,8 @@ class _Party:
         if g.anchor >= 0:  # at a wall: the clip may bring two closer than the spacing
             for _ in range(10):
                 places = np.clip(separate(places, spacing=self.p.spacing), -edge, edge)
-        self.records.append(
-            _Record(tuple(members), places, facings, g.centre.copy(), t, speeds=speeds or {})
-        )
+        planned = PlannedGroup(tuple(members), places, facings, g.centre, t)
+        self.records.append(_Record(planned, speeds=speeds or {}))
         g.record = len(self.records) - 1
         g.version += 1
         if g.kind == ROW:
@@ -526,9 +524,8 @@ class _Party:
         """Every open record holding a member of ``gid`` (``but`` one) ends at ``t``."""
         members = set(self.groups[gid].members) - {but}
         for rec in self.records:
-            if rec.end > t and not members.isdisjoint(rec.members):
+            if rec.end > t and not members.isdisjoint(rec.group.members):
                 rec.end = t
-                rec.talk_end = min(rec.talk_end, t)
 
     def new_group(
         self,
@@ -661,8 +658,8 @@ class _Party:
         alone += unplaced
         self.start_yaw = {}
         for rec in self.records:
-            for k, m in enumerate(rec.members):
-                self.start_yaw[m] = float(rec.facings[k])
+            for k, m in enumerate(rec.group.members):
+                self.start_yaw[m] = float(rec.group.facings[k])
         for m in alone:
             spot = self.free_spot(ALONE_CLAIM_M)
             if spot is None:
@@ -858,9 +855,9 @@ class _Party:
         shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
         self.close_all(gid, shift, but=m)
         self.record(gid, shift, speeds={m: speed})
-        rec = self.records[g.record]
-        k = rec.members.index(m)
-        self.walks.append((t, m, standing(rec.places[k], rec.facings[k], speed=speed)))
+        planned = self.records[g.record].group
+        k = planned.members.index(m)
+        self.walks.append((t, m, standing(planned.places[k], planned.facings[k], speed=speed)))
         self.schedule_group(gid, t)
         self.schedule_member(m, t)
         self.events.append((t, "join", f"person {m} joins group {sorted(g.members)}"))
@@ -1078,18 +1075,24 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
     for t, m, intent in party.walks:
         builder.set(t, m, intent)
     for rec in party.records:
-        if rec.end <= rec.start:
+        planned = rec.group
+        if rec.end <= planned.start:
             continue
         builder.group(
-            rec.members, rec.places, rec.facings, rec.centre, start=rec.start, end=rec.end
+            planned.members,
+            planned.places,
+            planned.facings,
+            planned.centre,
+            start=planned.start,
+            end=rec.end,
         )
         converse(
             builder,
-            rec.members,
-            rec.places,
-            rec.facings,
-            start=rec.start,
-            end=min(rec.talk_end, rec.end, params.duration),
+            planned.members,
+            planned.places,
+            planned.facings,
+            start=planned.start,
+            end=min(rec.end, params.duration),
             rng=rng,
             mean_utterance=params.mean_utterance,
             head_noise=params.head_noise,
