@@ -5,6 +5,8 @@ a circle is the circle's radius, so a scenario's radius law by group size is wha
 Tightness by size it produces. `RadiusLaw` is linear in the number of members,
 ``radius(n) = base + per_member * (n - 2)``, never tighter than people's bodies allow
 (`min_radius`: neighbours on the circle at least `scenarios.stage.SPACING_M` apart).
+`CircleShape` draws a scenario's circles from its options: the law, the spread of radii about
+it and the noise of places and facings (`circle_places`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import numpy as np
 from scenarios.stage import SPACING_M
 
 __all__ = [
+    "CIRCLE_OPTIONS",
+    "CircleShape",
     "RadiusLaw",
     "circle_places",
     "ellipse_offsets",
@@ -58,6 +62,65 @@ class RadiusLaw:
 
     def __call__(self, n: int) -> float:
         return max(self.base + self.per_member * (n - 2), min_radius(n, spacing=self.spacing))
+
+
+CIRCLE_OPTIONS = {
+    "radius_base": "o-space radius of a pair, metres.",
+    "radius_per_member": "growth of the radius per extra member, metres.",
+    "radius_spread": "relative standard deviation of a group's radius.",
+    "position_noise": "standard deviation of a place, metres.",
+    "orientation_noise": "standard deviation of a facing, radians.",
+    "head_noise": "standard deviation of a gaze off its target, radians.",
+}
+"""The help of the options that shape a scenario's circles (`CircleShape`) and the noise of its
+members' gaze, for the scenarios that declare them (``word-improv``, ``mingle``), each with its
+own range and default (`scenarios.registry.shared_help` writes them into their docstrings)."""
+
+
+@dataclass(frozen=True)
+class CircleShape:
+    """How a scenario draws its groups' circles: the radius law, the spread of radii about it
+    and the noise of places and facings (the options of `CIRCLE_OPTIONS`).
+
+    Attributes:
+        law: o-space radius by group size, of the options ``radius_base`` and
+            ``radius_per_member`` (its ``spacing`` also keeps the places apart).
+        radius_spread, position_noise, orientation_noise: the options of these names.
+    """
+
+    law: RadiusLaw
+    radius_spread: float = 0.0
+    position_noise: float = 0.0
+    orientation_noise: float = 0.0
+
+    def radius(self, n: int, rng: np.random.Generator, *, least: float) -> float:
+        """The o-space radius of a group of ``n``, metres: the law's times ``1 + spread Z`` (Z
+        drawn standard normal), that factor at least ``least``."""
+        return self.law(n) * max(1.0 + rng.normal() * self.radius_spread, least)
+
+    def places(
+        self,
+        centre: np.ndarray,
+        radius: float,
+        angles: np.ndarray,
+        rng: np.random.Generator,
+        *,
+        aspect: float = 1.0,
+        axis: float = 0.0,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """`circle_places` with this shape's noise and spacing: (places (k, 2) metres, facings
+        (k,) radians)."""
+        return circle_places(
+            centre,
+            radius,
+            angles,
+            rng,
+            position_noise=self.position_noise,
+            orientation_noise=self.orientation_noise,
+            spacing=self.law.spacing,
+            aspect=aspect,
+            axis=axis,
+        )
 
 
 def spread_angles(n: int, rng: np.random.Generator, *, jitter: float = 0.0) -> np.ndarray:

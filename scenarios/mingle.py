@@ -42,14 +42,22 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import (
+    CIRCLE_OPTIONS,
+    CircleShape,
     RadiusLaw,
-    circle_places,
     ellipse_offsets,
     facing_centre,
     min_radius,
     separate,
 )
-from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
+from scenarios.registry import (
+    PlaceNoise,
+    Range,
+    SceneSeconds,
+    check_ranges,
+    register,
+    shared_help,
+)
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import (
@@ -122,6 +130,7 @@ class NoFloorError(ValueError):
     """The party's groups and people do not fit the room."""
 
 
+@shared_help(circle=CIRCLE_OPTIONS)
 @dataclass(frozen=True)
 class MingleParams:
     """Every number that shapes a party: the options of ``mingle``, declared once here.
@@ -134,12 +143,7 @@ class MingleParams:
         max_group_size: largest group; SALSA holds groups of 8.
         robot: whether the robot stands by the west wall, watching.
         passers_by: extra people crossing the room now and then.
-        radius_base: o-space radius of a pair, metres.
-        radius_per_member: growth of the radius per extra member, metres.
-        radius_spread: relative standard deviation of a group's radius.
-        position_noise: standard deviation of a place, metres.
-        orientation_noise: standard deviation of a facing, radians.
-        head_noise: standard deviation of a gaze off its target, radians.
+        {circle}
         mean_stay: mean time a member stays in a group, seconds.
         mean_alone: mean time someone stays alone before acting, seconds.
         alone_share: share of the guests alone at the start.
@@ -277,7 +281,12 @@ class _Party:
         self.keep_clear = keep_clear  # spots no group or person may take (the robot's)
         self.rng = rng
         self.half = 0.5 * side
-        self.law = RadiusLaw(params.radius_base, params.radius_per_member, params.spacing)
+        self.shape = CircleShape(
+            RadiusLaw(params.radius_base, params.radius_per_member, params.spacing),
+            params.radius_spread,
+            params.position_noise,
+            params.orientation_noise,
+        )
         self.ids = list(range(1, params.people + 1))
         self.records: list[_Record] = []
         self.alone: list[_Alone] = []
@@ -377,8 +386,7 @@ class _Party:
     # -- groups -----------------------------------------------------------------------------
 
     def draw_radius(self, n: int) -> float:
-        spread = max(1.0 + self.rng.normal() * self.p.radius_spread, 0.6)
-        return max(self.law(n) * spread, min_radius(n, spacing=self.p.spacing))
+        return max(self.shape.radius(n, self.rng, least=0.6), min_radius(n, spacing=self.p.spacing))
 
     def layout(self, g: _Group, angles: dict[int, float]) -> dict[int, float]:
         """The members' angles round ``g``'s centre for its kind (a circle, `spread`; a row
@@ -485,16 +493,8 @@ class _Party:
         g = self.groups[gid]
         members = list(g.angles)
         angles = np.array([g.angles[m] for m in members])
-        places, facings = circle_places(
-            g.centre,
-            g.radius * g.stretch,
-            angles,
-            self.rng,
-            position_noise=self.p.position_noise,
-            orientation_noise=self.p.orientation_noise,
-            spacing=self.p.spacing,
-            aspect=g.aspect,
-            axis=g.axis,
+        places, facings = self.shape.places(
+            g.centre, g.radius * g.stretch, angles, self.rng, aspect=g.aspect, axis=g.axis
         )
         if g.kind == AUDIENCE:  # the audience faces the presenter, who faces the audience
             noise = facings - facing_centre(places, g.centre)
