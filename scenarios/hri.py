@@ -20,7 +20,7 @@ import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import MEAN_UTTERANCE_S, converse, standing
-from scenarios.formation import circle_places, facing_centre
+from scenarios.formation import CircleNoise, facing_centre
 from scenarios.registry import PlaceNoise, Range, SceneSeconds, register, shared_help
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
@@ -161,14 +161,8 @@ class _Scene:
         """The two guests take their places at ``angles`` on the o-space circle around
         ``centre``, walking in from ``approach`` (`_approach`; None: they stand there from the
         start)."""
-        places, facings = circle_places(
-            centre,
-            radius,
-            angles,
-            self.rng,
-            position_noise=position_noise,
-            orientation_noise=orientation_noise,
-        )
+        noise = CircleNoise(position_noise, orientation_noise)
+        places, facings = noise.places(centre, radius, angles, self.rng)
         if approach is None:
             starts, start_yaws = places.copy(), facings.copy()
         else:

@@ -43,6 +43,7 @@ from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import (
     CIRCLE_OPTIONS,
+    CircleNoise,
     CircleShape,
     RadiusLaw,
     ellipse_offsets,
@@ -284,8 +285,7 @@ class _Party:
         self.shape = CircleShape(
             RadiusLaw(params.radius_base, params.radius_per_member, params.spacing),
             params.radius_spread,
-            params.position_noise,
-            params.orientation_noise,
+            CircleNoise(params.position_noise, params.orientation_noise, params.spacing),
         )
         self.ids = list(range(1, params.people + 1))
         self.records: list[_Record] = []
@@ -493,7 +493,7 @@ class _Party:
         g = self.groups[gid]
         members = list(g.angles)
         angles = np.array([g.angles[m] for m in members])
-        places, facings = self.shape.places(
+        places, facings = self.shape.noise.places(
             g.centre, g.radius * g.stretch, angles, self.rng, aspect=g.aspect, axis=g.axis
         )
         if g.kind == AUDIENCE:  # the audience faces the presenter, who faces the audience

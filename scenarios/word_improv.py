@@ -29,7 +29,7 @@ import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
-from scenarios.formation import CIRCLE_OPTIONS, CircleShape, RadiusLaw
+from scenarios.formation import CIRCLE_OPTIONS, CircleNoise, CircleShape, RadiusLaw
 from scenarios.registry import PlaceNoise, Range, register, shared_help
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
@@ -86,7 +86,9 @@ def word_improv(
     """
     name = "word-improv"
     shape = CircleShape(
-        RadiusLaw(radius_base, radius_per_member), radius_spread, position_noise, orientation_noise
+        RadiusLaw(radius_base, radius_per_member),
+        radius_spread,
+        CircleNoise(position_noise, orientation_noise),
     )
     largest = shape.law(players + 1) * (1.0 + 3.0 * radius_spread) + CENTRE_JITTER_M + 0.35
     if largest > 0.5 * min(AREA_M):
@@ -108,7 +110,7 @@ def word_improv(
         n = len(members)
         centre = rng.uniform(-CENTRE_JITTER_M, CENTRE_JITTER_M, size=2)
         radius = shape.radius(n, rng, least=0.5)
-        places, facings = shape.places(centre, radius, [angles_of[m] for m in members], rng)
+        places, facings = shape.noise.places(centre, radius, [angles_of[m] for m in members], rng)
         return centre, places, facings
 
     def slots(members_in_order: list[int], moderator_angle: float) -> dict[int, float]:
