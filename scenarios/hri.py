@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 
@@ -144,7 +144,7 @@ class _Scene:
         self.roles = cast(self.rng, people, starts, yaws, parts=part)
         self.builder = TimelineBuilder([*people, ROBOT_ID])
 
-    def robot_stands(self, t: float, **gaze: object) -> None:
+    def robot_stands(self, t: float, **gaze: Any) -> None:
         """From ``t`` the robot stands at its place, looking where ``gaze`` says (`standing`)."""
         self.builder.set(t, ROBOT_ID, standing(self.robot_xy, self.robot.yaw, **gaze))
 
