@@ -27,18 +27,8 @@ applies the rule to the poses the world produces (`sim.episode` does this for ev
 
 from __future__ import annotations
 
-from scenarios import hri, mingle, randomisation, word_improv  # noqa: F401  (registration)
-from scenarios.registry import (
-    Option,
-    Range,
-    ScenarioInfo,
-    describe,
-    make,
-    names,
-    options,
-    parse_options,
-    register,
-)
+from scenarios import hri, mingle, randomisation, registry, word_improv  # noqa: F401  (registration)
+from scenarios.registry import *  # noqa: F403  (its public names, listed once in its __all__)
 from scenarios.scenario import Scenario
 from scenarios.script import WALK_SPEED_M_S, Intent, Script
 from scenarios.stage import PLANNING_RADIUS_M, Furniture, RobotPlace, Role, Stage
@@ -46,6 +36,7 @@ from scenarios.timeline import PlannedGroup, ScenarioEvent, Timeline, TimelineBu
 from scenarios.truth import FACING_TOLERANCE_RAD, PLACE_TOLERANCE_M, GroundTruth
 
 __all__ = [
+    *registry.__all__,
     "FACING_TOLERANCE_RAD",
     "PLACE_TOLERANCE_M",
     "PLANNING_RADIUS_M",
@@ -53,22 +44,13 @@ __all__ = [
     "Furniture",
     "GroundTruth",
     "Intent",
-    "Option",
     "PlannedGroup",
-    "Range",
     "RobotPlace",
     "Role",
     "Scenario",
     "ScenarioEvent",
-    "ScenarioInfo",
     "Script",
     "Stage",
     "Timeline",
     "TimelineBuilder",
-    "describe",
-    "make",
-    "names",
-    "options",
-    "parse_options",
-    "register",
 ]

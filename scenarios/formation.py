@@ -5,6 +5,8 @@ a circle is the circle's radius, so a scenario's radius law by group size is wha
 Tightness by size it produces. `RadiusLaw` is linear in the number of members,
 ``radius(n) = base + per_member * (n - 2)``, never tighter than people's bodies allow
 (`min_radius`: neighbours on the circle at least `scenarios.stage.SPACING_M` apart).
+`CircleNoise` places members on a circle with noise; `CircleShape` draws a scenario's circles
+from its options: the law, the spread of radii about it and that noise.
 """
 
 from __future__ import annotations
@@ -17,8 +19,10 @@ import numpy as np
 from scenarios.stage import SPACING_M
 
 __all__ = [
+    "CIRCLE_OPTIONS",
+    "CircleNoise",
+    "CircleShape",
     "RadiusLaw",
-    "circle_places",
     "ellipse_offsets",
     "facing_centre",
     "min_radius",
@@ -60,6 +64,91 @@ class RadiusLaw:
         return max(self.base + self.per_member * (n - 2), min_radius(n, spacing=self.spacing))
 
 
+CIRCLE_OPTIONS = {
+    "radius_base": "o-space radius of a pair, metres.",
+    "radius_per_member": "growth of the radius per extra member, metres.",
+    "radius_spread": "relative standard deviation of a group's radius.",
+    "position_noise": "standard deviation of a place, metres.",
+    "orientation_noise": "standard deviation of a facing, radians.",
+    "head_noise": "standard deviation of a gaze off its target, radians.",
+}
+"""The help of the options that shape a scenario's circles (`CircleShape`) and the noise of its
+members' gaze, for the scenarios that declare them (``word-improv``, ``mingle``), each with its
+own range and default (`scenarios.registry.shared_help` writes them into their docstrings)."""
+
+
+@dataclass(frozen=True)
+class CircleNoise:
+    """The noise on members' places on an o-space circle and on the way they face its centre.
+
+    Attributes:
+        position: standard deviation of a place's offset per axis, metres.
+        orientation: standard deviation of a facing's deviation from the centre, radians.
+        spacing: closest two places may come after the noise, metres (`separate`).
+    """
+
+    position: float = 0.0
+    orientation: float = 0.0
+    spacing: float = SPACING_M
+
+    def places(
+        self,
+        centre: np.ndarray,
+        radius: float,
+        angles: np.ndarray,
+        rng: np.random.Generator,
+        *,
+        aspect: float = 1.0,
+        axis: float = 0.0,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Places on an o-space circle and the way each member faces, with this noise.
+
+        Args:
+            centre: (2,) metres.
+            radius: metres.
+            angles: (k,) angle of each member around the centre, radians.
+            rng: draws the noise.
+            aspect: the o-space's long axis over its short one: 1, a circle; above, an ellipse
+                of axes ``radius * sqrt(aspect)`` and ``radius / sqrt(aspect)`` (members still
+                face its centre).
+            axis: direction of the long axis, radians.
+
+        Returns:
+            (places (k, 2) metres, facings (k,) radians).
+        """
+        angles = np.asarray(angles, dtype=np.float64)
+        k = angles.size
+        offsets = radius * ellipse_offsets(angles, aspect, axis)
+        places = np.asarray(centre, dtype=np.float64) + offsets
+        places = places + rng.normal(0.0, 1.0, size=(k, 2)) * self.position
+        places = separate(places, spacing=self.spacing)
+        facings = facing_centre(places, centre) + rng.normal(0.0, 1.0, size=k) * self.orientation
+        facings = np.angle(np.exp(1j * facings))
+        return places, facings
+
+
+@dataclass(frozen=True)
+class CircleShape:
+    """How a scenario draws its groups' circles: the radius law, the spread of radii about it
+    and the noise of places and facings (the options of `CIRCLE_OPTIONS`).
+
+    Attributes:
+        law: o-space radius by group size, of the options ``radius_base`` and
+            ``radius_per_member``.
+        radius_spread: the option of this name.
+        noise: of the options ``position_noise`` and ``orientation_noise``.
+    """
+
+    law: RadiusLaw
+    radius_spread: float = 0.0
+    noise: CircleNoise = CircleNoise()
+
+    def radius(self, n: int, rng: np.random.Generator, *, least: float) -> float:
+        """The o-space radius of a group of ``n``, metres: the law's times ``1 + spread Z`` (Z
+        drawn standard normal), that factor at least ``least``."""
+        return self.law(n) * max(1.0 + rng.normal() * self.radius_spread, least)
+
+
 def spread_angles(n: int, rng: np.random.Generator, *, jitter: float = 0.0) -> np.ndarray:
     """(n,) angles (radians, increasing) of ``n`` members evenly around a circle, rotated at
     random, each moved by uniform noise of up to ``jitter`` of the even gap."""
@@ -73,45 +162,6 @@ def facing_centre(places: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """(k,) yaws (radians) from each place toward ``centre``."""
     d = np.asarray(centre, dtype=np.float64) - np.asarray(places, dtype=np.float64)
     return np.arctan2(d[:, 1], d[:, 0])
-
-
-def circle_places(
-    centre: np.ndarray,
-    radius: float,
-    angles: np.ndarray,
-    rng: np.random.Generator,
-    *,
-    position_noise: float = 0.0,
-    orientation_noise: float = 0.0,
-    spacing: float = SPACING_M,
-    aspect: float = 1.0,
-    axis: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Places on an o-space circle and the way each member faces.
-
-    Args:
-        centre: (2,) metres.
-        radius: metres.
-        angles: (k,) angle of each member around the centre, radians.
-        rng: draws the noise.
-        position_noise: standard deviation of a place's offset per axis, metres.
-        orientation_noise: standard deviation of a facing's deviation from the centre, radians.
-        spacing: closest two places may come after the noise, metres (`separate`).
-        aspect: the o-space's long axis over its short one: 1, a circle; above, an ellipse of
-            axes ``radius * sqrt(aspect)`` and ``radius / sqrt(aspect)`` (members still face
-            its centre).
-        axis: direction of the long axis, radians.
-
-    Returns:
-        (places (k, 2) metres, facings (k,) radians).
-    """
-    angles = np.asarray(angles, dtype=np.float64)
-    k = angles.size
-    places = np.asarray(centre, dtype=np.float64) + radius * ellipse_offsets(angles, aspect, axis)
-    places = separate(places + rng.normal(0.0, 1.0, size=(k, 2)) * position_noise, spacing=spacing)
-    facings = facing_centre(places, centre) + rng.normal(0.0, 1.0, size=k) * orientation_noise
-    facings = np.angle(np.exp(1j * facings))
-    return places, facings
 
 
 def ellipse_offsets(angles: np.ndarray, aspect: float = 1.0, axis: float = 0.0) -> np.ndarray:

@@ -13,14 +13,15 @@ positions, paths and gaze vary with the seed.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from dataclasses import dataclass, field
+from typing import Annotated, Any, Literal
 
 import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import MEAN_UTTERANCE_S, converse, standing
-from scenarios.formation import circle_places, facing_centre
-from scenarios.registry import PlaceNoise, Range, SceneSeconds, register
+from scenarios.formation import CircleNoise, facing_centre
+from scenarios.registry import PlaceNoise, Range, SceneSeconds, register, shared_help
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Role, Stage
@@ -104,118 +105,161 @@ def _take_places(
     return arrive
 
 
-def _guests(
-    rng: np.random.Generator,
-    robot: RobotPlace,
-    centre: np.ndarray,
-    radius: float,
-    angles: np.ndarray,
-    *,
-    approach: str | None,
-    position_noise: float,
-    orientation_noise: float,
-) -> tuple[TimelineBuilder, tuple[Role, ...], np.ndarray, np.ndarray, float]:
-    """The two guests of an HRI scene take their places at ``angles`` on the o-space circle
-    around ``centre``, walking in from ``approach`` (`_approach`; None: they stand there from the
-    start); returns the scene's builder, their roles, their (2, 2) places and (2,) facings, and
-    when the last has arrived, seconds."""
-    places, facings = circle_places(
-        centre,
-        radius,
-        angles,
-        rng,
-        position_noise=position_noise,
-        orientation_noise=orientation_noise,
-    )
-    if approach is None:
-        starts, start_yaws = places.copy(), facings.copy()
-    else:
-        starts, places, facings = _approach(rng, approach, robot, places, facings)
-        start_yaws = facing_centre(starts, centre)
-    people = list(_GUESTS)
-    roles = cast(rng, people, starts, start_yaws, parts="guest")
-    builder = TimelineBuilder([*people, ROBOT_ID])
-    walk_in = approach is not None
-    arrive = _take_places(builder, people, starts, places, facings, rng, walk_in=walk_in)
-    return builder, roles, places, facings, arrive
+@dataclass(frozen=True)
+class _Guests:
+    """The two guests of a scene at their places: (2, 2) places, metres, and (2,) facings,
+    radians, on the o-space circle round ``centre``, and when the last has arrived, seconds."""
+
+    places: np.ndarray
+    facings: np.ndarray
+    centre: np.ndarray
+    arrive: float
 
 
-def _leave(
-    builder: TimelineBuilder,
-    people: list[int],
-    places: np.ndarray,
-    robot: RobotPlace,
-    t: float,
-    rng: np.random.Generator,
-) -> float:
-    """At ``t`` the robot stops following and ``people`` walk from ``places`` to the east wall
-    and out; returns the episode's end, a second after the last is gone."""
-    builder.event(t, "leave", f"people {people} walk away")
-    builder.set(t, ROBOT_ID, standing(np.array(robot.position), robot.yaw))
-    gone = t
-    hx = 0.5 * ROOM_M[0] - EXIT_GAP_M
-    for k, person in enumerate(people):
-        exit_at = np.array([hx, float(np.clip(places[k, 1] + rng.uniform(-0.8, 0.8), -1.5, 1.5))])
-        speed = float(rng.uniform(*WALK_SPEED_RANGE_M_S))
-        builder.set(t, person, Intent(goal=(float(exit_at[0]), float(exit_at[1])), speed=speed))
-        out = t + _walk_time(places[k], exit_at, speed)
-        builder.set(out, person, Intent(present=False))
-        gone = max(gone, out)
-    return gone + 1.0
+@dataclass
+class _Scene:
+    """An HRI scene being drawn: its name, seed and generator, its room with the robot at the
+    west wall; the people's roles and the timeline's builder once they are cast (`cast`)."""
+
+    name: str
+    seed: int
+    room: tuple[float, float] = ROOM_M
+    rng: np.random.Generator = field(init=False)
+    robot: RobotPlace = field(init=False)
+    roles: tuple[Role, ...] = field(init=False)
+    builder: TimelineBuilder = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.rng = np.random.default_rng(self.seed)
+        self.robot = _robot(self.room)
+
+    @property
+    def robot_xy(self) -> np.ndarray:
+        """(2,) where the robot stands, metres."""
+        return np.array(self.robot.position)
+
+    def cast(self, people: list[int], starts: np.ndarray, yaws: np.ndarray, part: str) -> None:
+        """``people``, playing ``part``, start at ``starts`` facing ``yaws``; the scene's
+        builder holds them and the robot."""
+        self.roles = cast(self.rng, people, starts, yaws, parts=part)
+        self.builder = TimelineBuilder([*people, ROBOT_ID])
+
+    def robot_stands(self, t: float, **gaze: Any) -> None:
+        """From ``t`` the robot stands at its place, looking where ``gaze`` says (`standing`)."""
+        self.builder.set(t, ROBOT_ID, standing(self.robot_xy, self.robot.yaw, **gaze))
+
+    def guests(
+        self,
+        centre: np.ndarray,
+        radius: float,
+        angles: np.ndarray,
+        *,
+        approach: str | None,
+        position_noise: float,
+        orientation_noise: float,
+    ) -> _Guests:
+        """The two guests take their places at ``angles`` on the o-space circle around
+        ``centre``, walking in from ``approach`` (`_approach`; None: they stand there from the
+        start)."""
+        noise = CircleNoise(position_noise, orientation_noise)
+        places, facings = noise.places(centre, radius, angles, self.rng)
+        if approach is None:
+            starts, start_yaws = places.copy(), facings.copy()
+        else:
+            starts, places, facings = _approach(self.rng, approach, self.robot, places, facings)
+            start_yaws = facing_centre(starts, centre)
+        people = list(_GUESTS)
+        self.cast(people, starts, start_yaws, "guest")
+        walk_in = approach is not None
+        arrive = _take_places(
+            self.builder, people, starts, places, facings, self.rng, walk_in=walk_in
+        )
+        return _Guests(places, facings, centre, arrive)
+
+    def talk(
+        self,
+        guests: _Guests,
+        *,
+        robot_joins: bool,
+        talk_duration: float,
+        leave: bool,
+        mean_utterance: float,
+    ) -> float:
+        """The guests converse from when the last has arrived for ``talk_duration`` seconds:
+        with the robot (``robot_joins``: a group of three; the robot looks at the first guest),
+        or in front of it (a group of two; the robot looks at the group's centre, then at each
+        speaker); then, with ``leave``, they walk out. The group is planned from the start (the
+        rule starts it once all have arrived) until they set off. Returns the scene's end,
+        seconds."""
+        people = list(_GUESTS)
+        members, places, facings = people, guests.places, guests.facings
+        if robot_joins:
+            members = [ROBOT_ID, *people]
+            places = np.vstack([self.robot_xy, guests.places])
+            facings = np.concatenate([[self.robot.yaw], guests.facings])
+            self.builder.event(0.0, "approach", f"people {people} walk up to the robot")
+        talk_end = guests.arrive + talk_duration
+        end = talk_end if leave else math.inf
+        self.builder.group(members, places, facings, guests.centre, start=0.0, end=end)
+        turns = converse(
+            self.builder,
+            members,
+            places,
+            facings,
+            start=guests.arrive,
+            end=talk_end,
+            rng=self.rng,
+            mean_utterance=mean_utterance,
+        )
+        if robot_joins:
+            self.robot_stands(0.0, gaze_agent=people[0])
+        else:
+            self.robot_stands(0.0, gaze_point=tuple(guests.centre))
+            for t, speaker in turns:
+                self.robot_stands(t, gaze_agent=speaker)
+        return self.leave(people, guests.places, talk_end) if leave else talk_end
+
+    def leave(self, people: list[int], places: np.ndarray, t: float) -> float:
+        """At ``t`` the robot stops following and ``people`` walk from ``places`` to the east
+        wall and out; returns the episode's end, a second after the last is gone."""
+        self.builder.event(t, "leave", f"people {people} walk away")
+        self.robot_stands(t)
+        gone = t
+        hx = 0.5 * self.room[0] - EXIT_GAP_M
+        for k, person in enumerate(people):
+            side = float(np.clip(places[k, 1] + self.rng.uniform(-0.8, 0.8), -1.5, 1.5))
+            exit_at = np.array([hx, side])
+            speed = float(self.rng.uniform(*WALK_SPEED_RANGE_M_S))
+            goal = (float(exit_at[0]), float(exit_at[1]))
+            self.builder.set(t, person, Intent(goal=goal, speed=speed))
+            out = t + _walk_time(places[k], exit_at, speed)
+            self.builder.set(out, person, Intent(present=False))
+            gone = max(gone, out)
+        return gone + 1.0
+
+    def made(self, duration: float, description: str) -> Scenario:
+        """The scene, made: its people and the robot in its room."""
+        return Scenario(
+            name=self.name,
+            seed=self.seed,
+            stage=Stage(room=self.room, people=self.roles, robot=self.robot),
+            timeline=self.builder.build(),
+            duration=duration,
+            description=description,
+        )
 
 
-def _talk(
-    builder: TimelineBuilder,
-    members: list[int],
-    places: np.ndarray,
-    facings: np.ndarray,
-    centre: np.ndarray,
-    *,
-    arrive: float,
-    talk_duration: float,
-    leave: bool,
-    rng: np.random.Generator,
-    mean_utterance: float,
-) -> tuple[float, list[tuple[float, int]]]:
-    """Plans the group of ``members`` from the start (the rule starts it once all have arrived)
-    until they set off, and their conversation after ``arrive``; returns when the talk ends and
-    the speaking turns."""
-    talk_end = arrive + talk_duration
-    builder.group(members, places, facings, centre, start=0.0, end=talk_end if leave else math.inf)
-    turns = converse(
-        builder,
-        members,
-        places,
-        facings,
-        start=arrive,
-        end=talk_end,
-        rng=rng,
-        mean_utterance=mean_utterance,
-    )
-    return talk_end, turns
-
-
-def _made(
-    name: str,
-    seed: int,
-    builder: TimelineBuilder,
-    roles: tuple[Role, ...],
-    robot: RobotPlace,
-    duration: float,
-    description: str,
-) -> Scenario:
-    """One of the HRI scenes, made: the people and the robot in the HRI room."""
-    return Scenario(
-        name=name,
-        seed=seed,
-        stage=Stage(room=ROOM_M, people=roles, robot=robot),
-        timeline=builder.build(),
-        duration=duration,
-        description=description,
-    )
+_TALK_OPTIONS = {
+    "leave": "whether they walk out at the end (the group ends when they set off).",
+    "position_noise": "standard deviation of each person's place, metres.",
+    "orientation_noise": "standard deviation of each person's facing, radians.",
+    "mean_utterance": "mean length of one speaker's turn, seconds.",
+}
+"""The help of the options the two conversation scenes share."""
 
 
 @register("hri-conversation", tags=("hri",), robot={})
+@shared_help(talk=_TALK_OPTIONS)
 def hri_conversation(
     *,
     seed: int,
@@ -234,21 +278,14 @@ def hri_conversation(
         radius: o-space radius of the group of three, metres.
         talk_duration: seconds of conversation once both have arrived.
         approach: where the two come from (the robot faces east, "front").
-        leave: whether they walk out at the end (the group ends when they set off).
-        position_noise: standard deviation of each person's place, metres.
-        orientation_noise: standard deviation of each person's facing, radians.
-        mean_utterance: mean length of one speaker's turn, seconds.
+        {talk}
     """
-    name = "hri-conversation"
-    rng = np.random.default_rng(seed)
-    robot = _robot(ROOM_M)
-    robot_xy = np.array(robot.position)
-    centre = robot_xy + radius * np.array([math.cos(robot.yaw), math.sin(robot.yaw)])
-    gap = 2.0 * math.pi / 3.0 + rng.uniform(-TRIANGLE_JITTER_RAD, TRIANGLE_JITTER_RAD, size=2)
+    scene = _Scene("hri-conversation", seed)
+    yaw = scene.robot.yaw
+    centre = scene.robot_xy + radius * np.array([math.cos(yaw), math.sin(yaw)])
+    gap = 2.0 * math.pi / 3.0 + scene.rng.uniform(-TRIANGLE_JITTER_RAD, TRIANGLE_JITTER_RAD, size=2)
     angles = np.array([math.pi - gap[0], math.pi + gap[1]])  # left of the robot, then right
-    builder, roles, places, facings, arrive = _guests(
-        rng,
-        robot,
+    guests = scene.guests(
         centre,
         radius,
         angles,
@@ -256,36 +293,18 @@ def hri_conversation(
         position_noise=position_noise,
         orientation_noise=orientation_noise,
     )
-    people = list(_GUESTS)
-    members = [ROBOT_ID, *people]
-    all_places = np.vstack([robot_xy, places])
-    all_facings = np.concatenate([[robot.yaw], facings])
-    builder.event(0.0, "approach", f"people {people} walk up to the robot")
-    talk_end, _ = _talk(
-        builder,
-        members,
-        all_places,
-        all_facings,
-        centre,
-        arrive=arrive,
+    end = scene.talk(
+        guests,
+        robot_joins=True,
         talk_duration=talk_duration,
         leave=leave,
-        rng=rng,
         mean_utterance=mean_utterance,
     )
-    builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=people[0]))
-    return _made(
-        name,
-        seed,
-        builder,
-        roles,
-        robot,
-        _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end,
-        "two people and the robot converse: one F-formation of three",
-    )
+    return scene.made(end, "two people and the robot converse: one F-formation of three")
 
 
 @register("hri-robot-excluded", tags=("hri",), robot={})
+@shared_help(talk=_TALK_OPTIONS)
 def hri_robot_excluded(
     *,
     seed: int,
@@ -306,21 +325,13 @@ def hri_robot_excluded(
         radius: half the distance between the two, metres.
         talk_duration: seconds of conversation once both stand at their places.
         walk_in: whether they walk in first (else they stand there from the start).
-        leave: whether they walk out at the end (the group ends when they set off).
-        position_noise: standard deviation of each person's place, metres.
-        orientation_noise: standard deviation of each person's facing, radians.
-        mean_utterance: mean length of one speaker's turn, seconds.
+        {talk}
     """
-    name = "hri-robot-excluded"
-    rng = np.random.default_rng(seed)
-    robot = _robot(ROOM_M)
-    robot_xy = np.array(robot.position)
-    bearing = rng.uniform(-0.3, 0.3)
-    centre = robot_xy + distance * np.array([math.cos(bearing), math.sin(bearing)])
-    axis = bearing + math.pi / 2.0 + rng.uniform(-0.5, 0.5)
-    builder, roles, places, facings, arrive = _guests(
-        rng,
-        robot,
+    scene = _Scene("hri-robot-excluded", seed)
+    bearing = scene.rng.uniform(-0.3, 0.3)
+    centre = scene.robot_xy + distance * np.array([math.cos(bearing), math.sin(bearing)])
+    axis = bearing + math.pi / 2.0 + scene.rng.uniform(-0.5, 0.5)
+    guests = scene.guests(
         centre,
         radius,
         np.array([axis, axis + math.pi]),
@@ -328,31 +339,14 @@ def hri_robot_excluded(
         position_noise=position_noise,
         orientation_noise=orientation_noise,
     )
-    people = list(_GUESTS)
-    talk_end, turns = _talk(
-        builder,
-        people,
-        places,
-        facings,
-        centre,
-        arrive=arrive,
+    end = scene.talk(
+        guests,
+        robot_joins=False,
         talk_duration=talk_duration,
         leave=leave,
-        rng=rng,
         mean_utterance=mean_utterance,
     )
-    builder.set(0.0, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_point=tuple(centre)))
-    for t, speaker in turns:
-        builder.set(t, ROBOT_ID, standing(robot_xy, robot.yaw, gaze_agent=speaker))
-    return _made(
-        name,
-        seed,
-        builder,
-        roles,
-        robot,
-        _leave(builder, people, places, robot, talk_end, rng) if leave else talk_end,
-        "two people converse in front of the robot: one F-formation of two",
-    )
+    return scene.made(end, "two people converse in front of the robot: one F-formation of two")
 
 
 @register("hri-passing", tags=("hri",), robot={})
@@ -371,19 +365,17 @@ def hri_passing(
         passes: how many times each crosses the robot's view.
         look_at_robot: probability that a walker looks at the robot on a pass.
     """
-    name = "hri-passing"
-    rng = np.random.default_rng(seed)
-    room = PASSING_ROOM_M
-    robot = _robot(room)
+    scene = _Scene("hri-passing", seed, room=PASSING_ROOM_M)
+    rng = scene.rng
     ids = list(range(1, people + 1))
-    hy = 0.5 * room[1] - 0.5
-    lanes_x = (robot.position[0] + 1.0, 0.5 * room[0] - 0.6)
+    hy = 0.5 * scene.room[1] - 0.5
+    lanes_x = (scene.robot.position[0] + 1.0, 0.5 * scene.room[0] - 0.6)
     # Start spread along both side walls, alternating, so that walkers meet head on.
     sides = np.array([1.0 if k % 2 == 0 else -1.0 for k in range(people)])
     starts = np.stack([np.linspace(lanes_x[0] + 0.3, lanes_x[1] - 0.3, people), sides * hy], axis=1)
-    roles = cast(rng, ids, starts, -sides * math.pi / 2.0, parts="walker")
-    builder = TimelineBuilder([*ids, ROBOT_ID])
-    builder.set(0.0, ROBOT_ID, standing(np.array(robot.position), robot.yaw))
+    scene.cast(ids, starts, -sides * math.pi / 2.0, "walker")
+    builder = scene.builder
+    scene.robot_stands(0.0)
     finish = 0.0
     for k, person in enumerate(ids):
         here = starts[k]
@@ -412,11 +404,4 @@ def hri_passing(
             here = goal
             t += float(rng.uniform(0.5, 3.0))
         finish = max(finish, t)
-    return Scenario(
-        name=name,
-        seed=seed,
-        stage=Stage(room=room, people=roles, robot=robot),
-        timeline=builder.build(),
-        duration=finish,
-        description="people walk past each other and the robot: no F-formation",
-    )
+    return scene.made(finish, "people walk past each other and the robot: no F-formation")

@@ -42,14 +42,23 @@ import numpy as np
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
 from scenarios.formation import (
+    CIRCLE_OPTIONS,
+    CircleNoise,
+    CircleShape,
     RadiusLaw,
-    circle_places,
     ellipse_offsets,
     facing_centre,
     min_radius,
     separate,
 )
-from scenarios.registry import PlaceNoise, Range, SceneSeconds, check_ranges, register
+from scenarios.registry import (
+    PlaceNoise,
+    Range,
+    SceneSeconds,
+    check_ranges,
+    register,
+    shared_help,
+)
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import (
@@ -60,7 +69,7 @@ from scenarios.stage import (
     RobotPlace,
     Stage,
 )
-from scenarios.timeline import TimelineBuilder
+from scenarios.timeline import PlannedGroup, TimelineBuilder
 
 __all__ = [
     "SALSA_RADIUS",
@@ -122,6 +131,7 @@ class NoFloorError(ValueError):
     """The party's groups and people do not fit the room."""
 
 
+@shared_help(circle=CIRCLE_OPTIONS)
 @dataclass(frozen=True)
 class MingleParams:
     """Every number that shapes a party: the options of ``mingle``, declared once here.
@@ -134,12 +144,7 @@ class MingleParams:
         max_group_size: largest group; SALSA holds groups of 8.
         robot: whether the robot stands by the west wall, watching.
         passers_by: extra people crossing the room now and then.
-        radius_base: o-space radius of a pair, metres.
-        radius_per_member: growth of the radius per extra member, metres.
-        radius_spread: relative standard deviation of a group's radius.
-        position_noise: standard deviation of a place, metres.
-        orientation_noise: standard deviation of a facing, radians.
-        head_noise: standard deviation of a gaze off its target, radians.
+        {circle}
         mean_stay: mean time a member stays in a group, seconds.
         mean_alone: mean time someone stays alone before acting, seconds.
         alone_share: share of the guests alone at the start.
@@ -244,13 +249,12 @@ class _Group:
 
 @dataclass
 class _Record:
-    members: tuple[int, ...]
-    places: np.ndarray
-    facings: np.ndarray
-    centre: np.ndarray
-    start: float
+    """A group's shape from one moment on, as planned: ``group`` (open-ended) and its ``end``,
+    which comes earlier as members are sent away (at or before the start: it never forms), and
+    the speeds of the members walking up to it."""
+
+    group: PlannedGroup
     end: float = math.inf
-    talk_end: float = math.inf
     speeds: dict[int, float] = field(default_factory=dict)
 
 
@@ -278,7 +282,11 @@ class _Party:
         self.keep_clear = keep_clear  # spots no group or person may take (the robot's)
         self.rng = rng
         self.half = 0.5 * side
-        self.law = RadiusLaw(params.radius_base, params.radius_per_member, params.spacing)
+        self.shape = CircleShape(
+            RadiusLaw(params.radius_base, params.radius_per_member, params.spacing),
+            params.radius_spread,
+            CircleNoise(params.position_noise, params.orientation_noise, params.spacing),
+        )
         self.ids = list(range(1, params.people + 1))
         self.records: list[_Record] = []
         self.alone: list[_Alone] = []
@@ -378,8 +386,7 @@ class _Party:
     # -- groups -----------------------------------------------------------------------------
 
     def draw_radius(self, n: int) -> float:
-        spread = max(1.0 + self.rng.normal() * self.p.radius_spread, 0.6)
-        return max(self.law(n) * spread, min_radius(n, spacing=self.p.spacing))
+        return max(self.shape.radius(n, self.rng, least=0.6), min_radius(n, spacing=self.p.spacing))
 
     def layout(self, g: _Group, angles: dict[int, float]) -> dict[int, float]:
         """The members' angles round ``g``'s centre for its kind (a circle, `spread`; a row
@@ -486,16 +493,8 @@ class _Party:
         g = self.groups[gid]
         members = list(g.angles)
         angles = np.array([g.angles[m] for m in members])
-        places, facings = circle_places(
-            g.centre,
-            g.radius * g.stretch,
-            angles,
-            self.rng,
-            position_noise=self.p.position_noise,
-            orientation_noise=self.p.orientation_noise,
-            spacing=self.p.spacing,
-            aspect=g.aspect,
-            axis=g.axis,
+        places, facings = self.shape.noise.places(
+            g.centre, g.radius * g.stretch, angles, self.rng, aspect=g.aspect, axis=g.axis
         )
         if g.kind == AUDIENCE:  # the audience faces the presenter, who faces the audience
             noise = facings - facing_centre(places, g.centre)
@@ -509,9 +508,8 @@ class _Party:
         if g.anchor >= 0:  # at a wall: the clip may bring two closer than the spacing
             for _ in range(10):
                 places = np.clip(separate(places, spacing=self.p.spacing), -edge, edge)
-        self.records.append(
-            _Record(tuple(members), places, facings, g.centre.copy(), t, speeds=speeds or {})
-        )
+        planned = PlannedGroup(tuple(members), places, facings, g.centre, t)
+        self.records.append(_Record(planned, speeds=speeds or {}))
         g.record = len(self.records) - 1
         g.version += 1
         if g.kind == ROW:
@@ -526,9 +524,8 @@ class _Party:
         """Every open record holding a member of ``gid`` (``but`` one) ends at ``t``."""
         members = set(self.groups[gid].members) - {but}
         for rec in self.records:
-            if rec.end > t and not members.isdisjoint(rec.members):
+            if rec.end > t and not members.isdisjoint(rec.group.members):
                 rec.end = t
-                rec.talk_end = min(rec.talk_end, t)
 
     def new_group(
         self,
@@ -661,8 +658,8 @@ class _Party:
         alone += unplaced
         self.start_yaw = {}
         for rec in self.records:
-            for k, m in enumerate(rec.members):
-                self.start_yaw[m] = float(rec.facings[k])
+            for k, m in enumerate(rec.group.members):
+                self.start_yaw[m] = float(rec.group.facings[k])
         for m in alone:
             spot = self.free_spot(ALONE_CLAIM_M)
             if spot is None:
@@ -858,9 +855,9 @@ class _Party:
         shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
         self.close_all(gid, shift, but=m)
         self.record(gid, shift, speeds={m: speed})
-        rec = self.records[g.record]
-        k = rec.members.index(m)
-        self.walks.append((t, m, standing(rec.places[k], rec.facings[k], speed=speed)))
+        planned = self.records[g.record].group
+        k = planned.members.index(m)
+        self.walks.append((t, m, standing(planned.places[k], planned.facings[k], speed=speed)))
         self.schedule_group(gid, t)
         self.schedule_member(m, t)
         self.events.append((t, "join", f"person {m} joins group {sorted(g.members)}"))
@@ -1078,18 +1075,24 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
     for t, m, intent in party.walks:
         builder.set(t, m, intent)
     for rec in party.records:
-        if rec.end <= rec.start:
+        planned = rec.group
+        if rec.end <= planned.start:
             continue
         builder.group(
-            rec.members, rec.places, rec.facings, rec.centre, start=rec.start, end=rec.end
+            planned.members,
+            planned.places,
+            planned.facings,
+            planned.centre,
+            start=planned.start,
+            end=rec.end,
         )
         converse(
             builder,
-            rec.members,
-            rec.places,
-            rec.facings,
-            start=rec.start,
-            end=min(rec.talk_end, rec.end, params.duration),
+            planned.members,
+            planned.places,
+            planned.facings,
+            start=planned.start,
+            end=min(rec.end, params.duration),
             rng=rng,
             mean_utterance=params.mean_utterance,
             head_noise=params.head_noise,

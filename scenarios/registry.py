@@ -4,13 +4,14 @@ A factory is a function ``factory(*, seed: int, option: type = default, ...) -> 
 Each option is written once, in the factory's signature: its type annotation (``int``,
 ``float``, ``bool``, ``str`` or a ``Literal`` of strings), its allowed range where it has one
 (``Annotated[float, Range(0.3, 1.5, unit="m")]``) and its default; its help comes from the
-factory's docstring (``Args:`` section). A factory whose options are a frozen dataclass's fields
-says so (``register(name, options=Params)``, help from the class's ``Attributes:``) and takes
-them as keywords. Everything else reads them from there: `register` wraps the factory so that
-every call, through `make` or directly, checks each option's name, type and range before the
-factory draws anything, and records every option's value (defaults included) in the
-scenario's ``options``. The factory itself checks only what depends on several options at once
-(a party that fits its room).
+factory's docstring (``Args:`` section; the help of options several scenarios declare alike is
+written once and filled in with `shared_help`). A factory whose options are a frozen
+dataclass's fields says so (``register(name, options=Params)``, help from the class's
+``Attributes:``) and takes them as keywords. Everything else reads them from there:
+`register` wraps the factory so that every call, through `make` or directly, checks each
+option's name, type and range before the factory draws anything, and records every option's
+value (defaults included) in the scenario's ``options``. The factory itself checks only what
+depends on several options at once (a party that fits its room).
 
 Tags sort scenarios into sets (``register(name, tags=("hri",))``; ``names(tag="hri")``), so
 that no other module keeps a list of names.
@@ -27,7 +28,7 @@ import typing
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
 from scenarios.scenario import Scenario, check_option
 
@@ -46,12 +47,15 @@ __all__ = [
     "options",
     "parse_options",
     "register",
+    "shared_help",
 ]
 
 _TYPES = (bool, int, float, str)
 # The longest scene a duration option may ask for, seconds (a day): drawing a script is work in
 # proportion to its length, done before the simulation is sized.
 MAX_SCENE_S = 86_400.0
+_PLACEHOLDER = re.compile(r"^(\s*)\{(\w+)\}\s*$")
+_Documented = TypeVar("_Documented", bound=Callable[..., Any])
 _TRUE = ("true", "yes", "on", "1")
 _FALSE = ("false", "no", "off", "0")
 
@@ -212,6 +216,38 @@ def _arg_help(doc: str) -> dict[str, str]:
             elif current and line.strip():
                 out[current] += " " + line.strip()
     return out
+
+
+def shared_help(**blocks: Mapping[str, str]) -> Callable[[_Documented], _Documented]:
+    """Writes the help of options several scenarios declare alike, kept in one place, into a
+    factory's (or an options class's) docstring: its line ``{key}`` becomes a line
+    ``name: help`` for each entry of ``blocks[key]``, indented as the placeholder was. Apply it
+    below `register`, which reads the docstring; each option's range and default stay in the
+    scenario's own declaration.
+
+    Raises:
+        ValueError: a placeholder with no block, or a block with no placeholder.
+    """
+
+    def fill(target: _Documented) -> _Documented:
+        lines = []
+        used = set()
+        for line in (target.__doc__ or "").split("\n"):
+            match = _PLACEHOLDER.match(line)
+            if match is None:
+                lines.append(line)
+                continue
+            indent, key = match.groups()
+            if key not in blocks:
+                raise ValueError(f"{target.__name__}: no shared help for {{{key}}}")
+            used.add(key)
+            lines += [f"{indent}{name}: {text}" for name, text in blocks[key].items()]
+        if used != set(blocks):
+            raise ValueError(f"{target.__name__}: no placeholder for {sorted(set(blocks) - used)}")
+        target.__doc__ = "\n".join(lines)
+        return target
+
+    return fill
 
 
 def _declared(source: Callable[..., Any] | type) -> list[tuple[str, Any, Any]]:

@@ -29,8 +29,8 @@ import numpy as np
 
 from scenarios.casting import cast
 from scenarios.conversation import converse, standing
-from scenarios.formation import RadiusLaw, circle_places
-from scenarios.registry import PlaceNoise, Range, register
+from scenarios.formation import CIRCLE_OPTIONS, CircleNoise, CircleShape, RadiusLaw
+from scenarios.registry import PlaceNoise, Range, register, shared_help
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
 from scenarios.stage import RobotPlace, Stage
@@ -57,6 +57,7 @@ MAX_TURNS = 10_000  # turns after which the game stops even without a winner
 
 
 @register("word-improv", tags=("game",), robot={"robot": "watch"})
+@shared_help(circle=CIRCLE_OPTIONS)
 def word_improv(
     *,
     seed: int,
@@ -80,17 +81,16 @@ def word_improv(
         turn_duration: mean length of a turn, seconds.
         fail_probability: chance that the turn's player fails and leaves, per turn.
         robot: none, watch (from a corner) or moderate (the robot is the moderator).
-        radius_base: o-space radius of a pair, metres.
-        radius_per_member: growth of the radius per extra member, metres.
-        radius_spread: relative standard deviation of a circle's radius.
-        position_noise: standard deviation of a place, metres.
-        orientation_noise: standard deviation of a facing, radians.
-        head_noise: standard deviation of a gaze off its target, radians.
+        {circle}
         mean_utterance: mean length of one speaker's turn to speak, seconds.
     """
     name = "word-improv"
-    law = RadiusLaw(radius_base, radius_per_member)
-    largest = law(players + 1) * (1.0 + 3.0 * radius_spread) + CENTRE_JITTER_M + 0.35
+    shape = CircleShape(
+        RadiusLaw(radius_base, radius_per_member),
+        radius_spread,
+        CircleNoise(position_noise, orientation_noise),
+    )
+    largest = shape.law(players + 1) * (1.0 + 3.0 * radius_spread) + CENTRE_JITTER_M + 0.35
     if largest > 0.5 * min(AREA_M):
         raise ValueError(
             f"{name}: a circle of {players + 1} with radius_base {radius_base:g} m and "
@@ -109,16 +109,8 @@ def word_improv(
     def formation(members: list[int], angles_of: dict[int, float]) -> tuple:
         n = len(members)
         centre = rng.uniform(-CENTRE_JITTER_M, CENTRE_JITTER_M, size=2)
-        radius = law(n) * max(1.0 + rng.normal() * radius_spread, 0.5)
-        angles = np.array([angles_of[m] for m in members])
-        places, facings = circle_places(
-            centre,
-            radius,
-            angles,
-            rng,
-            position_noise=position_noise,
-            orientation_noise=orientation_noise,
-        )
+        radius = shape.radius(n, rng, least=0.5)
+        places, facings = shape.noise.places(centre, radius, [angles_of[m] for m in members], rng)
         return centre, places, facings
 
     def slots(members_in_order: list[int], moderator_angle: float) -> dict[int, float]:

@@ -401,6 +401,37 @@ def test_an_option_is_declared_once_and_read_everywhere():
     assert randomised.options["drawn"]["people"] in (8, 9)
 
 
+def test_shared_option_help_is_written_once_and_ranges_stay_each_scenarios():
+    from scenarios.formation import CIRCLE_OPTIONS
+
+    for name in ("word-improv", "mingle"):
+        options = {o.name: o for o in scenarios.options(name)}
+        for key, text in CIRCLE_OPTIONS.items():
+            assert options[key].help.startswith(text.rstrip(".")), (name, key)
+            assert "{" not in options[key].help
+    improv = {o.name: o for o in scenarios.options("word-improv")}["orientation_noise"]
+    party = {o.name: o for o in scenarios.options("mingle")}["orientation_noise"]
+    assert (improv.range.high, party.range.high) == (0.8, 1.0)
+    assert "{circle}" not in (MingleParams.__doc__ or "")
+    assert "position_noise: standard deviation of each person's place" in (
+        hri_conversation.__doc__ or ""
+    )
+
+    def documented(placeholder: str):
+        def factory(*, seed: int, size: int = 1) -> Scenario:
+            raise AssertionError
+
+        factory.__doc__ = f"A scenario.\n\n    Args:\n        {placeholder}\n    "
+        return factory
+
+    filled = scenarios.shared_help(shared={"size": "how many."})(documented("{shared}"))
+    assert filled.__doc__ == "A scenario.\n\n    Args:\n        size: how many.\n    "
+    with pytest.raises(ValueError, match=r"no shared help for \{other\}"):
+        scenarios.shared_help(shared={"size": "x"})(documented("{other}"))
+    with pytest.raises(ValueError, match=r"no placeholder for \['unused'\]"):
+        scenarios.shared_help(unused={"size": "x"})(documented("size: how many."))
+
+
 def test_scenario_sets_come_from_tags():
     assert scenarios.names(tag="hri") == ("hri-conversation", "hri-robot-excluded", "hri-passing")
     assert scenarios.names(tag="party") == ("mingle", "mingle-randomised")
