@@ -24,6 +24,16 @@ WAIT_S = 60.0  # at most this long for the command to get going, and to stop
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="sends SIGINT to a process group")
 
 
+@pytest.fixture(autouse=True)
+def ctrl_c_as_a_terminal_sends_it():
+    """SIGINT not ignored, as in a terminal. A suite started in the background by a shell
+    without job control (``make test &``, some CI runners) inherits SIGINT ignored, and so
+    would the command under test: Ctrl-C would then never reach it."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def _interrupt(
     argv: list[str], tmp_path: Path, *, started: Callable[[str], bool], start: str = START
 ) -> tuple[int, str]:
