@@ -380,7 +380,8 @@ class RankAgreement:
 
     Attributes:
         benchmark: the simulated benchmark (:data:`SIM_PARTY`; :data:`SIM_FIELD`, the mean
-            over the validation sources; :data:`SIM_RECORDED`, the party's `recorded_views`).
+            over the validation sources; :data:`SIM_RECORDED`, the party's `recorded_views`),
+            or, as a reference, one real dataset ranked against the mean of the others.
         detectors: the detectors ranked.
         simulated: each one's F1 at T = 2/3 on the simulated benchmark.
         real: each one's mean F1 at T = 2/3 over the real datasets.
@@ -489,6 +490,9 @@ class SimToReal:
         rank_field: the same for the mean over the simulated validation sources.
         rank_recorded: the same for the default party as the field's datasets would record it
             (:func:`recorded_views`: rescaled, orientation coded).
+        rank_between_real: the reference for all three: each real dataset's ranking against
+            the mean of the other real datasets (empty with fewer than two), how far the
+            field's own datasets agree with each other.
         goals: the issue's goals, checked.
         calibration: set -> shape and pair statistics (the recommended recipe's synthetic
             data and each real dataset).
@@ -507,6 +511,7 @@ class SimToReal:
     rank: RankAgreement
     rank_field: RankAgreement
     rank_recorded: RankAgreement
+    rank_between_real: tuple[RankAgreement, ...]
     goals: tuple[Goal, ...]
     calibration: Mapping[str, Any]
     training: Mapping[str, Any]
@@ -556,6 +561,7 @@ class SimToReal:
                 self.rank_field.to_json(),
                 self.rank_recorded.to_json(),
             ],
+            "rank_between_real": [r.to_json() for r in self.rank_between_real],
             "goals": [g.to_json() for g in self.goals],
             "calibration": dict(self.calibration),
         }
@@ -923,6 +929,12 @@ def sim_to_real(
     rank_recorded = rank_agreement(
         ranked, weights, tuple(tests), simulated=tuple(party_views), benchmark=SIM_RECORDED
     )
+    rank_between_real = tuple(
+        rank_agreement(
+            ranked, weights, [t for t in tests if t != name], simulated=(name,), benchmark=name
+        )
+        for name in (tests if len(tests) > 1 else ())
+    )
 
     say("calibration: the recommended recipe's data against each real dataset")
     calibration = {
@@ -942,6 +954,7 @@ def sim_to_real(
         rank=rank,
         rank_field=rank_field,
         rank_recorded=rank_recorded,
+        rank_between_real=rank_between_real,
         goals=(),
         calibration=calibration,
         training=training_json,
@@ -999,13 +1012,20 @@ def check_goals(result: SimToReal) -> tuple[Goal, ...]:
             )
         )
     low, high = result.rank.interval
+    between = [r.tau for r in result.rank_between_real if math.isfinite(r.tau)]
+    reference = (
+        f"; each real dataset against the others' mean: tau {min(between):.2f} to "
+        f"{max(between):.2f}"
+        if between
+        else ""
+    )
     goals.append(
         Goal(
             "rank agreement, simulation vs real",
             f"Kendall's tau >= {TAU_GOAL}",
             result.rank.tau >= TAU_GOAL,
             f"tau {result.rank.tau:.2f} (95% interval {low:.2f} to {high:.2f}) over "
-            f"{len(result.rank.detectors)} detectors",
+            f"{len(result.rank.detectors)} detectors{reference}",
         )
     )
     return tuple(goals)

@@ -262,6 +262,18 @@ def to_markdown(
             f"{low:.2f} to {high:.2f}, every set's frames resampled at once) over "
             f"{len(rank.detectors)} detectors.",
         ]
+    if result.rank_between_real:
+        lines += [
+            "",
+            "For reference, how far the real datasets agree with each other: each one ranks the "
+            "same detectors against the mean of the others with Kendall's tau "
+            + "; ".join(
+                f"{r.benchmark} **{r.tau:.2f}** ({r.interval[0]:.2f} to {r.interval[1]:.2f})"
+                for r in result.rank_between_real
+            )
+            + ". A simulated benchmark that agrees with the real mean no better than the field's "
+            "datasets agree among themselves is as good a predictor as another real dataset.",
+        ]
     lines.append("")
     lines += [
         *markdown_table(

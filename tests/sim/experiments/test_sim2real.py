@@ -187,6 +187,22 @@ def test_rank_agreement_is_kendalls_tau_of_the_rows(tiny) -> None:
         "simulated field",
         "simulated party, recorded as the field's datasets",
     ]
+    # The reference: each real dataset against the mean of the others, over the same detectors.
+    between = result.rank_between_real
+    assert [r.benchmark for r in between] == list(result.datasets)
+    assert len(result.datasets) > 1
+    for reference in between:
+        others = [d for d in result.datasets if d != reference.benchmark]
+        assert reference.detectors == rank.detectors
+        for name, own, rest in zip(
+            reference.detectors, reference.simulated, reference.real, strict=True
+        ):
+            assert own == pytest.approx(result.score(name, reference.benchmark).f1)
+            assert rest == pytest.approx(np.mean([result.score(name, d).f1 for d in others]))
+        assert reference.tau == pytest.approx(
+            kendalltau(reference.simulated, reference.real).statistic, nan_ok=True
+        )
+    assert [r["benchmark"] for r in document["rank_between_real"]] == list(result.datasets)
     # GCFF's stride is in metres: rescaled parties score it otherwise than the party itself.
     gcff = rank.detectors.index(result.detectors("gcff-one")[0])
     assert recorded.simulated[gcff] != pytest.approx(rank.simulated[gcff])
