@@ -138,16 +138,15 @@ def check_partition_per_frame(name: str, detector: Any) -> None:
 
 
 def check_no_frames_nobody_and_one_person(name: str, detector: Any) -> None:
-    """No frames: no partitions; nobody: an empty partition; one person: that person alone."""
-    if (out := run_detector(name, detector, [])) != []:
-        raise _fail(name, "an empty batch", f"expected no partitions, got {out!r:.200}")
+    """No frames: no partitions; nobody: an empty partition; one person: that person alone.
+
+    `run_detector` refuses any other answer (one partition per frame, each a partition of
+    exactly the frame's people), naming the frame and what came back.
+    """
+    run_detector(name, detector, [])
     nobody = Frame(ids=np.zeros(0, np.int64), position=np.zeros((0, 2)), yaw=np.zeros(0))
     one = Frame(ids=np.array([7]), position=np.array([[1.0, 2.0]]), yaw=np.array([0.5]))
-    empty, alone = run_detector(name, detector, [nobody, one])
-    if _as_sets(empty) != set():
-        raise _fail(name, "a frame with nobody", f"expected no groups, got {empty!r:.200}")
-    if _as_sets(alone) != {frozenset({7})}:
-        raise _fail(name, "a frame of one person", f"expected ((7,),), got {alone!r:.200}")
+    run_detector(name, detector, [nobody, one])
 
 
 def check_the_same_answer_twice(name: str, detector: Any) -> None:
