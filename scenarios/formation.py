@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -64,14 +65,16 @@ class RadiusLaw:
         return max(self.base + self.per_member * (n - 2), min_radius(n, spacing=self.spacing))
 
 
-CIRCLE_OPTIONS = {
-    "radius_base": "o-space radius of a pair, metres.",
-    "radius_per_member": "growth of the radius per extra member, metres.",
-    "radius_spread": "relative standard deviation of a group's radius.",
-    "position_noise": "standard deviation of a place, metres.",
-    "orientation_noise": "standard deviation of a facing, radians.",
-    "head_noise": "standard deviation of a gaze off its target, radians.",
-}
+CIRCLE_OPTIONS = MappingProxyType(
+    {
+        "radius_base": "o-space radius of a pair, metres.",
+        "radius_per_member": "growth of the radius per extra member, metres.",
+        "radius_spread": "relative standard deviation of a group's radius.",
+        "position_noise": "standard deviation of a place, metres.",
+        "orientation_noise": "standard deviation of a facing, radians.",
+        "head_noise": "standard deviation of a gaze off its target, radians.",
+    }
+)
 """The help of the options that shape a scenario's circles (`CircleShape`) and the noise of its
 members' gaze, for the scenarios that declare them (``word-improv``, ``mingle``), each with its
 own range and default (`scenarios.registry.shared_help` writes them into their docstrings)."""
