@@ -95,13 +95,13 @@ def to_markdown(result: DemoResult) -> str:
     training = result.training
     lines += [
         *markdown_table(
-            ["scenario", "episodes", "frames kept", "pairs kept"],
+            ["source", "episodes", "frames kept", "pairs kept"],
             [
                 [
-                    f"`{src.scenario}`",
+                    f"`{src.name}`",
                     str(src.episodes),
-                    f"{training[src.scenario]['frames']:,}",
-                    f"{training[src.scenario]['pairs']:,}",
+                    f"{training[src.name]['frames']:,}",
+                    f"{training[src.name]['pairs']:,}",
                 ]
                 for src in budget.train
             ],

@@ -129,7 +129,7 @@ TAU_GOAL = 0.8  # goal 4: rank agreement between simulation and the real dataset
 BOOTSTRAP_BLOCKS = 10  # stretches of time per sequence: the clusters the bootstrap resamples
 BOOTSTRAP_RESAMPLES = 1000
 CONFIDENCE = 0.95
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 
 # REFORM's options compared (keyword arguments of reform.Reform, docs/guide/reform.md): {} is
 # the paper's method; then scale-free pair features, correlation clustering over the pair
@@ -493,6 +493,12 @@ class SimToReal:
         rank_between_real: the reference for all three: each real dataset's ranking against
             the mean of the other real datasets (empty with fewer than two), how far the
             field's own datasets agree with each other.
+        rank_compared: the default party's agreement over the detectors the experiment
+            compares (the recommended model, REFORM trained on SALSA, GCFF with one setting),
+            without the other candidates.
+        rank_salsa_train: another reference: SALSA's training split, real data that none of
+            the detectors ranked trained on (the candidates and GCFF with one setting),
+            against the real mean.
         goals: the issue's goals, checked.
         calibration: set -> shape and pair statistics (the recommended recipe's synthetic
             data and each real dataset).
@@ -512,6 +518,8 @@ class SimToReal:
     rank_field: RankAgreement
     rank_recorded: RankAgreement
     rank_between_real: tuple[RankAgreement, ...]
+    rank_compared: RankAgreement
+    rank_salsa_train: RankAgreement
     goals: tuple[Goal, ...]
     calibration: Mapping[str, Any]
     training: Mapping[str, Any]
@@ -562,6 +570,8 @@ class SimToReal:
                 self.rank_recorded.to_json(),
             ],
             "rank_between_real": [r.to_json() for r in self.rank_between_real],
+            "rank_compared": self.rank_compared.to_json(),
+            "rank_salsa_train": self.rank_salsa_train.to_json(),
             "goals": [g.to_json() for g in self.goals],
             "calibration": dict(self.calibration),
         }
@@ -749,9 +759,9 @@ def sim_to_real(
     for source in (s for r in recipes for s in r.sources):
         if source not in sources:
             sources.append(source)
-    scenarios_seen = [s.scenario for s in sources]
-    if len(set(scenarios_seen)) != len(scenarios_seen):
-        raise ValueError(f"recipes must use one source per scenario, got {scenarios_seen}")
+    names_seen = [s.name for s in sources]
+    if len(set(names_seen)) != len(names_seen):
+        raise ValueError(f"recipes' sources must each have their own name, got {names_seen}")
     generated = generate_sources(
         sources, root=synthetic_root, seed=seed, progress=progress_bars, executor=executor
     )
@@ -768,12 +778,20 @@ def sim_to_real(
         progress=progress_bars,
         executor=executor,
     )
-    if (
-        "mingle" in validation
-        and validation_sources[scenarios_seen.index("mingle")].episodes >= party_episodes
-    ):
+    same_party = [  # a validation source of the party with its defaults: its first episodes
+        s
+        for s in validation_sources
+        if s.scenario == party_source.scenario
+        and not s.options
+        and not s.annotation
+        and not s.tracker_noise
+        and s.episodes >= party_episodes
+    ]
+    if same_party:
         party = tuple(
-            f for f in validation["mingle"] if int(f.sequence.rsplit("-", 1)[1]) < party_episodes
+            f
+            for f in validation[same_party[0].name]
+            if int(f.sequence.rsplit("-", 1)[1]) < party_episodes
         )
     else:
         party = generate_sources(
@@ -782,12 +800,12 @@ def sim_to_real(
             seed=held_seed,
             progress=progress_bars,
             executor=executor,
-        )["mingle"]
+        )[party_source.name]
 
     training: dict[str, tuple[Frame, ...]] = {}
     training_json: dict[str, Any] = {}
     for entry in recipes:
-        kept = balance_pairs({s.scenario: generated[s.scenario] for s in entry.sources})
+        kept = balance_pairs({s.name: generated[s.name] for s in entry.sources})
         frames = _cap(_sum_of(kept), max_training_pairs)
         training[entry.name] = frames
         training_json[entry.name] = {"frames": len(frames), "pairs": count_pairs(frames)}
@@ -857,7 +875,11 @@ def sim_to_real(
         roles[label] = "salsa-trained"
     gcff_one = f"GCFF, one setting ({PAPER_STRIDE_M:g} m, {PAPER_MDL_M2 * 1e4:,.0f} cm²)"
     units.append(
-        (gcff_one, make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2), scored_sets)
+        (
+            gcff_one,
+            make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
+            (*scored_sets, SALSA_TRAIN_SET),
+        )
     )
     roles[gcff_one] = "gcff-one"
     gcff_own = "GCFF, each dataset's own settings"
@@ -935,6 +957,16 @@ def sim_to_real(
         )
         for name in (tests if len(tests) > 1 else ())
     )
+    compared = {d: e for d, e in ranked.items() if roles.get(d) or d == recommended.label}
+    rank_compared = rank_agreement(compared, weights, tuple(tests))
+    never_trained = {d: e for d, e in ranked.items() if roles.get(d) != "salsa-trained"}
+    rank_salsa_train = rank_agreement(
+        never_trained,
+        weights,
+        tuple(tests),
+        simulated=(SALSA_TRAIN_SET,),
+        benchmark=SALSA_TRAIN_SET,
+    )
 
     say("calibration: the recommended recipe's data against each real dataset")
     calibration = {
@@ -955,6 +987,8 @@ def sim_to_real(
         rank_field=rank_field,
         rank_recorded=rank_recorded,
         rank_between_real=rank_between_real,
+        rank_compared=rank_compared,
+        rank_salsa_train=rank_salsa_train,
         goals=(),
         calibration=calibration,
         training=training_json,

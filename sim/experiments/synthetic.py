@@ -77,6 +77,8 @@ class SyntheticSource:
             (exact), ``"random"`` (one model drawn per episode from
             :data:`reform.annotation.ANNOTATION_RANGES`) or an
             :class:`reform.annotation.AnnotationModel`'s settings as a mapping.
+        name: the source's name in results (default: its scenario); two sources of one
+            scenario (its defaults and other options, say) need two names.
     """
 
     scenario: str
@@ -86,8 +88,11 @@ class SyntheticSource:
     duration: float | None = None
     tracker_noise: bool = False
     annotation: str | Mapping[str, Any] | None = None
+    name: str = ""
 
     def __post_init__(self) -> None:
+        if not self.name:
+            object.__setattr__(self, "name", self.scenario)
         if isinstance(self.episodes, bool) or not isinstance(self.episodes, int):
             raise ValueError(f"episodes must be an int >= 1, got {self.episodes!r}")
         if self.episodes < 1:
@@ -124,6 +129,7 @@ class SyntheticSource:
 
     def to_json(self) -> dict[str, Any]:
         return {
+            "name": self.name,
             "scenario": self.scenario,
             "episodes": self.episodes,
             "options": dict(self.options),
@@ -182,7 +188,7 @@ def generate_sources(
     """Generates (or reuses) every source's episodes under ``root`` and reads them back.
 
     Args:
-        sources: the sources, one per scenario.
+        sources: the sources, each with its own name.
         root: folder holding one generated dataset per source (:meth:`SyntheticSource.folder`).
         seed: master seed of every source.
         n_jobs: worker processes of the generation (default: every core).
@@ -191,11 +197,12 @@ def generate_sources(
             local processes.
 
     Returns:
-        ``scenario -> annotated frames``, in the order of ``sources``.
+        ``source name -> annotated frames`` (:attr:`SyntheticSource.name`, by default its
+        scenario), in the order of ``sources``.
     """
-    names = [s.scenario for s in sources]
+    names = [s.name for s in sources]
     if len(set(names)) != len(names):
-        raise ValueError(f"sources must name each scenario once, got {names}")
+        raise ValueError(f"sources must each have their own name, got {names}")
     _check_synthetic_root(Path(root))
     backend = {"n_jobs": n_jobs}
     if executor is not None:
@@ -221,7 +228,7 @@ def generate_sources(
         )
         dataset = read_parquet(folder)
         wanted = {f"{source.scenario}-{k}" for k in range(source.episodes)}
-        out[source.scenario] = tuple(f for f in dataset.annotated() if f.sequence in wanted)
+        out[source.name] = tuple(f for f in dataset.annotated() if f.sequence in wanted)
     return out
 
 

@@ -208,6 +208,38 @@ def test_rank_agreement_is_kendalls_tau_of_the_rows(tiny) -> None:
     assert recorded.simulated[gcff] != pytest.approx(rank.simulated[gcff])
 
 
+def test_rank_agreement_over_the_compared_detectors_and_on_salsas_training_split(tiny) -> None:
+    result, _, _, _ = tiny
+    rank, gcff_one = result.rank, result.detectors("gcff-one")[0]
+    compared = result.rank_compared
+    assert compared.detectors == (
+        result.recommended.label,
+        *result.detectors("salsa-trained"),
+        gcff_one,
+    )
+    party = {d: s for d, s in zip(rank.detectors, rank.simulated, strict=True)}
+    assert compared.simulated == tuple(party[d] for d in compared.detectors)
+    assert compared.tau == pytest.approx(
+        kendalltau(compared.simulated, compared.real).statistic, nan_ok=True
+    )
+    # SALSA's training split ranks only the detectors that never trained on it.
+    train = result.rank_salsa_train
+    assert train.benchmark == "salsa (training split)"
+    assert set(train.detectors) == set(rank.detectors) - set(result.detectors("salsa-trained"))
+    on_train = {s["label"]: s["salsa_train_f1"] for s in result.selection}
+    for name, f1, real in zip(train.detectors, train.simulated, train.real, strict=True):
+        assert real == pytest.approx(result.mean_f1(name))
+        if name != gcff_one:
+            assert f1 == pytest.approx(on_train[name])
+    assert 0.0 < train.simulated[train.detectors.index(gcff_one)] <= 1.0
+    document = result.to_json()
+    assert document["rank_compared"]["tau"] == pytest.approx(compared.tau, nan_ok=True)
+    assert document["rank_salsa_train"]["benchmark"] == "salsa (training split)"
+    markdown = to_markdown(result, command="reform-sim experiment sim2real", figures=())
+    assert f"Kendall's tau **{compared.tau:.2f}**" in markdown
+    assert f"tau **{train.tau:.2f}**" in markdown
+
+
 def test_goals_follow_from_the_scores(tiny) -> None:
     result, _, _, _ = tiny
     goals = {g.name: g for g in result.goals}

@@ -92,9 +92,21 @@ def test_generate_sources_refuses_a_foreign_folder_and_repeated_scenarios(tmp_pa
     with pytest.raises(ValueError, match=r"expected a folder of generated datasets .*features.txt"):
         generate_sources([SyntheticSource("mingle", episodes=1)], root=tmp_path, seed=0)
     (tmp_path / "features.txt").unlink()
-    with pytest.raises(ValueError, match="sources must name each scenario once"):
+    with pytest.raises(ValueError, match="sources must each have their own name"):
         source = SyntheticSource("mingle", episodes=1)
         generate_sources([source, dataclasses.replace(source)], root=tmp_path, seed=0)
+
+
+def test_two_sources_of_one_scenario_come_back_under_their_names(tmp_path) -> None:
+    plain = SyntheticSource("mingle", episodes=1, duration=20.0, rate=0.5, options={"people": 8})
+    close = dataclasses.replace(plain, options={"people": 8, "spacing": 0.46}, name="close")
+    assert plain.name == "mingle" and plain.to_json()["name"] == "mingle"
+    out = generate_sources([plain, close], root=tmp_path, seed=0, progress=False)
+    assert list(out) == ["mingle", "close"]
+    assert plain.folder(0) != close.folder(0)
+    assert len(out["mingle"]) == len(out["close"]) == 10  # 20 s at 0.5 Hz
+    # Each its own party: the closer bodies stand elsewhere.
+    assert not np.array_equal(out["mingle"][-1].position, out["close"][-1].position)
 
 
 def test_source_annotation_is_checked_and_names_its_folder() -> None:
