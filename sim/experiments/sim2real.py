@@ -98,6 +98,7 @@ __all__ = [
     "Score",
     "SimToReal",
     "candidates",
+    "choice_shares",
     "recipe",
     "recorded_views",
     "salsa_views",
@@ -343,6 +344,17 @@ def _resampled_f1(evaluation: Evaluation, weights: np.ndarray) -> np.ndarray:
     return np.where(denominator > 0, 2 * p * r / np.where(denominator > 0, denominator, 1), 0.0)
 
 
+def choice_shares(scores: np.ndarray) -> np.ndarray:
+    """How often each candidate would be chosen: (C,) shares of the columns of (C, B) resampled
+    selection scores in which it has the best one (the first candidate on a tie, as the choice
+    itself breaks ties)."""
+    scores = np.asarray(scores, dtype=np.float64)
+    if scores.ndim != 2 or scores.shape[0] == 0 or scores.shape[1] == 0:
+        raise ValueError(f"scores must be a (candidates, resamples) array, got {scores.shape}")
+    winners = np.argmax(np.round(scores, 12), axis=0)
+    return np.bincount(winners, minlength=scores.shape[0]) / scores.shape[1]
+
+
 def _interval(samples: np.ndarray) -> tuple[float, float]:
     tail = 50.0 * (1.0 - CONFIDENCE)
     low, high = np.percentile(samples, [tail, 100.0 - tail])
@@ -496,6 +508,9 @@ class SimToReal:
         selection: one entry per candidate: its label, recipe, classifier, options, F1 on
             SALSA's training split, F1 per validation source and the selection score.
         recommended: the chosen candidate.
+        choice_stability: candidate label -> the share of bootstrap resamples of the frames the
+            choice sees (SALSA's training split, the validation episodes) in which it has the
+            best selection score; candidates that never have it are left out.
         datasets: the real datasets' labels, in table order.
         scores: every detector on every real dataset and on the simulated party.
         rank: the rank agreement between the default simulated party and the real datasets.
@@ -524,6 +539,7 @@ class SimToReal:
     recipes: tuple[Recipe, ...]
     selection: tuple[Mapping[str, Any], ...]
     recommended: Candidate
+    choice_stability: Mapping[str, float]
     datasets: tuple[str, ...]
     scores: tuple[Score, ...]
     rank: RankAgreement
@@ -570,6 +586,7 @@ class SimToReal:
             "recipes": [r.to_json() for r in self.recipes],
             "selection": [dict(s) for s in self.selection],
             "recommended": self.recommended.to_json(),
+            "choice_stability": dict(self.choice_stability),
             "datasets": list(self.datasets),
             "frames": dict(self.frames),
             "training": dict(self.training),
@@ -875,6 +892,19 @@ def sim_to_real(
         entry["chosen"] = k == best
     if out_model is not None:
         save_model(fitted[best][0], out_model)
+    resampled = np.stack(  # (candidates, resamples) selection scores; views share their frames
+        [
+            (
+                np.mean([_resampled_f1(evals[n], weights[SALSA_TRAIN_SET]) for n in views], axis=0)
+                + np.mean([_resampled_f1(evals[n], weights[n]) for n in validation_names], axis=0)
+            )
+            / 2
+            for _, evals in fitted
+        ]
+    )
+    stability = {
+        pool[k].label: share for k, share in enumerate(choice_shares(resampled)) if share > 0
+    }
 
     say("REFORM trained on SALSA's training split, GCFF with one setting and with each own")
     scored_sets = [*party_views, *validation_names, *tests]
@@ -993,6 +1023,7 @@ def sim_to_real(
         recipes=tuple(recipes),
         selection=tuple(selection),
         recommended=recommended,
+        choice_stability=stability,
         datasets=tuple(tests),
         scores=tuple(scores),
         rank=rank,

@@ -48,6 +48,11 @@ def sim2real_figure(result: SimToReal, path: str | os.PathLike[str]) -> Path:
     )
 
 
+def _share(share: float) -> str:
+    """A share in %: whole points, or below 1 % as such rather than rounded to 0."""
+    return "< 1 %" if 0.0 < share < 0.005 else f"{100 * share:.0f} %"
+
+
 def _short(result: SimToReal, detector: str) -> str:
     if detector == result.recommended.label:
         return f"recommended: {detector}"
@@ -210,6 +215,18 @@ def to_markdown(
         "scored frame is seen by the choice.",
         "",
     ]
+    if result.choice_stability:
+        shares = sorted(result.choice_stability.items(), key=lambda item: -item[1])
+        own = result.choice_stability.get(result.recommended.label, 0.0)
+        lines += [
+            "How sure the choice is: resampling the frames it sees (SALSA's training split by "
+            "stretches of time, each validation source's episodes), the best selection score "
+            "goes to "
+            + "; ".join(f"{label} {_share(share)}" for label, share in shares[:5])
+            + (f"; {len(shares) - 5} others the rest" if len(shares) > 5 else "")
+            + f". The recommended candidate has it in {_share(own)} of the resamples.",
+            "",
+        ]
     names = list(result.selection[0]["validation_f1"]) if result.selection else []
     views = list(result.selection[0]["salsa_views_f1"])[1:] if result.selection else []
     rows = []

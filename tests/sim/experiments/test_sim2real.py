@@ -20,6 +20,7 @@ from sim.experiments.sim2real import (
     Candidate,
     Recipe,
     candidates,
+    choice_shares,
     sim_to_real,
 )
 from sim.experiments.sim2real_report import (
@@ -107,6 +108,32 @@ def test_the_choice_is_the_best_selection_score(tiny) -> None:
     best = max(result.selection, key=lambda e: e["score"])
     assert [e["chosen"] for e in result.selection].count(True) == 1
     assert best["chosen"] and best["label"] == result.recommended.label
+
+
+def test_choice_shares_count_the_resamples_each_candidate_wins() -> None:
+    scores = np.array(
+        [
+            [0.8, 0.7, 0.5, 0.6],
+            [0.7, 0.9, 0.5, 0.6],  # ties (columns 2 and 3) go to the first candidate
+            [0.1, 0.1, 0.1, 0.1],
+        ]
+    )
+    assert choice_shares(scores).tolist() == [0.75, 0.25, 0.0]
+    with pytest.raises(ValueError, match=r"scores must be a \(candidates, resamples\) array"):
+        choice_shares(np.zeros((3, 0)))
+
+
+def test_how_sure_the_choice_is(tiny) -> None:
+    result, _, _, _ = tiny
+    stability = result.choice_stability
+    assert sum(stability.values()) == pytest.approx(1.0)
+    assert set(stability) <= {s["label"] for s in result.selection}
+    assert all(0.0 < share <= 1.0 for share in stability.values())
+    assert result.to_json()["choice_stability"] == dict(stability)
+    markdown = to_markdown(result, command="reform-sim experiment sim2real", figures=())
+    own = stability.get(result.recommended.label, 0.0)
+    shown = "< 1 %" if 0.0 < own < 0.005 else f"{100 * own:.0f} %"
+    assert f"The recommended candidate has it in {shown} of the resamples." in markdown
 
 
 def test_the_choice_never_sees_a_scored_dataset(tiny, salsa_dataset, tmp_path) -> None:
