@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import mujoco
 import numpy as np
@@ -68,6 +68,37 @@ PALETTE: tuple[tuple[float, float, float], ...] = (
     (0.00, 0.30, 0.55),
     (0.60, 0.90, 0.30),
 )
+
+
+class _Texture(NamedTuple):
+    """A texture MuJoCo draws itself: its ``builtin`` pattern between two RGB colours, on a
+    square of ``pixels`` a side."""
+
+    type: mujoco.mjtTexture
+    builtin: mujoco.mjtBuiltin
+    rgb1: tuple[float, float, float]
+    rgb2: tuple[float, float, float]
+    pixels: int
+
+
+# The room's look: its textures (the floor's grid, the sky) and its plain materials' RGBA.
+_ROOM_TEXTURES = {
+    "floor_grid": _Texture(
+        mujoco.mjtTexture.mjTEXTURE_2D,
+        mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        (0.82, 0.82, 0.80),
+        (0.74, 0.74, 0.72),
+        256,
+    ),
+    "sky": _Texture(
+        mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+        mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+        (0.62, 0.72, 0.82),
+        (0.25, 0.28, 0.32),
+        64,
+    ),
+}
+_ROOM_COLOURS = {"wall": (0.90, 0.88, 0.84, 1.0), "furniture": (0.55, 0.38, 0.24, 1.0)}
 
 # Bodies and joints a person or robot asset must have (names inside the asset).
 _PERSON_PARTS = {"body": ("root", "torso", "head"), "joint": ("neck_yaw",)}
@@ -465,27 +496,19 @@ def _load(asset: str, parts: dict[str, tuple[str, ...]]) -> mujoco.MjSpec:
 def _add_room(spec: mujoco.MjSpec, scene: SceneSpec) -> None:
     sx, sy = scene.room
     world = spec.worldbody
-    spec.add_texture(
-        name="floor_grid",
-        type=mujoco.mjtTexture.mjTEXTURE_2D,
-        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
-        rgb1=[0.82, 0.82, 0.80],
-        rgb2=[0.74, 0.74, 0.72],
-        width=256,
-        height=256,
-    )
+    for name, texture in _ROOM_TEXTURES.items():
+        spec.add_texture(
+            name=name,
+            type=texture.type,
+            builtin=texture.builtin,
+            rgb1=list(texture.rgb1),
+            rgb2=list(texture.rgb2),
+            width=texture.pixels,
+            height=texture.pixels,
+        )
     floor_material = spec.add_material(name="floor", texrepeat=[sx, sy], texuniform=False)
     floor_material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor_grid"
-    spec.add_material(name="wall", rgba=[0.90, 0.88, 0.84, 1.0])
-    spec.add_texture(
-        name="sky",
-        type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
-        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
-        rgb1=[0.62, 0.72, 0.82],
-        rgb2=[0.25, 0.28, 0.32],
-        width=64,
-        height=64,
-    )
+    spec.add_material(name="wall", rgba=list(_ROOM_COLOURS["wall"]))
     world.add_geom(
         name="floor",
         type=mujoco.mjtGeom.mjGEOM_PLANE,
@@ -514,7 +537,7 @@ def _add_room(spec: mujoco.MjSpec, scene: SceneSpec) -> None:
             group=GEOM_GROUP_ROOM,
         )
     if scene.furniture:
-        spec.add_material(name="furniture", rgba=[0.55, 0.38, 0.24, 1.0])
+        spec.add_material(name="furniture", rgba=list(_ROOM_COLOURS["furniture"]))
     for k, item in enumerate(scene.furniture):
         length, depth, height = item.size
         x, y = item.position

@@ -501,9 +501,10 @@ def _read_file(
         ):
             raise DataFormatError(path, None, name, f"type {expected}", f"{column.type}")
         mask = column.is_null().to_numpy(zero_copy_only=False)
-        if not nullable and mask.any():
-            row = int(np.flatnonzero(mask)[0])
-            raise DataFormatError(path, f"row {row}", name, "a value", "null")
+        if not nullable:
+            DataFormatError.check_rows(
+                mask, path, lambda row: f"row {row}", name, "a value", show=lambda _: "null"
+            )
         null[name] = mask
         if type_name == "string":
             data[name] = np.array(column.to_pylist(), dtype=object)

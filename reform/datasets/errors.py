@@ -71,7 +71,7 @@ class DataFormatError(ValueError):
         where: Callable[[int], str],
         field: str | None,
         expected: str,
-        values: np.ndarray,
+        values: np.ndarray | None = None,
         show: Callable[[Any], str] = _float_repr,
     ) -> None:
         """Raises one naming the first row where ``bad`` holds; returns when none does.
@@ -83,12 +83,15 @@ class DataFormatError(ValueError):
             field: the field, or None.
             expected: what the rule asks.
             values: (n,) the values checked: the message shows that row's, written by ``show``
-                (by default ``repr(float(value))``).
+                (by default ``repr(float(value))``); None when a breach has no value to show
+                (a null), and ``show(None)`` says what was found.
         """
         rows = bad.nonzero()[0]
         if rows.size:
             row = int(rows[0])
-            raise cls(path, where(row), field, expected, show(values[row]))
+            raise cls(
+                path, where(row), field, expected, show(None if values is None else values[row])
+            )
 
     def __reduce__(self) -> tuple:
         # Rebuilt from its fields, so that it survives pickling (errors of worker processes).
