@@ -244,6 +244,20 @@ def _set(table: pa.Table, name: str, row: int, value) -> pa.Table:
     )
 
 
+def test_a_null_where_a_value_is_required_names_its_row(tmp_path):
+    def change(table: pa.Table) -> pa.Table:  # a writer that left the column nullable
+        values = table.column("frame").to_pylist()
+        values[3] = None
+        index = table.schema.get_field_index("frame")
+        return table.set_column(index, "frame", pa.array(values, type=pa.int64()))
+
+    path = _rewrite(tmp_path, change)
+    with pytest.raises(
+        DataFormatError, match=r"bad.parquet: row 3: field 'frame': expected a value, found null"
+    ):
+        read_parquet(path)
+
+
 def test_missing_column(tmp_path):
     path = _rewrite(tmp_path, lambda t: t.drop_columns(["yaw"]))
     with pytest.raises(DataFormatError, match=r"bad.parquet: field 'yaw': expected a column 'yaw'"):
