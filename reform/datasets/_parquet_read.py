@@ -460,6 +460,12 @@ def _read_file(
         raise DataFormatError(
             path, None, None, "a readable Parquet file", f"{type(exc).__name__}: {exc}"
         ) from exc
+    try:
+        columns = table.column_names
+    except UnicodeDecodeError as exc:  # a column name's bytes are not UTF-8
+        raise DataFormatError(
+            path, None, "column names", "UTF-8 text", f"bytes that are not ({exc.reason})"
+        ) from None
     raw = (table.schema.metadata or {}).get(METADATA_KEY)
     if raw is None:
         raise DataFormatError(
@@ -490,10 +496,8 @@ def _read_file(
     data: dict[str, np.ndarray] = {}
     null: dict[str, np.ndarray] = {}
     for name, (type_name, nullable, _, _) in COLUMNS.items():
-        if name not in table.column_names:
-            raise DataFormatError(
-                path, None, name, f"a column {name!r}", f"columns {table.column_names}"
-            )
+        if name not in columns:
+            raise DataFormatError(path, None, name, f"a column {name!r}", f"columns {columns}")
         column = table.column(name)
         expected = _arrow_type(pa, type_name)
         if column.type != expected and not (

@@ -268,6 +268,20 @@ def test_parquet_with_one_splice(parquet_bytes, position, value, replace):
         _load(path)
 
 
+def test_a_column_name_that_is_not_utf8_is_one_line(parquet_bytes, tmp_path):
+    """The first byte of a column name in the file's schema (``group``, a length-prefixed
+    string) turned into one that UTF-8 cannot start with: found by the splice above."""
+    path = tmp_path / "x.parquet"
+    where = parquet_bytes.index(b"\x05group\x00") + 1
+    path.write_bytes(_splice(parquet_bytes, where, b"\x80", True))
+    with pytest.raises(DataFormatError) as caught:
+        load_dataset(path)
+    assert str(caught.value) == (
+        f"{path}: field 'column names': expected UTF-8 text, "
+        "found bytes that are not (invalid start byte)"
+    )
+
+
 @pytest.fixture(scope="module")
 def generated(tmp_path_factory) -> tuple[Path, int]:
     """A real folder of ``generate``: two short episodes, and its frame count."""
