@@ -14,6 +14,7 @@ from reform.datasets.fetch import (
     fetch,
     is_fetched,
     local_datasets_dir,
+    one_per_recording,
     registry,
     resolve,
 )
@@ -38,6 +39,7 @@ __all__ = [
     "load_gcff",
     "load_salsa",
     "local_datasets_dir",
+    "one_per_recording",
     "read_parquet",
     "registry",
     "resolve",

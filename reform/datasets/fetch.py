@@ -31,7 +31,7 @@ import posixpath
 import re
 import shutil
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from importlib import resources
 from os import PathLike
 from pathlib import Path, PurePosixPath
@@ -53,6 +53,7 @@ __all__ = [
     "fetch",
     "is_fetched",
     "local_datasets_dir",
+    "one_per_recording",
     "registry",
     "resolve",
 ]
@@ -186,6 +187,10 @@ class PublicDataset:
         licence: the licence note, when the registry gives one (a ``licence`` entry, else the
             clause of ``notes`` that mentions a licence), else None.
         files: its files, in the registry's order.
+        recording: the name of the entry holding the same recording packaged otherwise (the
+            Cocktail Party in DANTE's text files is ``cocktail-party`` recorded once), or None
+            when this entry is a recording of its own. A mean over datasets counts a recording
+            once (:func:`one_per_recording`).
     """
 
     name: str
@@ -197,6 +202,7 @@ class PublicDataset:
     notes: str
     licence: str | None
     files: tuple[DatasetFile, ...]
+    recording: str | None = None
 
     def __post_init__(self) -> None:
         _require(
@@ -232,6 +238,14 @@ class PublicDataset:
         duplicates = sorted({p for p in paths if paths.count(p) > 1})
         _require(not duplicates, "files", "each path once", duplicates)
         _require(MANIFEST not in self.local_names, "files", f"no file named {MANIFEST}", paths)
+        _require(
+            self.recording is None
+            or (isinstance(self.recording, str) and _NAME.fullmatch(self.recording) is not None),
+            "recording",
+            "the name of another dataset of the registry, or absent",
+            self.recording,
+        )
+        _require(self.recording != self.name, "recording", "another dataset's name", self.name)
 
     @property
     def bytes(self) -> int:
@@ -286,6 +300,7 @@ def _parse_entry(entry: Any) -> PublicDataset:
         notes=entry.get("notes", ""),
         licence=_licence_note(entry),
         files=tuple(parsed),
+        recording=entry.get("recording"),
     )
 
 
@@ -350,7 +365,34 @@ def _read_registry(path: str | PathLike[str] | None) -> tuple[PublicDataset, ...
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise DataFormatError(source, None, "name", "each dataset name once", ", ".join(twice))
+    own = {e.name for e in entries if e.recording is None}
+    for k, entry in enumerate(entries):
+        if entry.recording is not None and entry.recording not in own:
+            raise DataFormatError(
+                source,
+                f"dataset {k} ({entry.name!r})",
+                "recording",
+                f"the name of a dataset of the registry that is a recording of its own "
+                f"({', '.join(sorted(own))})",
+                repr(entry.recording),
+            )
     return tuple(entries)
+
+
+def one_per_recording(
+    names: Sequence[str], registry_path: str | PathLike[str] | None = None
+) -> tuple[list[str], dict[str, str]]:
+    """``names`` with each recording once: a dataset the registry marks as another packaging of
+    a recording (:attr:`PublicDataset.recording`) is left out when that recording is among
+    ``names`` too.
+
+    Returns:
+        The names kept, in order, and each name left out -> the name it repeats.
+    """
+    same = {e.name: e.recording for e in _read_registry(registry_path) if e.recording}
+    present = set(names)
+    kept = [n for n in names if same.get(n) not in present]
+    return kept, {n: same[n] for n in names if same.get(n) in present}
 
 
 def _kind(value: Any) -> str:

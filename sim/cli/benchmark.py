@@ -24,6 +24,7 @@ from sim.experiments.benchmark import (
     detector_spec,
     found_datasets,
     model_spec,
+    one_recording_each,
     run_benchmark,
 )
 from sim.experiments.benchmark_report import write_report
@@ -32,7 +33,10 @@ from sim.experiments.benchmark_report import write_report
 def _run(args: argparse.Namespace) -> int:
     check_backend(args)
     check_output("--out", args.out, folder=True)
-    names = args.data or found_datasets()
+    names = args.data
+    if not names:
+        names, left_out = one_recording_each(found_datasets())
+        print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
     if not names:
         raise CliError(
             "no datasets found: fetch the public ones with `reform-sim datasets fetch --all`, "

@@ -16,7 +16,7 @@ from reform.frame import Dataset
 from sim.cli._common import CliError, backend_words, check_output, executor_from_args
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
 from sim.cli._experiment_sim2real import BASENAME
-from sim.experiments.benchmark import found_datasets
+from sim.experiments.benchmark import found_datasets, one_recording_each
 from sim.experiments.sim2real import CLASSIFIER_NAMES, RECIPES, SALSA, sim_to_real
 from sim.experiments.sim2real_report import (
     calibration_figure,
@@ -29,14 +29,29 @@ FIGURES = (".png", "-rank.png", "-calibration.png")
 MODEL = "recommended.skops"
 
 
-def _folder_of_datasets(exc: DataFormatError) -> bool:
-    return str(exc.found or "").startswith("a folder of datasets")
+def _datasets_in(folder: Path) -> list[Path]:
+    """The subfolders of ``folder`` that hold a dataset in a format read here, in name order
+    (none when ``folder`` is not a folder)."""
+    if not folder.is_dir():
+        return []
+    found = []
+    for child in sorted(folder.iterdir()):
+        if not child.is_dir() or child.name.startswith((".", "_")):
+            continue
+        try:
+            detect_format(child)
+        except ValueError:
+            continue  # holds no dataset (a format none reads): not one of them
+        found.append(child)
+    return found
 
 
 def load_named(entries: list[str]) -> dict[str, Dataset]:
     """``--data`` values (or every dataset found) loaded: dataset name -> dataset. A folder of
-    datasets gives each dataset in it, named by its folder."""
+    datasets gives each dataset in it, named by its folder. A recording is scored once: a
+    second packaging of it that was found, not named, is left out (said on stderr)."""
     named: dict[str, str] = {}
+    chosen: set[str] = set()  # the datasets named one by one on the command line
     for value in entries or found_datasets():
         name, sep, path = value.partition("=")
         if sep and (not name or not path):
@@ -47,22 +62,21 @@ def load_named(entries: list[str]) -> dict[str, Dataset]:
     for name, where in named.items():
         try:
             out[name] = load_dataset(resolve(where))
+            chosen.update([name] if entries else [])
         except FileNotFoundError as exc:
             raise CliError(f"--data {where}: {exc}") from None
         except DataFormatError as exc:
-            if not _folder_of_datasets(exc):
+            children = _datasets_in(Path(resolve(where)))
+            if not children:  # one dataset, malformed
                 raise CliError(str(exc)) from None
-            for child in sorted(Path(where).iterdir()):
-                if not child.is_dir() or child.name.startswith((".", "_")):
-                    continue
-                try:
-                    detect_format(child)
-                except ValueError:
-                    continue  # holds no dataset (a format none reads): not one of them
+            for child in children:  # a folder of datasets
                 try:
                     out.setdefault(child.name.lower(), load_dataset(child))
                 except DataFormatError as inner:
                     raise CliError(str(inner)) from None
+    kept, left_out = one_recording_each(list(out), named=chosen)
+    print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
+    out = {name: out[name] for name in kept}
     if SALSA not in out:
         raise CliError(
             "the experiment needs SALSA (its training split is the one real set the choice may "

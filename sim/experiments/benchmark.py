@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,6 +38,7 @@ from reform.datasets import (
     is_fetched,
     load_dataset,
     local_datasets_dir,
+    one_per_recording,
     registry,
     resolve,
 )
@@ -63,6 +64,7 @@ __all__ = [
     "dataset_spec",
     "detector_spec",
     "found_datasets",
+    "one_recording_each",
     "run_benchmark",
 ]
 
@@ -233,6 +235,25 @@ def found_datasets() -> list[str]:
                     continue
                 names.append(child.name)
     return names
+
+
+def one_recording_each(
+    names: Sequence[str], *, named: Collection[str] = ()
+) -> tuple[list[str], list[str]]:
+    """``names`` with each recording once, so that a mean over datasets counts it once: a second
+    packaging of a recording that is among ``names`` too (`reform.datasets.one_per_recording`)
+    is left out, unless it is one of ``named`` (chosen by the user).
+
+    Returns:
+        The names kept, in order, and one line for each name left out, saying why.
+    """
+    _, repeats = one_per_recording(names)
+    left_out = {n: r for n, r in repeats.items() if n not in named}
+    lines = [
+        f"{n} left out: the same recording as {r}, which is scored (give --data {n} to score it)"
+        for n, r in left_out.items()
+    ]
+    return [n for n in names if n not in left_out], lines
 
 
 def dataset_spec(

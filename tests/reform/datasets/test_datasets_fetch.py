@@ -28,6 +28,7 @@ from reform.datasets import (
     is_fetched,
     load_dataset,
     local_datasets_dir,
+    one_per_recording,
     registry,
     resolve,
 )
@@ -490,10 +491,14 @@ def _packaged_registry() -> Path:
 
 
 def test_the_packaged_registry_is_the_shared_reference():
+    """The shared reference, plus what the project knows: which entries repackage a recording."""
     reference = _reference_registry()
     if reference is None:
         pytest.skip("../shared/reference/public-datasets.json not found")
-    assert json.loads(_packaged_registry().read_text()) == json.loads(reference.read_text())
+    packaged = json.loads(_packaged_registry().read_text())
+    same = {e["name"]: e.pop("recording") for e in packaged["datasets"] if "recording" in e}
+    assert packaged == json.loads(reference.read_text())
+    assert same == {"cocktail-party-dante": "cocktail-party"}
 
 
 def test_the_packaged_registry_pins_every_file():
@@ -528,6 +533,20 @@ def test_registry_reads_the_packaged_file():
     babble = datasets["babble"]
     assert babble.local_names == ("Motion-capture-data.csv", "annotated-frames.csv", "Readme.txt")
     assert [f.commit[:7] for f in babble.files] == ["f6f62a5", "4867794", "4867794"]
+    assert datasets["cocktail-party-dante"].recording == "cocktail-party"
+    assert {d.recording for n, d in datasets.items() if n != "cocktail-party-dante"} == {None}
+
+
+def test_one_per_recording_leaves_out_a_second_packaging():
+    names = ["coffeebreak", "cocktail-party", "salsa", "cocktail-party-dante", "babble"]
+    kept, left_out = one_per_recording(names)
+    assert kept == ["coffeebreak", "cocktail-party", "salsa", "babble"]
+    assert left_out == {"cocktail-party-dante": "cocktail-party"}
+    # alone, the second packaging is the recording's only copy: it stays
+    assert one_per_recording(["salsa", "cocktail-party-dante"]) == (
+        ["salsa", "cocktail-party-dante"],
+        {},
+    )
 
 
 def _broken(tmp_path: Path, edit) -> Path:
@@ -585,6 +604,16 @@ def _set_file(key, value):
             r"dataset 0 \('tiny'\): field 'files': expected a non-empty list, found \[\]",
         ),
         (lambda d: d.pop("datasets"), r"field 'datasets': expected an object with a list"),
+        (
+            lambda d: d["datasets"][1].update(recording="nowhere"),
+            r"dataset 1 \('flat'\): field 'recording': expected the name of a dataset of the "
+            r"registry that is a recording of its own \(tiny\), found 'nowhere'",
+        ),
+        (
+            lambda d: d["datasets"][1].update(recording="flat"),
+            r"dataset 1 \('flat'\): field 'recording': expected another dataset's name, "
+            r"found 'flat'",
+        ),
     ],
     ids=[
         "short-sha256",
@@ -596,6 +625,8 @@ def _set_file(key, value):
         "bad-name",
         "no-files",
         "no-datasets",
+        "recording-unknown",
+        "recording-itself",
     ],
 )
 def test_a_malformed_registry_is_one_clear_error(edit, message, tmp_path):

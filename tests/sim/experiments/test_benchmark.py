@@ -16,6 +16,7 @@ from sim.cli import main
 from sim.experiments.benchmark import (
     DatasetSpec,
     detector_spec,
+    one_recording_each,
     run_benchmark,
 )
 
@@ -212,3 +213,14 @@ def test_the_mean_over_common_datasets_compares_like_with_like(small):
     common = result.means(result.common_datasets())
     assert common[detectors[1].label]["datasets"] == 1
     assert result.means()[detectors[1].label]["datasets"] == 2
+
+
+def test_a_mean_over_the_datasets_found_counts_a_recording_once():
+    found = ["coffeebreak", "cocktail-party", "synth", "cocktail-party-dante", "babble"]
+    kept, lines = one_recording_each(found)
+    assert kept == ["coffeebreak", "cocktail-party", "synth", "babble"]
+    assert lines == [
+        "cocktail-party-dante left out: the same recording as cocktail-party, which is scored "
+        "(give --data cocktail-party-dante to score it)"
+    ]
+    assert one_recording_each(found, named={"cocktail-party-dante"}) == (found, [])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -390,6 +391,33 @@ def test_cli_reads_a_folder_of_datasets(shared_datasets) -> None:
     named = load_named([str(shared_datasets)])
     assert {"salsa", "babble", "coffeebreak", "synth"} <= set(named)
     assert named["salsa"].name.lower().startswith("salsa")
+
+
+def _tiny_dante(folder: Path) -> None:
+    folder.mkdir(parents=True)
+    (folder / "features.txt").write_text("0.0 ID_001 1.0 1.0 0.0 ID_002 2.0 1.0 3.14\n")
+    (folder / "group_names.txt").write_text("0.0 < ID_001 ID_002 > \n")
+
+
+def test_cli_scores_a_recording_once(shared_datasets, tmp_path, capsys) -> None:
+    """Both packagings of the Cocktail Party in a folder of datasets: the second is left out,
+    with one line saying so; named one by one, both are scored."""
+    from sim.cli.experiment_sim2real import load_named
+
+    (tmp_path / "salsa").symlink_to(shared_datasets / "salsa")
+    _tiny_dante(tmp_path / "cocktail-party")
+    _tiny_dante(tmp_path / "cocktail-party-dante")
+    assert set(load_named([str(tmp_path)])) == {"salsa", "cocktail-party"}
+    err = capsys.readouterr().err
+    assert err == (
+        "cocktail-party-dante left out: the same recording as cocktail-party, which is scored "
+        "(give --data cocktail-party-dante to score it)\n"
+    )
+    both = load_named(
+        [str(tmp_path / n) for n in ("salsa", "cocktail-party", "cocktail-party-dante")]
+    )
+    assert set(both) == {"salsa", "cocktail-party", "cocktail-party-dante"}
+    assert capsys.readouterr().err == ""
 
 
 def test_an_undefined_tau_is_said_not_invented() -> None:
