@@ -131,7 +131,7 @@ TAU_GOAL = 0.8  # goal 4: rank agreement between simulation and the real dataset
 BOOTSTRAP_BLOCKS = 10  # stretches of time per sequence: the clusters the bootstrap resamples
 BOOTSTRAP_RESAMPLES = 1000
 CONFIDENCE = 0.95
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 
 # REFORM's options compared (keyword arguments of reform.Reform, docs/guide/reform.md): {} is
 # the paper's method; then scale-free pair features, correlation clustering over the pair
@@ -526,6 +526,8 @@ class SimToReal:
         rank_salsa_train: another reference: SALSA's training split, real data that none of
             the detectors ranked trained on (the candidates and GCFF with one setting),
             against the real mean.
+        rank_salsa_halves: the same detectors ranked by SALSA's training split against its
+            test split: how far two parts of one recording agree.
         goals: the issue's goals, checked.
         calibration: set -> shape and pair statistics (the recommended recipe's synthetic
             data and each real dataset).
@@ -548,6 +550,7 @@ class SimToReal:
     rank_between_real: tuple[RankAgreement, ...]
     rank_compared: RankAgreement
     rank_salsa_train: RankAgreement
+    rank_salsa_halves: RankAgreement
     goals: tuple[Goal, ...]
     calibration: Mapping[str, Any]
     training: Mapping[str, Any]
@@ -601,6 +604,7 @@ class SimToReal:
             "rank_between_real": [r.to_json() for r in self.rank_between_real],
             "rank_compared": self.rank_compared.to_json(),
             "rank_salsa_train": self.rank_salsa_train.to_json(),
+            "rank_salsa_halves": self.rank_salsa_halves.to_json(),
             "goals": [g.to_json() for g in self.goals],
             "calibration": dict(self.calibration),
         }
@@ -1009,6 +1013,13 @@ def sim_to_real(
         simulated=(SALSA_TRAIN_SET,),
         benchmark=SALSA_TRAIN_SET,
     )
+    rank_salsa_halves = rank_agreement(
+        never_trained,
+        weights,
+        (labels[SALSA],),
+        simulated=(SALSA_TRAIN_SET,),
+        benchmark=SALSA_TRAIN_SET,
+    )
 
     say("calibration: the recommended recipe's data against each real dataset")
     calibration = {
@@ -1032,6 +1043,7 @@ def sim_to_real(
         rank_between_real=rank_between_real,
         rank_compared=rank_compared,
         rank_salsa_train=rank_salsa_train,
+        rank_salsa_halves=rank_salsa_halves,
         goals=(),
         calibration=calibration,
         training=training_json,

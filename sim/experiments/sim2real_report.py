@@ -292,6 +292,7 @@ def to_markdown(
             "datasets agree among themselves is as good a predictor as another real dataset.",
         ]
     compared, train = result.rank_compared, result.rank_salsa_train
+    halves = result.rank_salsa_halves
     lines += [
         "",
         f"Two more views. Over the {len(compared.detectors)} detectors the experiment compares "
@@ -301,7 +302,11 @@ def to_markdown(
         f"{compared.interval[1]:.2f}). And real data that no ranked detector trained on, "
         f"{SALSA_TRAIN_SET} as recorded, ranks the {len(train.detectors)} detectors trained "
         f"elsewhere (every candidate, GCFF with one setting) against the real mean with tau "
-        f"**{train.tau:.2f}** ({train.interval[0]:.2f} to {train.interval[1]:.2f}).",
+        f"**{train.tau:.2f}** ({train.interval[0]:.2f} to {train.interval[1]:.2f}), and "
+        f"against SALSA's test split, the rest of the same recording, with tau "
+        f"**{halves.tau:.2f}** "
+        f"({halves.interval[0]:.2f} to {halves.interval[1]:.2f}): two parts of one recording "
+        "put these detectors in different orders.",
     ]
     lines.append("")
     lines += [

@@ -260,12 +260,22 @@ def test_rank_agreement_over_the_compared_detectors_and_on_salsas_training_split
         if name != gcff_one:
             assert f1 == pytest.approx(on_train[name])
     assert 0.0 < train.simulated[train.detectors.index(gcff_one)] <= 1.0
+    # ... and against SALSA's test split alone: the rest of the same recording.
+    halves = result.rank_salsa_halves
+    assert halves.detectors == train.detectors and halves.simulated == train.simulated
+    for name, test in zip(halves.detectors, halves.real, strict=True):
+        assert test == pytest.approx(result.score(name, "salsa (test split)").f1)
+    assert halves.tau == pytest.approx(
+        kendalltau(halves.simulated, halves.real).statistic, nan_ok=True
+    )
     document = result.to_json()
     assert document["rank_compared"]["tau"] == pytest.approx(compared.tau, nan_ok=True)
     assert document["rank_salsa_train"]["benchmark"] == "salsa (training split)"
     markdown = to_markdown(result, command="reform-sim experiment sim2real", figures=())
     assert f"Kendall's tau **{compared.tau:.2f}**" in markdown
     assert f"tau **{train.tau:.2f}**" in markdown
+    assert f"rest of the same recording, with tau **{halves.tau:.2f}**" in markdown
+    assert document["rank_salsa_halves"]["tau"] == pytest.approx(halves.tau, nan_ok=True)
 
 
 def test_goals_follow_from_the_scores(tiny) -> None:
