@@ -8,12 +8,16 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Iterator
+from collections import defaultdict
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from reform.atomic import file_kind
 from reform.datasets.errors import DataFormatError
+from reform.features import frame_scale
 from reform.frame import POSITION_LIMIT_M, Frame
 
 # Largest |angle| accepted from a file that stores wrapped radians (GCFF, Babble): pi plus the
@@ -29,6 +33,15 @@ UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
 # participant numbers cannot be negative, the public GCFF sets number people from 1, and
 # generated datasets from 0 (the robot). A negative id is refused with this reason.
 ID_RULE = "person ids are never negative"
+
+# Units of the files' positions per metre (positions are divided by it); "px" has its own scale.
+UNITS_PER_M = {"cm": 100.0, "m": 1.0}
+
+# The widest median spacing (distance from a person to their nearest neighbour, the median over
+# a dataset's people and frames) a file read in its format's usual unit may have, metres. The
+# field's datasets space people 0.2 to 2 m apart; DANTE's CoffeeBreak text files, which hold
+# centimetres where the DANTE format holds metres, read as metres put them 60 m and more apart.
+MAX_SPACING_M = 20.0
 
 # Longest line a text loader reads, characters: a SALSA line of 18 people is 1.3 kB, so this
 # holds about 14,000 people; a longer line is a corrupt file (a missing newline, binary data),
@@ -252,3 +265,66 @@ def note_absent_members(
             count=len(absent),
         )
     return absent
+
+
+def units_per_metre(units: str, metres_per_pixel: float | None) -> float:
+    """File units per metre of ``units`` (``"px"`` with its ``metres_per_pixel``).
+
+    Raises:
+        ValueError: an unknown unit, pixels without a scale, a scale for another unit, or a
+            scale that is not a positive finite number.
+    """
+    if units not in (*UNITS_PER_M, "px"):
+        raise ValueError(f"units must be one of {(*UNITS_PER_M, 'px')}, got {units!r}")
+    if units != "px":
+        if metres_per_pixel is not None:
+            raise ValueError(
+                f"metres_per_pixel is the scale of units='px', got it with units={units!r}"
+            )
+        return UNITS_PER_M[units]
+    if metres_per_pixel is None:
+        raise ValueError(
+            "units='px' needs metres_per_pixel (--metres-per-pixel M): pixel positions are "
+            "never read as metres"
+        )
+    if (
+        isinstance(metres_per_pixel, bool)
+        or not isinstance(metres_per_pixel, (int, float))
+        or not math.isfinite(metres_per_pixel)
+        or metres_per_pixel <= 0
+    ):
+        raise ValueError(f"metres_per_pixel must be a positive number, got {metres_per_pixel!r}")
+    return 1.0 / float(metres_per_pixel)
+
+
+def median_spacing(frames: Sequence[Frame]) -> float | None:
+    """The median, over frames of 2 people or more, of each frame's scale (the median distance
+    from a person to their nearest neighbour, `reform.features.frame_scale`), in the frames'
+    unit; None without such a frame."""
+    by_size: dict[int, list[np.ndarray]] = defaultdict(list)
+    for frame in frames:
+        if frame.n_people >= 2:
+            by_size[frame.n_people].append(frame.position)
+    if not by_size:
+        return None
+    scales = [np.atleast_1d(frame_scale(np.stack(group))) for group in by_size.values()]
+    return float(np.median(np.concatenate(scales)))
+
+
+def check_assumed_metres(frames: Sequence[Frame], *, path: Path) -> None:
+    """Refuses frames read in metres, the unit assumed rather than given, whose people stand
+    farther apart than any dataset of the field (:data:`MAX_SPACING_M`): the file holds another
+    unit, and every distance a detector saw would be wrong. A unit given on purpose is not
+    checked."""
+    spacing = median_spacing(frames)
+    if spacing is None or spacing <= MAX_SPACING_M:
+        return
+    raise DataFormatError(
+        path,
+        None,
+        "positions",
+        f"metres, people a median of at most {MAX_SPACING_M:g} m from their nearest neighbour",
+        f"a median of {spacing:.3g} (centimetres, read as metres?)",
+        hint="give units='cm' (--units cm) if the file holds centimetres, units='m' if it "
+        "holds metres",
+    )

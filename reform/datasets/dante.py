@@ -36,6 +36,7 @@ from reform.datasets._validation import (
     UNWRAPPED_ANGLE_LIMIT_RAD,
     Repairs,
     check_angle,
+    check_assumed_metres,
     check_coordinate,
     check_time_increases,
     check_unique_ids,
@@ -44,6 +45,7 @@ from reform.datasets._validation import (
     parse_float,
     read_lines,
     require_file,
+    units_per_metre,
 )
 from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset, Frame, Group, wrap_angle
@@ -83,6 +85,8 @@ def load_dante(
     groups_path: str | PathLike[str] | None = None,
     strict: bool = False,
     name: str | None = None,
+    units: str | None = None,
+    metres_per_pixel: float | None = None,
 ) -> Dataset:
     """Loads a dataset in the DANTE text format (SALSA, Cocktail Party, ...).
 
@@ -115,6 +119,12 @@ def load_dante(
             ``group_names.txt`` beside it).
         strict: refuse the quirks above instead of repairing them.
         name: the dataset's name (default: the folder's name).
+        units: the length unit of the file's positions, ``"m"``, ``"cm"`` or ``"px"`` (with
+            ``metres_per_pixel``). None reads metres, the format's unit, and refuses a file
+            whose people then stand farther apart than in any dataset of the field
+            (`reform.datasets._validation.MAX_SPACING_M`): DANTE's own CoffeeBreak files hold
+            centimetres. A unit given is not checked.
+        metres_per_pixel: the scale of ``units="px"``; refused with other units.
 
     Returns:
         The dataset, positions in metres, one sequence per session.
@@ -124,6 +134,7 @@ def load_dante(
             line, field, what was expected and what was found).
     """
     function = "load_salsa" if name == "salsa" else "load_dante"
+    per_metre = units_per_metre("m" if units is None else units, metres_per_pixel)
     path = path_argument(path, name="path", function=function)
     if groups_path is not None:
         groups_path = path_argument(groups_path, name="groups_path", function=function)
@@ -137,7 +148,9 @@ def load_dante(
     require_file(groups_file, what="a DANTE group file")
     repairs = Repairs(strict=strict)
 
-    rows, fake_blocks, width, rounded = _read_features(features_path, repairs=repairs)
+    rows, fake_blocks, width, rounded = _read_features(
+        features_path, repairs=repairs, per_metre=per_metre
+    )
     gt_lines = _read_groups(groups_file)
 
     # Match ground-truth lines to feature lines by their exact time string, in file order.
@@ -223,6 +236,10 @@ def load_dante(
     }
     if width == 5:
         metadata["head_position"] = "equal to the body position (the format has none)"
+    if units is None:
+        check_assumed_metres(frames, path=features_path)
+    else:
+        metadata["file_units"] = units
     return Dataset(
         frames=tuple(frames),
         name=folder.name if name is None else name,
@@ -339,9 +356,11 @@ def _number(token: str, *, path: Path, where: str, field: str, nan: list[str]) -
     return parse_float(token, path=path, where=where, field=field)
 
 
-def _read_features(path: Path, *, repairs: Repairs) -> tuple[list[_Row], int, int, bool]:
-    """The rows, the ``fake`` blocks skipped, the fields per person, and whether times are
-    rounded to 0.1 s."""
+def _read_features(
+    path: Path, *, repairs: Repairs, per_metre: float = 1.0
+) -> tuple[list[_Row], int, int, bool]:
+    """The rows (positions in metres: the file's divided by ``per_metre``), the ``fake``
+    blocks skipped, the fields per person, and whether times are rounded to 0.1 s."""
     lines = _read_lines(path)
     width = _layout(path, lines)
     times = [parse_float(tokens[0], path=path, where=f"line {n}", field="t") for n, tokens in lines]
@@ -398,8 +417,8 @@ def _read_features(path: Path, *, repairs: Repairs) -> tuple[list[_Row], int, in
             nan: list[str] = []
             x = _number(block[1], path=path, where=person_where, field="x", nan=nan)
             y = _number(block[2], path=path, where=person_where, field="y", nan=nan)
-            check_coordinate(x, path=path, where=person_where, field="x")
-            check_coordinate(y, path=path, where=person_where, field="y")
+            check_coordinate(x, path=path, where=person_where, field="x", per_metre=per_metre)
+            check_coordinate(y, path=path, where=person_where, field="y", per_metre=per_metre)
             angles = [
                 _number(token, path=path, where=person_where, field=field, nan=nan)
                 for token, field in zip(block[3:], angle_fields, strict=True)
@@ -433,7 +452,7 @@ def _read_features(path: Path, *, repairs: Repairs) -> tuple[list[_Row], int, in
                 sequence=f"session{session}",
                 time=time,
                 ids=np.array(ids, dtype=np.int64),
-                position=array[:, :2],
+                position=array[:, :2] / per_metre,
                 yaw=wrap_angle(array[:, 2]),
                 head_yaw=wrap_angle(array[:, 3]) if width == 5 else None,
             )

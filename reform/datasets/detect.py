@@ -15,11 +15,11 @@ __all__ = ["FORMATS", "FORMAT_ALIASES", "LENGTH_UNITS", "detect_format", "load_d
 FORMATS = ("salsa", "babble", "gcff", "parquet")
 # Other names of the formats: "dante" is the DANTE text format that SALSA's packaging uses.
 FORMAT_ALIASES = {"dante": "salsa"}
-# Length units a GCFF folder may be written in (the other formats are always metres); "px"
-# (image pixels) needs its scale, metres_per_pixel.
+# Length units a GCFF folder or a DANTE text file may be written in (the other formats are
+# always metres); "px" (image pixels) needs its scale, metres_per_pixel.
 LENGTH_UNITS = ("cm", "m", "px")
 # Formats whose files have one fixed length unit.
-_FIXED_UNITS = {"salsa": "m", "babble": "m", "parquet": "m"}
+_FIXED_UNITS = {"babble": "m", "parquet": "m"}
 
 # How deep detection looks for shards (DIR/scenario=.../episode=.../part.parquet is 2 levels).
 _PARQUET_DEPTH = 4
@@ -128,10 +128,13 @@ def load_dataset(
             (``s3://bucket/prefix``; `reform.datasets.store`).
         format: one of :data:`FORMATS` (or an alias, ``"dante"``); detected from ``path`` when
             None.
-        units: length unit of the file's positions, ``"cm"``, ``"m"`` or ``"px"``. Only GCFF
-            folders have a choice (default ``"cm"``, as the public GCFF datasets use; ``"px"``
-            for sets derived from pose estimation, with ``metres_per_pixel``); the other
-            formats are always metres, and giving another unit for them is an error.
+        units: length unit of the file's positions, ``"cm"``, ``"m"`` or ``"px"``. GCFF
+            folders (default ``"cm"``, as the public GCFF datasets use; ``"px"`` for sets
+            derived from pose estimation, with ``metres_per_pixel``) and DANTE text files
+            (default ``"m"``, the format's unit, checked: a file whose people then stand
+            farther apart than in any dataset of the field is refused, as DANTE's own
+            CoffeeBreak files in centimetres are) have a choice; Babble and Parquet are always
+            metres, and giving another unit for them is an error.
         metres_per_pixel: the scale of ``units="px"``.
         strict: refuse the quirks a loader otherwise repairs and counts in
             ``metadata["report"]["repairs"]`` (ground-truth members absent from the features,
@@ -182,7 +185,7 @@ def load_dataset(
     if format == "salsa":
         from reform.datasets.dante import load_dante
 
-        return load_dante(path, strict=strict)
+        return load_dante(path, strict=strict, units=units, metres_per_pixel=metres_per_pixel)
     if format == "babble":
         from reform.datasets.babble import load_babble
 

@@ -36,6 +36,7 @@ from reform.datasets._validation import (
     make_frame,
     note_absent_members,
     require_file,
+    units_per_metre,
 )
 from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
@@ -57,8 +58,6 @@ FEATURES_FILE = "features.mat"
 GROUNDTRUTH_FILE = "groundtruth.mat"
 SETTINGS_FILE = "settings_gc.mat"
 
-# Units of the files' positions per metre (positions are divided by it).
-_UNITS_PER_M = {"cm": 100.0, "m": 1.0}
 # GCFF files store radians, in [-pi, pi] in some sets and [0, 2pi) in others, and a little
 # beyond in sets derived from tracker output (Cocktail Party's run to 6.8 rad); anything up to
 # two full turns is accepted and wrapped. Beyond that the values look like degrees. Radians.
@@ -182,36 +181,6 @@ def load_gcff(
     return Dataset(
         frames=tuple(frames), name=folder.name, source=str(folder), units="m", metadata=metadata
     )
-
-
-def units_per_metre(units: str, metres_per_pixel: float | None) -> float:
-    """File units per metre of ``units`` (``"px"`` with its ``metres_per_pixel``).
-
-    Raises:
-        ValueError: an unknown unit, pixels without a scale, a scale for another unit, or a
-            scale that is not a positive finite number.
-    """
-    if units not in (*_UNITS_PER_M, "px"):
-        raise ValueError(f"units must be one of {(*_UNITS_PER_M, 'px')}, got {units!r}")
-    if units != "px":
-        if metres_per_pixel is not None:
-            raise ValueError(
-                f"metres_per_pixel is the scale of units='px', got it with units={units!r}"
-            )
-        return _UNITS_PER_M[units]
-    if metres_per_pixel is None:
-        raise ValueError(
-            "units='px' needs metres_per_pixel (--metres-per-pixel M): pixel positions are "
-            "never read as metres"
-        )
-    if (
-        isinstance(metres_per_pixel, bool)
-        or not isinstance(metres_per_pixel, (int, float))
-        or not math.isfinite(metres_per_pixel)
-        or metres_per_pixel <= 0
-    ):
-        raise ValueError(f"metres_per_pixel must be a positive number, got {metres_per_pixel!r}")
-    return 1.0 / float(metres_per_pixel)
 
 
 def sequence_folders(folder: Path) -> list[Path]:

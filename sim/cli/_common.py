@@ -304,8 +304,8 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool 
         "--units",
         choices=LENGTH_UNITS,
         default=None,
-        help="length unit of the file's positions (GCFF folders: default cm, or px for image "
-        "pixels with --metres-per-pixel; the other formats are metres)",
+        help="length unit of the file's positions (GCFF folders: default cm; DANTE text: "
+        "default m; px for image pixels with --metres-per-pixel; Babble and Parquet are metres)",
     )
     parser.add_argument(
         "--metres-per-pixel",

@@ -223,6 +223,37 @@ def test_dante_with_four_fields_per_person(tmp_path):
     assert dataset.metadata["report"]["fake_blocks_skipped"] == 1
 
 
+def _dante_in_cm(folder: Path) -> Path:
+    """Two lines as DANTE's CoffeeBreak text files write them: centimetres, not metres."""
+    return _dante(
+        folder,
+        [
+            "1 ID_001 1.767008e+02 1.357453e+02 1.570796e+00 ID_002 2.46e+02 1.40e+02 3.14 "
+            "fake fake fake fake",
+            "13 ID_001 1.77e+02 1.36e+02 1.57 ID_002 2.47e+02 1.41e+02 3.14 ID_003 9.0e+02 "
+            "8.0e+02 0.0",
+        ],
+        ["1 < ID_001 ID_002 >", "13 < ID_001 ID_002 > < ID_003 >"],
+    )
+
+
+def test_dante_in_centimetres_is_refused_unless_the_unit_is_given(tmp_path):
+    folder = _dante_in_cm(tmp_path / "coffeebreak-dante")
+    with pytest.raises(DataFormatError) as caught:
+        load_dataset(folder)
+    assert str(caught.value) == (
+        f"{folder / 'features.txt'}: field 'positions': expected metres, people a median of at "
+        "most 20 m from their nearest neighbour, found a median of 69.8 (centimetres, read as "
+        "metres?); give units='cm' (--units cm) if the file holds centimetres, units='m' if it "
+        "holds metres"
+    )
+    dataset = load_dataset(folder, units="cm")
+    np.testing.assert_allclose(dataset.frames[0].position, [[1.767008, 1.357453], [2.46, 1.40]])
+    assert dataset.frames[1].groups == ((1, 2),)
+    # metres given on purpose are the user's call: read as written
+    assert load_dataset(folder, units="m").frames[0].position[0, 0] == pytest.approx(176.7008)
+
+
 @pytest.mark.parametrize("width", [4, 5])
 def test_dante_layout_is_told_by_the_person_tokens_not_the_count(tmp_path, width):
     # 21 tokens: 1 + 5 people × 4 fields, or 1 + 4 people × 5 fields.

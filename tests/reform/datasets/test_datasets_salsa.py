@@ -92,8 +92,12 @@ def test_first_frame_of_session_two_matches_the_readme(salsa):
 
 def test_load_dataset_detects_salsa(salsa_dir, salsa):
     assert load_dataset(salsa_dir).frames == salsa.frames
-    with pytest.raises(ValueError, match="salsa format stores positions in 'm'"):
-        load_dataset(salsa_dir, units="cm")
+    assert load_dataset(salsa_dir, units="m").frames == salsa.frames
+    in_cm = load_dataset(salsa_dir, units="cm")  # a unit given is the file's, unchecked
+    np.testing.assert_allclose(in_cm.frames[0].position, salsa.frames[0].position / 100)
+    assert in_cm.metadata["file_units"] == "cm" and "file_units" not in salsa.metadata
+    with pytest.raises(ValueError, match="units='px' needs metres_per_pixel"):
+        load_dataset(salsa_dir, units="px")
 
 
 def test_accepts_the_features_file_path(salsa_dir, salsa):

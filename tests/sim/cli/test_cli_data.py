@@ -115,8 +115,8 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
             "no such file or folder, nor a dataset name",
         ),
         (
-            ["data", "info", "--data", "{salsa}", "--units", "cm"],
-            "salsa format stores positions in 'm'",
+            ["data", "info", "--data", "{babble}", "--units", "cm"],
+            "babble format stores positions in 'm'",
         ),
         (["data", "info", "--data", "{tmp}"], "expected a dataset in one of the formats: salsa"),
         (
@@ -126,8 +126,8 @@ def test_info_parquet_with_robot_and_empty_frame(tmp_path, capsys):
     ],
     ids=["missing-path", "units-contradict-format", "unknown-format", "wrong-format"],
 )
-def test_errors_are_one_line(argv, message, salsa_dir, tmp_path, capsys):
-    argv = [a.format(salsa=salsa_dir, tmp=tmp_path) for a in argv]
+def test_errors_are_one_line(argv, message, salsa_dir, babble_dir, tmp_path, capsys):
+    argv = [a.format(salsa=salsa_dir, babble=babble_dir, tmp=tmp_path) for a in argv]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("reform-sim data: error: ")
