@@ -64,6 +64,10 @@ SETTINGS_FILE = "settings_gc.mat"
 _ANGLE_LIMIT_RAD = 4.0 * math.pi
 _ID_LIMIT = 2.0**53  # largest |ID| a double holds exactly
 _TIMESTAMP_RTOL = 1e-9  # relative tolerance matching GTtimestamp to timestamp
+# ... capped at this share of the smallest step between frames: at Unix times (1.3e9 s) the
+# relative tolerance alone spans more than a second, which could attach a ground truth to a
+# neighbouring frame's time.
+_TIMESTAMP_STEP_SHARE = 1e-3
 # Most bytes a GCFF .mat file's variables may take once inflated, bytes: the public files inflate
 # to 35 kB at most (features.mat of CoffeeBreak and Synth; 2.4 times their compressed size), and
 # a GCFF file of 10,000 frames of 50 people would hold 16 MB of [ID, x, y, θ]; a file claiming
@@ -615,9 +619,11 @@ def _frame_rows(
 def _match_time(stamp: float, timestamps: np.ndarray, order: dict[float, int]) -> int | None:
     if stamp in order:
         return order[stamp]
-    close = np.flatnonzero(
-        np.isclose(timestamps, stamp, rtol=_TIMESTAMP_RTOL, atol=_TIMESTAMP_RTOL)
-    )
+    tolerance = _TIMESTAMP_RTOL * (1.0 + abs(stamp))
+    steps = np.diff(np.unique(timestamps))
+    if steps.size:
+        tolerance = min(tolerance, _TIMESTAMP_STEP_SHARE * float(steps.min()))
+    close = np.flatnonzero(np.abs(timestamps - stamp) <= tolerance)
     return int(close[0]) if close.size == 1 else None
 
 

@@ -46,6 +46,29 @@ def _gcff(folder: Path, features, groups, *, settings=None) -> Path:
 PEOPLE = [[1, 100.0, 0.0, np.pi], [2, 0.0, 0.0, 0.0], [3, 500.0, 500.0, 0.0]]
 
 
+@pytest.mark.parametrize(("offset", "matched"), [(1e-6, True), (1.2, False)])
+def test_ground_truth_times_match_a_frame_not_its_neighbourhood(tmp_path, offset, matched):
+    """Unix times 5 s apart (Cocktail Party's): a ground-truth time a rounding away from a frame's
+    is that frame's; 1.2 s away is no frame's, though a relative tolerance alone spans 1.3 s."""
+    stamps = 1275403283.267134 + 5.0 * np.arange(3)
+    people = np.array([p[:3] + [0.0] for p in PEOPLE])
+    scipy.io.savemat(
+        tmp_path / "features.mat",
+        {"features": _cell([people[:, :4]] * 3), "timestamp": stamps[None, :]},
+    )
+    gt = _cell([_cell([np.array([[1.0, 2.0]])])])
+    stamp = stamps[1] + offset
+    scipy.io.savemat(
+        tmp_path / "groundtruth.mat", {"GTgroups": gt, "GTtimestamp": np.array([[stamp]])}
+    )
+    if matched:
+        frames = load_gcff(tmp_path).frames
+        assert [f.groups for f in frames] == [None, ((1, 2),), None]
+        return
+    with pytest.raises(DataFormatError, match="expected a value of features.mat's timestamp"):
+        load_gcff(tmp_path)
+
+
 # --- ground truth naming people absent from the features ---------------------------------------
 
 
