@@ -166,6 +166,12 @@ def _gcff(args: argparse.Namespace) -> Any:
     if len(given) > 1:
         raise CliError(f"gcff takes one of --stride/--mdl, --settings, --tune-on; got {given}")
     if args.settings is not None:
+        per_pixel = getattr(args, "metres_per_pixel", None)
+        if args.units == "px" and per_pixel is not None:  # settings in the dataset's pixels
+            read = Gcff.from_settings_file(args.settings, units="m", orientation=orientation)
+            return Gcff(
+                stride=read.stride * per_pixel, mdl=read.mdl * per_pixel**2, orientation=orientation
+            )
         return Gcff.from_settings_file(
             args.settings, units=args.units or "cm", orientation=orientation
         )

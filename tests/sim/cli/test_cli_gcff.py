@@ -93,6 +93,20 @@ def test_settings_file_in_centimetres(tmp_path):
     assert result["detector_params"]["mdl"] == pytest.approx(0.01)
 
 
+def test_settings_file_in_pixels_takes_the_datasets_scale(tmp_path):
+    """A pose-estimation set in pixels, its settings in the same pixels: read with
+    --metres-per-pixel as the positions are (0.01 m per pixel makes the file's cm-like values
+    metres / 100, as centimetres would)."""
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    settings = tmp_path / "settings_gc.mat"
+    scipy.io.savemat(settings, {"stride": 70.0, "mdl": 100.0})
+    pixels = ["--units", "px", "--metres-per-pixel", "0.01"]
+    groups, result = detect(tmp_path, "--data", str(folder), *pixels, "--settings", str(settings))
+    assert groups == NONE
+    assert result["detector_params"]["stride"] == pytest.approx(0.7)
+    assert result["detector_params"]["mdl"] == pytest.approx(0.01)
+
+
 def test_tune_on_training_data(tmp_path, capsys):
     train = write_gcff_folder(tmp_path / "Train", settings=None)
     folder = write_gcff_folder(tmp_path / "Scene", settings={"stride": 70.0, "mdl": 100.0})
