@@ -55,8 +55,9 @@ def test_stress(ray_instance, tmp_path) -> None:
 
 
 @pytest.mark.slow
-def test_benchmark(ray_instance, tmp_path) -> None:
-    argv = ["benchmark", "--data", "babble", "--data", "coffeebreak"]
+def test_benchmark(ray_instance, tmp_path, shared_datasets) -> None:
+    argv = ["benchmark", "--data", str(shared_datasets / "babble")]
+    argv += ["--data", str(shared_datasets / "coffeebreak")]
     argv += ["--detector", "gcff", "--detector", "gcff-own", "--detector", "majority"]
     argv += ["--quiet"]
     _run(argv, tmp_path / "local", LOCAL)
