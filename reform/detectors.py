@@ -37,7 +37,7 @@ import importlib.metadata
 import inspect
 import os
 import reprlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -148,7 +148,7 @@ def register_detector(
     name: str,
     factory: Callable[..., Any] | str | None = None,
     *,
-    help: str,  # noqa: A002 - argparse's word
+    help: str | None = None,  # noqa: A002 - argparse's word
 ) -> Any:
     """Registers ``factory(**options) -> detector`` under ``name``; also a decorator.
 
@@ -160,7 +160,8 @@ def register_detector(
     Args:
         name: a word without ``:`` or spaces.
         factory: the factory (omitted: returns a decorator).
-        help: one line on the detector.
+        help: one line on the detector (default: the first line of the factory's docstring,
+            else its import path).
 
     Returns:
         The factory (or, without one, the decorator that registers and returns it).
@@ -171,12 +172,40 @@ def register_detector(
     if factory is None:
 
         def decorate(function: Callable[..., Any]) -> Callable[..., Any]:
-            _register(name, function, help=help, source="registered")
+            _register(name, function, help=_help_of(function, help), source="registered")
             return function
 
         return decorate
-    _register(name, factory, help=help, source="registered")
+    _register(name, factory, help=_help_of(factory, help), source="registered")
     return factory
+
+
+def _help_of(factory: Any, given: str | None) -> Any:
+    """``given``, else the first line of the factory's docstring, else its import path (what
+    `_register` checks when the factory is malformed)."""
+    if given is not None:
+        return given
+    if isinstance(factory, str):
+        return f"plugin {factory}"
+    doc = (getattr(factory, "__doc__", None) or "").strip()
+    if doc:
+        return doc.splitlines()[0].strip()
+    return f"plugin {_import_path(factory)}"
+
+
+def _import_path(factory: Any) -> str:
+    """Where a factory is imported from: ``"module:qualname"`` (its string for a path)."""
+    if isinstance(factory, str):
+        return factory.split("[", 1)[0].strip()
+    module = getattr(factory, "__module__", None) or "?"
+    return f"{module}:{getattr(factory, '__qualname__', type(factory).__name__)}"
+
+
+def _same_package(registered: DetectorInfo, entry: importlib.metadata.EntryPoint) -> bool:
+    """Whether a registration and an entry point come from one package: the entry point's module
+    registers its own detector when imported (as the extending guide shows)."""
+    module = entry.value.split(":", 1)[0].strip()
+    return _import_path(registered.factory).split(":", 1)[0] == module
 
 
 def _entry_points() -> dict[str, list[importlib.metadata.EntryPoint]]:
@@ -223,6 +252,8 @@ def detector_info(name_or_path: str) -> DetectorInfo:
         )
     registered = _REGISTRY.get(name_or_path)
     installed = _entry_points().get(name_or_path, [])
+    if registered is not None:  # imported from its own entry point: one source, not two
+        installed = [e for e in installed if not _same_package(registered, e)]
     sources = ([registered.source] if registered else []) + [_entry_source(e) for e in installed]
     if len(sources) > 1:
         raise DetectorError(
@@ -417,16 +448,41 @@ def _culprit(
         return _frame_text(0, frames[0]), None
     for index, frame in enumerate(frames):
         try:
-            predict([frame])
-        except Exception as exc:  # noqa: BLE001 - looking for the frame, whatever it raises
+            _read_lazy(predict([frame]))
+        except _RAISED as exc:  # looking for the frame, whatever it raises
             return _frame_text(index, frame), exc
     return "", None
 
 
-def run_detector(name: str, detector: Any, frames: Sequence[Frame]) -> list[Sequence[Group]]:
+# What a detector may raise that is reported as its failure: any exception, and SystemExit (a
+# sys.exit() in someone's predict must not end the command without a word). Not
+# KeyboardInterrupt: Ctrl-C stops the run.
+_RAISED = (Exception, SystemExit)
+
+
+def _read_lazy(returned: Any) -> Any:
+    """What ``predict`` returned, with its lazy parts read (a generator of partitions, a
+    partition that is an iterator), so that what they raise is raised inside the detector."""
+    if isinstance(returned, Iterator):
+        returned = list(returned)
+    if isinstance(returned, (list, tuple)):
+        returned = [list(p) if isinstance(p, Iterator) else p for p in returned]
+    return returned
+
+
+def _without_truth(frames: Sequence[Frame]) -> list[Frame]:
+    """The frames as a detector may see them: their ground truth taken away."""
+    return [f if f.groups is None else f.replace(groups=None, listed_groups=None) for f in frames]
+
+
+def run_detector(
+    name: str, detector: Any, frames: Sequence[Frame], *, oracle: bool = False
+) -> list[Sequence[Group]]:
     """``detector.predict(frames)``, checked by :func:`check_predictions`.
 
-    An exception raised inside the detector becomes one line naming the detector, the
+    The detector sees the frames without their ground truth (``groups`` is None), so that no
+    detector can score by reading the answer. An exception raised inside the detector (or a
+    ``sys.exit``; lazy output is read first) becomes one line naming the detector, the
     exception's type and message, and the first frame that raises on its own (found by
     predicting the frames one at a time again, only after a failure).
 
@@ -434,6 +490,8 @@ def run_detector(name: str, detector: Any, frames: Sequence[Frame]) -> list[Sequ
         name: the detector's name, for messages.
         detector: an object with ``predict`` (:class:`Detector`).
         frames: the frames to partition.
+        oracle: hand the frames over with their ground truth: only for a detector that reads
+            it on purpose, as an upper bound (the gymnasium environment's ``"truth"``).
 
     Returns:
         One partition per frame, as a list.
@@ -445,10 +503,12 @@ def run_detector(name: str, detector: Any, frames: Sequence[Frame]) -> list[Sequ
     predict = getattr(detector, "predict", None)
     if not callable(predict):
         raise DetectorError(f"{name}: {_describe(detector)} has no callable predict(frames)")
+    frames = list(frames)
+    unlabelled = frames if oracle else _without_truth(frames)
     try:
-        partitions = predict(frames)
-    except Exception as exc:  # the detector is someone's code: report it in one line
-        where, alone = _culprit(predict, frames)
+        partitions = _read_lazy(predict(unlabelled))
+    except _RAISED as exc:  # the detector is someone's code: report it in one line
+        where, alone = _culprit(predict, unlabelled)
         where = where or f"a batch of {len(frames)} frames (no frame alone)"
         raised = alone or exc
         message = " ".join(str(raised).split())
@@ -472,10 +532,16 @@ def fit_detector(name: str, detector: Any, frames: Sequence[Frame]) -> Any:
         return detector
     if not callable(fit):
         raise DetectorError(f"{name}: the detector's fit is {_describe(fit)}, not a method")
-    fitted = copy.deepcopy(detector)
+    try:
+        fitted = copy.deepcopy(detector)
+    except Exception as exc:  # noqa: BLE001 - a lock, a socket, an open file...
+        raise DetectorError(
+            f"{name}: the detector cannot be copied to be fitted (copy.deepcopy raised "
+            f"{_one_line(exc)}): keep what cannot be copied out of its attributes"
+        ) from exc
     try:
         fitted.fit(frames)
-    except Exception as exc:  # the detector is someone's code: report it in one line
+    except _RAISED as exc:  # the detector is someone's code: report it in one line
         raise DetectorError(
             f"{name}: detector's fit raised {_one_line(exc)} (on {len(frames)} frames)"
         ) from exc

@@ -337,7 +337,18 @@ def detector_params(detector: Any) -> dict[str, Any]:
     get_params = getattr(detector, "get_params", None)
     if get_params is None:
         return {}
-    return {key: _json_value(value) for key, value in sorted(get_params(deep=False).items())}
+    try:
+        try:
+            params = get_params(deep=False)
+        except TypeError:  # a get_params without scikit-learn's deep argument
+            params = get_params()
+        items = sorted(dict(params).items())
+    except Exception as exc:  # the detector is someone's code: report it in one line
+        what = " ".join(f"{type(exc).__name__}: {exc}".split())
+        raise CliError(
+            f"the detector's get_params() raised {what} (expected a dict of its parameters)"
+        ) from None
+    return {str(key): _json_value(value) for key, value in items}
 
 
 def _json_value(value: Any) -> Any:

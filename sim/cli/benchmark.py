@@ -11,7 +11,6 @@ import sys
 
 from tqdm import tqdm
 
-from reform.detectors import make_detector
 from reform.splits import DEFAULT_TRAIN_FRACTION
 from sim.cli._benchmark import DEFAULT_DETECTORS, DEFAULT_OUT
 from sim.cli._common import (
@@ -19,6 +18,7 @@ from sim.cli._common import (
     check_backend,
     check_output,
 )
+from sim.cli._detectors import make_plugin
 from sim.experiments.benchmark import (
     dataset_spec,
     detector_spec,
@@ -91,12 +91,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _check_detectors(detectors) -> None:
-    """Every plugin is made once up front, so that a bad one is named before any work."""
+    """Every plugin is made once up front, so that a bad one is named before any work (the
+    current folder searched for a ``module:factory`` path, as `evaluate` and `detect` do; the
+    workers inherit the search path)."""
 
     for detector in detectors:
         if detector.spec in ("gcff", "gcff-own") or detector.spec.startswith("reform:"):
             continue
-        make_detector(detector.spec)
+        make_plugin(detector.spec)
 
 
 def _command(args: argparse.Namespace) -> str:

@@ -674,7 +674,9 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     def _detect(self, truth: Truth, view: View, groups: tuple[Group, ...]) -> None:
         frame = self._eyes.observed_frame(truth, view, groups, sequence=self._sequence)
-        (partition,) = run_detector(self.detector_name, self._detector, [frame])
+        (partition,) = run_detector(
+            self.detector_name, self._detector, [frame], oracle=self.detector_name == TRUTH
+        )
         partition = tuple(partition)
         self._detections.append((frame, partition))
         self._detected = partition

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -155,11 +156,15 @@ class DetectorSpec:
             ``package.module:factory``).
         kind: what was run, for the published figures: ``"gcff"``, a REFORM classifier's name
             (``"bagged-trees"``), or the spec.
+        search: a folder searched for a ``package.module:factory`` plugin's module after the
+            installed packages, in whichever process builds it (:func:`detector_spec` gives the
+            folder the run started in, as ``python -m`` would search it), or None.
     """
 
     label: str
     spec: str
     kind: str = ""
+    search: str | None = field(default=None, compare=False)
 
     @property
     def key(self) -> str:
@@ -185,6 +190,8 @@ class DetectorSpec:
         if self.spec.startswith(REFORM_PREFIX):
             return load_model(self.spec[len(REFORM_PREFIX) :]), None
 
+        if self.search is not None and self.search not in sys.path:
+            sys.path.append(self.search)  # a worker started before the run knows nothing of it
         return make_detector(self.spec), None
 
 
@@ -195,7 +202,9 @@ def detector_spec(spec: str) -> DetectorSpec:
         return DetectorSpec(label=label, spec=spec, kind="gcff")
     if spec == GCFF_OWN:
         return DetectorSpec(label="GCFF, each dataset's own settings", spec=spec, kind=GCFF_OWN)
-    return DetectorSpec(label=spec, spec=spec, kind=spec)
+    return DetectorSpec(
+        label=spec, spec=spec, kind=spec, search=os.getcwd() if ":" in spec else None
+    )
 
 
 def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import sys
 import textwrap
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -322,6 +323,44 @@ def test_an_entry_point_named_as_a_built_in_is_registered_twice(tmp_path, monkey
     assert detector_names().count("gcff") == 1
 
 
+def test_a_package_registering_its_own_entry_point_is_one_source(tmp_path, monkeypatch, registry):
+    """The extending guide's module registers itself, and its package declares the same
+    detector as an entry point: making it twice works (importing it registers it)."""
+    (tmp_path / "selfreg.py").write_text(
+        "import reform\n"
+        "from reform.majority import Majority\n\n"
+        "class Close(Majority):\n"
+        '    """Everyone alone, as the lab likes it."""\n\n'
+        'reform.register_detector("close", Close)\n'
+    )
+    dist_info(tmp_path, "selfreg", {"close": "selfreg:Close"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    first, second = make_detector("close"), make_detector("close")
+    assert type(first).__name__ == type(second).__name__ == "Close"
+    assert detector_info("close").help == "Everyone alone, as the lab likes it."  # its docstring
+    # another package's entry point of that name is still a second source
+    (tmp_path / "other").mkdir()
+    dist_info(tmp_path / "other", "rival", {"close": "rival:make"})
+    monkeypatch.syspath_prepend(str(tmp_path / "other"))
+    with pytest.raises(DetectorError, match=r"^detector 'close' is registered twice"):
+        make_detector("close")
+
+
+def test_help_defaults_to_the_factorys_docstring_or_path(registry):
+    def make_alone():
+        """Everyone alone.
+
+        More lines."""
+        return Majority()
+
+    register_detector("alone", make_alone)
+    register_detector("bare", lambda: Majority())
+    register_detector("by-path", "labplugin:make")
+    assert detector_info("alone").help == "Everyone alone."
+    assert detector_info("bare").help.startswith("plugin test_detectors:")
+    assert detector_info("by-path").help == "plugin labplugin:make"
+
+
 @pytest.mark.parametrize(
     ("name", "factory", "help", "message"),
     [
@@ -468,6 +507,56 @@ def test_run_detector_on_a_batch_that_raises_only_together():
         run_detector("lab", RaisesAt(None), FRAMES)
 
 
+class Yields:
+    """Partitions one frame at a time (a generator), raising on the frame at time ``when``."""
+
+    def __init__(self, when=None, lazy_groups=False):
+        self.when, self.lazy_groups = when, lazy_groups
+
+    def predict(self, frames):
+        for frame in frames:
+            if frame.time == self.when:
+                raise RuntimeError("cannot read frame")
+            yield iter(alone(frame)) if self.lazy_groups else alone(frame)
+
+
+def test_lazy_output_is_read_inside_the_detector():
+    """A generator's exception is the detector's, on the frame that raises it."""
+    assert run_detector("lab", Yields(), FRAMES) == [alone(f) for f in FRAMES]
+    assert run_detector("lab", Yields(lazy_groups=True), FRAMES) == [alone(f) for f in FRAMES]
+    with pytest.raises(
+        DetectorError,
+        match=r"^lab: detector raised RuntimeError on frame 1 \(toy t=1 s\): cannot read frame$",
+    ):
+        run_detector("lab", Yields(when=1.0), FRAMES)
+
+
+def test_a_detector_that_exits_is_one_line():
+    class Exits(Returns):
+        def predict(self, frames):
+            sys.exit(3)
+
+    with pytest.raises(DetectorError, match=r"^lab: detector raised SystemExit on frame 0 .*: 3$"):
+        run_detector("lab", Exits(None), FRAMES)
+
+
+def test_a_detector_never_sees_the_ground_truth():
+    """An oracle that returns each frame's ground truth scores nothing: it is not given one."""
+
+    class Oracle:
+        seen = []
+
+        def predict(self, frames):
+            self.seen += [f.groups for f in frames]
+            return [alone(f) for f in frames]
+
+    assert all(f.groups is not None for f in FRAMES)
+    oracle = Oracle()
+    run_detector("lab", oracle, FRAMES)
+    assert oracle.seen == [None] * len(FRAMES)
+    assert all(f.groups is not None for f in FRAMES)  # the caller's frames keep theirs
+
+
 def test_run_detector_wants_a_callable_predict():
     with pytest.raises(DetectorError, match=r"^lab: a str \('x'\) has no callable predict"):
         run_detector("lab", "x", FRAMES)
@@ -488,6 +577,19 @@ def test_fit_detector_fits_a_copy(plugins):
         match=r"^lab: detector's fit raised ValueError: needs head poses \(on 3 frames\)$",
     ):
         fit_detector("lab", FitRaises(None), FRAMES)
+
+    class Locked(Returns):
+        def fit(self, frames):
+            return self
+
+    locked = Locked(None)
+    locked.lock = threading.Lock()
+    with pytest.raises(
+        DetectorError,
+        match=r"^lab: the detector cannot be copied to be fitted \(copy.deepcopy raised "
+        r"TypeError: cannot pickle '_thread.lock' object\)",
+    ):
+        fit_detector("lab", locked, FRAMES)
 
 
 def test_the_command_lines_built_ins_are_registered_names():

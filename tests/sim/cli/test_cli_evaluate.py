@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 
+import numpy as np
 import pytest
 from cli_errors import cli_json, run_cli
 
 from reform.datasets import load_dataset
 from sim.cli import main
+from sim.cli._common import CliError
 from sim.cli._detectors import (
     DETECTORS,
     DetectorSpec,
@@ -116,12 +118,16 @@ def test_detect_majority_writes_every_frame(salsa_dir, tmp_path, capsys):
 
 
 def test_detect_writes_groups_sorted_without_singletons(salsa_dir, tmp_path, capsys, as_majority):
+    truth = {(f.sequence, f.time): f.partition() for f in load_dataset(salsa_dir).annotated()}
+
     class Oracle:
-        """Predicts the ground truth, shuffled: groups in reverse, members descending."""
+        """Predicts the ground truth (known beforehand: detectors are not given it), shuffled:
+        groups in reverse, members descending."""
 
         def predict(self, frames):
             return [
-                tuple(tuple(sorted(g, reverse=True)) for g in f.partition()[::-1]) for f in frames
+                tuple(tuple(sorted(g, reverse=True)) for g in truth[f.sequence, f.time][::-1])
+                for f in frames
             ]
 
     as_majority(Oracle())
@@ -186,6 +192,22 @@ def test_detector_registry():
     detector = build_detector(args)
     assert type(detector).__name__ == "Majority"
     assert detector_params(detector) == {}
+
+
+def test_detector_params_of_a_get_params_of_its_own():
+    class NoDeep:
+        def get_params(self):
+            return {"radius": np.float64(1.5)}
+
+    class Raises:
+        def get_params(self, deep=True):
+            raise RuntimeError("not\nready")
+
+    assert detector_params(NoDeep()) == {"radius": 1.5}
+    with pytest.raises(
+        CliError, match=r"^the detector's get_params\(\) raised RuntimeError: not ready"
+    ):
+        detector_params(Raises())
 
 
 def test_comparison_table_from_results(salsa_dir, tmp_path, capsys):

@@ -224,3 +224,29 @@ def test_a_mean_over_the_datasets_found_counts_a_recording_once():
         "(give --data cocktail-party-dante to score it)"
     ]
     assert one_recording_each(found, named={"cocktail-party-dante"}) == (found, [])
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_cli_finds_a_plugin_in_the_current_folder(small, tmp_path, monkeypatch, jobs):
+    """As evaluate and detect do: `--detector mylab.detectors:Close` from the lab's folder,
+    without PYTHONPATH, in the workers too."""
+    lab = tmp_path / "lab"
+    (lab / "benchlab").mkdir(parents=True)
+    (lab / "benchlab" / "__init__.py").write_text("")
+    (lab / "benchlab" / "detectors.py").write_text(
+        textwrap.dedent(
+            """
+            class Close:
+                def predict(self, frames):
+                    return [[(int(i),) for i in f.ids] for f in frames]
+            """
+        )
+    )
+    monkeypatch.chdir(lab)
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", str(lab))])
+    out = tmp_path / f"out{jobs}"
+    argv = ["benchmark", "--data", small[0].path, "--data", small[1].path]
+    argv += ["--detector", "benchlab.detectors:Close", "--jobs", jobs]
+    assert main([*argv, "--quiet", "--out", str(out)]) == 0
+    cells = json.loads((out / "benchmark.json").read_text())["cells"]
+    assert len(cells) == 2 and all(c["scores"]["frames"] > 0 for c in cells)
