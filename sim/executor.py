@@ -33,6 +33,7 @@ own long connection timeouts.
 from __future__ import annotations
 
 import os
+import pickle
 import socket
 import sys
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -61,6 +62,13 @@ AUTO = "auto"  # the cluster started on this machine by ``ray start --head``
 RAY_ADDRESS_VARIABLE = "RAY_ADDRESS"
 GCS_PROBE_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"  # every Ray GCS serves it
 RAY_INSTALL = "pip install 'reform-sim[ray]' (or pip install ray)"
+
+
+def _last_line(exc: BaseException) -> str:
+    """An exception as one line: its message's last line that says something (a remote
+    traceback's text ends with the error itself), else its type."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip().strip('"')]
+    return lines[-1] if lines else type(exc).__name__
 
 
 class ClusterError(ConnectionError):
@@ -425,9 +433,17 @@ class Executor:
         parallel = Parallel(
             n_jobs=workers, backend="loky", return_as="generator_unordered", batch_size=1, **setup
         )
-        yield from parallel(
-            delayed(_indexed)(function, k, item, *shared) for k, item in enumerate(units)
-        )
+        try:
+            yield from parallel(
+                delayed(_indexed)(function, k, item, *shared) for k, item in enumerate(units)
+            )
+        except pickle.PicklingError as exc:  # something the work holds cannot be sent
+            what = _last_line(exc.__cause__ or exc)
+            raise ValueError(
+                f"the work cannot be sent to {workers} worker processes ({what}): something it "
+                "holds, such as a detector's lock, socket or open file, cannot be copied to "
+                "another process; keep such things out of its attributes, or run with --jobs 1"
+            ) from exc
 
     def _ray_stream(
         self, function: Callable[..., Any], units: list[Any], shared: tuple[Any, ...]

@@ -78,6 +78,16 @@ def test_unordered_stream_says_which_unit_each_result_is() -> None:
     assert pairs[-1] == (0, 0)  # the slow unit came last
 
 
+def test_work_that_cannot_be_sent_to_local_workers_is_one_line() -> None:
+    locked = threading.Lock()  # what a detector may hold: no process can be handed it
+    with pytest.raises(
+        ValueError,
+        match=r"^the work cannot be sent to 2 worker processes \(TypeError: cannot pickle "
+        r"'_thread\.lock' object\): .* or run with --jobs 1$",
+    ):
+        Executor("local", jobs=2).map(_square_plus, [1, 2], shared=(locked,))
+
+
 def test_on_done_counts_every_unit() -> None:
     seen = []
     Executor("local", jobs=1).map(_square_plus, [3, 4], on_done=lambda *a: seen.append(a))
