@@ -24,6 +24,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         jobs=args.jobs,
         quick=args.quick,
+        progress=(lambda _line: None) if args.quiet else None,
         progress_bars=not args.quiet,
     )
     written = write_report(result)

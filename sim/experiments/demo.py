@@ -54,6 +54,7 @@ from reform.metrics import T_ONE, T_TWO_THIRDS, Evaluation, evaluate
 from reform.persistence import save_model
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.episode import simulate_episode
+from sim.executor import Executor
 from sim.experiments.demo_files import DEFAULT_OUT, FIGURES, MODEL, RECORDINGS, SYNTHETIC
 from sim.experiments.figures import Bar, score_bars, top_view
 from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
@@ -461,6 +462,7 @@ def run_demo(
         resamples=budget.resamples,
         detectors=hri_detectors,
         training=hri_training,
+        executor=Executor("local", jobs=1, progress=progress_bars),  # the episodes, as by default
     )
     write_markdown(out / "hri.md", hri_markdown(hri, command=command))
     recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 from pathlib import Path
 
@@ -20,13 +22,22 @@ from sim.experiments.sim2real import RECOMMENDED, recipe
 SAVED = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]}"
 
 
+QUIET: dict[str, str] = {}  # what the demo fixture's --quiet run wrote on stderr
+
+
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory, shared_datasets) -> Path:
     """One quick demo run through the command line, with the real datasets."""
     out = tmp_path_factory.mktemp("demo") / "demo-output"
     argv = ["demo", "--quick", "--data", str(shared_datasets), "--out", str(out)]
-    assert main([*argv, "--seed", "3", "--jobs", "1", "--quiet"]) == 0
+    with contextlib.redirect_stderr(io.StringIO()) as err:
+        assert main([*argv, "--seed", "3", "--jobs", "1", "--quiet"]) == 0
+    QUIET["stderr"] = err.getvalue()
     return out
+
+
+def test_quiet_says_nothing_on_stderr(demo) -> None:
+    assert QUIET["stderr"] == ""
 
 
 def _entities(path: Path) -> set[str]:
