@@ -98,14 +98,23 @@ class FetchError(DataFormatError):
         expected, found: what the file should have been, and what came.
     """
 
-    def __init__(self, dataset: str, file: str, url: str, expected: str, found: str) -> None:
+    def __init__(
+        self,
+        dataset: str,
+        file: str,
+        url: str,
+        expected: str,
+        found: str,
+        hint: str | None = None,
+    ) -> None:
         self.dataset = dataset
         self.file = file
         self.url = url
-        super().__init__(file, f"dataset {dataset!r} from {url}", None, expected, found)
+        super().__init__(file, f"dataset {dataset!r} from {url}", None, expected, found, hint=hint)
 
     def __reduce__(self) -> tuple:
-        return type(self), (self.dataset, self.file, self.url, self.expected, self.found)
+        fields = (self.dataset, self.file, self.url, self.expected, self.found, self.hint)
+        return type(self), fields
 
 
 class _Invalid(ValueError):
@@ -580,9 +589,10 @@ def _bytes_read(exc: BaseException) -> int | None:
 class _Problem(Exception):
     """Why one download failed: what was expected and what was found."""
 
-    def __init__(self, expected: str, found: str) -> None:
+    def __init__(self, expected: str, found: str, hint: str | None = None) -> None:
         self.expected = expected
         self.found = found
+        self.hint = hint
         super().__init__(f"expected {expected}, found {found}")
 
 
@@ -620,7 +630,12 @@ def _checked(downloader: Callable[..., Any], file: DatasetFile) -> Callable[...,
                     f"{file.bytes} bytes", f"{written} bytes, then the download broke off"
                 ) from None
             host = urlsplit(url).netloc or url
-            raise _Problem(f"an answer from {host}", _reason(exc)) from None
+            raise _Problem(
+                f"an answer from {host}",
+                _reason(exc),
+                hint="no network here? fetch from a copy with --mirror URL (http://, file:// or "
+                "a folder laid out as <mirror>/<repo>/<commit>/<path>)",
+            ) from None
         size = os.path.getsize(output_file)
         if size != file.bytes:
             raise _Problem(f"{file.bytes} bytes", f"{size} bytes")
@@ -689,7 +704,9 @@ def _download(
                 downloader=_checked(inner, file),
             )
     except _Problem as exc:
-        raise FetchError(dataset.name, file.path, url, exc.expected, exc.found) from None
+        raise FetchError(
+            dataset.name, file.path, url, exc.expected, exc.found, hint=exc.hint
+        ) from None
     except ValueError as exc:  # pooch: the sha256 does not match
         got = re.search(r"got ([0-9a-fA-F]{64})", str(exc))
         found = f"sha256 {got.group(1).lower()}" if got else str(exc)

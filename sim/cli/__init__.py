@@ -7,6 +7,7 @@ so that ``reform-sim --help`` answers at once.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
@@ -148,6 +149,9 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
         check_jobs(args)
         with sigint_to_main_only():
             return int(args.handler(args) or 0)
+    except BrokenPipeError:  # the reader of stdout left (`reform-sim scenarios | head`): done
+        _drop_stdout()
+        return 0
     except (CliError, ValueError, OSError, KeyError) as exc:
         # OSError: a file the command reads or writes that the system refuses (permissions, a
         # full disk, a path too long), named by the system's own message.
@@ -167,6 +171,16 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
         again = "; run the same command again to resume" if _resumes(args) else ""
         print(f"reform-sim {args.command}: interrupted{again}", file=sys.stderr)
         return INTERRUPTED
+
+
+def _drop_stdout() -> None:
+    """Points stdout at the null device, so that flushing it at exit does not raise again
+    (Python's own advice for a closed pipe)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout is no file (captured): nothing to flush
+        pass
 
 
 def _one_line(message: object) -> str:

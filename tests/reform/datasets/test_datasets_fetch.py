@@ -8,6 +8,7 @@ import hashlib
 import http.server
 import json
 import os
+import pickle
 import re
 import shutil
 import socket
@@ -352,8 +353,13 @@ def test_a_host_nobody_listens_on(cache, registry_file):
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     base = f"http://127.0.0.1:{port}"
-    found = f"expected an answer from 127.0.0.1:{port}, found Connection refused"
-    _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file)
+    found = (
+        f"expected an answer from 127.0.0.1:{port}, found Connection refused; no network here? "
+        "fetch from a copy with --mirror URL"
+    )
+    error = _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file, ends=False)
+    assert "\n" not in str(error)
+    assert str(pickle.loads(pickle.dumps(error))) == str(error)
 
 
 def test_a_file_missing_from_a_file_mirror(mirror_dir, cache, registry_file):

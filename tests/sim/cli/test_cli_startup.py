@@ -164,3 +164,17 @@ def test_gymnasium_make_with_the_module_in_the_id() -> None:
         "print(type(env.unwrapped).__name__, env.spec.id)\n"
     )
     assert out == "SocialEnv ReformSim/HRIPassingObserve-v0"
+
+
+def test_a_reader_that_leaves_early_is_no_error() -> None:
+    """`reform-sim scenarios | head -1`: the pipe closes before the listing is written."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "sim.cli", "scenarios"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=Path(__file__).resolve().parents[3],
+    )
+    process.stdout.close()  # before the command has started: every write finds the pipe gone
+    err = process.stderr.read().decode()
+    assert process.wait(timeout=60) == 0, err
+    assert err == ""
