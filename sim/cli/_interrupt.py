@@ -7,6 +7,12 @@ from it inherits the blocked signal, and is delivered to a parked thread instead
 handler raises KeyboardInterrupt in the main thread as usual. The command then stops its workers
 as on any error (joblib terminates them) and ``main`` reports the interruption in one line.
 (joblib's own resource tracker is started with SIGINT blocked for the same reason.)
+
+A Python handler runs when the main thread next executes Python code: a main thread waiting in
+a system call (a detector's ``time.sleep``, a socket, a lock) would wait on. So the signal's
+arrival is also written to a wake-up socket (`signal.set_wakeup_fd`), and a thread reading it
+sends the main thread SIGUSR1, whose handler does nothing: the call is interrupted, and Python
+runs the pending SIGINT handler on its way back.
 """
 
 from __future__ import annotations
@@ -14,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import socket
 import threading
 from collections.abc import Iterator
 
@@ -56,8 +63,58 @@ def sigint_to_main_only() -> Iterator[None]:
     from multiprocessing import resource_tracker
 
     resource_tracker.ensure_running()
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    with _wake_main_on_sigint():
+        previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            yield
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+@contextlib.contextmanager
+def _wake_main_on_sigint() -> Iterator[None]:
+    """Within: a SIGINT interrupts the main thread's blocking call (see the module notes). Left
+    out when SIGUSR1 or the wake-up fd is someone else's already."""
+    if not hasattr(signal, "SIGUSR1") or signal.getsignal(signal.SIGUSR1) not in (
+        signal.SIG_DFL,
+        None,
+    ):
+        yield
+        return
+    theirs = signal.set_wakeup_fd(-1)
+    if theirs != -1:  # an event loop's: leave it be
+        signal.set_wakeup_fd(theirs)
+        yield
+        return
+    reader, writer = socket.socketpair()
+    writer.setblocking(False)
+    signal.signal(signal.SIGUSR1, _nothing)
+    signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
+    main = threading.main_thread().ident
+    waker = threading.Thread(target=_wake, args=(reader, main), name="reform-sim-wake", daemon=True)
+    waker.start()
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.set_wakeup_fd(-1)
+        signal.signal(signal.SIGUSR1, signal.SIG_DFL)
+        writer.close()  # the waker reads the end of the stream and stops
+        waker.join(timeout=1.0)
+        reader.close()
+
+
+def _nothing(_signum: int, _frame: object) -> None:
+    """SIGUSR1's handler: its arrival is all that is needed."""
+
+
+def _wake(reader: socket.socket, main: int | None) -> None:
+    """Sends the main thread SIGUSR1 whenever the wake-up socket says SIGINT arrived."""
+    while True:
+        try:
+            data = reader.recv(64)
+        except OSError:
+            return
+        if not data:
+            return
+        if signal.SIGINT in data and main is not None:
+            signal.pthread_kill(main, signal.SIGUSR1)

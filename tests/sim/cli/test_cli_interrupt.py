@@ -119,3 +119,21 @@ def test_which_commands_say_they_resume():
     sim2real = parser.parse_args(["experiment", "sim2real", "--out", "x"])
     paper = parser.parse_args(["experiment", "paper", "--out", "x"])
     assert (_resumes(sim2real), _resumes(paper)) == (True, False)
+
+
+def test_a_detector_waiting_in_a_system_call_is_interrupted(tmp_path, shared_datasets):
+    """Ctrl-C while a researcher's detector sleeps (or waits on a socket, a lock): the main
+    thread is woken, and the command stops in one line."""
+    (tmp_path / "sleepy.py").write_text(
+        "import sys, time\n\n"
+        "class Sleepy:\n"
+        "    def predict(self, frames):\n"
+        "        print('asleep', file=sys.stderr, flush=True)\n"
+        "        time.sleep(3600)\n"
+    )
+    start = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); " + START
+    argv = ["evaluate", "--detector", "sleepy:Sleepy", "--data", str(shared_datasets / "synth")]
+    status, err = _interrupt(argv, tmp_path, started=lambda e: "asleep" in e, start=start)
+    assert "Traceback" not in err, err
+    assert err.strip().splitlines()[-1] == "reform-sim evaluate: interrupted"
+    assert status == 130
