@@ -43,7 +43,13 @@ from reform.datasets import (
     registry,
     resolve,
 )
-from reform.detectors import make_detector, run_detector
+from reform.detectors import (
+    detector_info,
+    detector_names,
+    make_detector,
+    register_detector,
+    run_detector,
+)
 from reform.frame import Dataset, Frame, Group
 from reform.gcff import Gcff, GcffBySequence
 from reform.metrics import evaluate
@@ -159,12 +165,16 @@ class DetectorSpec:
         search: a folder searched for a ``package.module:factory`` plugin's module after the
             installed packages, in whichever process builds it (:func:`detector_spec` gives the
             folder the run started in, as ``python -m`` would search it), or None.
+        registered: the `reform.detectors.DetectorInfo` of a name registered in this process
+            (`reform.register_detector`), registered again in a worker that has not seen it,
+            or None.
     """
 
     label: str
     spec: str
     kind: str = ""
     search: str | None = field(default=None, compare=False)
+    registered: Any = field(default=None, compare=False)
 
     @property
     def key(self) -> str:
@@ -192,6 +202,9 @@ class DetectorSpec:
 
         if self.search is not None and self.search not in sys.path:
             sys.path.append(self.search)  # a worker started before the run knows nothing of it
+        if self.registered is not None and self.spec not in detector_names():
+            info = self.registered  # registered in the process that started the run
+            register_detector(info.name, info.factory, help=info.help)
         return make_detector(self.spec), None
 
 
@@ -202,9 +215,11 @@ def detector_spec(spec: str) -> DetectorSpec:
         return DetectorSpec(label=label, spec=spec, kind="gcff")
     if spec == GCFF_OWN:
         return DetectorSpec(label="GCFF, each dataset's own settings", spec=spec, kind=GCFF_OWN)
-    return DetectorSpec(
-        label=spec, spec=spec, kind=spec, search=os.getcwd() if ":" in spec else None
-    )
+    if ":" in spec:
+        return DetectorSpec(label=spec, spec=spec, kind=spec, search=os.getcwd())
+    info = detector_info(spec) if spec in detector_names() else None
+    registered = info if info is not None and info.source == "registered" else None
+    return DetectorSpec(label=spec, spec=spec, kind=spec, registered=registered)
 
 
 def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:

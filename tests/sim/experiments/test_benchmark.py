@@ -250,3 +250,25 @@ def test_cli_finds_a_plugin_in_the_current_folder(small, tmp_path, monkeypatch, 
     assert main([*argv, "--quiet", "--out", str(out)]) == 0
     cells = json.loads((out / "benchmark.json").read_text())["cells"]
     assert len(cells) == 2 and all(c["scores"]["frames"] > 0 for c in cells)
+
+
+class _EveryoneAlone:
+    """A detector registered in the test's process only."""
+
+    def predict(self, frames):
+        return [[(int(i),) for i in f.ids] for f in frames]
+
+
+def test_a_detector_registered_in_this_process_runs_in_the_workers(small, monkeypatch):
+    import reform.detectors
+
+    monkeypatch.setattr(reform.detectors, "_REGISTRY", dict(reform.detectors._REGISTRY))
+    reform.detectors.register_detector("lab-alone", _EveryoneAlone)
+    detectors = [detector_spec("lab-alone"), detector_spec("majority")]
+    def cells(jobs):
+        result = run_benchmark(small, detectors, jobs=jobs)
+        return [(c.dataset, c.detector, c.scores, c.predictions) for c in result.cells]
+
+    alone = cells(1)
+    assert cells(2) == alone
+    assert all(scores is not None for _, _, scores, _ in alone)
