@@ -344,6 +344,13 @@ def _resampled_f1(evaluation: Evaluation, weights: np.ndarray) -> np.ndarray:
     return np.where(denominator > 0, 2 * p * r / np.where(denominator > 0, denominator, 1), 0.0)
 
 
+def _selection_score(salsa_views: Sequence[Any], validation: Sequence[Any]) -> Any:
+    """The choice's rule: the mean of two means of F1, over SALSA's training-split views and
+    over the validation sources (floats, or (B,) resamples of each: the same rule per
+    resample)."""
+    return (np.mean(salsa_views, axis=0) + np.mean(validation, axis=0)) / 2
+
+
 def choice_shares(scores: np.ndarray) -> np.ndarray:
     """How often each candidate would be chosen: (C,) shares of the columns of (C, B) resampled
     selection scores in which it has the best one (the first candidate on a tie, as the choice
@@ -887,7 +894,9 @@ def sim_to_real(
                 "salsa_views_f1": per_view,
                 "salsa_views_mean_f1": salsa_mean,
                 "validation_f1": per_source,
-                "score": float((salsa_mean + np.mean(list(per_source.values()))) / 2),
+                "score": float(
+                    _selection_score(list(per_view.values()), list(per_source.values()))
+                ),
             }
         )
     best = max(range(len(pool)), key=lambda k: (round(selection[k]["score"], 12), -k))
@@ -898,11 +907,10 @@ def sim_to_real(
         save_model(fitted[best][0], out_model)
     resampled = np.stack(  # (candidates, resamples) selection scores; views share their frames
         [
-            (
-                np.mean([_resampled_f1(evals[n], weights[SALSA_TRAIN_SET]) for n in views], axis=0)
-                + np.mean([_resampled_f1(evals[n], weights[n]) for n in validation_names], axis=0)
+            _selection_score(
+                [_resampled_f1(evals[n], weights[SALSA_TRAIN_SET]) for n in views],
+                [_resampled_f1(evals[n], weights[n]) for n in validation_names],
             )
-            / 2
             for _, evals in fitted
         ]
     )
