@@ -265,6 +265,7 @@ def test_a_detector_registered_in_this_process_runs_in_the_workers(small, monkey
     monkeypatch.setattr(reform.detectors, "_REGISTRY", dict(reform.detectors._REGISTRY))
     reform.detectors.register_detector("lab-alone", _EveryoneAlone)
     detectors = [detector_spec("lab-alone"), detector_spec("majority")]
+
     def cells(jobs):
         result = run_benchmark(small, detectors, jobs=jobs)
         return [(c.dataset, c.detector, c.scores, c.predictions) for c in result.cells]

@@ -275,6 +275,8 @@ def test_rank_agreement_over_the_compared_detectors_and_on_salsas_training_split
     assert f"Kendall's tau **{compared.tau:.2f}**" in markdown
     assert f"tau **{train.tau:.2f}**" in markdown
     assert f"rest of the same recording, with tau **{halves.tau:.2f}**" in markdown
+    verdict = "at or above" if halves.tau >= 0.8 else "below"
+    assert f"two parts of one recording agree {verdict} the goal's 0.8" in markdown
     assert document["rank_salsa_halves"]["tau"] == pytest.approx(halves.tau, nan_ok=True)
 
 
