@@ -290,9 +290,10 @@ def _load_sequence(
     ]
 
     listed_of_frame: dict[int, tuple[int, list[list[int]]]] = {}
+    smallest_step = float(np.diff(timestamps).min()) if timestamps.size > 1 else math.inf
     for g, (cell, stamp) in enumerate(zip(gt_cells, gt_times.tolist(), strict=True)):
         where = f"GT frame {g + 1} (GTtimestamp {stamp:g})"
-        t = _match_time(stamp, timestamps, order)
+        t = _match_time(stamp, timestamps, order, smallest_step)
         if t is None:
             raise DataFormatError(
                 groundtruth_path,
@@ -616,13 +617,14 @@ def _frame_rows(
     return ids, array[:, 1:3], theta
 
 
-def _match_time(stamp: float, timestamps: np.ndarray, order: dict[float, int]) -> int | None:
+def _match_time(
+    stamp: float, timestamps: np.ndarray, order: dict[float, int], smallest_step: float
+) -> int | None:
+    """The frame whose timestamp is ``stamp``, within a rounding (capped at a share of the
+    frames' ``smallest_step``), or None."""
     if stamp in order:
         return order[stamp]
-    tolerance = _TIMESTAMP_RTOL * (1.0 + abs(stamp))
-    steps = np.diff(np.unique(timestamps))
-    if steps.size:
-        tolerance = min(tolerance, _TIMESTAMP_STEP_SHARE * float(steps.min()))
+    tolerance = min(_TIMESTAMP_RTOL * (1.0 + abs(stamp)), _TIMESTAMP_STEP_SHARE * smallest_step)
     close = np.flatnonzero(np.abs(timestamps - stamp) <= tolerance)
     return int(close[0]) if close.size == 1 else None
 
