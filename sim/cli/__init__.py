@@ -178,9 +178,14 @@ def _drop_stdout() -> None:
     (Python's own advice for a closed pipe)."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        return
+    try:
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError):  # stdout is no file (captured): nothing to flush
         pass
+    finally:
+        os.close(devnull)
 
 
 def _one_line(message: object) -> str:

@@ -27,6 +27,7 @@ when a ``--detector`` value is parsed.
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import os
 import sys
@@ -338,11 +339,11 @@ def detector_params(detector: Any) -> dict[str, Any]:
     if get_params is None:
         return {}
     try:
-        try:
-            params = get_params(deep=False)
-        except TypeError:  # a get_params without scikit-learn's deep argument
-            params = get_params()
-        items = sorted(dict(params).items())
+        deep = "deep" in inspect.signature(get_params).parameters
+    except (TypeError, ValueError):  # no signature to read: call it as scikit-learn does
+        deep = True
+    try:  # scikit-learn's get_params(deep=False), or a get_params of the detector's own
+        items = sorted(dict(get_params(deep=False) if deep else get_params()).items())
     except Exception as exc:  # the detector is someone's code: report it in one line
         what = " ".join(f"{type(exc).__name__}: {exc}".split())
         raise CliError(
