@@ -41,10 +41,11 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+import numpy as np
+
 from reform.metrics import check_partition
 
 if TYPE_CHECKING:
-    from reform.detector import Reform
     from reform.frame import Frame, Group
 
 __all__ = [
@@ -52,9 +53,11 @@ __all__ = [
     "Detector",
     "DetectorError",
     "DetectorInfo",
+    "Option",
     "check_predictions",
     "detector_info",
     "detector_names",
+    "detector_options",
     "fit_detector",
     "make_detector",
     "register_detector",
@@ -85,6 +88,120 @@ class Detector(Protocol):
         ...
 
 
+OPTION_TYPES = ("float", "int", "str", "bool", "path")  # what an Option's value may be
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option of a catalogued detector, declared once: the command line (``--option
+    NAME=VALUE``), ``--help``, the registry's checks and the tuning searches read it from here.
+
+    Attributes:
+        name: the factory's keyword argument.
+        type: one of :data:`OPTION_TYPES`.
+        default: its value when not given (None: not given means the factory's own choice, said
+            in ``help``).
+        help: one line on what it does.
+        unit: the unit of a number (``"m"``, ``"m²"``, ``"rad"``), or ``""`` for a pure number.
+        low: the smallest value accepted (numbers), or None.
+        high: the largest value accepted (numbers), or None.
+        choices: the values accepted (``str``), or ``()`` for any.
+        grid: values a settings search tries (``reform-sim tune``), or ``()`` when it is not tuned.
+    """
+
+    name: str
+    type: str
+    default: Any
+    help: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[str, ...] = ()
+    grid: tuple[Any, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.name.isidentifier():
+            raise ValueError(f"an option's name must be an identifier, got {self.name!r}")
+        if self.type not in OPTION_TYPES:
+            raise ValueError(
+                f"option {self.name!r}: type must be one of {', '.join(OPTION_TYPES)}, "
+                f"got {self.type!r}"
+            )
+
+    def expects(self) -> str:
+        """What the option accepts: ``"a float in m from 0.01 to 10"``."""
+        text = f"a {self.type}" + (f" in {self.unit}" if self.unit else "")
+        if self.choices:
+            return f"{text}, one of {', '.join(self.choices)}"
+        if self.low is not None and self.high is not None:
+            return f"{text} from {self.low:g} to {self.high:g}"
+        if self.low is not None:
+            return f"{text} of at least {self.low:g}"
+        if self.high is not None:
+            return f"{text} of at most {self.high:g}"
+        return text
+
+    def describe(self) -> str:
+        """``"stride: a float in m from 0.01 to 10, default 0.7; help"``: a line of ``--help``."""
+        default = "" if self.default is None else f", default {self.default!s}"
+        return f"{self.name}: {self.expects()}{default}; {self.help}"
+
+    def parse(self, detector: str, text: str) -> Any:
+        """The value of ``text`` (a command line's string), checked by :meth:`check`."""
+        parsers: dict[str, Callable[[str], Any]] = {
+            "float": float,
+            "int": int,
+            "str": str,
+            "path": str,
+            "bool": _parse_bool,
+        }
+        try:
+            value = parsers[self.type](text)
+        except ValueError:
+            raise DetectorError(
+                f"detector {detector!r}: option {self.name} expects {self.expects()}, got {text!r}"
+            ) from None
+        return self.check(detector, value)
+
+    def check(self, detector: str, value: Any) -> Any:
+        """``value`` when it is of the option's type and inside its range; else DetectorError
+        naming the detector, the option, what is accepted and what came."""
+        if value is None:
+            return value
+        if self.type in ("float", "int"):
+            number = not isinstance(value, (bool, np.bool_)) and isinstance(
+                value, (int, float, np.integer, np.floating)
+            )
+            ok = (
+                number
+                and bool(np.isfinite(float(value)))
+                and (self.type == "float" or float(value) == int(value))
+                and (self.low is None or value >= self.low)
+                and (self.high is None or value <= self.high)
+            )
+            if ok:
+                return int(value) if self.type == "int" else float(value)
+        elif self.type == "bool":
+            if isinstance(value, (bool, np.bool_)):
+                return bool(value)
+        elif self.type == "path":
+            if isinstance(value, (str, os.PathLike)):
+                return value
+        elif isinstance(value, str) and (not self.choices or value in self.choices):
+            return value
+        raise DetectorError(
+            f"detector {detector!r}: option {self.name} expects {self.expects()}, "
+            f"got {_describe(value)}"
+        )
+
+
+def _parse_bool(text: str) -> bool:
+    words = {"true": True, "yes": True, "1": True, "false": False, "no": False, "0": False}
+    if text.strip().lower() not in words:
+        raise ValueError(text)
+    return words[text.strip().lower()]
+
+
 @dataclass(frozen=True)
 class DetectorInfo:
     """One detector the registry knows.
@@ -97,12 +214,27 @@ class DetectorInfo:
             (``"package.module:attribute"``), imported when the detector is made.
         source: where the name comes from: ``"built-in"``, ``"registered"``, ``"import path"``
             or the entry point and the package that declares it.
+        options: its options, declared once (:class:`Option`); ``()`` for a detector whose
+            options are only its factory's signature (a plugin's).
+        citation: the paper it implements (authors, title, venue, year), or ``""``.
     """
 
     name: str
     help: str
     factory: Callable[..., Any] | str
     source: str
+    options: tuple[Option, ...] = ()
+    citation: str = ""
+
+    def option(self, name: str) -> Option:
+        """The declared option ``name``; DetectorError listing the accepted ones."""
+        for option in self.options:
+            if option.name == name:
+                return option
+        accepted = ", ".join(o.name for o in self.options) or "none"
+        raise DetectorError(
+            f"detector {self.name!r} has no option {name!r}; its options: {accepted}"
+        )
 
 
 _REGISTRY: dict[str, DetectorInfo] = {}
@@ -126,8 +258,21 @@ def _parse_spec(spec: str) -> tuple[str, str]:
     return module, attribute
 
 
-def _register(name: str, factory: Any, *, help: str, source: str) -> None:  # noqa: A002
+def _register(
+    name: str,
+    factory: Any,
+    *,
+    help: str,  # noqa: A002
+    source: str,
+    options: Sequence[Option] = (),
+    citation: str = "",
+) -> None:
     _check_name(name)
+    options = tuple(options)
+    if not all(isinstance(option, Option) for option in options):
+        raise DetectorError(f"detector {name!r}: options must be reform.detectors.Option")
+    if len({option.name for option in options}) != len(options):
+        raise DetectorError(f"detector {name!r}: an option is declared twice")
     if not isinstance(help, str) or not help.strip() or "\n" in help.strip():
         raise DetectorError(f"detector {name!r}: help must be one line of text, got {help!r}")
     if isinstance(factory, str):
@@ -141,7 +286,14 @@ def _register(name: str, factory: Any, *, help: str, source: str) -> None:  # no
         raise DetectorError(
             f"detector {name!r} is registered twice (it is already {_REGISTRY[name].source})"
         )
-    _REGISTRY[name] = DetectorInfo(name=name, help=help.strip(), factory=factory, source=source)
+    _REGISTRY[name] = DetectorInfo(
+        name=name,
+        help=help.strip(),
+        factory=factory,
+        source=source,
+        options=options,
+        citation=citation,
+    )
 
 
 def register_detector(
@@ -149,6 +301,8 @@ def register_detector(
     factory: Callable[..., Any] | str | None = None,
     *,
     help: str | None = None,  # noqa: A002 - argparse's word
+    options: Sequence[Option] = (),
+    citation: str = "",
 ) -> Any:
     """Registers ``factory(**options) -> detector`` under ``name``; also a decorator.
 
@@ -162,6 +316,10 @@ def register_detector(
         factory: the factory (omitted: returns a decorator).
         help: one line on the detector (default: the first line of the factory's docstring,
             else its import path).
+        options: its options declared (:class:`Option`: type, default, range, unit, help); the
+            command line and ``--help`` show them, and `make_detector` checks values against
+            them. ``()``: the factory's signature alone says which options exist.
+        citation: the paper the detector implements.
 
     Returns:
         The factory (or, without one, the decorator that registers and returns it).
@@ -172,11 +330,25 @@ def register_detector(
     if factory is None:
 
         def decorate(function: Callable[..., Any]) -> Callable[..., Any]:
-            _register(name, function, help=_help_of(function, help), source="registered")
+            _register(
+                name,
+                function,
+                help=_help_of(function, help),
+                source="registered",
+                options=options,
+                citation=citation,
+            )
             return function
 
         return decorate
-    _register(name, factory, help=_help_of(factory, help), source="registered")
+    _register(
+        name,
+        factory,
+        help=_help_of(factory, help),
+        source="registered",
+        options=options,
+        citation=citation,
+    )
     return factory
 
 
@@ -227,6 +399,11 @@ def _entry_source(entry: importlib.metadata.EntryPoint) -> str:
 def detector_names() -> tuple[str, ...]:
     """Every detector name: the registered ones and those of installed packages, sorted."""
     return tuple(sorted(set(_REGISTRY) | set(_entry_points())))
+
+
+def detector_options(name: str) -> tuple[Option, ...]:
+    """The declared options of the detector ``name`` (``()`` for one that declares none)."""
+    return detector_info(name).options
 
 
 def detector_info(name_or_path: str) -> DetectorInfo:
@@ -362,6 +539,10 @@ def make_detector(name_or_path: str, **options: Any) -> Detector:
     """
     info = detector_info(name_or_path)
     name = info.name
+    if info.options:  # the declared defaults, then what was given, each checked
+        given = {key: info.option(key).check(name, value) for key, value in options.items()}
+        defaults = {o.name: o.default for o in info.options if o.default is not None}
+        options = {**defaults, **given}
     if isinstance(info.factory, str):
         label, target = info.factory, _import(name, info.factory)
     else:
@@ -548,29 +729,6 @@ def fit_detector(name: str, detector: Any, frames: Sequence[Frame]) -> Any:
     return fitted
 
 
-def _reform(*, model: str | os.PathLike[str], trusted: Iterable[str] = ()) -> Reform:
-    """REFORM from a model file written by `reform-sim train` (`reform.persistence.load_model`)."""
-    # Imported here: scikit-learn and skops load only when a REFORM model is made.
-    from reform.persistence import load_model
-
-    return load_model(model, trusted=trusted)
-
-
-_register(
-    "majority",
-    "reform.majority:Majority",
-    help="majority baseline: everyone alone, every pair 'not together'",
-    source="built-in",
-)
-_register(
-    "gcff",
-    "reform.gcff:Gcff",
-    help="GCFF graph-cut baseline (Setti et al. 2015); options stride (m), mdl (m²), orientation",
-    source="built-in",
-)
-_register(
-    "reform",
-    _reform,
-    help="REFORM (Hedayati et al. 2020) from a model file: option model (`reform-sim train`)",
-    source="built-in",
-)
+# The built-in catalogue (reform.catalogue) registers itself on import: one table of every
+# detector the project ships, each with its options declared once.
+import reform.catalogue  # noqa: E402, F401
