@@ -12,8 +12,9 @@ The steps, in this order, each a no-op at its default:
 
 1. **orientation source** (``orientation="head"``): each person's yaw becomes their head's yaw
    where the head is observed (the body's elsewhere);
-2. **scale error** (``scale_sd``): every position (body and head) is multiplied by one factor
-   ``1 + e``, ``e ~ N(0, scale_sd)`` drawn once per episode (and kept above 0.5), as a
+2. **scale** (``scale``, ``scale_sd``): every position (body and head) is multiplied by the
+   fixed factor ``scale`` (a dataset's unit or calibration, as a venue twin fits it) and by one
+   factor ``1 + e``, ``e ~ N(0, scale_sd)`` drawn once per episode (and kept above 0.5), as a
    camera calibration's error scales a whole recording;
 3. **tracker** (``position_noise``, ``yaw_noise``, ``dropout``): `reform.TrackerNoise` on every
    frame (robots kept exact, as everywhere);
@@ -87,6 +88,8 @@ class AnnotationModel:
         yaw_noise: tracker jitter on each yaw, radians (>= 0).
         dropout: probability that the tracker misses a person in a frame, in [0, 1].
         min_group_seconds: the shortest run, seconds, for which annotators call a group (>= 0).
+        scale: a fixed factor every position is multiplied by (> 0): the dataset's length
+            unit or calibration against the simulated metres (1: none).
     """
 
     orientation: str = "body"
@@ -96,6 +99,7 @@ class AnnotationModel:
     yaw_noise: float = 0.0
     dropout: float = 0.0
     min_group_seconds: float = 0.0
+    scale: float = 1.0
 
     def __post_init__(self) -> None:
         if self.orientation not in ORIENTATIONS:
@@ -112,6 +116,12 @@ class AnnotationModel:
             object.__setattr__(self, "directions", int(k))
         levels = ("scale_sd", "position_noise", "yaw_noise", "min_group_seconds")
         check_levels(self, "annotation ", levels, probabilities=("dropout",))
+        scale = self.scale
+        if isinstance(scale, bool) or not isinstance(scale, (int, float, np.number)):
+            raise ValueError(f"annotation scale must be a finite number > 0, got {scale!r}")
+        if not math.isfinite(float(scale)) or float(scale) <= 0.0:
+            raise ValueError(f"annotation scale must be a finite number > 0, got {scale!r}")
+        object.__setattr__(self, "scale", float(scale))
 
     @property
     def identity(self) -> bool:
@@ -119,7 +129,12 @@ class AnnotationModel:
         return self == AnnotationModel()
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        """The settings as JSON values; ``scale`` only when it is not 1 (so that the cards of
+        datasets annotated before it existed stay as they were)."""
+        out = asdict(self)
+        if out["scale"] == 1.0:
+            del out["scale"]
+        return out
 
     def apply(self, frames: Sequence[Frame], rng: np.random.Generator) -> tuple[Frame, ...]:
         """One episode's frames (in time order) as this annotation records them.
@@ -130,9 +145,9 @@ class AnnotationModel:
         frames = tuple(frames)
         if self.identity:
             return frames
-        scale = 1.0
+        scale = self.scale
         if self.scale_sd:
-            scale = max(MIN_SCALE, 1.0 + self.scale_sd * float(rng.normal()))
+            scale *= max(MIN_SCALE, 1.0 + self.scale_sd * float(rng.normal()))
         tracker = TrackerNoise(self.position_noise, self.yaw_noise, self.dropout)
         noisy = tracker != TrackerNoise()
         out = []
@@ -209,9 +224,12 @@ def draw_annotation(
     rng: np.random.Generator, ranges: Mapping[str, tuple[Any, ...]] = ANNOTATION_RANGES
 ) -> AnnotationModel:
     """One annotation model drawn from ``ranges`` (default `ANNOTATION_RANGES`): the choices of
-    ``orientation`` and ``directions`` uniformly, every other setting uniform on (low, high)."""
+    ``orientation`` and ``directions`` uniformly, every other setting uniform on (low, high);
+    a setting ``ranges`` does not name keeps its default (``scale``, by default)."""
     values: dict[str, Any] = {}
     for f in fields(AnnotationModel):
+        if f.name not in ranges:
+            continue
         span = ranges[f.name]
         if f.name in _CHOICES:
             values[f.name] = span[int(rng.integers(len(span)))]

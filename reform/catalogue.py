@@ -20,6 +20,7 @@ from reform.detectors import Option, _register
 
 if TYPE_CHECKING:
     from reform.detector import Reform
+    from reform.gcff import Gcff
 
 __all__: list[str] = []
 
@@ -98,6 +99,48 @@ _register(
         _ORIENTATION,
     ),
     citation=GCFF_CITATION,
+)
+_register(
+    "gcff-own",
+    "reform.gcff:GcffOwn",
+    help="GCFF with the settings each dataset ships (settings_gc.mat, per sequence)",
+    source="built-in",
+    options=(_ORIENTATION,),
+    citation=GCFF_CITATION,
+    needs="dataset",
+)
+
+
+def _gcff_tuned(*, orientation: str = "body", objective: str = "2/3") -> Gcff:
+    """GCFF whose stride and mdl are grid-searched on annotated training frames by ``fit``."""
+    from reform.gcff import Gcff
+
+    return Gcff(
+        tune=True,
+        orientation=orientation,
+        stride_grid=_GCFF_STRIDE_GRID_M,
+        mdl_grid=_GCFF_MDL_GRID_M2,
+        threshold=objective,
+    )
+
+
+_register(
+    "gcff-tuned",
+    _gcff_tuned,
+    help="GCFF with stride and mdl searched on annotated training frames (F1 at the objective T)",
+    source="built-in",
+    options=(
+        _ORIENTATION,
+        Option(
+            "objective",
+            "str",
+            "2/3",
+            "the threshold T whose F1 the search maximises",
+            choices=("2/3", "1"),
+        ),
+    ),
+    citation=GCFF_CITATION,
+    needs="training",
 )
 _register(
     "reform",

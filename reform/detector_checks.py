@@ -144,8 +144,18 @@ def check_no_frames_nobody_and_one_person(name: str, detector: Any) -> None:
     exactly the frame's people), naming the frame and what came back.
     """
     run_detector(name, detector, [])
-    nobody = Frame(ids=np.zeros(0, np.int64), position=np.zeros((0, 2)), yaw=np.zeros(0))
-    one = Frame(ids=np.array([7]), position=np.array([[1.0, 2.0]]), yaw=np.array([0.5]))
+    sequence = check_scenes()[0].sequence  # the scenes' recording, so that per-sequence
+    # settings (gcff-own) cover these frames too
+    nobody = Frame(
+        ids=np.zeros(0, np.int64), position=np.zeros((0, 2)), yaw=np.zeros(0), sequence=sequence
+    )
+    one = Frame(
+        ids=np.array([7]),
+        position=np.array([[1.0, 2.0]]),
+        yaw=np.array([0.5]),
+        sequence=sequence,
+        time=1.0,
+    )
     run_detector(name, detector, [nobody, one])
 
 

@@ -35,15 +35,13 @@ import copy
 import importlib
 import importlib.metadata
 import inspect
+import math
+import numbers
 import os
 import reprlib
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
-
-import numpy as np
-
-from reform.metrics import check_partition
 
 if TYPE_CHECKING:
     from reform.frame import Frame, Group
@@ -60,6 +58,7 @@ __all__ = [
     "detector_options",
     "fit_detector",
     "make_detector",
+    "prepare_detector",
     "register_detector",
     "run_detector",
 ]
@@ -89,6 +88,7 @@ class Detector(Protocol):
 
 
 OPTION_TYPES = ("float", "int", "str", "bool", "path")  # what an Option's value may be
+NEEDS = ("", "dataset", "training")  # what a detector must be given before it predicts
 
 
 @dataclass(frozen=True)
@@ -169,12 +169,11 @@ class Option:
         if value is None:
             return value
         if self.type in ("float", "int"):
-            number = not isinstance(value, (bool, np.bool_)) and isinstance(
-                value, (int, float, np.integer, np.floating)
-            )
+            number = isinstance(value, numbers.Real) and not isinstance(value, bool)
             ok = (
                 number
-                and bool(np.isfinite(float(value)))
+                and type(value).__name__ != "bool_"
+                and math.isfinite(float(value))
                 and (self.type == "float" or float(value) == int(value))
                 and (self.low is None or value >= self.low)
                 and (self.high is None or value <= self.high)
@@ -182,7 +181,7 @@ class Option:
             if ok:
                 return int(value) if self.type == "int" else float(value)
         elif self.type == "bool":
-            if isinstance(value, (bool, np.bool_)):
+            if isinstance(value, bool) or type(value).__name__ == "bool_":  # numpy's too
                 return bool(value)
         elif self.type == "path":
             if isinstance(value, (str, os.PathLike)):
@@ -217,6 +216,10 @@ class DetectorInfo:
         options: its options, declared once (:class:`Option`); ``()`` for a detector whose
             options are only its factory's signature (a plugin's).
         citation: the paper it implements (authors, title, venue, year), or ``""``.
+        needs: what it must be given before it predicts (:data:`NEEDS`): ``""`` nothing,
+            ``"dataset"`` the dataset it runs on (its ``for_dataset(dataset)`` returns the
+            detector for it, e.g. one with the settings the dataset ships), ``"training"``
+            annotated frames to ``fit`` on (never the frames it is scored on).
     """
 
     name: str
@@ -225,6 +228,7 @@ class DetectorInfo:
     source: str
     options: tuple[Option, ...] = ()
     citation: str = ""
+    needs: str = ""
 
     def option(self, name: str) -> Option:
         """The declared option ``name``; DetectorError listing the accepted ones."""
@@ -266,8 +270,11 @@ def _register(
     source: str,
     options: Sequence[Option] = (),
     citation: str = "",
+    needs: str = "",
 ) -> None:
     _check_name(name)
+    if needs not in NEEDS:
+        raise DetectorError(f"detector {name!r}: needs must be one of {NEEDS}, got {needs!r}")
     options = tuple(options)
     if not all(isinstance(option, Option) for option in options):
         raise DetectorError(f"detector {name!r}: options must be reform.detectors.Option")
@@ -293,6 +300,7 @@ def _register(
         source=source,
         options=options,
         citation=citation,
+        needs=needs,
     )
 
 
@@ -303,6 +311,7 @@ def register_detector(
     help: str | None = None,  # noqa: A002 - argparse's word
     options: Sequence[Option] = (),
     citation: str = "",
+    needs: str = "",
 ) -> Any:
     """Registers ``factory(**options) -> detector`` under ``name``; also a decorator.
 
@@ -320,6 +329,7 @@ def register_detector(
             command line and ``--help`` show them, and `make_detector` checks values against
             them. ``()``: the factory's signature alone says which options exist.
         citation: the paper the detector implements.
+        needs: ``"dataset"`` or ``"training"`` (see :class:`DetectorInfo`), ``""`` for neither.
 
     Returns:
         The factory (or, without one, the decorator that registers and returns it).
@@ -337,6 +347,7 @@ def register_detector(
                 source="registered",
                 options=options,
                 citation=citation,
+                needs=needs,
             )
             return function
 
@@ -348,6 +359,7 @@ def register_detector(
         source="registered",
         options=options,
         citation=citation,
+        needs=needs,
     )
     return factory
 
@@ -599,6 +611,8 @@ def check_predictions(name: str, frames: Sequence[Frame], partitions: Any) -> li
             someone not in the frame, someone twice, someone in no group, a non-integer id or
             an empty group.
     """
+    from reform.metrics import check_partition  # numpy: not needed to list the catalogue
+
     frames = list(frames)
     if isinstance(partitions, (str, bytes, Mapping)) or not isinstance(partitions, Iterable):
         raise DetectorError(
@@ -732,3 +746,45 @@ def fit_detector(name: str, detector: Any, frames: Sequence[Frame]) -> Any:
 # The built-in catalogue (reform.catalogue) registers itself on import: one table of every
 # detector the project ships, each with its options declared once.
 import reform.catalogue  # noqa: E402, F401
+
+
+def prepare_detector(
+    name: str,
+    detector: Any,
+    *,
+    dataset: Any = None,
+    training: Sequence[Frame] | None = None,
+) -> Any:
+    """The detector ready to predict on ``dataset``: specialised to it when it has
+    ``for_dataset`` (``needs="dataset"``), fitted on ``training`` when it must learn first.
+
+    Args:
+        name: the detector's name, for messages.
+        detector: what `make_detector` made.
+        dataset: the `reform.Dataset` it will run on, or None.
+        training: annotated frames to fit on (never the frames that are scored), or None.
+
+    Returns:
+        The detector to run (a new object when specialised or fitted; ``detector`` is left as it
+        was).
+
+    Raises:
+        DetectorError: one line: the detector needs a dataset or training frames that were not
+            given, or does not apply to the dataset (naming why).
+    """
+    for_dataset = getattr(detector, "for_dataset", None)
+    if callable(for_dataset):
+        if dataset is None:
+            raise DetectorError(f"{name}: runs on a dataset's own settings; none was given")
+        try:
+            detector = for_dataset(dataset)
+        except _RAISED as exc:
+            raise DetectorError(f"{name}: {' '.join(str(exc).split())}") from exc
+    info = _REGISTRY.get(name)
+    if info is not None and info.needs == "training":
+        if not training:
+            raise DetectorError(
+                f"{name}: learns its settings from annotated training frames; none were given"
+            )
+        detector = fit_detector(name, detector, training)
+    return detector

@@ -87,6 +87,7 @@ __all__ = [
     "Expansion",
     "Gcff",
     "GcffBySequence",
+    "GcffOwn",
     "GridSearch",
     "alpha_expansion",
     "energy",
@@ -855,3 +856,37 @@ class GcffBySequence(BaseEstimator):
 
     def __sklearn_is_fitted__(self) -> bool:
         return True
+
+
+class GcffOwn(BaseEstimator):
+    """GCFF with the settings the dataset it runs on ships: the catalogue's ``gcff-own``.
+
+    Made without a dataset, it is specialised to one by :meth:`for_dataset` (the commands that
+    score a dataset do it): :class:`GcffBySequence` with each sequence's ``settings_gc.mat``.
+
+    Args:
+        orientation: as :class:`Gcff`.
+    """
+
+    def __init__(self, *, orientation: str = "body") -> None:
+        self.orientation = orientation
+
+    def for_dataset(self, dataset: Any) -> GcffBySequence:
+        """GCFF with the settings ``dataset`` ships, per sequence.
+
+        Raises:
+            ValueError: a sequence of the dataset ships no settings (naming it).
+        """
+        return GcffBySequence.from_dataset(dataset, orientation=self.orientation)
+
+    def fit(self, frames: Sequence[Frame]) -> GcffOwn:
+        """Nothing to learn."""
+        check_frames(frames)
+        return self
+
+    def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
+        """Refused: the settings come from a dataset (:meth:`for_dataset`)."""
+        raise ValueError(
+            "gcff-own runs with the settings a dataset ships: specialise it with "
+            "for_dataset(dataset) (reform-sim evaluate, detect and benchmark do)"
+        )

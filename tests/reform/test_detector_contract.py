@@ -10,7 +10,15 @@ import numpy as np
 import pytest
 from toy_scenes import toy_frames
 
-from reform import DetectorError, Majority, Reform, detector_names, make_detector, save_model
+from reform import (
+    Dataset,
+    DetectorError,
+    Majority,
+    Reform,
+    detector_names,
+    make_detector,
+    save_model,
+)
 from reform.classifiers import make_classifier
 from reform.detector_checks import (
     DETECTOR_CHECKS,
@@ -23,6 +31,7 @@ from reform.detector_checks import (
     check_scenes,
     check_the_same_answer_twice,
 )
+from reform.detectors import prepare_detector
 
 
 @pytest.fixture(scope="module")
@@ -36,10 +45,35 @@ def options_for(name: str, model_path: Path) -> dict:
     return {"reform": {"model": model_path}}.get(name, {})
 
 
+def ready(name: str, model_path: Path):
+    """The catalogue's detector ``name`` made and given what it needs (reform.prepare_detector):
+    a dataset shipping GCFF settings for every sequence of the check scenes, training frames
+    that are not the check scenes."""
+    scenes = tuple({f.sequence: f for f in check_scenes()}.values())  # a frame of each sequence
+    settings = {"stride_m": 0.7, "mdl_m2": 3.0}
+    dataset = Dataset(
+        frames=scenes,
+        name="check-scenes",
+        metadata={"settings_gc_by_sequence": {f.sequence: settings for f in scenes}},
+    )
+    made = make_detector(name, **options_for(name, model_path))
+    return prepare_detector(name, made, dataset=dataset, training=toy_frames(0, 30))
+
+
 @pytest.mark.parametrize("check", DETECTOR_CHECKS, ids=lambda check: check.__name__)
 @pytest.mark.parametrize("name", detector_names())
 def test_every_registered_detector_keeps_the_contract(name, check, model_path):
-    check(name, make_detector(name, **options_for(name, model_path)))
+    check(name, ready(name, model_path))
+
+
+def test_a_detector_that_needs_a_dataset_or_training_frames_says_so():
+    with pytest.raises(DetectorError, match=r"^gcff-own: runs on a dataset's own settings"):
+        prepare_detector("gcff-own", make_detector("gcff-own"))
+    with pytest.raises(DetectorError, match=r"^gcff-tuned: learns its settings from annotated"):
+        prepare_detector("gcff-tuned", make_detector("gcff-tuned"), training=[])
+    bare = Dataset(frames=tuple(check_scenes()[:1]), name="bare")
+    with pytest.raises(DetectorError, match=r"^gcff-own: dataset 'bare': sequence 'circles' "):
+        prepare_detector("gcff-own", make_detector("gcff-own"), dataset=bare)
 
 
 def test_reform_finds_the_groups_of_the_check_scenes(model_path):
