@@ -52,6 +52,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
 
 from reform.features import pair_indices
 
@@ -75,6 +77,7 @@ __all__ = [
     "batch_greedy_labels",
     "check_reconstruction",
     "correlation_clustering",
+    "graph_greedy_labels",
     "greedy_reconstruction",
     "pair_weights",
     "partition_from_labels",
@@ -384,17 +387,18 @@ def batch_greedy_labels(pair_labels: npt.ArrayLike, n: int, *, variant: str = UN
         return np.broadcast_to(np.arange(n, dtype=np.intp), (n_frames, n)).copy()
     if n_frames < _SMALL_BATCH and n <= 64:
         return np.array([_greedy_python(row, n, variant) for row in labels_in], dtype=np.intp)
+    if n > _WORD_PEOPLE:  # the frames as one graph of n_frames * n people, its pairs listed
+        frame_of, pair = np.nonzero(labels_in)
+        offset = frame_of * n
+        labels = graph_greedy_labels(
+            n_frames * n, offset + i[pair], offset + j[pair], variant=variant
+        )
+        return (labels - np.repeat(np.arange(n_frames) * n, n)).reshape(n_frames, n)
 
-    beliefs = _beliefs(labels_in, n)  # (F, n, W)
+    beliefs = _beliefs(labels_in, n)[..., 0]  # (F, n): up to 64 people, one word each
     # A consistent person's group is their belief set; its first member is the label.
-    out = _lowest_bit(beliefs)
-    if beliefs.shape[-1] == 1:
-        word = beliefs[..., 0]
-        conflict = labels_in & (np.take(word, i, axis=1) != np.take(word, j, axis=1))
-    else:
-        b_i = beliefs[:, i]
-        b_j = beliefs[:, j]
-        conflict = labels_in & (b_i != b_j).any(axis=-1)
+    out = _lowest_bit(beliefs[..., None])
+    conflict = labels_in & (np.take(beliefs, i, axis=1) != np.take(beliefs, j, axis=1))
     if not conflict.any():
         return out
     frame_of, pair = np.nonzero(conflict)
@@ -402,26 +406,7 @@ def batch_greedy_labels(pair_labels: npt.ArrayLike, n: int, *, variant: str = UN
     loose[frame_of, i[pair]] = True
     loose[frame_of, j[pair]] = True
     frames = np.flatnonzero(loose.any(axis=1))
-    if beliefs.shape[-1] == 1:
-        _greedy_loop_word(
-            labels_in[frames],
-            beliefs[frames, :, 0],
-            loose[frames],
-            out,
-            frames,
-            n,
-            variant,
-        )
-        return out
-    out[frames] = _greedy_loop(
-        labels_in[frames],
-        beliefs[frames],
-        beliefs[frames][:, i] & beliefs[frames][:, j],
-        loose[frames],
-        out[frames],
-        n,
-        variant,
-    )
+    _greedy_loop_word(labels_in[frames], beliefs[frames], loose[frames], out, frames, n, variant)
     return out
 
 
@@ -495,59 +480,6 @@ def _greedy_loop_word(
     out[frames[group_frames[g]], person] = leader[g]
 
 
-def _greedy_loop(
-    pair_labels: np.ndarray,
-    beliefs: np.ndarray,
-    common: np.ndarray,
-    remaining: np.ndarray,
-    out: np.ndarray,
-    n: int,
-    variant: str,
-) -> np.ndarray:
-    """The greedy loop over the ``remaining`` people of each frame, all frames in lock-step.
-
-    ``common`` holds ``B_i ∩ B_j`` of every pair, (F, P, W).
-    """
-    i, j = pair_indices(n)
-    out = out.copy()
-    rows = np.arange(n, dtype=np.intp)
-    out[remaining] = np.broadcast_to(rows, remaining.shape)[remaining]
-    remaining = remaining.copy()
-    active_frames = np.arange(pair_labels.shape[0])
-    while active_frames.size:
-        rem = remaining[active_frames]
-        live = pair_labels[active_frames] & rem[:, i] & rem[:, j]
-        has_pair = live.any(axis=1)
-        if not has_pair.all():
-            active_frames = active_frames[has_pair]
-            rem = rem[has_pair]
-            live = live[has_pair]
-            if active_frames.size == 0:
-                break
-        rem_bits = _pack(rem)  # (F', W)
-        agreement = np.bitwise_count(common[active_frames] & rem_bits[:, None, :])
-        if agreement.shape[-1] == 1:
-            agreement = agreement[..., 0].astype(np.int16)
-        else:
-            agreement = agreement.sum(axis=-1, dtype=np.int16)
-        score = np.where(live, agreement, np.int16(-1))
-        best = np.argmax(score, axis=1)  # first maximum: lowest (i, j)
-        first, second = i[best], j[best]
-        b_first = beliefs[active_frames, first]
-        b_second = beliefs[active_frames, second]
-        if variant == UNION:
-            members = _unpack((b_first | b_second) & rem_bits, n)
-        else:
-            members = _unpack(b_first & b_second & rem_bits, n)
-            local = np.arange(active_frames.size)
-            members[local, first] = True
-            members[local, second] = True
-        leader = np.argmax(members, axis=1)
-        out[active_frames] = np.where(members, leader[:, None], out[active_frames])
-        remaining[active_frames] = rem & ~members
-    return out
-
-
 def _greedy_python(pair_labels: np.ndarray, n: int, variant: str) -> list[int]:
     """One frame with Python integers as bitsets: fastest for a single small frame."""
     i, j = pair_indices(n)
@@ -597,3 +529,209 @@ def _greedy_python(pair_labels: np.ndarray, n: int, variant: str) -> list[int]:
             labels[low.bit_length() - 1] = leader
             bits ^= low
         remaining &= ~members
+
+
+# --------------------------------------------------------------------------------------------
+# Greedy Reconstruction one connected component at a time, from the pairs predicted together
+
+_WORD_PEOPLE = 64  # components up to this many people hold each belief set in one uint64 word
+
+
+def graph_greedy_labels(
+    n: int, first: npt.ArrayLike, second: npt.ArrayLike, *, variant: str = UNION
+) -> np.ndarray:
+    """Greedy Reconstruction from the list of pairs predicted together, component by component.
+
+    The greedy loop never mixes connected components of the predicted graph: a candidate pair
+    lies inside one, its beliefs ``B_i``, ``B_j`` and so its agreement and its emitted group lie
+    inside it too, and removing a group changes no other component's agreements. A
+    component's own sequence of choices is therefore the one the whole-matrix loop makes, and
+    each is reconstructed on its own: a component in which everyone is predicted together with
+    everyone (a clique) is one group; the others go through the loop, those of up to 64 people
+    all at once with each belief set in one machine word, larger ones one by one with their
+    agreements updated only near the group just emitted. Memory grows with the number of people
+    and of pairs predicted together, not with the square of the people.
+
+    Args:
+        n: number of people (rows ``0..n-1``).
+        first: (E,) the lower row of each pair predicted together.
+        second: (E,) the higher row of each pair (``first < second``); pairs in any order,
+            repeats allowed.
+        variant: ``"union"`` or ``"intersection"``.
+
+    Returns:
+        (n,) intp group labels, each person's the row of their group's first member, as
+        :func:`batch_greedy_labels` gives them; the same partition as
+        :func:`greedy_reconstruction` on the Relation Matrix of these pairs.
+    """
+    check_reconstruction(variant, GREEDY_VARIANTS)
+    n = int(n)
+    if n < 0:
+        raise ValueError(f"n must be >= 0, got {n}")
+    a = np.asarray(first).astype(np.int64, copy=False).ravel()
+    b = np.asarray(second).astype(np.int64, copy=False).ravel()
+    if a.shape != b.shape:
+        raise ValueError(f"first and second must have one shape, got {a.shape} and {b.shape}")
+    if a.size and not (np.all(a < b) and a.min() >= 0 and b.max() < n):
+        raise ValueError(f"pairs must satisfy 0 <= first < second < n={n}")
+    out = np.arange(n, dtype=np.intp)
+    if a.size == 0:
+        return out
+    key = np.unique(a * n + b)  # sorted: pairs in (first, second) order, the tie-break order
+    a, b = np.divmod(key, n)
+    count, component = connected_components(
+        coo_array((np.ones(a.size, dtype=np.int8), (a, b)), shape=(n, n)), directed=False
+    )
+    _, leader = np.unique(component, return_index=True)  # each component's first member
+    out[:] = leader[component]
+    size = np.bincount(component, minlength=count)
+    pairs = np.bincount(component[a], minlength=count)
+    loose = pairs < size * (size - 1) // 2  # not a clique: the greedy loop decides
+    if not loose.any():
+        return out
+    edge_loose = loose[component[a]]
+    a, b = a[edge_loose], b[edge_loose]
+    people = np.flatnonzero(loose[component])  # ascending
+    out[people] = people
+    order = np.argsort(component[people], kind="stable")  # by component, rows ascending inside
+    people = people[order]
+    comp_of = component[people]
+    starts = np.flatnonzero(np.r_[True, comp_of[1:] != comp_of[:-1]])
+    local = np.empty(n, dtype=np.int64)  # each loose person's place in their component
+    local[people] = np.arange(people.size) - np.repeat(starts, np.diff(np.r_[starts, people.size]))
+    small = size[comp_of[starts]] <= _WORD_PEOPLE
+    edge_order = np.argsort(component[a], kind="stable")  # by component, pair order inside
+    a, b = a[edge_order], b[edge_order]
+    edge_comp = component[a]
+    small_comp = np.zeros(count, dtype=bool)
+    small_comp[comp_of[starts[small]]] = True
+    on_word = small_comp[edge_comp]
+    if on_word.any():
+        _word_components(a[on_word], b[on_word], edge_comp[on_word], local, out, variant)
+    for start in starts[~small].tolist():
+        c = component[people[start]]
+        inside = edge_comp == c
+        members = people[start : start + size[c]]
+        _large_component(members, local[a[inside]], local[b[inside]], out, variant)
+    return out
+
+
+def _word_components(
+    a: np.ndarray,
+    b: np.ndarray,
+    edge_comp: np.ndarray,
+    local: np.ndarray,
+    out: np.ndarray,
+    variant: str,
+) -> None:
+    """The greedy loop over components of at most 64 people, all in lock-step, writing into
+    ``out``. ``a``, ``b``: (E,) rows of their pairs, grouped by component ``edge_comp`` and in
+    pair order inside; ``local``: each person's place in their component."""
+    one = np.uint64(1)
+    la = local[a].astype(np.uint64)
+    lb = local[b].astype(np.uint64)
+    bit_a = one << la
+    bit_b = one << lb
+    # Belief words over local places, per person (a person's own bit included).
+    people = np.unique(np.concatenate([a, b]))
+    slot = np.searchsorted(people, a), np.searchsorted(people, b)
+    word = one << local[people].astype(np.uint64)
+    np.bitwise_or.at(word, slot[0], bit_b)
+    np.bitwise_or.at(word, slot[1], bit_a)
+    word_a, word_b = word[slot[0]], word[slot[1]]
+    common = word_a & word_b
+    comps, edge_comp = np.unique(edge_comp, return_inverse=True)
+    remaining = np.full(
+        comps.size, np.iinfo(np.uint64).max, dtype=np.uint64
+    )  # bits of each component's people not yet in a group
+    row_of = np.zeros((comps.size, _WORD_PEOPLE), dtype=np.int64)  # local place -> row
+    row_of[edge_comp, la.astype(np.intp)] = a
+    row_of[edge_comp, lb.astype(np.intp)] = b
+    emitted_comp, emitted_bits = [], []
+    edge = np.arange(a.size)
+    while edge.size:
+        c = edge_comp[edge]
+        rem = remaining[c]
+        live = ((rem & bit_a[edge]) != 0) & ((rem & bit_b[edge]) != 0)
+        edge, c, rem = edge[live], c[live], rem[live]
+        if edge.size == 0:
+            break
+        score = np.bitwise_count(common[edge] & rem).astype(np.int16)
+        opens = np.flatnonzero(np.r_[True, c[1:] != c[:-1]])
+        best = np.maximum.reduceat(score, opens)
+        at_best = np.where(score == np.repeat(best, np.diff(np.r_[opens, c.size])), edge, a.size)
+        pick = np.minimum.reduceat(at_best, opens)  # first maximum: the lowest pair
+        chosen = c[opens]
+        rem_c = remaining[chosen]
+        if variant == UNION:
+            members = (word_a[pick] | word_b[pick]) & rem_c
+        else:
+            members = (common[pick] & rem_c) | bit_a[pick] | bit_b[pick]
+        remaining[chosen] = rem_c & ~members
+        emitted_comp.append(chosen)
+        emitted_bits.append(members)
+    if not emitted_comp:
+        return
+    group_comp = np.concatenate(emitted_comp)
+    group_bits = np.concatenate(emitted_bits)
+    member = _unpack(group_bits[:, None], _WORD_PEOPLE)  # (groups, 64)
+    g, place = np.nonzero(member)
+    rows = row_of[group_comp[g], place]
+    first_place = _lowest_bit(group_bits[:, None])
+    out[rows] = row_of[group_comp, first_place][g]
+
+
+_AGREEMENT_CHUNK = 1 << 16  # pairs whose agreement is counted at once in a large component
+
+
+def _large_component(
+    members: np.ndarray, a: np.ndarray, b: np.ndarray, out: np.ndarray, variant: str
+) -> None:
+    """The greedy loop over one component of more than 64 people, writing into ``out``.
+
+    ``members``: (m,) its rows ascending; ``a``, ``b``: (E,) local places of its pairs, in pair
+    order. Each pair's agreement is counted once and recounted only when a group containing a
+    common neighbour of both members leaves.
+    """
+    m = members.size
+    adjacent = np.zeros((m, m), dtype=bool)
+    adjacent[a, b] = True
+    adjacent[b, a] = True
+    adjacent[np.arange(m), np.arange(m)] = True
+    beliefs = _pack(adjacent)  # (m, W)
+    del adjacent
+    remaining = np.ones(m, dtype=bool)
+    agreement = _agreement(beliefs, a, b, _pack(remaining))
+    while a.size:
+        k = int(np.argmax(agreement))  # pairs stay in pair order: the first is the lowest
+        if variant == UNION:
+            bits = (beliefs[a[k]] | beliefs[b[k]]) & _pack(remaining)
+        else:
+            bits = beliefs[a[k]] & beliefs[b[k]] & _pack(remaining)
+        group = _unpack(bits, m)
+        if variant != UNION:
+            group[[a[k], b[k]]] = True
+        rows = members[group]
+        out[rows] = rows[0]
+        remaining &= ~group
+        near = np.zeros(m, dtype=bool)  # neighbours of the group: the only agreements it moves
+        touch = group[a] | group[b]
+        near[a[touch]] = True
+        near[b[touch]] = True
+        keep = remaining[a] & remaining[b]
+        a, b, agreement = a[keep], b[keep], agreement[keep]
+        stale = np.flatnonzero(near[a] & near[b])
+        if stale.size:
+            agreement[stale] = _agreement(beliefs, a[stale], b[stale], _pack(remaining))
+
+
+def _agreement(
+    beliefs: np.ndarray, a: np.ndarray, b: np.ndarray, remaining: np.ndarray
+) -> np.ndarray:
+    """(E,) ``|B_a ∩ B_b ∩ remaining|`` of pairs, counted a chunk of pairs at a time."""
+    out = np.empty(a.size, dtype=np.int32)
+    for start in range(0, a.size, _AGREEMENT_CHUNK):
+        stop = start + _AGREEMENT_CHUNK
+        both = beliefs[a[start:stop]] & beliefs[b[start:stop]] & remaining
+        out[start:stop] = np.bitwise_count(both).sum(axis=-1, dtype=np.int32)
+    return out
