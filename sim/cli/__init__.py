@@ -67,6 +67,11 @@ COMMANDS = (
         "sim.cli._generate",
     ),
     Command(
+        "twin",
+        "fit a venue twin to a recording's frames (no labels): scenario and annotation model",
+        "sim.cli._twin",
+    ),
+    Command(
         "calibrate",
         "simulate the scenarios and set them beside SALSA and Babble",
         "sim.cli._calibrate",

@@ -1,0 +1,338 @@
+"""Fitting a venue twin to a recording's frames, without their groups.
+
+The recipe (`fit_twin`), each step matching one label-free statistic of the real frames
+(`sim.twins.statistics.measure_place`) with the same statistic of short simulated parties:
+
+1. **people**: ``mingle``'s ``people`` is the median number of humans per frame, its
+   ``max_group_size`` no more than them;
+2. **rate and length**: frames at the recording's rate, episodes as long as its sequences (cut so
+   that at least `MIN_EPISODES` episodes make `TARGET_FRAMES` frames or so);
+3. **spacing and scale**: pilot parties are simulated (`PILOT_EPISODES` of `PILOT_S` seconds);
+   the annotation's fixed ``scale`` is the real median nearest-neighbour distance over the
+   pilot's, and the room's side is set so that the box holding everyone, scaled, is as large as
+   the real one (crowding); `PILOT_ROUNDS` rounds of both;
+4. **orientation coding**: the number of directions every real yaw is coded in (continuous
+   when none fits), the head's yaw when the recording's yaw is its head's;
+5. **tracker**: position and yaw jitter on top of the pilot's own, so that people standing still
+   move between frames as much as in the recording; dropouts at the recording's rate.
+
+With ``use_labels`` (a separate mode, recorded in the twin), the annotated frames also fix the
+group structure: the share of people alone, the largest group and the o-space radius law
+(least squares on the mean distance of members to their group's centre by size).
+Every frame's groups are removed before anything else in the label-free mode, so the twin
+cannot depend on them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from reform.annotation import AnnotationModel
+from reform.frame import Frame
+from reform.seeding import derive_int, derive_rng
+from sim.twins.description import Fitted, Twin
+from sim.twins.statistics import PlaceStatistics, measure_place
+
+__all__ = [
+    "MIN_FRAMES",
+    "TwinInputError",
+    "check_frames_for_twin",
+    "fit_twin",
+    "twin_sample",
+]
+
+SCENARIO = "mingle"
+MIN_FRAMES = 10  # frames a recording needs to be fitted
+NN_RANGE_M = (0.05, 20.0)  # metres: a median nearest neighbour outside says the unit is wrong
+TARGET_FRAMES = 1200  # frames of a generated twin, about (at least the recording's, at most)
+MIN_TARGET_FRAMES = 400
+MIN_EPISODES = 4
+MAX_EPISODES = 40
+EPISODE_S = (30.0, 600.0)  # seconds, shortest and longest episode
+PILOT_EPISODES = 3
+PILOT_S = 120.0  # seconds per pilot episode
+PILOT_RATE_HZ = 0.5
+PILOT_ROUNDS = 3
+MIN_ROOM_M = 4.0  # metres (mingle's smallest room)
+MAX_ROOM_M = 100.0
+MAX_DENSITY = 1.0  # people per m^2 mingle allows
+ROOM_GROWTH = 1.1  # a room the party does not fit grows by this factor
+ROOM_TRIES = 12
+MAX_GROUP = 8  # mingle's default largest group
+PILOT, CHECK = 11, 12  # seed roles of the pilot and of the twin's own figures
+
+
+class TwinInputError(ValueError):
+    """A recording a twin cannot be fitted to: one line naming file, field, expected, found."""
+
+
+def _strip(frames: Sequence[Frame]) -> list[Frame]:
+    return [f if f.groups is None else f.replace(groups=None, listed_groups=None) for f in frames]
+
+
+def check_frames_for_twin(frames: Sequence[Frame], *, where: str) -> None:
+    """Refuses a recording too small to fit or in the wrong unit, before any work.
+
+    Raises:
+        TwinInputError: fewer than `MIN_FRAMES` frames, never two people at once, or a median
+            nearest-neighbour distance outside `NN_RANGE_M`.
+    """
+    if len(frames) < MIN_FRAMES:
+        raise TwinInputError(
+            f"{where}: field frames: expected at least {MIN_FRAMES} frames to fit a twin, found "
+            f"{len(frames)}"
+        )
+    most = max((int(np.sum(~f.is_robot)) for f in frames), default=0)
+    if most < 2:
+        raise TwinInputError(
+            f"{where}: field ids: expected two or more people in some frame, found at most {most}"
+        )
+    from sim.twins.statistics import nearest_neighbour_distances
+
+    nn = float(np.median(nearest_neighbour_distances(frames)))
+    low, high = NN_RANGE_M
+    if not low <= nn <= high:
+        raise TwinInputError(
+            f"{where}: field position: expected a median nearest-neighbour distance of {low:g} to "
+            f"{high:g} m, found {nn:.4g} (positions in another unit? convert them to metres)"
+        )
+
+
+def _room_for(people: int, side: float) -> float:
+    least = max(MIN_ROOM_M, math.sqrt(people / MAX_DENSITY) + 1e-6)
+    return float(min(MAX_ROOM_M, max(least, side)))
+
+
+def _simulate(options: dict[str, Any], *, seed: int, rate: float) -> tuple[list[Frame], dict]:
+    """Pilot episodes of ``options``; a room they do not fit grows (returned options)."""
+    from scenarios.mingle import NoFloorError
+    from sim.episode import simulate_episode
+
+    options = dict(options)
+    for _ in range(ROOM_TRIES):
+        try:
+            frames: list[Frame] = []
+            for k in range(PILOT_EPISODES):
+                episode = simulate_episode(
+                    SCENARIO, seed=derive_int(seed, k), rate=rate, options=options
+                )
+                frames.extend(episode.dataset)
+            return frames, options
+        except NoFloorError:
+            options["room_side"] = _room_for(options["people"], options["room_side"] * ROOM_GROWTH)
+    raise TwinInputError(
+        f"twin: field options.room_side: expected a room the party fits, found none up to "
+        f"{options['room_side']:.3g} m"
+    )
+
+
+def _sample(
+    options: Mapping[str, Any], annotation: AnnotationModel, *, seed: int, rate: float
+) -> list[Frame]:
+    frames, _ = _simulate(dict(options), seed=derive_int(seed, CHECK), rate=rate)
+    return list(annotation.apply(frames, derive_rng(seed, CHECK)))
+
+
+def twin_sample(twin: Twin) -> list[Frame]:
+    """A few of the twin's frames, as its fit measured them (`PILOT_EPISODES` episodes, seeded
+    by the twin's seed): what ``twin.json``'s twin figures and the plots are made of."""
+    return _sample(twin.options, twin.annotation, seed=twin.seed, rate=twin.rate_hz)
+
+
+def _labelled_shape(frames: Sequence[Frame]) -> dict[str, float]:
+    """Group structure of the annotated frames: share alone, largest group, radius law."""
+    alone = people = 0
+    largest = 2
+    sizes: dict[int, list[float]] = {}
+    for frame in frames:
+        if frame.groups is None:
+            continue
+        index = {int(i): k for k, i in enumerate(frame.ids)}
+        people += frame.n_people
+        together = 0
+        for group in frame.fformations():
+            rows = [index[m] for m in group]
+            p = frame.position[rows]
+            sizes.setdefault(len(rows), []).append(
+                float(np.mean(np.hypot(*(p - p.mean(axis=0)).T)))
+            )
+            together += len(rows)
+            largest = max(largest, len(rows))
+        alone += frame.n_people - together
+    if not sizes:
+        return {}
+    n = np.array([s for s, v in sizes.items() for _ in v], dtype=np.float64)
+    r = np.array([x for v in sizes.values() for x in v])
+    if len(set(n.tolist())) > 1:
+        per, base = np.polyfit(n - 2.0, r, 1)
+    else:
+        per, base = 0.0, float(r.mean())
+    return {
+        "alone_share": alone / people if people else 0.0,
+        "max_group_size": float(largest),
+        "radius_base": float(base),
+        "radius_per_member": float(per),
+    }
+
+
+def _clip(value: float, low: float, high: float) -> float:
+    return float(min(high, max(low, value)))
+
+
+def fit_twin(
+    frames: Sequence[Frame],
+    *,
+    name: str,
+    seed: int = 0,
+    use_labels: bool = False,
+    where: str | None = None,
+) -> Twin:
+    """Fits a venue twin to ``frames`` (see the module docstring for the recipe).
+
+    Args:
+        frames: the recording's frames (a Dataset works too); their groups are removed first
+            unless ``use_labels``.
+        name: the recording's name, recorded in the twin.
+        seed: master seed of the pilots and of the generated data.
+        use_labels: also fit the group structure on the annotated frames.
+        where: the file named by errors (default ``name``).
+
+    Raises:
+        TwinInputError: a recording too small or in the wrong unit (`check_frames_for_twin`).
+    """
+    where = where or name
+    frames = list(frames)
+    check_frames_for_twin(frames, where=where)
+    shape = _labelled_shape(frames) if use_labels else {}
+    if not use_labels:
+        frames = _strip(frames)
+    real = measure_place(frames)
+
+    people = int(_clip(round(real.people_median), 2, 100))
+    rate = _clip(real.rate_hz if math.isfinite(real.rate_hz) else 1.0, 0.05, 25.0)
+    target = _clip(real.frames, MIN_TARGET_FRAMES, TARGET_FRAMES)
+    duration = real.duration_s if math.isfinite(real.duration_s) else EPISODE_S[1]
+    duration = _clip(min(duration, target / (MIN_EPISODES * rate)), *EPISODE_S)
+    episodes = int(_clip(math.ceil(target / (duration * rate)), MIN_EPISODES, MAX_EPISODES))
+    max_group = min(MAX_GROUP, people)
+    options: dict[str, Any] = {
+        "people": people,
+        "max_group_size": max(2, max_group),
+        "room_side": _room_for(people, math.sqrt(people / 0.4)),
+    }
+    if shape:
+        options["max_group_size"] = int(_clip(shape["max_group_size"], 2, min(12, people)))
+        options["alone_share"] = _clip(shape["alone_share"], 0.0, 1.0)
+
+    scale = 1.0
+    pilot: PlaceStatistics | None = None
+    for round_ in range(PILOT_ROUNDS):
+        if shape:
+            options["radius_base"] = _clip(shape["radius_base"] / scale, 0.3, 2.0)
+            options["radius_per_member"] = _clip(shape["radius_per_member"] / scale, 0.0, 0.5)
+        run = {**options, "duration": PILOT_S}
+        sim_frames, run = _simulate(run, seed=derive_int(seed, PILOT, round_), rate=PILOT_RATE_HZ)
+        options["room_side"] = run["room_side"]
+        pilot = measure_place(sim_frames)
+        scale = real.nn_median / pilot.nn_median
+        if round_ < PILOT_ROUNDS - 1:  # the last round's room is the one the scale was fit on
+            wanted = real.extent_m / scale  # the box holding everyone, in simulated metres
+            side = options["room_side"] * wanted / pilot.extent_m
+            options["room_side"] = _room_for(people, side)
+    assert pilot is not None
+
+    jitter = math.sqrt(max(0.0, real.position_jitter_m**2 - (scale * pilot.position_jitter_m) ** 2))
+    turn = 0.0
+    if real.directions == 0:
+        turn = math.sqrt(max(0.0, real.yaw_jitter_rad**2 - pilot.yaw_jitter_rad**2))
+    annotation = AnnotationModel(
+        orientation="head" if real.yaw_is_head > 0.5 else "body",
+        directions=real.directions or None,
+        position_noise=float(f"{jitter:.4g}"),
+        yaw_noise=float(f"{turn:.4g}"),
+        dropout=float(f"{min(real.dropout, 0.5):.4g}"),
+        scale=float(f"{scale:.6g}"),
+    )
+    options = {k: (float(f"{v:.6g}") if isinstance(v, float) else v) for k, v in options.items()}
+    options["duration"] = float(f"{duration:.6g}")
+
+    import scenarios
+
+    options = scenarios.registry.check_options(SCENARIO, options)
+    mine = measure_place(_sample(options, annotation, seed=seed, rate=rate))
+
+    fitted = _fitted(real, mine, options, annotation, rate, episodes, shape)
+    return Twin(
+        name=name,
+        mode="labels" if use_labels else "label-free",
+        scenario=SCENARIO,
+        options=options,
+        annotation=annotation,
+        rate_hz=float(f"{rate:.6g}"),
+        episodes=episodes,
+        seed=seed,
+        fitted=fitted,
+        statistics={"real": real.to_json(), "twin": mine.to_json()},
+    )
+
+
+def _fitted(
+    real: PlaceStatistics,
+    twin: PlaceStatistics,
+    options: dict[str, Any],
+    annotation: AnnotationModel,
+    rate: float,
+    episodes: int,
+    shape: dict[str, float],
+) -> tuple[Fitted, ...]:
+    r, t = real.to_json(), twin.to_json()
+
+    def row(name: str, value: Any, statistic: str, key: str | None) -> Fitted:
+        return Fitted(
+            name, value, statistic, r.get(key) if key else None, t.get(key) if key else None
+        )
+
+    rows = [
+        row("options.people", options["people"], "humans per frame, median", "people_median"),
+        row("options.max_group_size", options["max_group_size"],
+            "no more than the people (labels: the largest group)", None),
+        row("options.room_side", options["room_side"],
+            "side of the box holding everyone, median (crowding)", "extent_m"),
+        row("options.duration", options["duration"], "length of a sequence, median, seconds",
+            "duration_s"),
+        row("rate_hz", float(f"{rate:.6g}"), "frames per second", "rate_hz"),
+        row("episodes", episodes, f"about {TARGET_FRAMES} frames, at least {MIN_EPISODES} "
+            "episodes", None),
+        row("annotation.scale", annotation.scale, "nearest-neighbour distance, median",
+            "nn_median"),
+        row("annotation.directions", annotation.directions,
+            "directions every yaw is coded in (0: continuous)", "directions"),
+        row("annotation.orientation", annotation.orientation,
+            "share of recorded yaws that are the head's", "yaw_is_head"),
+        row("annotation.position_noise", annotation.position_noise,
+            "position jitter of people standing still, per axis", "position_jitter_m"),
+        row("annotation.yaw_noise", annotation.yaw_noise,
+            "yaw jitter of people standing still", "yaw_jitter_rad"),
+        row("annotation.dropout", annotation.dropout,
+            "share of frames a person is missing between two that hold them", "dropout"),
+        row("(check) density", None, "humans per square metre of that box, median",
+            "density_per_m2"),
+        row("(check) nn q10", None, "nearest-neighbour distance, 10% quantile", "nn_q10"),
+        row("(check) arrivals", None, "people appearing per minute", "arrivals_per_min"),
+    ]  # fmt: skip
+    for key in ("alone_share", "radius_base", "radius_per_member"):
+        if key in shape:
+            rows.append(
+                Fitted(
+                    f"options.{key}",
+                    options[key],
+                    "labels: " + key.replace("_", " "),
+                    float(f"{shape[key]:.6g}"),
+                    None,
+                )  # fmt: skip
+            )
+    return tuple(rows)

@@ -1,0 +1,204 @@
+"""What a recording of a place shows without its groups: the statistics a venue twin is fitted to.
+
+`measure_place` reads positions, orientations, times and who is present, never the ground truth.
+Every statistic is a plain float (NaN where the frames cannot say), so that the real recording
+and its twin are measured by the same function and set side by side in ``twin.json``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from reform.frame import Frame, wrap_angle
+
+__all__ = ["CODINGS", "PlaceStatistics", "measure_place", "nearest_neighbour_distances"]
+
+# Orientation codings looked for, in directions per turn (the field's: 4, 8, 24).
+CODINGS = (4, 8, 12, 16, 24, 36, 72)
+CODING_TOLERANCE_RAD = 1e-3  # radians: a yaw this close to a coded direction is on it
+STILL_M_PER_S = 0.15  # metres per second: slower than this between two frames is standing still
+MAX_GAP_STEPS = 1.5  # consecutive frames are at most this many median steps apart
+RAYLEIGH_MEDIAN = math.sqrt(2.0 * math.log(2.0)) * math.sqrt(2.0)  # |difference of two jitters|
+HALF_NORMAL_MEDIAN = 0.6744897501960817 * math.sqrt(2.0)  # |difference of two yaw jitters|
+
+
+@dataclass(frozen=True)
+class PlaceStatistics:
+    """The label-free statistics of a recording.
+
+    Attributes:
+        frames: frames measured.
+        sequences: recordings (sequences) among them.
+        rate_hz: frames per second (the inverse of the median step within a sequence).
+        duration_s: median length of a sequence, seconds.
+        people_median, people_q10, people_q90: humans per frame.
+        arrivals_per_min: people who appear (were not in the frame before), per minute.
+        dropout: share of a person's frames missing between two frames that hold them.
+        nn_q10, nn_median, nn_q90: every person's distance to the nearest other person, metres.
+        extent_m: median over frames of the square root of the area of the box holding
+            everyone, metres.
+        density_per_m2: median over frames of the humans per square metre of that box.
+        directions: orientations coded in this many directions (0: continuous).
+        head_share: share of person-frames with a head pose.
+        yaw_is_head: share of those whose recorded yaw is the head's yaw.
+        position_jitter_m: per-axis standard deviation of position between frames of people
+            standing still, metres.
+        yaw_jitter_rad: standard deviation of yaw between frames of people standing still,
+            radians (0 when orientations are coded).
+    """
+
+    frames: int
+    sequences: int
+    rate_hz: float
+    duration_s: float
+    people_median: float
+    people_q10: float
+    people_q90: float
+    arrivals_per_min: float
+    dropout: float
+    nn_q10: float
+    nn_median: float
+    nn_q90: float
+    extent_m: float
+    density_per_m2: float
+    directions: int
+    head_share: float
+    yaw_is_head: float
+    position_jitter_m: float
+    yaw_jitter_rad: float
+
+    def to_json(self) -> dict[str, Any]:
+        return {k: _rounded(v) for k, v in asdict(self).items()}
+
+
+def _rounded(value: Any) -> Any:
+    if isinstance(value, float):
+        return None if not math.isfinite(value) else float(f"{value:.6g}")
+    return value
+
+
+def nearest_neighbour_distances(frames: Sequence[Frame]) -> np.ndarray:
+    """Every person's distance to the nearest other person, in every frame of two or more
+    people (annotated or not): (n,) in the frames' unit."""
+    out = []
+    for frame in frames:
+        if frame.n_people < 2:
+            continue
+        p = frame.position
+        d = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1])
+        np.fill_diagonal(d, np.inf)
+        out.append(d.min(axis=1))
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def _by_sequence(frames: Sequence[Frame]) -> list[list[Frame]]:
+    runs: dict[str, list[Frame]] = {}
+    for frame in frames:
+        runs.setdefault(frame.sequence, []).append(frame)
+    return [sorted(run, key=lambda f: f.time) for run in runs.values()]
+
+
+def _coding(yaw: np.ndarray) -> int:
+    """The number of directions every yaw is coded in, or 0 for continuous orientations."""
+    if yaw.size == 0:
+        return 0
+    for k in CODINGS:
+        step = 2.0 * math.pi / k
+        off = np.abs(wrap_angle(yaw - np.round(yaw / step) * step))
+        if np.all(off < CODING_TOLERANCE_RAD):
+            return k
+    return 0
+
+
+def measure_place(frames: Sequence[Frame]) -> PlaceStatistics:
+    """The statistics of ``frames`` (any order; grouped by sequence, ordered by time).
+
+    Only positions, yaws, head poses, ids, kinds, times and sequences are read: the frames'
+    groups never are.
+    """
+    frames = list(frames)
+    runs = _by_sequence(frames)
+    steps = np.concatenate([np.diff([f.time for f in run]) for run in runs if len(run) > 1] or [[]])
+    steps = steps[steps > 0]
+    step = float(np.median(steps)) if steps.size else math.nan
+    durations = [
+        run[-1].time - run[0].time + (step if math.isfinite(step) else 0.0) for run in runs
+    ]
+
+    humans = np.array([int(np.sum(~f.is_robot)) for f in frames], dtype=np.float64)
+    nn = nearest_neighbour_distances(frames)
+    extents, densities = [], []
+    for frame in frames:
+        p = frame.position[~frame.is_robot]
+        if len(p) < 2:
+            continue
+        area = float(np.prod(np.maximum(np.ptp(p, axis=0), 1e-9)))
+        extents.append(math.sqrt(area))
+        densities.append(len(p) / max(area, 1e-9))
+
+    yaw = np.concatenate([f.yaw for f in frames]) if frames else np.zeros(0)
+    head_seen = head_same = person_frames = 0
+    for frame in frames:
+        person_frames += frame.n_people
+        if frame.head_yaw is not None:
+            seen = ~np.isnan(frame.head_yaw)
+            head_seen += int(seen.sum())
+            diff = np.abs(wrap_angle(frame.yaw[seen] - frame.head_yaw[seen]))
+            head_same += int(np.sum(diff < CODING_TOLERANCE_RAD))
+
+    moves, turns = [], []
+    arrivals = missed = held = 0
+    for run in runs:
+        for k, (a, b) in enumerate(zip(run, run[1:], strict=False)):
+            dt = b.time - a.time
+            if not math.isfinite(step) or dt <= 0 or dt > MAX_GAP_STEPS * step:
+                continue
+            where = {int(i): j for j, i in enumerate(a.ids)}
+            for j, i in enumerate(b.ids):
+                prev = where.get(int(i))
+                if prev is None:
+                    arrivals += 1
+                    continue
+                move = float(np.hypot(*(b.position[j] - a.position[prev])))
+                if move < STILL_M_PER_S * dt:
+                    moves.append(move)
+                    turns.append(abs(float(wrap_angle(b.yaw[j] - a.yaw[prev]))))
+            if k + 2 < len(run):
+                c = run[k + 2]
+                both = set(a.ids.tolist()) & set(c.ids.tolist())
+                held += len(both)
+                missed += len(both - set(b.ids.tolist()))
+    directions = _coding(yaw)
+    minutes = sum(durations) / 60.0
+    return PlaceStatistics(
+        frames=len(frames),
+        sequences=len(runs),
+        rate_hz=1.0 / step if math.isfinite(step) and step > 0 else math.nan,
+        duration_s=float(np.median(durations)) if durations else math.nan,
+        people_median=_quantile(humans, 0.5),
+        people_q10=_quantile(humans, 0.1),
+        people_q90=_quantile(humans, 0.9),
+        arrivals_per_min=arrivals / minutes if minutes > 0 else math.nan,
+        dropout=missed / held if held else 0.0,
+        nn_q10=_quantile(nn, 0.1),
+        nn_median=_quantile(nn, 0.5),
+        nn_q90=_quantile(nn, 0.9),
+        extent_m=_quantile(np.array(extents), 0.5),
+        density_per_m2=_quantile(np.array(densities), 0.5),
+        directions=directions,
+        head_share=head_seen / person_frames if person_frames else 0.0,
+        yaw_is_head=head_same / head_seen if head_seen else 0.0,
+        position_jitter_m=float(np.median(moves)) / RAYLEIGH_MEDIAN if moves else 0.0,
+        yaw_jitter_rad=(
+            float(np.median(turns)) / HALF_NORMAL_MEDIAN if turns and directions == 0 else 0.0
+        ),
+    )
+
+
+def _quantile(values: np.ndarray, q: float) -> float:
+    return float(np.quantile(values, q)) if values.size else math.nan

@@ -1,0 +1,178 @@
+"""Venue twins: fitted without labels, refused on bad input, frozen in a checked twin.json."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reform.datasets import write_parquet
+from reform.frame import Dataset, Frame
+from sim.twins import (
+    TwinFormatError,
+    TwinInputError,
+    fit_twin,
+    measure_place,
+    read_twin,
+    write_twin,
+)
+from tests.cli_errors import cli_error, run_cli
+
+
+def _frames(*, n_frames: int = 24, people: int = 6, scale: float = 1.0, seed: int = 3) -> list:
+    """A small recording: people standing in two clusters with jitter, 1 frame per second,
+    yaws coded in 8 directions, annotated with two groups."""
+    rng = np.random.default_rng(seed)
+    base = rng.uniform(-2.0, 2.0, size=(people, 2))
+    yaw0 = rng.uniform(-np.pi, np.pi, size=people)
+    step = 2 * np.pi / 8
+    frames = []
+    half = people // 2
+    for t in range(n_frames):
+        position = (base + rng.normal(0.0, 0.02, size=base.shape)) * scale
+        yaw = np.round((yaw0 + rng.normal(0, 0.1, people)) / step) * step
+        yaw = (yaw + np.pi) % (2 * np.pi) - np.pi
+        groups = (tuple(range(1, half + 1)), tuple(range(half + 1, people + 1)))
+        frames.append(
+            Frame(
+                ids=np.arange(1, people + 1),
+                position=position,
+                yaw=yaw,
+                groups=groups,
+                time=float(t),
+                sequence="s",
+            )  # fmt: skip
+        )
+    return frames
+
+
+def _json(twin) -> str:
+    return json.dumps(twin.to_json(), indent=2)
+
+
+def test_a_twin_never_reads_the_groups():
+    frames = _frames()
+    removed = [f.replace(groups=None) for f in frames]
+    rng = np.random.default_rng(0)
+    shuffled = []
+    for f in frames:
+        ids = rng.permutation(f.ids)
+        shuffled.append(f.replace(groups=(tuple(ids[:2].tolist()), tuple(ids[2:5].tolist()))))
+    texts = {_json(fit_twin(fs, name="place")) for fs in (frames, removed, shuffled)}
+    assert len(texts) == 1
+
+
+def test_use_labels_is_a_mode_of_its_own():
+    frames = _frames()
+    twin = fit_twin(frames, name="place", use_labels=True)
+    assert twin.mode == "labels"
+    assert "options.alone_share" in [f.name for f in twin.fitted]
+    assert fit_twin(frames, name="place").mode == "label-free"
+
+
+def test_a_twin_matches_the_recording_it_is_fitted_to():
+    frames = _frames(scale=1.5)
+    twin = fit_twin(frames, name="place")
+    real = measure_place(frames)
+    assert twin.options["people"] == 6
+    assert twin.annotation.directions == 8  # the recording's coding, found
+    assert twin.rate_hz == pytest.approx(1.0)
+    twin_nn = twin.statistics["twin"]["nn_median"]
+    assert twin_nn == pytest.approx(real.nn_median, rel=0.35)
+
+
+def test_the_same_seed_gives_the_same_twin_and_file(tmp_path):
+    a = write_twin(fit_twin(_frames(), name="place", seed=5), tmp_path / "a.json")
+    b = write_twin(fit_twin(_frames(), name="place", seed=5), tmp_path / "b.json")
+    assert a.read_bytes() == b.read_bytes()
+    assert read_twin(a).to_json() == json.loads(a.read_text())  # round trip
+
+
+@pytest.mark.parametrize(
+    ("frames", "message"),
+    [
+        (_frames(n_frames=9), r"place: field frames: expected at least 10 frames .* found 9"),
+        (
+            [
+                f.replace(
+                    ids=f.ids[:1], position=f.position[:1], yaw=f.yaw[:1], kinds=None, groups=None
+                )
+                for f in _frames()
+            ],
+            r"place: field ids: expected two or more people in some frame, found at most 1",
+        ),
+        (_frames(scale=0.01), r"place: field position: expected a median nearest-neighbour"),
+        (_frames(scale=100.0), r"found \d+(\.\d+)? \(positions in another unit"),
+    ],
+    ids=["too-few-frames", "never-two-people", "centimetres-as-metres", "metres-as-centimetres"],
+)
+def test_bad_recordings_are_refused_before_any_work(frames, message):
+    with pytest.raises(TwinInputError, match=message):
+        fit_twin(frames, name="place")
+
+
+@pytest.fixture(scope="module")
+def twin_file(tmp_path_factory) -> Path:
+    return write_twin(fit_twin(_frames(), name="place"), tmp_path_factory.mktemp("t") / "t.json")
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d.update(colour="red"), r"field colour: expected one of the fields"),
+        (lambda d: d.update(version=99), r"field version: expected 1 .* found 99"),
+        (lambda d: d.update(rate_hz=-1), r"field rate_hz: expected a number in \(0, 100\]"),
+        (lambda d: d.update(episodes=0), r"field episodes: expected a whole number from 1"),
+        (lambda d: d["options"].update(people=1), r"field options: .*people"),
+        (lambda d: d["options"].update(wings=2), r"field options: .*wings"),
+        (lambda d: d["annotation"].update(dropout=2.0), r"field annotation: .*dropout"),
+        (lambda d: d["annotation"].update(blur=1), r"field annotation.blur: expected one of"),
+        (lambda d: d.update(scenario="moon"), r"field scenario: expected a registered scenario"),
+    ],
+    ids=[
+        "unknown-field",
+        "unknown-version",
+        "rate",
+        "episodes",
+        "option-range",
+        "unknown-option",
+        "annotation-range",
+        "unknown-annotation",
+        "unknown-scenario",
+    ],  # fmt: skip
+)
+def test_a_twin_file_edited_into_nonsense_is_refused(twin_file, tmp_path, edit, message):
+    data = json.loads(twin_file.read_text())
+    edit(data)
+    path = tmp_path / "twin.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(TwinFormatError, match=str(path).replace(".", r"\.") + ": " + message):
+        read_twin(path)
+
+
+def test_a_file_that_is_not_json_is_one_line(tmp_path):
+    path = tmp_path / "twin.json"
+    path.write_text("{nope")
+    with pytest.raises(TwinFormatError, match=r"expected a twin file \(JSON\)"):
+        read_twin(path)
+
+
+def test_the_twin_command_writes_the_twin_and_its_plots(tmp_path, capsys):
+    data = tmp_path / "place.parquet"
+    write_parquet(Dataset(tuple(_frames()), name="place"), data)
+    status, out, err = run_cli(["twin", "--data", data, "--out", tmp_path / "twin"], capsys)
+    assert status == 0, err
+    twin = read_twin(tmp_path / "twin" / "twin.json")
+    assert twin.options["people"] == 6
+    assert (tmp_path / "twin" / "twin.png").read_bytes()[:4] == b"\x89PNG"
+    assert "annotation.scale" in out
+
+
+def test_the_twin_command_refuses_a_small_recording_in_one_line(tmp_path, capsys):
+    data = tmp_path / "small.parquet"
+    write_parquet(Dataset(tuple(_frames(n_frames=5)), name="small"), data)
+    line = cli_error(["twin", "--data", data, "--out", tmp_path / "twin"], capsys)
+    assert "field frames: expected at least 10 frames to fit a twin, found 5" in line
+    assert not (tmp_path / "twin" / "twin.json").exists()
