@@ -150,3 +150,46 @@ _register(
     options=(Option("model", "path", None, "a model file written by `reform-sim train` (.skops)"),),
     citation=REFORM_CITATION,
 )
+
+DANTE_CITATION = (
+    "Swofford, Peruzzi, Tsoi, Thompson, Martín-Martín, Savarese, Vázquez. Improving Social "
+    "Awareness Through DANTE: Deep Affinity Network for Clustering Conversational "
+    "Interactants. CSCW 2020"
+)
+_register(
+    "dante",
+    "reform.dante:make_dante",
+    help="DANTE (Swofford et al. 2020) from a model file (option model, `reform-sim train "
+    "--detector dante`), or untrained to fit; needs the extra reform-sim[dante]",
+    source="built-in",
+    options=(
+        Option(
+            "model",
+            "path",
+            None,
+            "a model file written by `reform-sim train --detector dante` (.safetensors); "
+            "without it the detector is untrained and must be fitted",
+        ),
+        Option(
+            "orientation",
+            "str",
+            "body",
+            "the orientation each person carries (both: body and head, DANTE's SALSA input)",
+            choices=("body", "head", "both"),
+        ),
+        Option("epochs", "int", 600, "most passes over the training pairs", low=1, high=100_000),
+        Option(
+            "learning_rate", "float", 1e-4, "Adam's step size while training", low=1e-7, high=1.0
+        ),
+        Option("batch_size", "int", 1024, "pairs per gradient step", low=2, high=1 << 20),
+        Option(
+            "random_state",
+            "int",
+            0,
+            "seeds the weights, the shuffling and dropout: one seed, one model",
+            low=0,
+            high=2**32 - 1,
+        ),
+    ),
+    citation=DANTE_CITATION,
+)

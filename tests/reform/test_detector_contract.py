@@ -4,6 +4,7 @@ that every check is seen to fail."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +43,20 @@ def model_path(tmp_path_factory) -> Path:
 
 def options_for(name: str, model_path: Path) -> dict:
     """What each built-in needs to be made; a new built-in that needs options fails here."""
+    if name == "dante":
+        return {"model": _tiny_dante(model_path.parent)}
     return {"reform": {"model": model_path}}.get(name, {})
+
+
+@functools.cache
+def _tiny_dante(folder: Path) -> Path:
+    """A DANTE trained for a few epochs on toy frames, once per module (the extra
+    reform-sim[dante], which CI installs)."""
+    pytest.importorskip("torch")
+    from reform.dante import Dante
+
+    model = Dante(epochs=3, batch_size=256, learning_rate=1e-3, random_state=0)
+    return model.fit(toy_frames(0, 30)).save(folder / "dante.safetensors")
 
 
 def ready(name: str, model_path: Path):
