@@ -1,27 +1,21 @@
-"""Detectors the CLI can build: the built-ins from their options, any other from the registry.
+"""Detectors the CLI can build: every name of the catalogue (`reform.catalogue`), its options
+from the catalogue's declaration, and plugins.
 
-``--detector`` takes any name of the detector registry (`reform.detectors`: the built-ins, an
-installed package's entry point) or a plugin's ``package.module:factory`` path. The built-in
-detectors that take options on the command line have a builder here, one entry per detector
-(and, when it takes options, one function adding them to the parser)::
+``--detector`` takes any name of the detector registry (the catalogue's built-ins, an installed
+package's entry point) or a plugin's ``package.module:factory`` path. Its options come as
+``--option NAME=VALUE`` (repeatable), checked against the catalogue's declaration of that
+detector (type, range, unit: `reform.detectors.Option`), or from a settings file (``--settings
+FILE.json``, `reform.settings`: what ``reform-sim tune`` writes). A few detectors keep flags of
+their own, each flag belonging to the detectors that take it (GCFF's ``--stride``/``--mdl``/
+``--settings FILE.mat``/``--gcff-orientation``, ``--tune-on`` for detectors that learn their
+settings, REFORM's ``--model``); a flag given to another detector is an error naming both.
 
-    def _gcff_arguments(parser):
-        parser.add_argument("--stride", type=float, help="metres")
+A detector that needs the dataset it runs on (``gcff-own``: the settings the dataset ships) is
+specialised to it, and one that learns from training frames (``gcff-tuned``) is fitted on
+``--tune-on`` (`reform.detectors.prepare_detector`); the CLI never fits a detector on the frames
+it scores.
 
-    @cli_detector("gcff", help="GCFF graph-cut baseline", add_arguments=_gcff_arguments)
-    def _gcff(args):
-        from reform import Gcff
-        return Gcff(stride=args.stride)
-
-Every other detector is made by `reform.detectors.make_detector` with no options. A builder
-returns a detector ready to ``predict(frames)`` (one full partition per frame); the CLI never
-fits it. Options of every builder are added to ``evaluate`` and ``detect``; a builder reads its
-own. A detector's options default to None (not given), so that one given to another detector is
-an error naming both (``--model is an option of --detector reform, not of --detector
-majority``).
-
-Building the parser imports nothing of `reform` (``--help`` stays light): the registry is asked
-when a ``--detector`` value is parsed.
+Building the parser imports the catalogue only (pure Python: ``--help`` stays light).
 """
 
 from __future__ import annotations
@@ -71,8 +65,16 @@ class DetectorSpec:
     add_arguments: Callable[[argparse.ArgumentParser], None] | None = None
 
 
-# The built-in detectors the CLI builds from its own options (names of the registry).
+# The catalogue's detectors the CLI builds from flags of their own (names of the registry); every
+# other name is built from --option and --settings FILE.json by `_build_from_catalogue`.
 DETECTORS: dict[str, DetectorSpec] = {}
+# Flags that belong to some detectors only: dest -> (flag, the detectors that take it).
+_OWN_FLAGS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "stride": ("--stride", ("gcff",)),
+    "mdl": ("--mdl", ("gcff",)),
+    "gcff_orientation": ("--gcff-orientation", ("gcff", "gcff-own", "gcff-tuned")),
+    "model": ("--model", ("reform",)),
+}
 
 
 def cli_detector(
@@ -94,132 +96,121 @@ def cli_detector(
     return decorate
 
 
-@cli_detector("majority", help="majority baseline: everyone alone, every pair 'not together'")
-def _majority(args: argparse.Namespace) -> Any:  # noqa: ARG001
-    from reform.detectors import make_detector
-
-    return make_detector("majority")
-
-
 def _gcff_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
         "gcff options",
         "Parameters carry units: metres and square metres (GCFF computes in centimetres; "
-        "see reform.gcff). With none of --stride/--mdl, --settings, --tune-on, a GCFF folder's "
-        "own settings_gc.mat is used when present, else the reference code's 70 cm / 10000 cm².",
+        "see reform.gcff). gcff runs with one stated setting, the REFORM paper's 0.7 m and "
+        "3.0 m² unless --stride/--mdl/--settings say otherwise; gcff-own with the settings_gc.mat "
+        "each sequence of the dataset ships; gcff-tuned with stride and mdl searched on --tune-on.",
     )
     group.add_argument(
         "--stride",
         type=float,
         metavar="S",
-        help="GCFF: distance of the o-space centre in front of each person, in METRES "
-        "(default 0.7 m = the reference code's 70 cm)",
+        help="gcff: distance of the o-space centre in front of each person, in METRES "
+        "(default 0.7 m = 70 cm; the same as --option stride=S)",
     )
     group.add_argument(
         "--mdl",
         type=float,
         metavar="M",
-        help="GCFF: cost of opening one more group, in SQUARE METRES (default 1.0 m² = the "
-        "reference code's 10000 cm²; the REFORM paper's 'MDL 30000' is 30000 cm² = 3.0 m²)",
-    )
-    group.add_argument(
-        "--settings",
-        metavar="FILE.mat",
-        help="GCFF: read stride and mdl from a GCFF settings file, in centimetres and cm² "
-        "(in metres when --units m is given)",
-    )
-    group.add_argument(
-        "--tune-on",
-        metavar="PATH|NAME",
-        help="GCFF: grid-search stride and mdl on the annotated frames of this dataset "
-        "(format detected; give training data only), objective: F1 at T = 2/3",
+        help="gcff: cost of opening one more group, in SQUARE METRES (default 3.0 m², the "
+        "REFORM paper's 'MDL 30000' cm²; the reference code's 10000 cm² is 1.0 m²; the same as "
+        "--option mdl=M)",
     )
     group.add_argument(
         "--gcff-orientation",
         choices=("body", "head"),
         default=None,
-        help="GCFF: orientation each person's o-space vote follows (default: body)",
+        help="gcff, gcff-own, gcff-tuned: orientation each person's o-space vote follows "
+        "(default: body)",
     )
 
 
 @cli_detector(
     "gcff",
-    help="GCFF graph-cut baseline (Setti et al. 2015), faithful to the reference code",
+    help="GCFF graph-cut baseline (Setti et al. 2015) with one stated setting",
     add_arguments=_gcff_arguments,
 )
 def _gcff(args: argparse.Namespace) -> Any:
-    import sys
-
     from reform import Gcff
-    from reform.datasets import detect_format, load_dataset, resolve
+    from reform.detectors import make_detector
 
     orientation = args.gcff_orientation or "body"
-    explicit = args.stride is not None or args.mdl is not None
-    given = [
-        name
-        for name, present in (
-            ("--stride/--mdl", explicit),
-            ("--settings", args.settings is not None),
-            ("--tune-on", args.tune_on is not None),
-        )
-        if present
-    ]
-    if len(given) > 1:
-        raise CliError(f"gcff takes one of --stride/--mdl, --settings, --tune-on; got {given}")
-    if args.settings is not None:
+    options = _options(args)
+    flags = {
+        key: value
+        for key, value in (("stride", args.stride), ("mdl", args.mdl))
+        if value is not None
+    }
+    both = sorted(set(flags) & set(options))
+    if both:
+        raise CliError(f"gcff: give {both[0]} once (--{both[0]} or --option {both[0]}=), not both")
+    explicit = {**options, **flags}
+    settings = getattr(args, "settings", None)
+    if settings is not None and not _is_json(settings):
+        if explicit:
+            raise CliError(
+                f"gcff takes --settings FILE.mat or --stride/--mdl/--option; got both "
+                f"(--settings and {', '.join(sorted(explicit))})"
+            )
         per_pixel = getattr(args, "metres_per_pixel", None)
         if args.units == "px" and per_pixel is not None:  # settings in the dataset's pixels
-            read = Gcff.from_settings_file(args.settings, units="m", orientation=orientation)
+            read = Gcff.from_settings_file(settings, units="m", orientation=orientation)
             return Gcff(
                 stride=read.stride * per_pixel, mdl=read.mdl * per_pixel**2, orientation=orientation
             )
-        return Gcff.from_settings_file(
-            args.settings, units=args.units or "cm", orientation=orientation
-        )
-    if args.tune_on is not None:
-        train = load_dataset(args.tune_on).annotated()
-        if not train:
-            raise CliError(f"--tune-on {args.tune_on}: no annotated frames to tune on")
-        tuned = Gcff(tune=True, orientation=orientation).fit(train)
-        search = tuned.grid_search_
-        print(
-            f"gcff: tuned on {len(train)} frames of {args.tune_on}: stride {tuned.stride_:g} m, "
-            f"mdl {tuned.mdl_:g} m² (F1 at T=2/3 {search.best_f1:.3f})",
-            file=sys.stderr,
-        )
-        return Gcff(stride=tuned.stride_, mdl=tuned.mdl_, orientation=orientation)
-    if explicit:
-        defaults = Gcff()
-        stride = defaults.stride if args.stride is None else args.stride
-        mdl = defaults.mdl if args.mdl is None else args.mdl
-        return Gcff(stride=stride, mdl=mdl, orientation=orientation)
-    if (args.format or detect_format(resolve(args.data))) == "gcff":
-        from reform.gcff import GcffBySequence
+        return Gcff.from_settings_file(settings, units=args.units or "cm", orientation=orientation)
+    explicit = {**_settings_options(args), **explicit}
+    explicit.setdefault("orientation", orientation)
+    return make_detector("gcff", **explicit)
 
-        dataset = load_data(args)
-        try:
-            detector = GcffBySequence.from_dataset(dataset, orientation=orientation)
-        except ValueError as exc:
-            # A sequence ships no usable settings_gc.mat: the reference's defaults, said aloud.
-            defaults = Gcff()
-            print(
-                f"gcff: {' '.join(str(exc).split())}; using the reference's defaults (stride "
-                f"{defaults.stride:g} m, mdl {defaults.mdl:g} m²) for every sequence; give "
-                "--stride/--mdl or --settings to choose",
-                file=sys.stderr,
-            )
-            detector = None
-        if detector is not None:
-            shipped = "; ".join(
-                f"{sequence}: stride {stride:g} m, mdl {mdl:g} m²"
-                for sequence, (stride, mdl) in detector.settings.items()
-            )
-            print(f"gcff: the dataset's own settings_gc.mat ({shipped})", file=sys.stderr)
-            if len(detector.settings) == 1:
-                ((stride, mdl),) = detector.settings.values()
-                return Gcff(stride=stride, mdl=mdl, orientation=orientation)
-            return detector
-    return Gcff(orientation=orientation)
+
+@cli_detector(
+    "gcff-own",
+    help="GCFF with the settings_gc.mat each sequence of the dataset ships",
+    add_arguments=None,
+)
+def _gcff_own(args: argparse.Namespace) -> Any:
+    from reform.detectors import make_detector, prepare_detector
+
+    options = {**_settings_options(args), **_options(args)}
+    if args.gcff_orientation is not None:
+        options["orientation"] = args.gcff_orientation
+    own = make_detector("gcff-own", **options)
+    detector = prepare_detector("gcff-own", own, dataset=load_data(args))
+    shipped = "; ".join(
+        f"{sequence}: stride {stride:g} m, mdl {mdl:g} m²"
+        for sequence, (stride, mdl) in detector.settings.items()
+    )
+    print(f"gcff-own: the dataset's own settings_gc.mat ({shipped})", file=sys.stderr)
+    return detector
+
+
+@cli_detector(
+    "gcff-tuned",
+    help="GCFF with stride and mdl grid-searched on the annotated frames of --tune-on",
+    add_arguments=None,
+)
+def _gcff_tuned(args: argparse.Namespace) -> Any:
+    from reform.detectors import make_detector, prepare_detector
+
+    options = {**_settings_options(args), **_options(args)}
+    if args.gcff_orientation is not None:
+        options["orientation"] = args.gcff_orientation
+    train = _tuning_frames(args)
+    tuned = prepare_detector("gcff-tuned", make_detector("gcff-tuned", **options), training=train)
+    print(
+        f"gcff-tuned: tuned on {len(train)} frames of {args.tune_on}: stride {tuned.stride_:g} m, "
+        f"mdl {tuned.mdl_:g} m² (F1 at T={tuned.threshold} {tuned.grid_search_.best_f1:.3f})",
+        file=sys.stderr,
+    )
+    return tuned
+
+
+def _is_json(path: str) -> bool:
+    return str(path).lower().endswith(".json")
 
 
 def _reform_arguments(parser: argparse.ArgumentParser) -> None:
@@ -243,6 +234,106 @@ def _reform(args: argparse.Namespace) -> Any:
     return load_model(args.model)
 
 
+def _options(args: argparse.Namespace) -> dict[str, Any]:
+    """``--option NAME=VALUE`` values, each read and checked by the catalogue's declaration of
+    ``args.detector`` (a plugin's, undeclared: a JSON number, true/false, else the text)."""
+    from reform.detectors import DetectorError, detector_info
+
+    given = getattr(args, "option", None) or []
+    info = detector_info(args.detector)
+    out: dict[str, Any] = {}
+    for text in given:
+        key, equals, value = text.partition("=")
+        key = key.strip()
+        if not equals or not key.isidentifier():
+            raise CliError(f"--option expects NAME=VALUE, got {text!r}")
+        if key in out:
+            raise CliError(f"--option {key} is given twice")
+        if info.options:
+            try:
+                out[key] = info.option(key).parse(args.detector, value)
+            except DetectorError as exc:
+                raise CliError(str(exc)) from None
+        else:
+            out[key] = _literal(value)
+    return out
+
+
+def _literal(text: str) -> Any:
+    """A plugin's undeclared option value: a JSON number or boolean, else the text itself."""
+    import json
+
+    try:
+        value = json.loads(text)
+    except ValueError:
+        return text
+    return value if isinstance(value, (int, float, bool)) else text
+
+
+def _settings_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The options of a ``--settings FILE.json`` (`reform.settings`), checked to be
+    ``args.detector``'s; ``{}`` without one."""
+    from reform.detectors import DetectorError
+    from reform.settings import read_settings
+
+    path = getattr(args, "settings", None)
+    if path is None or not _is_json(path):
+        return {}
+    try:
+        settings = read_settings(path)
+    except DetectorError as exc:
+        raise CliError(str(exc)) from None
+    if settings.detector != args.detector:
+        raise CliError(
+            f"--settings {path} holds settings of detector {settings.detector!r}, not of "
+            f"--detector {args.detector}"
+        )
+    return dict(settings.options)
+
+
+def _build_from_catalogue(args: argparse.Namespace) -> Any:
+    """A catalogued (or installed, or plugin) detector from ``--settings FILE.json`` and
+    ``--option``, given the dataset or the ``--tune-on`` frames it needs."""
+    from reform.detectors import DetectorError, detector_info, prepare_detector
+
+    name = args.detector
+    options = {**_settings_options(args), **_options(args)}
+    detector = make_plugin(name, **options)
+    needs = detector_info(name).needs if ":" not in name else ""
+    training = None
+    if needs == "training":
+        training = _tuning_frames(args)
+    try:
+        return prepare_detector(
+            name,
+            detector,
+            dataset=load_data(args) if needs == "dataset" else None,
+            training=training,
+        )
+    except DetectorError as exc:
+        raise CliError(str(exc)) from None
+
+
+def _tuning_frames(args: argparse.Namespace) -> Any:
+    """The annotated frames of ``--tune-on`` (never the frames scored); CliError without it."""
+    from reform.datasets import load_dataset
+
+    source = getattr(args, "tune_on", None)
+    if source is None:
+        raise CliError(
+            f"--detector {args.detector} learns its settings from annotated training frames: "
+            "give --tune-on PATH|NAME (a dataset other than the one scored)"
+        )
+    train = load_dataset(source).annotated()
+    if not train:
+        raise CliError(f"--tune-on {source}: no annotated frames to tune on")
+    print(
+        f"{args.detector}: tuning on {len(train)} annotated frames of {source} ...",
+        file=sys.stderr,
+    )
+    return train
+
+
 def detector_name(text: str) -> str:
     """``--detector``'s type: a registry name or a plugin's ``package.module:factory`` path.
 
@@ -262,30 +353,61 @@ def detector_name(text: str) -> str:
     return text
 
 
+def catalogue_help() -> str:
+    """Every catalogued detector with its help line and declared options, for ``--help``."""
+    from reform.detectors import detector_info, detector_names
+
+    lines = []
+    for name in detector_names():
+        try:
+            info = detector_info(name)
+        except Exception:  # noqa: BLE001 - a broken installed package must not break --help
+            continue
+        options = "; ".join(option.describe() for option in info.options)
+        lines.append(f"{name}: {info.help}" + (f" [options: {options}]" if options else ""))
+    return " | ".join(lines)
+
+
 def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--detector NAME`` plus the options of every built-in detector."""
-    choices = "; ".join(f"{spec.name}: {spec.help}" for spec in DETECTORS.values())
+    """``--detector NAME``, ``--option``, ``--settings``, ``--tune-on`` and the flags of the
+    detectors that keep their own."""
     parser.add_argument(
         "--detector",
         type=detector_name,
         metavar="NAME",
-        help=f"{choices}; or the name an installed package gives in the entry-point group "
-        f"{_ENTRY_POINT_GROUP}; or package.module:factory, a detector of your own (the "
-        "current folder is searched too) (--model alone implies reform)",
+        help=f"the detector: {catalogue_help()}; or the name an installed package gives in the "
+        f"entry-point group {_ENTRY_POINT_GROUP}; or package.module:factory, a detector of your "
+        "own (the current folder is searched too). --model alone implies reform; --settings "
+        "FILE.json alone implies the detector it names",
     )
-    options: dict[str, tuple[tuple[str, str], ...]] = {}
+    parser.add_argument(
+        "--option",
+        action="append",
+        metavar="NAME=VALUE",
+        help="an option of the detector (repeatable), as the catalogue declares it above "
+        "(e.g. --detector gcff --option stride=0.6); values are checked against its range",
+    )
+    parser.add_argument(
+        "--settings",
+        metavar="FILE",
+        help="the detector's settings from a file: FILE.json as `reform-sim tune` writes it (any "
+        "detector), or, for gcff, a GCFF settings_gc.mat in centimetres and cm² (in metres "
+        "when --units m is given)",
+    )
+    parser.add_argument(
+        "--tune-on",
+        metavar="PATH|NAME",
+        help="annotated training frames for a detector that learns its settings (gcff-tuned "
+        "grid-searches stride and mdl on them, objective F1 at T = 2/3); give training data "
+        "only, never the dataset scored",
+    )
     for spec in DETECTORS.values():
         if spec.add_arguments is not None:
-            known = len(parser._actions)
             spec.add_arguments(parser)
-            options[spec.name] = tuple(
-                (action.option_strings[0], action.dest) for action in parser._actions[known:]
-            )
-    parser.set_defaults(detector_options=options)
 
 
-def make_plugin(name: str) -> Any:
-    """The registry's detector ``name`` (a plugin: no options), the current folder searched
+def make_plugin(name: str, **options: Any) -> Any:
+    """The registry's detector ``name`` made with ``options``, the current folder searched
     for a ``module:factory`` path after the installed packages, as ``python -m`` would.
 
     Raises:
@@ -295,36 +417,74 @@ def make_plugin(name: str) -> Any:
 
     if ":" in name and os.getcwd() not in sys.path and "" not in sys.path:
         sys.path.append(os.getcwd())
-    return make_detector(name)
+    return make_detector(name, **options)
 
 
 def check_detector(args: argparse.Namespace) -> DetectorSpec:
-    """The detector the options name (``--model`` alone: reform), its options checked: called
-    up front, before the data are read. A detector without a builder here is made now (a
-    plugin that does not import or has no ``predict`` fails before any data are read).
+    """The detector the options name (``--model`` alone: reform; ``--settings FILE.json``
+    alone: the detector it names), its options checked: called up front, before the data are
+    read. A detector without flags of its own is made now from ``--option`` and ``--settings``
+    (a plugin that does not import, an unknown option, a value out of range fail before any
+    data are read).
 
     Raises:
-        CliError: no detector named, or an option of another detector given.
-        reform.detectors.DetectorError: a plugin that cannot be made.
+        CliError: no detector named, a flag of another detector, a malformed option.
+        reform.detectors.DetectorError: a detector that cannot be made.
     """
     if args.detector is None:
-        if getattr(args, "model", None) is None:
-            raise CliError("give --detector NAME, or --model MODEL for a trained REFORM model")
-        args.detector = "reform"
-    for name, flags in getattr(args, "detector_options", {}).items():
-        if name == args.detector:
-            continue
-        given = [flag for flag, dest in flags if getattr(args, dest, None) is not None]
-        if given:
-            what = "is an option" if len(given) == 1 else "are options"
+        settings = getattr(args, "settings", None)
+        if getattr(args, "model", None) is not None:
+            args.detector = "reform"
+        elif settings is not None and _is_json(settings):
+            from reform.detectors import DetectorError
+            from reform.settings import read_settings
+
+            try:
+                args.detector = read_settings(settings).detector
+            except DetectorError as exc:
+                raise CliError(str(exc)) from None
+        else:
             raise CliError(
-                f"{', '.join(given)} {what} of --detector {name}, not of --detector {args.detector}"
+                "give --detector NAME, or --model MODEL for a trained REFORM model, or "
+                "--settings FILE.json"
             )
+    for dest, (_flag, takers) in _OWN_FLAGS.items():
+        if getattr(args, dest, None) is not None and args.detector not in takers:
+            others = [
+                f for d, (f, t) in _OWN_FLAGS.items() if t == takers and getattr(args, d, None)
+            ]
+            what = "is an option" if len(others) == 1 else "are options"
+            raise CliError(
+                f"{', '.join(others)} {what} of --detector {' or '.join(takers)}, not of "
+                f"--detector {args.detector}"
+            )
+    settings = getattr(args, "settings", None)
+    if settings is not None and not _is_json(settings) and args.detector != "gcff":
+        raise CliError(
+            f"--settings {settings}: a GCFF settings_gc.mat is read by --detector gcff only; "
+            f"--detector {args.detector} takes a settings file FILE.json (`reform-sim tune`)"
+        )
+    if getattr(args, "tune_on", None) is not None and not _learns(args.detector):
+        raise CliError(
+            f"--tune-on is for a detector that learns its settings from training frames "
+            f"(gcff-tuned), not for --detector {args.detector}"
+        )
     spec = DETECTORS.get(args.detector)
     if spec is not None:
+        _options(args)  # malformed or out-of-range options fail before any data are read
         return spec
-    detector = make_plugin(args.detector)
-    return DetectorSpec(name=args.detector, help="plugin", build=lambda _args: detector)
+    _options(args)
+    _settings_options(args)
+    return DetectorSpec(name=args.detector, help="catalogue", build=_build_from_catalogue)
+
+
+def _learns(name: str) -> bool:
+    from reform.detectors import DetectorError, detector_info
+
+    try:
+        return ":" not in name and detector_info(name).needs == "training"
+    except DetectorError:
+        return False
 
 
 def build_detector(args: argparse.Namespace) -> Any:

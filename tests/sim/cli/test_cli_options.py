@@ -38,7 +38,7 @@ def toy_dataset(tmp_path):
         ),
         (
             ["--model", "m.skops", "--stride", "0.5", "--gcff-orientation", "head"],
-            "--stride, --gcff-orientation are options of --detector gcff, not of --detector reform",
+            "--stride is an option of --detector gcff, not of --detector reform",
         ),
     ],
 )

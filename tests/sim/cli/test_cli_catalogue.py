@@ -1,0 +1,72 @@
+"""The command line reads the detector catalogue: every catalogued detector and its declared
+options appear in --help; any detector's options come as --option NAME=VALUE or from a settings
+file (reform.settings); a settings file names its detector."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from cli_errors import cli_error
+from toy_scenes import toy_frames
+
+from reform import Dataset, detector_info, detector_names, write_parquet, write_settings
+from sim.cli import main
+
+
+@pytest.fixture
+def toy_dataset(tmp_path):
+    path = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=tuple(toy_frames(0, 20)), name="toy", source="toy_scenes"), path)
+    return path
+
+
+@pytest.mark.parametrize("command", ["evaluate", "detect"])
+def test_help_lists_every_catalogued_detector_and_its_options(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for name in detector_names():
+        info = detector_info(name)
+        assert f"{name}: {' '.join(info.help.split())}" in text
+        for option in info.options:
+            assert " ".join(option.describe().split()) in text
+
+
+def test_a_settings_file_names_its_detector(toy_dataset, tmp_path):
+    settings = write_settings(tmp_path / "gcff.json", "gcff", {"stride": 0.55, "mdl": 0.4})
+    out = tmp_path / "groups.json"
+    argv = ["detect", "--settings", settings, "--data", toy_dataset, "--out", out]
+    assert main([str(a) for a in argv]) == 0
+    result = json.loads(out.read_text())
+    assert result["detector"] == "gcff"
+    assert (result["detector_params"]["stride"], result["detector_params"]["mdl"]) == (0.55, 0.4)
+
+
+def test_an_option_overrides_nothing_silently(toy_dataset, tmp_path, capsys):
+    settings = write_settings(tmp_path / "gcff.json", "gcff", {"stride": 0.55})
+    out = tmp_path / "groups.json"
+    argv = ["detect", "--settings", settings, "--option", "mdl=0.4", "--data", toy_dataset]
+    assert main([str(a) for a in [*argv, "--out", out]]) == 0, capsys.readouterr().err
+    params = json.loads(out.read_text())["detector_params"]
+    assert (params["stride"], params["mdl"]) == (0.55, 0.4)
+
+
+def test_settings_of_another_detector_are_refused(toy_dataset, tmp_path, capsys):
+    settings = write_settings(tmp_path / "gcff.json", "gcff", {"stride": 0.55})
+    argv = ["evaluate", "--detector", "majority", "--settings", settings, "--data", toy_dataset]
+    assert cli_error(argv, capsys).endswith(
+        f"--settings {settings} holds settings of detector 'gcff', not of --detector majority"
+    )
+
+
+def test_a_gcff_mat_file_is_for_gcff_only(toy_dataset, tmp_path, capsys):
+    argv = ["evaluate", "--detector", "majority", "--settings", "s.mat", "--data", toy_dataset]
+    assert "a GCFF settings_gc.mat is read by --detector gcff only" in cli_error(argv, capsys)
+
+
+def test_an_option_of_a_detector_without_it_is_one_line(toy_dataset, capsys):
+    argv = ["evaluate", "--detector", "majority", "--option", "k=3", "--data", toy_dataset]
+    assert cli_error(argv, capsys).endswith(
+        "detector 'majority' has no option 'k'; its options: none"
+    )
