@@ -11,7 +11,11 @@ from sim.cli._common import (
 from sim.cli._grammar import add_frames, add_quiet, add_recordings
 
 DEFAULT_OUT = "benchmark-output"
-DEFAULT_DETECTORS = ("gcff", "gcff-own", "majority")
+DEFAULT_DETECTORS = (
+    "gcff",
+    "gcff-own",
+    "majority",
+)  # the field's reference rows; `all`: the catalogue
 
 DESCRIPTION = """\
 Runs every detector given on every dataset given (default: every dataset found, fetched with
@@ -22,11 +26,15 @@ exist. Writes OUT/benchmark.md, OUT/benchmark.json, OUT/benchmark.png and one Re
 per dataset (OUT/recordings/<dataset>.rrd: its scenes, the ground truth, every detector's
 groups and mistakes).
 
-Detectors (--detector, repeatable): gcff (GCFF with one setting for every dataset, the REFORM
-paper's 0.7 m / 30,000 cm²), gcff-own (GCFF with each dataset's own shipped settings_gc.mat,
-per sequence; datasets that ship none are skipped), majority, any registered or installed
-detector's name, or package.module:factory. REFORM models: --model FILE (repeatable), written
-by `reform-sim train`. Default: gcff, gcff-own, majority, plus every --model.
+Detectors (--detector, repeatable): any name of the detector catalogue (`reform-sim evaluate
+--help` lists them with their options), run with its declared defaults: gcff (GCFF with one
+setting for every dataset, the REFORM paper's 0.7 m / 30,000 cm²), gcff-own (GCFF with each
+dataset's own shipped settings_gc.mat, per sequence; datasets that ship none are skipped),
+gcff-tuned (searched on the training part of each dataset's time split, scored on its test part
+only), majority, ...; `all` for every catalogued detector that needs no model file; an
+installed detector's name, or package.module:factory. REFORM models: --model FILE
+(repeatable), written by `reform-sim train`. Default: gcff, gcff-own, majority, plus every
+--model.
 
 Honest evaluation: datasets named by --test-split (default: salsa) are scored on the test part
 of reform.time_split only, the frames `reform-sim train --frames train` leaves out.
@@ -45,7 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--detector",
         action="append",
         metavar="SPEC",
-        help="a detector (repeatable): gcff, gcff-own, majority, a plugin's name or "
+        help="a detector (repeatable): a catalogue name (gcff, gcff-own, gcff-tuned, majority, "
+        "...), all (every catalogued detector that needs no model file), a plugin's name or "
         f"package.module:factory (default: {', '.join(DEFAULT_DETECTORS)})",
     )
     parser.add_argument(

@@ -20,6 +20,7 @@ from sim.cli._common import (
 )
 from sim.cli._detectors import make_plugin
 from sim.experiments.benchmark import (
+    catalogue_specs,
     dataset_spec,
     detector_spec,
     found_datasets,
@@ -55,7 +56,10 @@ def _run(args: argparse.Namespace) -> int:
             f"--test-split {unknown[0]}: expected the name of a dataset of this run "
             f"({', '.join(d.name for d in datasets)}), got {unknown[0]!r}"
         )
-    detectors = [detector_spec(spec) for spec in (args.detector or DEFAULT_DETECTORS)]
+    named = args.detector or DEFAULT_DETECTORS
+    if "all" in named:
+        named = [*catalogue_specs(), *(n for n in named if n != "all")]
+    detectors = [detector_spec(spec) for spec in dict.fromkeys(named)]
     detectors += [model_spec(path) for path in args.model or ()]
     _check_detectors(detectors)
 
@@ -96,7 +100,7 @@ def _check_detectors(detectors) -> None:
     workers inherit the search path)."""
 
     for detector in detectors:
-        if detector.spec in ("gcff", "gcff-own") or detector.spec.startswith("reform:"):
+        if detector.spec.startswith("reform:"):
             continue
         make_plugin(detector.spec)
 

@@ -7,13 +7,15 @@ protocol (:func:`reform.evaluate`: precision and recall means over frames, F1 of
 T = 2/3 and T = 1), for the dataset and for each of its sequences. The mean over datasets is the
 plain mean of the per-dataset figures, over the datasets a detector was scored on.
 
-Detectors are named by the specs :func:`reform.detectors.make_detector` takes (a registered
-name, an installed plugin's name, ``package.module:factory``), plus two of this module's own:
+Detectors are named as the catalogue names them (`reform.catalogue`: a registered name, an
+installed plugin's name, ``package.module:factory``), made with their declared defaults, and
+given what they need (`reform.detectors.prepare_detector`):
 
-* ``gcff``: GCFF with one setting for every dataset, the REFORM paper's (stride 0.7 m,
-  mdl 30,000 cm²);
-* ``gcff-own``: GCFF with each dataset's own shipped settings (``settings_gc.mat`` per
-  sequence), the protocol of the GCFF paper; a dataset that ships none is skipped, and says so;
+* a detector that runs on a dataset's own settings (``gcff-own``: each sequence's shipped
+  ``settings_gc.mat``, the GCFF paper's protocol) is specialised to the dataset; a dataset that
+  ships none is skipped, and says so;
+* a detector that learns its settings (``gcff-tuned``) is fitted on the training part of the
+  dataset's :func:`reform.time_split` and scored on its test part only, never on what it saw;
 
 and REFORM models given as files (``reform-sim train``'s ``.skops``).
 
@@ -30,7 +32,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Collection, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -44,19 +46,19 @@ from reform.datasets import (
     resolve,
 )
 from reform.detectors import (
+    DetectorError,
     detector_info,
     detector_names,
     make_detector,
+    prepare_detector,
     register_detector,
     run_detector,
 )
 from reform.frame import Dataset, Frame, Group
-from reform.gcff import Gcff, GcffBySequence
 from reform.metrics import evaluate
 from reform.persistence import load_model, model_info
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.executor import BACKENDS, Executor
-from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 
 __all__ = [
     "BACKENDS",
@@ -78,6 +80,7 @@ __all__ = [
 THRESHOLDS = ("2/3", "1")
 GCFF_ONE = "gcff"
 GCFF_OWN = "gcff-own"
+GCFF_TUNED = "gcff-tuned"
 REFORM_PREFIX = "reform:"  # a DetectorSpec.spec naming a model file
 
 # Published figures, (P, R, F1) in % at T = 2/3, keyed by (dataset, what was run); each with
@@ -188,15 +191,19 @@ class DetectorSpec:
             "".join(c if c.isalnum() or c in "-_" else "-" for c in text).strip("-") or "detector"
         )
 
-    def build(self, dataset: Dataset) -> tuple[Any, str | None]:
-        """``(detector, None)``, or ``(None, reason)`` when it does not apply to ``dataset``."""
-        if self.spec == GCFF_ONE:
-            return Gcff(stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2), None
-        if self.spec == GCFF_OWN:
-            try:
-                return GcffBySequence.from_dataset(dataset), None
-            except ValueError as exc:
-                return None, str(exc)
+    @property
+    def learns(self) -> bool:
+        """Whether the detector learns its settings from training frames (``gcff-tuned``)."""
+        if self.spec.startswith(REFORM_PREFIX) or ":" in self.spec:
+            return False
+        if self.spec not in detector_names() and self.registered is not None:
+            return self.registered.needs == "training"
+        return detector_info(self.spec).needs == "training"
+
+    def build(self, dataset: Dataset, training: Sequence[Frame] = ()) -> tuple[Any, str | None]:
+        """``(detector, None)``, or ``(None, reason)`` when it does not apply to ``dataset``:
+        made with its declared defaults, specialised to ``dataset`` when it runs on a dataset's
+        own settings, fitted on ``training`` when it :attr:`learns`."""
         if self.spec.startswith(REFORM_PREFIX):
             return load_model(self.spec[len(REFORM_PREFIX) :]), None
 
@@ -204,22 +211,65 @@ class DetectorSpec:
             sys.path.append(self.search)  # a worker started before the run knows nothing of it
         if self.registered is not None and self.spec not in detector_names():
             info = self.registered  # registered in the process that started the run
-            register_detector(info.name, info.factory, help=info.help)
-        return make_detector(self.spec), None
+            register_detector(
+                info.name,
+                info.factory,
+                help=info.help,
+                options=info.options,
+                citation=info.citation,
+                needs=info.needs,
+            )
+        detector = make_detector(self.spec)
+        if ":" in self.spec:
+            return detector, None
+        try:
+            ready = prepare_detector(
+                self.spec, detector, dataset=dataset, training=training or None
+            )
+        except DetectorError as exc:
+            if self.learns:
+                raise
+            return None, str(exc).removeprefix(f"{self.spec}: ")
+        return ready, None
 
 
 def detector_spec(spec: str) -> DetectorSpec:
-    """The row for a ``--detector`` value (``gcff``, ``gcff-own``, ``majority``, a plugin)."""
-    if spec == GCFF_ONE:
-        label = f"GCFF, one setting ({PAPER_STRIDE_M:g} m, {PAPER_MDL_M2 * 1e4:,.0f} cm²)"
-        return DetectorSpec(label=label, spec=spec, kind="gcff")
-    if spec == GCFF_OWN:
-        return DetectorSpec(label="GCFF, each dataset's own settings", spec=spec, kind=GCFF_OWN)
+    """The row for a ``--detector`` value (a catalogue name such as ``gcff``, ``gcff-own``,
+    ``majority``, or a plugin)."""
     if ":" in spec:
         return DetectorSpec(label=spec, spec=spec, kind=spec, search=os.getcwd())
     info = detector_info(spec) if spec in detector_names() else None
     registered = info if info is not None and info.source == "registered" else None
-    return DetectorSpec(label=spec, spec=spec, kind=spec, registered=registered)
+    return DetectorSpec(label=_label(spec), spec=spec, kind=spec, registered=registered)
+
+
+def _label(spec: str) -> str:
+    """A row's name: GCFF's variants say which settings they run with."""
+    if spec == GCFF_ONE:
+        defaults = {o.name: o.default for o in detector_info(spec).options}
+        return f"GCFF, one setting ({defaults['stride']:g} m, {defaults['mdl'] * 1e4:,.0f} cm²)"
+    if spec == GCFF_OWN:
+        return "GCFF, each dataset's own settings"
+    if spec == GCFF_TUNED:
+        return "GCFF, tuned on each dataset's training part"
+    return spec
+
+
+def catalogue_specs() -> tuple[str, ...]:
+    """Every built-in detector of the catalogue that runs with its declared defaults (no model
+    file to give): what ``benchmark --detector all`` runs."""
+    out = []
+    for name in detector_names():
+        try:
+            info = detector_info(name)
+        except DetectorError:
+            continue
+        if info.source != "built-in":
+            continue
+        if any(option.default is None and option.type == "path" for option in info.options):
+            continue  # a detector read from a trained model file (reform, a model of yours)
+        out.append(name)
+    return tuple(out)
 
 
 def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:
@@ -403,13 +453,21 @@ class Benchmark:
 
 
 def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
-    """One cell: load, build, predict (checked), evaluate."""
+    """One cell: load, build, predict (checked), evaluate. A detector that learns is fitted on
+    the training part of the dataset's time split and scored on its test part only."""
     dataset = dataset_spec.load()
+    training: tuple[Frame, ...] = ()
+    if detector_spec.learns:
+        dataset_spec = replace(dataset_spec, split="test")
+        train, _ = time_split(dataset.frames, dataset_spec.train_fraction)
+        training = tuple(f for f in train if f.groups is not None)
     frames = dataset_spec.frames(dataset)
     label = dataset_spec.label
     if not frames:
         return Cell(label, detector_spec.label, None, skipped="no annotated frames to score")
-    detector, reason = detector_spec.build(dataset)
+    if detector_spec.learns and not training:
+        return Cell(label, detector_spec.label, None, skipped="no annotated frames to train on")
+    detector, reason = detector_spec.build(dataset, training)
     if detector is None:
         return Cell(label, detector_spec.label, None, skipped=reason)
     start = time.perf_counter()

@@ -273,3 +273,26 @@ def test_a_detector_registered_in_this_process_runs_in_the_workers(small, monkey
     alone = cells(1)
     assert cells(2) == alone
     assert all(scores is not None for _, _, scores, _ in alone)
+
+
+def test_a_detector_that_learns_is_scored_only_on_what_it_did_not_see(tmp_path):
+    """gcff-tuned searches stride and mdl on the first 60 % of the frames by time and is scored
+    on the other 40 %: four of ten frames, the cell labelled as the test split."""
+    folder = _gcff(tmp_path / "d", [(PAIR, [[1, 2]])] * 10)
+    spec = DatasetSpec(name="d", path=str(folder), train_fraction=0.6)
+    tuned = detector_spec("gcff-tuned")
+    assert tuned.learns and tuned.label == "GCFF, tuned on each dataset's training part"
+    (cell,) = run_benchmark([spec], [tuned]).cells
+    assert cell.dataset == "d (test split)" and cell.scores.frames == 4
+    assert cell.scores.at["1"] == (1.0, 1.0, 1.0)
+
+
+def test_all_is_every_catalogued_detector_without_a_model_file(tmp_path, capsys):
+    from reform import detector_info
+    from sim.experiments.benchmark import catalogue_specs
+
+    names = catalogue_specs()
+    assert {"gcff", "gcff-own", "gcff-tuned", "majority"} <= set(names)
+    assert "reform" not in names  # read from a model file
+    for name in names:
+        assert detector_info(name).source == "built-in"
