@@ -4,7 +4,8 @@ Registered scenarios (``make(name, seed=..., **options)``, ``names()``, ``names(
 ``options(name)``), each option written once in its factory's signature (`register`):
 
 * ``hri-conversation``, ``hri-robot-excluded``, ``hri-passing``: the REFORM paper's
-  proof-of-concept scenes with the Directions Robot (`scenarios.hri`);
+  proof-of-concept scenes with the Directions Robot (`scenarios.hri`), the fixed set
+  ``PAPER_HRI_SCENES`` (a curated set: a new scenario tagged ``hri`` does not join it);
 * ``word-improv``: the Babble game (`scenarios.word_improv`);
 * ``mingle``: a SALSA-like party (`scenarios.mingle`);
 * ``mingle-randomised``: mingling with every shape parameter drawn from wide ranges, for domain
@@ -28,6 +29,7 @@ applies the rule to the poses the world produces (`sim.episode` does this for ev
 from __future__ import annotations
 
 from scenarios import hri, mingle, randomisation, registry, word_improv  # noqa: F401  (registration)
+from scenarios.hri import PAPER_HRI_SCENES
 from scenarios.registry import *  # noqa: F403  (its public names, listed once in its __all__)
 from scenarios.scenario import Scenario
 from scenarios.script import WALK_SPEED_M_S, Intent, Script
@@ -38,6 +40,7 @@ from scenarios.truth import FACING_TOLERANCE_RAD, PLACE_TOLERANCE_M, GroundTruth
 __all__ = [
     *registry.__all__,
     "FACING_TOLERANCE_RAD",
+    "PAPER_HRI_SCENES",
     "PLACE_TOLERANCE_M",
     "PLANNING_RADIUS_M",
     "WALK_SPEED_M_S",

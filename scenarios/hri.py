@@ -258,6 +258,11 @@ _TALK_OPTIONS = {
 """The help of the options the two conversation scenes share."""
 
 
+# The REFORM paper's proof-of-concept: exactly these three scenes, in this order. A curated set,
+# not a tag: a new scenario tagged "hri" joins the HRI tag's listings, never this experiment.
+PAPER_HRI_SCENES = ("hri-conversation", "hri-robot-excluded", "hri-passing")
+
+
 @register("hri-conversation", tags=("hri",), robot={})
 @shared_help(talk=_TALK_OPTIONS)
 def hri_conversation(

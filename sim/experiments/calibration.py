@@ -66,7 +66,7 @@ CALIBRATED: Mapping[str, tuple[str, float]] = {
 }
 RANDOMISED = "mingle-randomised"
 RANDOMISED_RATE_HZ = 0.5  # Hz
-HRI_SCENES = scenarios.names(tag="hri")
+HRI_SCENES = scenarios.PAPER_HRI_SCENES  # the paper's three scenes, a fixed set
 HRI_RATE_HZ = 1.0  # Hz
 COVERAGE_QUANTILES = (0.05, 0.5, 0.95)
 

@@ -92,7 +92,7 @@ __all__ = [
     "reform_detectors",
 ]
 
-HRI_SCENARIOS = scenarios.names(tag="hri")  # the paper's three scenes, in the order registered
+HRI_SCENARIOS = scenarios.PAPER_HRI_SCENES  # the paper's three scenes: a fixed set, not a tag
 ALL = "all"  # the three scenes pooled, as the paper's 100 frames were
 WIDE_FOV_DEG = 180.0  # degrees, the robot-wide view's field of view
 VIEWS: Mapping[str, Sensor | None] = MappingProxyType(
