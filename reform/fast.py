@@ -27,6 +27,7 @@ with a threshold ``t``, when ``predict_proba(X)[:, 1] >= t``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -62,6 +63,12 @@ class PairClassifier(Protocol):
         """(m, k) float64 pair features -> (m,) bool: together or not."""
         ...
 
+    def apart_from(self, column: int) -> float | None:
+        """A value of feature ``column`` from which every pair is apart, whatever its other
+        features: a pair whose feature is at least this is never together. None when no such
+        value is known."""
+        ...
+
 
 class _Exact:
     """A compiled form of this module: its labels equal the classifier's own, by construction
@@ -69,6 +76,9 @@ class _Exact:
 
     kind: str
     exact = True
+
+    def apart_from(self, column: int) -> float | None:  # noqa: ARG002 (the protocol's)
+        return None
 
 
 def sklearn_pair_labels(
@@ -521,7 +531,15 @@ class _TreeTable(_Exact):
     width: int  # cells along feature 1
     coarse: tuple[_Coarse, _Coarse]
     coarse_table: np.ndarray  # (count_0 * count_1,) uint8: 0, 1 or _MIXED
+    apart: tuple[float | None, float | None]  # per feature: apart from this value on (-inf:
+    # the table never says together), None when its highest cells say together somewhere
     kind = "tree-table"
+
+    def apart_from(self, column: int) -> float | None:
+        """The smallest float32 above the threshold past which feature ``column``'s cells all
+        say apart (a float32 input at or beyond it falls in those cells; so does a float64
+        input, which rounds to a float32 at least as large)."""
+        return self.apart[column]
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         features = np.asarray(features, dtype=np.float64)
@@ -567,13 +585,28 @@ class _TreeTable(_Exact):
                 np.maximum, highest, buckets.first_rank, buckets.last_rank, axis
             )
         coarse_table = np.where(lowest == highest, lowest, _MIXED).astype(np.uint8)
+        apart = tuple(_apart_from(table.any(axis=1 - axis), axes[axis]) for axis in (0, 1))
         return cls(
             ranks=(_RankIndex.build(axes[0]), _RankIndex.build(axes[1])),
             table=table.ravel().astype(np.uint8),
             width=shape[1],
             coarse=coarse,
             coarse_table=coarse_table.ravel(),
+            apart=apart,
         )
+
+
+def _apart_from(together: np.ndarray, axis: np.ndarray) -> float | None:
+    """From which value of a feature every cell says apart: ``together`` (cells,) holds
+    whether any cell of each rank of the feature says together, ``axis`` (cells - 1,) the
+    sorted thresholds between ranks (rank r+1 starts above threshold r)."""
+    ranks = np.flatnonzero(together)
+    if ranks.size == 0:
+        return -math.inf
+    last = int(ranks[-1])
+    if last == axis.size:
+        return None
+    return float(_step_float32(axis[last : last + 1])[0])
 
 
 @dataclass(frozen=True)

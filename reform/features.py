@@ -267,6 +267,7 @@ def batch_pair_features(
     head_position: np.ndarray | None = None,
     head_yaw: np.ndarray | None = None,
     is_robot: np.ndarray | None = None,
+    pairs: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
 ) -> np.ndarray:
     """Pair features of many frames with the same number of people, vectorised over both.
 
@@ -277,10 +278,13 @@ def batch_pair_features(
         head_position: optional (F, n, 2) head positions, metres; NaN rows = unknown head.
         head_yaw: optional (F, n) head yaws, radians; NaN = unknown head.
         is_robot: optional (F, n) bool, which people are robots.
+        pairs: optional ``(i, j)``, two (m,) arrays of rows: only these pairs, in this order,
+            each with the same values as among all pairs (the frame's scale, for the
+            scale-free features, is still that of all its people). None for all pairs.
 
     Returns:
-        (F, n(n-1)/2, k) float64 features, pairs in :func:`pair_indices` order, columns in the
-        order of ``features``.
+        (F, n(n-1)/2, k) float64 features, pairs in :func:`pair_indices` order (or (F, m, k),
+        the pairs given), columns in the order of ``features``.
     """
     features = check_features(features)
     position = np.asarray(position, dtype=np.float64)
@@ -290,7 +294,14 @@ def batch_pair_features(
     if yaw.shape != position.shape[:2]:
         raise ValueError(f"yaw must have shape {position.shape[:2]}, got {yaw.shape}")
     n_frames, n = yaw.shape
-    i, j = pair_indices(n)
+    if pairs is None:
+        i, j = pair_indices(n)
+    else:
+        i, j = (np.asarray(rows, dtype=np.intp) for rows in pairs)
+        if i.ndim != 1 or i.shape != j.shape:
+            raise ValueError(f"pairs must be two (m,) arrays of rows, got {i.shape} and {j.shape}")
+        if i.size and (min(i.min(), j.min()) < 0 or max(i.max(), j.max()) >= n):
+            raise ValueError(f"pairs must hold rows in [0, {n}), got rows out of range")
     out = np.empty((n_frames, i.size, len(features)), dtype=np.float64)
     if i.size == 0:
         return out
@@ -317,7 +328,8 @@ def batch_pair_features(
             if relative is None:
                 if body is None:
                     body = _distance_and_effort(position, yaw, i, j)
-                relative = _Relative(position, yaw, i, j, body[0])
+                scale = None if pairs is None else _own_scale(position)
+                relative = _Relative(position, yaw, i, j, body[0], scale=scale)
             out[..., column] = relative.feature(name)
     return out
 
@@ -332,9 +344,13 @@ class _Relative:
         i: np.ndarray,
         j: np.ndarray,
         distance: np.ndarray,
+        *,
+        scale: np.ndarray | None = None,
     ) -> None:
         self.position, self.yaw, self.i, self.j, self.distance = position, yaw, i, j, distance
-        self.scale = _scale_from_pairs(position, distance, i, j)[:, None]  # (F, 1)
+        if scale is None:  # the pairs are all the pairs
+            scale = _scale_from_pairs(position, distance, i, j)
+        self.scale = scale[:, None]  # (F, 1)
 
     def feature(self, name: str) -> np.ndarray:
         if name == RELATIVE_DISTANCE:
@@ -398,6 +414,15 @@ def _scale_from_pairs(
         warnings.simplefilter("ignore", RuntimeWarning)  # a frame of people sharing spots
         scale = np.nanmedian(nearest, axis=1)
     return np.where(np.isfinite(scale) & (scale > 0), scale, 1.0)
+
+
+def _own_scale(position: np.ndarray) -> np.ndarray:
+    """(F,) frame scales of (F, n, 2) positions from all their pairs, computed as
+    :func:`batch_pair_features` computes them for all pairs."""
+    n = position.shape[1]
+    i, j = pair_indices(n) if n <= _SCALE_MATRIX_PEOPLE else (np.zeros(0, np.intp),) * 2
+    distance = _distance_and_effort(position, np.zeros(position.shape[:2]), i, j)[0]
+    return _scale_from_pairs(position, distance, i, j)
 
 
 def _head_or_body(

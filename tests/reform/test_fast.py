@@ -104,3 +104,32 @@ def test_ties_are_settled_as_scikit_learn_settles_them():
         assert np.array_equal(
             compile_classifier(classifier, threshold=threshold).predict(grid), expected
         )
+
+
+@pytest.mark.parametrize("name", [k for k in CLASSIFIERS if "trees" in k or "forest" in k])
+@pytest.mark.parametrize("threshold", [None, 0.5])
+def test_a_table_knows_the_distance_from_which_every_pair_is_apart(name, threshold):
+    # Features at or above `apart_from(0)`, whatever the second, are apart for the classifier
+    # itself; just below it, the table says together somewhere (its own edge, not a guess).
+    x, y = pair_data(0)
+    y[x[:, 0] > 6.0] = 0  # no pair far apart is together in the training data
+    classifier = CLASSIFIERS[name]().fit(x, y)
+    compiled = compile_classifier(classifier, threshold=threshold)
+    apart = compiled.apart_from(0)
+    assert apart is not None and 0 < apart <= 6.0 + 1e-6
+    step = np.float32(apart)
+    first = np.array([apart, float(np.nextafter(step, np.float32(np.inf))), apart * 1.01, 7, 1e30])
+    second = np.concatenate([np.linspace(-1, 7, 801), x[:, 1]])
+    grid = np.column_stack([np.repeat(first, second.size), np.tile(second, first.size)])
+    assert not sklearn_pair_labels(classifier, grid, threshold=threshold).any()
+
+
+def test_only_a_table_knows_a_distance_from_which_every_pair_is_apart():
+    x, y = pair_data(4, 2000)
+    for classifier in (weighted_knn(), logistic_regression(), GaussianNB()):
+        assert compile_classifier(classifier.fit(x, y)).apart_from(0) is None
+    # A table whose highest distances still say together somewhere knows none.
+    y_far = y.copy()
+    y_far[x[:, 0] > 8.0] = 1
+    trees = bagged_trees(min_samples_leaf=5).fit(x, y_far)
+    assert compile_classifier(trees).apart_from(0) is None

@@ -100,6 +100,39 @@ def test_batch_equals_frame_by_frame_bit_for_bit():
         assert np.array_equal(batch[f], frame_pair_features(frame))
 
 
+@pytest.mark.parametrize("n", [9, 600], ids=["scale-from-pairs", "scale-from-a-tree"])
+def test_chosen_pairs_have_the_values_they_have_among_all_pairs(n):
+    # Every feature of a chosen pair, bit for bit, in the order asked: the frame's scale (for
+    # the scale-free features) stays that of all its people.
+    rng = np.random.default_rng(n)
+    position = rng.normal(size=(2, n, 2)) * 4
+    yaw = rng.uniform(-PI, PI, size=(2, n))
+    head_position = position + rng.normal(size=position.shape) * 0.1
+    head_position[:, ::3] = np.nan
+    head_yaw = np.where(rng.random((2, n)) < 0.3, np.nan, yaw + 0.2)
+    robot = rng.random((2, n)) < 0.1
+    everything = (*DEFAULT_FEATURES, HEAD_DISTANCE, HEAD_EFFORT_ANGLE, INVOLVES_ROBOT)
+    everything += (RELATIVE_DISTANCE, OSPACE_DISTANCE, LARGER_TURN)
+    arrays = {"head_position": head_position, "head_yaw": head_yaw, "is_robot": robot}
+    all_pairs = batch_pair_features(position, yaw, features=everything, **arrays)
+    i, j = pair_indices(n)
+    chosen = rng.permutation(i.size)[: max(3, i.size // 50)]
+    some = batch_pair_features(
+        position, yaw, features=everything, pairs=(i[chosen], j[chosen]), **arrays
+    )
+    assert np.array_equal(some, all_pairs[:, chosen], equal_nan=True)
+    none = batch_pair_features(position, yaw, features=everything, pairs=([], []), **arrays)
+    assert none.shape == (2, 0, len(everything))
+
+
+def test_chosen_pairs_must_be_rows_of_the_frame():
+    position, yaw = np.zeros((1, 3, 2)), np.zeros((1, 3))
+    with pytest.raises(ValueError, match=r"pairs must hold rows in \[0, 3\), got rows out of"):
+        batch_pair_features(position, yaw, pairs=([0], [3]))
+    with pytest.raises(ValueError, match=r"pairs must be two \(m,\) arrays of rows, got \(2,\)"):
+        batch_pair_features(position, yaw, pairs=([0, 1], [2]))
+
+
 def test_head_features_use_head_and_fall_back_to_body():
     frame = Frame(
         ids=[1, 2, 3],
