@@ -25,6 +25,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
+from scipy.spatial import KDTree
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
@@ -32,8 +33,10 @@ from reform.classifiers import bagged_trees
 from reform.fast import PairClassifier, compile_classifier, sklearn_pair_labels
 from reform.features import (
     DEFAULT_FEATURES,
+    DISTANCE,
     batch_pair_features,
     check_features,
+    frame_arrays,
     frame_pair_features,
     pair_indices,
 )
@@ -45,17 +48,20 @@ from reform.reconstruction import (
     batch_correlation_labels,
     batch_greedy_labels,
     check_reconstruction,
+    graph_greedy_labels,
 )
 from reform.splits import time_blocks
 
 CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
+LARGE_FRAME_PEOPLE = 256  # frames of more people are predicted one by one, keeping only the
+# pairs predicted together (Reform.predict notes)
+SEARCH_MARGIN = 1e-9  # relative: the neighbour search reaches this much beyond the distance
+# from which the classifier says apart, so that its own rounding can only add pairs
 MAX_FRAME_BYTES = 8 * 2**30  # bytes: the most predicting (or fitting on) one frame may take; a
 # frame whose pairs would take more is refused, naming it, before anything is allocated
 # Memory per pair, measured with tracemalloc at the peak of predict and training_pairs on frames
 # of 64 to 2,000 people (a frame of n people has n(n-1)/2 pairs):
 PAIR_BYTES = 40  # bytes per pair predicted: indices, features, labels, temporaries
-PAIR_WORD_BYTES = 40  # bytes per pair predicted per 64 people of the frame: Greedy
-# Reconstruction compares the two members' belief sets (reform.reconstruction), a bit a person
 TRAINING_PAIR_BYTES = 88  # bytes per pair of training_pairs: features, labels, indices
 CALIBRATIONS = ("sigmoid", "isotonic")  # sklearn.calibration.CalibratedClassifierCV methods
 CALIBRATION_FOLDS = 5  # stretches of time per sequence (reform.time_blocks), one fold each
@@ -200,6 +206,16 @@ class Reform(BaseEstimator):
             One partition per frame: tuples of person ids, groups ordered by their smallest id,
             members ascending, singletons included.
 
+        A frame of more than `LARGE_FRAME_PEOPLE` people (a crowd) is predicted on its own:
+        its pairs are classified a chunk at a time, only those predicted together are kept,
+        and Greedy Reconstruction runs on each connected component of them
+        (:func:`reform.reconstruction.graph_greedy_labels`), so memory grows with the people
+        and the pairs predicted together, not with the square of the people. Where the
+        compiled classifier says apart for every pair from some Distance on, whatever its
+        other features (a tree ensemble's table knows it: :mod:`reform.fast`), only the pairs
+        closer than that are classified, found with a k-d tree; every other pair would be
+        classified apart. Same partitions as classifying every pair.
+
         Raises:
             ValueError: a frame whose pairs would take more than `MAX_FRAME_BYTES` to classify
                 and reconstruct (:func:`frame_bytes`), naming it, before any frame is predicted.
@@ -230,11 +246,16 @@ class Reform(BaseEstimator):
         _check_frame_sizes(frames, predict=True)
         out: list[Partition] = [()] * len(frames) if partitions else []
         out_pairs: list[np.ndarray] = [np.zeros(0, dtype=bool)] * len(frames) if pairs else []
+        crowd = partitions and not pairs and self.reconstruction != CORRELATION
         for n, positions in _by_size(frames).items():
             if n < 2:
                 if partitions:
                     for k in positions:
                         out[k] = tuple((int(person),) for person in np.sort(frames[k].ids))
+                continue
+            if crowd and n > LARGE_FRAME_PEOPLE:
+                for k in positions:
+                    out[k] = self._predict_crowd(frames[k])
                 continue
             i, j = pair_indices(n)
             step = max(1, CHUNK_PAIRS // i.size)
@@ -256,6 +277,55 @@ class Reform(BaseEstimator):
                     for k, row in zip(chunk, pair_labels, strict=True):
                         out_pairs[k] = _frame_order(row, frames[k].ids, i, j)
         return out, out_pairs
+
+    def _predict_crowd(self, frame: Frame) -> Partition:
+        """One large frame's partition from the pairs predicted together (see :meth:`predict`)."""
+        order = _id_order(frame)
+        ordered = frame if order is None else _reordered(frame, order)
+        arrays = frame_arrays(ordered)
+        compiled = self._pair_classifier()
+        first, second = [np.zeros(0, dtype=np.intp)], [np.zeros(0, dtype=np.intp)]
+        for i, j in self._candidate_pairs(arrays["position"], compiled):
+            x = batch_pair_features(
+                arrays["position"][None],
+                arrays["yaw"][None],
+                features=self.features_,
+                head_position=_one(arrays["head_position"]),
+                head_yaw=_one(arrays["head_yaw"]),
+                is_robot=_one(arrays["is_robot"]),
+                pairs=(i, j),
+            )[0]
+            if compiled is None:
+                together = sklearn_pair_labels(self.classifier_, x, threshold=self.threshold)
+            else:
+                together = compiled.predict(x)
+            first.append(i[together])
+            second.append(j[together])
+        labels = graph_greedy_labels(
+            ordered.n_people,
+            np.concatenate(first),
+            np.concatenate(second),
+            variant=self.reconstruction,
+        )
+        return _partitions(labels[None], ordered.ids[None])[0]
+
+    def _candidate_pairs(
+        self, position: np.ndarray, compiled: PairClassifier | None
+    ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """Rows ``(i, j)``, ``i < j``, of the pairs a crowd's classifier must see, a chunk at a
+        time: those closer than the Distance from which it says apart, else all."""
+        apart = None
+        if compiled is not None and DISTANCE in self.features_:
+            apart = compiled.apart_from(self.features_.index(DISTANCE))
+        if apart is None:
+            yield from _row_blocks(position.shape[0], CHUNK_PAIRS)
+            return
+        if apart <= 0:  # every pair is apart
+            return
+        near = KDTree(position).query_pairs(apart * (1 + SEARCH_MARGIN), output_type="ndarray")
+        near = near.astype(np.intp, copy=False)
+        for start in range(0, near.shape[0], CHUNK_PAIRS):
+            yield near[start : start + CHUNK_PAIRS, 0], near[start : start + CHUNK_PAIRS, 1]
 
     def predict_pair_proba(self, frames: Iterable[Frame]) -> list[np.ndarray]:
         """The classifier's pair probabilities (of being together), before reconstruction.
@@ -426,13 +496,34 @@ def _frame_order(labels: np.ndarray, ids: np.ndarray, i: np.ndarray, j: np.ndarr
 
 
 def frame_bytes(n_people: int, *, predict: bool = True) -> int:
-    """Bytes of memory REFORM takes at its peak on one frame of ``n_people``: predicting it
-    (pair features, labels and Greedy Reconstruction), or with ``predict=False`` turning it
-    into training pairs."""
+    """Bytes of memory REFORM takes at its peak on one frame of ``n_people``: classifying all
+    its pairs at once (pair features and labels, as ``predict_pairs`` does; ``predict`` on a
+    crowd takes less, see :meth:`Reform.predict`), or with ``predict=False`` turning it into
+    training pairs."""
     pairs = n_people * (n_people - 1) // 2
-    if not predict:
-        return pairs * TRAINING_PAIR_BYTES
-    return pairs * (PAIR_BYTES + PAIR_WORD_BYTES * -(-n_people // 64))
+    return pairs * (PAIR_BYTES if predict else TRAINING_PAIR_BYTES)
+
+
+def _row_blocks(n: int, chunk: int) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """All pairs ``(i, j)``, ``i < j``, of ``n`` people in :func:`pair_indices` order, in
+    blocks of whole rows of about ``chunk`` pairs (at least one row)."""
+    row = 0
+    while row < n - 1:
+        stop, size = row, 0
+        while stop < n - 1 and (size == 0 or size + (n - 1 - stop) <= chunk):
+            size += n - 1 - stop
+            stop += 1
+        counts = n - 1 - np.arange(row, stop)
+        i = np.repeat(np.arange(row, stop), counts)
+        starts = np.cumsum(counts) - counts
+        j = i + 1 + (np.arange(size) - np.repeat(starts, counts))
+        yield i, j
+        row = stop
+
+
+def _one(array: np.ndarray | None) -> np.ndarray | None:
+    """An array of one frame as a batch of one."""
+    return None if array is None else array[None]
 
 
 def _check_frame_sizes(frames: Sequence[Frame], *, predict: bool) -> None:

@@ -335,9 +335,10 @@ def crowd() -> Frame:
 
 
 def test_frame_bytes_follow_the_measured_costs():
-    # Hand-computed: 64 people make 2,016 pairs, one word of beliefs; 65 make 2,080, two words.
-    assert frame_bytes(64) == 2_016 * (40 + 40)
-    assert frame_bytes(65) == 2_080 * (40 + 2 * 40)
+    # Hand-computed: 64 people make 2,016 pairs, 65 make 2,080; Greedy Reconstruction adds
+    # nothing per pair (it keeps only the pairs predicted together).
+    assert frame_bytes(64) == 2_016 * 40
+    assert frame_bytes(65) == 2_080 * 40
     assert frame_bytes(64, predict=False) == 2_016 * 88
     assert frame_bytes(1) == frame_bytes(0) == 0
 
