@@ -32,10 +32,12 @@ def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--detector",
-        choices=("gcff", "truth"),
         default=None,
-        help="detector without a --model: gcff (default) or truth (the ground truth of what the "
-        "robot sees: the policy's upper bound)",
+        metavar="NAME",
+        help="detector without a --model: a name of the detector catalogue that needs nothing "
+        "more (gcff, the default; `reform-sim evaluate --help` lists them), a plugin's "
+        "package.module:factory, or truth (the ground truth of what the robot sees: the "
+        "policy's upper bound)",
     )
     parser.add_argument(
         "--out", default=None, metavar="FILE.json", help="write the results as JSON here"

@@ -73,7 +73,13 @@ from gymnasium import spaces
 from gymnasium.error import InvalidAction, ResetNeeded
 
 import scenarios
-from reform.detectors import DetectorError, detector_names, make_detector, run_detector
+from reform.detectors import (
+    DetectorError,
+    detector_info,
+    detector_names,
+    make_detector,
+    run_detector,
+)
 from reform.frame import Frame, Group
 from reform.json_values import json_float
 from reform.metrics import T_TWO_THIRDS, evaluate
@@ -912,6 +918,14 @@ def _detector(detector: Any, model: str | os.PathLike[str] | None) -> tuple[Any,
                 f"detector must be {TRUTH!r}, a detector's name ({', '.join(detector_names())}), "
                 f"a plugin's package.module:factory or an object with predict(frames), got "
                 f"{detector!r}"
+            )
+        needs = detector_info(detector).needs if ":" not in detector else ""
+        if needs:
+            what = "a dataset" if needs == "dataset" else "training frames"
+            raise DetectorError(
+                f"detector {detector!r} must be given {what} before it predicts, which an "
+                "environment does not have: make it with reform.make_detector, give it what it "
+                "needs (reform.prepare_detector) and pass the object"
             )
         return make_detector(detector), detector
     if not callable(getattr(detector, "predict", None)):

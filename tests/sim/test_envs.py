@@ -713,6 +713,18 @@ def test_a_broken_plugin_detector_is_one_line_naming_it(
         env.reset(seed=0)
 
 
+@pytest.mark.parametrize(
+    ("name", "what"), [("gcff-own", "a dataset"), ("gcff-tuned", "training frames")]
+)
+def test_a_catalogued_detector_that_needs_more_is_refused_when_the_env_is_made(
+    name: str, what: str
+) -> None:
+    with pytest.raises(
+        DetectorError, match=rf"^detector '{name}' must be given {what} before it predicts"
+    ):
+        toy_env(detector=name)
+
+
 def test_a_plugin_that_is_not_there_fails_when_the_env_is_made(env_plugin: str) -> None:
     with pytest.raises(
         DetectorError, match=r"^detector 'envplugin:nothing': module 'envplugin' has no attribute"
@@ -904,8 +916,9 @@ def test_detectors_truth_gcff_and_a_reform_model_file(tmp_path: Path) -> None:
     assert sorted(m for g in info["detected_groups"] for m in g) == [0, 1, 2]
     with pytest.raises(
         DetectorError,
-        match=r"^detector must be 'truth', a detector's name \(gcff, majority, reform\), a "
-        r"plugin's package\.module:factory or an object with predict\(frames\), got 'oracle'$",
+        match=r"^detector must be 'truth', a detector's name \((\S+, )*gcff, (\S+, )*majority, "
+        r"(\S+, )*reform(, \S+)*\), a plugin's package\.module:factory or an object with "
+        r"predict\(frames\), got 'oracle'$",
     ):
         toy_env(detector="oracle")
     with pytest.raises(DetectorError, match=r"^detector 'reform' needs the option model="):
