@@ -236,7 +236,13 @@ def model_info(
 def _read_payload(path: Path, trusted: Iterable[str], max_bytes: int) -> Any:
     if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes < 1:
         raise ValueError(f"max_bytes must be a positive number of bytes, got {max_bytes!r}")
-    data = _safe_archive(path, _read(path, max_bytes), max_bytes)
+    data = _read(path, max_bytes)
+    if data[:4] != b"PK\x03\x04" and b"reform-sim dante model" in data[8 : 8 + (1 << 20)]:
+        raise ValueError(
+            f"{path}: a DANTE model file (safetensors), not a REFORM model: use it with the "
+            "detector dante (option model=FILE)"
+        )
+    data = _safe_archive(path, data, max_bytes)
     with zipfile.ZipFile(io.BytesIO(data)) as archive:
         _Schema(path, archive, max_bytes).check()
     untrusted = _check_types(path, data, trusted)

@@ -1,4 +1,5 @@
-"""``reform-sim train``: fit REFORM on a dataset's annotated frames and save it as a skops file."""
+"""``reform-sim train``: fit REFORM (a skops file) or DANTE (a safetensors file) on a dataset's
+annotated frames and save it."""
 
 from __future__ import annotations
 
@@ -19,15 +20,36 @@ with `reform-sim detect --model` and `reform-sim evaluate --model`.
 --frames train|test picks the training or test part of reform.time_split (per sequence, the
 first --train-fraction of annotated frames by time train); --tune chooses the classifier's
 hyper-parameters by time-blocked cross-validation on the frames used for training.
+
+--detector dante trains DANTE (Swofford et al. 2020; the extra reform-sim[dante]) instead: its
+deep affinity network on every ordered pair of the frames and their mirror images, one line per
+epoch on stderr; its options (--option NAME=VALUE: epochs, learning_rate, batch_size,
+orientation, random_state) are the catalogue's. --out names the model file (.safetensors), for
+`reform-sim detect|evaluate|benchmark --detector dante` with the option model=FILE.
 """
+
+TRAINED = ("reform", "dante")  # the detectors `train` fits
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_data_arguments(parser)
     parser.add_argument(
+        "--detector",
+        choices=TRAINED,
+        default="reform",
+        help="what to train: reform (default) or dante (needs reform-sim[dante])",
+    )
+    parser.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="dante: one of its catalogued options (repeatable), e.g. epochs=50",
+    )
+    parser.add_argument(
         "--classifier",
         choices=tuple(CLASSIFIERS),
-        default="bagged-trees",
+        default=None,
         help="pair classifier (default: bagged-trees)",
     )
     add_frames(parser, scored="to train on")
@@ -39,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel CV fits")
     parser.add_argument(
         "--features",
-        default=",".join(DEFAULT_FEATURES),
+        default=None,
         metavar="F1,F2",
         help=f"pair features, comma-separated, from {', '.join(FEATURES)} "
         f"(default: {','.join(DEFAULT_FEATURES)})",
@@ -47,7 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--reconstruction",
         choices=RECONSTRUCTIONS,
-        default="union",
+        default=None,
         help="Greedy Reconstruction variant (default: union, the paper's)",
     )
     parser.add_argument(
@@ -58,7 +80,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="together when the classifier's probability is at least P (default: its decision)",
     )
     parser.add_argument(
-        "--out", required=True, metavar="FILE.skops", help="model file to write (.skops)"
+        "--out",
+        required=True,
+        metavar="FILE",
+        help="model file to write (.skops for reform, .safetensors for dante)",
     )
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.train:run"))

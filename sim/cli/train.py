@@ -9,7 +9,7 @@ import sys
 
 from reform import Reform
 from reform.classifiers import make_classifier
-from reform.features import check_features
+from reform.features import DEFAULT_FEATURES, check_features
 from reform.persistence import save_model
 from reform.tuning import classifier_params, tune
 from sim.cli._common import (
@@ -21,10 +21,30 @@ from sim.cli._common import (
 )
 from sim.cli._grammar import show_progress
 
+# REFORM's own options: (flag, attribute); refused with --detector dante.
+_REFORM_OPTIONS = (
+    ("--classifier", "classifier"),
+    ("--tune", "tune"),
+    ("--jobs", "jobs"),
+    ("--features", "features"),
+    ("--reconstruction", "reconstruction"),
+    ("--threshold", "threshold"),
+)
+
 
 def run(args: argparse.Namespace) -> int:
     check_output("--out", args.out)
     check_frames(args)
+    if args.detector == "dante":
+        return _run_dante(args)
+    if args.option:
+        raise CliError(
+            f"--option {args.option[0]} is for --detector dante; REFORM takes --classifier, "
+            "--features, --reconstruction, --threshold and --tune"
+        )
+    args.classifier = args.classifier or "bagged-trees"
+    args.features = args.features or ",".join(DEFAULT_FEATURES)
+    args.reconstruction = args.reconstruction or "union"
     if args.threshold is not None and not 0.0 < args.threshold < 1.0:
         raise CliError(f"--threshold must be a probability in (0, 1), got {args.threshold}")
     features = check_features([name.strip() for name in args.features.split(",") if name.strip()])
@@ -57,5 +77,60 @@ def run(args: argparse.Namespace) -> int:
         f"{summary['frames']:,} frames of {dataset.name} ({summary['pairs']:,} pairs, "
         f"{summary['together_pairs']:,} together); features {', '.join(model.features_)}; "
         f"wrote {path}"
+    )
+    return 0
+
+
+def _run_dante(args: argparse.Namespace) -> int:
+    """Trains DANTE with its catalogued options (``--option NAME=VALUE``) and saves it."""
+    given = [flag for flag, dest in _REFORM_OPTIONS if getattr(args, dest) not in (None, False)]
+    if given:
+        what = "is an option" if len(given) == 1 else "are options"
+        raise CliError(
+            f"{', '.join(given)} {what} of --detector reform, not of --detector dante "
+            "(DANTE's: --option NAME=VALUE)"
+        )
+    from reform.detectors import DetectorError, detector_info
+
+    info = detector_info("dante")
+    options = {}
+    for text in args.option:
+        name, sep, value = text.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise CliError(f"--option expects NAME=VALUE, got {text!r}")
+        if name == "model":
+            raise CliError("--option model= names a trained model; train writes one to --out")
+        try:
+            options[name] = info.option(name).parse("dante", value.strip())
+        except DetectorError as exc:
+            raise CliError(str(exc)) from None
+    from reform.dante import INSTALL, Dante, torch_available
+
+    if not torch_available():
+        raise CliError(f"--detector dante needs PyTorch, which is not installed: {INSTALL}")
+    dataset = load_data(args)
+    frames = select_frames(args, dataset.frames, doing="train on")
+    model = Dante(**options)
+    if not args.quiet:
+        print(
+            f"training DANTE on {len(frames):,} frames of {dataset.name} (at most "
+            f"{model.epochs} epochs) ...",
+            file=sys.stderr,
+        )
+
+    def progress(epoch: int, epochs: int, loss: float, _validation: float | None) -> None:
+        print(f"  epoch {epoch}/{epochs}: loss {loss:.4f}", file=sys.stderr, flush=True)
+
+    try:
+        model.fit(frames, progress=None if args.quiet else progress)
+    except ValueError as exc:
+        raise CliError(f"{args.data}: {' '.join(str(exc).split())}") from None
+    path = model.save(args.out)
+    summary = model.training_summary_
+    print(
+        f"trained DANTE on {summary['frames']:,} frames of {dataset.name} "
+        f"({summary['ordered_pairs']:,} ordered pairs, {summary['together_pairs']:,} together; "
+        f"{summary['epochs_run']} epochs, final loss {summary['final_loss']:.4f}); wrote {path}"
     )
     return 0
