@@ -27,8 +27,18 @@ line when it cannot fit this machine.
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--scenario", required=True, metavar="NAME", help="scenario name")
-    parser.add_argument("--episodes", required=True, type=int, metavar="N", help="episodes")
+    parser.add_argument(
+        "--scenario", metavar="NAME", help="scenario name (required unless --twin is given)"
+    )
+    parser.add_argument(
+        "--twin",
+        metavar="TWIN.json",
+        help="a venue twin written by `reform-sim twin`: its scenario, options, annotation, rate "
+        "and episodes (--episodes overrides its own)",
+    )
+    parser.add_argument(
+        "--episodes", type=int, metavar="N", help="episodes (required unless --twin is given)"
+    )
     add_seed(parser)
     parser.add_argument(
         "--out",
@@ -55,7 +65,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=[],
         metavar="KEY=VALUE",
         help="how the annotation records each episode (reform.annotation.AnnotationModel): "
-        "orientation=body|head, directions=K|continuous, scale_sd=F, position_noise=M, "
+        "orientation=body|head, directions=K|continuous, scale=F, scale_sd=F, position_noise=M, "
         "yaw_noise=RAD, dropout=P, min_group_seconds=S; repeatable; 'random' draws one model "
         "per episode from reform.annotation.ANNOTATION_RANGES",
     )

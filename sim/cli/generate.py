@@ -34,8 +34,44 @@ def _annotation(items: list[str]) -> AnnotationModel | str | None:
     return parse_annotation(items) if items else None
 
 
+def _twin_arguments(args: argparse.Namespace) -> None:
+    """``--twin``: the twin's scenario, options, annotation, rate and episodes in place of the
+    flags, which it refuses beside it; without it, --scenario and --episodes are required."""
+    if args.twin is None:
+        for flag, value in (("--scenario", args.scenario), ("--episodes", args.episodes)):
+            if value is None:
+                raise CliError(f"{flag} is required (or give --twin TWIN.json)")
+        return
+    given = [
+        flag
+        for flag, value in (
+            ("--scenario", args.scenario),
+            ("--annotation", args.annotation),
+            ("--rate", args.rate),
+            ("--duration", args.duration),
+            ("--set", args.overrides),
+        )
+        if value
+    ]
+    if given:
+        raise CliError(
+            f"--twin fixes the scenario, its options, annotation and rate; got {given[0]}"
+        )
+    from sim.twins import read_twin
+
+    twin = read_twin(args.twin)
+    args.scenario = twin.scenario
+    args.episodes = twin.episodes if args.episodes is None else args.episodes
+    args.rate = twin.rate_hz
+    args.twin_model = twin
+
+
 def _run(args: argparse.Namespace) -> int:
+    _twin_arguments(args)
+    twin = getattr(args, "twin_model", None)
     annotation = _annotation(args.annotation)
+    if twin is not None and not twin.annotation.identity:
+        annotation = twin.annotation
     check_backend(args)
     if not is_uri(args.out):  # a store is checked when opened, before any work
         check_output("--out", args.out, folder=True)
@@ -46,7 +82,11 @@ def _run(args: argparse.Namespace) -> int:
             episodes=args.episodes,
             seed=args.seed,
             out_dir=args.out,
-            options=parse_overrides(args.scenario, args.overrides),
+            options=(
+                dict(twin.options)
+                if twin is not None
+                else parse_overrides(args.scenario, args.overrides)
+            ),
             view=args.view,
             sensor=sensor_options(args),
             **({} if args.rate is None else {"rate": args.rate}),

@@ -9,6 +9,7 @@ detectors for that place and predict how well they will do there (`sim.twins.tun
 
 from __future__ import annotations
 
+from sim.twins.data import generate_twin, twin_data
 from sim.twins.description import (
     TWIN_VERSION,
     Fitted,
@@ -30,8 +31,10 @@ __all__ = [
     "TwinInputError",
     "check_frames_for_twin",
     "fit_twin",
+    "generate_twin",
     "measure_place",
     "read_twin",
+    "twin_data",
     "twin_from_json",
     "twin_sample",
     "write_twin",

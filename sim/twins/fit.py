@@ -63,6 +63,7 @@ MAX_DENSITY = 1.0  # people per m^2 mingle allows
 ROOM_GROWTH = 1.1  # a room the party does not fit grows by this factor
 ROOM_TRIES = 12
 MAX_GROUP = 8  # mingle's default largest group
+STEP_S = 0.01  # seconds: the simulator's control step; a frame is a whole number of them
 PILOT, CHECK = 11, 12  # seed roles of the pilot and of the twin's own figures
 
 
@@ -214,6 +215,7 @@ def fit_twin(
 
     people = int(_clip(round(real.people_median), 2, 100))
     rate = _clip(real.rate_hz if math.isfinite(real.rate_hz) else 1.0, 0.05, 25.0)
+    rate = 1.0 / (max(1, round(1.0 / rate / STEP_S)) * STEP_S)  # whole control steps a frame
     target = _clip(real.frames, MIN_TARGET_FRAMES, TARGET_FRAMES)
     duration = real.duration_s if math.isfinite(real.duration_s) else EPISODE_S[1]
     duration = _clip(min(duration, target / (MIN_EPISODES * rate)), *EPISODE_S)
@@ -272,7 +274,7 @@ def fit_twin(
         scenario=SCENARIO,
         options=options,
         annotation=annotation,
-        rate_hz=float(f"{rate:.6g}"),
+        rate_hz=rate,
         episodes=episodes,
         seed=seed,
         fitted=fitted,
@@ -304,7 +306,7 @@ def _fitted(
             "side of the box holding everyone, median (crowding)", "extent_m"),
         row("options.duration", options["duration"], "length of a sequence, median, seconds",
             "duration_s"),
-        row("rate_hz", float(f"{rate:.6g}"), "frames per second", "rate_hz"),
+        row("rate_hz", rate, "frames per second", "rate_hz"),
         row("episodes", episodes, f"about {TARGET_FRAMES} frames, at least {MIN_EPISODES} "
             "episodes", None),
         row("annotation.scale", annotation.scale, "nearest-neighbour distance, median",

@@ -90,6 +90,10 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^per shard: [\d.]+ s .* KiB, 2\.0 PUT requests, \d+ bytes of card$",
         r"^paper: 64 workers x 1,000,000 episodes: [\d.]+ h, .* requests/s to the store ",
     ),
+    "bench_twin": (
+        r"^load SALSA \(baseline\) +[\d.]+ +1\.0$",
+        r"^twin fitted and generated: [\d.]+ s \(goal < 60 s: (met|NOT met)\)$",
+    ),
     "bench_stress": (
         r"^  reform\.evaluate \(baseline\) +[\d.]+ s +1\.0 x baseline$",
         r"^  predict: bagged-trees +[\d.]+ s +[\d.]+ x baseline$",

@@ -1,0 +1,59 @@
+"""A venue twin's labelled synthetic data: `sim.generate` run with the twin's scenario, options,
+annotation model and rate, into a folder of its own (resumed, never made twice)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from reform.frame import Dataset
+from sim.twins.description import Twin
+
+__all__ = ["DATA_FOLDER", "generate_twin", "twin_data"]
+
+DATA_FOLDER = "twin-data"  # beside twin.json: the twin's generated dataset
+
+
+def generate_twin(
+    twin: Twin,
+    out_dir: str | os.PathLike[str],
+    *,
+    episodes: int | None = None,
+    seed: int | None = None,
+    n_jobs: int | None = None,
+    progress: bool = False,
+):
+    """Generates (or resumes) the twin's dataset in ``out_dir``: ``episodes`` (default the
+    twin's) episodes of its scenario with its options, annotated by its annotation model at its
+    rate, seeded by ``seed`` (default the twin's, as `reform-sim generate --twin` does with its
+    default ``--seed 0`` for a twin fitted with seed 0). Returns
+    `sim.generate.GenerationReport`."""
+    from sim.generate import generate_dataset
+
+    return generate_dataset(
+        twin.scenario,
+        episodes=twin.episodes if episodes is None else episodes,
+        seed=twin.seed if seed is None else seed,
+        out_dir=out_dir,
+        options=dict(twin.options),
+        rate=twin.rate_hz,
+        annotation=None if twin.annotation.identity else twin.annotation,
+        n_jobs=n_jobs,
+        progress=progress,
+    )
+
+
+def twin_data(
+    twin: Twin,
+    out_dir: str | os.PathLike[str],
+    *,
+    episodes: int | None = None,
+    seed: int | None = None,
+    n_jobs: int | None = None,
+    progress: bool = False,
+) -> Dataset:
+    """The twin's dataset in ``out_dir``, generated there first when it is not yet."""
+    from reform.datasets import read_parquet
+
+    generate_twin(twin, out_dir, episodes=episodes, seed=seed, n_jobs=n_jobs, progress=progress)
+    return read_parquet(Path(out_dir))

@@ -1,0 +1,70 @@
+"""reform-sim generate --twin: the twin's place as a labelled synthetic dataset."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from reform.datasets import read_parquet
+from sim.twins import fit_twin, write_twin
+from tests.cli_errors import cli_error, run_cli
+from tests.sim.test_twin import _frames
+
+
+@pytest.fixture(scope="module")
+def twin_file(tmp_path_factory):
+    twin = fit_twin(_frames(scale=1.5), name="place")
+    return write_twin(twin, tmp_path_factory.mktemp("twin") / "twin.json")
+
+
+def test_generate_twin_writes_the_twins_place(twin_file, tmp_path, capsys):
+    out = tmp_path / "data"
+    status, _, err = run_cli(["generate", "--twin", twin_file, "--episodes", 2, "--out", out,
+                              "--jobs", 1, "-q"], capsys)  # fmt: skip
+    assert status == 0, err
+    twin = json.loads(twin_file.read_text())
+    card = json.loads((out / "dataset.json").read_text())
+    assert card["parameters"]["scenario"] == twin["scenario"]
+    assert card["parameters"]["annotation"]["scale"] == twin["annotation"]["scale"]
+    assert card["parameters"]["options"]["people"] == 6
+    data = read_parquet(out)
+    assert len(data) == 2 * round(twin["options"]["duration"] * twin["rate_hz"])
+    assert all(f.annotated and f.n_people == 6 for f in data)
+
+
+def test_generate_twin_is_deterministic(twin_file, tmp_path, capsys):
+    for name in ("a", "b"):
+        argv = ["generate", "--twin", twin_file, "--episodes", 1, "--out", tmp_path / name, "-q"]
+        assert run_cli(argv + ["--jobs", 1], capsys)[0] == 0
+    shard = "data/scenario=mingle/episode=0/part.parquet"
+    assert (tmp_path / "a" / shard).read_bytes() == (tmp_path / "b" / shard).read_bytes()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--scenario", "mingle"], "--twin fixes the scenario, its options, annotation and rate; "
+                                   "got --scenario"),
+        (["--set", "people=4"], "got --set"),
+    ],
+    ids=["scenario", "set"],
+)  # fmt: skip
+def test_generate_twin_refuses_what_the_twin_fixes(twin_file, tmp_path, capsys, extra, message):
+    line = cli_error(["generate", "--twin", twin_file, "--out", tmp_path / "d", *extra], capsys)
+    assert line.endswith(message)
+
+
+def test_generate_needs_a_scenario_or_a_twin(tmp_path, capsys):
+    line = cli_error(["generate", "--episodes", 1, "--out", tmp_path / "d"], capsys)
+    assert line.endswith("--scenario is required (or give --twin TWIN.json)")
+
+
+def test_generate_refuses_a_nonsense_twin_in_one_line(twin_file, tmp_path, capsys):
+    data = json.loads(twin_file.read_text())
+    data["version"] = 7
+    bad = tmp_path / "twin.json"
+    bad.write_text(json.dumps(data))
+    line = cli_error(["generate", "--twin", bad, "--out", tmp_path / "d"], capsys)
+    assert f"{bad}: field version: expected 1" in line
+    assert not (tmp_path / "d").exists()
