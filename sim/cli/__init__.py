@@ -72,6 +72,11 @@ COMMANDS = (
         "sim.cli._twin",
     ),
     Command(
+        "tune",
+        "choose a detector's settings on a venue twin's data; write a settings or model file",
+        "sim.cli._tune",
+    ),
+    Command(
         "calibrate",
         "simulate the scenarios and set them beside SALSA and Babble",
         "sim.cli._calibrate",

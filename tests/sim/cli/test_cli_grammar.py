@@ -41,6 +41,7 @@ LONG = {
     "train",
     "evaluate",
     "detect",
+    "tune",
 }
 # Commands that record one Rerun recording of the run: the flags of rr.script_add_args.
 RECORDING = {"simulate", "evaluate", "detect", "stress"}

@@ -1,0 +1,48 @@
+"""What ``reform-sim tune`` does when it runs.
+
+Its arguments are `sim.cli._tune`."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+from pathlib import Path
+
+from sim.cli._common import check_output
+
+
+def _run(args: argparse.Namespace) -> int:
+    from sim.twins import read_twin, twin_data
+    from sim.twins.data import DATA_FOLDER
+    from sim.twins.tune import REFORM, check_tunable, tune_detector, write_settings
+
+    twin = read_twin(args.twin)  # a nonsense twin or detector is one line, before any work
+    name = check_tunable(args.detector)
+    suffix = ".skops" if name == REFORM else ".json"
+    out = Path(args.out) if args.out else Path(args.twin).parent / f"tuned-{name}{suffix}"
+    check_output("--out", out)
+    folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
+    frames = list(twin_data(twin, folder, n_jobs=args.jobs, progress=not args.quiet))
+    tuned = tune_detector(name, frames)
+    if name == REFORM:
+        from reform.persistence import save_model
+
+        save_model(tuned.model, out)
+        use = f"--detector reform --model {shlex.quote(str(out))}"
+    else:
+        write_settings(out, tuned, chosen_on={"twin": str(args.twin), "twin_data": str(folder)})
+        use = " ".join(f"--{k} {v}" for k, v in tuned.options.items())
+    chosen = ", ".join(f"{k}={v}" for k, v in tuned.options.items()) or (
+        "REFORM "
+        + str(
+            tuned.grid[max(range(len(tuned.grid)), key=lambda k: tuned.grid[k]["f1"])]["options"][
+                "classifier"
+            ]
+        )  # fmt: skip
+    )
+    print(
+        f"{name} on the twin of {twin.name}: {chosen} (F1 at T=2/3 on the twin "
+        f"{100 * tuned.f1:.1f}, {len(tuned.grid)} settings, {tuned.frames} frames); wrote {out}"
+    )
+    print(f"use: reform-sim detect --detector {name} {use} --data DATASET --out groups.json")
+    return 0

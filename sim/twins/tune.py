@@ -1,0 +1,279 @@
+"""A detector's settings chosen on a venue twin's generated data, and the settings file it writes.
+
+`tune_detector` searches the grid each catalogued option declares
+(`reform.detectors.detector_info(name).options`, each `Option.grid`; the other options at their
+defaults) and keeps the setting with the best F1 at T = 2/3 on the twin's frames. REFORM is
+trained on the twin instead: each of the paper's classifiers is trained on half of the twin's
+episodes and scored on the other half, and the best is trained again on every episode.
+
+The settings file (`write_settings`, `read_settings`) is JSON::
+
+    {"format": "reform-sim detector settings", "version": 1, "detector": "gcff",
+     "options": {"stride": 0.6, "mdl": 1.5}, "chosen_on": {...}, "grid": [...]}
+
+``options`` are the detector's own keyword arguments, as `reform.make_detector` takes them;
+`read_settings` returns ``(detector, options)`` for any command that builds detectors.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reform.atomic import atomic_open
+from reform.frame import Frame
+
+__all__ = [
+    "SETTINGS_FORMAT",
+    "SETTINGS_VERSION",
+    "SettingsError",
+    "Tuned",
+    "check_tunable",
+    "detector_f1",
+    "read_settings",
+    "search_grid",
+    "tune_detector",
+    "tuning_frames",
+    "write_settings",
+]
+
+SETTINGS_FORMAT = "reform-sim detector settings"
+SETTINGS_VERSION = 1
+TUNE_FRAMES = 300  # frames of the twin each grid setting is scored on at most (spread out)
+MIN_TUNE_FRAMES = 60  # ... and at least
+TUNE_BUDGET = 12_000  # frames scored in all, over the grid: a larger grid scores fewer frames each
+THRESHOLD = Fraction(2, 3)  # the objective: F1 at T = 2/3, the field's protocol
+REFORM = "reform"
+
+
+class SettingsError(ValueError):
+    """A settings file that cannot be used: one line naming file, field, expected, found."""
+
+
+@dataclass(frozen=True)
+class Tuned:
+    """A detector's settings chosen on a twin.
+
+    Attributes:
+        detector: the catalogue name.
+        options: the chosen keyword arguments (``{}`` for REFORM: its model is ``model``).
+        f1: F1 at T = 2/3 of the chosen setting on the twin (REFORM: on held-out episodes).
+        grid: every setting tried, ``{"options": ..., "f1": ...}``.
+        frames: twin frames the choice was scored on.
+        model: REFORM's fitted estimator, trained on every twin episode (else None).
+    """
+
+    detector: str
+    options: Mapping[str, Any]
+    f1: float
+    grid: tuple[Mapping[str, Any], ...] = ()
+    frames: int = 0
+    model: Any = field(default=None, compare=False)
+
+
+def tuning_frames(frames: Sequence[Frame], limit: int = TUNE_FRAMES) -> list[Frame]:
+    """At most ``limit`` annotated frames, evenly spread over ``frames`` (same order)."""
+    annotated = [f for f in frames if f.groups is not None]
+    if len(annotated) <= limit:
+        return annotated
+    keep = np.unique(np.linspace(0, len(annotated) - 1, limit).round().astype(int))
+    return [annotated[k] for k in keep]
+
+
+def detector_f1(name: str, detector: Any, frames: Sequence[Frame]) -> float:
+    """F1 at T = 2/3 (the field's protocol) of ``detector`` on the annotated ``frames``."""
+    from reform.detectors import run_detector
+    from reform.metrics import evaluate
+
+    frames = [f for f in frames if f.groups is not None]
+    predictions = run_detector(name, detector, frames)
+    return float(evaluate(frames, predictions, thresholds=(THRESHOLD,)).at(THRESHOLD).f1)
+
+
+def _grid(name: str) -> list[dict[str, Any]]:
+    from reform.detectors import detector_info
+
+    options = [o for o in detector_info(name).options if o.grid]
+    if not options:
+        return [{}]
+    return [
+        dict(zip([o.name for o in options], values, strict=True))
+        for values in itertools.product(*(o.grid for o in options))
+    ]
+
+
+def search_grid(name: str, frames: Sequence[Frame]) -> Tuned:
+    """Every setting of ``name``'s declared grids scored on ``frames``; the best kept (the first
+    in grid order on a tie)."""
+    from reform.detectors import make_detector
+
+    grid = _grid(name)
+    scores = [detector_f1(name, make_detector(name, **options), frames) for options in grid]
+    best = int(np.argmax(scores))
+    return Tuned(
+        detector=name,
+        options=grid[best],
+        f1=scores[best],
+        grid=tuple({"options": o, "f1": s} for o, s in zip(grid, scores, strict=True)),
+        frames=len(frames),
+    )
+
+
+def _train_reform(frames: Sequence[Frame]) -> Tuned:
+    from reform.classifiers import CLASSIFIERS, make_classifier
+    from reform.detector import Reform
+
+    annotated = [f for f in frames if f.groups is not None]
+    sequences = sorted({f.sequence for f in annotated})
+    fit_on = set(sequences[::2])
+    train = [f for f in annotated if f.sequence in fit_on]
+    held = [f for f in annotated if f.sequence not in fit_on] or train
+    if len({label for f in train for label in _pair_kinds(f)}) < 2:
+        train = held = annotated  # half the episodes hold one kind of pair: train on all
+    grid, scores = [], []
+    for classifier in CLASSIFIERS:
+        model = Reform(make_classifier(classifier)).fit(train)
+        grid.append({"classifier": classifier})
+        scores.append(detector_f1(REFORM, model, held))
+    best = int(np.argmax(scores))
+    model = Reform(make_classifier(grid[best]["classifier"])).fit(annotated)
+    return Tuned(
+        detector=REFORM,
+        options={},
+        f1=scores[best],
+        grid=tuple({"options": o, "f1": s} for o, s in zip(grid, scores, strict=True)),
+        frames=len(held),
+        model=model,
+    )
+
+
+def _pair_kinds(frame: Frame) -> set[bool]:
+    """Which kinds of pair (together, apart) ``frame`` holds."""
+    n = frame.n_people
+    together = sum(len(g) * (len(g) - 1) // 2 for g in frame.groups or ())
+    kinds = set()
+    if together:
+        kinds.add(True)
+    if together < n * (n - 1) // 2:
+        kinds.add(False)
+    return kinds
+
+
+def check_tunable(name: str) -> str:
+    """The catalogue name of ``name`` when a twin can tune it.
+
+    Raises:
+        ValueError: one line: an unknown detector, one that reads the settings a dataset ships
+            (a twin has none) or one that learns on training frames of its own.
+    """
+    from reform.detectors import detector_info, detector_names
+
+    if name not in detector_names():
+        raise ValueError(
+            f"--detector: expected a catalogued detector ({', '.join(detector_names())}), got "
+            f"{name!r}"
+        )
+    info = detector_info(name)
+    if info.name != REFORM and info.needs == "dataset":
+        raise ValueError(
+            f"--detector {name}: it reads the settings its dataset ships, which a twin has none "
+            "of; tune a detector whose options it searches (e.g. gcff)"
+        )
+    if info.name != REFORM and info.needs == "training":
+        raise ValueError(
+            f"--detector {name}: it fits itself on training frames; tune the detector whose "
+            "options it searches instead (gcff for gcff-tuned)"
+        )
+    return info.name
+
+
+def tune_detector(name: str, frames: Sequence[Frame]) -> Tuned:
+    """``name``'s settings chosen on the twin's ``frames`` (see the module docstring).
+
+    Raises:
+        ValueError: one line for a detector a twin cannot tune: one that reads the settings a
+            dataset ships (a twin has none) or learns on training frames of its own.
+    """
+    name = check_tunable(name)
+    if name == REFORM:
+        return _train_reform(frames)
+    limit = int(min(TUNE_FRAMES, max(MIN_TUNE_FRAMES, TUNE_BUDGET // len(_grid(name)))))
+    return search_grid(name, tuning_frames(frames, limit))
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, float):
+        return float(f"{value:.6g}") if math.isfinite(value) else None
+    return value
+
+
+def write_settings(
+    path: str | os.PathLike[str], tuned: Tuned, *, chosen_on: Mapping[str, Any]
+) -> Path:
+    """Writes the settings file (atomically) of ``tuned``; ``chosen_on`` says on what."""
+    data = {
+        "format": SETTINGS_FORMAT,
+        "version": SETTINGS_VERSION,
+        "detector": tuned.detector,
+        "options": {k: _plain(v) for k, v in tuned.options.items()},
+        "chosen_on": dict(chosen_on)
+        | {"frames": tuned.frames, "objective": "F1 at T = 2/3", "f1": _plain(tuned.f1)},
+        "grid": [
+            {"options": {k: _plain(v) for k, v in g["options"].items()}, "f1": _plain(g["f1"])}
+            for g in tuned.grid
+        ],
+    }
+    path = Path(path)
+    with atomic_open(path, "w", encoding="utf-8") as handle:
+        handle.write(json.dumps(data, indent=2) + "\n")
+    return path
+
+
+def read_settings(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
+    """``(detector, options)`` from a settings file written by `write_settings`, each option
+    checked against the detector's declaration (`reform.detectors.Option.check`).
+
+    Raises:
+        SettingsError: one line naming the file, the field, what was expected and what came.
+    """
+    from reform.detectors import DetectorError, detector_info, detector_names
+
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SettingsError(f"{path}: no such settings file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SettingsError(f"{path}: expected a settings file (JSON), found: {exc}") from None
+
+    def fail(name: str, expected: str, found: Any) -> SettingsError:
+        return SettingsError(f"{path}: field {name}: expected {expected}, found {found!r}")
+
+    if not isinstance(data, dict) or data.get("format") != SETTINGS_FORMAT:
+        found = data.get("format") if isinstance(data, dict) else data
+        raise fail("format", repr(SETTINGS_FORMAT), found)
+    if data.get("version") != SETTINGS_VERSION:
+        raise fail("version", str(SETTINGS_VERSION), data.get("version"))
+    name = data.get("detector")
+    if name not in detector_names():
+        raise fail("detector", f"a catalogued detector {list(detector_names())}", name)
+    options = data.get("options")
+    if not isinstance(options, dict):
+        raise fail("options", "an object of the detector's options", options)
+    info = detector_info(name)
+    checked = {}
+    for key, value in options.items():
+        try:
+            checked[key] = info.option(key).check(name, value)
+        except DetectorError as exc:
+            raise SettingsError(f"{path}: field options.{key}: {exc}") from None
+    return name, checked
