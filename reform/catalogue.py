@@ -193,3 +193,245 @@ _register(
     ),
     citation=DANTE_CITATION,
 )
+
+# The field's non-deep detectors (reform.proximity, reform.dominant_sets, reform.gtcg,
+# reform.hough). Defaults as the estimators' signatures (a test holds the two equal).
+HUNG_KROSE_CITATION = "Hung, Kröse. Detecting F-formations as dominant sets. ICMI 2011, pp. 231-238"
+GTCG_CITATION = (
+    "Vascon, Mequanint, Cristani, Hung, Pelillo, Murino. Detecting conversational groups in "
+    "images and sequences: A robust game-theoretic approach. CVIU 143, pp. 11-24, 2016"
+)
+HVFF_CITATION = (
+    "Cristani, Bazzani, Paggetti, Fossati, Tosato, Del Bue, Menegaz, Murino. Social "
+    "interaction discovery by statistical analysis of F-formations. BMVC 2011"
+)
+HVFF_MULTISCALE_CITATION = (
+    "Setti, Lanz, Ferrario, Murino, Cristani. Multi-scale F-formation discovery for group "
+    "detection. ICIP 2013"
+)
+_FIELD_ORIENTATION = Option(
+    "orientation",
+    "str",
+    "body",
+    "the orientation read: body, or head (the head's where seen, the body's where not)",
+    choices=("body", "head"),
+)
+_GLOBAL_CONTEXT = Option(
+    "global_context",
+    "bool",
+    True,
+    "stop peeling at the first set not dominant among everyone (Hung & Kröse's rule)",
+)
+
+
+def _seed_option(what: str) -> Option:
+    return Option("random_state", "int", 0, f"seeds {what}", low=0, high=2**32 - 1)
+
+
+def _hough_options(*, radius: float) -> tuple[Option, ...]:
+    """The options HVFF and multi-scale HVFF share (votes, accumulator, orientation, seed)."""
+    return (
+        Option("samples", "int", 100, "votes per person", low=16, high=10_000),
+        Option(
+            "position_sd",
+            "float",
+            0.1,
+            "standard deviation of a vote's position noise",
+            unit="m",
+            low=0.0,
+            high=10.0,
+        ),
+        Option(
+            "orientation_sd",
+            "float",
+            0.25,
+            "standard deviation of a vote's orientation noise",
+            unit="rad",
+            low=0.0,
+            high=3.14159,
+        ),
+        Option(
+            "radius",
+            "float",
+            radius,
+            "radius of an accumulator cell around a candidate centre",
+            unit="m",
+            low=0.01,
+            high=10.0,
+            grid=(0.35, 0.5, 0.7),
+        ),
+        Option(
+            "min_share",
+            "float",
+            0.1,
+            "share of a person's votes a centre must hold for them to back it",
+            low=0.01,
+            high=1.0,
+            grid=(0.1, 0.2, 0.3),
+        ),
+        _FIELD_ORIENTATION,
+        _seed_option("the votes' noise"),
+    )
+
+
+_register(
+    "proximity",
+    "reform.proximity:Proximity",
+    help="proximity baseline: connected components of people within a distance (option "
+    "distance, m)",
+    source="built-in",
+    options=(
+        Option(
+            "distance",
+            "float",
+            1.0,
+            "largest distance that links two people into one group",
+            unit="m",
+            low=0.01,
+            high=100.0,
+            grid=(0.6, 0.8, 1.0, 1.2, 1.5, 2.0),
+        ),
+    ),
+)
+_register(
+    "dominant-sets",
+    "reform.dominant_sets:DominantSets",
+    help="dominant sets (Hung & Kröse 2011): proximity affinities between people in each "
+    "other's view, sets peeled by replicator dynamics",
+    source="built-in",
+    options=(
+        Option(
+            "sigma",
+            "float",
+            1.4,
+            "width of the Gaussian of distance in the affinity",
+            unit="m",
+            low=0.01,
+            high=100.0,
+            grid=(0.6, 0.8, 1.0, 1.2, 1.4, 1.6),
+        ),
+        Option(
+            "field_of_view",
+            "float",
+            3.84,
+            "whole angle within which each must have the other for an affinity (6.2832: "
+            "orientation ignored)",
+            unit="rad",
+            low=0.0,
+            high=6.2832,
+            grid=(3.1416, 3.84, 4.71),
+        ),
+        _FIELD_ORIENTATION,
+        _GLOBAL_CONTEXT,
+    ),
+    citation=HUNG_KROSE_CITATION,
+)
+_register(
+    "gtcg",
+    "reform.gtcg:Gtcg",
+    help="GTCG (Vascon et al. 2016): frustum-overlap affinities, groups as evolutionarily "
+    "stable strategies by replicator dynamics, per frame",
+    source="built-in",
+    options=(
+        Option(
+            "length",
+            "float",
+            1.7,
+            "the frustum's length (the authors' Cocktail Party 170 cm)",
+            unit="m",
+            low=0.01,
+            high=100.0,
+            grid=(1.0, 1.7, 2.5),
+        ),
+        Option(
+            "aperture",
+            "float",
+            160.0,
+            "the frustum's whole aperture (the authors' 160°)",
+            unit="deg",
+            low=1.0,
+            high=360.0,
+        ),
+        Option("samples", "int", 2000, "samples per frustum", low=10, high=100_000),
+        Option(
+            "sigma",
+            "float",
+            0.3,
+            "scale of the affinity exp(-JS / sigma) on the Jensen-Shannon divergence (base 2)",
+            low=1e-3,
+            high=100.0,
+            grid=(0.1, 0.2, 0.3, 0.6),
+        ),
+        Option(
+            "bin",
+            "float",
+            0.3,
+            "side of a square bin of the frustum histograms",
+            unit="m",
+            low=0.01,
+            high=100.0,
+            grid=(0.2, 0.3, 0.5),
+        ),
+        _FIELD_ORIENTATION,
+        _GLOBAL_CONTEXT,
+        Option(
+            "zero_disjoint",
+            "bool",
+            False,
+            "take exp(-1/sigma), the affinity of frustums sharing no bin, off every affinity "
+            "(the authors' code keeps it: two people alone in a frame pair up)",
+        ),
+        _seed_option("the frustum samples"),
+    ),
+    citation=GTCG_CITATION,
+)
+_register(
+    "hvff",
+    "reform.hough:Hvff",
+    help="HVFF (Cristani et al. 2011): sampled votes for o-space centres a stride ahead, "
+    "accumulated and read greedily by weighted Boltzmann entropy",
+    source="built-in",
+    options=(
+        Option(
+            "stride",
+            "float",
+            0.7,
+            "distance of the o-space centre in front of a person",
+            unit="m",
+            low=0.0,
+            high=100.0,
+            grid=(0.5, 0.7, 1.0),
+        ),
+        *_hough_options(radius=0.7),
+    ),
+    citation=HVFF_CITATION,
+)
+_register(
+    "hvff-multiscale",
+    "reform.hough:MultiScaleHvff",
+    help="multi-scale HVFF (Setti et al. 2013): votes at the o-space radius of every group "
+    "size, a centre of size k making a group of k",
+    source="built-in",
+    options=(
+        Option(
+            "spacing",
+            "float",
+            1.0,
+            "distance between neighbours on a group's circle",
+            unit="m",
+            low=0.01,
+            high=100.0,
+            grid=(1.0, 1.2, 1.4),
+        ),
+        Option(
+            "max_size",
+            "int",
+            6,
+            "the largest group size with a scale of its own",
+            low=2,
+            high=20,
+        ),
+        *_hough_options(radius=0.5),
+    ),
+    citation=HVFF_MULTISCALE_CITATION,
+)
