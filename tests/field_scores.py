@@ -24,7 +24,7 @@ SALSA_EVERY = 8  # SALSA frames scored: every 8th (143 of 1,143), to keep the te
 MARGIN = 0.2  # how far (F1 at T = 2/3, as a fraction) a detector must clear the majority baseline
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _annotated(folder: str, name: str) -> tuple[Frame, ...]:
     frames = [f for f in load_dataset(folder).frames if f.groups is not None]
     return tuple(frames[::SALSA_EVERY] if name == "salsa" else frames)
