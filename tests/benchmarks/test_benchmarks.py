@@ -50,6 +50,11 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^--help +median +[\d.]+ s +best +[\d.]+ s$",
         r"^every parser / --help: [\d.]+x$",
     ),
+    "bench_crowd": (
+        r"^ +400 +[\d.]+ +[\d.]+ +[\d.]+x +[\d.]+ +[\d.]+ +- +[\d.]+  same$",
+        r"^growth from 200 to 400 people: REFORM time n\^-?[\d.]+, memory n\^-?[\d.]+; GCFF ",
+        r"^Targets: .*peak [\d.]+ MB \(< 500: met\)",
+    ),
     "bench_envs": (
         r"^ +7 ReformSim/WordImprov-v0 .* [\d.]+x +\d+$",
         r"^ +18 ReformSim/Mingle-v0 .* [\d.]+x +\d+$",
