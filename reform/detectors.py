@@ -53,6 +53,7 @@ __all__ = [
     "DetectorInfo",
     "Option",
     "check_predictions",
+    "builtin_names",
     "detector_info",
     "detector_names",
     "detector_options",
@@ -411,6 +412,21 @@ def _entry_source(entry: importlib.metadata.EntryPoint) -> str:
 def detector_names() -> tuple[str, ...]:
     """Every detector name: the registered ones and those of installed packages, sorted."""
     return tuple(sorted(set(_REGISTRY) | set(_entry_points())))
+
+
+def builtin_names(*, needs: Sequence[str] = NEEDS) -> tuple[str, ...]:
+    """The catalogue's built-in detectors that run with their declared defaults (none read from
+    a model file, as ``reform`` is), whose :attr:`DetectorInfo.needs` is among ``needs``: what
+    ``benchmark --detector all`` and ``stress --detector all`` run."""
+    out = []
+    for name in sorted(_REGISTRY):
+        info = _REGISTRY[name]
+        if info.source != "built-in" or info.needs not in needs:
+            continue
+        if any(o.default is None and o.type == "path" for o in info.options):
+            continue  # a detector read from a trained model file
+        out.append(name)
+    return tuple(out)
 
 
 def detector_options(name: str) -> tuple[Option, ...]:

@@ -21,11 +21,17 @@ DIR/stress-<axis>.png, and with --save a Rerun recording of the curves.
 
 Grids: 'default' (the documented run, a few minutes on two cores) and 'small' (seconds).
 
---detector NAME|package.module:factory (repeatable) runs detectors of your own beside these: a
-name of the detector registry (majority, an installed package's entry point in the group
-reform_sim.detectors) or a plugin's path. One with fit() is fitted on the same training frames.
-Their scores are in stress.json.
+--detector NAME|package.module:factory (repeatable) runs more detectors beside these: a name of
+the detector catalogue (majority, gcff with its one stated setting, proximity, ...; `all` for
+every catalogued detector that needs no model file and no dataset of its own), an installed
+package's entry point in the group reform_sim.detectors, or a plugin's path. One with fit() is
+fitted on the same training frames. Their scores are in stress.json.
 """
+
+
+def _detector_or_all(text: str) -> str:
+    """``--detector``'s type: ``all``, a catalogue name or a plugin's path."""
+    return text if text == "all" else detector_name(text)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -52,12 +58,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--detector",
         action="append",
         dest="detectors",
-        type=detector_name,
+        type=_detector_or_all,
         default=None,
         metavar="NAME|module:factory",
-        help="also run this detector (repeatable): a registered name such as majority, an "
-        "installed package's (entry-point group reform_sim.detectors), or package.module:factory "
-        "(the current folder is searched too); fitted on the training frames when it has fit()",
+        help="also run this detector (repeatable): a catalogue name such as majority, all (every "
+        "catalogued detector that needs no model file), an installed package's (entry-point "
+        "group reform_sim.detectors), or package.module:factory (the current folder is searched "
+        "too); fitted on the training frames when it has fit()",
     )
     parser.add_argument(
         "--out",

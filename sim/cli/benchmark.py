@@ -11,6 +11,7 @@ import sys
 
 from tqdm import tqdm
 
+from reform.detectors import builtin_names
 from reform.splits import DEFAULT_TRAIN_FRACTION
 from sim.cli._benchmark import DEFAULT_DETECTORS, DEFAULT_OUT
 from sim.cli._common import (
@@ -20,7 +21,6 @@ from sim.cli._common import (
 )
 from sim.cli._detectors import make_plugin
 from sim.experiments.benchmark import (
-    catalogue_specs,
     dataset_spec,
     detector_spec,
     found_datasets,
@@ -32,6 +32,10 @@ from sim.experiments.benchmark_report import write_report
 
 
 def _run(args: argparse.Namespace) -> int:
+    if args.twin is not None:
+        from sim.cli.benchmark_twin import run_twin
+
+        return run_twin(args)
     check_backend(args)
     check_output("--out", args.out, folder=True)
     names = args.data
@@ -58,7 +62,7 @@ def _run(args: argparse.Namespace) -> int:
         )
     named = args.detector or DEFAULT_DETECTORS
     if "all" in named:
-        named = [*catalogue_specs(), *(n for n in named if n != "all")]
+        named = [*builtin_names(), *(n for n in named if n != "all")]
     detectors = [detector_spec(spec) for spec in dict.fromkeys(named)]
     detectors += [model_spec(path) for path in args.model or ()]
     _check_detectors(detectors)

@@ -10,6 +10,7 @@ import os
 import shlex
 import sys
 
+from reform.detectors import builtin_names
 from sim import sizing
 from sim.cli._common import (
     CliError,
@@ -102,7 +103,11 @@ def run(args: argparse.Namespace) -> int:
     check_output("--out", args.out, folder=True)
     check_recording(args)
     plugins = {}
-    for name in args.detectors or ():
+    named = list(args.detectors or ())
+    if "all" in named:  # the catalogue, beside the detectors stress always runs
+        every = [n for n in builtin_names(needs=("", "training")) if n not in DETECTOR_LABELS]
+        named = [*every, *(n for n in named if n != "all" and n not in every)]
+    for name in named:
         if name in DETECTOR_LABELS:
             raise CliError(
                 f"--detector {name}: stress always runs {DETECTOR_LABELS[name]} (trained on its "

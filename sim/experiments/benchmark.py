@@ -255,23 +255,6 @@ def _label(spec: str) -> str:
     return spec
 
 
-def catalogue_specs() -> tuple[str, ...]:
-    """Every built-in detector of the catalogue that runs with its declared defaults (no model
-    file to give): what ``benchmark --detector all`` runs."""
-    out = []
-    for name in detector_names():
-        try:
-            info = detector_info(name)
-        except DetectorError:
-            continue
-        if info.source != "built-in":
-            continue
-        if any(option.default is None and option.type == "path" for option in info.options):
-            continue  # a detector read from a trained model file (reform, a model of yours)
-        out.append(name)
-    return tuple(out)
-
-
 def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:
     """The row for a REFORM model file: labelled with its classifier and file name."""
     info = model_info(path)

@@ -91,7 +91,7 @@ __all__ = [
     "training_frames",
 ]
 
-GCFF = "gcff"
+GCFF = "gcff-tuned"  # the catalogue's name: GCFF searched on the training frames
 DETECTORS = (WEIGHTED_KNN, BAGGED_TREES, LOGISTIC_REGRESSION, GCFF)
 DETECTOR_LABELS: Mapping[str, str] = MappingProxyType(
     {

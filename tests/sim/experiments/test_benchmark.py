@@ -288,10 +288,9 @@ def test_a_detector_that_learns_is_scored_only_on_what_it_did_not_see(tmp_path):
 
 
 def test_all_is_every_catalogued_detector_without_a_model_file(tmp_path, capsys):
-    from reform import detector_info
-    from sim.experiments.benchmark import catalogue_specs
+    from reform.detectors import builtin_names, detector_info
 
-    names = catalogue_specs()
+    names = builtin_names()
     assert {"gcff", "gcff-own", "gcff-tuned", "majority"} <= set(names)
     assert "reform" not in names  # read from a model file
     for name in names:

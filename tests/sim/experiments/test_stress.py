@@ -209,3 +209,23 @@ def test_cli_runs_one_axis(tmp_path, capsys) -> None:
     # Its estimate, stated once before the work.
     assert captured.err.count("the stress test: about ") == 1
     assert "(estimates, sim.sizing)" in captured.err.splitlines()[0]
+
+
+def test_the_whole_catalogue_runs_beside_the_built_ins(detectors) -> None:
+    """What ``stress --detector all`` adds: every catalogued detector that needs no model file
+    and no dataset of its own, each scored at every point (the one that learns fitted on the
+    training frames)."""
+    from reform.detectors import builtin_names, make_detector
+
+    names = [n for n in builtin_names(needs=("", "training")) if n not in DETECTORS]
+    assert "gcff" in names and "majority" in names and "gcff-tuned" not in names
+    plugins = {name: make_detector(name) for name in names}
+    results = run_stress(
+        TINY, seed=0, jobs=1, detectors=detectors, plugins=plugins, axes=["dropout"]
+    )
+    for point in results.axis("dropout").points:
+        for name in names:
+            assert 0.0 <= point.scores[name]["2/3"].f1.value <= 1.0, name
+    clean = results.axis("dropout").points[0].scores
+    assert clean["majority"]["2/3"].f1.value == 0.0
+    assert clean["gcff"]["2/3"].f1.value > 0.5  # the test parties' groups are there to find
