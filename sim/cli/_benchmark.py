@@ -76,6 +76,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default_help="the test part in --test-split datasets, all elsewhere",
     )
     parser.add_argument(
+        "--twin",
+        metavar="TWIN.json",
+        help="predict each detector's F1 at the place a venue twin (`reform-sim twin`) describes, "
+        "on the twin's data, before any label exists (writes OUT/benchmark-twin.md and .json)",
+    )
+    parser.add_argument(
+        "--twin-data",
+        metavar="DIR",
+        help="with --twin: its generated dataset (default: twin-data/ beside twin.json)",
+    )
+    parser.add_argument(
         "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder (./{DEFAULT_OUT})"
     )
     add_recordings(parser, default=True, each="dataset")
