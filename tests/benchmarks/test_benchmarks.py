@@ -60,6 +60,11 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^ +18 ReformSim/Mingle-v0 .* [\d.]+x +\d+$",
         r"^target: >= 2,000 env steps/s with 7 people: (met|NOT met) ",
     ),
+    "bench_field_detectors": tuple(
+        rf"^ +{name} +{n} +[\d.]+ ms +[\d.]+ ms +[\d.]+x$"
+        for name in ("proximity", "dominant-sets", "gtcg", "hvff", "hvff-multiscale")
+        for n in (6, 18, 200)
+    ),
     "bench_gcff": tuple(rf"^ +{n} +[\d.]+ ms +[\d.]+ ms +[\d.]+x +\d+$" for n in (6, 18, 50, 200)),
     "bench_generate": (
         r"^ +total +\d+ us +\([\d,]+ frames per CPU second\)$",
