@@ -47,10 +47,21 @@ from reform.frame import Frame, Group
 from reform.path_argument import path_argument
 
 __all__ = [
+    "BATCH_SIZE",
+    "CONTEXT_WIDTHS",
+    "DROPOUT",
+    "DYAD_WIDTHS",
+    "EPOCHS",
+    "FAR_AWAY_M",
+    "FINAL_WIDTHS",
     "FORMAT",
     "FORMAT_VERSION",
     "INSTALL",
+    "L2",
+    "LEARNING_RATE",
+    "MEMBER_WEIGHT",
     "ORIENTATIONS",
+    "PATIENCE",
     "Dante",
     "affinity_matrix",
     "dominant_sets",

@@ -55,6 +55,7 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^growth from 200 to 400 people: REFORM time n\^-?[\d.]+, memory n\^-?[\d.]+; GCFF ",
         r"^Targets: .*peak [\d.]+ MB \(< 500: met\)",
     ),
+    "bench_dante": tuple(rf"^ +{n} +[\d.]+ ms +[\d.]+ ms +[\d.]+x$" for n in (6, 18)),
     "bench_envs": (
         r"^ +7 ReformSim/WordImprov-v0 .* [\d.]+x +\d+$",
         r"^ +18 ReformSim/Mingle-v0 .* [\d.]+x +\d+$",
