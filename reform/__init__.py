@@ -26,6 +26,7 @@ _EXPORTS = {
     "read_parquet": "reform.datasets",
     "write_parquet": "reform.datasets",
     "DataFormatError": "reform.datasets.errors",
+    "Dante": "reform.dante",
     "Reform": "reform.detector",
     "check_detector": "reform.detector_checks",
     "Detector": "reform.detectors",
