@@ -316,8 +316,13 @@ class MultiScaleHvff(_HoughBase):
     Args:
         spacing: metres between neighbours on a group's circle.
         max_size: the largest group size with a scale of its own (2 to 20).
-        samples, position_sd, orientation_sd, radius, min_share, orientation, random_state:
-            as :class:`Hvff`.
+        samples: votes per person, at every scale.
+        position_sd: standard deviation of a vote's position noise, metres.
+        orientation_sd: standard deviation of a vote's orientation noise, radians.
+        radius: radius of an accumulator cell, metres.
+        min_share: share of a person's votes a centre must hold for them to back it.
+        orientation: ``"body"`` or ``"head"`` (head yaw where seen, body yaw where not).
+        random_state: seed of the votes' noise.
     """
 
     def __init__(
