@@ -63,6 +63,7 @@ class Role(IntEnum):
     SIM2REAL_BOOTSTRAP = 8  # sim2real's bootstrap intervals: (role, dataset)
     SIM2REAL_PERIODS = 9  # sim2real's cross-period bootstrap: (role, held-out half)
     PAPER_RANDOM_SPLIT = 10  # the paper experiment's random-split diagnostic: (role,)
+    BENCHMARK_BOOTSTRAP = 11  # the benchmark's intervals: (role, crc32 of the dataset's label)
 
 
 def _key(keys: tuple[int, ...]) -> tuple[int, ...]:

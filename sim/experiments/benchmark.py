@@ -31,11 +31,13 @@ import math
 import os
 import sys
 import time
+import zlib
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from reform.bootstrap import bootstrap_weights, score_intervals
 from reform.datasets import (
     detect_format,
     is_fetched,
@@ -55,8 +57,10 @@ from reform.detectors import (
     run_detector,
 )
 from reform.frame import Dataset, Frame, Group
+from reform.json_values import json_float
 from reform.metrics import evaluate
 from reform.persistence import load_model, model_info
+from reform.seeding import Role, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.executor import BACKENDS, Executor
 
@@ -78,6 +82,9 @@ __all__ = [
 ]
 
 THRESHOLDS = ("2/3", "1")
+BOOTSTRAP_RESAMPLES = 1000  # resamples of each cell's interval
+BLOCKS_PER_SEQUENCE = 10  # contiguous stretches of a recording, the clusters resampled
+BOOTSTRAP_SEED = 0  # the benchmark's intervals: the same on every run
 GCFF_ONE = "gcff"
 GCFF_OWN = "gcff-own"
 GCFF_TUNED = "gcff-tuned"
@@ -338,26 +345,62 @@ def dataset_spec(
 
 @dataclass(frozen=True)
 class Scores:
-    """Precision, recall and F1 (fractions) at each threshold, and the frames scored."""
+    """Precision, recall and F1 (fractions) at each threshold, the frames scored, and the F1's
+    bootstrap interval at each threshold.
+
+    Attributes:
+        frames: the annotated frames scored.
+        at: threshold -> (P, R, F1).
+        f1_interval: threshold -> (low, high), the 95 % percentile interval of a block bootstrap
+            (:func:`bootstrap_blocks`: contiguous stretches of each recording resampled whole,
+            as neighbouring frames are near-duplicates); empty where not computed.
+    """
 
     frames: int
     at: Mapping[str, tuple[float, float, float]]
+    f1_interval: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
     @classmethod
-    def of(cls, evaluation: Any) -> Scores:
-        at = {}
+    def of(cls, evaluation: Any, *, weights: Any = None) -> Scores:
+        at, interval = {}, {}
         for t in THRESHOLDS:
             s = evaluation.at(t)
             at[t] = (float(s.precision), float(s.recall), float(s.f1))
-        return cls(frames=int(evaluation.n_frames), at=at)
+            if weights is not None:
+                f1 = score_intervals(evaluation, t, weights=weights).f1
+                interval[t] = (float(f1.low), float(f1.high))
+        return cls(frames=int(evaluation.n_frames), at=at, f1_interval=interval)
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "frames": self.frames,
-            **{
-                f"T={t}": {"precision": p, "recall": r, "f1": f} for t, (p, r, f) in self.at.items()
-            },
-        }
+        out: dict[str, Any] = {"frames": self.frames}
+        for t, (p, r, f) in self.at.items():
+            out[f"T={t}"] = {"precision": p, "recall": r, "f1": f}
+            if t in self.f1_interval:
+                low, high = self.f1_interval[t]
+                out[f"T={t}"]["f1_interval"] = [json_float(low), json_float(high)]
+        return out
+
+
+def bootstrap_blocks(frames: Sequence[Frame], blocks: int = BLOCKS_PER_SEQUENCE) -> list[str]:
+    """Each frame's block: its sequence cut, by position in time, into ``blocks`` contiguous
+    stretches of (nearly) equal length, the clusters a benchmark interval resamples."""
+    position: dict[str, int] = {}
+    sizes: dict[str, int] = {}
+    for frame in frames:
+        sizes[frame.sequence] = sizes.get(frame.sequence, 0) + 1
+    out = []
+    for frame in frames:
+        k = position.get(frame.sequence, 0)
+        position[frame.sequence] = k + 1
+        out.append(f"{frame.sequence}#{k * blocks // sizes[frame.sequence]}")
+    return out
+
+
+def _weights(label: str, frames: Sequence[Frame]) -> Any:
+    """The bootstrap weights of a dataset's scored frames: the same for every detector scored on
+    those frames (a paired bootstrap), from the dataset's label alone."""
+    rng = derive_rng(BOOTSTRAP_SEED, Role.BENCHMARK_BOOTSTRAP, zlib.crc32(label.encode()))
+    return bootstrap_weights(bootstrap_blocks(frames), rng=rng, resamples=BOOTSTRAP_RESAMPLES)
 
 
 @dataclass(frozen=True)
@@ -464,7 +507,7 @@ def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
     return Cell(
         dataset=label,
         detector=detector_spec.label,
-        scores=Scores.of(evaluation),
+        scores=Scores.of(evaluation, weights=_weights(label, frames)),
         by_sequence=by_sequence,
         seconds=seconds,
         predictions=tuple(tuple(tuple(int(m) for m in g) for g in p) for p in predictions),

@@ -295,3 +295,33 @@ def test_all_is_every_catalogued_detector_without_a_model_file(tmp_path, capsys)
     assert "reform" not in names  # read from a model file
     for name in names:
         assert detector_info(name).source == "built-in"
+
+
+def test_blocks_are_contiguous_stretches_of_each_recording():
+    from reform import Frame
+    from sim.experiments.benchmark import bootstrap_blocks
+
+    def frame(sequence, time):
+        return Frame(
+            ids=np.array([1]),
+            position=np.zeros((1, 2)),
+            yaw=np.zeros(1),
+            sequence=sequence,
+            time=time,
+        )
+
+    frames = [frame("a", t) for t in range(5)] + [frame("b", t) for t in range(2)]
+    # hand-computed: a's 5 frames in 2 blocks (k * 2 // 5), b's 2 frames in 2 blocks
+    assert bootstrap_blocks(frames, blocks=2) == ["a#0", "a#0", "a#0", "a#1", "a#1", "b#0", "b#1"]
+
+
+def test_every_score_carries_its_bootstrap_interval(tmp_path):
+    frames = [(PAIR, [[1, 2]])] * 6 + [(PAIR, [[1, 3]])] * 6
+    folder = _gcff(tmp_path / "d", frames)
+    spec = DatasetSpec(name="d", path=str(folder))
+    one, two = run_benchmark([spec], [detector_spec("gcff"), detector_spec("proximity")]).cells
+    for cell in (one, two):
+        for t in ("2/3", "1"):
+            low, high = cell.scores.f1_interval[t]
+            assert low <= cell.scores.at[t][2] <= high
+    assert one.scores.f1_interval["2/3"][0] < one.scores.f1_interval["2/3"][1]  # it varies
