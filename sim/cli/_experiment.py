@@ -30,6 +30,11 @@ EXPERIMENTS = (
         "REFORM trained on synthetic crowds only, tested on SALSA and Babble",
         "sim.cli._experiment_sim2real",
     ),
+    Command(
+        "twins",
+        "venue twins of every real dataset: tuning on them, predicting each detector's F1",
+        "sim.cli._experiment_twins",
+    ),
 )
 
 

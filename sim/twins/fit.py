@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -35,7 +36,7 @@ from reform.annotation import AnnotationModel
 from reform.frame import Frame
 from reform.seeding import derive_int, derive_rng
 from sim.twins.description import Fitted, Twin
-from sim.twins.statistics import PlaceStatistics, measure_place
+from sim.twins.statistics import PlaceStatistics, measure_place, spacing_shape
 
 __all__ = [
     "MIN_FRAMES",
@@ -64,7 +65,22 @@ ROOM_GROWTH = 1.1  # a room the party does not fit grows by this factor
 ROOM_TRIES = 12
 MAX_GROUP = 8  # mingle's default largest group
 STEP_S = 0.01  # seconds: the simulator's control step; a frame is a whole number of them
-PILOT, CHECK = 11, 12  # seed roles of the pilot and of the twin's own figures
+PILOT, CHECK, SHAPE = 11, 12, 13  # seed roles of the pilot and of the twin's own figures
+
+
+# The crowd options searched label-free, in this order, one at a time (mingle's own ranges).
+SHAPE_CHOICES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
+    {
+        "spacing": (0.63, 0.5, 0.43),  # metres: how close two people may stand
+        "unevenness": (0.0, 0.5, 1.0),  # how unevenly members spread round the o-space
+        "alone_share": (0.08, 0.25, 0.5),  # share of people alone at the start
+        "arrangements": (0.0, 0.5),  # share of groups side by side or presenter and audience
+    }
+)
+SHAPE_STATISTIC = (
+    "spacing shape: nearest-neighbour q10, q25, q75, q90, 2nd and 3rd nearest over the median "
+    "nearest neighbour, share standing apart"
+)
 
 
 class TwinInputError(ValueError):
@@ -142,6 +158,44 @@ def twin_sample(twin: Twin) -> list[Frame]:
     """A few of the twin's frames, as its fit measured them (`PILOT_EPISODES` episodes, seeded
     by the twin's seed): what ``twin.json``'s twin figures and the plots are made of."""
     return _sample(twin.options, twin.annotation, seed=twin.seed, rate=twin.rate_hz)
+
+
+def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
+    """How far two `spacing_shape` signatures are: squared log ratios of the six distance
+    ratios, plus the squared difference of the shares standing apart (times 4)."""
+    ratios = np.log(np.maximum(twin[:6], 1e-6) / np.maximum(real[:6], 1e-6))
+    return float(np.sum(ratios**2) + 4.0 * (twin[6] - real[6]) ** 2)
+
+
+def _fit_spacing_shape(
+    frames: Sequence[Frame], real: PlaceStatistics, options: dict[str, Any], *, seed: int
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The crowd options (`SHAPE_CHOICES`, one at a time in that order, each kept where it brings
+    the pilot's `spacing_shape` closest to the recording's) on a room sized once for the
+    recording's crowding."""
+    target = spacing_shape(frames)
+    options = dict(options)
+    if not np.all(np.isfinite(target)):
+        return options, {}
+    run = {**options, "duration": PILOT_S}
+    sim_frames, run = _simulate(run, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
+    pilot = measure_place(sim_frames)
+    scale = real.nn_median / pilot.nn_median
+    side = run["room_side"] * (real.extent_m / scale) / pilot.extent_m
+    options["room_side"] = _room_for(options["people"], side)
+    best_shape = None
+    for key, choices in SHAPE_CHOICES.items():
+        scores = []
+        for value in choices:
+            trial = {**options, key: value, "duration": PILOT_S}
+            sim_frames, _ = _simulate(trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
+            signature = spacing_shape(sim_frames)
+            scores.append((_shape_distance(target, signature), signature))
+        k = min(range(len(choices)), key=lambda j: scores[j][0])
+        options[key] = choices[k]
+        best_shape = scores[k][1]
+    shown = [float(f"{v:.4g}") for v in target]
+    return options, {"real": shown, "twin": [float(f"{v:.4g}") for v in best_shape]}
 
 
 def _labelled_shape(frames: Sequence[Frame]) -> dict[str, float]:
@@ -230,6 +284,10 @@ def fit_twin(
         options["max_group_size"] = int(_clip(shape["max_group_size"], 2, min(12, people)))
         options["alone_share"] = _clip(shape["alone_share"], 0.0, 1.0)
 
+    shape_fit = {}
+    if not shape:
+        options, shape_fit = _fit_spacing_shape(frames, real, options, seed=seed)
+
     scale = 1.0
     pilot: PlaceStatistics | None = None
     for round_ in range(PILOT_ROUNDS):
@@ -267,7 +325,13 @@ def fit_twin(
     options = scenarios.registry.check_options(SCENARIO, options)
     mine = measure_place(_sample(options, annotation, seed=seed, rate=rate))
 
-    fitted = _fitted(real, mine, options, annotation, rate, episodes, shape)
+    fitted = _fitted(real, mine, options, annotation, rate, episodes, shape) + tuple(
+        Fitted(
+            f"options.{key}", options[key], SHAPE_STATISTIC, shape_fit["real"], shape_fit["twin"]
+        )  # fmt: skip
+        for key in SHAPE_CHOICES
+        if shape_fit
+    )
     return Twin(
         name=name,
         mode="labels" if use_labels else "label-free",

@@ -16,7 +16,13 @@ import numpy as np
 
 from reform.frame import Frame, wrap_angle
 
-__all__ = ["CODINGS", "PlaceStatistics", "measure_place", "nearest_neighbour_distances"]
+__all__ = [
+    "CODINGS",
+    "PlaceStatistics",
+    "measure_place",
+    "nearest_neighbour_distances",
+    "spacing_shape",
+]
 
 # Orientation codings looked for, in directions per turn (the field's: 4, 8, 24).
 CODINGS = (4, 8, 12, 16, 24, 36, 72)
@@ -94,6 +100,30 @@ def nearest_neighbour_distances(frames: Sequence[Frame]) -> np.ndarray:
         np.fill_diagonal(d, np.inf)
         out.append(d.min(axis=1))
     return np.concatenate(out) if out else np.zeros(0)
+
+
+def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
+    """How people stand relative to their spacing, free of the unit: the 10, 25, 75 and 90 %
+    quantiles of the nearest-neighbour distance and the medians of the second and third nearest,
+    each over the median nearest-neighbour distance, and the share of people whose nearest
+    neighbour is more than 1.5 medians away (standing apart). (7,)."""
+    near = []
+    for frame in frames:
+        if frame.n_people < 4:
+            continue
+        p = frame.position
+        d = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1])
+        np.fill_diagonal(d, np.inf)
+        near.append(np.sort(d, axis=1)[:, :3])
+    if not near:
+        return np.full(7, np.nan)
+    k = np.concatenate(near)
+    median = float(np.median(k[:, 0]))
+    quantiles = np.quantile(k[:, 0], [0.1, 0.25, 0.75, 0.9]) / median
+    return np.array(
+        [*quantiles, np.median(k[:, 1]) / median, np.median(k[:, 2]) / median,
+         float(np.mean(k[:, 0] > 1.5 * median))]
+    )  # fmt: skip
 
 
 def _by_sequence(frames: Sequence[Frame]) -> list[list[Frame]]:

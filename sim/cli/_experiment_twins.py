@@ -1,0 +1,44 @@
+"""``reform-sim experiment twins``: venue twins against every real dataset found."""
+
+from __future__ import annotations
+
+import argparse
+
+from sim.cli._common import run_with
+from sim.cli._experiment_io import add_out_argument
+from sim.cli._grammar import add_quiet, add_seed
+
+DESCRIPTION = """\
+For every real dataset found: fits its label-free venue twin (`reform-sim twin`), generates the
+twin's data (under --twins, reused), and measures, on the second half of each recording, (1)
+tuning: GCFF, the proximity baseline and REFORM with one setting for every dataset, tuned on
+the twin, and tuned on the first half's labels (the ceiling); (2) prediction: every catalogued
+detector's F1 on the twin against its real F1 (Pearson r, Spearman, Kendall's tau, mean absolute
+error, mean maximum rank violation, with bootstrap intervals), beside the real ceiling (the
+first half predicting the second); (3) leave one out. Writes DIR/twins.md, DIR/twins.json and
+DIR/twins.png, and prints the Markdown.
+"""
+
+BASENAME = "twins"
+DEFAULT_TWINS = "runs/twins"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--data",
+        action="append",
+        default=[],
+        metavar="PATH|NAME",
+        help="a real dataset (repeatable): NAME=PATH, a fetched or local dataset's name or its "
+        "folder (default: every fetched or local dataset)",
+    )
+    add_out_argument(parser, basename=BASENAME)
+    parser.add_argument(
+        "--twins",
+        default=DEFAULT_TWINS,
+        metavar="DIR",
+        help=f"folder of the twins and their generated data, reused when present ({DEFAULT_TWINS})",
+    )
+    add_seed(parser)
+    add_quiet(parser)
+    parser.set_defaults(handler=run_with("sim.cli.experiment_twins:run"))

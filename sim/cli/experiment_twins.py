@@ -1,0 +1,82 @@
+"""What ``reform-sim experiment twins`` does when it runs.
+
+Its arguments are `sim.cli._experiment_twins`."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+import time
+from pathlib import Path
+
+from sim.cli._common import CliError, check_output
+from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
+from sim.cli._experiment_twins import BASENAME, DEFAULT_TWINS
+
+FIGURE = ".png"
+
+
+def _load(entries: list[str]) -> dict:
+    """``--data`` values (or every dataset found), each recording once: name -> dataset."""
+    from reform.datasets import DataFormatError, load_dataset, resolve
+    from sim.experiments.benchmark import found_datasets, one_recording_each
+
+    named: dict[str, str] = {}
+    for value in entries or found_datasets():
+        name, sep, path = value.partition("=")
+        if sep and (not name or not path):
+            raise CliError(f"--data {value}: expected NAME=PATH, got an empty side")
+        named[(name if sep else Path(value).name or value).lower()] = path if sep else value
+    kept, left_out = one_recording_each(list(named), named=set(named) if entries else ())
+    print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
+    out = {}
+    for name in kept:
+        try:
+            out[name] = load_dataset(resolve(named[name]))
+        except (FileNotFoundError, DataFormatError) as exc:
+            raise CliError(f"--data {named[name]}: {exc}") from None
+    if len(out) < 2:
+        raise CliError(
+            f"the experiment compares datasets: expected two or more, found {len(out)} "
+            "(fetch them with `reform-sim datasets fetch --all` or give --data)"
+        )
+    return out
+
+
+def _command(args: argparse.Namespace) -> str:
+    words = ["reform-sim", "experiment", "twins"]
+    for value in args.data:
+        words += ["--data", value]
+    if args.twins != DEFAULT_TWINS:
+        words += ["--twins", args.twins]
+    if args.seed != 0:
+        words += ["--seed", str(args.seed)]
+    words += ["--out", args.out]
+    return shlex.join(words)
+
+
+def run(args: argparse.Namespace) -> int:
+    from sim.experiments.twins import run_twins
+    from sim.experiments.twins_report import scatter_figure, to_markdown
+
+    out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, FIGURE))
+    check_report(out, suffixes=(*REPORT_SUFFIXES, FIGURE))
+    check_output("--twins", args.twins, folder=True)
+    real = _load(args.data)
+    started = time.perf_counter()
+
+    def progress(message: str) -> None:
+        if not args.quiet:
+            print(
+                f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
+            )
+
+    result = run_twins(real, root=args.twins, seed=args.seed, progress=progress)
+    command = _command(args)
+    figure = scatter_figure(result, out.with_name(out.name + FIGURE)).name
+    markdown = to_markdown(result, command=command, figure=figure)
+    write_report(out, markdown, result.to_json(command=command))
+    print(markdown, end="")
+    print(f"wrote {out}.md, {out}.json and {figure}", file=sys.stderr)
+    return 0
