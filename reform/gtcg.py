@@ -121,13 +121,16 @@ def _pair_divergence(
     cells = width * width
     pairs = first.size
     counts = []
+    # Every sample lies within ``reach`` of the midpoint, so ``u / bin_size + half`` is in
+    # (0, width): truncation is the floor, and no bin index needs clipping.
+    cos, sin = cos / bin_size, sin / bin_size
+    base = (np.arange(pairs) * cells)[:, None]
     for who in (first, second):
-        rel = points[who] - middle[:, None, :]  # (pairs, samples, 2)
-        u = cos * rel[..., 0] + sin * rel[..., 1]
-        v = -sin * rel[..., 0] + cos * rel[..., 1]
-        iu = np.clip(np.floor(u / bin_size).astype(np.int64) + half, 0, width - 1)
-        iv = np.clip(np.floor(v / bin_size).astype(np.int64) + half, 0, width - 1)
-        key = (np.arange(pairs)[:, None] * cells + iu * width + iv).ravel()
+        x = points[who, :, 0] - middle[:, 0, None]  # (pairs, samples)
+        y = points[who, :, 1] - middle[:, 1, None]
+        iu = (cos * x + sin * y + half).astype(np.int64)
+        iv = (cos * y - sin * x + half).astype(np.int64)
+        key = (base + iu * width + iv).ravel()
         counts.append(np.bincount(key, minlength=pairs * cells).reshape(pairs, cells))
     p = counts[0] / points.shape[1]
     q = counts[1] / points.shape[1]

@@ -75,7 +75,7 @@ MULTISCALE_RADIUS_M = 0.5  # metres: the same for multi-scale HVFF (chosen likew
 MIN_SHARE = 0.1  # a person backs a centre holding at least this share of their (kernel) votes
 SPACING_M = 1.0  # metres between neighbours on a group's circle (multi-scale; chosen likewise)
 MAX_SIZE = 6  # the largest group size with a scale of its own (multi-scale)
-CANDIDATES = 16  # votes of each person tried as candidate centres
+CANDIDATES = 8  # votes of each person tried as candidate centres
 RANDOM_STATE = 0  # the default seed of the votes' noise
 
 
@@ -205,9 +205,7 @@ class _HoughBase(BaseEstimator):
 
     def _check_common(self) -> dict:
         values = {
-            "samples": check_number(
-                "samples", self.samples, low=CANDIDATES, high=10_000, integer=True
-            ),
+            "samples": check_number("samples", self.samples, low=16, high=10_000, integer=True),
             "position_sd": check_number("position_sd", self.position_sd, low=0.0, high=10.0),
             "orientation_sd": check_number(
                 "orientation_sd", self.orientation_sd, low=0.0, high=np.pi
