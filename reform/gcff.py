@@ -114,6 +114,8 @@ TRIPLE_BYTES = 64  # bytes per (group, person, person) triple of the visibility 
 # ordered pair of people within a group's neighbourhood, O(K·N²) in a dense crowd
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
 _MATMUL_MAX_PEOPLE = 64  # up to this many people, per-label sums by a (small) matrix product
+_SPARSE_PEOPLE = 256  # alpha_expansion on more people evaluates only who a move can relabel
+_ROUNDING = 4 * np.finfo(np.float64).eps  # per term, a generous bound on a sum's rounding
 ORIENTATIONS = ("body", "head")
 # Default tuning grid: the published settings (stride 50-70 cm, mdl 6,000-30,000 cm²) and around.
 STRIDE_GRID_M = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # metres
@@ -208,7 +210,8 @@ def unary_costs(
     costs = dx * dx + dy * dy  # (n, K)
 
     # Neighbourhood entries (k, i), ordered by group then person.
-    group, person = np.nonzero((costs < mdl).T)
+    near = np.ascontiguousarray((costs < mdl).T)
+    group, person = np.divmod(np.flatnonzero(near), labels.size)  # np.nonzero's order, faster
     if group.size == 0:
         return costs
     vx = position[person, 0] - centre_x[group]
@@ -384,6 +387,8 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
     label_cost = float(label_cost)
     if not (np.isfinite(label_cost) and label_cost >= 0.0):
         raise ValueError(f"label_cost must be a finite number >= 0, got {label_cost!r}")
+    if n > _SPARSE_PEOPLE:
+        return _sparse_expansion(unary, labels, label_cost)
     identity = np.eye(k) if n <= _MATMUL_MAX_PEOPLE else np.empty((0, 0))
     label_costs = np.tri(k + 1, k, -1) * label_cost  # [u, j] = label_cost if j < u
     whole = k <= _WINDOW  # evaluate every alpha in column order; scan from the current one
@@ -423,6 +428,111 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
             if stale >= k:
                 break
     return Expansion(labels=labels, energies=tuple(energies), moves=moves)
+
+
+def _sparse_expansion(unary: np.ndarray, labels: np.ndarray, label_cost: float) -> Expansion:
+    """:func:`alpha_expansion` for many people, evaluating only the people a move can relabel.
+
+    The same sweep, windows and decisions as the dense form, with two facts that make a move's
+    work grow with the people near its alpha rather than with everyone:
+
+    * a person ``i`` whom the move of ``alpha`` relabels has ``d_i <= label_cost`` (either
+      ``d_i <= 0``, or their whole label moves, whose positive ``d`` sum to at most
+      ``label_cost``, each at most their sum): the others are never looked at, and a label
+      with such a member never moves whole. The labels' sums are those of the dense form (the
+      same members' values in the same order, summed by the same ``np.add.reduceat``).
+    * a move is kept when its energy, summed term by term in the reference order, is not above
+      the current one. Its exact change is the sum of the moved people's ``d`` and the label
+      costs it opens or closes; where that change is farther from zero than the rounding of the
+      two sums can reach (bounded by ``n + K`` terms' rounding of their absolute sum), the
+      comparison is decided by its sign; only closer calls sum the energy in full.
+    """
+    n, k = unary.shape
+    rows = np.arange(n)
+    cost = unary[rows, labels]  # each person's current cost
+    # reach[a, i]: the move of alpha a may relabel person i (d_i <= label_cost).
+    reach = np.ascontiguousarray((unary - cost[:, None]).T <= label_cost)
+    size = np.bincount(labels, minlength=k)
+    label_costs = np.tri(k + 1, k, -1) * label_cost  # [u, j] = label_cost if j < u
+    current = energy(unary, labels, label_cost=label_cost)
+    energies = [current]
+    terms = n + k
+    alpha = 0
+    stale = 0
+    moves = 0
+    while stale < k:
+        alphas = (alpha + np.arange(min(k, _WINDOW))) % k
+        m = alphas.size
+        used = int(np.count_nonzero(size))
+        entry_alpha, person = np.divmod(np.flatnonzero(reach[alphas]), n)  # by place, person
+        label = labels[person]
+        delta = unary[person, alphas[entry_alpha]] - cost[person]
+        # Per (window place, label) groups, members in person order.
+        key = entry_alpha * k + label
+        order = np.argsort(key, kind="stable")
+        key_sorted = key[order]
+        opens = np.flatnonzero(np.r_[key.size > 0, key_sorted[1:] != key_sorted[:-1]])
+        group_key = key_sorted[opens]
+        group_alpha, group_label = np.divmod(group_key, k)
+        counts = np.diff(np.r_[opens, key.size])
+        sums = np.add.reduceat(np.maximum(delta[order], 0.0), opens) if key.size else delta[:0]
+        take_all = (counts == size[group_label]) & (sums <= label_cost)
+        group_of = np.empty(key.size, dtype=np.intp)
+        group_of[order] = np.repeat(np.arange(opens.size), counts)
+        moved = (delta <= 0.0) | take_all[group_of]
+        moved &= label != alphas[entry_alpha]
+        changed = np.bincount(entry_alpha[moved], minlength=m) > 0
+        closed = np.bincount(group_alpha[take_all], minlength=m)
+        n_used = used - closed + ((size[alphas] > 0) | changed)
+        change = np.bincount(entry_alpha[moved], weights=delta[moved], minlength=m).astype(float)
+        change += label_cost * (n_used - used)
+        spread = np.abs(delta[moved])
+        spread = np.bincount(entry_alpha[moved], weights=spread, minlength=m).astype(float)
+        spread += label_cost * np.abs(n_used - used)
+        total = float(np.abs(cost).sum()) + used * label_cost  # sum of |terms| now
+        slack = _ROUNDING * terms * (2 * total + spread + np.abs(change))
+        changed_list = changed.tolist()
+        change_list = change.tolist()
+        slack_list = slack.tolist()
+        for j, a in enumerate(alphas.tolist()):
+            alpha = (a + 1) % k
+            moves += 1
+            if changed_list[j]:
+                if change_list[j] < -slack_list[j]:
+                    accept = True
+                elif change_list[j] > slack_list[j]:
+                    accept = False
+                else:  # a close call: the energy summed as the reference sums it
+                    mine = entry_alpha == j
+                    accept = (
+                        _moved_energy(unary, cost, person[mine & moved], a, label_costs[n_used[j]])
+                        <= current
+                    )
+                if accept:
+                    who = person[(entry_alpha == j) & moved]
+                    np.subtract.at(size, labels[who], 1)
+                    size[a] += who.size
+                    labels[who] = a
+                    cost[who] = unary[who, a]
+                    reach[:, who] = (unary[who] - cost[who, None]).T <= label_cost
+                    e = float(np.add.accumulate(np.concatenate([cost, label_costs[n_used[j]]]))[-1])
+                    stale = 0 if e < current else stale + 1
+                    current = e
+                    energies.append(current)
+                    break
+            stale += 1  # no change, or rejected because the energy would rise
+            if stale >= k:
+                break
+    return Expansion(labels=labels, energies=tuple(energies), moves=moves)
+
+
+def _moved_energy(
+    unary: np.ndarray, cost: np.ndarray, who: np.ndarray, alpha: int, label_terms: np.ndarray
+) -> float:
+    """The energy after relabelling ``who`` to ``alpha``, summed as the reference sums it."""
+    after = cost.copy()
+    after[who] = unary[who, alpha]
+    return float(np.add.accumulate(np.concatenate([after, label_terms]))[-1])
 
 
 def gcff_labels(
