@@ -19,6 +19,10 @@ first frame of a size.
 GCFF (``Gcff()``, the reference code's settings) is timed on the same frames, median of a
 size's frames (at most `GCFF_FRAMES`).
 
+Both detectors change method with the frame's size (REFORM beyond
+``reform.detector.LARGE_FRAME_PEOPLE`` = 256 people, GCFF's alpha-expansion beyond 256 too), so
+the growth exponents from 200 people span the small frames' path and the crowds'.
+
 Run: ``python benchmarks/bench_crowd.py [--quick] [--sizes 200 500 1000 2000]``
 (``--quick``: 200 and 400 people, two frames each, models trained on 100 frames). Targets
 (issue 31): REFORM at most 50 ms at 1,000 people and 250 ms at 2,000, peak memory under 500
