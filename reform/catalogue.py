@@ -381,6 +381,15 @@ _register(
             "take exp(-1/sigma), the affinity of frustums sharing no bin, off every affinity "
             "(the authors' code keeps it: two people alone in a frame pair up)",
         ),
+        Option(
+            "frames",
+            "int",
+            1,
+            "frames whose affinities are averaged, equal weights: the frame and those before it "
+            "in its sequence (1: per frame)",
+            low=1,
+            high=100,
+        ),
         _seed_option("the frustum samples"),
     ),
     citation=GTCG_CITATION,

@@ -26,8 +26,10 @@ What differs from the authors' MATLAB code, and why:
 * **The replicator dynamics** run until no share moves by more than 1e-9 a step (the code stops
   at a step of 1e-5 in norm, after at most 3,000 steps), so that a share still decaying is not
   counted in a group; the support threshold is the code's (1e-5 of the largest share).
-* The multi-frame variant (affinities of several frames mixed with weights from a linear
-  programme) is not implemented: the detector takes each frame on its own.
+* **The multi-frame variant** (``frames`` > 1) averages the affinities of a frame and of the
+  frames before it with equal weights, the authors' ``EQUAL`` mode; their default weights, from
+  a multi-objective linear programme, are not implemented. The window is taken among the frames
+  given to one ``predict`` call, by sequence and time.
 """
 
 from __future__ import annotations
@@ -198,6 +200,31 @@ def frustum_affinity(
     return affinity
 
 
+def _window_affinity(
+    frames: Sequence[Frame], affinities: list[np.ndarray], k: int, window: int
+) -> np.ndarray:
+    """The affinity of frame ``k`` averaged with equal weights over it and the ``window - 1``
+    frames before it of its sequence in ``frames`` (earlier times only; the authors' ``EQUAL``
+    weights). A pair of frame ``k`` that a past frame lacks counts 0 there, as the authors' code
+    pads missing people with zeros."""
+    frame = frames[k]
+    if window <= 1:
+        return affinities[k]
+    past = [
+        j for j in range(k) if frames[j].sequence == frame.sequence and frames[j].time < frame.time
+    ]
+    past = sorted(past, key=lambda j: frames[j].time)[-(window - 1) :]
+    total = affinities[k].copy()
+    for j in past:
+        rows = {int(i): r for r, i in enumerate(frames[j].ids.tolist())}
+        at = np.array([rows.get(int(i), -1) for i in frame.ids.tolist()], dtype=np.int64)
+        seen = at >= 0
+        block = np.zeros_like(total)
+        block[np.ix_(seen, seen)] = affinities[j][np.ix_(at[seen], at[seen])]
+        total += block
+    return total / (1 + len(past))
+
+
 class Gtcg(BaseEstimator):
     """GTCG detector (Vascon et al. 2016), per frame, on frustum affinities.
 
@@ -214,6 +241,11 @@ class Gtcg(BaseEstimator):
         bin: the side of a square bin of the frustum histograms, metres.
         orientation: ``"head"`` (the paper's, where seen; body yaw where not) or ``"body"``.
         global_context: stop peeling at the first set that is not dominant among everyone.
+        zero_disjoint: take ``exp(-1 / sigma)``, the affinity of frustums sharing no bin, off
+            every affinity.
+        frames: frames whose affinities are averaged (equal weights): the frame and the
+            ``frames - 1`` before it of its sequence among those predicted together; 1 is the
+            per-frame detector.
         random_state: seed of the frustum samples.
     """
 
@@ -228,6 +260,7 @@ class Gtcg(BaseEstimator):
         orientation: str = "body",
         global_context: bool = True,
         zero_disjoint: bool = ZERO_DISJOINT,
+        frames: int = 1,
         random_state: int = RANDOM_STATE,
     ) -> None:
         self.length = length
@@ -238,6 +271,7 @@ class Gtcg(BaseEstimator):
         self.orientation = orientation
         self.global_context = global_context
         self.zero_disjoint = zero_disjoint
+        self.frames = frames
         self.random_state = random_state
 
     def _validate(self) -> dict:
@@ -247,6 +281,7 @@ class Gtcg(BaseEstimator):
             "samples": check_number("samples", self.samples, low=10, high=100_000, integer=True),
             "sigma": check_number("sigma", self.sigma, low=0.0, high=100.0, open_low=True),
             "bin": check_number("bin", self.bin, low=0.0, high=100.0, open_low=True),
+            "frames": check_number("frames", self.frames, low=1, high=100, integer=True),
             "random_state": check_number(
                 "random_state", self.random_state, low=0, high=2**32 - 1, integer=True
             ),
@@ -272,9 +307,9 @@ class Gtcg(BaseEstimator):
             length=values["length"],
             aperture=np.deg2rad(values["aperture"]),
         )
-        out = []
-        for frame in check_frames(frames):
-            affinity = frustum_affinity(
+        frames = check_frames(frames)
+        affinities = [
+            frustum_affinity(
                 frame.position,
                 orientation_of(frame, self.orientation),
                 local=local,
@@ -282,6 +317,11 @@ class Gtcg(BaseEstimator):
                 bin_size=values["bin"],
                 zero_disjoint=bool(self.zero_disjoint),
             )
+            for frame in frames
+        ]
+        out = []
+        for k, frame in enumerate(frames):
+            affinity = _window_affinity(frames, affinities, k, values["frames"])
             labels = dominant_set_labels(affinity, global_context=bool(self.global_context))
             out.append(labels_to_partition(frame.ids, labels))
         return out

@@ -95,6 +95,34 @@ def test_two_people_apart_pair_up_unless_disjoint_frustums_count_zero():
     assert Gtcg(zero_disjoint=True).predict([scene]) == [((1,), (2,))]
 
 
+def test_several_frames_average_the_affinities_of_the_past():
+    # Hand-computed, with zero_disjoint (frustums sharing no bin count 0). At t = 0, 1 and 2
+    # face each other 1.2 m apart (a positive affinity); at t = 1, 2 stands 10 m away and 4,
+    # absent before, 20 m away: every frustum is disjoint, every affinity 0, everyone alone.
+    # Averaged over both frames (frames=2), 1 and 2 keep half their t = 0 affinity and nobody
+    # else has any: at t = 1 they are a pair. A frame of another sequence is not mixed in.
+    before = Frame(
+        ids=[1, 2, 3],
+        position=[[0, 0], [1.2, 0], [30, 0]],
+        yaw=[0.0, np.pi, 0.0],
+        time=0.0,
+        sequence="s",
+    )
+    after = Frame(
+        ids=[1, 2, 3, 4],
+        position=[[0, 0], [10, 0], [30, 0], [20, 0]],
+        yaw=[0.0, np.pi, 0.0, 0.0],
+        time=1.0,
+        sequence="s",
+    )
+    other = after.replace(sequence="t")
+    alone = ((1,), (2,), (3,), (4,))
+    assert Gtcg(zero_disjoint=True).predict([before, after])[1] == alone
+    both = Gtcg(zero_disjoint=True, frames=2).predict([before, after, other])
+    assert both[1] == ((1, 2), (3,), (4,))
+    assert both[2] == alone
+
+
 def test_a_missing_head_falls_back_to_the_body():
     scene = frame([[0, 0], [1.2, 0], [20, 0]], [0.0, np.pi, 0.0], head_yaw=[np.nan, np.nan, 0.0])
     assert Gtcg(sigma=0.2, orientation="head").predict([scene]) == [((1, 2), (3,))]
