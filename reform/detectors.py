@@ -131,15 +131,16 @@ class Option:
 
     def expects(self) -> str:
         """What the option accepts: ``"a float in m from 0.01 to 10"``."""
-        text = f"a {self.type}" + (f" in {self.unit}" if self.unit else "")
+        article = "an" if self.type == "int" else "a"
+        text = f"{article} {self.type}" + (f" in {self.unit}" if self.unit else "")
         if self.choices:
             return f"{text}, one of {', '.join(self.choices)}"
         if self.low is not None and self.high is not None:
-            return f"{text} from {self.low:g} to {self.high:g}"
+            return f"{text} from {_number(self.low)} to {_number(self.high)}"
         if self.low is not None:
-            return f"{text} of at least {self.low:g}"
+            return f"{text} of at least {_number(self.low)}"
         if self.high is not None:
-            return f"{text} of at most {self.high:g}"
+            return f"{text} of at most {_number(self.high)}"
         return text
 
     def describe(self) -> str:
@@ -193,6 +194,13 @@ class Option:
             f"detector {detector!r}: option {self.name} expects {self.expects()}, "
             f"got {_describe(value)}"
         )
+
+
+def _number(value: float) -> str:
+    """A bound as people write it: ``0.01``, ``10``, ``1,048,576``."""
+    if float(value).is_integer() and abs(value) < 1e15:
+        return f"{int(value):,}"
+    return f"{value:g}"
 
 
 def _parse_bool(text: str) -> bool:

@@ -3,6 +3,9 @@
 * ``reference/cli.md``: every ``reform-sim`` subcommand, walked from the parser that the command
   builds (`sim.cli.build_parser`, each subcommand's arguments from ``sim/cli/_NAME.py``), so the
   page cannot drift from ``--help``.
+* ``detectors/index.md``: the detector catalogue (`reform.catalogue`), every name with what it
+  is, its options as declared (type, unit, range, default), what it needs and its citation, so
+  the page cannot drift from ``--help`` either.
 * ``reference/api/PACKAGE.md``: one mkdocstrings entry per public name of each package's
   ``__all__``, pointed at the module that defines it (the packages load their names lazily,
   which a static reader cannot follow).
@@ -30,11 +33,64 @@ API_PACKAGES = {
 
 def on_files(files: Files, config) -> Files:
     files.append(File.generated(config, "reference/cli.md", content=cli_markdown()))
+    files.append(File.generated(config, "detectors/index.md", content=catalogue_markdown()))
     for package in API_PACKAGES:
         files.append(
             File.generated(config, f"reference/api/{package}.md", content=api_markdown(package))
         )
     return files
+
+
+# --- the detector catalogue ----------------------------------------------------------------------
+
+_NEEDS = {
+    "": "nothing",
+    "dataset": "the dataset it runs on",
+    "training": "annotated training frames",
+}
+
+
+def catalogue_markdown() -> str:
+    from pathlib import Path
+
+    from reform.detectors import builtin_names, detector_info, detector_names
+
+    pages = Path(__file__).resolve().parents[1] / "detectors"
+    lines = [
+        "# The detector catalogue",
+        "",
+        "Every detector the project ships, by the one name each command knows it by "
+        "(`--detector NAME` of `evaluate`, `detect`, `benchmark`, `stress`, `tune`; "
+        "`reform.make_detector(NAME, **options)`), generated from the catalogue "
+        "(`reform/catalogue.py`) when this site is built. Options are set with `--option "
+        "NAME=VALUE` or a settings file (`--settings FILE.json`) and checked against the "
+        "range below; `benchmark --detector all` and `stress --detector all` run every "
+        "detector that needs no model file ("
+        + ", ".join(f"`{n}`" for n in builtin_names())
+        + ").",
+        "",
+        "| name | what it is | options | needs before it predicts | paper |",
+        "|---|---|---|---|---|",
+    ]
+    for name in detector_names():
+        info = detector_info(name)
+        if info.source != "built-in":
+            continue
+        page = pages / f"{name}.md"
+        shown = f"[`{name}`]({name}.md)" if page.is_file() else f"`{name}`"
+        options = "<br>".join(_cell(o.describe()) for o in info.options) or "none"
+        lines.append(
+            f"| {shown} | {_cell(info.help)} | {options} | {_NEEDS[info.needs]} | "
+            f"{_cell(info.citation) or '–'} |"
+        )
+    lines += [
+        "",
+        "Your own detector joins the catalogue with one `register_detector` call (or an entry "
+        "point), its options declared the same way: see [Adding a detector]"
+        "(../guide/extending.md).",
+        "",
+    ]
+    return "\n".join(lines)
 
 
 # --- the command line ---------------------------------------------------------------------------
