@@ -6,6 +6,7 @@ import os
 import sys
 from pathlib import Path
 
+import leftover_processes
 import pytest
 
 # Offscreen rendering (sim.camera) on a headless machine: EGL, chosen before mujoco is imported.
@@ -79,6 +80,26 @@ def gcff_reference_dir(shared_datasets: Path) -> Path:
             pytest.fail(message)
         pytest.skip(message)
     return path
+
+
+@pytest.fixture(scope="session", autouse=True)
+def no_process_left_running():
+    """A test run leaves no process it started alive: when the last test has finished and the
+    helpers that end with the interpreter are stopped (`leftover_processes.end_helpers`: the test
+    Ray instance, reusable worker pools), any process the run started that is still running after
+    `leftover_processes.GRACE_S` fails the run, each named by its id and command line, and is
+    then stopped (Linux: the orphans of stopped parents are counted too, see
+    `leftover_processes`)."""
+    watching = leftover_processes.adopt_orphans()
+    yield
+    if not watching:
+        return
+    leftover_processes.end_helpers()
+    left = leftover_processes.left_running()
+    if left:
+        leftover_processes.stop(left)
+        lines = "\n".join(f"  {process}" for process in left)
+        pytest.fail(f"the test run left {len(left)} process(es) it started running:\n{lines}")
 
 
 # The local Ray instance of the tests: 2 CPUs, as this machine has.
