@@ -75,11 +75,12 @@ SHAPE_CHOICES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
         "unevenness": (0.0, 0.5, 1.0),  # how unevenly members spread round the o-space
         "alone_share": (0.08, 0.25, 0.5),  # share of people alone at the start
         "arrangements": (0.0, 0.5),  # share of groups side by side or presenter and audience
+        "orientation_noise": (0.35, 0.7, 1.0),  # radians: how far people face off the centre
     }
 )
 SHAPE_STATISTIC = (
     "spacing shape: nearest-neighbour q10, q25, q75, q90, 2nd and 3rd nearest over the median "
-    "nearest neighbour, share standing apart"
+    "nearest neighbour, share standing apart, facing away from the nearest (median, q75, rad)"
 )
 
 
@@ -147,6 +148,30 @@ def _simulate(options: dict[str, Any], *, seed: int, rate: float) -> tuple[list[
     )
 
 
+def _room_for_every_episode(
+    options: Mapping[str, Any], *, seed: int, episodes: int
+) -> dict[str, Any]:
+    """``options`` with a room every episode of the twin's data fits (each episode's party is
+    drawn, not simulated; the room grows by `ROOM_GROWTH` until all fit)."""
+    import scenarios
+    from scenarios.mingle import NoFloorError
+    from sim.generate import episode_seed
+
+    options = dict(options)
+    for _ in range(ROOM_TRIES):
+        try:
+            for k in range(max(episodes, MIN_EPISODES)):
+                scenarios.make(SCENARIO, seed=episode_seed(seed, k), **options)
+            return options
+        except NoFloorError:
+            side = _room_for(options["people"], options["room_side"] * ROOM_GROWTH)
+            options["room_side"] = float(f"{side:.6g}")
+    raise TwinInputError(
+        f"twin: field options.room_side: expected a room every episode fits, found none up to "
+        f"{options['room_side']:.3g} m"
+    )
+
+
 def _sample(
     options: Mapping[str, Any], annotation: AnnotationModel, *, seed: int, rate: float
 ) -> list[Frame]:
@@ -162,9 +187,11 @@ def twin_sample(twin: Twin) -> list[Frame]:
 
 def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
     """How far two `spacing_shape` signatures are: squared log ratios of the six distance
-    ratios, plus the squared difference of the shares standing apart (times 4)."""
+    ratios, plus the squared differences of the shares standing apart (times 4) and of the
+    facing angles (radians)."""
     ratios = np.log(np.maximum(twin[:6], 1e-6) / np.maximum(real[:6], 1e-6))
-    return float(np.sum(ratios**2) + 4.0 * (twin[6] - real[6]) ** 2)
+    facing = twin[7:9] - real[7:9]
+    return float(np.sum(ratios**2) + 4.0 * (twin[6] - real[6]) ** 2 + np.sum(facing**2))
 
 
 def _fit_spacing_shape(
@@ -174,6 +201,7 @@ def _fit_spacing_shape(
     the pilot's `spacing_shape` closest to the recording's) on a room sized once for the
     recording's crowding."""
     target = spacing_shape(frames)
+    coding = AnnotationModel(directions=real.directions or None)  # yaws as the recording codes
     options = dict(options)
     if not np.all(np.isfinite(target)):
         return options, {}
@@ -189,7 +217,7 @@ def _fit_spacing_shape(
         for value in choices:
             trial = {**options, key: value, "duration": PILOT_S}
             sim_frames, _ = _simulate(trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
-            signature = spacing_shape(sim_frames)
+            signature = spacing_shape(coding.apply(sim_frames, derive_rng(seed, SHAPE)))
             scores.append((_shape_distance(target, signature), signature))
         k = min(range(len(choices)), key=lambda j: scores[j][0])
         options[key] = choices[k]
@@ -323,6 +351,7 @@ def fit_twin(
     import scenarios
 
     options = scenarios.registry.check_options(SCENARIO, options)
+    options = _room_for_every_episode(options, seed=seed, episodes=episodes)
     mine = measure_place(_sample(options, annotation, seed=seed, rate=rate))
 
     fitted = _fitted(real, mine, options, annotation, rate, episodes, shape) + tuple(

@@ -105,9 +105,10 @@ def nearest_neighbour_distances(frames: Sequence[Frame]) -> np.ndarray:
 def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
     """How people stand relative to their spacing, free of the unit: the 10, 25, 75 and 90 %
     quantiles of the nearest-neighbour distance and the medians of the second and third nearest,
-    each over the median nearest-neighbour distance, and the share of people whose nearest
-    neighbour is more than 1.5 medians away (standing apart). (7,)."""
-    near = []
+    each over the median nearest-neighbour distance, the share of people whose nearest
+    neighbour is more than 1.5 medians away (standing apart), and the median and 75 % quantile
+    of how far each person faces away from their nearest neighbour (radians, in [0, pi]). (9,)."""
+    near, facing = [], []
     for frame in frames:
         if frame.n_people < 4:
             continue
@@ -115,14 +116,17 @@ def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
         d = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1])
         np.fill_diagonal(d, np.inf)
         near.append(np.sort(d, axis=1)[:, :3])
+        to = p[np.argmin(d, axis=1)] - p
+        facing.append(np.abs(wrap_angle(np.arctan2(to[:, 1], to[:, 0]) - frame.yaw)))
     if not near:
-        return np.full(7, np.nan)
+        return np.full(9, np.nan)
     k = np.concatenate(near)
     median = float(np.median(k[:, 0]))
     quantiles = np.quantile(k[:, 0], [0.1, 0.25, 0.75, 0.9]) / median
+    away = np.concatenate(facing)
     return np.array(
         [*quantiles, np.median(k[:, 1]) / median, np.median(k[:, 2]) / median,
-         float(np.mean(k[:, 0] > 1.5 * median))]
+         float(np.mean(k[:, 0] > 1.5 * median)), np.median(away), np.quantile(away, 0.75)]
     )  # fmt: skip
 
 

@@ -48,11 +48,13 @@ def _frames(*, n_frames: int = 24, people: int = 6, scale: float = 1.0, seed: in
     return frames
 
 
-def _json(twin) -> str:
-    return json.dumps(twin.to_json(), indent=2)
+@pytest.fixture(scope="module")
+def fitted():
+    """A twin of ``_frames(scale=1.5)`` and its file's bytes (fitted once for the module)."""
+    return fit_twin(_frames(scale=1.5), name="place")
 
 
-def test_a_twin_never_reads_the_groups():
+def test_a_twin_never_reads_the_groups(tmp_path):
     frames = _frames()
     removed = [f.replace(groups=None) for f in frames]
     rng = np.random.default_rng(0)
@@ -60,34 +62,29 @@ def test_a_twin_never_reads_the_groups():
     for f in frames:
         ids = rng.permutation(f.ids)
         shuffled.append(f.replace(groups=(tuple(ids[:2].tolist()), tuple(ids[2:5].tolist()))))
-    texts = {_json(fit_twin(fs, name="place")) for fs in (frames, removed, shuffled)}
-    assert len(texts) == 1
+    files = [
+        write_twin(fit_twin(fs, name="place"), tmp_path / f"{k}.json")
+        for k, fs in enumerate((frames, removed, shuffled))
+    ]
+    assert len({f.read_bytes() for f in files}) == 1  # same frames, same seed: same bytes
+    assert read_twin(files[0]).to_json() == json.loads(files[0].read_text())  # round trip
 
 
-def test_use_labels_is_a_mode_of_its_own():
-    frames = _frames()
-    twin = fit_twin(frames, name="place", use_labels=True)
-    assert twin.mode == "labels"
+def test_use_labels_is_a_mode_of_its_own(fitted):
+    twin = fit_twin(_frames(scale=1.5), name="place", use_labels=True)
+    assert twin.mode == "labels" and fitted.mode == "label-free"
     assert "options.alone_share" in [f.name for f in twin.fitted]
-    assert fit_twin(frames, name="place").mode == "label-free"
+    assert twin.options["radius_base"] != fitted.options["radius_base"]  # fitted on the groups
 
 
-def test_a_twin_matches_the_recording_it_is_fitted_to():
-    frames = _frames(scale=1.5)
-    twin = fit_twin(frames, name="place")
-    real = measure_place(frames)
-    assert twin.options["people"] == 6
-    assert twin.annotation.directions == 8  # the recording's coding, found
-    assert twin.rate_hz == pytest.approx(1.0)
-    twin_nn = twin.statistics["twin"]["nn_median"]
-    assert twin_nn == pytest.approx(real.nn_median, rel=0.35)
-
-
-def test_the_same_seed_gives_the_same_twin_and_file(tmp_path):
-    a = write_twin(fit_twin(_frames(), name="place", seed=5), tmp_path / "a.json")
-    b = write_twin(fit_twin(_frames(), name="place", seed=5), tmp_path / "b.json")
-    assert a.read_bytes() == b.read_bytes()
-    assert read_twin(a).to_json() == json.loads(a.read_text())  # round trip
+def test_a_twin_matches_the_recording_it_is_fitted_to(fitted):
+    real = measure_place(_frames(scale=1.5))
+    assert fitted.options["people"] == 6
+    assert fitted.annotation.directions == 8  # the recording's coding, found
+    assert fitted.rate_hz == pytest.approx(1.0)
+    assert fitted.statistics["twin"]["nn_median"] == pytest.approx(real.nn_median, rel=0.35)
+    fields = {f.name for f in fitted.fitted}
+    assert {"options.people", "annotation.scale", "options.spacing"} <= fields
 
 
 @pytest.mark.parametrize(
@@ -114,8 +111,8 @@ def test_bad_recordings_are_refused_before_any_work(frames, message):
 
 
 @pytest.fixture(scope="module")
-def twin_file(tmp_path_factory) -> Path:
-    return write_twin(fit_twin(_frames(), name="place"), tmp_path_factory.mktemp("t") / "t.json")
+def twin_file(fitted, tmp_path_factory) -> Path:
+    return write_twin(fitted, tmp_path_factory.mktemp("t") / "t.json")
 
 
 @pytest.mark.parametrize(

@@ -68,3 +68,17 @@ def test_generate_refuses_a_nonsense_twin_in_one_line(twin_file, tmp_path, capsy
     line = cli_error(["generate", "--twin", bad, "--out", tmp_path / "d"], capsys)
     assert f"{bad}: field version: expected 1" in line
     assert not (tmp_path / "d").exists()
+
+
+def test_the_annotations_fixed_scale_multiplies_every_position_and_stays_off_old_cards():
+    import numpy as np
+
+    from reform.annotation import AnnotationModel
+
+    frames = _frames(n_frames=3)
+    out = AnnotationModel(scale=2.0).apply(frames, np.random.default_rng(0))
+    assert np.array_equal(out[1].position, 2.0 * frames[1].position)  # exactly, no draw
+    assert "scale" not in AnnotationModel(directions=4).to_json()  # cards of before keep bytes
+    assert AnnotationModel(scale=0.5).to_json()["scale"] == 0.5
+    with pytest.raises(ValueError, match=r"annotation scale must be a finite number > 0, got 0"):
+        AnnotationModel(scale=0)
