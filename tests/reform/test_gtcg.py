@@ -146,7 +146,7 @@ def test_the_same_answer_twice_and_for_one_seed():
     [
         ("sigma", -1, "a float from 0.001 to 100, got a int (-1)"),
         ("bin", 0.0, "a float in m from 0.01 to 100, got a float (0.0)"),
-        ("samples", 2.5, "a int from 10 to 100000, got a float (2.5)"),
+        ("samples", 2.5, "an int from 10 to 100,000, got a float (2.5)"),
     ],
 )
 def test_options_out_of_range_are_one_line(option, value, expected):

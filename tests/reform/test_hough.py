@@ -139,7 +139,7 @@ def test_one_seed_one_answer(cls):
     [
         ("hvff", "radius", -1, "a float in m from 0.01 to 10, got a int (-1)"),
         ("hvff", "min_share", 1.5, "a float from 0.01 to 1, got a float (1.5)"),
-        ("hvff-multiscale", "max_size", 1, "a int from 2 to 20, got a int (1)"),
+        ("hvff-multiscale", "max_size", 1, "an int from 2 to 20, got a int (1)"),
         ("hvff-multiscale", "spacing", "wide", "a float in m from 0.01 to 100, got a str ('wide')"),
     ],
 )
