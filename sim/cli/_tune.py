@@ -13,8 +13,9 @@ twin's labelled synthetic data (generated first into --twin-data, default twin-d
 twin.json, and reused): every setting of the grids the detector declares (GCFF: stride x mdl)
 scored by F1 at T = 2/3, the best kept; REFORM is trained on the twin (each of the paper's
 classifiers trained on half the episodes and scored on the others, the best trained on all).
-Writes a settings file (JSON: the detector, its options, the grid's scores) or, for REFORM, a
-model file (.skops) that `detect`, `evaluate` and `benchmark` take with --model.
+Writes a settings file (JSON, reform.settings: the detector, its options, the grid's scores)
+that `detect` and `evaluate` take with --settings FILE.json or, for REFORM, a model file (.skops)
+that `detect`, `evaluate` and `benchmark` take with --model.
 """
 
 

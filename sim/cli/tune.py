@@ -14,7 +14,7 @@ from sim.cli._common import check_output
 def _run(args: argparse.Namespace) -> int:
     from sim.twins import read_twin, twin_data
     from sim.twins.data import DATA_FOLDER
-    from sim.twins.tune import REFORM, check_tunable, tune_detector, write_settings
+    from sim.twins.tune import REFORM, check_tunable, tune_detector, write_tuned
 
     twin = read_twin(args.twin)  # a nonsense twin or detector is one line, before any work
     name = check_tunable(args.detector)
@@ -30,8 +30,9 @@ def _run(args: argparse.Namespace) -> int:
         save_model(tuned.model, out)
         use = f"--detector reform --model {shlex.quote(str(out))}"
     else:
-        write_settings(out, tuned, chosen_on={"twin": str(args.twin), "twin_data": str(folder)})
-        use = " ".join(f"--{k} {v}" for k, v in tuned.options.items())
+        chosen_on = {"twin": str(args.twin), "twin_data": str(folder), "labels read": "none"}
+        write_tuned(out, tuned, chosen_on=chosen_on)
+        use = f"--detector {name} --settings {shlex.quote(str(out))}"
     chosen = ", ".join(f"{k}={v}" for k, v in tuned.options.items()) or (
         "REFORM "
         + str(
@@ -44,5 +45,5 @@ def _run(args: argparse.Namespace) -> int:
         f"{name} on the twin of {twin.name}: {chosen} (F1 at T=2/3 on the twin "
         f"{100 * tuned.f1:.1f}, {len(tuned.grid)} settings, {tuned.frames} frames); wrote {out}"
     )
-    print(f"use: reform-sim detect --detector {name} {use} --data DATASET --out groups.json")
+    print(f"use: reform-sim detect {use} --data DATASET --out groups.json")
     return 0

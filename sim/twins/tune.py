@@ -6,19 +6,14 @@ defaults) and keeps the setting with the best F1 at T = 2/3 on the twin's frames
 trained on the twin instead: each of the paper's classifiers is trained on half of the twin's
 episodes and scored on the other half, and the best is trained again on every episode.
 
-The settings file (`write_settings`, `read_settings`) is JSON::
-
-    {"format": "reform-sim detector settings", "version": 1, "detector": "gcff",
-     "options": {"stride": 0.6, "mdl": 1.5}, "chosen_on": {...}, "grid": [...]}
-
-``options`` are the detector's own keyword arguments, as `reform.make_detector` takes them;
-`read_settings` returns ``(detector, options)`` for any command that builds detectors.
+The choice is written as a settings file of `reform.settings` (JSON: the detector, its
+options, and beside them on what they were chosen and every setting's score), which
+``detect``, ``evaluate`` and ``benchmark`` read with ``--settings FILE.json``.
 """
 
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -29,34 +24,23 @@ from typing import Any
 
 import numpy as np
 
-from reform.atomic import atomic_open
 from reform.frame import Frame
 
 __all__ = [
-    "SETTINGS_FORMAT",
-    "SETTINGS_VERSION",
-    "SettingsError",
     "Tuned",
     "check_tunable",
     "detector_f1",
-    "read_settings",
     "search_grid",
     "tune_detector",
     "tuning_frames",
-    "write_settings",
+    "write_tuned",
 ]
 
-SETTINGS_FORMAT = "reform-sim detector settings"
-SETTINGS_VERSION = 1
 TUNE_FRAMES = 300  # frames of the twin each grid setting is scored on at most (spread out)
 MIN_TUNE_FRAMES = 60  # ... and at least
 TUNE_BUDGET = 12_000  # frames scored in all, over the grid: a larger grid scores fewer frames each
 THRESHOLD = Fraction(2, 3)  # the objective: F1 at T = 2/3, the field's protocol
 REFORM = "reform"
-
-
-class SettingsError(ValueError):
-    """A settings file that cannot be used: one line naming file, field, expected, found."""
 
 
 @dataclass(frozen=True)
@@ -216,64 +200,21 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def write_settings(
+def write_tuned(
     path: str | os.PathLike[str], tuned: Tuned, *, chosen_on: Mapping[str, Any]
 ) -> Path:
-    """Writes the settings file (atomically) of ``tuned``; ``chosen_on`` says on what."""
-    data = {
-        "format": SETTINGS_FORMAT,
-        "version": SETTINGS_VERSION,
-        "detector": tuned.detector,
-        "options": {k: _plain(v) for k, v in tuned.options.items()},
-        "chosen_on": dict(chosen_on)
+    """Writes ``tuned`` as a `reform.settings` file: its options, and beside them ``chosen_on``
+    (what the choice saw), the objective and every setting's score."""
+    from reform.settings import write_settings
+
+    return write_settings(
+        path,
+        tuned.detector,
+        tuned.options,
+        chosen_on=dict(chosen_on)
         | {"frames": tuned.frames, "objective": "F1 at T = 2/3", "f1": _plain(tuned.f1)},
-        "grid": [
+        grid=[
             {"options": {k: _plain(v) for k, v in g["options"].items()}, "f1": _plain(g["f1"])}
             for g in tuned.grid
         ],
-    }
-    path = Path(path)
-    with atomic_open(path, "w", encoding="utf-8") as handle:
-        handle.write(json.dumps(data, indent=2) + "\n")
-    return path
-
-
-def read_settings(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
-    """``(detector, options)`` from a settings file written by `write_settings`, each option
-    checked against the detector's declaration (`reform.detectors.Option.check`).
-
-    Raises:
-        SettingsError: one line naming the file, the field, what was expected and what came.
-    """
-    from reform.detectors import DetectorError, detector_info, detector_names
-
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SettingsError(f"{path}: no such settings file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SettingsError(f"{path}: expected a settings file (JSON), found: {exc}") from None
-
-    def fail(name: str, expected: str, found: Any) -> SettingsError:
-        return SettingsError(f"{path}: field {name}: expected {expected}, found {found!r}")
-
-    if not isinstance(data, dict) or data.get("format") != SETTINGS_FORMAT:
-        found = data.get("format") if isinstance(data, dict) else data
-        raise fail("format", repr(SETTINGS_FORMAT), found)
-    if data.get("version") != SETTINGS_VERSION:
-        raise fail("version", str(SETTINGS_VERSION), data.get("version"))
-    name = data.get("detector")
-    if name not in detector_names():
-        raise fail("detector", f"a catalogued detector {list(detector_names())}", name)
-    options = data.get("options")
-    if not isinstance(options, dict):
-        raise fail("options", "an object of the detector's options", options)
-    info = detector_info(name)
-    checked = {}
-    for key, value in options.items():
-        try:
-            checked[key] = info.option(key).check(name, value)
-        except DetectorError as exc:
-            raise SettingsError(f"{path}: field options.{key}: {exc}") from None
-    return name, checked
+    )

@@ -8,8 +8,8 @@ import json
 import pytest
 
 from reform.persistence import load_model
+from reform.settings import read_settings
 from sim.twins import fit_twin, write_twin
-from sim.twins.tune import SettingsError, read_settings
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
@@ -29,9 +29,10 @@ def test_tune_gcff_writes_the_best_setting_of_its_grid(twin_file, capsys):
     assert len(data["grid"]) == 49  # stride x mdl, as the catalogue declares them
     best = max(data["grid"], key=lambda g: g["f1"])
     assert data["options"] == best["options"]
-    name, options = read_settings(path)
-    assert name == "gcff" and set(options) == {"stride", "mdl"}
-    assert f"--stride {options['stride']:g}" in out.replace(".0 ", " ")
+    settings = read_settings(path)
+    assert settings.detector == "gcff" and set(settings.options) == {"stride", "mdl"}
+    assert settings.about["chosen_on"]["labels read"] == "none"
+    assert f"--detector gcff --settings {path}" in out
 
 
 def test_tune_reform_trains_on_the_twin_and_writes_a_model(twin_file, tmp_path, capsys):
@@ -54,12 +55,17 @@ def test_tune_refuses_what_it_cannot_tune_in_one_line(twin_file, capsys, detecto
     assert message in cli_error(["tune", "--twin", twin_file, "--detector", detector], capsys)
 
 
-def test_a_settings_file_edited_into_nonsense_is_one_line(tmp_path):
-    path = tmp_path / "s.json"
-    path.write_text(json.dumps({"format": "reform-sim detector settings", "version": 1,
-                                "detector": "gcff", "options": {"stride": -3}}))  # fmt: skip
-    with pytest.raises(SettingsError, match=r"s\.json: field options\.stride: .*stride"):
-        read_settings(path)
-    path.write_text(json.dumps({"format": "reform-sim detector settings", "version": 2}))
-    with pytest.raises(SettingsError, match=r"field version: expected 1, found 2"):
-        read_settings(path)
+def test_detect_takes_the_settings_file_as_it_is(twin_file, tmp_path, capsys):
+    from reform.datasets import write_parquet
+    from reform.frame import Dataset
+
+    settings = twin_file.parent / "tuned-gcff.json"
+    if not settings.exists():
+        assert run_cli(["tune", "--twin", twin_file, "--detector", "gcff", "-q"], capsys)[0] == 0
+    data = tmp_path / "place.parquet"
+    write_parquet(Dataset(tuple(_frames()), name="place"), data)
+    argv = ["detect", "--detector", "gcff", "--settings", settings, "--data", data,
+            "--out", tmp_path / "groups.json"]  # fmt: skip
+    status, _, err = run_cli(argv, capsys)
+    assert status == 0, err
+    assert json.loads((tmp_path / "groups.json").read_text())
