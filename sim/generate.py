@@ -958,24 +958,38 @@ def _committed_shards(
 
 @contextlib.contextmanager
 def _folder_lock(out_dir: Path) -> Iterator[None]:
-    """Holds an exclusive lock on the folder (POSIX), refusing a second concurrent run."""
+    """Holds an exclusive lock on the folder (POSIX), refusing a second concurrent run.
+
+    The lock file is removed when the run ends: its holder deletes it before letting go, and a
+    run that locked a file deleted meanwhile (by a run that just ended) locks the new one, so two
+    runs never hold two files.
+    """
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX: no lock
         yield
         return
     out_dir.mkdir(parents=True, exist_ok=True)
-    with open(out_dir / LOCK_FILE, "a+", encoding="utf-8") as handle:
+    path = out_dir / LOCK_FILE
+    while True:
+        handle = open(path, "a+", encoding="utf-8")
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
+            handle.close()
             raise ValueError(
                 f"out_dir {out_dir} is being written by another reform-sim generate run; wait "
                 "for it to finish or use another folder"
             ) from None
+        with contextlib.suppress(FileNotFoundError):
+            if os.path.samestat(os.fstat(handle.fileno()), os.stat(path)):
+                break
+        handle.close()  # deleted by a run that ended meanwhile: lock the new file
+    with handle:
         try:
             yield
         finally:
+            path.unlink(missing_ok=True)
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 

@@ -374,7 +374,17 @@ def test_a_folder_being_written_by_another_run_is_refused(tmp_path):
         fcntl.flock(handle, fcntl.LOCK_EX)
         with pytest.raises(ValueError, match=r"being written by another reform-sim generate run"):
             generate(out, episodes=1, duration=5.0)
+        assert (out / ".generate.lock").exists()  # the other run's, left as it is
     assert not list(out.glob("**/*.parquet"))
+
+
+def test_a_run_removes_its_lock_and_one_a_killed_run_left(tmp_path):
+    out = tmp_path / "data"
+    out.mkdir()
+    (out / ".generate.lock").touch()  # a killed run's: nobody holds it
+    report = generate(out, episodes=1, duration=5.0)
+    assert report.generated == (0,)
+    assert sorted(p.name for p in out.iterdir()) == [CARD_MARKDOWN, "data", CARD_JSON]
 
 
 def test_command_line_errors_are_one_line(tmp_path, capsys):
