@@ -13,6 +13,8 @@ from site_pages import DOCS, NEEDS_DATASETS, RUNNABLE_PAGES, blocks, page_script
 # Sizes in the tutorials are small: a page runs in well under a minute on two shared cores.
 PAGE_TIMEOUT_S = 600
 DATASETS_ENV = "REFORM_SIM_DATASETS"
+# Recordings a page tells the reader to open, and entities each must hold.
+PAGE_RECORDINGS = {"tutorials/gymnasium-loop.md": ("runs/*.rrd", ("people", "groups"))}
 
 
 def _run_page(text: str, folder: Path, *, datasets: Path | None) -> subprocess.CompletedProcess:
@@ -45,6 +47,20 @@ def test_every_block_of_the_page_runs(page, tmp_path, request):
     )
     ran = done.stderr.count("--- line ")
     assert ran == sum(b.runs for b in blocks(text)) > 0
+    if page in PAGE_RECORDINGS:
+        pattern, holds = PAGE_RECORDINGS[page]
+        recordings = sorted(tmp_path.glob(pattern))
+        assert recordings, f"{page}: the blocks wrote no {pattern}"
+        for path in recordings:
+            entities = _entities(path)
+            assert all(any(part in e for e in entities) for part in holds), (path, entities)
+
+
+def _entities(path: Path) -> set[str]:
+    """The entity paths a recording holds, read back from the file."""
+    from rerun.chunk import RrdReader
+
+    return {str(chunk.entity_path) for chunk in RrdReader(path).stream().collect().stream()}
 
 
 @pytest.mark.parametrize("page", RUNNABLE_PAGES)
