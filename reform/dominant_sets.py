@@ -49,7 +49,7 @@ __all__ = [
 
 SIGMA_M = 1.4  # metres: the Gaussian's width (chosen on SALSA, Babble and CoffeeBreak)
 FIELD_OF_VIEW_RAD = 3.84  # radians (about 220°): the whole field of view (chosen likewise)
-RD_TOL = 1e-9  # largest change of any share over one step at which the dynamics have settled
+RD_TOL = 1e-9  # largest change of any share over 32 steps at which the dynamics have settled
 RD_MAX_STEPS = 20_000  # steps of the replicator dynamics at most (the GTCG code: 3,000)
 SUPPORT = 1e-5  # a share above SUPPORT * the largest share is in the set (the GTCG code's theta)
 _BLOCK = 32  # steps between convergence checks (a speed setting; results do not depend on it)
@@ -60,7 +60,7 @@ _DOMINANCE_TOL = 1e-9  # relative slack on (A x)_i >= x'Ax, against rounding
 def replicator_dynamics(payoff: npt.ArrayLike) -> np.ndarray:
     """The replicator dynamics ``x_i <- x_i (Ax)_i / x'Ax`` run from the simplex's centre.
 
-    Runs until no share changes by more than :data:`RD_TOL` in a step (or
+    Runs until no share changes by more than :data:`RD_TOL` over 32 steps (or
     :data:`RD_MAX_STEPS`). Shares that fall below ``1e-14`` of the largest are set to zero for
     good, which keeps the work on the few people who matter.
 

@@ -23,9 +23,10 @@ What differs from the authors' MATLAB code, and why:
   state. Here one set of ``samples`` (angle, distance) draws comes from a generator seeded with
   ``random_state`` and every person's frustum is that set turned and moved to their pose, so the
   answer is the same every time and for any order or naming of the people.
-* **The replicator dynamics** run until no share moves by more than 1e-9 a step (the code stops
-  at a step of 1e-5 in norm, after at most 3,000 steps), so that a share still decaying is not
-  counted in a group; the support threshold is the code's (1e-5 of the largest share).
+* **The replicator dynamics** run until no share moves by more than 1e-9 over 32 steps (the
+  code stops at a step of 1e-5 in norm, after at most 3,000 steps), so that a share still
+  decaying is not counted in a group; the support threshold is the code's (1e-5 of the largest
+  share).
 * **The multi-frame variant** (``frames`` > 1) averages the affinities of a frame and of the
   frames before it with equal weights, the authors' ``EQUAL`` mode; their default weights, from
   a multi-objective linear programme, are not implemented. The window is taken among the frames
