@@ -17,7 +17,15 @@ import pytest
 from reform import Frame, evaluate, make_detector, run_detector
 from reform.datasets import load_dataset
 
-__all__ = ["MARGIN", "REAL_DATASETS", "annotated_frames", "assert_beats_majority", "scores"]
+__all__ = [
+    "MARGIN",
+    "REAL_DATASETS",
+    "annotated_frames",
+    "assert_beats_majority",
+    "assert_same_groups_moved_and_relabelled",
+    "moved_and_relabelled",
+    "scores",
+]
 
 REAL_DATASETS = ("salsa", "babble", "coffeebreak", "synth")
 SALSA_EVERY = 8  # SALSA frames scored: every 8th (143 of 1,143), to keep the tests short
@@ -52,3 +60,37 @@ def assert_beats_majority(detector: str, frames: tuple[Frame, ...], **options: A
     floor, _ = scores("majority", frames)
     assert np.isfinite(f1)
     assert f1 >= floor + MARGIN, f"{detector}: F1 {f1:.3f} against majority {floor:.3f}"
+
+
+def moved_and_relabelled(frame: Frame, rng: np.random.Generator) -> tuple[Frame, dict[int, int]]:
+    """``frame`` turned and moved on the floor, its people listed in another order under other
+    ids; and the map from the new ids back to the old."""
+    turn = rng.uniform(-np.pi, np.pi)
+    shift = rng.uniform(-50.0, 50.0, 2)
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    order = rng.permutation(frame.n_people)
+    new_ids = rng.choice(10**6, size=frame.n_people, replace=False) + 1000
+    yaw = (frame.yaw + turn + np.pi) % (2 * np.pi) - np.pi
+    moved = Frame(
+        ids=new_ids[order],
+        position=(frame.position @ rotation.T + shift)[order],
+        yaw=yaw[order],
+    )
+    return moved, dict(zip(new_ids.tolist(), frame.ids.tolist(), strict=True))
+
+
+def assert_same_groups_moved_and_relabelled(detector: Any, seed: int, scenes: int = 5) -> None:
+    """Dense random scenes (30 people on 6 m x 6 m, any heading) give the same groups turned,
+    moved, reordered and renamed: no tie in them is broken by where or in which order people
+    are listed."""
+    rng = np.random.default_rng(seed)
+    for _ in range(scenes):
+        frame = Frame(
+            ids=np.arange(1, 31),
+            position=rng.uniform(0.0, 6.0, (30, 2)),
+            yaw=rng.uniform(-np.pi, np.pi, 30),
+        )
+        moved, back = moved_and_relabelled(frame, rng)
+        (before,) = detector.predict([frame])
+        (after,) = detector.predict([moved])
+        assert {frozenset(g) for g in before} == {frozenset(back[int(m)] for m in g) for g in after}

@@ -7,7 +7,12 @@ import inspect
 
 import numpy as np
 import pytest
-from field_scores import REAL_DATASETS, annotated_frames, assert_beats_majority
+from field_scores import (
+    REAL_DATASETS,
+    annotated_frames,
+    assert_beats_majority,
+    assert_same_groups_moved_and_relabelled,
+)
 
 from reform import DetectorError, Frame, detector_info, make_detector, run_detector
 from reform.dominant_sets import (
@@ -161,6 +166,10 @@ def test_declared_defaults_are_the_estimators():
     declared = {o.name: o.default for o in detector_info("dominant-sets").options}
     signature = inspect.signature(DominantSets).parameters
     assert declared == {name: signature[name].default for name in declared}
+
+
+def test_dense_scenes_keep_their_groups_turned_moved_and_relabelled():
+    assert_same_groups_moved_and_relabelled(DominantSets(), seed=33)
 
 
 @pytest.mark.parametrize("name", REAL_DATASETS)

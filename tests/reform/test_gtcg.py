@@ -6,7 +6,12 @@ import inspect
 
 import numpy as np
 import pytest
-from field_scores import REAL_DATASETS, annotated_frames, assert_beats_majority
+from field_scores import (
+    REAL_DATASETS,
+    annotated_frames,
+    assert_beats_majority,
+    assert_same_groups_moved_and_relabelled,
+)
 
 from reform import DetectorError, Frame, detector_info, make_detector
 from reform.gtcg import Gtcg, frustum_affinity, frustum_samples
@@ -166,6 +171,10 @@ def test_declared_defaults_are_the_estimators():
     declared = {o.name: o.default for o in detector_info("gtcg").options}
     signature = inspect.signature(Gtcg).parameters
     assert declared == {name: signature[name].default for name in declared}
+
+
+def test_dense_scenes_keep_their_groups_turned_moved_and_relabelled():
+    assert_same_groups_moved_and_relabelled(Gtcg(), seed=31)
 
 
 @pytest.mark.parametrize("name", REAL_DATASETS)

@@ -11,7 +11,12 @@ import inspect
 
 import numpy as np
 import pytest
-from field_scores import REAL_DATASETS, annotated_frames, assert_beats_majority
+from field_scores import (
+    REAL_DATASETS,
+    annotated_frames,
+    assert_beats_majority,
+    assert_same_groups_moved_and_relabelled,
+)
 
 from reform import DetectorError, Frame, detector_info, make_detector
 from reform.hough import Hvff, MultiScaleHvff, scale_strides, vote_noise
@@ -161,6 +166,11 @@ def test_declared_defaults_are_the_estimators(name, cls):
     declared = {o.name: o.default for o in detector_info(name).options}
     signature = inspect.signature(cls).parameters
     assert declared == {option: signature[option].default for option in declared}
+
+
+@pytest.mark.parametrize("cls", [Hvff, MultiScaleHvff], ids=["hvff", "multiscale"])
+def test_dense_scenes_keep_their_groups_turned_moved_and_relabelled(cls):
+    assert_same_groups_moved_and_relabelled(cls(), seed=32)
 
 
 @pytest.mark.parametrize("name", REAL_DATASETS)
