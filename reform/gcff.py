@@ -205,9 +205,12 @@ def unary_costs(
     counts = np.bincount(labels, minlength=n_groups).astype(np.float64)
     centre_x = np.bincount(labels, weights=points[:, 0], minlength=n_groups) / counts
     centre_y = np.bincount(labels, weights=points[:, 1], minlength=n_groups) / counts
-    dx = points[:, 0, None] - centre_x[None, :]
+    costs = points[:, 0, None] - centre_x[None, :]  # dx, then the costs, in place
     dy = points[:, 1, None] - centre_y[None, :]
-    costs = dx * dx + dy * dy  # (n, K)
+    np.multiply(costs, costs, out=costs)
+    np.multiply(dy, dy, out=dy)
+    np.add(costs, dy, out=costs)  # dx * dx + dy * dy, (n, K)
+    del dy
 
     # Neighbourhood entries (k, i), ordered by group then person.
     near = np.ascontiguousarray((costs < mdl).T)
@@ -451,7 +454,7 @@ def _sparse_expansion(unary: np.ndarray, labels: np.ndarray, label_cost: float) 
     rows = np.arange(n)
     cost = unary[rows, labels]  # each person's current cost
     # reach[a, i]: the move of alpha a may relabel person i (d_i <= label_cost).
-    reach = np.ascontiguousarray((unary - cost[:, None]).T <= label_cost)
+    reach = np.subtract(unary.T, cost[None, :], order="C") <= label_cost
     size = np.bincount(labels, minlength=k)
     label_costs = np.tri(k + 1, k, -1) * label_cost  # [u, j] = label_cost if j < u
     current = energy(unary, labels, label_cost=label_cost)
