@@ -125,3 +125,57 @@ def test_a_failing_block_fails_the_page_and_names_its_line(tmp_path):
     assert done.returncode != 0
     assert "--- line 7: python" in done.stderr
     assert "broken" in done.stderr
+
+
+# The pages a newcomer reads first: each says how to run its commands before the first one.
+SHELL_NOTE = "source .venv/bin/activate"
+NEWCOMER_PAGES = (*RUNNABLE_PAGES, "guide/demo.md")
+
+
+def _command_lines(text: str) -> list[int]:
+    """The lines (1-based) of the page's ``reform-sim`` and ``rerun`` commands: in code blocks,
+    or inline (```reform-sim ...```)."""
+    lines = [
+        block.line + k
+        for block in blocks(text)
+        for k, code in enumerate(block.code.splitlines(), start=1)
+        if code.lstrip().startswith(("reform-sim ", "rerun "))
+    ]
+    lines += [
+        n
+        for n, line in enumerate(text.splitlines(), start=1)
+        if "`reform-sim " in line or "`rerun " in line
+    ]
+    return sorted(lines)
+
+
+@pytest.mark.parametrize("page", NEWCOMER_PAGES)
+def test_the_page_says_how_to_run_its_commands_near_the_top(page):
+    text = (DOCS / page).read_text(encoding="utf-8")
+    lines = text.splitlines()
+    assert _command_lines(text), f"{page}: no reform-sim or rerun command"
+    # Near the top: in the introduction, before the first section and the first code block.
+    first_section = next((n for n, line in enumerate(lines) if line.startswith("## ")), len(lines))
+    first_block = min((b.line - 1 for b in blocks(text)), default=len(lines))
+    intro = "\n".join(lines[: min(first_section, first_block)])
+    assert SHELL_NOTE in intro, f"{page}: does not say {SHELL_NOTE!r} in its introduction"
+
+
+def test_the_figure_of_the_field_s_words_is_the_script_s(tmp_path):
+    import importlib.util
+
+    from matplotlib.image import imread
+
+    spec = importlib.util.spec_from_file_location("figures", DOCS / "figures.py")
+    figures = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(figures)
+    drawn = imread(figures.draw(tmp_path / "f-formation.png"))
+    shipped = imread(figures.IMAGE)
+    assert drawn.shape == shipped.shape and drawn.shape[2] in (3, 4)
+    assert f"images/{figures.IMAGE.name}" in (DOCS / "getting-started.md").read_text()
+    # The table's answers are reform.evaluate's: {1, 2} finds {1, 2, 3} at T = 2/3, not at T = 1.
+    assert figures._scores() == [
+        ("{1, 2} and {3}", "yes", "no"),
+        ("{1, 2, 3, 4}", "yes", "no"),
+        ("{1, 2, 3, 4, 5}", "no", "no"),
+    ]
