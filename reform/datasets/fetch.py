@@ -796,8 +796,10 @@ def resolve(
         registry: another registry file; None for the packaged one.
 
     Raises:
-        FileNotFoundError: a public dataset that is not fetched (the message says how to fetch
-            it), or neither a path nor a dataset name (the message lists the names).
+        FileNotFoundError: a public dataset that is neither fetched nor in the real datasets'
+            folder (the message says the three ways to give it: its folder's path,
+            ``$REFORM_SIM_DATASETS``, or fetching it), or neither a path nor a dataset name (the
+            message lists the names).
     """
     from reform.datasets.store import is_uri
 
@@ -816,9 +818,12 @@ def resolve(
         return local / text
     if dataset is not None:
         where = cache_dir() if cache is None else Path(cache)
+        looked = f"{DATASETS_VARIABLE} is not set" if local is None else f"no {text}/ in {local}"
         raise FileNotFoundError(
-            f"dataset {text!r} is not fetched (cache {where}); "
-            f"run `reform-sim datasets fetch {text}`"
+            f"dataset {text!r} is not fetched (cache {where}) and {looked}; give the path of "
+            f"the folder that holds it, or set {DATASETS_VARIABLE} to the folder holding "
+            f"{text}/, or fetch it once online: `reform-sim datasets fetch {text}` "
+            "(--mirror URL fetches from a copy)"
         )
     raise FileNotFoundError(
         f"{text}: no such file or folder, nor a dataset name; the public datasets are: "

@@ -438,16 +438,37 @@ def test_resolve_a_fetched_name(http_mirror, cache, registry_file, tmp_path, mon
     assert resolve("tiny", registry=registry_file) == cache / "tiny"
 
 
-def test_resolve_an_unfetched_name_says_how_to_fetch_it(
+# What an unfetched dataset's message offers: a folder's path, the variable, or fetching it.
+HOW_TO_GIVE_TINY = (
+    "give the path of the folder that holds it, or set REFORM_SIM_DATASETS to the folder "
+    "holding tiny/, or fetch it once online: `reform-sim datasets fetch tiny` (--mirror URL "
+    "fetches from a copy)"
+)
+
+
+def test_resolve_an_unfetched_name_says_every_way_to_give_it(
     cache, registry_file, tmp_path, monkeypatch
 ):
-    monkeypatch.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)  # no ../shared/datasets from here
     monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "no-datasets"))
-    with pytest.raises(
-        FileNotFoundError,
-        match=r"^dataset 'tiny' is not fetched \(cache .*\); run `reform-sim datasets fetch tiny`$",
-    ):
+    with pytest.raises(FileNotFoundError) as raised:
         resolve("tiny", registry=registry_file)
+    assert str(raised.value) == (
+        f"dataset 'tiny' is not fetched (cache {cache}) and no tiny/ in "
+        f"{tmp_path / 'no-datasets'}; {HOW_TO_GIVE_TINY}"
+    )
+    monkeypatch.delenv("REFORM_SIM_DATASETS")
+    with pytest.raises(FileNotFoundError) as raised:
+        resolve("tiny", registry=registry_file)
+    assert str(raised.value) == (
+        f"dataset 'tiny' is not fetched (cache {cache}) and REFORM_SIM_DATASETS is not set; "
+        f"{HOW_TO_GIVE_TINY}"
+    )
+    # Each way it names works.
+    (tmp_path / "no-datasets" / "tiny").mkdir(parents=True)
+    assert resolve(tmp_path / "no-datasets" / "tiny", registry=registry_file).name == "tiny"
+    monkeypatch.setenv("REFORM_SIM_DATASETS", str(tmp_path / "no-datasets"))
+    assert resolve("tiny", registry=registry_file) == tmp_path / "no-datasets" / "tiny"
 
 
 def test_resolve_an_unknown_name_lists_the_datasets(cache, registry_file, tmp_path, monkeypatch):
@@ -749,7 +770,10 @@ def test_cli_data_takes_a_fetched_name(http_mirror, cache, registry_file, capsys
     monkeypatch.setenv("REFORM_SIM_DATASETS", str(cache / "no-datasets"))
     error = cli_error(["evaluate", "--data", "salsa", "--detector", "gcff"], capsys)
     assert error.endswith(
-        f"dataset 'salsa' is not fetched (cache {cache}); run `reform-sim datasets fetch salsa`"
+        f"dataset 'salsa' is not fetched (cache {cache}) and no salsa/ in {cache / 'no-datasets'}"
+        "; give the path of the folder that holds it, or set REFORM_SIM_DATASETS to the folder "
+        "holding salsa/, or fetch it once online: `reform-sim datasets fetch salsa` (--mirror URL "
+        "fetches from a copy)"
     )
 
 
