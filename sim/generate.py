@@ -36,7 +36,11 @@ half-written shard, and the next run with the same parameters skips the episodes
 written and simulates the rest. Each shard already there is first checked, from its footer alone,
 to be its episode's (the episode, seed, sequence and parameters in its metadata, the values of
 its ``sequence`` column): one copied or moved from another episode or dataset is refused, naming
-the file, and nothing is changed. Asking for more episodes than a folder holds extends it. A folder
+the file, and nothing is changed. Each shard kept is then checked against the size and sha256
+recorded when it was written (in its commit file ``_commits/episode=<k>.json``, written before
+the shard is renamed into place, or in the card): a damaged one (altered, even in one value) is
+named on stderr and made again, never vouched for; the card is written from these records only,
+never from the files as they are. Asking for more episodes than a folder holds extends it. A folder
 holding another dataset (a card with other parameters) or other files is refused before any work
 starts, and so is a folder another run is writing.
 
@@ -48,16 +52,17 @@ workers writing to a folder on this machine send each shard back as bytes and th
 writes it, so the cluster needs no shared file system, only reform-sim installed on every node.
 
 **Object storage.** ``out_dir`` may be a URI (``s3://bucket/prefix``, ``gs://…``, any fsspec
-filesystem; `reform.datasets.store`), credentials from the environment. Every worker (local or
-Ray) writes its shards there itself, each in two steps: the shard object (whole or absent), then
-its commit object (`reform.datasets.store_dataset`); the finished run writes the card listing
-every shard with its size and sha256, and deletes the commits. A resumed run skips the committed
-shards and writes the others again (an uncommitted shard object is never taken for done, nor
-read). Two runs on one prefix are refused: the lock object ``.generate.lock`` is created only if
+filesystem; `reform.datasets.store`), credentials from the environment. Every worker (local or Ray)
+writes its shards there itself, each in two steps: the shard object (whole or absent), then its
+commit object (`reform.datasets.store_dataset`); the finished run writes the card listing every
+shard with its size and sha256, and deletes the commits. A resumed run skips the committed shards
+whose objects match their recorded size and sha256 (each read back to be checked; a damaged one is
+named on stderr) and writes the others again (an uncommitted shard object is never taken for done,
+nor read). Two runs on one prefix are refused: the lock object ``.generate.lock`` is created only if
 there is none (S3: ``If-None-Match: *``); one left by a killed run on this machine (its process
 gone) is taken over with a conditional overwrite (``If-Match`` its ETag). An unusable store (no
-credentials, unreachable, no such bucket) or a prefix holding something else is refused in one
-line before any work.
+credentials, unreachable, no such bucket) or a prefix holding something else is refused in one line
+before any work.
 """
 
 from __future__ import annotations
@@ -149,6 +154,7 @@ TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balanc
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
 RANDOM_ANNOTATION = "random"  # GenerationSpec.annotation: one model drawn per episode
 SHOWN_PROBLEMS = 3  # shards named in the error when several are not where they belong
+VERIFY_BATCH = 16  # shards of a store fetched at once to be checked on resume
 
 
 def episode_seed(seed: int, episode: int) -> int:
@@ -470,6 +476,8 @@ class GenerationReport:
         backend: ``"local"`` or ``"ray"``.
         n_jobs: worker processes used (local), or the cluster's CPUs (Ray).
         card: path (URI) of the JSON card; ``card_markdown`` of the Markdown one.
+        check_seconds: wall-clock time spent checking the shards already there (each against
+            the size and sha256 recorded when it was written), seconds.
     """
 
     out_dir: Path | str
@@ -483,6 +491,7 @@ class GenerationReport:
     n_jobs: int
     card: Path | str
     card_markdown: Path | str
+    check_seconds: float = 0.0
 
     @property
     def frames(self) -> int:
@@ -613,13 +622,15 @@ def _simulate_and_write(
             list(episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence))
         )
         summary = _summarise_block(spec, episode, block)
-        write_parquet(
-            block,
-            path,
-            name=spec.scenario,
-            source=source,
-            metadata=_shard_metadata(spec, summary, made),
-        )
+        with atomic_path(path) as tmp:
+            write_parquet(
+                block,
+                tmp,
+                name=spec.scenario,
+                source=source,
+                metadata=_shard_metadata(spec, summary, made),
+            )
+            _write_commit(folder, summary, _file_entry(tmp))
         return summary
     result = simulate_episode(
         made,
@@ -644,8 +655,19 @@ def _simulate_and_write(
         source=source,
         metadata=_shard_metadata(spec, summary, made) | metadata,
     )
-    write_parquet(dataset, path)
+    with atomic_path(path) as tmp:
+        write_parquet(dataset, tmp)
+        _write_commit(folder, summary, _file_entry(tmp))
     return summary
+
+
+def _write_commit(folder: _Folder, summary: ShardSummary, files: Mapping[str, Any]) -> None:
+    """Records a shard's size and sha256 (``files``) in its commit file, before the shard is
+    renamed into place: a shard in the folder always has its checksum recorded, and a resumed
+    run checks it against that record (`_verified_shards`)."""
+    entry = {**summary.to_json(), "path": folder.listed(summary), **files}
+    with atomic_open(folder.out / commit_name(summary.episode), "w", encoding="utf-8") as handle:
+        json.dump(entry, handle, sort_keys=True)
 
 
 def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None:
@@ -763,7 +785,7 @@ def _checked_card(card: Any, where: object) -> dict[str, Any]:
 
 def _is_ours(name: str) -> bool:
     """Entries a generated folder may hold besides its shards."""
-    ours = (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR, DATA_DIR)
+    ours = (CARD_JSON, CARD_MARKDOWN, LOCK_FILE, RECORDINGS_DIR, DATA_DIR, COMMITS_DIR)
     return name in ours or name.startswith(("scenario=", "."))
 
 
@@ -939,16 +961,43 @@ def _committed_shards(
         if isinstance(entry, dict) and "sha256" in entry:
             entries[int(entry["episode"])] = entry
     entries.update(folder.commits())
-    done = {}
+    candidates = {}
     for k, entry in entries.items():
         expected = _summary(spec, k, 0, 0, 0, {})
         path = f"{DATA_DIR}/{expected.path}"
-        if k >= episodes or entry.get("path") != path or folder.size(path) != entry.get("bytes"):
+        if k >= episodes or entry.get("path") != path:
             continue
         summary = ShardSummary.from_json({**entry, "path": expected.path})
         if (summary.seed, summary.sequence) != (expected.seed, expected.sequence):
             continue
-        done[k] = (summary, {"bytes": entry["bytes"], "sha256": entry["sha256"]})
+        if path not in folder.objects:
+            continue
+        candidates[k] = (summary, {"bytes": entry["bytes"], "sha256": entry["sha256"]})
+    return _verified_objects(store, candidates)
+
+
+def _verified_objects(
+    store: Store, candidates: Mapping[int, tuple[ShardSummary, dict[str, Any]]]
+) -> dict[int, tuple[ShardSummary, dict[str, Any]]]:
+    """The shards of ``candidates`` whose objects are as they were written: each read and its
+    size and sha256 checked against those recorded then (a few fetched at once). A damaged one
+    is named on stderr and left out (made again)."""
+    done = {}
+    order = sorted(candidates)
+    for start in range(0, len(order), VERIFY_BATCH):
+        batch = order[start : start + VERIFY_BATCH]
+        paths = {k: f"{DATA_DIR}/{candidates[k][0].path}" for k in batch}
+        contents = store.read_many(list(paths.values()))
+        for k in batch:
+            content = contents[paths[k]]
+            if content is None:
+                continue
+            found = {"bytes": len(content), "sha256": hashlib.sha256(content).hexdigest()}
+            damage = _damage(store.url(paths[k]), found, candidates[k][1])
+            if damage:
+                print(damage, file=sys.stderr, flush=True)
+                continue
+            done[k] = candidates[k]
     return done
 
 
@@ -999,6 +1048,7 @@ def _remove_stale_temporaries(out_dir: Path) -> None:
         f"{DATA_DIR}/scenario=*/episode=*/.*.tmp",
         "scenario=*/episode=*/.*.tmp",
         f"{RECORDINGS_DIR}/.*.tmp",
+        f"{COMMITS_DIR}/.*.tmp",
         ".*.tmp",
     ):
         for path in out_dir.glob(pattern):
@@ -1006,6 +1056,100 @@ def _remove_stale_temporaries(out_dir: Path) -> None:
                 shutil.rmtree(path, ignore_errors=True)
             else:
                 path.unlink(missing_ok=True)
+
+
+def _recorded_files(folder: _Folder) -> dict[int, Mapping[str, Any]]:
+    """The size and sha256 recorded for each shard when it was written: listed by the card (a
+    finished dataset, or the shards a resumed run kept), or by the shard's commit file (written
+    before the shard was renamed into place; the newer of the two)."""
+    entries: dict[int, Mapping[str, Any]] = {}
+    try:
+        card = read_card(folder.out)
+    except ValueError:
+        card = None
+    commits = folder.out / COMMITS_DIR
+    found = [e for e in (card or {}).get("shards", []) if isinstance(e, dict)]
+    for path in sorted(commits.glob("episode=*.json")) if commits.is_dir() else []:
+        try:
+            entry = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+            continue  # an unreadable commit records nothing: its shard is made again
+        found.append(entry if isinstance(entry, dict) else {})
+    for entry in found:
+        if isinstance(entry.get("episode"), int) and "sha256" in entry and "bytes" in entry:
+            entries[entry["episode"]] = entry
+    return entries
+
+
+def _damage(where: str, found: Mapping[str, Any], recorded: Mapping[str, Any]) -> str | None:
+    """What differs between a shard (its ``bytes`` and ``sha256``) and its record; None when
+    nothing does."""
+    if found["bytes"] != recorded.get("bytes"):
+        what = f"{found['bytes']} bytes, not the {recorded.get('bytes')}"
+    elif found["sha256"] != recorded.get("sha256"):
+        what = f"sha256 {found['sha256']}, not the {recorded.get('sha256')}"
+    else:
+        return None
+    return (
+        f"reform-sim generate: {where} is damaged ({what} recorded when it was written); "
+        "it is made again"
+    )
+
+
+def _verified_shards(
+    folder: _Folder, spec: GenerationSpec, episodes: Sequence[int]
+) -> dict[int, dict[str, Any]]:
+    """The finished shards of ``episodes`` that are as they were written: each one's size and
+    sha256 against those recorded then (`_recorded_files`). A damaged one is named on stderr and
+    left out (made again), and so is one with no record (written by an older reform-sim).
+
+    Returns:
+        episode -> the shard's ``bytes`` and ``sha256``.
+    """
+    recorded = _recorded_files(folder)
+    kept: dict[int, dict[str, Any]] = {}
+    unrecorded = 0
+    for k in episodes:
+        path = folder.shard(spec.scenario, k)
+        entry = recorded.get(k)
+        listed = folder.listed(_summary(spec, k, 0, 0, 0, {}))
+        if entry is None or entry.get("path") != listed:
+            unrecorded += 1
+            continue
+        found = _file_entry(path)
+        damage = _damage(str(path), found, entry)
+        if damage:
+            print(damage, file=sys.stderr, flush=True)
+            continue
+        kept[k] = found
+    if unrecorded:
+        print(
+            f"reform-sim generate: {folder.out}: {unrecorded} shard(s) with no checksum recorded "
+            "when written (by an older reform-sim): they cannot be checked and are made again",
+            file=sys.stderr,
+            flush=True,
+        )
+    return kept
+
+
+def _written_files(
+    folder: _Folder, summaries: Sequence[ShardSummary], kept: Mapping[int, Mapping[str, Any]]
+) -> dict[str, Mapping[str, Any]]:
+    """Each shard's size and sha256 for the final card: those checked on resume (``kept``), and
+    those recorded as the others were written (their commits); never read again from the files,
+    so that a shard altered since is never vouched for."""
+    records = _recorded_files(folder)
+    files = {}
+    for summary in summaries:
+        entry = kept.get(summary.episode) or records.get(summary.episode)
+        if entry is None or (
+            summary.episode not in kept and entry.get("path") != folder.listed(summary)
+        ):
+            raise RuntimeError(  # pragma: no cover - every shard written is committed first
+                f"{folder.root / summary.path}: no checksum recorded when it was written"
+            )
+        files[summary.path] = {"bytes": entry["bytes"], "sha256": entry["sha256"]}
+    return files
 
 
 def _finished(folder: _Folder, spec: GenerationSpec, episode: int, save_recordings: bool) -> bool:
@@ -1186,18 +1330,15 @@ def _card(
     }
 
 
-def _shard_files(folder: _Folder, shards: Sequence[ShardSummary]) -> dict[str, dict[str, Any]]:
-    """Each shard's size and sha256, for the card."""
-
-    files = {}
-    for shard in shards:
-        path = folder.root / shard.path
-        digest = hashlib.sha256()
-        with open(path, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
-        files[shard.path] = {"bytes": path.stat().st_size, "sha256": digest.hexdigest()}
-    return files
+def _file_entry(path: Path) -> dict[str, Any]:
+    """A file's size and sha256, as the card and the commits record them."""
+    digest = hashlib.sha256()
+    size = 0
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+            size += len(block)
+    return {"bytes": size, "sha256": digest.hexdigest()}
 
 
 def _command(spec: GenerationSpec, episodes: int) -> str:
@@ -1496,6 +1637,8 @@ def _written(
                     tmp.write_bytes(recording)
             with atomic_path(folder.root / summary.path) as tmp:
                 tmp.write_bytes(shard)
+                files = {"bytes": len(shard), "sha256": hashlib.sha256(shard).hexdigest()}
+                _write_commit(folder, summary, files)
         yield [summary for summary, _, _ in batch]
 
 
@@ -1609,7 +1752,7 @@ def generate_dataset(
         max_memory=max_memory,
     )
     if store is not None:
-        todo, done, summaries, workers = _generate_store(
+        todo, done, summaries, workers, check_seconds = _generate_store(
             store,
             spec,
             executor,
@@ -1631,8 +1774,12 @@ def generate_dataset(
             _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
             folder = _Folder(out_dir, folder_layout(out_dir))
             _remove_stale_temporaries(out_dir)
+            checking = time.perf_counter()
             existing = _existing_shards(folder, spec, episodes)
-            done = [k for k in existing if _finished(folder, spec, k, save_recordings)]
+            finished = [k for k in existing if _finished(folder, spec, k, save_recordings)]
+            kept = _verified_shards(folder, spec, finished)  # each against its recorded sha256
+            check_seconds = time.perf_counter() - checking
+            done = sorted(kept)
             shards = {k: existing[k] for k in done}
             todo = [k for k in range(episodes) if k not in shards]
             _write_cards(
@@ -1643,6 +1790,7 @@ def generate_dataset(
                     list(shards.values()),
                     complete=False,
                     resolved_options=resolved,
+                    files={shards[k].path: kept[k] for k in done},
                     data_dir=folder.data,
                 ),
             )
@@ -1666,10 +1814,11 @@ def generate_dataset(
                 summaries,
                 complete=True,
                 resolved_options=resolved,
-                files=_shard_files(folder, summaries),
+                files=_written_files(folder, summaries, kept),
                 data_dir=folder.data,
             )
             _write_cards(out_dir, card)
+            shutil.rmtree(out_dir / COMMITS_DIR, ignore_errors=True)  # the card lists them now
         where, card_url = out_dir, out_dir.joinpath
     return GenerationReport(
         out_dir=where,
@@ -1683,6 +1832,7 @@ def generate_dataset(
         n_jobs=workers,
         card=card_url(CARD_JSON),
         card_markdown=card_url(CARD_MARKDOWN),
+        check_seconds=check_seconds,
     )
 
 
@@ -1696,17 +1846,20 @@ def _generate_store(
     n_jobs: int | None,
     save_recordings: bool,
     progress: bool,
-) -> tuple[list[int], list[int], list[ShardSummary], int]:
+) -> tuple[list[int], list[int], list[ShardSummary], int, float]:
     """`generate_dataset` into a store: the workers write the shards and their commits.
 
     Returns:
-        The episodes simulated, those found finished, every episode's shard, and the workers.
+        The episodes simulated, those found finished, every episode's shard, the workers, and
+        the seconds spent checking the shards already there.
     """
     parameters = spec.parameters()
     _check_store(store, parameters, episodes)
     with _store_lock(store), executor:
         _check_store(store, parameters, episodes)  # again, now that no other run can write
+        checking = time.perf_counter()
         existing = _committed_shards(store, spec, episodes)
+        check_seconds = time.perf_counter() - checking
         objects = store.sizes()
         done = [k for k in existing if not save_recordings or _recording_name(k) in objects]
         shards = {k: existing[k][0] for k in done}
@@ -1728,7 +1881,7 @@ def _generate_store(
         )
         _write_store_cards(store, card)
         store.delete(*store.sizes(COMMITS_DIR))  # the card lists every shard now
-    return todo, done, summaries, workers
+    return todo, done, summaries, workers, check_seconds
 
 
 def _write_store_cards(store: Store, card: Mapping[str, Any]) -> None:

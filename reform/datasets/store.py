@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import re
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -71,6 +72,14 @@ class Store:
             return self.fs.cat_file(self.path(relative))
         except FileNotFoundError:
             return None
+
+    def read_many(self, relative: list[str]) -> dict[str, bytes | None]:
+        """Several objects' bytes (None for one that is not there), fetched concurrently: one
+        GET each."""
+        if len(relative) <= 1:
+            return {r: self.read(r) for r in relative}
+        with ThreadPoolExecutor(max_workers=len(relative)) as pool:
+            return dict(zip(relative, pool.map(self.read, relative), strict=True))
 
     def _forget(self, relative: str) -> None:
         """Drops what the filesystem remembers of listings (another process may have written

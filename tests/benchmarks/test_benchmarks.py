@@ -90,6 +90,13 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^Targets, Bagged Trees, 18 people: .* predictions identical: yes$",
         r"^  reconstruction='correlation' +30 people: +[\d.]+ ms/frame, +[\d.]+x the defaults' ",
     ),
+    "bench_resume": (
+        *(
+            rf"^{where} +[\d.]+ s +[\d.]+ s +[\d.]+ s +[\d.]+%$"
+            for where in ("local disk", "S3 server")
+        ),
+        r"^target: checks on resume <= 10% of the generation: (met|NOT met) \([\d.]+%\)$",
+    ),
     "bench_sim": (
         r"^ +18 +[\d,]+x +[\d,]+x +[\d.]+ +[\d,]+x +[\d.]+ ",
         r"^18 people: [\d,]+x real time ",

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from damaged_shard import one_float_changed
 from killed_run import CLI, RUN_TIMEOUT_S, kill_when
 
 from reform.datasets import read_parquet
@@ -348,3 +349,24 @@ def test_local_workers_see_the_credentials_as_they_are_now(server, reference, mo
     uri = f"s3://{BUCKET}/pool"
     assert generate(uri, n_jobs=2).n_jobs == 2
     same_as_reference(uri, reference)
+
+
+def test_a_resume_makes_a_damaged_object_again_and_never_vouches_for_it(server, reference, capsys):
+    uri = f"s3://{BUCKET}/damaged"
+    generate(uri)
+    store = open_store(uri)
+    shard = f"data/scenario={SCENARIO}/episode=1/part.parquet"
+    before = store.read(shard)
+    store.write(shard, one_float_changed(before))  # one float changed, the same size
+    assert objects(uri)[shard] == len(before)
+    (problem,) = verify_folder(uri)
+    assert f"{uri}/{shard}: field 'sha256'" in problem
+    capsys.readouterr()
+
+    report = generate(uri)  # the same dataset again, over its complete prefix
+    assert report.generated == (1,) and report.skipped == (0, 2, 3)
+    (line,) = [x for x in capsys.readouterr().err.splitlines() if "is damaged" in x]
+    assert line.startswith(f"reform-sim generate: {uri}/{shard} is damaged (sha256 ")
+    same_as_reference(uri, reference)
+    assert store.read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
+    assert verify_folder(uri) == []
