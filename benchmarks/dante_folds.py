@@ -67,7 +67,7 @@ def main() -> int:
         f"{args.train_every} frame(s), validating on every {args.validate_every}"
     )
     rows = []
-    for fold, (train, validation, test) in enumerate(fold_splits(len(frames), args.folds)):
+    for fold, (train, validation, test) in enumerate(fold_splits(frames, args.folds)):
         start = time.perf_counter()
 
         def progress(epoch: int, epochs: int, loss: float, val: float | None, fold=fold) -> None:

@@ -316,21 +316,24 @@ def dominant_sets(affinity: np.ndarray) -> list[np.ndarray]:
 # Folds
 
 
-def fold_splits(n_frames: int, k: int = 5) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+def fold_splits(
+    frames: Sequence[Frame] | int, k: int = 5
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """DANTE's folds over frames in their order (``build_dataset.py``): fold ``f`` tests the
     ``f``-th contiguous fifth; validation is half a fold on each side of it (a whole fold after
     the first fold's, before the last's); training is every frame outside both.
 
     Args:
-        n_frames: how many frames, in time order (sequences one after the other).
+        frames: the frames in time order (sequences one after the other), or how many.
         k: how many folds (DANTE: 5).
 
     Returns:
         ``k`` triples (train, validation, test) of frame indices, each sorted.
 
     Raises:
-        ValueError: k below 2 or ``n_frames`` too few for k folds of at least two frames.
+        ValueError: k below 2, or too few frames for k folds of at least two frames.
     """
+    n_frames = frames if isinstance(frames, (int, np.integer)) else len(frames)
     if isinstance(k, bool) or not isinstance(k, int) or k < 2:
         raise ValueError(f"k must be an integer of at least 2, got {k!r}")
     if isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer)):

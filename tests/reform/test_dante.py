@@ -54,6 +54,8 @@ def test_fold_splits_follow_dantes_build_dataset():
     ]
     got = [tuple(part.tolist() for part in split) for split in fold_splits(20, 5)]
     assert got == expected
+    by_frames = fold_splits(toy_frames(0, 20), 5)  # the frames themselves, or their count
+    assert [tuple(part.tolist() for part in split) for split in by_frames] == expected
 
 
 @pytest.mark.parametrize("n", [10, 119, 1143])
