@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from field_scores import assert_same_groups_moved_and_relabelled
 from toy_scenes import toy_frames
 
 from reform import Dataset, DetectorError, Frame, Reform, detector_info, make_detector, save_model
@@ -160,6 +161,10 @@ def _frame(n: int, **kwargs) -> Frame:
         yaw=rng.uniform(-3, 3, n),
         **kwargs,
     )
+
+
+def test_dense_scenes_keep_their_groups_turned_moved_and_relabelled(trained):
+    assert_same_groups_moved_and_relabelled(trained, seed=41)
 
 
 @pytest.mark.parametrize("n", [0, 1, 2, 3])
