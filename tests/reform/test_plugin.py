@@ -274,7 +274,7 @@ def test_stress_runs_an_installed_plugin_beside_the_built_ins(lab):
     )
     assert scores[0]["value"] > scores[-1]["value"]  # 0.5 m of noise hurts it too
     assert result["training"]["plugins"]["pairs"].startswith("fitted on the ")
-    assert all(math.isfinite(p["scores"]["gcff"]["2/3"]["f1"]["value"]) for p in axis["points"])
+    assert all(math.isfinite(p["scores"]["gcff-tuned"]["2/3"]["f1"]["value"]) for p in axis["points"])
 
 
 @pytest.mark.slow
@@ -290,7 +290,10 @@ def test_stress_stops_on_a_broken_plugin_in_one_line(lab):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--detector", "gcff"], "--detector gcff: stress always runs GCFF (trained on its "),
+        (
+            ["--detector", "gcff-tuned"],
+            "--detector gcff-tuned: stress always runs GCFF (trained on its ",
+        ),
         (["--detector", "pairs", "--detector", "pairs"], "--detector pairs is given twice"),
         (["--detector", "myplugin:nothing"], "detector 'myplugin:nothing': module 'myplugin' has "),
     ],
@@ -321,7 +324,7 @@ def test_run_stress_keeps_the_built_in_names_for_the_built_ins():
     from sim.experiments.stress import run_stress
 
     with pytest.raises(ValueError, match=r"^plugins must be named apart from the built-in"):
-        run_stress("small", plugins={"gcff": Majority()})
+        run_stress("small", plugins={"gcff-tuned": Majority()})
 
 
 @pytest.mark.slow
