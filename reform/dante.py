@@ -98,6 +98,7 @@ FAR_AWAY_M = 50.0  # metres
 MAX_MODEL_BYTES = 1 << 28  # bytes (256 MiB): largest model file read (the default net: 1.3 MB)
 _MAX_HEADER_BYTES = 1 << 20  # bytes of a safetensors JSON header (the default net: 3 kB)
 _METADATA_KEY = "reform_sim"
+_PREDICT_PEOPLE = 1 << 20  # context people whose features are made at once while predicting
 
 
 def torch_available() -> bool:
@@ -195,9 +196,14 @@ def _pair_features(
 def _ordered_pairs(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every ordered pair (i, j), i != j, of n people and the other people of each, (P, n - 2)."""
     i, j = np.nonzero(~np.eye(n, dtype=bool))
+    return i, j, _others(i, j, n)
+
+
+def _others(i: np.ndarray, j: np.ndarray, n: int) -> np.ndarray:
+    """(P, n - 2): for each pair, the n - 2 people who are neither i nor j, in order."""
     low, high = np.minimum(i, j)[:, None], np.maximum(i, j)[:, None]
     k = np.arange(max(n - 2, 0))[None, :]  # the k-th person who is neither i nor j
-    return i, j, k + (k >= low) + (k >= high - 1)
+    return k + (k >= low) + (k >= high - 1)
 
 
 def _together(frame: Frame) -> np.ndarray:
@@ -562,21 +568,24 @@ class Dante(BaseEstimator):
         if n < 2:
             return np.zeros((n, n))
         net_module = _net_module()
-        i, j, others = _ordered_pairs(n)
-        if n == 2:
-            others = np.full((len(i), 1), -1)
+        i, j = np.nonzero(~np.eye(n, dtype=bool))
         position, facing = _people(frame, self.orientation)
-        zeros = np.zeros(len(i), dtype=np.int64)
-        context, pair = _pair_features(
-            position[None],
-            facing[None],
-            np.stack([zeros, i], axis=1),
-            np.stack([zeros, j], axis=1),
-            others,
-            np.zeros(len(i), dtype=bool),
-        )
-        with net_module.single_thread():
-            logits = net_module.predict_logits(self.net_, context, pair).astype(np.float64)
+        logits = np.empty(len(i))
+        step = max(1, _PREDICT_PEOPLE // max(n - 2, 1))  # pairs whose features are held at once
+        for start in range(0, len(i), step):
+            a, b = i[start : start + step], j[start : start + step]
+            others = _others(a, b, n) if n > 2 else np.full((len(a), 1), -1)
+            zeros = np.zeros(len(a), dtype=np.int64)
+            context, pair = _pair_features(
+                position[None],
+                facing[None],
+                np.stack([zeros, a], axis=1),
+                np.stack([zeros, b], axis=1),
+                others,
+                np.zeros(len(a), dtype=bool),
+            )
+            with net_module.single_thread():
+                logits[start : start + step] = net_module.predict_logits(self.net_, context, pair)
         return affinity_matrix(n, 1.0 / (1.0 + np.exp(-logits)))
 
     def predict(self, frames: Sequence[Frame]) -> list[list[Group]]:

@@ -163,6 +163,14 @@ def _frame(n: int, **kwargs) -> Frame:
     )
 
 
+def test_a_frame_predicted_in_pieces_gives_the_same_affinities(trained, monkeypatch):
+    """Large frames are scored a few pairs at a time (memory stays bounded): same answer."""
+    frame = toy_frames(4, 1)[0]
+    whole = trained.affinities(frame)
+    monkeypatch.setattr("reform.dante._PREDICT_PEOPLE", 3 * (frame.n_people - 2))  # 3 pairs
+    np.testing.assert_allclose(trained.affinities(frame), whole, rtol=0, atol=1e-6)
+
+
 def test_dense_scenes_keep_their_groups_turned_moved_and_relabelled(trained):
     assert_same_groups_moved_and_relabelled(trained, seed=41)
 
