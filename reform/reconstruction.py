@@ -52,8 +52,6 @@ from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import coo_array
-from scipy.sparse.csgraph import connected_components
 
 from reform.features import pair_indices
 
@@ -579,6 +577,10 @@ def graph_greedy_labels(
         return out
     key = np.unique(a * n + b)  # sorted: pairs in (first, second) order, the tie-break order
     a, b = np.divmod(key, n)
+    # SciPy here: `train --help` lists RECONSTRUCTIONS without loading it
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
     count, component = connected_components(
         coo_array((np.ones(a.size, dtype=np.int8), (a, b)), shape=(n, n)), directed=False
     )
