@@ -11,6 +11,7 @@ saves what the viewer shows. Nothing is drawn by hand: each picture is the viewe
 
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import sys
@@ -19,6 +20,8 @@ import time
 from pathlib import Path
 
 from rerun.experimental import ViewerClient
+
+from sim.recording import stop_viewer, viewer_command
 
 IMAGES = Path(__file__).resolve().parent / "images"
 WINDOW = "1600x900"  # logical points
@@ -57,16 +60,16 @@ def _free_port() -> int:
 
 
 def main() -> int:
-    rerun = Path(sys.executable).with_name("rerun")
     IMAGES.mkdir(exist_ok=True)
+    # This interpreter's reform-sim, whether or not its environment is activated.
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     with tempfile.TemporaryDirectory() as folder:
         for image, commands, recording, at in SHOTS:
             for command in commands:
-                subprocess.run(command, shell=True, cwd=folder, check=True)
+                subprocess.run(command, shell=True, cwd=folder, env=env, check=True)
             port = _free_port()
             viewer = subprocess.Popen(
-                [
-                    str(rerun),
+                viewer_command(
                     "--headless",
                     "--renderer",
                     "vulkan",
@@ -75,7 +78,7 @@ def main() -> int:
                     "--window-size",
                     WINDOW,
                     "--hide-welcome-screen",
-                ],
+                ),
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.DEVNULL,
             )
@@ -89,8 +92,7 @@ def main() -> int:
                 client.save_screenshot(str(IMAGES / image))
                 time.sleep(2.0)
             finally:
-                viewer.terminate()
-                viewer.wait(timeout=30)
+                stop_viewer(viewer)
             print(f"wrote {IMAGES / image}")
     return 0
 

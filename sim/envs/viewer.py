@@ -2,7 +2,8 @@
 
 `ViewerStream.open` finds a viewer at the given gRPC address (Rerun's default,
 ``rerun+http://127.0.0.1:9876/proxy``, unless told otherwise): one that is listening is used;
-with none listening there and a display to show one on, a viewer is started (``rr.spawn``);
+with none listening there and a display to show one on, a viewer window is started, listening
+on this machine only (`sim.recording.viewer_command`);
 with neither, nothing is shown and one warning says how to get a viewer — the environment
 neither waits for a viewer nor fails. An episode is one recording (``reform-sim``, its id from
 the scenario, its seed and the episode's number), on the ``frame`` (control step) and
@@ -17,7 +18,9 @@ import contextlib
 import math
 import os
 import socket
+import subprocess
 import sys
+import time
 import urllib.parse
 from collections.abc import Sequence
 
@@ -33,6 +36,7 @@ from sim.recording import (
     default_blueprint,
     log_room,
     open_recording,
+    viewer_command,
 )
 from sim.recording._colours import ROBOT, SINGLETON
 from sim.recording._target import VIEWER_SCHEMES
@@ -41,6 +45,7 @@ __all__ = ["DEFAULT_VIEWER", "ViewerStream", "viewer_listening"]
 
 DEFAULT_VIEWER = "rerun+http://127.0.0.1:9876/proxy"  # Rerun's default viewer address
 PROBE_TIMEOUT_S = 0.25  # seconds to wait for a viewer's port to answer
+SPAWN_WAIT_S = 10.0  # seconds a viewer window started here is given to listen
 PERSON_RADIUS_M = 0.22  # metres, the dot of a person (grey when alone)
 PERSON_Z_M = 0.9  # metres: people's dots float at chest height
 HEADING_M = 0.5  # metres, length of the robot's heading arrow
@@ -125,10 +130,26 @@ class ViewerStream:
         return True
 
     def _spawn(self) -> bool:
+        """Starts a viewer window at the address (a local one, with a display to show it on),
+        listening on this machine only and left open when the environment closes."""
         host, port = _address(self.url)
         if host not in _LOCAL or not _display():
             return False
-        rr.spawn(port=port, connect=False)
+        subprocess.Popen(
+            viewer_command(
+                "--port",
+                str(port),
+                "--expect-data-soon",
+                bind="::1" if host == "::1" else "127.0.0.1",
+            ),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,  # a window of its own: it outlives the environment
+            env={**os.environ, "RERUN_APP_ONLY": "true"},  # as rr.spawn starts it
+        )
+        deadline = time.monotonic() + SPAWN_WAIT_S
+        while not viewer_listening(self.url) and time.monotonic() < deadline:
+            time.sleep(0.1)
         return viewer_listening(self.url)
 
     def show(

@@ -26,6 +26,10 @@ colours, events and mistakes are worked out only where the partitions change. Th
 pose blocks can be recorded without making Frames: ``record_episode(path,
 FrameColumns.from_blocks(sim.episode.episode_blocks(...)))``.
 
+A viewer the project starts itself (``--serve``'s web viewer, the Gymnasium environments'
+window, the tests' servers) is the Rerun program run through :func:`viewer_command`, listening
+on 127.0.0.1, and stopped with :func:`stop_viewer`.
+
 Entity tree: ``world/`` (room, MuJoCo model, people, robot, observed people, groups per source
 with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, group counts),
 ``events``, ``dataset/`` (characterisation, pair scatter, stress curves).
@@ -81,6 +85,9 @@ _EXPORTS = {
     "log_camera_images": "sim.recording._scene",
     "log_model": "sim.recording._scene",
     "log_room": "sim.recording._scene",
+    "rerun_program": "sim.recording._program",
+    "stop_viewer": "sim.recording._program",
+    "viewer_command": "sim.recording._program",
     "room_bounds": "sim.recording._scene",
     "APPLICATION_ID": "sim.recording._stream",
     "RecordingTarget": "sim.recording._target",

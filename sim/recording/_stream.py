@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import contextlib
 import os
+import socket
+import subprocess
 import sys
 import time
 import urllib.parse
@@ -19,6 +21,7 @@ from collections.abc import Iterator
 import rerun as rr
 
 from reform.atomic import atomic_path
+from sim.recording._program import stop_viewer, viewer_command
 from sim.recording._target import (
     SERVE_BIND_IP,
     SERVE_GRPC_PORT,
@@ -29,6 +32,7 @@ from sim.recording._target import (
 __all__ = ["APPLICATION_ID", "open_recording", "recording_id"]
 
 APPLICATION_ID = "reform-sim"
+WEB_VIEWER_START_S = 20.0  # seconds the web viewer of --serve is given to answer
 # Namespace of the recording ids (uuid5 of "name:seed"): fixed, so ids are stable across runs.
 _RECORDING_NAMESPACE = uuid.UUID("6f1c2a4e-0d5b-4c59-9a64-2f6f3c1b7e21")
 
@@ -96,15 +100,44 @@ def open_recording(
 
 
 def _serve_until_interrupted(uri: str) -> None:
-    rr.serve_web_viewer(web_port=SERVE_WEB_PORT, open_browser=False, connect_to=uri)
-    web = f"http://{SERVE_BIND_IP}:{SERVE_WEB_PORT}/?url={urllib.parse.quote(uri, safe='')}"
-    print(
-        f"serving the recording at {uri}: open it with `rerun {uri}` or in a browser at "
-        f"{web}; Ctrl-C stops",
-        file=sys.stderr,
+    """Hosts the web viewer of the recording served at ``uri`` (on this machine only) until
+    Ctrl-C."""
+    viewer = subprocess.Popen(
+        viewer_command("--serve-web", "--web-viewer-port", str(SERVE_WEB_PORT), uri),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
     )
     try:
-        while True:
-            time.sleep(1.0)
+        _wait_for_web_viewer(viewer)
+        web = f"http://{SERVE_BIND_IP}:{SERVE_WEB_PORT}/?url={urllib.parse.quote(uri, safe='')}"
+        print(
+            f"serving the recording at {uri}: open it with `rerun {uri}` or in a browser at "
+            f"{web}; Ctrl-C stops",
+            file=sys.stderr,
+            flush=True,
+        )
+        while viewer.poll() is None:
+            time.sleep(0.2)
+        raise OSError(f"--serve: the web viewer stopped (exit status {viewer.returncode})")
     except KeyboardInterrupt:
         print("stopped serving", file=sys.stderr)
+    finally:
+        stop_viewer(viewer)
+
+
+def _wait_for_web_viewer(viewer: subprocess.Popen) -> None:
+    """Returns once the web viewer answers on its port; an OSError if it exits first."""
+    deadline = time.monotonic() + WEB_VIEWER_START_S
+    while time.monotonic() < deadline:
+        if viewer.poll() is not None:
+            raise OSError(
+                f"--serve: the web viewer could not start on port {SERVE_WEB_PORT} (exit status "
+                f"{viewer.returncode}); is another program using it?"
+            )
+        with (
+            contextlib.suppress(OSError),
+            socket.create_connection((SERVE_BIND_IP, SERVE_WEB_PORT), timeout=0.2),
+        ):
+            return
+        time.sleep(0.1)
+    raise OSError(f"--serve: the web viewer did not answer on port {SERVE_WEB_PORT}")

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import signal
 import subprocess
 import sys
 import time
@@ -536,60 +535,20 @@ def _free_port() -> int:
         return int(probe.getsockname()[1])
 
 
-def _rerun_binary() -> Path:
-    """The Rerun viewer program itself, not the ``rerun`` wrapper script that runs it as a
-    child (stopping the wrapper would leave the viewer running)."""
-    import rerun_cli
-
-    folder = Path(rerun_cli.__file__).parent
-    for candidate in (folder / "Rerun.app" / "Contents" / "MacOS" / "Rerun", folder / "rerun"):
-        for path in (candidate, candidate.with_suffix(".exe")):
-            if path.is_file():
-                return path
-    raise AssertionError(f"no Rerun viewer program in {folder}")
-
-
-def _listening_hosts(port: int) -> set[str]:
-    """The IPv4 and IPv6 addresses something listens on at ``port`` here (Linux /proc/net)."""
-    hosts = set()
-    for table in ("tcp", "tcp6"):
-        path = Path("/proc/net") / table
-        if not path.exists():
-            continue
-        for line in path.read_text().splitlines()[1:]:
-            local, _, state = line.split()[1:4]
-            address, local_port = local.split(":")
-            if state == "0A" and int(local_port, 16) == port:  # 0A: LISTEN
-                raw = bytes.fromhex(address)
-                if len(raw) == 4:
-                    hosts.add(".".join(str(b) for b in reversed(raw)))
-                else:
-                    hosts.add(":".join(raw[i : i + 4][::-1].hex() for i in range(0, 16, 4)))
-    return hosts
-
-
-def _stop(server: subprocess.Popen) -> None:
-    """Stops the viewer as its log says ("Abort with Ctrl-C"); killed if it does not exit."""
-    if server.poll() is None:
-        server.send_signal(signal.SIGINT)
-        try:
-            server.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            server.kill()
-            server.wait()
-
-
 @pytest.fixture
 def rerun_server(tmp_path: Path):
     """A real Rerun server (the viewer program, no window) on 127.0.0.1 saving what it
     receives; stopped at the end."""
+    from listening import listening_hosts, supported
+
     from sim.envs.viewer import viewer_listening
+    from sim.recording import stop_viewer, viewer_command
 
     port = _free_port()
     saved = tmp_path / "received.rrd"
     log = (tmp_path / "server.log").open("w")
     server = subprocess.Popen(
-        [str(_rerun_binary()), "--bind", "127.0.0.1", "--port", str(port), "--save", str(saved)],
+        viewer_command("--port", str(port), "--save", str(saved)),
         stdout=log,
         stderr=subprocess.STDOUT,
     )
@@ -601,11 +560,11 @@ def rerun_server(tmp_path: Path):
             time.sleep(0.1)
         else:
             raise AssertionError(f"the rerun server did not listen on port {port}")
-        if Path("/proc/net/tcp").exists():
-            assert _listening_hosts(port) == {"127.0.0.1"}  # this machine only
+        if supported():
+            assert listening_hosts(port) == {"127.0.0.1"}  # this machine only
         yield url, saved, server
     finally:
-        _stop(server)
+        stop_viewer(server)
         log.close()
 
 
@@ -643,7 +602,9 @@ def test_human_mode_streams_each_episode_to_the_viewer(rerun_server) -> None:
         assert env.render() is None
         _run_out(env)
     env.close()
-    _stop(server)  # all it received is in the file
+    from sim.recording import stop_viewer
+
+    stop_viewer(server)  # all it received is in the file
     stores = _stores(saved)
     ids = [recording_id(name, seed=4) for name in names]
     assert set(ids) <= set(stores)

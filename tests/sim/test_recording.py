@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import signal
 import subprocess
 import sys
+import time
 from collections import defaultdict
 from fractions import Fraction
 from pathlib import Path
@@ -46,6 +48,7 @@ from sim.recording import (
 )
 
 RERUN_CLI = Path(sys.executable).with_name("rerun")
+REFORM_SIM = Path(sys.executable).with_name("reform-sim")
 
 
 @pytest.fixture(autouse=True)
@@ -1288,6 +1291,64 @@ def test_command_line_flags_follow_rerun_conventions(tmp_path):
         RecordingTarget(save=tmp_path / "run.txt")
     with pytest.raises(ValueError, match="needs save, connect or serve"):
         RecordingTarget()
+
+
+def test_the_viewer_program_is_started_itself_on_this_machine_only(tmp_path):
+    from listening import free_port, listening_hosts, supported
+
+    from sim.recording import rerun_program, stop_viewer, viewer_command
+
+    program = rerun_program()
+    assert not program.read_bytes()[:2] == b"#!"  # the program, not the script that runs it
+    port = free_port()
+    command = viewer_command("--port", str(port), "--save", str(tmp_path / "got.rrd"))
+    assert command[:3] == [str(program), "--bind", "127.0.0.1"]
+    viewer = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(200):
+            if not supported() or listening_hosts(port):
+                break
+            time.sleep(0.05)
+        if supported():
+            assert listening_hosts(port) == {"127.0.0.1"}
+    finally:
+        stop_viewer(viewer)
+    assert viewer.poll() is not None  # stopped: nothing left running
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="stops the run with SIGINT")
+def test_serve_listens_on_this_machine_only_until_ctrl_c(tmp_path):
+    from listening import listening_hosts, supported
+
+    from sim.recording._target import SERVE_GRPC_PORT, SERVE_WEB_PORT
+
+    if not supported():
+        pytest.skip("reads the listening addresses from Linux /proc/net")
+    if listening_hosts(SERVE_GRPC_PORT) or listening_hosts(SERVE_WEB_PORT):
+        pytest.skip(f"port {SERVE_GRPC_PORT} or {SERVE_WEB_PORT} is in use on this machine")
+    run = subprocess.Popen(
+        [str(REFORM_SIM), "simulate", "--scenario", "hri-conversation", "--duration", "1"]
+        + ["--out", str(tmp_path / "x.parquet"), "--serve", "--quiet"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        line = run.stderr.readline()
+        assert line.startswith(
+            f"serving the recording at rerun+http://127.0.0.1:{SERVE_GRPC_PORT}/proxy"
+        ), line
+        assert listening_hosts(SERVE_GRPC_PORT) == {"127.0.0.1"}
+        assert listening_hosts(SERVE_WEB_PORT) == {"127.0.0.1"}
+        run.send_signal(signal.SIGINT)  # the run only: it stops the web viewer itself
+        rest = run.stderr.read()
+        assert run.wait(timeout=60) == 0, rest
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait()
+    assert "stopped serving" in rest
+    assert not listening_hosts(SERVE_GRPC_PORT) and not listening_hosts(SERVE_WEB_PORT)
 
 
 def test_a_failed_run_leaves_no_file(tmp_path):
