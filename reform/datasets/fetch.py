@@ -30,7 +30,9 @@ import os
 import posixpath
 import re
 import shutil
+import socket
 import sys
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from importlib import resources
 from os import PathLike
@@ -50,6 +52,7 @@ __all__ = [
     "FetchError",
     "PublicDataset",
     "cache_dir",
+    "download_deadline",
     "fetch",
     "is_fetched",
     "local_datasets_dir",
@@ -66,6 +69,7 @@ DEFAULT_MIRROR = "https://raw.githubusercontent.com"  # files at <mirror>/<repo>
 MANIFEST = ".reform-sim-fetched.json"  # written last, in a dataset's folder: the fetch is complete
 MANIFEST_VERSION = 1
 DOWNLOAD_TIMEOUT_S = 60.0  # seconds without an answer before a download fails
+MIN_DOWNLOAD_RATE = 10_000  # bytes/s: a file must arrive within DOWNLOAD_TIMEOUT_S + bytes / this
 REGISTRY_FILE = "public-datasets.json"
 
 # A file:// URL's path as a local path (urllib.request's url2pathname, without importing
@@ -643,6 +647,47 @@ def _checked(downloader: Callable[..., Any], file: DatasetFile) -> Callable[...,
     return download
 
 
+def download_deadline(size: int) -> float:
+    """Seconds a file of ``size`` bytes may take to arrive whole: `DOWNLOAD_TIMEOUT_S` plus its
+    size at `MIN_DOWNLOAD_RATE`. A mirror that trickles (a byte every few seconds, each in time
+    for the read timeout) is cut off then, instead of holding the fetch for ever."""
+    return DOWNLOAD_TIMEOUT_S + size / MIN_DOWNLOAD_RATE
+
+
+class _Deadline:
+    """Shuts a download's connection once ``seconds`` have passed: the read that waits on it
+    fails at once. Its `capture` is a requests response hook (it learns the connection)."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self.expired = False
+        self._response: Any = None
+        self._timer = threading.Timer(seconds, self._expire)
+        self._timer.daemon = True
+
+    def capture(self, response: Any, *args: Any, **kwargs: Any) -> Any:
+        self._response = response
+        return response
+
+    def _expire(self) -> None:
+        self.expired = True
+        response = self._response
+        if response is None:  # no answer yet: the read timeout ends the wait
+            return
+        try:
+            response.raw._fp.fp.raw._sock.shutdown(socket.SHUT_RDWR)
+        except (AttributeError, OSError):
+            with contextlib.suppress(Exception):
+                response.raw.close()
+
+    def __enter__(self) -> _Deadline:
+        self._timer.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._timer.cancel()
+
+
 @contextlib.contextmanager
 def _quiet(pooch: Any) -> Iterator[None]:
     """pooch logs every download to stderr at level INFO: only its warnings, here."""
@@ -676,6 +721,7 @@ def _download(
     its size and sha256 match), or raises `FetchError`. ``label`` names the progress bar."""
     pooch = _pooch()
     bar = None
+    deadline = _Deadline(download_deadline(file.bytes))
     if urlsplit(url).scheme == "file":
         inner: Callable[..., Any] = _copy_file
     else:
@@ -692,10 +738,12 @@ def _download(
                 leave=False,
             )
         inner = pooch.HTTPDownloader(
-            progressbar=bar if bar is not None else False, timeout=DOWNLOAD_TIMEOUT_S
+            progressbar=bar if bar is not None else False,
+            timeout=DOWNLOAD_TIMEOUT_S,
+            hooks={"response": deadline.capture},
         )
     try:
-        with _quiet(pooch):
+        with _quiet(pooch), deadline:
             pooch.retrieve(
                 url,
                 known_hash=f"sha256:{file.sha256}",
@@ -704,6 +752,15 @@ def _download(
                 downloader=_checked(inner, file),
             )
     except _Problem as exc:
+        if deadline.expired:
+            raise FetchError(
+                dataset.name,
+                file.path,
+                url,
+                f"{file.bytes} bytes within {deadline.seconds:g} s",
+                f"{exc.found.split(', then')[0]} when cut off: too slow a mirror (try another "
+                "--mirror)",
+            ) from None
         raise FetchError(
             dataset.name, file.path, url, exc.expected, exc.found, hint=exc.hint
         ) from None

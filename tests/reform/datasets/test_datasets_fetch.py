@@ -15,6 +15,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -33,7 +34,7 @@ from reform.datasets import (
     registry,
     resolve,
 )
-from reform.datasets.fetch import MANIFEST
+from reform.datasets.fetch import MANIFEST, download_deadline
 from sim.cli import main
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -105,6 +106,8 @@ class _Server(http.server.ThreadingHTTPServer):
     requests: list[str]
     # path -> (bytes sent, Content-Length announced): a download that stops early.
     truncate: dict[str, tuple[int, int]]
+    # path -> seconds between bytes: a mirror that trickles, each byte in time for a read timeout.
+    trickle: dict[str, float]
 
 
 class _Handler(http.server.SimpleHTTPRequestHandler):
@@ -112,6 +115,9 @@ class _Handler(http.server.SimpleHTTPRequestHandler):
 
     def do_GET(self) -> None:
         self.server.requests.append(self.path)
+        if self.path in self.server.trickle:
+            self._trickle(self.server.trickle[self.path])
+            return
         cut = self.server.truncate.get(self.path)
         if cut is None:
             super().do_GET()
@@ -123,6 +129,20 @@ class _Handler(http.server.SimpleHTTPRequestHandler):
         self.end_headers()
         self.wfile.write(data[:sent])
         self.close_connection = True
+
+    def _trickle(self, every_s: float) -> None:
+        data = Path(self.translate_path(self.path)).read_bytes()
+        self.send_response(200)
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        self.close_connection = True
+        for k in range(len(data)):
+            try:
+                self.wfile.write(data[k : k + 1])
+                self.wfile.flush()
+            except OSError:  # the client has gone
+                return
+            time.sleep(every_s)
 
     def log_message(self, format: str, *args) -> None:  # noqa: A002 - the base's signature
         pass
@@ -136,6 +156,7 @@ def _serve(root: Path) -> Iterator[tuple[str, _Server]]:
     server = _Server(("127.0.0.1", 0), handler)
     server.requests = []
     server.truncate = {}
+    server.trickle = {}
     thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
     thread.start()
     try:
@@ -337,6 +358,26 @@ def test_a_download_that_breaks_off(http_mirror, cache, registry_file):
     server.truncate[f"/{REPO}/{commit}/{path}"] = (100, len(data))
     found = f"expected {len(data)} bytes, found 100 bytes, then the download broke off"
     _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file, ends=False)
+
+
+def test_a_mirror_that_trickles_is_cut_off_at_its_deadline(
+    http_mirror, cache, registry_file, monkeypatch
+):
+    base, server = http_mirror
+    path, commit, data = FILES["tiny"][0]
+    server.trickle[f"/{REPO}/{commit}/{path}"] = 1.0  # a byte a second: no read ever times out
+    fetch_module = sys.modules[download_deadline.__module__]  # the name fetch is the function
+    monkeypatch.setattr(fetch_module, "DOWNLOAD_TIMEOUT_S", 2.0)
+    deadline = download_deadline(len(data))
+    assert deadline == 2.0 + len(data) / fetch_module.MIN_DOWNLOAD_RATE
+    started = time.monotonic()
+    found = f"expected {len(data)} bytes within {deadline:g} s, found "
+    error = _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file, ends=False)
+    assert time.monotonic() - started < deadline + 10
+    assert re.search(
+        r"found \d+ bytes when cut off: too slow a mirror \(try another --mirror\)$", str(error)
+    )
+    assert not [p for p in cache.rglob("*") if p.is_file()]  # no temporary file left behind
 
 
 def test_a_file_missing_from_the_http_mirror(http_mirror, mirror_dir, cache, registry_file):
