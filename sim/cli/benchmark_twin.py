@@ -44,7 +44,7 @@ def run_twin(args: argparse.Namespace) -> int:
     ]
     candidates += models
     folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
-    frames = list(twin_data(twin, folder, progress=not args.quiet))
+    frames = list(twin_data(twin, folder, n_jobs=args.jobs or 1, progress=not args.quiet))
 
     def progress(label: str) -> None:
         if not args.quiet:

@@ -22,7 +22,9 @@ def twin_file(tmp_path_factory):
 
 
 def test_tune_gcff_writes_the_best_setting_of_its_grid(twin_file, capsys):
-    status, out, err = run_cli(["tune", "--twin", twin_file, "--detector", "gcff", "-q"], capsys)
+    status, out, err = run_cli(
+        ["tune", "--twin", twin_file, "--detector", "gcff", "--jobs", 1, "-q"], capsys
+    )
     assert status == 0, err
     path = twin_file.parent / "tuned-gcff.json"
     data = json.loads(path.read_text())
@@ -37,7 +39,7 @@ def test_tune_gcff_writes_the_best_setting_of_its_grid(twin_file, capsys):
 
 def test_tune_reform_trains_on_the_twin_and_writes_a_model(twin_file, tmp_path, capsys):
     out = tmp_path / "m.skops"
-    argv = ["tune", "--twin", twin_file, "--detector", "reform", "--out", out, "-q"]
+    argv = ["tune", "--twin", twin_file, "--detector", "reform", "--out", out, "--jobs", 1, "-q"]
     status, _, err = run_cli(argv, capsys)
     assert status == 0, err
     model = load_model(out)
@@ -61,7 +63,12 @@ def test_detect_takes_the_settings_file_as_it_is(twin_file, tmp_path, capsys):
 
     settings = twin_file.parent / "tuned-gcff.json"
     if not settings.exists():
-        assert run_cli(["tune", "--twin", twin_file, "--detector", "gcff", "-q"], capsys)[0] == 0
+        assert (
+            run_cli(["tune", "--twin", twin_file, "--detector", "gcff", "--jobs", 1, "-q"], capsys)[
+                0
+            ]
+            == 0
+        )
     data = tmp_path / "place.parquet"
     write_parquet(Dataset(tuple(_frames()), name="place"), data)
     argv = ["detect", "--detector", "gcff", "--settings", settings, "--data", data,

@@ -35,7 +35,7 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     }
     result = run_twins(
         real, root=tmp_path / "twins", detectors=("proximity", "majority"),
-        tuned=("proximity",), episodes=2,
+        tuned=("proximity",), episodes=2, jobs=1,
     )  # fmt: skip
     assert result.datasets == ("one", "two")
     assert {c["detector"] for c in result.cells} == {"proximity", "majority"}
