@@ -11,6 +11,7 @@ import time
 from sim.cli._common import CliError, check_output, default_datasets
 from sim.experiments.demo import run_demo
 from sim.experiments.demo_report import write_report
+from sim.recording import rerun_in_this_shell
 
 
 def run(args: argparse.Namespace) -> int:
@@ -35,8 +36,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"  numbers:    {written['json']}")
     print(f"  model:      {result.model}")
     print(f"  recordings: {len(result.recordings)} .rrd files in {out / 'recordings'}/")
+    rerun = rerun_in_this_shell()
     for path in result.recordings:
-        print(f"    rerun {path}")
+        print(f"    {rerun} {path}")
     print(f"  figures:    {len(result.figures)} PNG files")
     missing = [name for name in ("salsa", "babble") if name not in result.datasets]
     if missing:

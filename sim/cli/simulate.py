@@ -26,7 +26,7 @@ from sim.cli._common import (
     size_error,
 )
 from sim.episode import estimate_episode, prepare, simulate_episode, write_episode
-from sim.recording import FieldOfView, record_episode, target_from_args
+from sim.recording import FieldOfView, record_episode, rerun_in_this_shell, target_from_args
 from sim.sensor import Sensor
 
 _STREAMING = (
@@ -131,7 +131,8 @@ def _run_recorded(
         field_of_view=FieldOfView.of(sensor),
     )
     if target.save is not None:
-        print(f"wrote {target.save} (open it with `rerun {target.save}`)", file=sys.stderr)
+        rerun = rerun_in_this_shell()
+        print(f"wrote {target.save} (open it with `{rerun} {target.save}`)", file=sys.stderr)
     return 0
 
 

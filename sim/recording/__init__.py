@@ -85,6 +85,7 @@ _EXPORTS = {
     "log_camera_images": "sim.recording._scene",
     "log_model": "sim.recording._scene",
     "log_room": "sim.recording._scene",
+    "rerun_in_this_shell": "sim.recording._program",
     "rerun_program": "sim.recording._program",
     "stop_viewer": "sim.recording._program",
     "viewer_command": "sim.recording._program",

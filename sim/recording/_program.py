@@ -8,6 +8,8 @@ always with ``--bind 127.0.0.1`` (the program's own default is every interface).
 
 from __future__ import annotations
 
+import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -15,7 +17,7 @@ from pathlib import Path
 
 from sim.recording._target import SERVE_BIND_IP
 
-__all__ = ["VIEWER_STOP_S", "rerun_program", "stop_viewer", "viewer_command"]
+__all__ = ["VIEWER_STOP_S", "rerun_in_this_shell", "rerun_program", "stop_viewer", "viewer_command"]
 
 VIEWER_STOP_S = 20.0  # seconds a stopped viewer is given to exit before it is killed
 # Where rerun_cli keeps the program, by platform (the macOS build may be an app bundle).
@@ -54,3 +56,17 @@ def stop_viewer(viewer: subprocess.Popen, *, timeout_s: float = VIEWER_STOP_S) -
             viewer.kill()
             viewer.wait()
     return int(viewer.returncode)
+
+
+def rerun_in_this_shell() -> str:
+    """How to type the ``rerun`` command here: ``rerun`` when the one on the PATH is this
+    environment's, else this environment's by its path (``.venv/bin/rerun`` from a clone's
+    folder whose environment is not activated)."""
+    mine = Path(sys.executable).with_name("rerun")
+    found = shutil.which("rerun")
+    if not mine.is_file() or (found is not None and os.path.samefile(found, mine)):
+        return "rerun"
+    try:
+        return str(mine.relative_to(Path.cwd()))
+    except ValueError:
+        return str(mine)

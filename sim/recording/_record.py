@@ -20,6 +20,7 @@ from sim.recording._dataset_views import log_characterisation, log_pair_scatter,
 from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
 from sim.recording._groups import TRUTH, GroupLayout, log_groups
 from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
+from sim.recording._program import rerun_in_this_shell
 from sim.recording._scene import (
     BodyPoses,
     CameraImages,
@@ -327,5 +328,6 @@ def record_from_args(
         target, frames, predictions_by_detector, evaluations, name=name, dataset=dataset
     )
     if target.save is not None:
-        print(f"wrote {target.save} (open it with `rerun {target.save}`)", file=sys.stderr)
+        rerun = rerun_in_this_shell()
+        print(f"wrote {target.save} (open it with `{rerun} {target.save}`)", file=sys.stderr)
     return recorded

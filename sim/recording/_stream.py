@@ -21,7 +21,7 @@ from collections.abc import Iterator
 import rerun as rr
 
 from reform.atomic import atomic_path
-from sim.recording._program import stop_viewer, viewer_command
+from sim.recording._program import rerun_in_this_shell, stop_viewer, viewer_command
 from sim.recording._target import (
     SERVE_BIND_IP,
     SERVE_GRPC_PORT,
@@ -111,7 +111,8 @@ def _serve_until_interrupted(uri: str) -> None:
         _wait_for_web_viewer(viewer)
         web = f"http://{SERVE_BIND_IP}:{SERVE_WEB_PORT}/?url={urllib.parse.quote(uri, safe='')}"
         print(
-            f"serving the recording at {uri}: open it with `rerun {uri}` or in a browser at "
+            f"serving the recording at {uri}: open it with `{rerun_in_this_shell()} {uri}` or in "
+            "a browser at "
             f"{web}; Ctrl-C stops",
             file=sys.stderr,
             flush=True,

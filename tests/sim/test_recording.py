@@ -1316,6 +1316,22 @@ def test_the_viewer_program_is_started_itself_on_this_machine_only(tmp_path):
     assert viewer.poll() is not None  # stopped: nothing left running
 
 
+def test_the_rerun_command_printed_is_one_this_shell_runs(tmp_path, monkeypatch):
+    from sim.recording import rerun_in_this_shell
+
+    mine = Path(sys.executable).with_name("rerun")
+    clone = mine.parents[2]  # the folder holding the environment, as a clone holds .venv
+    monkeypatch.setenv("PATH", str(tmp_path))  # a new shell: the environment not activated
+    monkeypatch.chdir(clone)
+    typed = rerun_in_this_shell()
+    assert typed == str(mine.relative_to(clone))  # .venv/bin/rerun
+    assert subprocess.run([typed, "--version"], capture_output=True).returncode == 0
+    monkeypatch.chdir(tmp_path)
+    assert rerun_in_this_shell() == str(mine)
+    monkeypatch.setenv("PATH", str(mine.parent))  # activated
+    assert rerun_in_this_shell() == "rerun"
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="stops the run with SIGINT")
 def test_serve_listens_on_this_machine_only_until_ctrl_c(tmp_path):
     from listening import listening_hosts, supported
