@@ -85,8 +85,10 @@ def _reap(pid: int) -> None:
         os.waitpid(pid, os.WNOHANG)
 
 
-def descendants(root: int | None = None) -> list[Process]:
-    """Every live process below ``root`` (this process by default); zombies are reaped."""
+def descendants(root: int | None = None, *, reap: bool = False) -> list[Process]:
+    """Every live process below ``root`` (this process by default); with ``reap``, this
+    process's exited children are reaped (only once no test waits for them: a child reaped
+    here would read as exit status 0 to its `subprocess.Popen`)."""
     root = os.getpid() if root is None else root
     table = {}
     for entry in PROC.iterdir():
@@ -100,7 +102,7 @@ def descendants(root: int | None = None) -> list[Process]:
         pid = todo.pop()
         ppid, state, command = table[pid]
         if state == "Z":
-            if ppid == os.getpid():
+            if reap and ppid == os.getpid():
                 _reap(pid)
             continue
         found.append(Process(pid, ppid, command))
@@ -111,7 +113,7 @@ def descendants(root: int | None = None) -> list[Process]:
 def left_running(*, grace_s: float = GRACE_S) -> list[Process]:
     """The descendants of this process still alive after ``grace_s`` seconds of waiting."""
     deadline = time.monotonic() + grace_s
-    while (alive := descendants()) and time.monotonic() < deadline:
+    while (alive := descendants(reap=True)) and time.monotonic() < deadline:
         time.sleep(0.1)
     return alive
 
