@@ -96,7 +96,7 @@ from reform.annotation import ANNOTATION_RANGES, AnnotationModel, draw_annotatio
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.errors import DataFormatError
 from reform.datasets.parquet import CARD_JSON, FORMAT_VERSION, METADATA_KEY, write_parquet
-from reform.datasets.store import Store, is_uri, open_store
+from reform.datasets.store import Store, StoreError, is_uri, open_store
 from reform.datasets.store_dataset import COMMITS_DIR, StoreFolder, commit_name
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
@@ -148,8 +148,9 @@ SIZE_CATEGORIES = (
 )
 RECORDINGS_DIR = "recordings"
 LOCK_FILE = ".generate.lock"
-# Environment variables the stores' libraries read (botocore, google-auth, azure, fsspec).
-STORE_ENVIRONMENT = ("AWS_", "GOOGLE_", "GCE_", "AZURE_", "FSSPEC_")
+# Environment variables the stores' libraries read (botocore, google-auth, azure, fsspec), and
+# the stores' deadline (reform.datasets.store.TIMEOUT_VARIABLE).
+STORE_ENVIRONMENT = ("AWS_", "GOOGLE_", "GCE_", "AZURE_", "FSSPEC_", "REFORM_SIM_STORE_")
 TASKS_PER_WORKER = 4  # batches per worker, so that uneven episodes still balance
 MAX_EPISODES_PER_TASK = 16  # episodes per batch at most (progress stays live)
 RANDOM_ANNOTATION = "random"  # GenerationSpec.annotation: one model drawn per episode
@@ -943,9 +944,16 @@ def _store_lock(store: Store) -> Iterator[None]:
             )
     try:
         yield
-    finally:
-        if store.read(LOCK_FILE) == mine:
-            store.delete(LOCK_FILE)
+    except BaseException:
+        with contextlib.suppress(StoreError):  # a store that stopped answering is already said
+            _release_store_lock(store, mine)
+        raise
+    _release_store_lock(store, mine)
+
+
+def _release_store_lock(store: Store, mine: bytes) -> None:
+    if store.read(LOCK_FILE) == mine:
+        store.delete(LOCK_FILE)
 
 
 def _committed_shards(

@@ -11,6 +11,13 @@ Everything that can go wrong before any work (the filesystem's package not insta
 credentials, a store that cannot be reached, a bucket that does not exist) is one `StoreError`,
 a ValueError whose message is one line naming the URI.
 
+**Deadlines.** Every request to the store must be answered within a deadline, `TIMEOUT_S`
+seconds unless the environment variable ``REFORM_SIM_STORE_TIMEOUT`` says otherwise (seconds, or
+a duration such as ``90s``, ``2m``, ``500ms``): a store that accepts connections and never
+answers is one `StoreError` naming the object, the operation and the deadline, never a wait
+without end. A deadline that is not a duration, or is not above zero, is refused when the store
+is opened, before any work.
+
 fsspec is imported only inside these functions.
 """
 
@@ -18,12 +25,26 @@ from __future__ import annotations
 
 import os
 import re
+import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["StoreError", "Store", "is_uri", "open_store"]
+__all__ = [
+    "TIMEOUT_S",
+    "TIMEOUT_VARIABLE",
+    "StoreError",
+    "Store",
+    "is_uri",
+    "open_store",
+    "timeout",
+]
 
+TIMEOUT_S = 60.0  # seconds a store may take to answer one request, unless TIMEOUT_VARIABLE says
+TIMEOUT_VARIABLE = "REFORM_SIM_STORE_TIMEOUT"
+_DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s|m|min)?\s*$")
+_UNIT_S = {None: 1.0, "s": 1.0, "ms": 1e-3, "m": 60.0, "min": 60.0}
 _URI = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
 # The package each common scheme needs (fsspec's own registry knows the rest).
 _PACKAGES = {"s3": "s3fs", "s3a": "s3fs", "gs": "gcsfs", "gcs": "gcsfs", "az": "adlfs"}
@@ -37,6 +58,27 @@ _CREDENTIALS = {
 
 class StoreError(ValueError):
     """A store that cannot be used: one line naming the URI and what to do."""
+
+
+def timeout(text: str | None = None) -> float:
+    """The stores' deadline, seconds: ``text`` (a duration: ``30``, ``90s``, ``2m``, ``500ms``),
+    by default the environment's ``REFORM_SIM_STORE_TIMEOUT``, else `TIMEOUT_S`.
+
+    Raises:
+        StoreError: not a duration, or not above zero (one line).
+    """
+    if text is None:
+        text = os.environ.get(TIMEOUT_VARIABLE)
+        if text is None or not text.strip():
+            return TIMEOUT_S
+    match = _DURATION.match(text)
+    seconds = float(match.group(1)) * _UNIT_S[match.group(2)] if match else 0.0
+    if not seconds > 0.0:
+        raise StoreError(
+            f"{TIMEOUT_VARIABLE} must be a duration above zero (seconds, or with a unit: 90s, 2m, "
+            f"500ms), got {text!r}"
+        )
+    return seconds
 
 
 def is_uri(location: str | os.PathLike[str]) -> bool:
@@ -57,6 +99,7 @@ class Store:
     uri: str
     fs: Any
     root: str
+    timeout: float = TIMEOUT_S
 
     def url(self, relative: str = "") -> str:
         """The URI of ``relative`` (in messages and for other tools)."""
@@ -69,7 +112,7 @@ class Store:
         """The object's bytes, or None when there is none."""
         self._forget(relative)
         try:
-            return self.fs.cat_file(self.path(relative))
+            return self._within("read", relative, self.fs.cat_file, self.path(relative))
         except FileNotFoundError:
             return None
 
@@ -81,6 +124,33 @@ class Store:
         with ThreadPoolExecutor(max_workers=len(relative)) as pool:
             return dict(zip(relative, pool.map(self.read, relative), strict=True))
 
+    def _within(self, what: str, relative: str, call: Callable[..., Any], *args, **kwargs) -> Any:
+        """``call(*args, **kwargs)``, or a `StoreError` once the store has not answered within
+        `timeout` seconds (the request is left to a thread that does not keep the process)."""
+        outcome: dict[str, Any] = {}
+
+        def run() -> None:
+            try:
+                outcome["value"] = call(*args, **kwargs)
+            except BaseException as exc:  # noqa: BLE001 - raised again in the caller
+                outcome["error"] = exc
+
+        thread = threading.Thread(target=run, name=f"store {what}", daemon=True)
+        thread.start()
+        thread.join(self.timeout)
+        if thread.is_alive():
+            loop = getattr(self.fs, "loop", None)  # an async filesystem's (s3fs, gcsfs)
+            if loop is not None:  # its abandoned requests fail as the process ends: not news
+                loop.set_exception_handler(lambda loop, context: None)
+            raise StoreError(
+                f"{self.url(relative)}: the store did not answer within {self.timeout:g} s "
+                f"({what}); check the store and the network, or give it longer with "
+                f"{TIMEOUT_VARIABLE}=SECONDS"
+            )
+        if "error" in outcome:
+            raise outcome["error"]
+        return outcome.get("value")
+
     def _forget(self, relative: str) -> None:
         """Drops what the filesystem remembers of listings (another process may have written
         since)."""
@@ -88,14 +158,18 @@ class Store:
 
     def write(self, relative: str, data: bytes) -> None:
         """Writes the object whole: in object storage it appears complete or not at all."""
-        self.fs.pipe_file(self.path(relative), data)
+        self._within("write", relative, self.fs.pipe_file, self.path(relative), data)
 
     def create(self, relative: str, data: bytes) -> bool:
         """Writes the object only if there is none (S3: a PUT with ``If-None-Match: *``);
         False when one is there."""
-        try:
+
+        def create() -> None:
             with self.fs.open(self.path(relative), "xb") as handle:
                 handle.write(data)
+
+        try:
+            self._within("create", relative, create)
         except FileExistsError:
             return False
         return True
@@ -104,7 +178,7 @@ class Store:
         """The object's version tag (ETag), or None when the filesystem has none."""
         self._forget(relative)
         try:
-            info = self.fs.info(self.path(relative))
+            info = self._within("look up", relative, self.fs.info, self.path(relative))
         except FileNotFoundError:
             return None
         tag = info.get("ETag") or info.get("etag")
@@ -116,7 +190,17 @@ class Store:
         if type(self.fs).__name__ == "S3FileSystem":
             bucket, key, _ = self.fs.split_path(self.path(relative))
             try:
-                self.fs.call_s3("put_object", Bucket=bucket, Key=key, Body=data, IfMatch=tag)
+                put = self.fs.call_s3
+                self._within(
+                    "replace",
+                    relative,
+                    put,
+                    "put_object",
+                    Bucket=bucket,
+                    Key=key,
+                    Body=data,
+                    IfMatch=tag,
+                )
             except (OSError, FileExistsError):  # PreconditionFailed
                 return False
             self.fs.invalidate_cache(self.path(relative))
@@ -129,14 +213,14 @@ class Store:
     def delete(self, *relative: str) -> None:
         paths = [self.path(r) for r in relative]
         if paths:
-            self.fs.rm(paths)
+            self._within("delete", relative[0], self.fs.rm, paths)
 
     def sizes(self, relative: str = "") -> dict[str, int]:
         """Every object below ``relative``: its path relative to the folder -> bytes."""
         base = self.path(relative)
         self._forget(relative)
         try:
-            found = self.fs.find(base, detail=True)
+            found = self._within("list", relative, self.fs.find, base, detail=True)
         except FileNotFoundError:
             return {}
         prefix = self.root.rstrip("/") + "/"
@@ -156,6 +240,7 @@ def open_store(uri: str, *, check: bool = True) -> Store:
     """
     import fsspec
 
+    deadline = timeout()
     uri = uri.rstrip("/")
     scheme = uri.split("://", 1)[0].lower()
     package = _PACKAGES.get(scheme)
@@ -172,7 +257,7 @@ def open_store(uri: str, *, check: bool = True) -> Store:
         raise StoreError(
             f"{uri}: cannot open a {scheme}:// store ({_first_line(exc)}); {install}"
         ) from None
-    store = Store(uri=uri, fs=fs, root=root.rstrip("/"))
+    store = Store(uri=uri, fs=fs, root=root.rstrip("/"), timeout=deadline)
     if check:
         _check(store, scheme, package)
     return store
@@ -192,7 +277,9 @@ def _check(store: Store, scheme: str, package: str | None) -> None:
     endpoint = _endpoint(store.fs)
     where = f" at {endpoint}" if endpoint else ""
     try:
-        store.fs.ls(bucket, refresh=True)
+        store._within("list", "", store.fs.ls, bucket, refresh=True)
+    except StoreError:
+        raise
     except FileNotFoundError:
         raise StoreError(
             f"{store.uri}: bucket {bucket!r} does not exist{where}; create it first or check "

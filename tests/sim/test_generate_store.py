@@ -4,12 +4,18 @@ pyarrow, polars and DuckDB straight from the bucket, and every bad store refused
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import re
+import signal
 import socket
 import subprocess
 import sys
+import threading
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -370,3 +376,90 @@ def test_a_resume_makes_a_damaged_object_again_and_never_vouches_for_it(server, 
     same_as_reference(uri, reference)
     assert store.read(CARD_JSON) == (reference / CARD_JSON).read_bytes()
     assert verify_folder(uri) == []
+
+
+@contextlib.contextmanager
+def _freezable(host: str, port: int) -> Iterator[tuple[int, threading.Event]]:
+    """A TCP proxy on 127.0.0.1 in front of ``host:port``, and the event that freezes it: from
+    then on it accepts connections and takes requests, and answers nothing."""
+    frozen = threading.Event()
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(64)
+    listener.settimeout(0.1)
+    stop = threading.Event()
+    opened: list[socket.socket] = []
+
+    def pump(source: socket.socket, target: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := source.recv(65536):
+                while frozen.is_set() and not stop.is_set():
+                    time.sleep(0.05)
+                target.sendall(data)
+
+    def serve() -> None:
+        while not stop.is_set():
+            try:
+                client = listener.accept()[0]
+            except TimeoutError:
+                continue
+            opened.append(client)
+            if frozen.is_set():
+                continue
+            upstream = socket.create_connection((host, port))
+            opened.append(upstream)
+            for ends in ((client, upstream), (upstream, client)):
+                threading.Thread(target=pump, args=ends, daemon=True).start()
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    try:
+        yield listener.getsockname()[1], frozen
+    finally:
+        stop.set()
+        thread.join()
+        for connection in opened:
+            connection.close()
+        listener.close()
+
+
+def test_a_store_that_stops_answering_mid_run_ends_it_in_one_line(server):
+    """The store freezes once two shards are committed: the run ends within its deadline (plus
+    10 s) with one line naming the object, the operation and the deadline."""
+    deadline_s = 2.0
+    endpoint = server["AWS_ENDPOINT_URL"].removeprefix("http://")
+    host, port = endpoint.rsplit(":", 1)
+    uri = f"s3://{BUCKET}/frozen"
+    store = open_store(uri)
+    args = [*ARGS[:3], str(KILL_EPISODES), *ARGS[4:]]
+    with _freezable(host, int(port)) as (proxy, frozen):
+        env = os.environ | server | {"AWS_ENDPOINT_URL": f"http://127.0.0.1:{proxy}"}
+        process = subprocess.Popen(
+            [*CLI, "generate", *args, "--out", uri],
+            cwd=REPO_ROOT,
+            env=env | {"REFORM_SIM_STORE_TIMEOUT": f"{deadline_s:g}"},
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            start_new_session=True,
+        )
+        try:
+            ready = time.monotonic() + RUN_TIMEOUT_S
+            while len(store.sizes("_commits")) < 2 and time.monotonic() < ready:
+                time.sleep(0.02)
+            frozen.set()
+            started = time.monotonic()
+            _, err = process.communicate(timeout=deadline_s + 10 + 30)
+            seconds = time.monotonic() - started
+        finally:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+    assert seconds < deadline_s + 10
+    assert process.returncode == 2
+    (line,) = err.splitlines()
+    assert re.fullmatch(
+        rf"reform-sim generate: error: {uri}/\S+: the store did not answer within 2 s \(\w+\); "
+        r"check the store and the network, or give it longer with "
+        r"REFORM_SIM_STORE_TIMEOUT=SECONDS",
+        line,
+    )
