@@ -506,7 +506,7 @@ def _import(name: str, spec: str) -> Any:
     module_name, attribute = _parse_spec(spec)
     try:
         module = importlib.import_module(module_name)
-    except Exception as exc:  # the plugin's own code runs here: any error of it is its own
+    except _RAISED as exc:  # the plugin's own code runs here (a sys.exit too): its error
         hint = ""
         if isinstance(exc, ModuleNotFoundError) and module_name.startswith(str(exc.name)):
             hint = " (is the package installed, or its folder on PYTHONPATH?)"
@@ -600,7 +600,7 @@ def make_detector(name_or_path: str, **options: Any) -> Detector:
         detector = target(**options)
     except DetectorError:
         raise
-    except Exception as exc:  # the factory is the plugin's code
+    except _RAISED as exc:  # the factory is the plugin's code (a sys.exit too)
         raise DetectorError(f"detector {name!r} could not be made: {_one_line(exc)}") from exc
     if not _has_predict(detector):
         raise DetectorError(
