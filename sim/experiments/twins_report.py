@@ -205,7 +205,6 @@ def to_markdown(result: TwinsResult, *, command: str, figure: str | None = None)
         "",
         "| dataset | Pearson r | MAE | MMRV | MAE, line fixed on the others |",
         "|:--|--:|--:|--:|--:|",
-        "",
         *_per_dataset(result),
         "",
         "## The twins",

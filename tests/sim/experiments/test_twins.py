@@ -44,4 +44,8 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     page = to_markdown(result, command="reform-sim experiment twins --out x", figure="t.png")
     for heading in ("## Tuning", "## Prediction", "## Leave one out", "Goals met"):
         assert heading in page
+    for table in page.split("\n\n"):  # no table broken by a blank line between its rows
+        lines = table.strip().splitlines()
+        if lines and lines[0].startswith("|"):
+            assert len(lines) > 2 and lines[1].startswith(("|:", "|-")), table  # head, rows
     assert scatter_figure(result, tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
