@@ -135,7 +135,7 @@ class ViewerStream:
         host, port = _address(self.url)
         if host not in _LOCAL or not _display():
             return False
-        subprocess.Popen(
+        viewer = subprocess.Popen(
             viewer_command(
                 "--port",
                 str(port),
@@ -148,9 +148,11 @@ class ViewerStream:
             env={**os.environ, "RERUN_APP_ONLY": "true"},  # as rr.spawn starts it
         )
         deadline = time.monotonic() + SPAWN_WAIT_S
-        while not viewer_listening(self.url) and time.monotonic() < deadline:
+        while not viewer_listening(self.url):
+            if viewer.poll() is not None or time.monotonic() > deadline:
+                return False  # it could not open a window here, or took too long
             time.sleep(0.1)
-        return viewer_listening(self.url)
+        return True
 
     def show(
         self,
