@@ -463,3 +463,43 @@ def test_a_store_that_stops_answering_mid_run_ends_it_in_one_line(server):
         r"REFORM_SIM_STORE_TIMEOUT=SECONDS",
         line,
     )
+
+
+def test_a_resume_checks_each_committed_object_it_keeps(server, tmp_path):
+    """A run killed mid-way, one of its committed shards then damaged (one float, same size):
+    the resume names it on stderr, writes it again, and the dataset is whole."""
+    uri = f"s3://{BUCKET}/killed-damaged"
+    store = open_store(uri)
+    args = [*ARGS[:3], str(KILL_EPISODES), *ARGS[4:]]
+    command = [*CLI, "generate", *args, "--out", uri]
+    process = subprocess.Popen(
+        command,
+        cwd=REPO_ROOT,
+        env=os.environ | server,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    kill_when(process, lambda: len(store.sizes("_commits")) >= 2, poll_s=0.01)
+    committed = len([n for n in objects(uri) if n.startswith("_commits/")])
+    assert 2 <= committed < KILL_EPISODES, "the run was not killed mid-way"
+    shard = f"data/scenario={SCENARIO}/episode=0/part.parquet"
+    store.write(shard, one_float_changed(store.read(shard)))
+
+    run = subprocess.run(
+        command,
+        cwd=REPO_ROOT,
+        env=os.environ | server,
+        capture_output=True,
+        timeout=RUN_TIMEOUT_S,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    (line,) = [x for x in run.stderr.splitlines() if "is damaged" in x]
+    assert line.startswith(f"reform-sim generate: {uri}/{shard} is damaged (sha256 ")
+    kept = committed - 1
+    assert f"({KILL_EPISODES - kept} generated, {kept} already there)" in run.stdout
+    assert verify_folder(uri) == []
+    reference = tmp_path / "reference"
+    generate(reference, episodes=1)
+    same_as_reference(uri, reference, episodes=1)
