@@ -32,6 +32,7 @@ LONG = {
     "experiment paper",
     "experiment hri",
     "experiment sim2real",
+    "experiment twins",
     "simulate",
     "generate",
     "calibrate",
