@@ -3,7 +3,7 @@
 * ``reference/cli.md``: every ``reform-sim`` subcommand, walked from the parser that the command
   builds (`sim.cli.build_parser`, each subcommand's arguments from ``sim/cli/_NAME.py``), so the
   page cannot drift from ``--help``.
-* ``detectors/index.md``: the detector catalogue (`reform.catalogue`), every name with what it
+* ``detectors/catalogue.md``: the detector catalogue (`reform.catalogue`), every name with what it
   is, its options as declared (type, unit, range, default), what it needs and its citation, so
   the page cannot drift from ``--help`` either.
 * ``reference/api/PACKAGE.md``: one mkdocstrings entry per public name of each package's
@@ -33,7 +33,7 @@ API_PACKAGES = {
 
 def on_files(files: Files, config) -> Files:
     files.append(File.generated(config, "reference/cli.md", content=cli_markdown()))
-    files.append(File.generated(config, "detectors/index.md", content=catalogue_markdown()))
+    files.append(File.generated(config, "detectors/catalogue.md", content=catalogue_markdown()))
     for package in API_PACKAGES:
         files.append(
             File.generated(config, f"reference/api/{package}.md", content=api_markdown(package))

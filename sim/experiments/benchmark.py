@@ -482,13 +482,13 @@ def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
     """One cell: load, build, predict (checked), evaluate. A detector that learns is fitted on
     the training part of the dataset's time split and scored on its test part only."""
     dataset = dataset_spec.load()
+    label = dataset_spec.label  # the row's dataset, whichever of its frames this cell scores
     training: tuple[Frame, ...] = ()
     if detector_spec.learns:
         dataset_spec = replace(dataset_spec, split="test")
         train, _ = time_split(dataset.frames, dataset_spec.train_fraction)
         training = tuple(f for f in train if f.groups is not None)
     frames = dataset_spec.frames(dataset)
-    label = dataset_spec.label
     if not frames:
         return Cell(label, detector_spec.label, None, skipped="no annotated frames to score")
     if detector_spec.learns and not training:

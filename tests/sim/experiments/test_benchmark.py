@@ -282,8 +282,9 @@ def test_a_detector_that_learns_is_scored_only_on_what_it_did_not_see(tmp_path):
     spec = DatasetSpec(name="d", path=str(folder), train_fraction=0.6)
     tuned = detector_spec("gcff-tuned")
     assert tuned.learns and tuned.label == "GCFF, tuned on each dataset's training part"
-    (cell,) = run_benchmark([spec], [tuned]).cells
-    assert cell.dataset == "d (test split)" and cell.scores.frames == 4
+    result = run_benchmark([spec], [tuned, detector_spec("majority")])
+    cell = result.cell(spec, tuned)  # in the dataset's row, beside the others
+    assert cell.scores.frames == 4 and result.cell(spec, result.detectors[1]).scores.frames == 10
     assert cell.scores.at["1"] == (1.0, 1.0, 1.0)
 
 
