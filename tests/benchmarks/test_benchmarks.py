@@ -143,6 +143,33 @@ def test_quick_run_passes_its_checks_and_prints_its_figures(
     assert not missing, f"{script.name} --quick printed no line matching {missing}:\n{run.stdout}"
 
 
+@pytest.mark.slow
+def test_choose_field_defaults_quick_run_prints_a_choice_per_detector(
+    request: pytest.FixtureRequest,
+) -> None:
+    # benchmarks/choose_field_defaults.py chooses the field detectors' defaults on SALSA's
+    # training split; its quick run must print one table row per detector it chooses for.
+    script = BENCHMARKS_DIR / "choose_field_defaults.py"
+    run = subprocess.run(
+        [sys.executable, str(script.relative_to(REPO_ROOT)), "--quick"],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=QUICK_TIMEOUT_S,
+        check=False,
+    )
+    if run.returncode == DATASETS_MISSING:
+        request.getfixturevalue("shared_datasets")  # skips, or fails under CI, when missing
+        pytest.fail(f"{script.name} did not find the datasets the tests found: {run.stderr}")
+    assert run.returncode == 0, f"{script.name} --quick failed:\n{run.stdout}\n{run.stderr}"
+    assert re.search(
+        r"^SALSA training split .*: \d+ frames, every 40th scored: \d+ frames", run.stdout, re.M
+    )
+    for name in ("proximity", "dominant-sets", "gtcg", "hvff", "hvff-multiscale"):
+        row = rf"^\| {name} \| [a-z_]+=[\d.]+.* \| [\d.]+ \| .* \| \d+ \|$"
+        assert re.search(row, run.stdout, re.M), f"no row for {name}:\n{run.stdout}"
+
+
 def _project_packages() -> set[str]:
     """Top-level packages found inside the repository (not installed from elsewhere)."""
     found = set()
