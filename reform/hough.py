@@ -31,8 +31,9 @@ What differs from the papers, and why:
 * **The samples.** One set of noise draws comes from a generator seeded with
   ``random_state``, and every person's votes are that set applied to their pose: the same
   input always gives the same groups, whatever the order or the names of the people.
-* The constants the papers leave open (``radius``, ``min_share``, the multi-scale ``spacing``)
-  are options with defaults chosen on the data at hand (see the detectors' pages).
+* The constants the papers leave open (``stride``, ``radius``, ``min_share``, the multi-scale
+  ``spacing``) are options whose defaults were chosen on SALSA's training split alone (see the
+  detectors' pages).
 """
 
 from __future__ import annotations
@@ -66,14 +67,16 @@ __all__ = [
     "vote_noise",
 ]
 
-STRIDE_M = 0.7  # metres: distance of the o-space centre in front of a person (as GCFF's)
+# The open constants (stride, radius, min_share, spacing) are chosen on SALSA's training split
+# alone, by benchmarks/choose_field_defaults.py.
+STRIDE_M = 0.7  # metres: distance of the o-space centre in front of a person
 SAMPLES = 100  # votes per person
 POSITION_SD_M = 0.1  # metres: standard deviation of the position noise of a vote
 ORIENTATION_SD_RAD = 0.25  # radians: standard deviation of the orientation noise of a vote
-RADIUS_M = 0.7  # metres: radius of an accumulator cell (HVFF; chosen on SALSA, Babble, CoffeeBreak)
-MULTISCALE_RADIUS_M = 0.5  # metres: the same for multi-scale HVFF (chosen likewise)
-MIN_SHARE = 0.1  # a person backs a centre holding at least this share of their (kernel) votes
-SPACING_M = 1.0  # metres between neighbours on a group's circle (multi-scale; chosen likewise)
+RADIUS_M = 0.5  # metres: radius of an accumulator cell (HVFF)
+MULTISCALE_RADIUS_M = 0.5  # metres: the same for multi-scale HVFF
+MIN_SHARE = 0.2  # a person backs a centre holding at least this share of their (kernel) votes
+SPACING_M = 1.0  # metres between neighbours on a group's circle (multi-scale)
 MAX_SIZE = 6  # the largest group size with a scale of its own (multi-scale)
 CANDIDATES = 8  # votes of each person tried as candidate centres
 RANDOM_STATE = 0  # the default seed of the votes' noise

@@ -22,7 +22,8 @@ from reform.gcff import labels_to_partition
 
 __all__ = ["DISTANCE_M", "Proximity", "proximity_labels"]
 
-DISTANCE_M = 1.0  # metres: the default link distance (chosen on SALSA, Babble and CoffeeBreak)
+# Chosen on SALSA's training split alone, by benchmarks/choose_field_defaults.py.
+DISTANCE_M = 0.8  # metres: the default link distance
 MAX_DISTANCE_M = 100.0  # metres: the largest distance accepted
 
 

@@ -103,8 +103,9 @@ def test_a_whole_field_of_view_ignores_orientation():
 
 
 def test_two_facing_and_one_looking_away():
-    # Hand-computed: 1 and 2 face each other (affinity exp(-1/3.92) > 0); 3 is behind 2 facing
-    # away: affinity 0 with both. Groups {1, 2}, {3}.
+    # Hand-computed at the default sigma 1.6 m: 1 and 2 face each other 1 m apart (affinity
+    # exp(-1 / (2 * 1.6²)) = exp(-1/5.12) > 0); 3 is behind 2 facing away: affinity 0 with both.
+    # Groups {1, 2}, {3}.
     scene = frame([[0, 0], [1, 0], [2, 0]], [0.0, np.pi, 0.0])
     assert DominantSets().predict([scene]) == [((1, 2), (3,))]
 

@@ -99,6 +99,19 @@ def test_dense_scenes_keep_their_groups_turned_moved_and_relabelled():
     assert_same_groups_moved_and_relabelled(Proximity(), seed=34)
 
 
-@pytest.mark.parametrize("name", REAL_DATASETS)
+# The default distance, 0.8 m, was chosen on SALSA's training split alone. Babble's people stand
+# farther apart (a person's nearest neighbour is a median 0.97 m away; 7 % of them are within
+# 0.8 m), so almost nobody links: F1 9.5 at T = 2/3 against the majority baseline's 9.6. Choosing
+# the distance on Babble to pass would score Babble with a setting chosen on it, so the case
+# stays, marked: strict, it fails loudly when a default that transfers makes it pass.
+BABBLE_UNLINKED = pytest.mark.xfail(
+    strict=True, reason="0.8 m, chosen on SALSA's training split, links almost no one on Babble"
+)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [pytest.param(n, marks=BABBLE_UNLINKED) if n == "babble" else n for n in REAL_DATASETS],
+)
 def test_beats_the_majority_baseline_on_real_data(shared_datasets, name):
     assert_beats_majority("proximity", annotated_frames(shared_datasets, name))
