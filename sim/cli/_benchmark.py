@@ -60,8 +60,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--model",
         action="append",
-        metavar="FILE.skops",
-        help="a REFORM model file written by `reform-sim train` (repeatable)",
+        metavar="FILE",
+        help="a model file written by `reform-sim train` (repeatable): REFORM's .skops, or "
+        "DANTE's .safetensors (train --detector dante)",
     )
     parser.add_argument(
         "--test-split",

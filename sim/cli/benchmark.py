@@ -104,7 +104,7 @@ def _check_detectors(detectors) -> None:
     workers inherit the search path)."""
 
     for detector in detectors:
-        if detector.spec.startswith("reform:"):
+        if detector.spec.startswith(("reform:", "dante:")):
             continue
         make_plugin(detector.spec)
 

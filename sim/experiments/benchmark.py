@@ -89,6 +89,8 @@ GCFF_ONE = "gcff"
 GCFF_OWN = "gcff-own"
 GCFF_TUNED = "gcff-tuned"
 REFORM_PREFIX = "reform:"  # a DetectorSpec.spec naming a model file
+DANTE_PREFIX = "dante:"  # a DetectorSpec.spec naming a DANTE model file (.safetensors)
+_MODEL_PREFIXES = (REFORM_PREFIX, DANTE_PREFIX)
 
 # Published figures, (P, R, F1) in % at T = 2/3, keyed by (dataset, what was run); each with
 # its source. The REFORM paper (Hedayati et al. 2020, definitions.md "The paper's numbers"):
@@ -189,9 +191,9 @@ class DetectorSpec:
     @property
     def key(self) -> str:
         """A short name without spaces or slashes: the detector's entity in the recordings."""
-        if self.spec.startswith(REFORM_PREFIX):
-            stem = Path(self.spec[len(REFORM_PREFIX) :]).stem
-            text = f"reform-{stem}"
+        if self.spec.startswith(_MODEL_PREFIXES):
+            prefix, _, path = self.spec.partition(":")
+            text = f"{prefix}-{Path(path).stem}"
         else:
             text = self.spec
         return (
@@ -201,7 +203,7 @@ class DetectorSpec:
     @property
     def learns(self) -> bool:
         """Whether the detector learns its settings from training frames (``gcff-tuned``)."""
-        if self.spec.startswith(REFORM_PREFIX) or ":" in self.spec:
+        if self.spec.startswith(_MODEL_PREFIXES) or ":" in self.spec:
             return False
         if self.spec not in detector_names() and self.registered is not None:
             return self.registered.needs == "training"
@@ -213,6 +215,8 @@ class DetectorSpec:
         own settings, fitted on ``training`` when it :attr:`learns`."""
         if self.spec.startswith(REFORM_PREFIX):
             return load_model(self.spec[len(REFORM_PREFIX) :]), None
+        if self.spec.startswith(DANTE_PREFIX):
+            return make_detector("dante", model=self.spec[len(DANTE_PREFIX) :]), None
 
         if self.search is not None and self.search not in sys.path:
             sys.path.append(self.search)  # a worker started before the run knows nothing of it
@@ -263,7 +267,13 @@ def _label(spec: str) -> str:
 
 
 def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:
-    """The row for a REFORM model file: labelled with its classifier and file name."""
+    """The row for a model file: REFORM's (``.skops``, labelled with its classifier and file
+    name) or DANTE's (``.safetensors``, `reform-sim train --detector dante`)."""
+    if str(path).lower().endswith(".safetensors"):
+        make_detector("dante", model=path)  # a file that is not a DANTE model: one line, now
+        return DetectorSpec(
+            label=f"DANTE ({Path(path).stem})", spec=f"{DANTE_PREFIX}{path}", kind="dante"
+        )
     info = model_info(path)
     kind = _classifier_kind(str(info.get("classifier_repr", "")))
     name = Path(path).stem

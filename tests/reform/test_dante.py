@@ -466,3 +466,18 @@ def test_importing_reform_and_listing_detectors_does_not_import_torch(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+def test_benchmark_takes_a_dante_model_file(model_path, tmp_path):
+    from sim.experiments.benchmark import DatasetSpec, model_spec, run_benchmark
+
+    data = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=tuple(toy_frames(5, 12)), name="toy", source="toy"), data)
+    spec = model_spec(model_path)
+    assert spec.label == "DANTE (dante)" and not spec.learns
+    (cell,) = run_benchmark([DatasetSpec(name="toy", path=str(data))], [spec]).cells
+    assert cell.scores is not None and cell.scores.frames == 12
+    wrong = tmp_path / "not-dante.safetensors"
+    wrong.write_bytes(b"not a model")
+    with pytest.raises(DetectorError):
+        model_spec(wrong)
