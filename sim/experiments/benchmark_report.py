@@ -265,23 +265,32 @@ def plot(benchmark: Benchmark, path: str | Path) -> Path:
     n = len(benchmark.detectors)
     width = 0.8 / n
     x = np.arange(len(datasets))
+    rows = (n + 2) // 3  # the legend below the panels, three detectors a row
     figure, panels = plt.subplots(
-        1, len(THRESHOLDS), figsize=(max(6.0, 1.2 * len(datasets) + 2), 4.0), sharey=True
+        1,
+        len(THRESHOLDS),
+        figsize=(max(6.0, 1.2 * len(datasets) + 2), 4.0 + 0.22 * rows),
+        sharey=True,
     )
+    colours = plt.get_cmap("tab20")
     for panel, threshold in zip(np.atleast_1d(panels), THRESHOLDS, strict=True):
         for k, detector in enumerate(benchmark.detectors):
             values = []
             for dataset in benchmark.datasets:
                 cell = benchmark.cell(dataset, detector)
                 values.append(np.nan if cell.scores is None else cell.scores.at[threshold][2])
-            panel.bar(x + (k - (n - 1) / 2) * width, values, width, label=detector.label)
+            colour = colours(k / max(n - 1, 1)) if n > 10 else f"C{k}"  # none repeated
+            panel.bar(
+                x + (k - (n - 1) / 2) * width, values, width, label=detector.label, color=colour
+            )
         panel.set_xticks(x, datasets, rotation=30, ha="right", fontsize=8)
         panel.set_title(f"F1 at T = {threshold}")
         panel.set_ylim(0.0, 1.0)
         panel.grid(axis="y", alpha=0.3)
     np.atleast_1d(panels)[0].set_ylabel("F1 (frame-mean protocol)")
-    np.atleast_1d(panels)[-1].legend(fontsize=7, loc="lower left")
-    figure.tight_layout()
+    handles, labels = np.atleast_1d(panels)[0].get_legend_handles_labels()
+    figure.legend(handles, labels, fontsize=7, loc="lower center", ncol=3, frameon=False)
+    figure.tight_layout(rect=(0.0, 0.22 * rows / (4.0 + 0.22 * rows) + 0.02, 1.0, 1.0))
     return save_png(figure, path, dpi=PLOT_DPI)
 
 
