@@ -137,17 +137,22 @@ def _gcff(args: argparse.Namespace) -> Any:
     from reform import Gcff
     from reform.detectors import make_detector
 
-    orientation = args.gcff_orientation or "body"
     options = _options(args)
     flags = {
         key: value
-        for key, value in (("stride", args.stride), ("mdl", args.mdl))
+        for key, value in (
+            ("stride", args.stride),
+            ("mdl", args.mdl),
+            ("orientation", args.gcff_orientation),
+        )
         if value is not None
     }
     both = sorted(set(flags) & set(options))
     if both:
-        raise CliError(f"gcff: give {both[0]} once (--{both[0]} or --option {both[0]}=), not both")
+        flag = "--gcff-orientation" if both[0] == "orientation" else f"--{both[0]}"
+        raise CliError(f"gcff: give {both[0]} once ({flag} or --option {both[0]}=), not both")
     explicit = {**options, **flags}
+    orientation = explicit.pop("orientation", None) or "body"
     settings = getattr(args, "settings", None)
     if settings is not None and not _is_json(settings):
         if explicit:
@@ -162,9 +167,10 @@ def _gcff(args: argparse.Namespace) -> Any:
                 stride=read.stride * per_pixel, mdl=read.mdl * per_pixel**2, orientation=orientation
             )
         return Gcff.from_settings_file(settings, units=args.units or "cm", orientation=orientation)
-    explicit = {**_settings_options(args), **explicit}
-    explicit.setdefault("orientation", orientation)
-    return make_detector("gcff", **explicit)
+    from_file = _settings_options(args)
+    if "orientation" in flags or "orientation" in options or "orientation" not in from_file:
+        explicit["orientation"] = orientation
+    return make_detector("gcff", **{**from_file, **explicit})
 
 
 @cli_detector(

@@ -202,3 +202,17 @@ def test_a_folder_of_sequences_uses_each_sequences_own_settings(shared_datasets,
     by_sequence = json.loads(out.read_text())["by_sequence"]
     assert round(by_sequence["Seq1"]["2/3"]["f1"], 3) == 0.770
     assert round(by_sequence["Seq2"]["2/3"]["f1"], 3) == 0.944
+
+
+def test_orientation_by_option_beside_a_settings_file(tmp_path, capsys):
+    """An option that is not a setting (the orientation) goes with a settings_gc.mat: GCFF
+    follows the heads, which this folder (bodies only) does not have."""
+    folder = write_gcff_folder(tmp_path / "Scene", settings=None)
+    settings = tmp_path / "settings_gc.mat"
+    scipy.io.savemat(settings, {"stride": 70.0, "mdl": 100.0})
+    argv = ["--data", str(folder), "--settings", str(settings), "--option", "orientation=head"]
+    assert "orientation='head' needs head yaws" in detect_error(tmp_path, capsys, *argv)
+    both = ["--data", str(folder), "--gcff-orientation", "body", "--option", "orientation=head"]
+    assert "gcff: give orientation once (--gcff-orientation or --option orientation=)" in (
+        detect_error(tmp_path, capsys, *both)
+    )
