@@ -568,6 +568,20 @@ def rerun_server(tmp_path: Path):
         log.close()
 
 
+def _written_out(path: Path, *, quiet_s: float = 1.0, limit_s: float = 30.0) -> None:
+    """Waits until the server's file has not grown for ``quiet_s`` seconds (at most
+    ``limit_s``): the client's close returns once the data are sent, not once they are saved."""
+    deadline = time.monotonic() + limit_s
+    size, since = -1, time.monotonic()
+    while time.monotonic() < deadline:
+        now = path.stat().st_size if path.exists() else -1
+        if now != size:
+            size, since = now, time.monotonic()
+        elif now >= 0 and time.monotonic() - since >= quiet_s:
+            return
+        time.sleep(0.1)
+
+
 def _stores(path: Path) -> dict[str, list[tuple]]:
     """Recording id -> everything its recording holds, minus row ids, in a canonical order."""
     from rerun.chunk import RrdReader
@@ -604,6 +618,7 @@ def test_human_mode_streams_each_episode_to_the_viewer(rerun_server) -> None:
     env.close()
     from sim.recording import stop_viewer
 
+    _written_out(saved)  # the server writes what it received after the client is done
     stop_viewer(server)  # all it received is in the file
     stores = _stores(saved)
     ids = [recording_id(name, seed=4) for name in names]
