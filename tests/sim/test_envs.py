@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import subprocess
 import sys
 import time
@@ -551,6 +552,7 @@ def rerun_server(tmp_path: Path):
         viewer_command("--port", str(port), "--save", str(saved)),
         stdout=log,
         stderr=subprocess.STDOUT,
+        preexec_fn=_dies_with_parent,  # a test process killed before teardown takes it along
     )
     url = f"rerun+http://127.0.0.1:{port}/proxy"
     try:
@@ -566,6 +568,15 @@ def rerun_server(tmp_path: Path):
     finally:
         stop_viewer(server)
         log.close()
+
+
+def _dies_with_parent() -> None:
+    """In the child before it runs: on Linux, SIGTERM when the process that started it dies."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
 
 
 def _written_out(path: Path, *, quiet_s: float = 1.0, limit_s: float = 30.0) -> None:
