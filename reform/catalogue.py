@@ -151,6 +151,96 @@ _register(
     citation=REFORM_CITATION,
 )
 
+
+# REFORM fitted where it runs: the training frames `reform.prepare_detector` gives (benchmark:
+# each dataset's training part; evaluate: --tune-on), with the options beyond the paper
+# (docs/guide/reform-options.md) as named configurations. The choices are literals so that the
+# catalogue imports nothing heavy; a test holds them equal to the modules' own tuples.
+_REFORM_CLASSIFIERS = ("weighted-knn", "bagged-trees", "logistic-regression")
+_REFORM_FEATURE_SETS = ("paper", "relative")
+_REFORM_RECONSTRUCTIONS = ("union", "intersection", "correlation")
+_REFORM_CALIBRATIONS = ("none", "sigmoid", "isotonic")
+
+
+def _reform_options(*, features: str, reconstruction: str) -> tuple[Option, ...]:
+    return (
+        Option(
+            "classifier",
+            "str",
+            "bagged-trees",
+            "the pair classifier (its defaults, the paper's settings)",
+            choices=_REFORM_CLASSIFIERS,
+        ),
+        Option(
+            "features",
+            "str",
+            features,
+            "pair features: paper (Distance, Effort Angle) or relative (scale-free)",
+            choices=_REFORM_FEATURE_SETS,
+        ),
+        Option(
+            "reconstruction",
+            "str",
+            reconstruction,
+            "groups from the pairs: union (the paper's Greedy Reconstruction), intersection, "
+            "or correlation clustering over the pair probabilities",
+            choices=_REFORM_RECONSTRUCTIONS,
+        ),
+        Option(
+            "calibration",
+            "str",
+            "none",
+            "the classifier's probabilities as they are, or calibrated on held-out time",
+            choices=_REFORM_CALIBRATIONS,
+        ),
+    )
+
+
+def _reform_trained(
+    *,
+    classifier: str = "bagged-trees",
+    features: str = "paper",
+    reconstruction: str = "union",
+    calibration: str = "none",
+) -> Reform:
+    """REFORM, unfitted, with the named options: fitted on training frames before it runs."""
+    from reform.classifiers import make_classifier
+    from reform.detector import Reform
+
+    return Reform(
+        make_classifier(classifier),
+        features=features,
+        reconstruction=reconstruction,
+        calibration=None if calibration == "none" else calibration,
+    )
+
+
+for _name, _features, _reconstruction, _help in (
+    ("reform-trained", "paper", "union", "REFORM trained on the training frames given"),
+    (
+        "reform-relative",
+        "relative",
+        "union",
+        "REFORM with scale-free pair features, trained on the training frames given",
+    ),
+    (
+        "reform-correlation",
+        "paper",
+        "correlation",
+        "REFORM with correlation clustering over its pair probabilities, trained on the "
+        "training frames given",
+    ),
+):
+    _register(
+        _name,
+        _reform_trained,
+        help=_help,
+        source="built-in",
+        options=_reform_options(features=_features, reconstruction=_reconstruction),
+        citation=REFORM_CITATION,
+        needs="training",
+    )
+
 DANTE_CITATION = (
     "Swofford, Peruzzi, Tsoi, Thompson, Martín-Martín, Savarese, Vázquez. Improving Social "
     "Awareness Through DANTE: Deep Affinity Network for Clustering Conversational "
@@ -182,6 +272,15 @@ _register(
             "learning_rate", "float", 1e-4, "Adam's step size while training", low=1e-7, high=1.0
         ),
         Option("batch_size", "int", 1024, "pairs per gradient step", low=2, high=1 << 20),
+        Option(
+            "patience",
+            "int",
+            50,
+            "with validation frames (`reform-sim train --validation`), epochs without a better "
+            "validation loss before training stops",
+            low=1,
+            high=100_000,
+        ),
         Option(
             "random_state",
             "int",

@@ -322,7 +322,7 @@ def _build_from_catalogue(args: argparse.Namespace) -> Any:
 
 def _tuning_frames(args: argparse.Namespace) -> Any:
     """The annotated frames of ``--tune-on`` (never the frames scored); CliError without it."""
-    from reform.datasets import load_dataset
+    from reform.datasets import load_dataset, resolve
 
     source = getattr(args, "tune_on", None)
     if source is None:
@@ -330,11 +330,11 @@ def _tuning_frames(args: argparse.Namespace) -> Any:
             f"--detector {args.detector} learns its settings from annotated training frames: "
             "give --tune-on PATH|NAME (a dataset other than the one scored)"
         )
-    train = load_dataset(source).annotated()
+    train = load_dataset(resolve(source)).annotated()
     if not train:
         raise CliError(f"--tune-on {source}: no annotated frames to tune on")
     print(
-        f"{args.detector}: tuning on {len(train)} annotated frames of {source} ...",
+        f"{args.detector}: learning from {len(train)} annotated frames of {source} ...",
         file=sys.stderr,
     )
     return train

@@ -23,9 +23,14 @@ hyper-parameters by time-blocked cross-validation on the frames used for trainin
 
 --detector dante trains DANTE (Swofford et al. 2020; the extra reform-sim[dante]) instead: its
 deep affinity network on every ordered pair of the frames and their mirror images, one line per
-epoch on stderr; its options (--option NAME=VALUE: epochs, learning_rate, batch_size,
-orientation, random_state) are the catalogue's. --out names the model file (.safetensors), for
+epoch on stderr; its options (--option NAME=VALUE: epochs, learning_rate, batch_size, patience,
+orientation, random_state) are the catalogue's. --validation F holds out the last F of each
+sequence's training frames, by time, and stops once their loss has not improved for `patience`
+epochs (the paper's early stopping). --out names the model file (.safetensors), for
 `reform-sim detect|evaluate|benchmark --detector dante` with the option model=FILE.
+
+--every K keeps every K-th of the frames chosen (and of the validation frames): a slow
+recording's consecutive frames repeat each other, and K cuts the training time K-fold.
 """
 
 TRAINED = ("reform", "dante")  # the detectors `train` fits
@@ -53,6 +58,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="pair classifier (default: bagged-trees)",
     )
     add_frames(parser, scored="to train on")
+    parser.add_argument(
+        "--every",
+        type=int,
+        default=1,
+        metavar="K",
+        help="train on every K-th of those frames, in time order per sequence (default: 1, all)",
+    )
+    parser.add_argument(
+        "--validation",
+        type=float,
+        default=None,
+        metavar="F",
+        help="dante: the last F of each sequence's training frames stop training early "
+        "(--option patience=N) instead of training",
+    )
     parser.add_argument(
         "--tune",
         action="store_true",

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
+from typing import Any
 
 from reform import Reform
 from reform.classifiers import make_classifier
@@ -35,8 +37,20 @@ _REFORM_OPTIONS = (
 def run(args: argparse.Namespace) -> int:
     check_output("--out", args.out)
     check_frames(args)
+    if args.every < 1:
+        raise CliError(f"--every keeps every K-th frame: K must be 1 or more, got {args.every}")
+    if args.validation is not None and not 0.0 < args.validation < 1.0:
+        raise CliError(
+            f"--validation is the share of training frames held out: in (0, 1), got "
+            f"{args.validation:g}"
+        )
     if args.detector == "dante":
         return _run_dante(args)
+    if args.validation is not None:
+        raise CliError(
+            "--validation stops DANTE's training early; REFORM's classifiers train once "
+            "(--tune cross-validates them)"
+        )
     if args.option:
         raise CliError(
             f"--option {args.option[0]} is for --detector dante; REFORM takes --classifier, "
@@ -49,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--threshold must be a probability in (0, 1), got {args.threshold}")
     features = check_features([name.strip() for name in args.features.split(",") if name.strip()])
     dataset = load_data(args)
-    frames = select_frames(args, dataset.frames, doing="train on")
+    frames = _every(args, select_frames(args, dataset.frames, doing="train on"))
     params = {}
     if args.tune:
         if not args.quiet:
@@ -111,19 +125,35 @@ def _run_dante(args: argparse.Namespace) -> int:
         raise CliError(f"--detector dante needs PyTorch, which is not installed: {INSTALL}")
     dataset = load_data(args)
     frames = select_frames(args, dataset.frames, doing="train on")
+    validation = None
+    if args.validation is not None:
+        from reform import time_split
+
+        frames, validation = time_split(frames, 1.0 - args.validation)
+        validation = _every(args, validation)
+        if not frames or not validation:
+            raise CliError(
+                f"{args.data}: --validation {args.validation:g} leaves "
+                f"{len(frames)} training and {len(validation)} validation frames; both need some"
+            )
+    elif "patience" in options:
+        raise CliError("--option patience= stops training early on --validation F frames")
+    frames = _every(args, frames)
     model = Dante(**options)
     if not args.quiet:
+        held = f", stopping on {len(validation):,} validation frames" if validation else ""
         print(
             f"training DANTE on {len(frames):,} frames of {dataset.name} (at most "
-            f"{model.epochs} epochs) ...",
+            f"{model.epochs} epochs{held}) ...",
             file=sys.stderr,
         )
 
-    def progress(epoch: int, epochs: int, loss: float, _validation: float | None) -> None:
-        print(f"  epoch {epoch}/{epochs}: loss {loss:.4f}", file=sys.stderr, flush=True)
+    def progress(epoch: int, epochs: int, loss: float, validation_loss: float | None) -> None:
+        held = "" if validation_loss is None else f", validation loss {validation_loss:.4f}"
+        print(f"  epoch {epoch}/{epochs}: loss {loss:.4f}{held}", file=sys.stderr, flush=True)
 
     try:
-        model.fit(frames, progress=None if args.quiet else progress)
+        model.fit(frames, validation=validation, progress=None if args.quiet else progress)
     except ValueError as exc:
         raise CliError(f"{args.data}: {' '.join(str(exc).split())}") from None
     path = model.save(args.out)
@@ -134,3 +164,14 @@ def _run_dante(args: argparse.Namespace) -> int:
         f"{summary['epochs_run']} epochs, final loss {summary['final_loss']:.4f}); wrote {path}"
     )
     return 0
+
+
+def _every(args: argparse.Namespace, frames: Sequence[Any]) -> list[Any]:
+    """Every ``--every``-th of ``frames``, counted per sequence in time order (input order kept)."""
+    if args.every == 1:
+        return list(frames)
+    rank: dict[tuple[str, float], int] = {}
+    for sequence in dict.fromkeys(frame.sequence for frame in frames):
+        times = sorted(frame.time for frame in frames if frame.sequence == sequence)
+        rank.update(((sequence, time), index) for index, time in enumerate(times))
+    return [frame for frame in frames if rank[frame.sequence, frame.time] % args.every == 0]
