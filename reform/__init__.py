@@ -41,6 +41,11 @@ _EXPORTS = {
     "prepare_detector": "reform.detectors",
     "register_detector": "reform.detectors",
     "run_detector": "reform.detectors",
+    "EVENT_KINDS": "reform.events",
+    "GroupEvent": "reform.events",
+    "GroupTracks": "reform.events",
+    "group_events": "reform.events",
+    "track_groups": "reform.events",
     "DEFAULT_FEATURES": "reform.features",
     "FEATURES": "reform.features",
     "FEATURE_SETS": "reform.features",
@@ -91,6 +96,9 @@ _EXPORTS = {
     "relation_matrix": "reform.reconstruction",
     "time_blocks": "reform.splits",
     "time_split": "reform.splits",
+    "KindScores": "reform.temporal",
+    "TemporalEvaluation": "reform.temporal",
+    "evaluate_events": "reform.temporal",
 }
 
 __version__ = "0.1.0"
