@@ -191,8 +191,9 @@ class _Tracking:
     states: list[tuple[int, dict[int, frozenset[int]]]]
 
 
-def _where(frame: Frame, index: int) -> str:
-    return f"frames[{index}] (sequence {frame.sequence!r}, time {frame.time:g} s)"
+def _where(frame: Frame, index: int, name: str = "frames") -> str:
+    """``frames[3] (sequence 'a', time 1.5 s)``: a frame, as messages name it."""
+    return f"{name}[{index}] (sequence {frame.sequence!r}, time {frame.time:g} s)"
 
 
 def _split_sequences(frames: Sequence[Frame], *, caller: str) -> list[_Sequence]:

@@ -46,6 +46,7 @@ from reform.events import (
     _Sequence,
     _split_sequences,
     _Tracking,
+    _where,
 )
 from reform.frame import Frame
 from reform.json_values import json_float, json_record
@@ -188,10 +189,6 @@ class TemporalEvaluation:
                 "matches": [list(pair) for pair in self.matches],
             }
         return result
-
-
-def _where(frame: Frame, index: int, name: str = "frames") -> str:
-    return f"{name}[{index}] (sequence {frame.sequence!r}, time {frame.time:g} s)"
 
 
 def _detected_groups(
