@@ -241,6 +241,55 @@ for _name, _features, _reconstruction, _help in (
         needs="training",
     )
 
+# Temporal filters (reform.smoothing): any detector's partitions steadied over past frames.
+_WINDOW = Option(
+    "window",
+    "float",
+    2.0,
+    "seconds looked back, the current frame included",
+    unit="s",
+    low=0.01,
+    high=3600.0,
+    grid=(0.5, 1.0, 2.0, 4.0),
+)
+_register(
+    "smoothed",
+    "reform.smoothing:make_smoothed",
+    help="any detector's pairs voted over a sliding window of past frames (sliding majority)",
+    source="built-in",
+    options=(
+        Option(
+            "detector",
+            "str",
+            "gcff",
+            "the detector filtered: a catalogued name that runs as it is, or a settings file",
+        ),
+        _WINDOW,
+    ),
+)
+_register(
+    "hysteresis",
+    "reform.smoothing:make_hysteresis",
+    help="a REFORM configuration's pair probabilities switched with two thresholds over time",
+    source="built-in",
+    options=(
+        Option(
+            "detector",
+            "str",
+            "reform-trained",
+            "the REFORM configuration filtered (trained on the training frames given)",
+            choices=("reform-trained", "reform-relative", "reform-correlation"),
+        ),
+        Option("high", "float", 0.7, "probability at which a pair apart joins", low=0.5, high=1.0),
+        Option(
+            "low", "float", 0.3, "probability at which a pair together parts", low=0.0, high=0.5
+        ),
+        _WINDOW,
+    ),
+    citation=REFORM_CITATION,
+    needs="training",
+)
+
 DANTE_CITATION = (
     "Swofford, Peruzzi, Tsoi, Thompson, Martín-Martín, Savarese, Vázquez. Improving Social "
     "Awareness Through DANTE: Deep Affinity Network for Clustering Conversational "

@@ -170,15 +170,26 @@ def check_the_same_answer_twice(name: str, detector: Any) -> None:
 
 
 def check_relabelling(name: str, detector: Any) -> None:
-    """Other ids for the same people, listed in another order, give the same groups."""
+    """Other ids for the same people, listed in another order, give the same groups.
+
+    A person keeps one id through a sequence (a detector that follows people over time may rely
+    on it), so each sequence's ids are mapped once; each frame lists its people in a new order.
+    """
     frames = check_scenes()
     rng = np.random.default_rng(CHECK_SEED)
     before = [_as_sets(p) for p in run_detector(name, detector, frames)]
     relabelled, back = [], []
+    mappings: dict[str, dict[int, int]] = {}
     for frame in frames:
         order = rng.permutation(frame.n_people)
-        new_ids = rng.choice(10**6, size=frame.n_people, replace=False) + 1000
-        mapping = dict(zip(frame.ids.tolist(), new_ids.tolist(), strict=True))
+        mapping = mappings.setdefault(frame.sequence, {})
+        for person in frame.ids.tolist():
+            while person not in mapping:
+                new = int(rng.integers(10**6)) + 1000
+                if new not in mapping.values():
+                    mapping[person] = new
+        new_ids = np.array([mapping[person] for person in frame.ids.tolist()], dtype=np.int64)
+        mapping = {person: mapping[person] for person in frame.ids.tolist()}
         relabelled.append(
             Frame(
                 ids=new_ids[order],
