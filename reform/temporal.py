@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -144,6 +145,8 @@ class TemporalEvaluation:
             )
         latency.flags.writeable = False
         object.__setattr__(self, "latency_s", latency)
+        if self.intervals is not None:
+            object.__setattr__(self, "intervals", MappingProxyType(dict(self.intervals)))
 
     def kind(self, kind: str) -> KindScores:
         """The scores of one kind of event (``"joins"``)."""
@@ -430,6 +433,8 @@ def evaluate_events(
     tolerance = _check_tolerance(tolerance_s, sequences)
     if rng is not None and not isinstance(rng, np.random.Generator):
         raise ValueError(f"rng must be a numpy.random.Generator or None, got {type(rng).__name__}")
+    if isinstance(resamples, bool) or not isinstance(resamples, (int, np.integer)) or resamples < 1:
+        raise ValueError(f"resamples must be an int >= 1, got {resamples!r}")
     if not 0.0 < level < 1.0:
         raise ValueError(f"level must lie in (0, 1), got {level!r}")
     detected_groups = _detected_groups(frames, predictions, sequences)

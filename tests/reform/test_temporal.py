@@ -335,6 +335,7 @@ def test_a_prediction_that_is_not_a_partition_is_refused():
         ({"tolerance_s": "1"}, r"^tolerance_s must be a number of seconds, got '1'$"),
         ({"tolerance_s": float("inf")}, r"^tolerance_s must be finite, got inf$"),
         ({"rng": 3}, r"^rng must be a numpy.random.Generator or None, got int$"),
+        ({"resamples": 0}, r"^resamples must be an int >= 1, got 0$"),
         ({"level": 1.0}, r"^level must lie in \(0, 1\), got 1.0$"),
     ],
 )
