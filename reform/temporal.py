@@ -10,8 +10,9 @@ the same annotated frames. Then:
   times), the person is the same (``joins``, ``leaves``) and the groups they concern match at
   the field's threshold, ``|G ∩ D| / max(|G|, |D|) >= 2/3`` (the event's ``members``: the group
   formed, dissolved, joined, left, merged into or split). The matching is one-to-one and greedy:
-  candidate pairs are taken in order of increasing time difference, then true event (time,
-  position), then detected event (position), each event at most once.
+  candidate pairs are taken in order of increasing time difference (to the nanosecond, so that
+  equal gaps between floating-point times tie), then true event (time, position), then detected
+  event (position), each event at most once.
 * **Recall and precision**, per kind and pooled over kinds: matched true events over true
   events, matched detected events over detected events; None where there are none.
 * **Latency** of a matched pair: the detected event's time minus the true one's, seconds
@@ -64,6 +65,7 @@ __all__ = [
 DEFAULT_TOLERANCE_S = 1.0  # seconds between a true event and the detected event matching it
 MEMBER_THRESHOLD = T_TWO_THIRDS  # |G ∩ D| / max(|G|, |D|) for two events' groups to match
 _TIME_SLACK_S = 1e-9  # seconds: absorbs floating-point times (0.1 steps) in comparisons
+_SLACK_DIGITS = 9  # decimals of a second kept when time differences are compared for ties
 _P = MEMBER_THRESHOLD.numerator
 _Q = MEMBER_THRESHOLD.denominator
 
@@ -197,7 +199,8 @@ class TemporalEvaluation:
 def _detected_groups(
     frames: Sequence[Frame], predictions: Sequence[Any], sequences: list[_Sequence]
 ) -> list[list[Any]]:
-    """The detected groups of every sequence's annotated frames, checked to align."""
+    """The detected groups of every sequence's annotated frames; partitions are checked to be
+    partitions of their frame's ids (a partition repeated for the same people, once)."""
     out = []
     checked: tuple[Any, bytes] | None = None
     for sequence in sequences:
@@ -213,7 +216,7 @@ def _detected_groups(
                 groups.append(prediction.groups)
                 continue
             key = (prediction, frame.ids.tobytes())
-            if key != checked:  # a partition repeated for the same people is checked once
+            if key != checked:
                 check_partition(prediction, frame, where=_where(frame, k, "predictions"))
                 checked = key
             groups.append(prediction)
@@ -270,7 +273,9 @@ def _match(
             g = true_sets.setdefault(i, frozenset(event.members))
             d = detected_sets.setdefault(j, frozenset(other.members))
             if _Q * len(g & d) >= _P * max(len(g), len(d)):
-                candidates.append((abs(other.time - event.time), event.time, i, j))
+                # Rounded to the slack, so that equal gaps between floating-point times tie.
+                gap = round(abs(other.time - event.time), _SLACK_DIGITS)
+                candidates.append((gap, event.time, i, j))
     candidates.sort()
     used_true: set[int] = set()
     used_detected: set[int] = set()

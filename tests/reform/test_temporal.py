@@ -121,6 +121,20 @@ def test_matching_is_one_to_one_and_greedy_by_time_then_the_earlier_true_event()
     assert ev.kind(LEAVES).recall == 0.0 and ev.kind(LEAVES).precision is None
 
 
+def test_equal_gaps_between_floating_point_times_tie_and_go_to_the_earlier_true_event():
+    # 10 Hz: true joins at 0.7 s and 0.9 s, a detected join at 0.8 s; in floating point
+    # 0.8 - 0.7 = 0.10000000000000009 but 0.9 - 0.8 = 0.09999999999999998: a tie all the same.
+    truth = [[(1, 2)]] * 7 + [[(1, 2, 3)], [(1, 2)], [(1, 2, 3)]]
+    detection = [[(1, 2)]] * 8 + [[(1, 2, 3)]] * 2
+    frames = [line_frame(IDS, groups, time=k / 10) for k, groups in enumerate(truth)]
+    ev = evaluate_events(frames, detected(*detection), tolerance_s=0.1)
+    assert [(e.kind, e.time) for e in ev.true_events if e.kind == JOINS] == [
+        (JOINS, pytest.approx(0.7)),
+        (JOINS, pytest.approx(0.9)),
+    ]
+    assert ev.matches == ((0, 0),)
+
+
 @pytest.mark.parametrize(
     ("true_group", "detected_group", "matched"),
     [
