@@ -108,6 +108,11 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^per shard: [\d.]+ s .* KiB, 2\.0 PUT requests, \d+ bytes of card$",
         r"^paper: 64 workers x 1,000,000 episodes: [\d.]+ h, .* requests/s to the store ",
     ),
+    "bench_temporal": (
+        r"^evaluate_events \+JSON +[\d.]+ ms +evaluate \(frame P/R/F1\) \+JSON +[\d.]+ ms "
+        r"+ratio [\d.]+x ",
+        r"^goal: temporal metrics under 1 s: (met|NOT met) ",
+    ),
     "bench_twin": (
         r"^load SALSA \(baseline\) +[\d.]+ +1\.0$",
         r"^twin fitted and generated: [\d.]+ s \(goal < 60 s: (met|NOT met)\)$",
