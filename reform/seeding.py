@@ -64,6 +64,7 @@ class Role(IntEnum):
     SIM2REAL_PERIODS = 9  # sim2real's cross-period bootstrap: (role, held-out half)
     PAPER_RANDOM_SPLIT = 10  # the paper experiment's random-split diagnostic: (role,)
     BENCHMARK_BOOTSTRAP = 11  # the benchmark's intervals: (role, crc32 of the dataset's label)
+    TEMPORAL_BOOTSTRAP = 12  # temporal scores' intervals over sequences: (role,) or (role, crc32)
 
 
 def _key(keys: tuple[int, ...]) -> tuple[int, ...]:

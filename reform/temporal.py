@@ -59,7 +59,9 @@ __all__ = [
     "MEMBER_THRESHOLD",
     "KindScores",
     "TemporalEvaluation",
+    "check_temporal",
     "evaluate_events",
+    "frame_interval",
 ]
 
 DEFAULT_TOLERANCE_S = 1.0  # seconds between a true event and the detected event matching it
@@ -241,6 +243,30 @@ def _check_tolerance(tolerance_s: Any, sequences: list[_Sequence]) -> float:
                 f"{tolerance:g} s"
             )
     return tolerance
+
+
+def frame_interval(frames: Sequence[Frame]) -> float:
+    """The longest of the sequences' frame intervals (each the median step between its
+    annotated frames), seconds: the shortest tolerance every sequence of ``frames`` accepts.
+
+    Raises:
+        ValueError: as :func:`evaluate_events` refuses the frames, in one line.
+    """
+    sequences = _split_sequences(tuple(frames), caller="frame_interval")
+    return max(float(np.median(np.diff(sequence.time))) for sequence in sequences)
+
+
+def check_temporal(frames: Sequence[Frame], tolerance_s: float = DEFAULT_TOLERANCE_S) -> float:
+    """Checks, before any detector runs, that ``frames`` can be scored in time with
+    ``tolerance_s``, as :func:`evaluate_events` would; returns the tolerance.
+
+    Raises:
+        ValueError: one line naming the sequence and the frame (frames out of time order or at
+            a repeated time, a sequence with fewer than two annotated frames) or the tolerance
+            (below a sequence's frame interval).
+    """
+    sequences = _split_sequences(tuple(frames), caller="evaluate_events")
+    return _check_tolerance(tolerance_s, sequences)
 
 
 def _match(

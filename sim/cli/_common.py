@@ -608,3 +608,22 @@ def sensor_options(args: argparse.Namespace) -> dict[str, Any] | None:
             raise CliError(f"sensor options need --view robot, got {', '.join(flags)}")
         return None
     return given
+
+
+def temporal_tolerance(args: argparse.Namespace, frames: Sequence[Any]) -> float | None:
+    """``--temporal``'s matching window for ``frames``, checked before any detector runs (None
+    without ``--temporal``): ``--tolerance``, else 1 s or the frames' interval where longer;
+    a `CliError` naming the sequence and the frame when the frames cannot be scored in time."""
+    if args.tolerance is not None and not args.temporal:
+        raise CliError("--tolerance is the matching window of --temporal; give --temporal too")
+    if not args.temporal:
+        return None
+    from reform.temporal import DEFAULT_TOLERANCE_S, check_temporal, frame_interval
+
+    try:
+        tolerance = args.tolerance
+        if tolerance is None:
+            tolerance = max(DEFAULT_TOLERANCE_S, frame_interval(frames))
+        return check_temporal(frames, tolerance)
+    except ValueError as exc:
+        raise CliError(f"--temporal: {args.data}: {' '.join(str(exc).split())}") from None

@@ -6,7 +6,7 @@ import argparse
 
 from sim.cli._common import run_with
 from sim.cli._detection import add_detection_arguments
-from sim.cli._grammar import add_frames, add_report_out
+from sim.cli._grammar import add_frames, add_report_out, add_temporal_arguments
 from sim.recording import add_recording_arguments
 
 DESCRIPTION = """\
@@ -16,6 +16,11 @@ Runs a detector on every annotated frame of a dataset and scores it with the fie
 recall and precision by group size. Prints the table; --out DIR saves it (DIR/evaluation.json,
 DIR/evaluation.md). --frames test scores the SALSA test split that `reform-sim train --frames
 train` leaves out.
+
+--temporal also scores the detector in time (docs/guide/temporal.md): the group events of its
+answers (forms, dissolves, joins, leaves, merges, splits) against the ground truth's, matched
+within --tolerance seconds: recall and precision per kind, latency (median, 95th percentile),
+false events per minute and group identity switches, with intervals over sequences.
 """
 
 BASENAME = "evaluation"
@@ -30,5 +35,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="include every frame's scores in the JSON (for time-series plots)",
     )
+    add_temporal_arguments(parser)
     add_recording_arguments(parser)
     parser.set_defaults(handler=run_with("sim.cli.evaluate:run"))

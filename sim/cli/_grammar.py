@@ -307,3 +307,21 @@ def data_entries(
         else:
             rest.append(value)
     return named, rest
+
+
+def add_temporal_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--temporal`` and ``--tolerance S``: score the detector's group events in time too."""
+    parser.add_argument(
+        "--temporal",
+        action="store_true",
+        help="also score the group events in time: recall and precision per kind, latency, "
+        "false events per minute, identity switches (docs/guide/temporal.md)",
+    )
+    parser.add_argument(
+        "--tolerance",
+        type=float,
+        default=None,
+        metavar="S",
+        help="with --temporal: seconds between a true event and the detected event matching "
+        "it (default: 1 s, or the frame interval where frames come further apart)",
+    )

@@ -7,7 +7,13 @@ from __future__ import annotations
 import argparse
 
 from reform.metrics import evaluate
-from sim.cli._common import check_frames, check_recording, load_data, select_frames
+from sim.cli._common import (
+    check_frames,
+    check_recording,
+    load_data,
+    select_frames,
+    temporal_tolerance,
+)
 from sim.cli._detection import detect_frames, record_detection
 from sim.cli._detectors import check_detector, detector_params
 from sim.cli._evaluate import BASENAME
@@ -22,6 +28,7 @@ def run(args: argparse.Namespace) -> int:
     check_recording(args)
     dataset = load_data(args)
     frames = select_frames(args, dataset.frames, doing="evaluate on")
+    tolerance = temporal_tolerance(args, frames)
     detector, predictions = detect_frames(args, spec, frames)
     evaluation = evaluate(frames, predictions)
     result = evaluation.to_json(
@@ -31,6 +38,14 @@ def run(args: argparse.Namespace) -> int:
         source=dataset.source,
         per_frame=args.per_frame,
     )
+    if tolerance is not None:
+        from reform.seeding import Role, derive_rng
+        from reform.temporal import evaluate_events
+
+        rng = derive_rng(0, Role.TEMPORAL_BOOTSTRAP)
+        result["temporal"] = evaluate_events(
+            frames, predictions, tolerance_s=tolerance, rng=rng
+        ).to_json()
     print(format_report(result, style="text"), end="")
     write_outputs(
         outputs, document=result, markdown=lambda: format_report(result, style="markdown")

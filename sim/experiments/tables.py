@@ -193,7 +193,74 @@ def format_report(result: Mapping[str, Any], *, style: str = "text") -> str:
         parts.append(render_table(headers, size_rows, style=style))
     else:
         parts.append("(no F-formations, true or detected)")
+    temporal = result.get("temporal")
+    if temporal:
+        parts += ["", *format_temporal(temporal, style=style)]
     return "\n".join(parts) + "\n"
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def format_temporal(temporal: Mapping[str, Any], *, style: str = "text") -> list[str]:
+    """The lines of a temporal evaluation (`reform.TemporalEvaluation.to_json`): events per kind
+    found and invented, latency, flicker and identity switches."""
+    intervals = temporal.get("intervals") or {}
+
+    def spread(name: str, show) -> str:
+        interval = intervals.get(name)
+        if not interval:
+            return ""
+        return f" ({show(interval['low'])} to {show(interval['high'])})"
+
+    rows = [
+        [
+            kind,
+            _count(scores["true_events"]),
+            _count(scores["detected_events"]),
+            _count(scores["matched"]),
+            percent(scores["recall"]),
+            percent(scores["precision"]),
+        ]
+        for kind, scores in temporal["by_kind"].items()
+    ]
+    rows.append(
+        [
+            "all",
+            _count(temporal["true_events"]),
+            _count(temporal["detected_events"]),
+            _count(temporal["latency_s"]["matched"]),
+            percent(temporal["recall"]),
+            percent(temporal["precision"]),
+        ]
+    )
+    latency = temporal["latency_s"]
+    summary = (
+        f"Latency of the matched events: median {_seconds(latency['median'])} s"
+        f"{spread('latency_median_s', _seconds)}, 95th percentile {_seconds(latency['p95'])} s"
+        f"{spread('latency_p95_s', _seconds)}. False events: {_count(temporal['false_events'])}"
+        f", {temporal['false_events_per_minute']:.2f} per minute"
+        f"{spread('false_events_per_minute', lambda v: f'{v:.2f}')} over "
+        f"{temporal['minutes']:.1f} min. Identity switches: "
+        f"{_count(temporal['identity_switches'])}."
+    )
+    note = (
+        f"Group events (docs/guide/temporal.md): a detected event matches a true event of the "
+        f"same kind within {temporal['tolerance_s']:g} s whose group it matches at "
+        f"{temporal['member_threshold']} (the same person for joins and leaves), one to one."
+    )
+    return [
+        "Groups in time:",
+        "",
+        render_table(
+            ["event", "true", "detected", "matched", "recall", "precision"], rows, style=style
+        ),
+        "",
+        _wrap(summary),
+        "",
+        _wrap(note),
+    ]
 
 
 def _wrap(text: str) -> str:
