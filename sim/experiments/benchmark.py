@@ -263,6 +263,8 @@ def _label(spec: str) -> str:
         return "GCFF, each dataset's own settings"
     if spec == GCFF_TUNED:
         return "GCFF, tuned on each dataset's training part"
+    if spec in detector_names() and detector_info(spec).needs == "training":
+        return f"{spec}, trained on each dataset's training part"
     return spec
 
 
