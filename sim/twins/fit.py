@@ -10,7 +10,11 @@ The recipe (`fit_twin`), each step matching one label-free statistic of the real
 3. **spacing and scale**: pilot parties are simulated (`PILOT_EPISODES` of `PILOT_S` seconds);
    the annotation's fixed ``scale`` is the real median nearest-neighbour distance over the
    pilot's, and the room's side is set so that the box holding everyone, scaled, is as large as
-   the real one (crowding); `PILOT_ROUNDS` rounds of both;
+   the real one (crowding); `PILOT_ROUNDS` rounds of both; before them, the crowd's shape
+   (`SHAPE_CHOICES`: spacing, largest group, unevenness, share alone, arrangements, noise on
+   facings) is searched one option at a time, `SHAPE_PASSES` passes, each choice kept where
+   the pilot's `sim.twins.statistics.spacing_shape` comes closest to the recording's
+   (nearest-neighbour distances, facing a common point, clumps of bodies and of o-space votes);
 4. **orientation coding**: the number of directions every real yaw is coded in (continuous
    when none fits), the head's yaw when the recording's yaw is its head's;
 5. **tracker**: position and yaw jitter on top of the pilot's own, so that people standing still
@@ -58,6 +62,7 @@ PILOT_EPISODES = 3
 PILOT_S = 120.0  # seconds per pilot episode
 PILOT_RATE_HZ = 0.5
 PILOT_ROUNDS = 3
+SHAPE_PASSES = 2  # passes over the crowd options searched one at a time
 MIN_ROOM_M = 4.0  # metres (mingle's smallest room)
 MAX_ROOM_M = 100.0
 MAX_DENSITY = 1.0  # people per m^2 mingle allows
@@ -68,19 +73,23 @@ STEP_S = 0.01  # seconds: the simulator's control step; a frame is a whole numbe
 PILOT, CHECK, SHAPE = 11, 12, 13  # seed roles of the pilot and of the twin's own figures
 
 
-# The crowd options searched label-free, in this order, one at a time (mingle's own ranges).
+# The crowd options searched label-free, in this order, one at a time (mingle's own ranges;
+# ``max_group_size`` no more than the people).
 SHAPE_CHOICES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
     {
         "spacing": (0.63, 0.5, 0.43),  # metres: how close two people may stand
+        "max_group_size": (3, 5, 8),  # largest group
         "unevenness": (0.0, 0.5, 1.0),  # how unevenly members spread round the o-space
         "alone_share": (0.08, 0.25, 0.5),  # share of people alone at the start
         "arrangements": (0.0, 0.5),  # share of groups side by side or presenter and audience
-        "orientation_noise": (0.35, 0.7, 1.0),  # radians: how far people face off the centre
+        "orientation_noise": (0.1, 0.2, 0.35, 0.5, 0.7, 1.0),  # radians: facing off the centre
     }
 )
 SHAPE_STATISTIC = (
     "spacing shape: nearest-neighbour q10, q25, q75, q90, 2nd and 3rd nearest over the median "
-    "nearest neighbour, share standing apart, facing away from the nearest (median, q75, rad)"
+    "nearest neighbour, share standing apart, facing away from the nearest (median, q75, rad), "
+    "a person and the nearest off facing a common point (q25, median, q75, rad), clumps "
+    "(mean size, share in clumps of 4 or more), o-space votes (share alone, mean clump size)"
 )
 
 
@@ -187,18 +196,22 @@ def twin_sample(twin: Twin) -> list[Frame]:
 
 def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
     """How far two `spacing_shape` signatures are: squared log ratios of the six distance
-    ratios, plus the squared differences of the shares standing apart (times 4) and of the
-    facing angles (radians)."""
-    ratios = np.log(np.maximum(twin[:6], 1e-6) / np.maximum(real[:6], 1e-6))
-    facing = twin[7:9] - real[7:9]
-    return float(np.sum(ratios**2) + 4.0 * (twin[6] - real[6]) ** 2 + np.sum(facing**2))
+    ratios and of the mean sizes of clumps and of vote clumps, plus the squared differences of
+    the shares standing apart, in clumps of 4 or more and voting alone (each times 4) and of
+    the angles off facing a common point (radians)."""
+    ratios = np.log(np.maximum(twin[[*range(6), 12, 15]], 1e-6))
+    ratios -= np.log(np.maximum(real[[*range(6), 12, 15]], 1e-6))
+    facing = twin[9:12] - real[9:12]
+    shares = twin[[6, 13, 14]] - real[[6, 13, 14]]
+    return float(np.sum(ratios**2) + 4.0 * np.sum(shares**2) + np.sum(facing**2))
 
 
 def _fit_spacing_shape(
     frames: Sequence[Frame], real: PlaceStatistics, options: dict[str, Any], *, seed: int
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The crowd options (`SHAPE_CHOICES`, one at a time in that order, each kept where it brings
-    the pilot's `spacing_shape` closest to the recording's) on a room sized once for the
+    the pilot's `spacing_shape` closest to the recording's; `SHAPE_PASSES` passes, so that an
+    option chosen early is chosen again beside the later ones) on a room sized once for the
     recording's crowding."""
     target = spacing_shape(frames)
     coding = AnnotationModel(directions=real.directions or None)  # yaws as the recording codes
@@ -212,16 +225,25 @@ def _fit_spacing_shape(
     side = run["room_side"] * (real.extent_m / scale) / pilot.extent_m
     options["room_side"] = _room_for(options["people"], side)
     best_shape = None
-    for key, choices in SHAPE_CHOICES.items():
-        scores = []
-        for value in choices:
-            trial = {**options, key: value, "duration": PILOT_S}
-            sim_frames, _ = _simulate(trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
-            signature = spacing_shape(coding.apply(sim_frames, derive_rng(seed, SHAPE)))
-            scores.append((_shape_distance(target, signature), signature))
-        k = min(range(len(choices)), key=lambda j: scores[j][0])
-        options[key] = choices[k]
-        best_shape = scores[k][1]
+    seen: dict[tuple, tuple[float, np.ndarray]] = {}  # pilots already run, by their options
+    for _ in range(SHAPE_PASSES):
+        for key, choices in SHAPE_CHOICES.items():
+            if key == "max_group_size":
+                choices = tuple(sorted({min(c, options["people"]) for c in choices}))
+            scores = []
+            for value in choices:
+                trial = {**options, key: value, "duration": PILOT_S}
+                known = tuple(sorted(trial.items()))
+                if known not in seen:
+                    sim_frames, _ = _simulate(
+                        trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ
+                    )
+                    signature = spacing_shape(coding.apply(sim_frames, derive_rng(seed, SHAPE)))
+                    seen[known] = (_shape_distance(target, signature), signature)
+                scores.append(seen[known])
+            k = min(range(len(choices)), key=lambda j: scores[j][0])
+            options[key] = choices[k]
+            best_shape = scores[k][1]
     shown = [float(f"{v:.4g}") for v in target]
     return options, {"real": shown, "twin": [float(f"{v:.4g}") for v in best_shape]}
 
@@ -354,13 +376,16 @@ def fit_twin(
     options = _room_for_every_episode(options, seed=seed, episodes=episodes)
     mine = measure_place(_sample(options, annotation, seed=seed, rate=rate))
 
-    fitted = _fitted(real, mine, options, annotation, rate, episodes, shape) + tuple(
+    searched = tuple(
         Fitted(
             f"options.{key}", options[key], SHAPE_STATISTIC, shape_fit["real"], shape_fit["twin"]
         )  # fmt: skip
         for key in SHAPE_CHOICES
         if shape_fit
     )
+    names = {row.name for row in searched}
+    rows = _fitted(real, mine, options, annotation, rate, episodes, shape)
+    fitted = tuple(row for row in rows if row.name not in names) + searched
     return Twin(
         name=name,
         mode="labels" if use_labels else "label-free",

@@ -17,7 +17,9 @@ import numpy as np
 from reform.frame import Frame, wrap_angle
 
 __all__ = [
+    "CLUMP_LINK",
     "CODINGS",
+    "SHAPE_SIZE",
     "PlaceStatistics",
     "measure_place",
     "nearest_neighbour_distances",
@@ -31,6 +33,10 @@ STILL_M_PER_S = 0.15  # metres per second: slower than this between two frames i
 MAX_GAP_STEPS = 1.5  # consecutive frames are at most this many median steps apart
 RAYLEIGH_MEDIAN = math.sqrt(2.0 * math.log(2.0)) * math.sqrt(2.0)  # |difference of two jitters|
 HALF_NORMAL_MEDIAN = 0.6744897501960817 * math.sqrt(2.0)  # |difference of two yaw jitters|
+CLUMP_LINK = 1.3  # median nearest-neighbour distances: people closer than this are one clump
+VOTE_AHEAD = 0.6  # median nearest-neighbour distances: an o-space vote this far ahead of a person
+VOTE_LINK = 0.5  # median nearest-neighbour distances: votes closer than this are one clump
+SHAPE_SIZE = 16  # entries of `spacing_shape`
 
 
 @dataclass(frozen=True)
@@ -102,13 +108,47 @@ def nearest_neighbour_distances(frames: Sequence[Frame]) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0)
 
 
+def _clump_sizes(d: np.ndarray, link: float) -> np.ndarray:
+    """(n,) the size of each person's clump: people linked, in a chain, by distances under
+    ``link`` (``d`` (n, n) pairwise distances, infinite on the diagonal)."""
+    from scipy.sparse.csgraph import connected_components
+
+    _, label = connected_components(d < link, directed=False)
+    return np.bincount(label)[label]
+
+
+def _votes(position: np.ndarray, yaw: np.ndarray, median: float) -> np.ndarray:
+    """(n,) the size of each person's o-space vote clump (see `spacing_shape`)."""
+    ahead = VOTE_AHEAD * median * np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+    v = position + ahead
+    d = np.hypot(v[:, None, 0] - v[None, :, 0], v[:, None, 1] - v[None, :, 1])
+    np.fill_diagonal(d, np.inf)
+    return _clump_sizes(d, VOTE_LINK * median)
+
+
 def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
-    """How people stand relative to their spacing, free of the unit: the 10, 25, 75 and 90 %
-    quantiles of the nearest-neighbour distance and the medians of the second and third nearest,
-    each over the median nearest-neighbour distance, the share of people whose nearest
-    neighbour is more than 1.5 medians away (standing apart), and the median and 75 % quantile
-    of how far each person faces away from their nearest neighbour (radians, in [0, pi]). (9,)."""
-    near, facing = [], []
+    """How people stand relative to their spacing, free of the unit. (SHAPE_SIZE,):
+
+    - 0-5: the 10, 25, 75 and 90 % quantiles of the nearest-neighbour distance and the medians
+      of the second and third nearest, each over the median nearest-neighbour distance;
+    - 6: the share of people whose nearest neighbour is more than 1.5 medians away (apart);
+    - 7-8: the median and 75 % quantile of how far each person faces away from their nearest
+      neighbour (radians, in [0, pi]);
+    - 9-11: the 25, 50 and 75 % quantiles of how far a person and their nearest neighbour are
+      from facing a common point (radians, in [0, pi]): with ``a`` the angle from the person's
+      direction to the neighbour to their yaw and ``b`` the angle from the neighbour's direction
+      to the person to the neighbour's yaw, ``|a + b|``, which is 0 when both face a point on the
+      same side at the same angle, as members of one o-space do whatever its size (label-free
+      evidence of o-spaces and of the noise on facings);
+    - 12-13: clumps, people linked in a chain by distances under `CLUMP_LINK` medians: the mean
+      size of the clump a person stands in (over people not alone in one) and the share of
+      people in clumps of 4 or more (how large groups are and how close groups stand);
+    - 14-15: o-space votes, the point `VOTE_AHEAD` medians ahead of each person, linked in a
+      chain by distances under `VOTE_LINK` medians: the share of people whose vote is alone
+      and the mean size of a vote's clump over the others (label-free evidence of how many
+      people share an o-space, which clumps of bodies blur when groups stand close).
+    """
+    near, facing, common, clumps, votes = [], [], [], [], []
     for frame in frames:
         if frame.n_people < 4:
             continue
@@ -116,17 +156,31 @@ def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
         d = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1])
         np.fill_diagonal(d, np.inf)
         near.append(np.sort(d, axis=1)[:, :3])
-        to = p[np.argmin(d, axis=1)] - p
-        facing.append(np.abs(wrap_angle(np.arctan2(to[:, 1], to[:, 0]) - frame.yaw)))
+        nearest = np.argmin(d, axis=1)
+        to = p[nearest] - p
+        towards = np.arctan2(to[:, 1], to[:, 0])
+        a = wrap_angle(frame.yaw - towards)
+        b = wrap_angle(frame.yaw[nearest] - towards - math.pi)
+        facing.append(np.abs(a))
+        common.append(np.abs(wrap_angle(a + b)))
+        clumps.append(d)
+        votes.append((p, frame.yaw))
     if not near:
-        return np.full(9, np.nan)
+        return np.full(SHAPE_SIZE, np.nan)
     k = np.concatenate(near)
     median = float(np.median(k[:, 0]))
     quantiles = np.quantile(k[:, 0], [0.1, 0.25, 0.75, 0.9]) / median
     away = np.concatenate(facing)
+    sizes = np.concatenate([_clump_sizes(d, CLUMP_LINK * median) for d in clumps])
+    together = sizes[sizes > 1]
+    voted = np.concatenate([_votes(p, yaw, median) for p, yaw in votes])
+    shared = voted[voted > 1]
     return np.array(
         [*quantiles, np.median(k[:, 1]) / median, np.median(k[:, 2]) / median,
-         float(np.mean(k[:, 0] > 1.5 * median)), np.median(away), np.quantile(away, 0.75)]
+         float(np.mean(k[:, 0] > 1.5 * median)), np.median(away), np.quantile(away, 0.75),
+         *np.quantile(np.concatenate(common), [0.25, 0.5, 0.75]),
+         float(together.mean()) if together.size else 1.0, float(np.mean(sizes >= 4)),
+         float(np.mean(voted == 1)), float(shared.mean()) if shared.size else 1.0]
     )  # fmt: skip
 
 
