@@ -38,6 +38,10 @@ installed detector's name, or package.module:factory. REFORM models: --model FIL
 
 Honest evaluation: datasets named by --test-split (default: salsa) are scored on the test part
 of reform.time_split only, the frames `reform-sim train --frames train` leaves out.
+
+--temporal also scores every detector's group events in time on each dataset (a "Groups in
+time" table: event recall and precision, latency, false events per minute, identity switches;
+docs/guide/temporal.md), matched within 1 s or the dataset's frame interval where longer.
 """
 
 
@@ -89,6 +93,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder (./{DEFAULT_OUT})"
+    )
+    parser.add_argument(
+        "--temporal",
+        action="store_true",
+        help="also score each detector's group events in time (docs/guide/temporal.md)",
     )
     add_recordings(parser, default=True, each="dataset")
     add_backend_arguments(parser, jobs_default="1")

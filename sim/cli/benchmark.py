@@ -87,6 +87,7 @@ def _run(args: argparse.Namespace) -> int:
             backend=args.backend,
             address=args.address,
             progress=progress,
+            temporal=args.temporal,
         )
     finally:
         if bar is not None:
@@ -123,6 +124,8 @@ def _command(args: argparse.Namespace) -> str:
             words += [flag, value]
     if args.train_fraction is not None:
         words += ["--train-fraction", f"{args.train_fraction:g}"]
+    if args.temporal:
+        words.append("--temporal")
     if args.out != DEFAULT_OUT:
         words += ["--out", args.out]
     if not args.recordings:

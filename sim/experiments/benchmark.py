@@ -435,6 +435,7 @@ class Cell:
     skipped: str | None = None
     seconds: float = 0.0
     predictions: tuple[tuple[Group, ...], ...] = ()
+    temporal: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -490,9 +491,24 @@ class Benchmark:
         return None
 
 
-def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
-    """One cell: load, build, predict (checked), evaluate. A detector that learns is fitted on
-    the training part of the dataset's time split and scored on its test part only."""
+def _temporal(label: str, frames: Sequence[Frame], predictions: Sequence[Any]) -> dict[str, Any]:
+    """The group events of ``predictions`` scored in time (`reform.evaluate_events`), matched
+    within 1 s or the dataset's frame interval where longer, with intervals over sequences; or
+    ``{"skipped": why}`` where the frames cannot be scored in time (one frame per sequence)."""
+    from reform.temporal import DEFAULT_TOLERANCE_S, evaluate_events, frame_interval
+
+    try:
+        tolerance = max(DEFAULT_TOLERANCE_S, frame_interval(frames))
+        rng = derive_rng(BOOTSTRAP_SEED, Role.TEMPORAL_BOOTSTRAP, zlib.crc32(label.encode()))
+        return evaluate_events(frames, predictions, tolerance_s=tolerance, rng=rng).to_json()
+    except ValueError as exc:
+        return {"skipped": " ".join(str(exc).split())}
+
+
+def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec, temporal: bool = False) -> Cell:
+    """One cell: load, build, predict (checked), evaluate (and, with ``temporal``, score the
+    group events in time). A detector that learns is fitted on the training part of the
+    dataset's time split and scored on its test part only."""
     dataset = dataset_spec.load()
     label = dataset_spec.label  # the row's dataset, whichever of its frames this cell scores
     training: tuple[Frame, ...] = ()
@@ -523,10 +539,11 @@ def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> Cell:
         by_sequence=by_sequence,
         seconds=seconds,
         predictions=tuple(tuple(tuple(int(m) for m in g) for g in p) for p in predictions),
+        temporal=_temporal(label, frames, predictions) if temporal else None,
     )
 
 
-def _score_unit(unit: tuple[DatasetSpec, DetectorSpec]) -> Cell:
+def _score_unit(unit: tuple[DatasetSpec, DetectorSpec, bool]) -> Cell:
     return _score(*unit)
 
 
@@ -539,6 +556,7 @@ def run_benchmark(
     address: str | None = None,
     progress: Callable[[int, int, Cell], None] | None = None,
     executor: Executor | None = None,
+    temporal: bool = False,
 ) -> Benchmark:
     """Runs every detector on every dataset.
 
@@ -551,6 +569,7 @@ def run_benchmark(
         progress: called as ``progress(done, total, cell)`` as each cell finishes.
         executor: where the cells run (`sim.executor.Executor`), instead of ``jobs``,
             ``backend`` and ``address``.
+        temporal: also score each cell's group events in time (`Cell.temporal`).
 
     Raises:
         ValueError: no dataset or detector, a repeated label, an unknown backend, jobs < 1.
@@ -574,7 +593,7 @@ def run_benchmark(
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
-    units = [(d, m) for d in datasets for m in detectors]
+    units = [(d, m, bool(temporal)) for d in datasets for m in detectors]
     start = time.perf_counter()
     if executor is None:
         local = backend == "local"

@@ -177,10 +177,64 @@ def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = N
             ),
             "",
         ]
+    lines += _temporal_lines(benchmark)
     if plot_name:
         lines += [f"![F1 at T = 2/3 and T = 1 per dataset]({plot_name})", ""]
     lines.append(f"Ran in {benchmark.seconds:.1f} s.")
     return "\n".join(lines) + "\n"
+
+
+def _seconds(value: float | None) -> str:
+    return "–" if value is None else f"{value:.1f}"
+
+
+def _temporal_lines(benchmark: Benchmark) -> list[str]:
+    """The "Groups in time" section: every cell's events scored in time (``--temporal``)."""
+    rows = []
+    tolerances = {}
+    for dataset in benchmark.datasets:
+        for detector in benchmark.detectors:
+            cell = benchmark.cell(dataset, detector)
+            temporal = cell.temporal
+            if temporal is None:
+                continue
+            if "skipped" in temporal:
+                rows.append([dataset.label, detector.label, f"skipped: {temporal['skipped']}"])
+                rows[-1] += [""] * 6
+                continue
+            tolerances[dataset.label] = temporal["tolerance_s"]
+            latency = temporal["latency_s"]
+            rows.append(
+                [
+                    dataset.label,
+                    detector.label,
+                    f"{temporal['true_events']:,}",
+                    percent(temporal["recall"]),
+                    percent(temporal["precision"]),
+                    _seconds(latency["median"]),
+                    _seconds(latency["p95"]),
+                    f"{temporal['false_events_per_minute']:.1f}",
+                    f"{temporal['identity_switches']:,}",
+                ]
+            )
+    if not rows:
+        return []
+    windows = ", ".join(f"{label} {value:g} s" for label, value in tolerances.items())
+    header = ["dataset", "detector", "true events", "event recall", "event precision"]
+    header += ["latency median s", "latency p95 s", "false events / min", "identity switches"]
+    return [
+        "## Groups in time",
+        "",
+        "Each detector's group events (forms, dissolves, joins, leaves, merges, splits; "
+        "docs/guide/temporal.md) against the ground truth's on the same scored frames: a detected "
+        "event matches a true one of the same kind whose group it matches at 2/3 within the "
+        f"dataset's window ({windows}: 1 s, or the frame interval where longer). Recall and "
+        "precision pooled over kinds, in %; latency of the matched events; false events per "
+        "minute of recording (flicker); identity switches of the true groups' matched tracks.",
+        "",
+        *_table(header, rows),
+        "",
+    ]
 
 
 def _mean_rows(means: Mapping[str, Mapping[str, Any]]) -> list[list[str]]:
@@ -228,6 +282,7 @@ def to_json(benchmark: Benchmark, *, command: str) -> dict[str, Any]:
                     "scores": None if cell.scores is None else cell.scores.to_json(),
                     "by_sequence": {s: v.to_json() for s, v in cell.by_sequence.items()},
                     "seconds": round(cell.seconds, 3),
+                    **({} if cell.temporal is None else {"temporal": cell.temporal}),
                     "published_at_2/3": None
                     if published is None
                     else dict(zip(("precision", "recall", "f1", "source"), published, strict=True)),

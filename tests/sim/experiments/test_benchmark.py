@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sys
 import textwrap
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -326,3 +327,56 @@ def test_every_score_carries_its_bootstrap_interval(tmp_path):
             low, high = cell.scores.f1_interval[t]
             assert low <= cell.scores.at[t][2] <= high
     assert one.scores.f1_interval["2/3"][0] < one.scores.f1_interval["2/3"][1]  # it varies
+
+
+def test_temporal_scores_each_cells_events_as_evaluate_events_does(tmp_path):
+    from toy_scenes import line_frame
+
+    from reform import Dataset, make_detector, write_parquet
+    from reform.seeding import Role, derive_rng
+    from reform.temporal import evaluate_events
+
+    # person 3 joins (1, 2) at 2 s and leaves at 4 s; frames 0.5 s apart
+    frames = tuple(
+        line_frame([1, 2, 3], [[1, 2, 3]] if 2.0 <= 0.5 * k < 4.0 else [[1, 2]], time=0.5 * k)
+        for k in range(12)
+    )
+    path = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=frames, name="toy", source="toy_scenes"), path)
+    one = tmp_path / "one.parquet"
+    write_parquet(Dataset(frames=frames[:1], name="one", source="toy_scenes"), one)
+    datasets = [DatasetSpec(name="toy", path=str(path)), DatasetSpec(name="one", path=str(one))]
+    benchmark = run_benchmark(datasets, [detector_spec("gcff")], temporal=True)
+    cell = benchmark.cell(datasets[0], benchmark.detectors[0])
+    unlabelled = [f.replace(groups=None) for f in frames]
+    rng = derive_rng(0, Role.TEMPORAL_BOOTSTRAP, zlib.crc32(b"toy"))
+    expected = evaluate_events(
+        frames, make_detector("gcff").predict(unlabelled), tolerance_s=1.0, rng=rng
+    ).to_json()
+    assert cell.temporal == expected and expected["true_events"] == 2
+    skipped = benchmark.cell(datasets[1], benchmark.detectors[0]).temporal
+    assert "expected at least two" in skipped["skipped"]
+    # without --temporal a cell holds none
+    assert run_benchmark(datasets[:1], [detector_spec("gcff")]).cells[0].temporal is None
+
+
+def test_the_report_has_a_groups_in_time_table(tmp_path, capsys):
+    from toy_scenes import line_frame
+
+    from reform import Dataset, write_parquet
+
+    frames = tuple(
+        line_frame([1, 2, 3], [[1, 2, 3]] if k >= 4 else [[1, 2]], time=float(k)) for k in range(8)
+    )
+    path = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=frames, name="toy", source="toy_scenes"), path)
+    argv = ["benchmark", "--data", str(path), "--detector", "majority", "--temporal"]
+    assert main([*argv, "--out", str(tmp_path / "out"), "--no-recordings", "-q"]) == 0
+    report = (tmp_path / "out" / "benchmark.md").read_text()
+    assert "## Groups in time" in report and "--temporal" in report
+    row = next(
+        line for line in report.splitlines() if line.startswith("| toy.parquet | majority | ")
+    )
+    assert row.split(" | ")[2:4] == ["1", "0.0"]  # one join, none found
+    cell = json.loads((tmp_path / "out" / "benchmark.json").read_text())["cells"][0]
+    assert cell["temporal"]["true_events"] == 1
