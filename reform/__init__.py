@@ -45,6 +45,8 @@ _EXPORTS = {
     "GroupEvent": "reform.events",
     "GroupTracks": "reform.events",
     "group_events": "reform.events",
+    "partition_events": "reform.events",
+    "partition_tracks": "reform.events",
     "track_groups": "reform.events",
     "DEFAULT_FEATURES": "reform.features",
     "FEATURES": "reform.features",

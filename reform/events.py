@@ -65,6 +65,8 @@ __all__ = [
     "GroupEvent",
     "GroupTracks",
     "group_events",
+    "partition_events",
+    "partition_tracks",
     "track_groups",
 ]
 
@@ -113,6 +115,48 @@ class GroupEvent:
 
     def to_json(self) -> dict[str, Any]:
         return json_record(self)
+
+    @classmethod
+    def from_json(cls, data: Any) -> GroupEvent:
+        """The event :meth:`to_json` wrote (after a round trip through JSON text).
+
+        Raises:
+            ValueError: ``data`` is not such an object (a missing field, an unknown kind, a
+                value of the wrong type), naming what is wrong.
+        """
+        try:
+            kind = data["kind"]
+            if kind not in EVENT_KINDS:
+                raise ValueError(f"kind must be one of {EVENT_KINDS}, got {kind!r}")
+            person = data.get("person")
+            event = cls(
+                kind=str(kind),
+                sequence=str(data["sequence"]),
+                time=float(data["time"]),
+                frame=_int(data["frame"]),
+                group=_int(data["group"]),
+                members=tuple(_int(m) for m in data["members"]),
+                person=None if person is None else _int(person),
+                parts=tuple(tuple(_int(m) for m in part) for part in data.get("parts", ())),
+                part_tracks=tuple(_int(t) for t in data.get("part_tracks", ())),
+            )
+        except KeyError as exc:
+            raise ValueError(f"no field {exc} in {data!r}") from None
+        except (TypeError, AttributeError) as exc:
+            raise ValueError(f"{exc} in {data!r}") from None
+        if len(event.parts) != len(event.part_tracks):
+            raise ValueError(
+                f"one track per part expected, got {len(event.parts)} parts and "
+                f"{len(event.part_tracks)} tracks in {data!r}"
+            )
+        return event
+
+
+def _int(value: Any) -> int:
+    """``value`` if it is an int (not a bool), else a TypeError."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"expected an integer, got {value!r}")
+    return value
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,7 +250,51 @@ def _split_sequences(frames: Sequence[Frame], *, caller: str) -> list[_Sequence]
             sequence, both frames and both times), a sequence with fewer than two annotated
             frames, or no frames at all.
     """
-    frames = check_frames(frames, caller=caller)
+    return _split_rows(check_frames(frames, caller=caller), caller=caller)
+
+
+@dataclass(frozen=True)
+class _Row:
+    """A frame as the events see it: its sequence, time and groups (None: not annotated)."""
+
+    sequence: str
+    time: float
+    groups: Any
+
+
+def _rows(partitions: Iterable[Any], times: Any, sequences: Any, *, caller: str) -> list[_Row]:
+    """The rows of partitions given with their times (seconds) and sequence names (one name
+    for all, or one per partition)."""
+    partitions = list(partitions)
+    time = np.asarray(times, dtype=np.float64)
+    if time.shape != (len(partitions),):
+        raise ValueError(
+            f"{caller}: times must have shape ({len(partitions)},), one per partition, got "
+            f"{time.shape}"
+        )
+    if not np.all(np.isfinite(time)):
+        k = int(np.flatnonzero(~np.isfinite(time))[0])
+        raise ValueError(f"{caller}: times must be finite seconds, got {time[k]} at times[{k}]")
+    names = [sequences] * len(partitions) if isinstance(sequences, str) else list(sequences)
+    if len(names) != len(partitions):
+        raise ValueError(
+            f"{caller}: sequences must be one name or one per partition ({len(partitions)}), "
+            f"got {len(names)}"
+        )
+    return [
+        _Row(
+            str(name),
+            float(t),
+            None if groups is None else tuple(tuple(int(m) for m in g) for g in groups),
+        )
+        for name, t, groups in zip(names, time.tolist(), partitions, strict=True)
+    ]
+
+
+def _split_rows(frames: Sequence[Any], *, caller: str, skip_short: bool = False) -> list[_Sequence]:
+    """`_split_sequences` of rows (Frames, or anything with ``sequence``, ``time`` and
+    ``groups``); with ``skip_short`` a sequence with fewer than two annotated frames is left
+    out (it has no events) instead of refused."""
     if not frames:
         raise ValueError(f"{caller} needs frames: expected annotated frames, found none")
     last: dict[str, int] = {}
@@ -234,6 +322,8 @@ def _split_sequences(frames: Sequence[Frame], *, caller: str) -> list[_Sequence]
             chosen[frame.sequence].append(k)
     out = []
     for name, rows in chosen.items():
+        if len(rows) < 2 and skip_short:
+            continue
         if len(rows) < 2:
             found = f"only frames[{rows[0]}]" if rows else "none"
             raise ValueError(
@@ -394,9 +484,12 @@ def _transition(
     return now, events
 
 
-def _track_all(frames: Sequence[Frame], *, caller: str) -> tuple[list[_Sequence], list[_Tracking]]:
-    """Every sequence of ``frames``, checked, and its tracking."""
-    sequences = _split_sequences(frames, caller=caller)
+def _track_all(
+    frames: Sequence[Frame], *, caller: str, rows: list[_Sequence] | None = None
+) -> tuple[list[_Sequence], list[_Tracking]]:
+    """Every sequence of ``frames`` (or the sequences ``rows`` already split), checked, and its
+    tracking."""
+    sequences = _split_sequences(frames, caller=caller) if rows is None else rows
     out, next_track = [], 1
     for sequence in sequences:
         followed, next_track = _follow(sequence, next_track)
@@ -452,4 +545,51 @@ def track_groups(frames: Sequence[Frame]) -> GroupTracks:
         TypeError, ValueError: as :func:`group_events`.
     """
     _, followed = _track_all(frames, caller="track_groups")
+    return _spans_to_tracks(followed)
+
+
+def partition_events(
+    partitions: Iterable[Any],
+    *,
+    times: Any,
+    sequences: str | Sequence[str],
+    skip_short: bool = False,
+) -> list[GroupEvent]:
+    """:func:`group_events` of groups given without Frames: one partition per frame (groups of
+    person ids, None where the frame is not annotated), with each frame's time and sequence.
+    What a detector predicts, or a simulation's groups, gives its events so.
+
+    Args:
+        partitions: one partition (or None) per frame, sequence by sequence in time order.
+        times: (n_frames,) seconds, each frame's time in its sequence.
+        sequences: the sequence of every frame: one name for all, or one per frame.
+        skip_short: leave out a sequence with fewer than two annotated frames (it has no
+            events) instead of refusing it.
+
+    Returns:
+        The events, as :func:`group_events` gives them; ``frame`` indexes ``partitions``.
+
+    Raises:
+        ValueError: as :func:`group_events`, and for times or sequences not one per partition.
+    """
+    rows = _rows(partitions, times, sequences, caller="partition_events")
+    split = _split_rows(rows, caller="partition_events", skip_short=skip_short)
+    if not split:
+        return []
+    _, followed = _track_all((), caller="partition_events", rows=split)
+    return [event for f in followed for event in f.events]
+
+
+def partition_tracks(
+    partitions: Iterable[Any],
+    *,
+    times: Any,
+    sequences: str | Sequence[str],
+    skip_short: bool = False,
+) -> GroupTracks:
+    """:func:`track_groups` of groups given without Frames (arguments as for
+    :func:`partition_events`)."""
+    rows = _rows(partitions, times, sequences, caller="partition_tracks")
+    split = _split_rows(rows, caller="partition_tracks", skip_short=skip_short)
+    _, followed = _track_all((), caller="partition_tracks", rows=split)
     return _spans_to_tracks(followed)

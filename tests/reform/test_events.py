@@ -3,12 +3,20 @@ rule's ties, sequences, and every refusal of bad input."""
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from toy_scenes import line_frame
 
-from reform import GroupEvent, group_events, track_groups
+from reform import (
+    GroupEvent,
+    group_events,
+    partition_events,
+    partition_tracks,
+    track_groups,
+)
 from reform.events import DISSOLVES, EVENT_KINDS, FORMS, JOINS, LEAVES, MERGES, SPLITS
 
 IDS = (1, 2, 3, 4, 5, 6)
@@ -315,3 +323,81 @@ def test_no_frames_and_entries_that_are_not_frames_are_refused():
         group_events([])
     with pytest.raises(TypeError, match=r"group_events takes reform.Frame objects, got tuple"):
         group_events([((1, 2),), ((1, 2),)])
+
+
+# --- groups given without Frames, and events read back from JSON ----------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(labels, min_size=2, max_size=12), st.lists(st.booleans(), min_size=12))
+def test_partitions_give_the_events_and_tracks_of_their_frames(rows, annotated):
+    frames = frames_of(*(partition(row) for row in rows))
+    frames = [
+        f if keep else f.replace(groups=None) for f, keep in zip(frames, annotated, strict=False)
+    ]
+    if sum(f.groups is not None for f in frames) < 2:
+        frames[0], frames[-1] = (frames_of(partition(r))[0] for r in (rows[0], rows[-1]))
+        frames[-1] = frames[-1].replace(time=float(len(frames) - 1))
+    given_as = {
+        "partitions": [f.groups for f in frames],
+        "times": [f.time for f in frames],
+        "sequences": "s",
+    }
+    assert partition_events(**given_as) == group_events(frames)
+    tracks, expected = partition_tracks(**given_as), track_groups(frames)
+    assert tracks.track.tolist() == expected.track.tolist()
+    assert tracks.members == expected.members and tracks.n_tracks == expected.n_tracks
+
+
+def test_partitions_of_several_sequences_and_short_ones_skipped_when_asked():
+    partitions = [[(1, 2)], [(4, 5)], [(1, 2, 3)], [(7, 8)]]
+    sequences = ["a", "b", "a", "c"]
+    times = [0.0, 0.0, 1.0, 0.0]
+    with pytest.raises(ValueError, match=r"sequence 'b' has 1 annotated frame\(s\)"):
+        partition_events(partitions, times=times, sequences=sequences)
+    events = partition_events(partitions, times=times, sequences=sequences, skip_short=True)
+    assert [(e.sequence, e.kind, e.group, e.frame, e.person) for e in events] == [
+        ("a", JOINS, 1, 2, 3)
+    ]
+    assert (
+        partition_tracks(partitions, times=times, sequences=sequences, skip_short=True).n_tracks
+        == 1
+    )
+    assert partition_events([[(1, 2)]], times=[0.0], sequences="s", skip_short=True) == []
+
+
+def test_partitions_need_one_time_and_sequence_each():
+    with pytest.raises(ValueError, match=r"times must have shape \(2,\), one per partition"):
+        partition_events([[(1, 2)], [(1, 2)]], times=[0.0], sequences="s")
+    with pytest.raises(ValueError, match=r"sequences must be one name or one per partition \(2\)"):
+        partition_events([[(1, 2)], [(1, 2)]], times=[0.0, 1.0], sequences=["s"])
+    with pytest.raises(ValueError, match=r"times must be finite seconds, got nan at times\[1\]"):
+        partition_events([[(1, 2)], [(1, 2)]], times=[0.0, float("nan")], sequences="s")
+    with pytest.raises(ValueError, match=r"frames\[1\] \(sequence 's', time 0 s\) repeats"):
+        partition_events([[(1, 2)], [(1, 2)]], times=[0.0, 0.0], sequences="s")
+
+
+def test_events_come_back_from_json():
+    frames = frames_of([(1, 2, 3, 4)], [(1, 2), (3, 4, 5)], [(1, 2, 3, 4, 5)], [(1, 2, 3, 4)], [])
+    events = group_events(frames)
+    assert {e.kind for e in events} == {SPLITS, MERGES, LEAVES, JOINS, DISSOLVES}
+    assert [GroupEvent.from_json(json.loads(json.dumps(e.to_json()))) for e in events] == events
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"kind": "meets"}, r"kind must be one of \('forms'"),
+        ({"group": "1"}, r"expected an integer, got '1'"),
+        ({"members": [1, True]}, r"expected an integer, got True"),
+        ({"part_tracks": [1]}, r"one track per part expected, got 0 parts and 1 tracks"),
+    ],
+    ids=["kind", "group", "member", "parts"],
+)
+def test_malformed_json_events_are_named(change, message):
+    (event,) = group_events(frames_of([(1, 2)], [(1, 2, 3)]))
+    with pytest.raises(ValueError, match=message):
+        GroupEvent.from_json(event.to_json() | change)
+    without = {k: v for k, v in event.to_json().items() if k != "time"}
+    with pytest.raises(ValueError, match=r"no field 'time'"):
+        GroupEvent.from_json(without)
