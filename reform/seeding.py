@@ -65,6 +65,7 @@ class Role(IntEnum):
     PAPER_RANDOM_SPLIT = 10  # the paper experiment's random-split diagnostic: (role,)
     BENCHMARK_BOOTSTRAP = 11  # the benchmark's intervals: (role, crc32 of the dataset's label)
     TEMPORAL_BOOTSTRAP = 12  # temporal scores' intervals over sequences: (role,) or (role, crc32)
+    TEMPORAL_PARTY = 13  # the temporal experiment's party episodes: (role, episode)
 
 
 def _key(keys: tuple[int, ...]) -> tuple[int, ...]:

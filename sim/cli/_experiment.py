@@ -35,6 +35,11 @@ EXPERIMENTS = (
         "venue twins of every real dataset: tuning on them, predicting each detector's F1",
         "sim.cli._experiment_twins",
     ),
+    Command(
+        "temporal",
+        "groups in time: every detector's events, latency and flicker, and the temporal filters",
+        "sim.cli._experiment_temporal",
+    ),
 )
 
 
