@@ -22,13 +22,18 @@ in which every member has arrived: present, within `PLACE_TOLERANCE_M` (0.25 m) 
 and facing within `FACING_TOLERANCE_RAD` (30 degrees) of its planned way. Walking up to a group
 is not yet being in it. A group *ends* when its first member leaves its place, or when a newer
 planned group sharing members forms (someone joined, groups merged, the circle re-formed after a
-shuffle), which replaces it from that frame on. Everyone else is a singleton. `GroundTruth`
-applies the rule to the poses the world produces (`sim.episode` does this for every episode).
+shuffle), which replaces it from that frame on. A group that continues another after a
+scripted change (`scenarios.changes`: a latecomer joins, a member drifts away, a group walks
+over to merge) starts once its newcomers have taken their places, the members it keeps being
+still together; until then the group as it was is recorded. Everyone else is a singleton.
+`GroundTruth` applies the rule to the poses the world produces (`sim.episode` does this for
+every episode).
 """
 
 from __future__ import annotations
 
 from scenarios import hri, mingle, randomisation, registry, word_improv  # noqa: F401  (registration)
+from scenarios.changes import CHANGE_KINDS
 from scenarios.hri import PAPER_HRI_SCENES
 from scenarios.registry import *  # noqa: F403  (its public names, listed once in its __all__)
 from scenarios.scenario import Scenario
@@ -39,6 +44,7 @@ from scenarios.truth import FACING_TOLERANCE_RAD, PLACE_TOLERANCE_M, GroundTruth
 
 __all__ = [
     *registry.__all__,
+    "CHANGE_KINDS",
     "FACING_TOLERANCE_RAD",
     "PAPER_HRI_SCENES",
     "PLACE_TOLERANCE_M",

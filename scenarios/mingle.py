@@ -40,6 +40,17 @@ from typing import Annotated, Any
 import numpy as np
 
 from scenarios.casting import cast
+from scenarios.changes import (
+    CHANGE_OPTIONS,
+    JOIN,
+    LEAVE,
+    MERGE,
+    ApproachSpeed,
+    EventKinds,
+    EventRate,
+    draw_kind,
+    next_change,
+)
 from scenarios.conversation import converse, standing
 from scenarios.formation import (
     CIRCLE_OPTIONS,
@@ -125,13 +136,19 @@ BAR_SIZE_M = (2.0, 0.5, 1.1)  # metres: length, depth, height of a bar counter a
 POSTER_SIZE_M = (1.0, 0.05, 1.8)  # metres: width, depth, height of a poster board at a wall
 FURNITURE_GAP_M = 0.08  # metres between a body's disc and the furniture it stands at
 FURNITURE_WALL_END_M = 0.4  # metres, a bar or a poster keeps this far from the room's corners
+# Scripted changes (`scenarios.changes`).
+FIRST_CHANGE_S = 5.0  # seconds into the party before the first scripted change
+CHANGE_GAP_S = 3.0  # seconds a scripted change waits beyond the end of the one before
+APPROACH_M = 1.2  # metres from their place a latecomer's last straight walk up starts
+MERGED_MAX = 6  # people: a scripted merge makes a group of at most this many
+APPROACH_SPEED_M_S = 1.0  # m/s, default speed of a latecomer walking up
 
 
 class NoFloorError(ValueError):
     """The party's groups and people do not fit the room."""
 
 
-@shared_help(circle=CIRCLE_OPTIONS)
+@shared_help(circle=CIRCLE_OPTIONS, changes=CHANGE_OPTIONS)
 @dataclass(frozen=True)
 class MingleParams:
     """Every number that shapes a party: the options of ``mingle``, declared once here.
@@ -170,6 +187,7 @@ class MingleParams:
             people leave and (at a table) join these groups, which never merge, split or
             move. The furniture is in the MuJoCo scene; people walking do not collide with
             it.
+        {changes}
     """
 
     people: Annotated[int, Range(2, 100)] = 18
@@ -192,6 +210,9 @@ class MingleParams:
     unevenness: Annotated[float, Range(0.0, 1.0)] = 0.0
     arrangements: Annotated[float, Range(0.0, 1.0)] = 0.0
     furniture: Annotated[int, Range(0, 6)] = 0
+    event_rate: EventRate = 0.0
+    event_kinds: EventKinds = "mixed"
+    approach_speed: ApproachSpeed = APPROACH_SPEED_M_S
 
     def check(self, name: str) -> None:
         """`ValueError` naming the option for impossible values: each out of its range
@@ -250,12 +271,14 @@ class _Group:
 @dataclass
 class _Record:
     """A group's shape from one moment on, as planned: ``group`` (open-ended) and its ``end``,
-    which comes earlier as members are sent away (at or before the start: it never forms), and
-    the speeds of the members walking up to it."""
+    which comes earlier as members are sent away (at or before the start: it never forms), the
+    speeds of the members walking up to it and, for a scripted change, the records it
+    continues (``group.newcomers`` names who is new)."""
 
     group: PlannedGroup
     end: float = math.inf
     speeds: dict[int, float] = field(default_factory=dict)
+    continues: tuple[int, ...] = ()  # the records a scripted change continues (indices)
 
 
 @dataclass
@@ -488,8 +511,17 @@ class _Party:
         base = float(np.angle(np.exp(1j * offsets).mean()))
         return {m: base + float(at[k]) for k, m in enumerate(order)}
 
-    def record(self, gid: int, t: float, speeds: dict[int, float] | None = None) -> None:
-        """A new planned record of group ``gid``'s current shape from ``t``."""
+    def record(
+        self,
+        gid: int,
+        t: float,
+        speeds: dict[int, float] | None = None,
+        *,
+        newcomers: tuple[int, ...] | None = None,
+        continues: tuple[int, ...] = (),
+    ) -> None:
+        """A new planned record of group ``gid``'s current shape from ``t`` (``newcomers``,
+        ``continues``: a scripted change, see `_Record`)."""
         g = self.groups[gid]
         members = list(g.angles)
         angles = np.array([g.angles[m] for m in members])
@@ -508,8 +540,8 @@ class _Party:
         if g.anchor >= 0:  # at a wall: the clip may bring two closer than the spacing
             for _ in range(10):
                 places = np.clip(separate(places, spacing=self.p.spacing), -edge, edge)
-        planned = PlannedGroup(tuple(members), places, facings, g.centre, t)
-        self.records.append(_Record(planned, speeds=speeds or {}))
+        planned = PlannedGroup(tuple(members), places, facings, g.centre, t, newcomers=newcomers)
+        self.records.append(_Record(planned, speeds=speeds or {}, continues=continues))
         g.record = len(self.records) - 1
         g.version += 1
         if g.kind == ROW:
@@ -671,6 +703,9 @@ class _Party:
             self.start_alone(m, spot, 0.0)
             self.start_yaw[m] = self.alone_at[m].facing
         self.start_position = dict(self.position)
+        if self.p.event_rate > 0.0:
+            first = next_change(rng, self.p.event_rate, ready=FIRST_CHANGE_S, last=0.0)
+            self.push(first, "change", ())
 
     def furnish(self, k: int, unplaced: list[int]) -> list[int]:
         """Furniture ``k`` (a table, a bar, a poster, a corner, in turn) and the group that
@@ -990,6 +1025,175 @@ class _Party:
             self.group_of.pop(m, None)
         self.gather(self.new_group(members, centre, radius, t, shape=shape), t)
 
+    # -- scripted changes (`scenarios.changes`) ----------------------------------------------
+
+    def idle(self, gid: int, t: float) -> bool:
+        """Whether group ``gid`` may take part in a scripted change at ``t``: not at furniture,
+        nobody in it walking."""
+        g = self.groups[gid]
+        return g.anchor < 0 and all(self.busy_until.get(m, 0.0) <= t for m in g.members)
+
+    def on_change(self, t: float) -> None:
+        """A scripted change at ``t`` (a latecomer joins, a member drifts away, a group walks
+        over to merge), then the next one scheduled."""
+        p = self.p
+        idle = [gid for gid in self.groups if self.idle(gid, t)]
+        alone = [m for m in self.alone_at if self.busy_until.get(m, 0.0) <= t]
+        joinable = [gid for gid in idle if len(self.groups[gid].members) < p.max_group_size]
+        leavable = [gid for gid in idle if len(self.groups[gid].members) >= 3]
+        pairs = self.merge_pairs(idle)
+        possible = {JOIN: bool(alone and joinable), LEAVE: bool(leavable), MERGE: bool(pairs)}
+        kind = draw_kind(self.rng, p.event_kinds, possible)
+        done = t
+        if kind == JOIN:
+            m = alone[int(self.rng.integers(len(alone)))]
+            done = self.latecomer(m, joinable[int(self.rng.integers(len(joinable)))], t)
+        elif kind == LEAVE:
+            done = self.drift(leavable[int(self.rng.integers(len(leavable)))], t)
+        elif kind == MERGE:
+            big, small = pairs[int(self.rng.integers(len(pairs)))]
+            done = self.walk_over(big, small, t)
+        ready = max(t, done) + CHANGE_GAP_S
+        self.push(next_change(self.rng, p.event_rate, ready=ready, last=t), "change", ())
+
+    def merge_pairs(self, idle: list[int]) -> list[tuple[int, int]]:
+        """(larger, smaller) groups among ``idle`` near enough to merge (`MERGE_REACH_M`)
+        whose members together make a group the party allows, of `MERGED_MAX` at most."""
+        out = []
+        for a in idle:
+            for b in idle:
+                g, h = self.groups[a], self.groups[b]
+                if (len(g.members), -a) <= (len(h.members), -b):
+                    continue  # each pair once: the larger first (ties: the older)
+                if len(g.members) + len(h.members) > min(self.p.max_group_size, MERGED_MAX):
+                    continue
+                if float(np.hypot(*(h.centre - g.centre))) - g.radius - h.radius < MERGE_REACH_M:
+                    out.append((a, b))
+        return out
+
+    def latecomer(self, m: int, gid: int, t: float) -> float:
+        """``m``, alone, walks up to group ``gid`` at the approach speed: to `APPROACH_M` out
+        from their place, then straight to it; the members make room just before ``m``
+        arrives, the group as it was recorded until then. Returns when ``m`` should have
+        arrived (``t`` when there is no room)."""
+        g = self.groups[gid]
+        radius = self.draw_radius(len(g.members) + 1)
+        claim = self.reach(self.extent(g, radius))
+        if not self.fits(self.floor_centre(g), claim, ignore_groups=(gid,), ignore_people=(m,)):
+            return t
+        speed = self.p.approach_speed
+        before = g.record
+        self.end_alone(m, t)
+        d = self.position[m] - g.centre
+        angles = dict(g.angles)
+        angles[m] = math.atan2(d[1], d[0])
+        g.members.append(m)
+        g.radius = radius
+        g.angles = self.layout(g, angles)
+        self.group_of[m] = gid
+        place = g.place_of(m)
+        outward = place - g.centre
+        near = place + APPROACH_M * outward / max(float(np.hypot(*outward)), 1e-9)
+        edge = self.half - WALL_GAP_M - PLANNING_RADIUS_M
+        near = np.clip(near, -edge, edge)
+        on = t + float(np.hypot(*(near - self.position[m]))) / speed
+        arrive = on + float(np.hypot(*(place - near))) / speed + SETTLE_S
+        shift = max(on, arrive - SETTLE_S - MAKE_ROOM_S)
+        self.close_all(gid, shift, but=m)
+        self.record(gid, shift, speeds={m: speed}, newcomers=(m,), continues=(before,))
+        planned = self.records[g.record].group
+        k = planned.members.index(m)
+        self.walks.append((t, m, Intent(goal=(float(near[0]), float(near[1])), speed=speed)))
+        self.walks.append((on, m, standing(planned.places[k], planned.facings[k], speed=speed)))
+        self.busy_until[m] = arrive
+        self.schedule_group(gid, t)
+        self.schedule_member(m, t)
+        detail = f"person {m} walks up to join group {sorted(g.members)} (scripted)"
+        self.events.append((t, JOIN, detail))
+        return arrive
+
+    def drift(self, gid: int, t: float) -> float:
+        """A member of group ``gid`` (three or more) drifts away to stand alone nearby; the
+        others stay where they stood, still a group. Returns ``t``."""
+        g = self.groups[gid]
+        m = g.members[int(self.rng.integers(len(g.members)))]
+        before = g.record
+        self.close_all(gid, t)
+        planned = self.records[before].group
+        keep = [k for k, x in enumerate(planned.members) if x != m]
+        rest = PlannedGroup(
+            tuple(planned.members[k] for k in keep),
+            planned.places[keep],
+            planned.facings[keep],
+            planned.centre,
+            t,
+            newcomers=(),
+        )
+        self.records.append(_Record(rest, continues=(before,)))
+        g.record = len(self.records) - 1
+        g.version += 1
+        g.members.remove(m)
+        del g.angles[m]
+        self.group_of.pop(m)
+        self.events.append(
+            (t, LEAVE, f"person {m} drifts away from group {sorted([*g.members, m])}")
+        )
+        self.schedule_group(gid, t)
+        spot = self.free_spot(ALONE_CLAIM_M, near=self.position[m], within=3.0)
+        if spot is None:
+            spot = self.position[m]
+        speed, arrive = self.walk(m, spot, t)
+        self.walks.append((t, m, Intent(goal=(float(spot[0]), float(spot[1])), speed=speed)))
+        self.position[m] = spot
+        self.start_alone(m, spot, arrive)
+        return t
+
+    def walk_over(self, gid: int, other: int, t: float) -> float:
+        """Group ``other`` walks over to group ``gid`` at the approach speed and they merge
+        round ``gid``'s centre, ``gid`` making room just before they arrive; both groups are
+        recorded as they were until then. Returns when the last should have arrived (``t``
+        when there is no room)."""
+        g, h = self.groups[gid], self.groups[other]
+        members = g.members + h.members
+        radius = self.draw_radius(len(members))
+        claim = self.reach(self.extent(g, radius))
+        here = self.floor_centre(g)
+        if not self.fits(here, claim, ignore_groups=(gid, other), ignore_people=tuple(members)):
+            return t
+        speed = self.p.approach_speed
+        before = (g.record, h.record)
+        angles = dict(g.angles)
+        for m in h.members:
+            d = self.position[m] - g.centre
+            angles[m] = math.atan2(d[1], d[0])
+        self.close_all(other, t)
+        walkers = list(h.members)
+        g.members = members
+        g.radius = radius
+        g.angles = self.layout(g, angles)
+        arrive = (
+            t
+            + SETTLE_S
+            + max(float(np.hypot(*(g.place_of(m) - self.position[m]))) / speed for m in walkers)
+        )
+        shift = max(t, arrive - SETTLE_S - MAKE_ROOM_S)
+        g.members = [m for m in members if m not in walkers]
+        self.close_all(gid, shift)
+        g.members = members
+        del self.groups[other]
+        speeds = dict.fromkeys(walkers, speed)
+        self.record(gid, shift, speeds=speeds, newcomers=tuple(walkers), continues=before)
+        planned = self.records[g.record].group
+        for m in walkers:
+            self.group_of[m] = gid
+            k = planned.members.index(m)
+            self.walks.append((t, m, standing(planned.places[k], planned.facings[k], speed=speed)))
+            self.busy_until[m] = arrive
+        self.schedule_group(gid, t)
+        detail = f"group {sorted(walkers)} walks over to merge with group {sorted(g.members)}"
+        self.events.append((t, MERGE, detail + " (scripted)"))
+        return arrive
+
 
 def _glances(
     builder: TimelineBuilder,
@@ -1074,17 +1278,20 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
     builder = TimelineBuilder(agents)
     for t, m, intent in party.walks:
         builder.set(t, m, intent)
-    for rec in party.records:
+    handles: dict[int, int] = {}  # record -> planned group in the builder
+    for r, rec in enumerate(party.records):
         planned = rec.group
         if rec.end <= planned.start:
             continue
-        builder.group(
+        handles[r] = builder.group(
             planned.members,
             planned.places,
             planned.facings,
             planned.centre,
             start=planned.start,
             end=rec.end,
+            newcomers=planned.newcomers,
+            continues=[handles[c] for c in rec.continues if c in handles],
         )
         converse(
             builder,

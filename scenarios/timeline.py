@@ -55,7 +55,13 @@ class PlannedGroup:
         facings: (k,) the body yaw each member is to take there, radians.
         centre: (2,) the o-space centre, metres.
         start: when the members are sent to their places, seconds.
-        end: when the first member is sent away, seconds (``inf``: never).
+        end: when the first member is sent away, seconds (``inf``: never); for a group that a
+            newer one continues (someone joins or leaves it, it merges), when that newer group
+            ends: it is recorded until the newer group starts (`scenarios.truth`).
+        newcomers: for a group that continues an older one (someone joined or left it, or a
+            group merged into it), the members new to it, who must take their places before it
+            starts (``()``: someone left, nobody is new); ``None``: a group of its own, every
+            member must arrive.
     """
 
     members: tuple[int, ...]
@@ -64,6 +70,7 @@ class PlannedGroup:
     centre: np.ndarray
     start: float
     end: float = math.inf
+    newcomers: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
         members = tuple(int(m) for m in self.members)
@@ -81,6 +88,13 @@ class PlannedGroup:
                 f"PlannedGroup {members}: end must come after start, got {self.start} -> {self.end}"
             )
         object.__setattr__(self, "members", members)
+        if self.newcomers is not None:
+            newcomers = tuple(int(m) for m in self.newcomers)
+            if len(set(newcomers)) != len(newcomers) or not set(newcomers) <= set(members):
+                raise ValueError(
+                    f"PlannedGroup {members}: newcomers must be distinct members, got {newcomers}"
+                )
+            object.__setattr__(self, "newcomers", newcomers)
         object.__setattr__(self, "start", float(self.start))
         object.__setattr__(self, "end", float(self.end))
 
@@ -143,6 +157,7 @@ class TimelineBuilder:
         self._known = set(self._agents)
         self._changes: list[tuple[float, int, int, Intent]] = []
         self._groups: list[dict] = []
+        self._continues: list[tuple[int, ...]] = []  # per planned group, the groups it continues
         self._events: list[ScenarioEvent] = []
 
     def set(self, t: float, agent: int, intent: Intent) -> None:
@@ -162,18 +177,34 @@ class TimelineBuilder:
         *,
         start: float,
         end: float = math.inf,
+        newcomers: Sequence[int] | None = None,
+        continues: Sequence[int] = (),
     ) -> int:
-        """Plans an F-formation; returns its handle for `end_group`."""
-        self._groups.append(
-            {
-                "members": tuple(int(m) for m in members),
-                "places": np.asarray(places, dtype=np.float64),
-                "facings": np.asarray(facings, dtype=np.float64),
-                "centre": np.asarray(centre, dtype=np.float64),
-                "start": float(start),
-                "end": float(end),
-            }
-        )
+        """Plans an F-formation; returns its handle for `end_group`.
+
+        Args:
+            newcomers: see `PlannedGroup`.
+            continues: handles of the planned groups this one continues (someone joined or
+                left, a group merged in): each is kept planned until this one ends (`build`),
+                so that it is recorded until this one starts.
+        """
+        entry = {
+            "members": tuple(int(m) for m in members),
+            "places": np.asarray(places, dtype=np.float64),
+            "facings": np.asarray(facings, dtype=np.float64),
+            "centre": np.asarray(centre, dtype=np.float64),
+            "start": float(start),
+            "end": float(end),
+        }
+        if newcomers is not None:
+            entry["newcomers"] = tuple(int(m) for m in newcomers)
+        self._groups.append(entry)
+        for handle in continues:
+            if not 0 <= handle < len(self._groups) - 1:
+                raise ValueError(
+                    f"continues names planned group {handle}, which was not planned before"
+                )
+        self._continues.append(tuple(int(h) for h in continues))
         return len(self._groups) - 1
 
     def end_group(self, handle: int, t: float) -> None:
@@ -199,5 +230,9 @@ class TimelineBuilder:
                 k += 1
             times.append(t)
             snapshots.append(MappingProxyType(dict(current)))
-        plan = [PlannedGroup(**g) for g in self._groups if g["end"] > g["start"]]
+        groups = [dict(g) for g in self._groups]
+        for k in range(len(groups) - 1, -1, -1):  # the newest first: chains resolve in one pass
+            for handle in self._continues[k]:
+                groups[handle]["end"] = max(groups[handle]["end"], groups[k]["end"])
+        plan = [PlannedGroup(**g) for g in groups if g["end"] > g["start"]]
         return Timeline(times, snapshots, plan, self._events)

@@ -11,6 +11,16 @@ of them is sent away (``end``). What the frames record follows one rule:
 * **It ends when the first member leaves its place** (``end``), or when a later planned group
   sharing members with it starts (someone joined, two groups merged, a group re-formed after a
   shuffle): the newer group replaces it from the frame it forms.
+* **A group that continues another** (``newcomers`` given: a latecomer joins it, a member
+  drifts away, another group merges into it) starts in the first frame at or after its start
+  in which its newcomers have arrived (present, at their places, facing their planned way) and
+  the members it keeps are present and still recorded together in one group. The members it
+  keeps need not stand at their new places yet: making room for a latecomer does not interrupt
+  a conversation. A latecomer has joined when they take their place; someone leaving is gone
+  from the group in the first frame at or after they are sent away (``newcomers=()``). The
+  script keeps the group it continues planned until then (`PlannedGroup.end`). When the members
+  it keeps are not together (a change before it never happened: someone never got to their
+  place), it starts as any group does, once every member has arrived.
 * A planned group that never forms (a member blocked on the way) is never recorded; one that
   would form after a newer group sharing its members formed is dropped.
 
@@ -20,6 +30,7 @@ blocks), vectorised over the frames of each block.
 
 from __future__ import annotations
 
+import heapq
 import math
 from collections.abc import Sequence
 
@@ -101,7 +112,12 @@ class GroundTruth:
         if rows == 0:
             return ()
         t_last = float(time[-1])
-        arrivals: list[tuple[float, int]] = []
+        # (time, plan entry, candidate): the first frame each planned group may start in; a
+        # group that continues another may start in any frame its newcomers have arrived in,
+        # the first in which the members it keeps are still recorded together.
+        arrivals: list[tuple[float, int, int]] = []
+        candidates: dict[int, np.ndarray] = {}
+        everyone: dict[int, np.ndarray] = {}  # ... and whether every member has arrived then
         for r in range(len(self._plan)):
             g = self._plan[r]
             if g.start > t_last + 1e-9:
@@ -115,13 +131,29 @@ class GroundTruth:
             pos = position[window][:, cols]
             off = np.hypot(pos[..., 0] - g.places[:, 0], pos[..., 1] - g.places[:, 1])
             turn = np.abs(np.angle(np.exp(1j * (yaw[window][:, cols] - g.facings))))
-            ok = (
-                present[window][:, cols] & (off <= self._place_tol) & (turn <= self._facing_tol)
-            ).all(axis=1)
-            hit = np.flatnonzero(ok)
-            if hit.size:
-                arrivals.append((float(time[window][hit[0]]), r))
-        for t_arrive, r in sorted(arrivals):
+            arrived = present[window][:, cols] & (off <= self._place_tol)
+            arrived &= turn <= self._facing_tol
+            if g.newcomers is None:
+                hit = np.flatnonzero(arrived.all(axis=1))
+                if hit.size:
+                    arrivals.append((float(time[window][hit[0]]), r, 0))
+                continue
+            new = np.array([m in g.newcomers for m in g.members], dtype=bool)
+            ok = present[window][:, cols].all(axis=1) & arrived[:, new].all(axis=1)
+            times = time[window][ok]
+            if times.size:
+                candidates[r] = times
+                everyone[r] = arrived[ok].all(axis=1)
+                arrivals.append((float(times[0]), r, 0))
+        heapq.heapify(arrivals)
+        while arrivals:
+            t_arrive, r, k = heapq.heappop(arrivals)
+            if self._dropped[r] or math.isfinite(self._live_from[r]):
+                continue
+            if r in candidates and not (everyone[r][k] or self._kept_together(r, t_arrive)):
+                if k + 1 < candidates[r].size:
+                    heapq.heappush(arrivals, (float(candidates[r][k + 1]), r, k + 1))
+                continue
             members = set(self._plan[r].members)
             newer_live = False
             for q in range(len(self._plan)):
@@ -149,6 +181,20 @@ class GroundTruth:
             for row in np.flatnonzero(mask).tolist():
                 out[row].append(members)
         return tuple(tuple(groups) for groups in out)
+
+    def _kept_together(self, r: int, t: float) -> bool:
+        """Whether the members planned group ``r`` keeps (all but its newcomers) are recorded
+        together in one group at ``t`` (none kept: trivially)."""
+        g = self._plan[r]
+        kept = set(g.members) - set(g.newcomers or ())
+        if not kept:
+            return True
+        for q in range(len(self._plan)):
+            if q == r or not self._live_from[q] <= t < self._live_until[q]:
+                continue
+            if kept <= set(self._plan[q].members):
+                return True
+        return False
 
     def formed(self) -> tuple[tuple[PlannedGroup, float, float], ...]:
         """The planned groups that formed so far, with the times they started and ended."""
