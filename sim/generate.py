@@ -95,9 +95,11 @@ from reform import __version__
 from reform.annotation import ANNOTATION_RANGES, AnnotationModel, draw_annotation
 from reform.atomic import atomic_open, atomic_path
 from reform.datasets.errors import DataFormatError
+from reform.datasets.group_events import GROUP_EVENTS_KEY, count_kinds, group_events_record
 from reform.datasets.parquet import CARD_JSON, FORMAT_VERSION, METADATA_KEY, write_parquet
 from reform.datasets.store import Store, StoreError, is_uri, open_store
 from reform.datasets.store_dataset import COMMITS_DIR, StoreFolder, commit_name
+from reform.events import EVENT_KINDS
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
 from reform.seeding import ANNOTATION, ANNOTATION_DRAW, derive_int, derive_rng
@@ -422,6 +424,9 @@ class ShardSummary:
         duration: the episode's simulated length, seconds.
         group_sizes: size -> number of groups of that size over the annotated frames, counting
             everyone (people alone are groups of size 1; the robot counts as a member).
+        group_events: kind -> number of ground-truth group events of that kind
+            (`reform.events.EVENT_KINDS`, zeros included) the shard stores; None for a shard
+            written before the events were stored.
     """
 
     episode: int
@@ -433,6 +438,7 @@ class ShardSummary:
     rows: int
     duration: float
     group_sizes: Mapping[int, int]
+    group_events: Mapping[str, int] | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -445,7 +451,7 @@ class ShardSummary:
             "rows": self.rows,
             "duration_s": self.duration,
             "group_sizes": {str(k): v for k, v in sorted(self.group_sizes.items())},
-        }
+        } | ({} if self.group_events is None else {"group_events": dict(self.group_events)})
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ShardSummary:
@@ -459,7 +465,18 @@ class ShardSummary:
             rows=int(data["rows"]),
             duration=float(data["duration_s"]),
             group_sizes={int(k): int(v) for k, v in dict(data["group_sizes"]).items()},
+            group_events=None
+            if data.get("group_events") is None
+            else _kinds_in_order(data["group_events"]),
         )
+
+
+def _kinds_in_order(counts: Mapping[str, Any]) -> dict[str, int]:
+    """Counts per event kind in `reform.events.EVENT_KINDS` order, whatever order they came in
+    (a commit file sorts its keys): the card lists them so, byte for byte, however it was made."""
+    order = {kind: k for k, kind in enumerate(EVENT_KINDS)}
+    items = sorted(dict(counts).items(), key=lambda kv: (order.get(kv[0], len(order)), kv[0]))
+    return {str(k): int(v) for k, v in items}
 
 
 @dataclass(frozen=True, eq=False)
@@ -524,7 +541,9 @@ def _summary(
     annotated: int,
     rows: int,
     sizes: Mapping[int, int],
+    events: Mapping[str, Any] | None = None,
 ) -> ShardSummary:
+    """A shard's summary; ``events``: the group events it stores (`group_events_record`)."""
     return ShardSummary(
         episode=int(episode),
         seed=episode_seed(spec.seed, episode),
@@ -535,10 +554,13 @@ def _summary(
         rows=rows,
         duration=frames / spec.rate,
         group_sizes=dict(sorted(sizes.items())),
+        group_events=None if events is None else count_kinds(events),
     )
 
 
-def _summarise_frames(spec: GenerationSpec, episode: int, frames: Sequence[Frame]) -> ShardSummary:
+def _summarise_frames(
+    spec: GenerationSpec, episode: int, frames: Sequence[Frame], events: Mapping[str, Any]
+) -> ShardSummary:
     sizes: Counter[int] = Counter()
     annotated = rows = 0
     for frame in frames:
@@ -553,10 +575,12 @@ def _summarise_frames(spec: GenerationSpec, episode: int, frames: Sequence[Frame
             grouped += len(group)
         if n > grouped:
             sizes[1] += n - grouped
-    return _summary(spec, episode, len(frames), annotated, rows, sizes)
+    return _summary(spec, episode, len(frames), annotated, rows, sizes, events)
 
 
-def _summarise_block(spec: GenerationSpec, episode: int, block: FrameBlock) -> ShardSummary:
+def _summarise_block(
+    spec: GenerationSpec, episode: int, block: FrameBlock, events: Mapping[str, Any]
+) -> ShardSummary:
     """As `_summarise_frames`, for the frames of a block, without making them."""
     sizes: Counter[int] = Counter()
     annotated = 0
@@ -569,11 +593,14 @@ def _summarise_block(spec: GenerationSpec, episode: int, block: FrameBlock) -> S
         grouped = sum(len(group) for group in groups)
         if counts[t] > grouped:
             sizes[1] += int(counts[t]) - grouped
-    return _summary(spec, episode, len(block), annotated, int(counts.sum()), sizes)
+    return _summary(spec, episode, len(block), annotated, int(counts.sum()), sizes, events)
 
 
-def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> dict[str, Any]:
-    """What a shard carries besides its frames: the parameters, its episode, its scenario."""
+def _shard_metadata(
+    spec: GenerationSpec, summary: ShardSummary, made: Any, events: Mapping[str, Any]
+) -> dict[str, Any]:
+    """What a shard carries besides its frames: the parameters, its episode, its scenario, and
+    its ground-truth group events (`reform.datasets.group_events`)."""
     return {
         "generator": "reform-sim generate",
         "parameters": spec.parameters(),
@@ -585,6 +612,7 @@ def _shard_metadata(spec: GenerationSpec, summary: ShardSummary, made: Any) -> d
             "natural_duration_s": made.duration,
             "room_m": list(made.stage.room),
         },
+        GROUP_EVENTS_KEY: dict(events),
     }
 
 
@@ -622,14 +650,17 @@ def _simulate_and_write(
         block = FrameBlock.concatenate(
             list(episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence))
         )
-        summary = _summarise_block(spec, episode, block)
+        events = group_events_record(
+            partitions=block.present_groups(), times=block.time, sequences=block.sequence
+        )
+        summary = _summarise_block(spec, episode, block, events)
         with atomic_path(path) as tmp:
             write_parquet(
                 block,
                 tmp,
                 name=spec.scenario,
                 source=source,
-                metadata=_shard_metadata(spec, summary, made),
+                metadata=_shard_metadata(spec, summary, made, events),
             )
             _write_commit(folder, summary, _file_entry(tmp))
         return summary
@@ -649,12 +680,13 @@ def _simulate_and_write(
         rng = derive_rng(episode_seed(spec.seed, episode), ANNOTATION)
         frames = annotation.apply(frames, rng)
         metadata["annotation"] = annotation.to_json()
-    summary = _summarise_frames(spec, episode, frames)
+    events = group_events_record(frames)
+    summary = _summarise_frames(spec, episode, frames, events)
     dataset = Dataset(
         frames=frames,
         name=spec.scenario,
         source=source,
-        metadata=_shard_metadata(spec, summary, made) | metadata,
+        metadata=_shard_metadata(spec, summary, made, events) | metadata,
     )
     with atomic_path(path) as tmp:
         write_parquet(dataset, tmp)
@@ -1330,12 +1362,25 @@ def _card(
             "rows": sum(s.rows for s in shards),
             "simulated_seconds": sum(s.duration for s in shards),
             "group_sizes": {str(k): v for k, v in sorted(sizes.items())},
+            "group_events": _event_totals(shards),
         },
         "shards": [
             {**s.to_json(), "path": folder.listed(s), **files.get(s.path, {})}
             for s in sorted(shards, key=lambda s: s.episode)
         ],
     }
+
+
+def _event_totals(shards: Sequence[ShardSummary]) -> dict[str, int] | None:
+    """Ground-truth group events per kind over the shards; None when a shard does not say
+    (written before the events were stored)."""
+    if any(shard.group_events is None for shard in shards):
+        return None
+    totals = dict.fromkeys(EVENT_KINDS, 0)
+    for shard in shards:
+        for kind, count in shard.group_events.items():  # type: ignore[union-attr]
+            totals[kind] = totals.get(kind, 0) + count
+    return totals
 
 
 def _file_entry(path: Path) -> dict[str, Any]:
@@ -1520,7 +1565,32 @@ def _markdown(card: Mapping[str, Any]) -> str:
     ]
     lines += [f"| {k} | {v:,} |" for k, v in totals["group_sizes"].items()]
     lines.append("")
+    lines += _events_markdown(totals.get("group_events"))
     return "\n".join(lines)
+
+
+def _events_markdown(events: Mapping[str, int] | None) -> list[str]:
+    """The card's section on the ground-truth group events."""
+    lines = ["## Group events", ""]
+    if events is None:
+        return [
+            *lines,
+            "Not counted: some shards were written before their group events were stored "
+            "(`reform.datasets.dataset_group_events` derives them from the frames).",
+            "",
+        ]
+    lines += [
+        "Ground-truth group events over the annotated frames (`reform.events`: F-formations "
+        "of two or more, between consecutive annotated frames of an episode). Each shard "
+        f"stores its own in its metadata (`{GROUP_EVENTS_KEY}`); "
+        "`reform.datasets.dataset_group_events(read_parquet('DIR'))` gives them all:",
+        "",
+        "| kind | events |",
+        "| --- | ---: |",
+    ]
+    lines += [f"| {kind} | {count:,} |" for kind, count in events.items()]
+    lines += [f"| all | {sum(events.values()):,} |", ""]
+    return lines
 
 
 def _duration_text(value: float | None) -> str:

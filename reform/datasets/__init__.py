@@ -19,6 +19,7 @@ from reform.datasets.fetch import (
     resolve,
 )
 from reform.datasets.gcff_mat import load_gcff
+from reform.datasets.group_events import dataset_group_events
 from reform.datasets.parquet import read_parquet, write_parquet
 from reform.datasets.summary import summarise
 
@@ -30,6 +31,7 @@ __all__ = [
     "FetchError",
     "PublicDataset",
     "cache_dir",
+    "dataset_group_events",
     "detect_format",
     "fetch",
     "is_fetched",
