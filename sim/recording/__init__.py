@@ -32,7 +32,8 @@ on 127.0.0.1, and stopped with :func:`stop_viewer`.
 
 Entity tree: ``world/`` (room, MuJoCo model, people, robot, observed people, groups per source
 with mistakes), ``camera/`` (head-camera images), ``metrics/`` (running scores, group counts),
-``events``, ``dataset/`` (characterisation, pair scatter, stress curves).
+``events`` (scenario events; group events under ``events/truth`` and ``events/<detector>``),
+``dataset/`` (characterisation, pair scatter, stress curves).
 """
 
 from __future__ import annotations
@@ -67,8 +68,10 @@ _EXPORTS = {
     "EVENTS_ENTITY": "sim.recording._metrics",
     "METRICS_ROOT": "sim.recording._metrics",
     "Event": "sim.recording._metrics",
-    "group_events": "sim.recording._metrics",
+    "group_event_text": "sim.recording._metrics",
     "log_events": "sim.recording._metrics",
+    "log_group_events": "sim.recording._metrics",
+    "stream_group_events": "sim.recording._metrics",
     "log_group_counts": "sim.recording._metrics",
     "log_running_scores": "sim.recording._metrics",
     "Recorded": "sim.recording._record",

@@ -7,32 +7,39 @@ Entity tree:
   per-frame precisions and recalls so far and F1 = 2·P̄·R̄/(P̄+R̄), the protocol of
   ``reform.metrics`` (the last value equals the evaluation's score).
 * ``metrics/groups/truth`` and ``metrics/groups/<detector>``: F-formations per frame.
-* ``events``: a text log of scenario events (turn starts, shuffles, eliminations, ...) and of
-  the ground-truth groups forming and dissolving.
+* ``events``: a text log of scenario events (turn starts, shuffles, eliminations, ...).
+* ``events/truth`` and ``events/<detector>``: text logs of the group events
+  (`reform.events`: groups forming, dissolving, merging, splitting, people joining and
+  leaving) of the ground truth and of each detector's groups, at the frame of each event. One
+  text-log view of ``events`` shows them all, each line under its entity.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import rerun as rr
 
 from reform import T_TWO_THIRDS, Evaluation
+from reform.events import DISSOLVES, FORMS, JOINS, LEAVES, MERGES, GroupEvent, partition_events
 from sim.recording import _colours
-from sim.recording._columns import send_rows
-from sim.recording._groups import TRUTH, LoggedGroups, stretches
+from sim.recording._columns import FrameColumns, send_rows
+from sim.recording._groups import TRUTH, LoggedGroups
 from sim.recording._timeline import FRAME_TIMELINE, SIM_TIME_TIMELINE, Clock
 
 __all__ = [
     "EVENTS_ENTITY",
     "METRICS_ROOT",
     "Event",
-    "group_events",
+    "group_event_text",
     "log_events",
     "log_group_counts",
+    "log_group_events",
     "log_running_scores",
+    "stream_group_events",
 ]
 
 METRICS_ROOT = "metrics"
@@ -133,42 +140,72 @@ def log_group_counts(
         )
 
 
-def group_events(truth: LoggedGroups) -> list[Event]:
-    """Ground-truth groups forming, changing and dissolving, from the truth tree's tracks.
+def stream_group_events(
+    columns: FrameColumns, partitions: Sequence[Any] | None = None
+) -> list[GroupEvent]:
+    """The group events (`reform.partition_events`) of a stream's ground truth, or of
+    ``partitions`` (one per frame of ``columns``, a detector's) on the frames the stream
+    annotates (all its frames when it annotates none), as `reform.evaluate_events` takes them.
+    A sequence with fewer than two such frames has none."""
+    annotated = [groups is not None for groups in columns.groups]
+    if partitions is None:
+        chosen = list(columns.groups)
+    elif any(annotated):
+        chosen = [p if a else None for p, a in zip(partitions, annotated, strict=True)]
+    else:
+        chosen = list(partitions)
+    if not chosen:
+        return []
+    return partition_events(chosen, times=columns.time, sequences=columns.sequence, skip_short=True)
 
-    Events happen only where the F-formations change, so only those frames are visited.
+
+def group_event_text(event: GroupEvent) -> str:
+    """One line for the text log: ``4 joins group 1: {1, 2, 3, 4}``,
+    ``groups 1 {1, 2} and 2 {3, 4} merge into group 1: {1, 2, 3, 4}``."""
+    members = _names(event.members)
+    if event.kind in (FORMS, DISSOLVES):
+        return f"group {event.group} {event.kind}: {members}"
+    if event.kind in (JOINS, LEAVES):
+        return f"{event.person} {event.kind} group {event.group}: {members}"
+    parts = " and ".join(
+        f"{track} {_names(part)}"
+        for track, part in zip(event.part_tracks, event.parts, strict=True)
+    )
+    if event.kind == MERGES:
+        return f"groups {parts} merge into group {event.group}: {members}"
+    return f"group {event.group} {members} splits into groups {parts}"
+
+
+def log_group_events(
+    rec: rr.RecordingStream, events: Sequence[GroupEvent], *, name: str, clock: Clock
+) -> int:
+    """Logs group events as the text log ``events/<name>``, each at its frame (found by its
+    sequence and time); returns how many.
+
+    Args:
+        rec: the recording stream.
+        events: `reform.GroupEvent` objects, in time order (`stream_group_events`).
+        name: ``"truth"`` or the detector's name.
+        clock: the run's clock.
     """
-    layout, tracks, columns = truth.layout, truth.tracks, truth.columns
-    starts = layout.group_starts.tolist()
-    keys, track_list = layout.group_key.tolist(), tracks.tolist()
-    sorted_members = [tuple(sorted(members)) for members in layout.members_table]
-    alive_at: dict[int, dict[int, tuple[int, ...]]] = {-1: {}}
-    events: list[Event] = []
-    for f, before in stretches(layout, columns.segment).changes():
-        alive = alive_at[before]
-        now = {track_list[r]: sorted_members[keys[r]] for r in range(starts[f], starts[f + 1])}
-        alive_at[f] = now
-        time, sequence = float(columns.time[f]), columns.sequence[f]
-        for track, members in now.items():
-            if track not in alive:
-                events.append(
-                    Event(time, f"group {track} forms: {_names(members)}", sequence=sequence)
-                )
-            elif alive[track] != members:
-                events.append(
-                    Event(
-                        time,
-                        f"group {track} changes: {_names(alive[track])} -> {_names(members)}",
-                        level="DEBUG",
-                        sequence=sequence,
-                    )
-                )
-        for track, members in alive.items():
-            if track not in now:
-                events.append(
-                    Event(time, f"group {track} dissolves: {_names(members)}", sequence=sequence)
-                )
-    return events
+    if not events:
+        return 0
+    rows = clock.rows_at(
+        [e.sequence for e in events], [e.time for e in events], what=f"{name} group events"
+    )
+    order = np.argsort(clock.sim_time[rows], kind="stable")
+    rows = rows[order]
+    send_rows(
+        rec,
+        f"{EVENTS_ENTITY}/{name}",
+        None,
+        clock.columns(rows),
+        rr.TextLog.columns(
+            text=[group_event_text(events[k]) for k in order.tolist()],
+            level=[INFO] * len(events),
+        ),
+    )
+    return len(events)
 
 
 def _names(members: Iterable[int]) -> str:

@@ -12,14 +12,20 @@ from typing import Any
 
 import rerun as rr
 
-from reform import Evaluation, Frame, Group
+from reform import Evaluation, Frame, Group, GroupEvent
 from reform.perturb import restrict_groups
 from sim.recording._blueprint import default_blueprint
 from sim.recording._columns import FrameColumns
 from sim.recording._dataset_views import log_characterisation, log_pair_scatter, pair_scatter_data
 from sim.recording._frames import KINECT_FIELD_OF_VIEW, FieldOfView, log_frames
 from sim.recording._groups import TRUTH, GroupLayout, log_groups
-from sim.recording._metrics import group_events, log_events, log_group_counts, log_running_scores
+from sim.recording._metrics import (
+    log_events,
+    log_group_counts,
+    log_group_events,
+    log_running_scores,
+    stream_group_events,
+)
 from sim.recording._program import rerun_in_this_shell
 from sim.recording._scene import (
     BodyPoses,
@@ -93,15 +99,33 @@ def _most_fformations(partitions: Iterable[Partition | None]) -> int:
     return best
 
 
+def _group_event_logs(
+    world: FrameColumns, detected_on: FrameColumns, detections: Mapping[str, Sequence[Partition]]
+) -> dict[str, list[GroupEvent]]:
+    """The group events of the truth (where ``world`` is annotated) and of each detector, by
+    name. A detector whose partitions cannot be read is left out here: `log_groups` names its
+    mistake before anything is logged from them."""
+    found = {}
+    if any(groups is not None for groups in world.groups):
+        found[TRUTH] = stream_group_events(world)
+    for name, partitions in detections.items():
+        try:
+            found[name] = stream_group_events(detected_on, list(partitions))
+        except (TypeError, ValueError):
+            continue
+    return found
+
+
 def _run_blueprint(
     world: FrameColumns,
     detections: Mapping[str, Sequence[Partition]],
     events: Sequence[object],
+    group_event_logs: Mapping[str, Sequence[GroupEvent]],
     **views: Any,
 ) -> rr.blueprint.Blueprint:
     """The default layout of a run recorded by `_log_groups_and_scores`: panels only for what
     it logs (scores with ground truth and detectors, group counts for any group tree, events
-    given or groups forming), the counts plot's range holding every count."""
+    given or group events found), the counts plot's range holding every count."""
     annotated = any(groups is not None for groups in world.groups)
     truth = GroupLayout.truth(world) if annotated else None
     counts = [int(truth.group_counts.max(initial=0))] if truth is not None else []
@@ -109,7 +133,7 @@ def _run_blueprint(
     return default_blueprint(
         scores=annotated and bool(detections),
         max_groups=max(counts) if counts else None,
-        events=bool(events) or (truth is not None and truth.group_frame.size > 0),
+        events=bool(events) or any(group_event_logs.values()),
         **views,
     )
 
@@ -121,12 +145,13 @@ def _log_groups_and_scores(
     detections: Mapping[str, Sequence[Partition]],
     evaluations: Mapping[str, Evaluation] | None,
     events: Iterable[object],
+    group_event_logs: Mapping[str, Sequence[GroupEvent]],
     *,
     clock: Clock,
 ) -> dict[str, Evaluation]:
     """The truth tree (where ``world`` is annotated), one tree per detector (on
-    ``detected_on``), group counts, running scores, and ``events`` with the true groups
-    forming and dissolving; returns the detectors' evaluations."""
+    ``detected_on``), group counts, running scores, ``events``, and the group events of the
+    truth and of each detector; returns the detectors' evaluations."""
     annotated = any(groups is not None for groups in world.groups)
     truth = log_groups(rec, world, name=TRUTH, clock=clock) if annotated else None
     trees = {} if truth is None else {TRUTH: truth}
@@ -151,7 +176,9 @@ def _log_groups_and_scores(
     }
     log_group_counts(rec, trees, clock=clock)
     log_running_scores(rec, scored, clock=clock)
-    log_events(rec, [*events, *(() if truth is None else group_events(truth))], clock=clock)
+    log_events(rec, events, clock=clock)
+    for name, found in group_event_logs.items():  # the truth's, then each detector's
+        log_group_events(rec, found, name=name, clock=clock)
     return scored
 
 
@@ -185,8 +212,9 @@ def record_episode(
         evaluations: detector name -> ``reform.evaluate(stream, partitions)``, if already
             computed; otherwise computed here where the stream carries ground truth.
         events: scenario events (:class:`Event`, ``(time, text[, level])`` tuples or objects
-            with ``time`` and ``text``/``kind``); ground-truth groups forming and dissolving
-            are added.
+            with ``time`` and ``text``/``kind``), logged on ``events``; the group events of the
+            ground truth and of each detector (`reform.events`) go to ``events/truth`` and
+            ``events/<detector>``.
         model: the compiled ``mujoco.MjModel`` of the scene: its geometry is drawn (static)
             and, with ``body_poses``, moves per frame; people are then not drawn as capsules.
         body_poses: the bodies' poses per frame (needs ``model``).
@@ -212,8 +240,9 @@ def record_episode(
     cameras = tuple(cameras)
     events = tuple(events or ())
     bounds = room_bounds(world)
+    found = _group_event_logs(world, detected_on, detections)
     blueprint = _run_blueprint(
-        world, detections, events, bounds=bounds, cameras=tuple(c.name for c in cameras)
+        world, detections, events, found, bounds=bounds, cameras=tuple(c.name for c in cameras)
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         log_frames(
@@ -233,7 +262,7 @@ def record_episode(
         for camera in cameras:
             log_camera_images(rec, camera, clock=clock)
         scored = _log_groups_and_scores(
-            rec, world, detected_on, detections, evaluations, events, clock=clock
+            rec, world, detected_on, detections, evaluations, events, found, clock=clock
         )
     return Recorded(
         recording_id=recording_id(name, seed=seed), n_frames=len(world), evaluations=scored
@@ -283,14 +312,15 @@ def record_evaluation(
     if views and columns.frames is None:
         raise ValueError("dataset views need the frames: pass reform.Frame objects, not columns")
     bounds = room_bounds(columns)
+    found = _group_event_logs(columns, columns, predictions)
     blueprint = _run_blueprint(
-        columns, predictions, (), bounds=bounds, characterisation=views, pairs=views
+        columns, predictions, (), found, bounds=bounds, characterisation=views, pairs=views
     )
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         clock = log_frames(rec, columns, field_of_view=None)
         log_room(rec, bounds)
         scored = _log_groups_and_scores(
-            rec, columns, columns, predictions, evaluations, (), clock=clock
+            rec, columns, columns, predictions, evaluations, (), found, clock=clock
         )
         if views:
             log_characterisation(rec, columns.frames, name=dataset)

@@ -19,7 +19,7 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
-from reform import Frame, FrameBlock, Majority, evaluate
+from reform import Frame, FrameBlock, Majority, evaluate, group_events, partition_events
 from sim.recording import (
     APPLICATION_ID,
     BodyPoses,
@@ -32,6 +32,7 @@ from sim.recording import (
     add_recording_arguments,
     body_entity,
     default_blueprint,
+    group_event_text,
     log_body_poses,
     log_characterisation,
     log_frames,
@@ -461,20 +462,65 @@ def test_observed_frames_without_truth_are_scored_on_the_world_truth_of_who_was_
     assert recorded.evaluations["reform"].n_frames == sum(f.groups is not None for f in frames)
 
 
-def test_events_include_scenario_events_and_group_changes(episode):
-    entries = []  # several events may share a frame: read the chunks, not the merged rows
-    for chunk in RrdReader(episode["path"]).stream():
-        if chunk.entity_path == "/events":
+def text_log(path: Path, entity: str) -> list[tuple[int, str, str]]:
+    """(frame, text, level) of every line of a text log, in the order logged."""
+    entries = []  # several lines may share a frame: read the chunks, not the merged rows
+    for chunk in RrdReader(path).stream():
+        if chunk.entity_path == entity:
             data = chunk.to_record_batch().to_pydict()
-            entries += list(
-                zip(data["frame"], data["TextLog:text"], data["TextLog:level"], strict=True)
-            )
-    assert (5, ["turn starts"], ["INFO"]) in entries
-    assert (12, ["shuffle"], ["WARN"]) in entries
-    texts = [e[1][0] for e in entries]
-    assert "group 1 forms: {0, 1, 2}" in texts
-    assert any(t.startswith("group 2 changes: {3, 4} -> {3, 4, 5}") for t in texts)
-    assert [e[0] for e in entries] == sorted(e[0] for e in entries)
+            texts, levels = data["TextLog:text"], data["TextLog:level"]
+            entries += [
+                (f, text[0], level[0])
+                for f, text, level in zip(data["frame"], texts, levels, strict=True)
+            ]
+    return entries
+
+
+def test_events_hold_the_scenario_events_and_group_events_beside_them(episode):
+    path = episode["path"]
+    assert text_log(path, "/events") == [(5, "turn starts", "INFO"), (12, "shuffle", "WARN")]
+    # Hand-computed from make_frames(24): groups {0,1,2} (track 1) and {3,4} (track 2); at
+    # frame 12 (annotated, person 5 away) 2 has left {0,1,2}; at frame 16 (the first annotated
+    # frame with 5 back, 15 being unannotated) 5 has joined {3,4}.
+    assert text_log(path, "/events/truth") == [
+        (12, "2 leaves group 1: {0, 1, 2}", "INFO"),
+        (16, "5 joins group 2: {3, 4, 5}", "INFO"),
+    ]
+    # The detector's events, found by the same rules on the frames the stream annotates.
+    observed, partitions = episode["observed"], episode["detections"]["reform"]
+    expected = partition_events(
+        [p if f.groups is not None else None for f, p in zip(observed, partitions, strict=True)],
+        times=[f.time for f in observed],
+        sequences="episode",
+    )
+    assert expected  # the alternating detector flickers
+    assert text_log(path, "/events/reform") == [
+        (e.frame, group_event_text(e), "INFO") for e in expected
+    ]
+    # The majority baseline (everyone alone) has no group, hence no event and no log.
+    assert "/events/majority" not in episode["rec"].entities
+
+
+def test_group_event_lines_name_the_kind_the_group_and_the_people():
+    # reform.events' worked example (docs/guide/temporal.md): one event of every kind.
+    partitions = [
+        ((1, 2, 3),),
+        ((1, 2, 3, 4),),
+        ((1, 2, 3, 4), (5, 6)),
+        ((1, 2, 3, 4, 5, 6),),
+        ((1, 2, 3), (4, 5, 6)),
+        ((1, 2), (4, 5, 6)),
+        ((4, 5, 6),),
+    ]
+    events = partition_events(partitions, times=range(7), sequences="s")
+    assert [group_event_text(e) for e in events] == [
+        "4 joins group 1: {1, 2, 3, 4}",
+        "group 2 forms: {5, 6}",
+        "groups 1 {1, 2, 3, 4} and 2 {5, 6} merge into group 1: {1, 2, 3, 4, 5, 6}",
+        "group 1 {1, 2, 3, 4, 5, 6} splits into groups 1 {1, 2, 3} and 3 {4, 5, 6}",
+        "3 leaves group 1: {1, 2, 3}",
+        "group 1 dissolves: {1, 2}",
+    ]
 
 
 def test_two_runs_with_one_seed_have_equal_content(tmp_path, episode):
@@ -811,33 +857,25 @@ def test_random_runs_name_exactly_the_mistakes(random_episode):
             np.testing.assert_allclose(xy, where, atol=1e-5)
 
 
-def test_random_runs_log_the_truth_groups_forming_and_dissolving(random_episode):
-    frames = random_episode["frames"]
-    truth = [f.partition() if f.groups is not None else None for f in frames]
-    expected, alive, sequence = [(1, "start")], {}, None  # 0.2 s: frame 1 (0.125 s)
-    tracks_by_frame = reference_tracks(frames, truth)
-    for t, (frame, tracks) in enumerate(zip(frames, tracks_by_frame, strict=True)):
-        if frame.sequence != sequence:
-            alive, sequence = {}, frame.sequence
-        if truth[t] is None or not frame.n_people:
-            continue
-        now = {k: tuple(sorted(g)) for g, k in tracks.items()}
-        names = {k: "{" + ", ".join(map(str, m)) + "}" for k, m in {**alive, **now}.items()}
-        expected += [(t, f"group {k} forms: {names[k]}") for k in now if k not in alive]
-        expected += [
-            (t, f"group {k} changes: {'{' + ', '.join(map(str, alive[k])) + '}'} -> {names[k]}")
-            for k in now
-            if k in alive and alive[k] != now[k]
+def test_random_runs_log_the_group_events_of_the_truth_and_of_each_detector(random_episode):
+    frames, path = random_episode["frames"], random_episode["path"]
+    assert text_log(path, "/events") == [(1, "start", "INFO")]  # 0.2 s: frame 1 (0.125 s)
+    # Two sequences, one after the other on the timeline: reform.group_events on the Frames.
+    truth = group_events(frames)
+    assert {e.sequence for e in truth} == {"a", "b"}
+    assert text_log(path, "/events/truth") == [
+        (e.frame, group_event_text(e), "INFO") for e in truth
+    ]
+    for name, partitions in random_episode["detections"].items():
+        annotated = [
+            p if f.groups is not None else None for f, p in zip(frames, partitions, strict=True)
         ]
-        expected += [(t, f"group {k} dissolves: {names[k]}") for k in alive if k not in now]
-        alive = now
-    logged = []
-    for chunk in RrdReader(random_episode["path"]).stream():
-        if chunk.entity_path == "/events":
-            data = chunk.to_record_batch().to_pydict()
-            texts = data["TextLog:text"]
-            logged += [(f, text[0]) for f, text in zip(data["frame"], texts, strict=True)]
-    assert sorted(logged) == sorted(expected)
+        found = partition_events(
+            annotated, times=[f.time for f in frames], sequences=[f.sequence for f in frames]
+        )
+        logged = text_log(path, f"/events/{name}")
+        assert logged == [(e.frame, group_event_text(e), "INFO") for e in found], name
+        assert len(logged) > len(truth)  # random groups change more often than the truth
 
 
 def test_columns_hold_what_the_frames_hold():
