@@ -73,19 +73,22 @@ def test_simulate_save_records_the_episode(tmp_path):
     out, rrd = tmp_path / "c.parquet", tmp_path / "c.rrd"
     argv = ["simulate", "--scenario", "hri-conversation", "--seed", "1", "--out", str(out)]
     assert main([*argv, "--save", str(rrd)]) == 0
-    texts = []
+    texts: dict[str, list[str]] = {"/events": [], "/events/truth": []}
     entities = set()
     for chunk in RrdReader(rrd).stream():
         entities.add(chunk.entity_path)
-        if chunk.entity_path == "/events":
-            texts += [t[0] for t in chunk.to_record_batch().column("TextLog:text").to_pylist()]
+        if chunk.entity_path in texts:
+            column = chunk.to_record_batch().column("TextLog:text").to_pylist()
+            texts[chunk.entity_path] += [t[0] for t in column]
     assert {
         "/world/people/bodies",
         "/world/robot/bodies",
         "/world/groups/truth/members",
     } <= entities
-    assert any(t.startswith("approach:") for t in texts)
-    assert any("forms" in t for t in texts) and any("leave:" in t for t in texts)
+    scenario, truth = texts["/events"], texts["/events/truth"]
+    assert any(t.startswith("approach:") for t in scenario)
+    assert any(t.startswith("leave:") for t in scenario)
+    assert any("forms" in t for t in truth)  # the group events of the ground truth
 
 
 def test_simulate_save_draws_the_sensors_own_field_of_view(tmp_path):
