@@ -47,7 +47,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -253,8 +253,7 @@ def _split_sequences(frames: Sequence[Frame], *, caller: str) -> list[_Sequence]
     return _split_rows(check_frames(frames, caller=caller), caller=caller)
 
 
-@dataclass(frozen=True)
-class _Row:
+class _Row(NamedTuple):
     """A frame as the events see it: its sequence, time and groups (None: not annotated)."""
 
     sequence: str
@@ -281,14 +280,13 @@ def _rows(partitions: Iterable[Any], times: Any, sequences: Any, *, caller: str)
             f"{caller}: sequences must be one name or one per partition ({len(partitions)}), "
             f"got {len(names)}"
         )
-    return [
-        _Row(
-            str(name),
-            float(t),
-            None if groups is None else tuple(tuple(int(m) for m in g) for g in groups),
-        )
-        for name, t, groups in zip(names, time.tolist(), partitions, strict=True)
-    ]
+    rows, last_raw, last = [], None, None
+    for name, t, groups in zip(names, time.tolist(), partitions, strict=True):
+        if groups is not last_raw:  # a partition repeated as one object is read once
+            last_raw = groups
+            last = None if groups is None else tuple(tuple(int(m) for m in g) for g in groups)
+        rows.append(_Row(str(name), t, last))
+    return rows
 
 
 def _split_rows(frames: Sequence[Any], *, caller: str, skip_short: bool = False) -> list[_Sequence]:
@@ -572,11 +570,9 @@ def partition_events(
     Raises:
         ValueError: as :func:`group_events`, and for times or sequences not one per partition.
     """
-    rows = _rows(partitions, times, sequences, caller="partition_events")
-    split = _split_rows(rows, caller="partition_events", skip_short=skip_short)
-    if not split:
-        return []
-    _, followed = _track_all((), caller="partition_events", rows=split)
+    followed = _follow_partitions(
+        partitions, times, sequences, caller="partition_events", skip_short=skip_short
+    )
     return [event for f in followed for event in f.events]
 
 
@@ -589,7 +585,20 @@ def partition_tracks(
 ) -> GroupTracks:
     """:func:`track_groups` of groups given without Frames (arguments as for
     :func:`partition_events`)."""
-    rows = _rows(partitions, times, sequences, caller="partition_tracks")
-    split = _split_rows(rows, caller="partition_tracks", skip_short=skip_short)
-    _, followed = _track_all((), caller="partition_tracks", rows=split)
+    followed = _follow_partitions(
+        partitions, times, sequences, caller="partition_tracks", skip_short=skip_short
+    )
     return _spans_to_tracks(followed)
+
+
+def _follow_partitions(
+    partitions: Iterable[Any], times: Any, sequences: Any, *, caller: str, skip_short: bool
+) -> list[_Tracking]:
+    """The tracking of every sequence of partitions given with their times and sequences (one
+    pass gives both the events and the tracks)."""
+    rows = _rows(partitions, times, sequences, caller=caller)
+    split = _split_rows(rows, caller=caller, skip_short=skip_short)
+    if not split:
+        return []
+    _, followed = _track_all((), caller=caller, rows=split)
+    return followed

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from reform.datasets.errors import DataFormatError
-from reform.events import EVENT_KINDS, GroupEvent, partition_events, partition_tracks
+from reform.events import EVENT_KINDS, GroupEvent, _follow_partitions
 from reform.frame import Dataset, Frame
 
 __all__ = ["GROUP_EVENTS_KEY", "count_kinds", "dataset_group_events", "group_events_record"]
@@ -76,9 +76,15 @@ def _derive(frames: Sequence[Frame] | None, groups: Mapping[str, Any]) -> tuple[
         }
     if not len(groups["partitions"]):
         return [], 0
-    events = partition_events(**groups, skip_short=True)
-    tracks = partition_tracks(**groups, skip_short=True).n_tracks
-    return events, tracks
+    followed = _follow_partitions(
+        groups["partitions"],
+        groups["times"],
+        groups["sequences"],
+        caller="group_events_record",
+        skip_short=True,
+    )  # partition_events and partition_tracks in one pass
+    events = [event for f in followed for event in f.events]
+    return events, len({span[0] for f in followed for span in f.spans})
 
 
 def dataset_group_events(dataset: Dataset) -> list[GroupEvent]:
