@@ -11,7 +11,10 @@ paper's three pair classifiers and of GCFF, as functions of:
   ``group-size`` (largest group allowed);
 * the ``sensor``: the ground truth of everyone in the room against the robot's head sensor
   (`sim.sensor.Sensor`): field of view and range only, with occlusion by MuJoCo rays, and with
-  occlusion plus Kinect-like tracking errors.
+  occlusion plus Kinect-like tracking errors;
+* the ``event-rate``: scripted changes per minute on top of the party's own (`mingle`'s
+  ``event_rate``, `scenarios.changes`): latecomers walking up to groups, members drifting away,
+  groups walking over to merge.
 
 Protocol. The detectors are trained once: REFORM's three classifiers on a synthetic training set
 of ``mingle`` and ``word-improv`` episodes, GCFF tuned (stride and mdl, by grid search with the
@@ -202,6 +205,8 @@ def _scene_spec(grid: StressGrid, axis: str | None, level: Any, seed: int) -> _E
     elif axis == "sensor":
         options["robot"] = True
         sensor = str(level)
+    elif axis == "event-rate":
+        options["event_rate"] = float(level)
     return _EpisodeSpec(
         TEST_SCENARIO, seed, tuple(sorted(options.items())), grid.duration_s, grid.rate_hz, sensor
     )

@@ -96,6 +96,15 @@ AXES: Mapping[str, _AxisInfo] = MappingProxyType(
                 "The party with the robot watching from the west wall, seen from the ground "
                 "truth or by the robot's head sensor.",
             ),
+            _AxisInfo(
+                "event-rate",
+                "Scripted changes",
+                "scripted changes per minute",
+                "scene",
+                "The party with scripted changes on top of its own comings and goings "
+                "(mingle's event_rate): latecomers walking up to groups, members drifting "
+                "away, groups walking over to merge.",
+            ),
         )
     }
 )
@@ -133,6 +142,7 @@ _GRID_FIELDS = (
     ("density_per_m2", "floats", 0.01, 1.0),
     ("people", "ints", 2, 100),
     ("max_group_size", "ints", 2, 12),
+    ("event_rate_per_min", "floats", 0.0, 20.0),
     ("seeds", "int", 1, 10**6),
     ("duration_s", "float", 1e-3, 1e6),
     ("rate_hz", "float", 1e-3, 1e3),
@@ -158,6 +168,8 @@ class StressGrid:
         people: numbers of guests at the default density.
         max_group_size: largest groups allowed (2-12).
         sensors: sensor levels, names of :data:`SENSOR_NAMES`.
+        event_rate_per_min: scripted changes per minute of the party (0-20; mingle's
+            ``event_rate``).
         seeds: test episodes per point.
         duration_s: length of a test episode, seconds.
         rate_hz: frames per second scored.
@@ -177,6 +189,7 @@ class StressGrid:
     people: tuple[int, ...] = (6, 12, 18, 30, 48)
     max_group_size: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
     sensors: tuple[str, ...] = SENSOR_NAMES
+    event_rate_per_min: tuple[float, ...] = (0.0, 2.0, 4.0, 8.0, 12.0)
     seeds: int = 5
     duration_s: float = 600.0
     rate_hz: float = 0.5
@@ -218,6 +231,7 @@ class StressGrid:
             "groups": self.people,
             "group-size": self.max_group_size,
             "sensor": self.sensors,
+            "event-rate": self.event_rate_per_min,
         }[check_axis(axis)]
 
     def to_json(self) -> dict[str, Any]:
@@ -235,6 +249,7 @@ GRIDS: Mapping[str, StressGrid] = MappingProxyType(
             people=(6, 18),
             max_group_size=(3, 8),
             sensors=("truth", "occlusion"),
+            event_rate_per_min=(0.0, 8.0),
             seeds=2,
             duration_s=40.0,
             rate_hz=0.5,

@@ -88,6 +88,20 @@ def test_scene_axes_change_the_scene(results) -> None:
     assert dropout[1].people_per_frame < dropout[0].people_per_frame
 
 
+def test_the_event_rate_axis_scripts_changes_into_the_same_parties(results) -> None:
+    # No scripted change: the party of every other scene axis at its defaults (largest group
+    # 8, mingle's default), the same episodes scored the same.
+    assert SMALL.event_rate_per_min == (0.0, 8.0) and SMALL.max_group_size[-1] == 8
+    still, busy = results.axis("event-rate").points
+    base = results.axis("group-size").points[-1]
+    assert (still.frames, still.fformations_per_frame) == (base.frames, base.fformations_per_frame)
+    for detector in DETECTORS:
+        assert still.scores[detector]["2/3"].f1.value == base.scores[detector]["2/3"].f1.value
+    # Eight changes a minute: people walk up, drift away and merge, so the groups differ.
+    assert busy.frames == still.frames and busy.people_per_frame == still.people_per_frame
+    assert busy.fformations_per_frame != still.fformations_per_frame
+
+
 def test_training_and_test_seeds_differ() -> None:
     train = {derive_int(0, Role.STRESS_TRAIN, s, i) for s in range(2) for i in range(4)}
     test = {derive_int(0, Role.STRESS_TEST, i) for i in range(5)}
@@ -188,6 +202,10 @@ def test_grid_validation() -> None:
         StressGrid(sensors=("lidar",))
     with pytest.raises(ValueError, match="StressGrid.people must hold at least one level"):
         StressGrid(people=())
+    with pytest.raises(
+        ValueError, match=r"StressGrid.event_rate_per_min values must lie in \[0, 20\], got 30"
+    ):
+        StressGrid(event_rate_per_min=(0.0, 30.0))
     with pytest.raises(ValueError, match="grid must be one of"):
         run_stress("huge")
     with pytest.raises(ValueError, match="axis must be one of"):
