@@ -8,7 +8,9 @@ A generated folder::
       dataset.json                                    the same card, for programs: every
                                                       parameter, the seed, size and sha256 of
                                                       every shard, frame counts, group sizes
-      data/scenario=<name>/episode=<k>/part.parquet   one shard per episode, the project's format
+      data/scenario=<name>/episode=<k>/part.parquet   one shard per episode, the project's format,
+                                                      its ground-truth group events in its
+                                                      metadata (`reform.datasets.group_events`)
       recordings/episode=<k>.rrd                      with ``save_recordings``: one Rerun
                                                       recording per episode
 
