@@ -96,6 +96,8 @@ _EXPORTS = {
     "greedy_reconstruction": "reform.reconstruction",
     "partition_from_labels": "reform.reconstruction",
     "relation_matrix": "reform.reconstruction",
+    "Hysteresis": "reform.smoothing",
+    "SlidingMajority": "reform.smoothing",
     "time_blocks": "reform.splits",
     "time_split": "reform.splits",
     "KindScores": "reform.temporal",
