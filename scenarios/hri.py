@@ -415,14 +415,17 @@ class _Scene:
         also: _Circle | None = None,
         mean_utterance: float,
     ) -> _Circle:
-        """``group`` becomes ``after`` (planned from ``t``, continuing ``group`` and ``also``,
-        its ``newcomers`` to arrive): ``group`` talks until ``shift``, when its members walk to
-        their new places; ``after`` talks from then."""
+        """``group`` becomes ``after`` (planned from ``t``, its ``newcomers`` to arrive; with
+        newcomers, continuing ``group`` and ``also``): ``group`` talks until ``shift``, when
+        its members walk to their new places; ``after`` talks from then."""
         group.talk(self, group.talk_from, shift, mean_utterance=mean_utterance)
         self.builder.end_group(group.handle, shift)
         if also is not None:
             self.builder.end_group(also.handle, t)
-        continues = [group.handle] + ([] if also is None else [also.handle])
+        # Someone left: the group as it was ends as they set off, not when the rest does.
+        continues = [group.handle] if newcomers else []
+        if also is not None:
+            continues.append(also.handle)
         after.handle = self.builder.group(
             after.members,
             after.places,

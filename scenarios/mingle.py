@@ -139,8 +139,10 @@ FURNITURE_WALL_END_M = 0.4  # metres, a bar or a poster keeps this far from the 
 # Scripted changes (`scenarios.changes`).
 FIRST_CHANGE_S = 5.0  # seconds into the party before the first scripted change
 CHANGE_GAP_S = 3.0  # seconds a scripted change waits beyond the end of the one before
+SETTLED_S = 10.0  # seconds a group stands as it is before a scripted change takes it on
+CHANGE_SLACK_S = 10.0  # seconds beyond a walker's planned arrival the group is left alone
 APPROACH_M = 1.2  # metres from their place a latecomer's last straight walk up starts
-MERGED_MAX = 6  # people: a scripted merge makes a group of at most this many
+CHANGED_MAX = 6  # people: a scripted join or merge makes a group of at most this many
 APPROACH_SPEED_M_S = 1.0  # m/s, default speed of a latecomer walking up
 
 
@@ -325,6 +327,7 @@ class _Party:
         self.count = 0
         self.next_gid = 0
         self.furniture: list[Furniture] = []
+        self.changing: dict[int, float] = {}  # group -> when its scripted change is over
 
     # -- floor space ------------------------------------------------------------------------
 
@@ -828,7 +831,7 @@ class _Party:
         self.shrink(gid, t)
         target = None
         if self.rng.random() < LEAVE_TO_GROUP_SHARE:
-            target = self.pick_group(m, exclude=gid)
+            target = self.pick_group(m, t, exclude=gid)
         if target is not None and self.join(m, target, t):
             return
         spot = self.free_spot(ALONE_CLAIM_M, near=self.position[m], within=3.0)
@@ -854,11 +857,13 @@ class _Party:
         self.version[last] += 1
         self.start_alone(last, self.position[last], t)
 
-    def pick_group(self, m: int, *, exclude: int = -1) -> int | None:
+    def pick_group(self, m: int, t: float, *, exclude: int = -1) -> int | None:
         here = self.position[m]
         options, weights = [], []
         for gid, g in self.groups.items():
             if gid == exclude or len(g.members) >= self.p.max_group_size:
+                continue
+            if self.changing.get(gid, -math.inf) > t:  # a scripted change under way
                 continue
             d = float(np.hypot(*(g.centre - here)))
             options.append(gid)
@@ -903,7 +908,7 @@ class _Party:
             return
         draw = self.rng.random()
         if draw < JOIN_SHARE:
-            target = self.pick_group(m)
+            target = self.pick_group(m, t)
             if target is not None and self.join(m, target, t):
                 return
         elif draw < JOIN_SHARE + PAIR_SHARE:
@@ -1029,9 +1034,14 @@ class _Party:
 
     def idle(self, gid: int, t: float) -> bool:
         """Whether group ``gid`` may take part in a scripted change at ``t``: not at furniture,
-        nobody in it walking."""
+        nobody in it walking, and standing as it is for `SETTLED_S` (or from the start)."""
         g = self.groups[gid]
-        return g.anchor < 0 and all(self.busy_until.get(m, 0.0) <= t for m in g.members)
+        since = self.records[g.record].group.start
+        return (
+            g.anchor < 0
+            and (since == 0.0 or t >= since + SETTLED_S)
+            and all(self.busy_until.get(m, 0.0) <= t for m in g.members)
+        )
 
     def on_change(self, t: float) -> None:
         """A scripted change at ``t`` (a latecomer joins, a member drifts away, a group walks
@@ -1039,7 +1049,8 @@ class _Party:
         p = self.p
         idle = [gid for gid in self.groups if self.idle(gid, t)]
         alone = [m for m in self.alone_at if self.busy_until.get(m, 0.0) <= t]
-        joinable = [gid for gid in idle if len(self.groups[gid].members) < p.max_group_size]
+        most = min(p.max_group_size, CHANGED_MAX)
+        joinable = [gid for gid in idle if len(self.groups[gid].members) < most]
         leavable = [gid for gid in idle if len(self.groups[gid].members) >= 3]
         pairs = self.merge_pairs(idle)
         possible = {JOIN: bool(alone and joinable), LEAVE: bool(leavable), MERGE: bool(pairs)}
@@ -1058,14 +1069,14 @@ class _Party:
 
     def merge_pairs(self, idle: list[int]) -> list[tuple[int, int]]:
         """(larger, smaller) groups among ``idle`` near enough to merge (`MERGE_REACH_M`)
-        whose members together make a group the party allows, of `MERGED_MAX` at most."""
+        whose members together make a group the party allows, of `CHANGED_MAX` at most."""
         out = []
         for a in idle:
             for b in idle:
                 g, h = self.groups[a], self.groups[b]
                 if (len(g.members), -a) <= (len(h.members), -b):
                     continue  # each pair once: the larger first (ties: the older)
-                if len(g.members) + len(h.members) > min(self.p.max_group_size, MERGED_MAX):
+                if len(g.members) + len(h.members) > min(self.p.max_group_size, CHANGED_MAX):
                     continue
                 if float(np.hypot(*(h.centre - g.centre))) - g.radius - h.radius < MERGE_REACH_M:
                     out.append((a, b))
@@ -1105,7 +1116,9 @@ class _Party:
         k = planned.members.index(m)
         self.walks.append((t, m, Intent(goal=(float(near[0]), float(near[1])), speed=speed)))
         self.walks.append((on, m, standing(planned.places[k], planned.facings[k], speed=speed)))
-        self.busy_until[m] = arrive
+        for x in g.members:  # nobody leaves, splits off or merges until the latecomer stands
+            self.busy_until[x] = max(self.busy_until.get(x, 0.0), arrive + CHANGE_SLACK_S)
+        self.changing[gid] = arrive + CHANGE_SLACK_S  # ... nor joins
         self.schedule_group(gid, t)
         self.schedule_member(m, t)
         detail = f"person {m} walks up to join group {sorted(g.members)} (scripted)"
@@ -1129,7 +1142,7 @@ class _Party:
             t,
             newcomers=(),
         )
-        self.records.append(_Record(rest, continues=(before,)))
+        self.records.append(_Record(rest))  # the group as it was ends as ``m`` sets off
         g.record = len(self.records) - 1
         g.version += 1
         g.members.remove(m)
@@ -1188,7 +1201,9 @@ class _Party:
             self.group_of[m] = gid
             k = planned.members.index(m)
             self.walks.append((t, m, standing(planned.places[k], planned.facings[k], speed=speed)))
-            self.busy_until[m] = arrive
+        for x in g.members:  # nobody leaves, splits off or merges until the walkers stand
+            self.busy_until[x] = max(self.busy_until.get(x, 0.0), arrive + CHANGE_SLACK_S)
+        self.changing[gid] = arrive + CHANGE_SLACK_S  # ... nor joins
         self.schedule_group(gid, t)
         detail = f"group {sorted(walkers)} walks over to merge with group {sorted(g.members)}"
         self.events.append((t, MERGE, detail + " (scripted)"))

@@ -56,8 +56,8 @@ class PlannedGroup:
         centre: (2,) the o-space centre, metres.
         start: when the members are sent to their places, seconds.
         end: when the first member is sent away, seconds (``inf``: never); for a group that a
-            newer one continues (someone joins or leaves it, it merges), when that newer group
-            ends: it is recorded until the newer group starts (`scenarios.truth`).
+            newer one continues (someone joins it, it merges), when that newer group ends: it
+            is recorded until the newer group starts (`scenarios.truth`).
         newcomers: for a group that continues an older one (someone joined or left it, or a
             group merged into it), the members new to it, who must take their places before it
             starts (``()``: someone left, nobody is new); ``None``: a group of its own, every
@@ -184,9 +184,9 @@ class TimelineBuilder:
 
         Args:
             newcomers: see `PlannedGroup`.
-            continues: handles of the planned groups this one continues (someone joined or
-                left, a group merged in): each is kept planned until this one ends (`build`),
-                so that it is recorded until this one starts.
+            continues: handles of the planned groups this one continues (someone joined, a
+                group merged in): each is kept planned until this one ends (`build`), so that
+                it is recorded until this one starts.
         """
         entry = {
             "members": tuple(int(m) for m in members),

@@ -16,9 +16,10 @@ of them is sent away (``end``). What the frames record follows one rule:
   in which its newcomers have arrived (present, at their places, facing their planned way) and
   the members it keeps are present and still recorded together in one group. The members it
   keeps need not stand at their new places yet: making room for a latecomer does not interrupt
-  a conversation. A latecomer has joined when they take their place; someone leaving is gone
-  from the group in the first frame at or after they are sent away (``newcomers=()``). The
-  script keeps the group it continues planned until then (`PlannedGroup.end`). When the members
+  a conversation. A latecomer has joined when they take their place (the script keeps the
+  group it continues planned until then, `PlannedGroup.end`); someone leaving is gone from the
+  group in the first frame at or after they set off (``newcomers=()``: the group as it was
+  ends then, the rest are a group from that frame on). When the members
   it keeps are not together (a change before it never happened: someone never got to their
   place), it starts as any group does, once every member has arrived.
 * A planned group that never forms (a member blocked on the way) is never recorded; one that
@@ -183,14 +184,16 @@ class GroundTruth:
         return tuple(tuple(groups) for groups in out)
 
     def _kept_together(self, r: int, t: float) -> bool:
-        """Whether the members planned group ``r`` keeps (all but its newcomers) are recorded
-        together in one group at ``t`` (none kept: trivially)."""
+        """Whether the members planned group ``r`` keeps (all but its newcomers) were recorded
+        together in one group when ``r`` was planned, and still are at ``t`` (for a group
+        someone left: until they set off); none kept: trivially."""
         g = self._plan[r]
         kept = set(g.members) - set(g.newcomers or ())
         if not kept:
             return True
         for q in range(len(self._plan)):
-            if q == r or not self._live_from[q] <= t < self._live_until[q]:
+            live = self._live_from[q] <= t and self._live_until[q] >= g.start - 1e-9
+            if q == r or not live:
                 continue
             if kept <= set(self._plan[q].members):
                 return True
