@@ -10,6 +10,7 @@ import math
 import os
 from collections import defaultdict
 from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +43,14 @@ UNITS_PER_M = {"cm": 100.0, "m": 1.0}
 # field's datasets space people 0.2 to 2 m apart; DANTE's CoffeeBreak text files, which hold
 # centimetres where the DANTE format holds metres, read as metres put them 60 m and more apart.
 MAX_SPACING_M = 20.0
+
+# The widest median spacing a GCFF folder read in centimetres, the unit assumed rather than
+# given, may have, metres. The field's sets space people a median of 0.63 m (SALSA) to 1.0 m
+# (Babble) from their nearest neighbour, 0.72 m (Synth) and 0.80 m (CoffeeBreak) among the GCFF
+# ones, and conversation keeps people within Hall's social distance (3.6 m at most); a folder
+# whose people stand a median of more than 3 m apart read as centimetres holds another unit,
+# in the field's GCFF packagings image pixels (sets derived from pose estimation).
+MAX_CENTIMETRE_SPACING_M = 3.0
 
 # Longest line a text loader reads, characters: a SALSA line of 18 people is 1.3 kB, so this
 # holds about 14,000 people; a longer line is a corrupt file (a missing newline, binary data),
@@ -327,4 +336,158 @@ def check_assumed_metres(frames: Sequence[Frame], *, path: Path) -> None:
         f"a median of {spacing:.3g} (centimetres, read as metres?)",
         hint="give units='cm' (--units cm) if the file holds centimetres, units='m' if it "
         "holds metres",
+    )
+
+
+# --- units of the files' time stamps --------------------------------------------------------
+
+# Units a file's time stamps may be stated in (time_unit=, --time-unit), seconds per unit.
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+_TIME_UNIT_WORDS = {"s": "seconds", "ms": "milliseconds", "us": "microseconds", "ns": "nanoseconds"}
+
+# Largest |time| read as stored, in seconds (or a GCFF set's frame numbers): over three years.
+# The field's recordings last minutes to hours, so larger values are Unix times or another unit.
+STORED_TIME_LIMIT = 1e8
+
+# Unix times a recording of the field can carry: 1990-01-01 to 2100-01-01, seconds. In seconds,
+# milliseconds, microseconds and nanoseconds these windows lie a factor 1000 apart and never
+# overlap, so the magnitude of a file's times names their unit.
+UNIX_TIME_RANGE_S = (631_152_000.0, 4_102_444_800.0)
+
+# The median step between frames a unit must make plausible, seconds: motion capture at 1 kHz
+# to one frame an hour (the field's sets: 100 Hz for Babble, a frame each 3 s for SALSA, 5 s for
+# Cocktail Party). A step outside says the magnitude's unit is not the file's.
+FRAME_STEP_RANGE_S = (1e-3, 3600.0)
+
+
+@dataclass(frozen=True)
+class TimeReading:
+    """How a file's time stamps are read: their unit, how it was known, and whether they are
+    Unix times (then counted from each sequence's first frame, the origin kept in the report).
+
+    Attributes:
+        unit: one of :data:`TIME_UNITS`.
+        how: ``"as stored"`` (seconds, or frame numbers, kept as the file writes them),
+            ``"stated"`` (given by the caller) or ``"inferred"`` (from their magnitude and
+            spacing).
+        unix: the times are Unix times: each sequence's times count from its first frame.
+    """
+
+    unit: str
+    how: str
+    unix: bool
+
+    def seconds(self, times: np.ndarray) -> tuple[np.ndarray, float | None]:
+        """(n,) one sequence's times in seconds (from its first when Unix times), and that
+        first time in Unix seconds (None when not Unix times)."""
+        times = np.asarray(times, dtype=np.float64)
+        per_unit = TIME_UNITS[self.unit]
+        if not self.unix or times.size == 0:
+            return (times if self.unit == "s" else times * per_unit), None
+        return (times - times[0]) * per_unit, float(times[0]) * per_unit
+
+    def describe(self) -> str:
+        """The reading in words, for a dataset's metadata."""
+        if self.how == "as stored":
+            return "as stored (seconds)"
+        word = ("Unix " if self.unix else "") + _TIME_UNIT_WORDS[self.unit]
+        how = "stated" if self.how == "stated" else "inferred from their magnitude and spacing"
+        start = ", counted in seconds from each sequence's first frame" if self.unix else ""
+        return f"{word} ({how}){start}"
+
+    def report(self, origins: dict[str, float | None]) -> dict[str, Any]:
+        """The load report's entry: unit, how it was known, and each sequence's first time in
+        Unix seconds (``origin_unix_s``, when Unix times)."""
+        out: dict[str, Any] = {"unit": self.unit, "how": self.how, "read": self.describe()}
+        if self.unix:
+            out["origin_unix_s"] = dict(origins)
+        return out
+
+
+def check_time_unit(time_unit: str | None) -> None:
+    """Raises ValueError unless ``time_unit`` is None or one of :data:`TIME_UNITS`."""
+    if time_unit is not None and time_unit not in TIME_UNITS:
+        raise ValueError(f"time_unit must be one of {tuple(TIME_UNITS)}, got {time_unit!r}")
+
+
+def read_time_unit(
+    sequences: Sequence[np.ndarray], *, path: Path, field: str, stated: str | None = None
+) -> TimeReading:
+    """The unit of a file's time stamps: ``stated``, else as their magnitude and spacing prove.
+
+    Times below :data:`STORED_TIME_LIMIT` are kept as stored (seconds, or frame numbers), as the
+    field's public sets write them. Larger times are Unix times in the one unit of
+    :data:`TIME_UNITS` whose window of dates (:data:`UNIX_TIME_RANGE_S`) holds them all, if
+    that unit puts frames a plausible step apart (:data:`FRAME_STEP_RANGE_S`): values near
+    1.7e15 a step of 1e5 apart are Unix microseconds (0.1 s steps). A stated unit is trusted;
+    its times are Unix times when they fall in the window of dates.
+
+    Args:
+        sequences: each sequence's times as stored (increasing), the file's unit.
+        path: the file, for the message.
+        field: the field holding the times (``"timestamp"``, ``"t"``).
+        stated: the unit the caller gives (``time_unit=``, ``--time-unit``), or None.
+
+    Raises:
+        DataFormatError: no unit fits (Unix-sized times outside every window or with
+            implausible steps, or small times whose frames lie hours apart), naming the file,
+            the field, what was expected and found, and the option that states the unit.
+    """
+    check_time_unit(stated)
+    times = [np.asarray(s, dtype=np.float64) for s in sequences if len(s)]
+    if not times:
+        return TimeReading(stated or "s", "stated" if stated else "as stored", False)
+    low = min(float(t.min()) for t in times)
+    high = max(float(t.max()) for t in times)
+    steps = np.concatenate([np.diff(t) for t in times])
+    step = float(np.median(steps)) if steps.size else None
+    if stated is not None:
+        per_unit = TIME_UNITS[stated]
+        unix = UNIX_TIME_RANGE_S[0] <= low * per_unit and high * per_unit <= UNIX_TIME_RANGE_S[1]
+        return TimeReading(stated, "stated", unix)
+    largest = max(abs(low), abs(high))
+    if largest < STORED_TIME_LIMIT:
+        if step is None or step <= FRAME_STEP_RANGE_S[1]:
+            return TimeReading("s", "as stored", False)
+    else:
+        for unit, per_unit in TIME_UNITS.items():
+            first, last = (bound / per_unit for bound in UNIX_TIME_RANGE_S)
+            if first <= low and high <= last:
+                if step is None or (
+                    FRAME_STEP_RANGE_S[0] <= step * per_unit <= FRAME_STEP_RANGE_S[1]
+                ):
+                    return TimeReading(unit, "inferred", True)
+                break
+    found = f"values {low:.10g} to {high:.10g}"
+    if step is not None:
+        found += f", a median step of {step:.4g} between frames"
+    raise DataFormatError(
+        path,
+        None,
+        field,
+        f"times in seconds (|t| < {STORED_TIME_LIMIT:g}, frames at most "
+        f"{FRAME_STEP_RANGE_S[1]:g} s apart) or Unix times in s, ms, us or ns (dates 1990 to "
+        f"2100, frames {FRAME_STEP_RANGE_S[0]:g} s to {FRAME_STEP_RANGE_S[1]:g} s apart)",
+        found,
+        hint="give their unit with time_unit= (--time-unit): s, ms, us or ns",
+    )
+
+
+def check_assumed_centimetres(frames: Sequence[Frame], *, path: Path) -> None:
+    """Refuses frames read in centimetres, the unit assumed rather than given, whose people
+    stand farther apart than conversation allows (:data:`MAX_CENTIMETRE_SPACING_M`): the file
+    holds image pixels (or another unit), and every distance a detector saw would be wrong. A
+    unit given on purpose is not checked."""
+    spacing = median_spacing(frames)
+    if spacing is None or spacing <= MAX_CENTIMETRE_SPACING_M:
+        return
+    raise DataFormatError(
+        path,
+        None,
+        "positions",
+        f"centimetres, people a median of at most {MAX_CENTIMETRE_SPACING_M * 100:g} units "
+        f"({MAX_CENTIMETRE_SPACING_M:g} m) from their nearest neighbour",
+        f"a median of {spacing * 100:.4g} units ({spacing:.3g} m in centimetres: image pixels?)",
+        hint="give units='px' with metres_per_pixel (--units px --metres-per-pixel M) if the "
+        "file holds pixels, units='cm' (--units cm) if it holds centimetres",
     )

@@ -19,16 +19,22 @@ The time restarts when a new session begins: every decrease of ``t`` opens a new
 error). Ground-truth lines are matched to feature lines by their exact time string, in file
 order. SALSA's session-2 time strings carry a +2e-5 offset, so when every time of a file lies
 within 1e-4 s of a multiple of 0.1 s, a frame's ``time`` is ``round(float(t), 1)``; otherwise
-(Cocktail Party's Unix times, files sampled faster than 10 Hz) it is ``float(t)``.
+(files sampled faster than 10 Hz) it is ``float(t)``. Unix times (Cocktail Party's, in seconds;
+or in milliseconds, microseconds, nanoseconds, told apart by their magnitude and spacing) are
+read in their unit and counted in seconds from each session's first line.
+
+A file of 3 fields per person (``ID x y``: positions without an orientation) is refused as such.
 """
 
 from __future__ import annotations
 
 import re
 from collections import Counter
+from collections.abc import Iterable
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -39,11 +45,13 @@ from reform.datasets._validation import (
     check_assumed_metres,
     check_coordinate,
     check_time_increases,
+    check_time_unit,
     check_unique_ids,
     make_frame,
     note_absent_members,
     parse_float,
     read_lines,
+    read_time_unit,
     require_file,
     units_per_metre,
 )
@@ -59,6 +67,7 @@ GROUPS_FILE = "group_names.txt"
 # Tokens per person block of each layout, and what its fields are.
 FIELDS_PER_PERSON = {5: "ID x y body head", 4: "ID x y θ"}
 _FAKE = "fake"
+_POSITION_ONLY = 3  # fields per person of a file of positions without orientation: ID x y
 _ID_PATTERN = re.compile(r"ID_(\d+)")
 _ID_MAX = 2**63 - 1  # person ids are int64
 _TIME_DECIMALS = 1  # SALSA is sampled every 3 s at t = 0.2 + 3k
@@ -87,6 +96,7 @@ def load_dante(
     name: str | None = None,
     units: str | None = None,
     metres_per_pixel: float | None = None,
+    time_unit: str | None = None,
 ) -> Dataset:
     """Loads a dataset in the DANTE text format (SALSA, Cocktail Party, ...).
 
@@ -125,6 +135,12 @@ def load_dante(
             (`reform.datasets._validation.MAX_SPACING_M`): DANTE's own CoffeeBreak files hold
             centimetres. A unit given is not checked.
         metres_per_pixel: the scale of ``units="px"``; refused with other units.
+        time_unit: the unit of the times ``t``, ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. None
+            keeps times below 1e8 as stored (seconds) and reads larger ones as Unix times in
+            the unit their magnitude and spacing prove
+            (`reform.datasets._validation.read_time_unit`), refusing times that fit no unit.
+            Unix times count in seconds from each session's first line; the unit, how it was
+            known and each session's origin are in ``metadata["report"]["time_unit"]``.
 
     Returns:
         The dataset, positions in metres, one sequence per session.
@@ -135,6 +151,7 @@ def load_dante(
     """
     function = "load_salsa" if name == "salsa" else "load_dante"
     per_metre = units_per_metre("m" if units is None else units, metres_per_pixel)
+    check_time_unit(time_unit)
     path = path_argument(path, name="path", function=function)
     if groups_path is not None:
         groups_path = path_argument(groups_path, name="groups_path", function=function)
@@ -148,8 +165,8 @@ def load_dante(
     require_file(groups_file, what="a DANTE group file")
     repairs = Repairs(strict=strict)
 
-    rows, fake_blocks, width, rounded = _read_features(
-        features_path, repairs=repairs, per_metre=per_metre
+    rows, fake_blocks, width, rounded, time_report = _read_features(
+        features_path, repairs=repairs, per_metre=per_metre, time_unit=time_unit
     )
     gt_lines = _read_groups(groups_file)
 
@@ -225,6 +242,11 @@ def load_dante(
         "time": "round(float(t), 1)" if rounded else "float(t)",
         **repairs.report(),
     }
+    if time_report is not None:
+        report["time"] = f"float(t) in {time_report['read']}" + (
+            ", rounded to 0.1 s" if rounded else ""
+        )
+        report["time_unit"] = time_report
     folder = features_path.parent
     metadata = {
         "format": "salsa",
@@ -276,10 +298,10 @@ def _is_person_token(token: str) -> bool:
     return token == _FAKE or _ID_PATTERN.fullmatch(token) is not None
 
 
-def _widths_of(tokens: list[str]) -> set[int]:
-    """The layouts (fields per person) a line's tokens agree with."""
+def _widths_of(tokens: list[str], widths: Iterable[int] = FIELDS_PER_PERSON) -> set[int]:
+    """The layouts (fields per person) among ``widths`` a line's tokens agree with."""
     fits = set()
-    for width in FIELDS_PER_PERSON:
+    for width in widths:
         if (len(tokens) - 1) % width:
             continue
         starts = range(1, len(tokens), width)
@@ -307,6 +329,7 @@ def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
                 repr(tokens[1]),
             )
         if not fits:
+            _check_orientation(path, lines)
             raise DataFormatError(
                 path,
                 f"line {line_number}",
@@ -328,6 +351,21 @@ def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
     raise DataFormatError(
         path, None, "tokens", expected, "no line with a person telling the layout apart"
     )
+
+
+def _check_orientation(path: Path, lines: list[tuple[int, list[str]]]) -> None:
+    """Refuses a file whose every line holds :data:`_POSITION_ONLY` fields per person (``ID x
+    y``): positions without an orientation, which every detector of the field needs."""
+    if all(_widths_of(tokens, (_POSITION_ONLY,)) for _, tokens in lines):
+        raise DataFormatError(
+            path,
+            None,
+            "orientation",
+            "an orientation for every person (4 fields per person, ID x y θ, or 5, ID x y body "
+            "head): the detectors need where each person faces",
+            f"{_POSITION_ONLY} fields per person on every line (ID x y): positions without an "
+            "orientation",
+        )
 
 
 def _read_lines(path: Path) -> list[tuple[int, list[str]]]:
@@ -357,20 +395,24 @@ def _number(token: str, *, path: Path, where: str, field: str, nan: list[str]) -
 
 
 def _read_features(
-    path: Path, *, repairs: Repairs, per_metre: float = 1.0
-) -> tuple[list[_Row], int, int, bool]:
-    """The rows (positions in metres: the file's divided by ``per_metre``), the ``fake``
-    blocks skipped, the fields per person, and whether times are rounded to 0.1 s."""
+    path: Path, *, repairs: Repairs, per_metre: float = 1.0, time_unit: str | None = None
+) -> tuple[list[_Row], int, int, bool, dict[str, Any] | None]:
+    """The rows (positions in metres: the file's divided by ``per_metre``; times in seconds),
+    the ``fake`` blocks skipped, the fields per person, whether times are rounded to 0.1 s, and
+    the load report's ``time_unit`` entry (None when times are kept as stored)."""
     lines = _read_lines(path)
     width = _layout(path, lines)
-    times = [parse_float(tokens[0], path=path, where=f"line {n}", field="t") for n, tokens in lines]
+    stored = [
+        parse_float(tokens[0], path=path, where=f"line {n}", field="t") for n, tokens in lines
+    ]
+    times, time_report = _seconds(stored, path=path, time_unit=time_unit)
     rounded = all(abs(t - round(t, _TIME_DECIMALS)) <= _TIME_GRID_TOLERANCE_S for t in times)
     angle_fields = ("body", "head") if width == 5 else ("θ",)
     rows: list[_Row] = []
     fake_blocks = 0
     session = 1
     previous_time: float | None = None
-    for (line_number, tokens), time_value in zip(lines, times, strict=True):
+    for (line_number, tokens), time_value, stored_value in zip(lines, times, stored, strict=True):
         where = f"line {line_number}"
         n_blocks, extra = divmod(len(tokens) - 1, width)
         if extra:
@@ -383,7 +425,7 @@ def _read_features(
                 f"{len(tokens)} tokens (truncated line?)",
             )
         time = round(time_value, _TIME_DECIMALS) if rounded else time_value
-        if previous_time is not None and time_value < previous_time:
+        if previous_time is not None and stored_value < previous_time:
             session += 1  # the time restarts: a new session
         elif rows:
             check_time_increases(
@@ -395,7 +437,7 @@ def _read_features(
                 previous_where=f"line {rows[-1].line}, t = {rows[-1].time_string}",
                 found=repr(tokens[0]) + (f" (t = {time!r})" if str(time) != tokens[0] else ""),
             )
-        previous_time = time_value
+        previous_time = stored_value
 
         ids: list[int] = []
         values: list[tuple[float, ...]] = []
@@ -457,7 +499,31 @@ def _read_features(
                 head_yaw=wrap_angle(array[:, 3]) if width == 5 else None,
             )
         )
-    return rows, fake_blocks, width, rounded
+    return rows, fake_blocks, width, rounded, time_report
+
+
+def _seconds(
+    stored: list[float], *, path: Path, time_unit: str | None
+) -> tuple[list[float], dict[str, Any] | None]:
+    """Each line's time in seconds (Unix times from their session's first line; a session
+    begins whenever the stored time goes down) and the report's ``time_unit`` entry (None when
+    the times are kept as stored)."""
+    sessions: list[list[float]] = []
+    for k, value in enumerate(stored):
+        if k == 0 or value < stored[k - 1]:
+            sessions.append([])
+        sessions[-1].append(value)
+    reading = read_time_unit(
+        [np.array(s) for s in sessions], path=path, field="t", stated=time_unit
+    )
+    if reading.how == "as stored":
+        return stored, None
+    seconds: list[float] = []
+    origins: dict[str, float | None] = {}
+    for number, values in enumerate(sessions, start=1):
+        converted, origins[f"session{number}"] = reading.seconds(np.array(values))
+        seconds.extend(converted.tolist())
+    return seconds, reading.report(origins)
 
 
 def _read_groups(path: Path) -> list[tuple[int, str, list[list[int]]]]:

@@ -120,6 +120,7 @@ def load_dataset(
     metres_per_pixel: float | None = None,
     strict: bool = False,
     allow_incomplete: bool = False,
+    time_unit: str | None = None,
 ) -> Dataset:
     """Loads a dataset in any supported format; positions come back in metres.
 
@@ -129,8 +130,10 @@ def load_dataset(
         format: one of :data:`FORMATS` (or an alias, ``"dante"``); detected from ``path`` when
             None.
         units: length unit of the file's positions, ``"cm"``, ``"m"`` or ``"px"``. GCFF
-            folders (default ``"cm"``, as the public GCFF datasets use; ``"px"`` for sets
-            derived from pose estimation, with ``metres_per_pixel``) and DANTE text files
+            folders (default ``"cm"``, as the public GCFF datasets use, checked: a folder whose
+            people then stand a median of more than 3 m apart holds image pixels and is
+            refused; ``"px"`` for sets derived from pose estimation, with
+            ``metres_per_pixel``) and DANTE text files
             (default ``"m"``, the format's unit, checked: a file whose people then stand
             farther apart than in any dataset of the field is refused, as DANTE's own
             CoffeeBreak files in centimetres are) have a choice; Babble and Parquet are always
@@ -141,6 +144,11 @@ def load_dataset(
             NaN poses, ...), naming file, frame, field, expected and found.
         allow_incomplete: Parquet only: read an unfinished ``reform-sim generate`` folder
             (see :func:`~reform.datasets.parquet.read_parquet`).
+        time_unit: GCFF and DANTE only: the unit of the files' time stamps, ``"s"``, ``"ms"``,
+            ``"us"`` or ``"ns"``; by default times below 1e8 are kept as stored and larger ones
+            read as Unix times in the unit their magnitude and spacing prove, counted from
+            each sequence's start (`reform.datasets._validation.read_time_unit`). Babble and
+            Parquet times are always seconds, and giving a unit for them is an error.
 
     Raises:
         DataFormatError: the path is missing, matches no format, or a file is malformed.
@@ -156,6 +164,8 @@ def load_dataset(
             )
         if units not in (None, "m"):
             raise ValueError(f"units: the parquet format stores positions in 'm', got {units!r}")
+        if time_unit is not None:
+            raise ValueError(f"time_unit: the parquet format stores seconds, got {time_unit!r}")
         from reform.datasets.parquet import read_parquet
 
         return read_parquet(path, allow_incomplete=allow_incomplete)
@@ -177,6 +187,8 @@ def load_dataset(
         raise ValueError(
             f"metres_per_pixel is the scale of units='px', got it with units={units!r}"
         )
+    if time_unit is not None and format in _FIXED_UNITS:
+        raise ValueError(f"time_unit: the {format} format stores seconds, got {time_unit!r}")
     if not path.exists():
         raise DataFormatError(
             path, None, None, f"an existing {format} file or folder", "no such file or folder"
@@ -185,7 +197,13 @@ def load_dataset(
     if format == "salsa":
         from reform.datasets.dante import load_dante
 
-        return load_dante(path, strict=strict, units=units, metres_per_pixel=metres_per_pixel)
+        return load_dante(
+            path,
+            strict=strict,
+            units=units,
+            metres_per_pixel=metres_per_pixel,
+            time_unit=time_unit,
+        )
     if format == "babble":
         from reform.datasets.babble import load_babble
 
@@ -195,9 +213,10 @@ def load_dataset(
 
         return load_gcff(
             path,
-            units="cm" if units is None else units,
+            units=units,
             metres_per_pixel=metres_per_pixel,
             strict=strict,
+            time_unit=time_unit,
         )
     from reform.datasets.parquet import read_parquet
 

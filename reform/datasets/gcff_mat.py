@@ -11,7 +11,10 @@ A GCFF folder holds:
   parameters tuned for the dataset.
 
 The public sets write positions in centimetre-like units, so :func:`load_gcff` assumes
-centimetres unless told otherwise and converts to metres.
+centimetres unless told otherwise (refusing a folder whose spacing says image pixels) and
+converts to metres. Time stamps are frame numbers or seconds in the public sets, kept as
+stored; Unix times (in seconds, milliseconds, microseconds or nanoseconds, told apart by their
+magnitude and spacing) are read in their unit and counted in seconds from each sequence's start.
 """
 
 from __future__ import annotations
@@ -30,11 +33,15 @@ from reform.datasets._isolated import IsolatedFailure, run_isolated
 from reform.datasets._validation import (
     ID_RULE,
     Repairs,
+    TimeReading,
+    check_assumed_centimetres,
     check_time_increases,
+    check_time_unit,
     check_unique_ids,
     file_kind,
     make_frame,
     note_absent_members,
+    read_time_unit,
     require_file,
     units_per_metre,
 )
@@ -83,15 +90,17 @@ _INFLATE_CHUNK = 2**20  # bytes inflated at a time while counting
 def load_gcff(
     path: str | PathLike[str],
     *,
-    units: str = "cm",
+    units: str | None = None,
     metres_per_pixel: float | None = None,
     strict: bool = False,
+    time_unit: str | None = None,
 ) -> Dataset:
     """Loads a GCFF MATLAB folder, or a folder of them (one sequence each).
 
     Frames carry the body only (``head_position`` and ``head_yaw`` are None): GCFF's θ is one
     orientation per person. ``time`` is the frame's ``timestamp`` as stored (its unit is the
-    dataset's; often a frame index). Ground truth is canonicalised as for the other formats:
+    dataset's; often a frame index), or, for Unix times, seconds from the sequence's first
+    frame (see ``time_unit``). Ground truth is canonicalised as for the other formats:
     groups of two or more as listed, everyone else a singleton; frames whose timestamp is not
     in ``GTtimestamp`` have ``groups=None``.
 
@@ -113,11 +122,20 @@ def load_gcff(
 
     Args:
         path: the folder (or its ``features.mat``), or a folder of such folders.
-        units: length unit of the files' positions, ``"cm"`` (default, as the public sets
-            use), ``"m"``, or ``"px"`` (image pixels, sets derived from pose estimation; needs
-            ``metres_per_pixel``). Positions are converted to metres.
+        units: length unit of the files' positions, ``"cm"`` (as the public sets use),
+            ``"m"``, or ``"px"`` (image pixels, sets derived from pose estimation; needs
+            ``metres_per_pixel``). Positions are converted to metres. None reads centimetres
+            and refuses a sequence whose people then stand a median of more than 3 m from their
+            nearest neighbour (`reform.datasets._validation.MAX_CENTIMETRE_SPACING_M`): its
+            positions are image pixels. A unit given is not checked.
         metres_per_pixel: the scale of ``units="px"``; refused with other units.
         strict: refuse the quirks listed above instead of repairing them.
+        time_unit: the unit of ``timestamp``, ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. None
+            keeps times below 1e8 as stored (seconds or frame numbers) and reads larger ones as
+            Unix times in the unit their magnitude and spacing prove
+            (`reform.datasets._validation.read_time_unit`), refusing times that fit no unit.
+            Unix times count in seconds from each sequence's first frame; the unit, how it was
+            known and each sequence's origin are in ``metadata["report"]["time_unit"]``.
 
     Returns:
         The dataset, named after the folder, a sequence per folder. ``metadata["settings_gc"]``
@@ -126,12 +144,14 @@ def load_gcff(
         ``metadata["settings_gc_by_sequence"]`` holds them per sequence (always).
 
     Raises:
-        ValueError: ``units`` is unknown, or ``metres_per_pixel`` is missing for pixels, given
-            for another unit, or not a positive finite number.
-        DataFormatError: a file is missing, unreadable or malformed.
+        ValueError: ``units`` or ``time_unit`` is unknown, or ``metres_per_pixel`` is missing
+            for pixels, given for another unit, or not a positive finite number.
+        DataFormatError: a file is missing, unreadable or malformed, its positions' spacing
+            says pixels (``units`` None), or its time stamps fit no unit (``time_unit`` None).
     """
     path = path_argument(path, name="path", function="load_gcff")
-    per_metre = units_per_metre(units, metres_per_pixel)
+    per_metre = units_per_metre("cm" if units is None else units, metres_per_pixel)
+    check_time_unit(time_unit)
     folder = path.parent if path.is_file() else path
     if not folder.is_dir():
         raise DataFormatError(
@@ -152,16 +172,20 @@ def load_gcff(
     frames: list[Frame] = []
     reports: dict[str, dict[str, Any]] = {}
     settings: dict[str, dict[str, Any]] = {}
+    times: dict[str, tuple[TimeReading, float | None]] = {}
+    file_units = "cm" if units is None else units
     for sequence_folder in sequences:
-        sequence_frames, report = _load_sequence(
-            sequence_folder, units=units, per_metre=per_metre, repairs=repairs
+        sequence_frames, report, times[sequence_folder.name] = _load_sequence(
+            sequence_folder, per_metre=per_metre, repairs=repairs, time_unit=time_unit
         )
+        if units is None:
+            check_assumed_centimetres(sequence_frames, path=sequence_folder / FEATURES_FILE)
         frames.extend(sequence_frames)
         reports[sequence_folder.name] = report
         settings_path = sequence_folder / SETTINGS_FILE
         if settings_path.exists():
             settings[sequence_folder.name] = _settings(
-                settings_path, units=units, per_metre=per_metre
+                settings_path, units=file_units, per_metre=per_metre
             )
 
     totals = Counter()
@@ -171,10 +195,20 @@ def load_gcff(
     if len(reports) > 1:
         report_out["by_sequence"] = reports
     report_out.update(repairs.report())
+    time_text = "timestamp as stored in features.mat"
+    readings = {reading for reading, _ in times.values()}
+    if readings != {TimeReading("s", "as stored", False)}:
+        if len(readings) == 1:
+            (reading,) = readings
+            time_text = f"timestamp of features.mat in {reading.describe()}"
+            report_out["time_unit"] = reading.report({k: o for k, (_, o) in times.items()})
+        else:
+            time_text = "timestamp of features.mat, read per sequence (report: time_unit)"
+            report_out["time_unit"] = {k: r.report({k: o}) for k, (r, o) in times.items()}
     metadata: dict[str, Any] = {
         "format": "gcff",
-        "file_units": units,
-        "time": "timestamp as stored in features.mat",
+        "file_units": file_units,
+        "time": time_text,
         "report": report_out,
         "settings_gc_by_sequence": settings,
     }
@@ -231,9 +265,10 @@ def _check_only_sequences(folder: Path, sequences: list[Path]) -> None:
 
 
 def _load_sequence(
-    folder: Path, *, units: str, per_metre: float, repairs: Repairs
-) -> tuple[list[Frame], dict[str, int]]:
-    """The frames of one GCFF folder and its report counts."""
+    folder: Path, *, per_metre: float, repairs: Repairs, time_unit: str | None
+) -> tuple[list[Frame], dict[str, int], tuple[TimeReading, float | None]]:
+    """The frames of one GCFF folder, its report counts, and how its time stamps were read
+    (with the first one in Unix seconds when they are Unix times)."""
     features_path = require_file(folder / FEATURES_FILE, what="the GCFF features file")
     groundtruth_path = require_file(folder / GROUNDTRUTH_FILE, what="the GCFF ground-truth file")
 
@@ -265,6 +300,8 @@ def _load_sequence(
         )
         order[value] = t
         previous = value
+    reading = read_time_unit([timestamps], path=features_path, field="timestamp", stated=time_unit)
+    seconds, origin = reading.seconds(timestamps)
 
     gt_mat = _loadmat(groundtruth_path)
     gt_cells = _cells(
@@ -336,7 +373,7 @@ def _load_sequence(
                 yaw=wrap_angle(yaw),
                 groups=groups,
                 listed_groups=listed_groups,
-                time=float(timestamps[t]),
+                time=float(seconds[t]),
                 sequence=folder.name,
             )
         )
@@ -348,7 +385,7 @@ def _load_sequence(
         "people_in_no_group": report["people_in_no_group"],
         "groundtruth_frames_with_absent_members": report["frames_with_absent"],
     }
-    return frames, counts
+    return frames, counts, (reading, origin)
 
 
 def _loadmat(path: Path) -> dict[str, Any]:
@@ -553,6 +590,14 @@ def _frame_rows(
         )
     if array.size == 0:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros(0)
+    if array.ndim == 2 and array.shape[1] == 3:
+        raise DataFormatError(
+            path,
+            where,
+            "features",
+            "an N×4 matrix [ID, x, y, θ]: a position and an orientation per person",
+            f"shape {array.shape}: [ID, x, y] without the orientation θ",
+        )
     if array.ndim != 2 or array.shape[1] != 4:
         raise DataFormatError(
             path, where, "features", "an N×4 matrix [ID, x, y, θ]", f"shape {array.shape}"

@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 # parser imports nothing heavy (tests/sim/cli/test_cli_options.py checks that they agree).
 FORMATS = ("salsa", "dante", "babble", "gcff", "parquet")
 LENGTH_UNITS = ("cm", "m", "px")
+# The time units of reform.datasets._validation.TIME_UNITS, kept here for the same reason
+# (tests/reform/datasets/test_datasets_time_units.py checks that they agree).
+TIME_UNITS = ("s", "ms", "us", "ns")
 # Default share of each sequence's annotated frames, by time, that trains (reform.time_split's).
 TRAIN_FRACTION = 0.6
 DEFAULT_DATASETS = "../shared/datasets"  # the real datasets beside a clone
@@ -283,7 +286,8 @@ def size_error(exc: RequestTooLarge, flags: dict[str, str] | None = None) -> Cli
 
 
 def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool = False) -> None:
-    """``--data PATH|NAME [--format F] [--units cm|m]``: where a dataset is and how to read it.
+    """``--data PATH|NAME [--format F] [--units cm|m|px] [--time-unit s|ms|us|ns]``: where a
+    dataset is and how to read it.
 
     The dataset is a path, or a name that :func:`load_data` resolves (`reform.datasets.resolve`):
     a fetched public dataset (``reform-sim datasets list``) or a folder among the real datasets.
@@ -306,6 +310,14 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool 
         default=None,
         help="length unit of the file's positions (GCFF folders: default cm; DANTE text: "
         "default m; px for image pixels with --metres-per-pixel; Babble and Parquet are metres)",
+    )
+    parser.add_argument(
+        "--time-unit",
+        choices=TIME_UNITS,
+        default=None,
+        help="unit of the file's time stamps (GCFF timestamp, DANTE t; default: seconds as "
+        "stored below 1e8, larger ones read as Unix times in the unit their magnitude and "
+        "spacing show, counted from each sequence's start; Babble and Parquet are seconds)",
     )
     parser.add_argument(
         "--metres-per-pixel",
@@ -511,6 +523,7 @@ def load_data(args: argparse.Namespace):
         metres_per_pixel=args.metres_per_pixel,
         strict=args.strict,
         allow_incomplete=args.allow_incomplete,
+        time_unit=getattr(args, "time_unit", None),
     )
     missing = dataset.metadata.get("incomplete")
     if missing:  # read on purpose (--allow-incomplete): say what is left out

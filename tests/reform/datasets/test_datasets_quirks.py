@@ -242,7 +242,12 @@ def test_dante_with_four_fields_per_person(tmp_path):
     assert first.head_yaw is None  # one orientation per person
     np.testing.assert_allclose(first.yaw[0], 6.102 - 2 * np.pi)
     assert first.groups == ((1, 2),) and second.groups == ((1, 10),)
-    assert first.time == 1275403283.267134  # off the 0.1 s grid: as written
+    # Unix seconds (Cocktail Party's): counted from the session's first line, the origin kept.
+    assert first.time == 0.0
+    assert second.time == pytest.approx(1275403288.272120 - 1275403283.267134, abs=1e-6)
+    assert dataset.metadata["report"]["time_unit"]["origin_unix_s"] == {
+        "session1": 1275403283.267134
+    }
     assert dataset.metadata["report"]["fake_blocks_skipped"] == 1
 
 
