@@ -54,6 +54,7 @@ Example:
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -115,6 +116,8 @@ TRIPLE_BYTES = 64  # bytes per (group, person, person) triple of the visibility 
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
 _MATMUL_MAX_PEOPLE = 64  # up to this many people, per-label sums by a (small) matrix product
 _SPARSE_PEOPLE = 256  # alpha_expansion on more people evaluates only who a move can relabel
+_PLAIN_PEOPLE = 12  # gcff_labels on at most this many people runs in plain Python (numpy's
+# per-call overhead dominates there); the same arithmetic, operation for operation
 _ROUNDING = 4 * np.finfo(np.float64).eps  # per term, a generous bound on a sum's rounding
 ORIENTATIONS = ("body", "head")
 # Default tuning grid: the published settings (stride 50-70 cm, mdl 6,000-30,000 cm²) and around.
@@ -197,24 +200,32 @@ def unary_costs(
         ValueError: costs that would take more than :data:`MAX_FRAME_BYTES`, before they are
             allocated (the (n, K) cells, then the neighbourhoods' triples).
     """
+    return np.ascontiguousarray(_group_costs(points, position, labels, mdl=mdl).T)
+
+
+def _group_costs(
+    points: npt.ArrayLike, position: npt.ArrayLike, labels: npt.ArrayLike, *, mdl: float
+) -> np.ndarray:
+    """:func:`unary_costs` transposed: (K, n), a row per group (the layout a crowd's
+    alpha-moves read); the same values."""
     points = np.asarray(points, dtype=np.float64)
     position = np.asarray(position, dtype=np.float64)
     labels = np.asarray(labels, dtype=np.int64)
-    n_groups = int(labels.max()) + 1 if labels.size else 0
-    _check_memory(labels.size, n_groups)
+    n = labels.size
+    n_groups = int(labels.max()) + 1 if n else 0
+    _check_memory(n, n_groups)
     counts = np.bincount(labels, minlength=n_groups).astype(np.float64)
     centre_x = np.bincount(labels, weights=points[:, 0], minlength=n_groups) / counts
     centre_y = np.bincount(labels, weights=points[:, 1], minlength=n_groups) / counts
-    costs = points[:, 0, None] - centre_x[None, :]  # dx, then the costs, in place
-    dy = points[:, 1, None] - centre_y[None, :]
+    costs = points[None, :, 0] - centre_x[:, None]  # dx, then the costs, in place
+    dy = points[None, :, 1] - centre_y[:, None]
     np.multiply(costs, costs, out=costs)
     np.multiply(dy, dy, out=dy)
-    np.add(costs, dy, out=costs)  # dx * dx + dy * dy, (n, K)
+    np.add(costs, dy, out=costs)  # dx * dx + dy * dy, (K, n)
     del dy
 
     # Neighbourhood entries (k, i), ordered by group then person.
-    near = np.ascontiguousarray((costs < mdl).T)
-    group, person = np.divmod(np.flatnonzero(near), labels.size)  # np.nonzero's order, faster
+    group, person = np.divmod(np.flatnonzero(costs < mdl), n)  # np.nonzero's order, faster
     if group.size == 0:
         return costs
     vx = position[person, 0] - centre_x[group]
@@ -223,7 +234,7 @@ def unary_costs(
     # Every ordered pair (behind, front) of entries of the same group, behind-major, front
     # ascending: the order in which the reference adds the penalties.
     size = np.bincount(group, minlength=n_groups)
-    _check_memory(labels.size, n_groups, int(np.dot(size, size)))
+    _check_memory(n, n_groups, int(np.dot(size, size)))
     start = np.concatenate(([0], np.cumsum(size)[:-1]))
     repeats = size[group]
     behind = np.repeat(np.arange(group.size), repeats)
@@ -237,7 +248,7 @@ def unary_costs(
         exponent = cosine[hidden] * r_behind[hidden] / r_front[hidden]
     exponent = np.minimum(exponent, MAX_VISIBILITY_EXPONENT)
     penalty = VISIBILITY_BASE**exponent
-    cell = person[behind[hidden]] * n_groups + group[behind[hidden]]
+    cell = group[behind[hidden]] * n + person[behind[hidden]]
     flat = costs.reshape(-1)
     np.add.at(flat, cell, penalty)  # unbuffered and in order: sequential per cell
     return costs
@@ -449,93 +460,270 @@ def _sparse_expansion(unary: np.ndarray, labels: np.ndarray, label_cost: float) 
       costs it opens or closes; where that change is farther from zero than the rounding of the
       two sums can reach (bounded by ``n + K`` terms' rounding of their absolute sum), the
       comparison is decided by its sign; only closer calls sum the energy in full.
+    * a move's evaluation reads only the people within its reach, their labels and those
+      labels' sizes (and alpha's own). After a move is kept, the window's later moves that read
+      none of what it changed (the people it moved, their old labels, alpha) and that none of
+      the moved people can now reach keep their evaluation; the sweep goes on with them and
+      evaluates a new window only from the first move that must be evaluated again. The
+      global terms (labels in use, the sum of the costs that bounds the rounding) are read
+      afresh at every decision, so each decision is the one a fresh evaluation would make.
     """
     n, k = unary.shape
-    rows = np.arange(n)
-    cost = unary[rows, labels]  # each person's current cost
-    # reach[a, i]: the move of alpha a may relabel person i (d_i <= label_cost).
-    reach = np.subtract(unary.T, cost[None, :], order="C") <= label_cost
+    by_group = np.ascontiguousarray(unary.T)  # (K, n): no copy for gcff_labels' costs
+    cost = unary[np.arange(n), labels]  # each person's current cost
     size = np.bincount(labels, minlength=k)
-    label_costs = np.tri(k + 1, k, -1) * label_cost  # [u, j] = label_cost if j < u
+    used = int(np.count_nonzero(size))
     current = energy(unary, labels, label_cost=label_cost)
     energies = [current]
     terms = n + k
+    steps = np.arange(min(k, _WINDOW))
+    moved_person = np.zeros(n, dtype=bool)  # scratch marks, cleared after each use
+    touched_label = np.zeros(k, dtype=bool)
     alpha = 0
     stale = 0
     moves = 0
     while stale < k:
-        alphas = (alpha + np.arange(min(k, _WINDOW))) % k
+        alphas = (alpha + steps) % k
         m = alphas.size
-        used = int(np.count_nonzero(size))
-        entry_alpha, person = np.divmod(np.flatnonzero(reach[alphas]), n)  # by place, person
+        # d of every (window place, person); the move of alpha may relabel only d <= label_cost
+        rows = by_group[alpha : alpha + m] if alpha + m <= k else by_group[alphas]
+        d_all = rows - cost
+        reach = np.flatnonzero(d_all <= label_cost)
+        entry_alpha, person = np.divmod(reach, n)  # by place, then person
+        delta = d_all.reshape(-1)[reach]
+        del d_all
         label = labels[person]
-        delta = unary[person, alphas[entry_alpha]] - cost[person]
         # Per (window place, label) groups, members in person order.
         key = entry_alpha * k + label
         order = np.argsort(key, kind="stable")
         key_sorted = key[order]
-        opens = np.flatnonzero(np.r_[key.size > 0, key_sorted[1:] != key_sorted[:-1]])
-        group_key = key_sorted[opens]
-        group_alpha, group_label = np.divmod(group_key, k)
-        counts = np.diff(np.r_[opens, key.size])
+        boundary = np.empty(key.size, dtype=bool)
+        boundary[:1] = True
+        np.not_equal(key_sorted[1:], key_sorted[:-1], out=boundary[1:])
+        opens = np.flatnonzero(boundary)
+        group_alpha, group_label = np.divmod(key_sorted[opens], k)
+        counts = np.diff(opens, append=key.size)
         sums = np.add.reduceat(np.maximum(delta[order], 0.0), opens) if key.size else delta[:0]
         take_all = (counts == size[group_label]) & (sums <= label_cost)
         group_of = np.empty(key.size, dtype=np.intp)
         group_of[order] = np.repeat(np.arange(opens.size), counts)
         moved = (delta <= 0.0) | take_all[group_of]
         moved &= label != alphas[entry_alpha]
-        changed = np.bincount(entry_alpha[moved], minlength=m) > 0
+        moved_alpha = entry_alpha[moved]
+        moved_delta = delta[moved]
+        changed = np.bincount(moved_alpha, minlength=m) > 0
         closed = np.bincount(group_alpha[take_all], minlength=m)
-        n_used = used - closed + ((size[alphas] > 0) | changed)
-        change = np.bincount(entry_alpha[moved], weights=delta[moved], minlength=m).astype(float)
-        change += label_cost * (n_used - used)
-        spread = np.abs(delta[moved])
-        spread = np.bincount(entry_alpha[moved], weights=spread, minlength=m).astype(float)
-        spread += label_cost * np.abs(n_used - used)
-        total = float(np.abs(cost).sum()) + used * label_cost  # sum of |terms| now
-        slack = _ROUNDING * terms * (2 * total + spread + np.abs(change))
+        opened = ((size[alphas] > 0) | changed).astype(np.int64) - closed  # labels in use, more
+        change = np.bincount(moved_alpha, weights=moved_delta, minlength=m).astype(float)
+        change += label_cost * opened
+        spread = np.bincount(moved_alpha, weights=np.abs(moved_delta), minlength=m)
+        spread = spread.astype(float) + label_cost * np.abs(opened)
         changed_list = changed.tolist()
         change_list = change.tolist()
-        slack_list = slack.tolist()
-        for j, a in enumerate(alphas.tolist()):
+        spread_list = spread.tolist()
+        opened_list = opened.tolist()
+        alpha_list = alphas.tolist()
+        total = float(np.abs(cost).sum()) + used * label_cost  # sum of |terms| now
+        place_start = np.searchsorted(entry_alpha, np.arange(m + 1)).tolist()
+        valid = m  # places from here on must be evaluated again
+        j = 0
+        while j < valid and stale < k:
+            a = alpha_list[j]
             alpha = (a + 1) % k
             moves += 1
+            accept = False
             if changed_list[j]:
-                if change_list[j] < -slack_list[j]:
+                slack = _ROUNDING * terms * (2 * total + spread_list[j] + abs(change_list[j]))
+                if change_list[j] < -slack:
                     accept = True
-                elif change_list[j] > slack_list[j]:
+                elif change_list[j] > slack:
                     accept = False
                 else:  # a close call: the energy summed as the reference sums it
-                    mine = entry_alpha == j
-                    accept = (
-                        _moved_energy(unary, cost, person[mine & moved], a, label_costs[n_used[j]])
-                        <= current
-                    )
-                if accept:
-                    who = person[(entry_alpha == j) & moved]
-                    np.subtract.at(size, labels[who], 1)
-                    size[a] += who.size
-                    labels[who] = a
-                    cost[who] = unary[who, a]
-                    reach[:, who] = (unary[who] - cost[who, None]).T <= label_cost
-                    e = float(np.add.accumulate(np.concatenate([cost, label_costs[n_used[j]]]))[-1])
-                    stale = 0 if e < current else stale + 1
-                    current = e
-                    energies.append(current)
-                    break
-            stale += 1  # no change, or rejected because the energy would rise
-            if stale >= k:
-                break
+                    who = person[moved & (entry_alpha == j)]
+                    after = cost.copy()
+                    after[who] = by_group[a, who]
+                    accept = _energy_of(after, used + opened_list[j], label_cost) <= current
+            if not accept:
+                stale += 1  # no change, or rejected because the energy would rise
+                j += 1
+                continue
+            who = person[moved & (entry_alpha == j)]
+            touched = np.append(labels[who], a)  # labels whose members or size change
+            np.subtract.at(size, labels[who], 1)
+            size[a] += who.size
+            labels[who] = a
+            cost[who] = by_group[a, who]
+            used += opened_list[j]
+            e = _energy_of(cost, used, label_cost)
+            stale = 0 if e < current else stale + 1
+            current = e
+            energies.append(current)
+            total = float(np.abs(cost).sum()) + used * label_cost
+            j += 1
+            if j < valid:  # the later places that read anything this move changed
+                moved_person[who] = True
+                touched_label[touched] = True
+                rest = alphas[j:valid]
+                lo, hi = place_start[j], place_start[valid]
+                hit = moved_person[person[lo:hi]] | touched_label[label[lo:hi]]
+                dirty = touched_label[rest]
+                dirty[entry_alpha[lo:hi][hit] - j] = True
+                dirty |= (by_group[rest[:, None], who[None, :]] - cost[who] <= label_cost).any(1)
+                moved_person[who] = False
+                touched_label[touched] = False
+                first = np.flatnonzero(dirty)
+                if first.size:
+                    valid = j + int(first[0])
     return Expansion(labels=labels, energies=tuple(energies), moves=moves)
 
 
-def _moved_energy(
-    unary: np.ndarray, cost: np.ndarray, who: np.ndarray, alpha: int, label_terms: np.ndarray
-) -> float:
-    """The energy after relabelling ``who`` to ``alpha``, summed as the reference sums it."""
-    after = cost.copy()
-    after[who] = unary[who, alpha]
-    return float(np.add.accumulate(np.concatenate([after, label_terms]))[-1])
+def _energy_of(cost: np.ndarray, used: int, label_cost: float) -> float:
+    """The energy of per-person costs ``cost`` and ``used`` labels, summed as :func:`energy`
+    sums it (person by person, then one ``label_cost`` per used label)."""
+    return float(np.add.accumulate(np.concatenate([cost, np.full(used, label_cost)]))[-1])
+
+
+# --------------------------------------------------------------------------------------------
+# Few people: the same computation in plain Python
+# --------------------------------------------------------------------------------------------
+
+
+def _plain_labels(position: np.ndarray, points: np.ndarray, mdl: float) -> np.ndarray:
+    """:func:`gcff_labels`' refit loop for a few people, in plain Python.
+
+    Every cost, sum and comparison is the one the numpy path makes, in the same order (sums
+    left to right, as ``np.bincount``, ``np.cumsum`` and the one-hot product of :func:`_moves`
+    add), so the labels are identical; only numpy's per-call overhead is saved.
+
+    Args:
+        position: (n, 2) positions, centimetres.
+        points: (n, 2) segment points, centimetres.
+        mdl: label cost and neighbourhood radius squared, cm².
+
+    Returns:
+        (n,) int64 labels, renumbered.
+    """
+    pos = position.tolist()
+    pts = points.tolist()
+    labels = list(range(len(pts)))
+    for _ in range(MAX_REFITS):
+        costs = _plain_unary(pts, pos, labels, mdl)
+        moved = _plain_expansion(costs, labels, mdl)
+        rank = {label: r for r, label in enumerate(sorted(set(moved)))}
+        expanded = [rank[label] for label in moved]
+        if expanded == labels:
+            break
+        labels = expanded
+    return np.array(labels, dtype=np.int64)
+
+
+def _plain_unary(
+    pts: list[list[float]], pos: list[list[float]], labels: list[int], mdl: float
+) -> list[list[float]]:
+    """:func:`unary_costs` in plain Python: (n, K) nested lists, the same values bit for bit."""
+    n = len(labels)
+    k = max(labels) + 1
+    sum_x, sum_y, count = [0.0] * k, [0.0] * k, [0] * k
+    for (x, y), label in zip(pts, labels, strict=True):
+        sum_x[label] += x
+        sum_y[label] += y
+        count[label] += 1
+    centre_x = [sx / c for sx, c in zip(sum_x, count, strict=True)]
+    centre_y = [sy / c for sy, c in zip(sum_y, count, strict=True)]
+    costs = []
+    for x, y in pts:
+        row = []
+        for cx, cy in zip(centre_x, centre_y, strict=True):
+            dx = x - cx
+            dy = y - cy
+            row.append(dx * dx + dy * dy)
+        costs.append(row)
+    cells: list[tuple[int, int]] = []  # (person, group) of each penalty, in the order added
+    exponents: list[float] = []
+    for g in range(k):
+        cx, cy = centre_x[g], centre_y[g]
+        near = []  # (person, vx, vy, r), persons ascending
+        for i in range(n):
+            if costs[i][g] < mdl:
+                vx = pos[i][0] - cx
+                vy = pos[i][1] - cy
+                near.append((i, vx, vy, math.sqrt(vx * vx + vy * vy)))
+        if len(near) < 2:
+            continue
+        for i, bx, by, rb in near:  # behind
+            for _, fx, fy, rf in near:  # in front, ascending
+                if rb > rf:
+                    cosine = _divide(bx * fx + by * fy, rb * rf)
+                    if cosine > VISIBILITY_COSINE:
+                        cells.append((i, g))
+                        exponents.append(min(cosine * rb / rf, MAX_VISIBILITY_EXPONENT))
+    if cells:
+        # numpy's power, as the numpy path takes it (it may differ from libm's in the last bit)
+        penalties = (VISIBILITY_BASE ** np.array(exponents)).tolist()
+        for (i, g), penalty in zip(cells, penalties, strict=True):
+            costs[i][g] += penalty
+    return costs
+
+
+def _divide(numerator: float, denominator: float) -> float:
+    """``numerator / denominator`` as numpy divides: 0/0 is NaN, x/0 an infinity."""
+    if denominator == 0.0:
+        if numerator == 0.0 or numerator != numerator:
+            return math.nan
+        return math.copysign(math.inf, numerator) * math.copysign(1.0, denominator)
+    return numerator / denominator
+
+
+def _plain_expansion(costs: list[list[float]], labels: list[int], label_cost: float) -> list[int]:
+    """:func:`alpha_expansion`'s labels in plain Python, one alpha-move at a time.
+
+    Per-label sums of the positive ``d`` run over the people in order, as the one-hot product
+    of :func:`_moves` sums them (at most :data:`_MATMUL_MAX_PEOPLE` people); energies are
+    summed person by person, then one ``label_cost`` per used label, as :func:`energy` does.
+    """
+    k = len(costs[0])
+    labels = list(labels)
+    cost = [costs[i][label] for i, label in enumerate(labels)]
+    current = _plain_energy(cost, len(set(labels)), label_cost)
+    alpha = 0
+    stale = 0
+    while stale < k:
+        a = alpha
+        alpha = (a + 1) % k
+        target = [row[a] for row in costs]
+        delta = [t - c for t, c in zip(target, cost, strict=True)]
+        sums: dict[int, float] = {}
+        for label, d in zip(labels, delta, strict=True):
+            sums[label] = sums.get(label, 0.0) + (d if d > 0.0 else 0.0)
+        take_all = {label: total <= label_cost for label, total in sums.items()}
+        moved = [
+            label != a and (take_all[label] or d <= 0.0)
+            for label, d in zip(labels, delta, strict=True)
+        ]
+        if not any(moved):
+            stale += 1
+            continue
+        used = sum(1 for label, whole in take_all.items() if label != a and not whole) + 1
+        after = [t if m else c for t, c, m in zip(target, cost, moved, strict=True)]
+        candidate = _plain_energy(after, used, label_cost)
+        if candidate <= current:
+            stale = 0 if candidate < current else stale + 1
+            labels = [a if m else label for label, m in zip(labels, moved, strict=True)]
+            cost = after
+            current = candidate
+        else:
+            stale += 1
+    return labels
+
+
+def _plain_energy(cost: list[float], used: int, label_cost: float) -> float:
+    """:func:`energy` of these per-person costs and ``used`` labels, summed in its order."""
+    total = 0.0
+    for c in cost:
+        total += c
+    for _ in range(used):
+        total += label_cost
+    return total
 
 
 def gcff_labels(
@@ -586,8 +774,14 @@ def gcff_labels(
         return labels
     _check_memory(n, n)  # every person starts as a candidate group
     points = segment_points(position_cm, yaw, stride=stride_cm)
+    if n <= _PLAIN_PEOPLE:
+        return _plain_labels(position_cm, points, mdl_cm2)
+    crowd = n > _SPARSE_PEOPLE  # costs kept a row per group, as the crowd's moves read them
     for _ in range(MAX_REFITS):
-        unary = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
+        if crowd:
+            unary = _group_costs(points, position_cm, labels, mdl=mdl_cm2).T
+        else:
+            unary = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
         expanded = _renumber(alpha_expansion(unary, labels, label_cost=mdl_cm2).labels)
         if np.array_equal(expanded, labels):
             break
