@@ -4,6 +4,7 @@ dataset without them derives them on read, and the recordings show them on the t
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import shutil
@@ -198,3 +199,40 @@ def test_recordings_show_the_episode_s_group_events(tmp_path):
     events = dataset_group_events(read_parquet(shard_path(out, SCENARIO, 0)))
     assert events
     assert logged == [(e.frame, group_event_text(e)) for e in events]
+
+
+def test_a_folder_written_before_events_were_stored_reads_and_extends(reference, tmp_path):
+    # The folder as an earlier reform-sim wrote it: shards and card without group events, the
+    # card's sizes and checksums those of these shards.
+    folder = tmp_path / "old"
+    shutil.copytree(reference, folder)
+
+    def forget(metadata):
+        del metadata["group_events"]
+        del metadata["episode"]["group_events"]
+
+    card = json.loads((folder / "dataset.json").read_text())
+    del card["totals"]["group_events"]
+    for k, entry in enumerate(card["shards"]):
+        path = shard_path(folder, SCENARIO, k)
+        rewrite_header(path, forget)
+        del entry["group_events"]
+        entry["bytes"] = path.stat().st_size
+        entry["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+    (folder / "dataset.json").write_text(json.dumps(card, indent=2) + "\n")
+    assert "group_events" not in read_parquet(shard_path(folder, SCENARIO, 0)).metadata
+    # Its events are derived on read: those a new run stores.
+    expected = dataset_group_events(read_parquet(reference))
+    assert dataset_group_events(read_parquet(folder)) == expected
+    # Extended by this reform-sim: the old shards are kept as they are, the new one stores its
+    # events, and the card does not count what some shards do not say.
+    report = generate(folder, episodes=EPISODES + 1)
+    assert report.generated == (EPISODES,) and report.skipped == tuple(range(EPISODES))
+    card = read_card(folder)
+    assert card["totals"]["group_events"] is None
+    assert "group_events" not in card["shards"][0] and "group_events" in card["shards"][-1]
+    assert "Not counted: some shards were written before" in (folder / CARD_MARKDOWN).read_text()
+    assert stored(shard_path(folder, SCENARIO, EPISODES))["tracks"] >= 0
+    events = dataset_group_events(read_parquet(folder))
+    assert events[: len(expected)] == expected
+    assert {e.sequence for e in events[len(expected) :]} <= {f"{SCENARIO}-{EPISODES}"}
