@@ -250,68 +250,14 @@ def _split_sequences(frames: Sequence[Frame], *, caller: str) -> list[_Sequence]
             sequence, both frames and both times), a sequence with fewer than two annotated
             frames, or no frames at all.
     """
-    return _split_rows(check_frames(frames, caller=caller), caller=caller)
-
-
-class _Row(NamedTuple):
-    """A frame as the events see it: its sequence, time and groups (None: not annotated)."""
-
-    sequence: str
-    time: float
-    groups: Any
-
-
-def _rows(partitions: Iterable[Any], times: Any, sequences: Any, *, caller: str) -> list[_Row]:
-    """The rows of partitions given with their times (seconds) and sequence names (one name
-    for all, or one per partition)."""
-    partitions = list(partitions)
-    time = np.asarray(times, dtype=np.float64)
-    if time.shape != (len(partitions),):
-        raise ValueError(
-            f"{caller}: times must have shape ({len(partitions)},), one per partition, got "
-            f"{time.shape}"
-        )
-    if not np.all(np.isfinite(time)):
-        k = int(np.flatnonzero(~np.isfinite(time))[0])
-        raise ValueError(f"{caller}: times must be finite seconds, got {time[k]} at times[{k}]")
-    names = [sequences] * len(partitions) if isinstance(sequences, str) else list(sequences)
-    if len(names) != len(partitions):
-        raise ValueError(
-            f"{caller}: sequences must be one name or one per partition ({len(partitions)}), "
-            f"got {len(names)}"
-        )
-    rows, last_raw, last = [], None, None
-    for name, t, groups in zip(names, time.tolist(), partitions, strict=True):
-        if groups is not last_raw:  # a partition repeated as one object is read once
-            last_raw = groups
-            last = None if groups is None else tuple(tuple(int(m) for m in g) for g in groups)
-        rows.append(_Row(str(name), t, last))
-    return rows
-
-
-def _split_rows(frames: Sequence[Any], *, caller: str, skip_short: bool = False) -> list[_Sequence]:
-    """`_split_sequences` of rows (Frames, or anything with ``sequence``, ``time`` and
-    ``groups``); with ``skip_short`` a sequence with fewer than two annotated frames is left
-    out (it has no events) instead of refused."""
+    frames = check_frames(frames, caller=caller)
     if not frames:
         raise ValueError(f"{caller} needs frames: expected annotated frames, found none")
     last: dict[str, int] = {}
     for k, frame in enumerate(frames):
         before = last.get(frame.sequence)
-        if before is not None:
-            earlier = frames[before].time
-            if frame.time == earlier:
-                raise ValueError(
-                    f"{_where(frame, k)} repeats the time of frames[{before}] in sequence "
-                    f"{frame.sequence!r}: expected a time after {earlier:g} s, found "
-                    f"{frame.time:g} s"
-                )
-            if frame.time < earlier:
-                raise ValueError(
-                    f"{_where(frame, k)} is out of time order in sequence {frame.sequence!r}: "
-                    f"expected a time after {earlier:g} s (frames[{before}]), found "
-                    f"{frame.time:g} s"
-                )
+        if before is not None and not frame.time > frames[before].time:
+            raise _order_error(frame, k, before, frames[before].time)
         last[frame.sequence] = k
     chosen: dict[str, list[int]] = {}
     for k, frame in enumerate(frames):
@@ -320,8 +266,6 @@ def _split_rows(frames: Sequence[Any], *, caller: str, skip_short: bool = False)
             chosen[frame.sequence].append(k)
     out = []
     for name, rows in chosen.items():
-        if len(rows) < 2 and skip_short:
-            continue
         if len(rows) < 2:
             found = f"only frames[{rows[0]}]" if rows else "none"
             raise ValueError(
@@ -337,6 +281,111 @@ def _split_rows(frames: Sequence[Any], *, caller: str, skip_short: bool = False)
             )
         )
     return out
+
+
+class _Row(NamedTuple):
+    """A frame given by its sequence, time and groups (None: not annotated), as messages name
+    it."""
+
+    sequence: str
+    time: float
+    groups: Any
+
+
+def _split_partitions(
+    partitions: Iterable[Any], times: Any, sequences: Any, *, caller: str, skip_short: bool
+) -> list[_Sequence]:
+    """`_split_sequences` of partitions given with their times (seconds) and sequence names (one
+    name for all, or one per partition), without an object per frame: the same sequences, the
+    same refusals; with ``skip_short`` a sequence with fewer than two annotated frames is left
+    out (it has no events) instead of refused."""
+    partitions = list(partitions)
+    n = len(partitions)
+    time = np.asarray(times, dtype=np.float64)
+    if time.shape != (n,):
+        raise ValueError(
+            f"{caller}: times must have shape ({n},), one per partition, got {time.shape}"
+        )
+    if not np.all(np.isfinite(time)):
+        k = int(np.flatnonzero(~np.isfinite(time))[0])
+        raise ValueError(f"{caller}: times must be finite seconds, got {time[k]} at times[{k}]")
+    if isinstance(sequences, str):
+        indices = {sequences: np.arange(n)} if n else {}
+    else:
+        names = np.array([str(name) for name in sequences], dtype=object)
+        if names.shape != (n,):
+            raise ValueError(
+                f"{caller}: sequences must be one name or one per partition ({n}), got {names.size}"
+            )
+        indices = {name: np.flatnonzero(names == name) for name in dict.fromkeys(names.tolist())}
+    if not n:
+        raise ValueError(f"{caller} needs frames: expected annotated frames, found none")
+    first_bad = None  # (k, before, sequence): the first frame, in the order given, out of order
+    for name, index in indices.items():
+        bad = np.flatnonzero(np.diff(time[index]) <= 0)
+        if bad.size and (first_bad is None or index[bad[0] + 1] < first_bad[0]):
+            first_bad = (int(index[bad[0] + 1]), int(index[bad[0]]), name)
+    if first_bad is not None:
+        k, before, name = first_bad
+        raise _order_error(_Row(name, float(time[k]), None), k, before, float(time[before]))
+    groups = _read_partitions(partitions)
+    annotated = np.array([g is not None for g in groups], dtype=bool)
+    out = []
+    for name, index in indices.items():
+        rows = index[annotated[index]]
+        if rows.size < 2:
+            if skip_short:
+                continue
+            found = f"only frames[{rows[0]}]" if rows.size else "none"
+            raise ValueError(
+                f"sequence {name!r} has {rows.size} annotated frame(s) ({found}): expected at "
+                "least two to find events between"
+            )
+        out.append(
+            _Sequence(
+                name=name,
+                index=rows.astype(np.int64),
+                time=time[rows],
+                groups=[groups[k] for k in rows.tolist()],
+            )
+        )
+    return out
+
+
+def _read_partitions(partitions: list[Any]) -> list[Any]:
+    """Each partition as tuples of int ids (None stays None); one repeating the previous one is
+    read once (and shared)."""
+    out, last_raw, last = [], None, None
+    for groups in partitions:
+        if groups is not last_raw:
+            if groups is None or last_raw is None or not _same(groups, last_raw):
+                last = None if groups is None else tuple(tuple(int(m) for m in g) for g in groups)
+            last_raw = groups
+        out.append(last)
+    return out
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether two partitions are equal as given (False when they cannot be compared so, as
+    arrays cannot)."""
+    try:
+        return bool(a == b)
+    except (TypeError, ValueError):
+        return False
+
+
+def _order_error(frame: Any, k: int, before: int, earlier: float) -> ValueError:
+    """The error for ``frame`` (``frames[k]``) at or before the time ``earlier`` of
+    ``frames[before]``, the previous frame of its sequence."""
+    if frame.time == earlier:
+        return ValueError(
+            f"{_where(frame, k)} repeats the time of frames[{before}] in sequence "
+            f"{frame.sequence!r}: expected a time after {earlier:g} s, found {frame.time:g} s"
+        )
+    return ValueError(
+        f"{_where(frame, k)} is out of time order in sequence {frame.sequence!r}: expected a "
+        f"time after {earlier:g} s (frames[{before}]), found {frame.time:g} s"
+    )
 
 
 def _fformations(groups: Iterable[Iterable[int]]) -> list[frozenset[int]]:
@@ -596,8 +645,7 @@ def _follow_partitions(
 ) -> list[_Tracking]:
     """The tracking of every sequence of partitions given with their times and sequences (one
     pass gives both the events and the tracks)."""
-    rows = _rows(partitions, times, sequences, caller=caller)
-    split = _split_rows(rows, caller=caller, skip_short=skip_short)
+    split = _split_partitions(partitions, times, sequences, caller=caller, skip_short=skip_short)
     if not split:
         return []
     _, followed = _track_all((), caller=caller, rows=split)

@@ -401,3 +401,25 @@ def test_malformed_json_events_are_named(change, message):
     without = {k: v for k, v in event.to_json().items() if k != "time"}
     with pytest.raises(ValueError, match=r"no field 'time'"):
         GroupEvent.from_json(without)
+
+
+@pytest.mark.parametrize(
+    "times",
+    [
+        [0.0, 0.0, 1.0, 1.0, 2.0, 0.5],
+        [0.0, 0.0, 1.0, 1.0, 1.0, 3.0],
+        [0.0, 5.0, 1.0, 4.0, 0.5, 6.0],
+    ],
+    ids=["out of order", "repeated", "b before a"],
+)
+def test_partitions_out_of_time_order_are_refused_as_frames_are(times):
+    sequences = ["a", "b", "a", "b", "a", "b"]  # interleaved
+    frames = [
+        line_frame(IDS, [(1, 2)], time=t, sequence=name)
+        for t, name in zip(times, sequences, strict=True)
+    ]
+    with pytest.raises(ValueError) as by_frames:
+        group_events(frames)
+    with pytest.raises(ValueError) as by_partitions:
+        partition_events([f.groups for f in frames], times=times, sequences=sequences)
+    assert str(by_partitions.value) == str(by_frames.value)
