@@ -26,6 +26,10 @@ the detector catalogue (majority, gcff with its one stated setting, proximity, .
 every catalogued detector that needs no model file and no dataset of its own), an installed
 package's entry point in the group reform_sim.detectors, or a plugin's path. One with fit() is
 fitted on the same training frames. Their scores are in stress.json.
+
+--temporal also scores every detector's group events in time at every point (event recall and
+precision, latency, false events per minute, identity switches, pooled over the point's
+episodes; docs/guide/temporal.md), in stress.json and a "Groups in time" table in stress.md.
 """
 
 
@@ -71,6 +75,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="stress",
         metavar="DIR",
         help="folder for stress.md, stress.json and the plots (default: ./stress)",
+    )
+    parser.add_argument(
+        "--temporal",
+        action="store_true",
+        help="also score each detector's group events in time (docs/guide/temporal.md)",
     )
     add_recording_arguments(parser, what="the curves")
     add_max_memory_argument(

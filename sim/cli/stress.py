@@ -40,6 +40,8 @@ def _command(args: argparse.Namespace) -> str:
     words += backend_words(args)
     for name in args.detectors or ():
         words += ["--detector", name]
+    if args.temporal:
+        words.append("--temporal")
     words += ["--out", args.out]
     if args.save is not None:
         words += ["--save", args.save]
@@ -125,7 +127,13 @@ def run(args: argparse.Namespace) -> int:
 
     with executor:
         results = run_stress(
-            grid, seed=args.seed, axes=axes, plugins=plugins, progress=progress, executor=executor
+            grid,
+            seed=args.seed,
+            axes=axes,
+            plugins=plugins,
+            progress=progress,
+            executor=executor,
+            temporal=args.temporal,
         )
     if results.grid_name == "custom":
         results = dataclasses.replace(

@@ -64,6 +64,7 @@ from reform.json_values import json_float, json_record
 from reform.metrics import T_ONE, T_TWO_THIRDS, evaluate
 from reform.perturb import Perturbation
 from reform.seeding import Role, derive_int, derive_rng
+from reform.temporal import DEFAULT_TOLERANCE_S, evaluate_events, frame_interval
 from sim.episode import simulate_episode
 from sim.executor import Executor, cpu_count
 from sim.experiments.stress_grid import (
@@ -347,18 +348,46 @@ class _Scored:
     fformation_members: int
     density: float  # humans in the room per m²
     notes: tuple[str, ...] = ()
+    events: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)  # detector -> counts
 
     @staticmethod
     def noted(scored: _Scored, notes: Sequence[str]) -> _Scored:
         return dataclasses.replace(scored, notes=tuple(notes))
 
 
-def _score(frames: Sequence[Frame], detectors: Mapping[str, Any], density: float) -> _Scored:
+def _event_counts(frames: Sequence[Frame], predictions: Sequence[Any]) -> dict[str, Any]:
+    """What the temporal scores of a point pool over its episodes (`reform.evaluate_events`,
+    matched within 1 s or the frame interval where longer); empty where the episode cannot be
+    scored in time (fewer than two annotated frames)."""
+    try:
+        tolerance = max(DEFAULT_TOLERANCE_S, frame_interval(frames))
+        scored = evaluate_events(frames, predictions, tolerance_s=tolerance)
+    except ValueError:
+        return {}
+    return {
+        "true": len(scored.true_events),
+        "detected": len(scored.detected_events),
+        "matched": len(scored.matches),
+        "false": scored.false_events,
+        "minutes": scored.minutes,
+        "switches": scored.identity_switches,
+        "latency": scored.latency_s.tolist(),
+        "tolerance_s": tolerance,
+    }
+
+
+def _score(
+    frames: Sequence[Frame], detectors: Mapping[str, Any], density: float, temporal: bool = False
+) -> _Scored:
     precision, recall, correct = {}, {}, {}
+    events: dict[str, Mapping[str, Any]] = {}
     sequence: tuple[str, ...] = ()
     pairs = 0
     for name, detector in detectors.items():
-        evaluation = evaluate(frames, run_detector(name, detector, frames))
+        predictions = run_detector(name, detector, frames)
+        evaluation = evaluate(frames, predictions)
+        if temporal:
+            events[name] = _event_counts(frames, predictions)
         for key in THRESHOLDS:
             scores = evaluation.at(_THRESHOLD_VALUES[key])
             precision[name, key] = np.asarray(scores.frame_precision)
@@ -378,6 +407,7 @@ def _score(frames: Sequence[Frame], detectors: Mapping[str, Any], density: float
         fformations=len(groups),
         fformation_members=sum(len(g) for g in groups),
         density=density,
+        events=events,
     )
 
 
@@ -399,6 +429,7 @@ def _perturb_task(
     base: tuple[Sequence[Frame], float],
     seed: int,
     detectors: Mapping[str, Any],
+    temporal: bool = False,
 ) -> list[tuple[str, int, int, _Scored | str]]:
     frames, density = base
     out: list[tuple[str, int, int, _Scored | str]] = []
@@ -407,7 +438,7 @@ def _perturb_task(
         # The same draws at every level.
         rng = derive_rng(seed, Role.STRESS_PERTURB, axis_index, episode)
         perturbed = perturbation.apply_all(frames, rng)
-        out.append((axis, k, episode, _score(perturbed, detectors, density)))
+        out.append((axis, k, episode, _score(perturbed, detectors, density, temporal)))
     return out
 
 
@@ -417,6 +448,7 @@ def _scene_task(
     k: int,
     seed: int,
     detectors: Mapping[str, Any],
+    temporal: bool = False,
 ) -> list[tuple[str, int, int, _Scored | str]]:
     """Every test episode of level ``k`` of a scene axis (one task: the detectors are unpacked
     and compiled once per task)."""
@@ -432,7 +464,7 @@ def _scene_task(
             except ValueError as exc:  # the planner cannot lay out this party: draw another
                 notes.append(f"seed {spec.seed}: {exc}")
                 continue
-            scored = _score(frames, detectors, density)
+            scored = _score(frames, detectors, density, temporal)
             out.append((axis, k, episode, _Scored.noted(scored, notes)))
             break
         else:
@@ -477,6 +509,10 @@ class StressPoint:
         pairwise_accuracy: detector -> share of pairs labelled correctly.
         notes: seeds the scenario could not be made with (each drawn again with another seed;
             an episode is missing only when every redraw failed).
+        temporal: with ``temporal=True``, detector -> its group events scored in time, pooled
+            over the episodes (`reform.evaluate_events`): ``true_events``, ``detected_events``,
+            ``recall``, ``precision``, ``latency_median_s``, ``latency_p95_s``,
+            ``false_events_per_minute``, ``identity_switches``, ``tolerance_s``.
     """
 
     value: float
@@ -490,9 +526,13 @@ class StressPoint:
     scores: Mapping[str, Mapping[str, ScoreIntervals]]
     pairwise_accuracy: Mapping[str, float]
     notes: tuple[str, ...] = ()
+    temporal: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        return json_record(self)
+        out = json_record(self)
+        if not self.temporal:
+            out.pop("temporal", None)
+        return out
 
 
 @dataclass(frozen=True)
@@ -626,6 +666,7 @@ def _point(
         for d in detectors
     }
     ff = sum(part.fformations for part in scored)
+    temporal = {d: _pooled([part.events.get(d, {}) for part in scored]) for d in detectors}
     return StressPoint(
         value=value,
         label=label,
@@ -638,7 +679,32 @@ def _point(
         scores=scores,
         pairwise_accuracy=accuracy,
         notes=tuple(notes_),
+        temporal={d: v for d, v in temporal.items() if v},
     )
+
+
+def _pooled(counts: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """One detector's event counts of a point's episodes pooled: recall and precision over all
+    events, latency percentiles over all matches, false events per minute over all minutes."""
+    counts = [c for c in counts if c]
+    if not counts:
+        return {}
+    true = sum(c["true"] for c in counts)
+    detected = sum(c["detected"] for c in counts)
+    matched = sum(c["matched"] for c in counts)
+    minutes = sum(c["minutes"] for c in counts)
+    latency = np.array([x for c in counts for x in c["latency"]], dtype=np.float64)
+    return {
+        "true_events": true,
+        "detected_events": detected,
+        "recall": matched / true if true else None,
+        "precision": matched / detected if detected else None,
+        "latency_median_s": float(np.median(latency)) if latency.size else None,
+        "latency_p95_s": float(np.percentile(latency, 95)) if latency.size else None,
+        "false_events_per_minute": sum(c["false"] for c in counts) / minutes if minutes else None,
+        "identity_switches": sum(c["switches"] for c in counts),
+        "tolerance_s": max(c["tolerance_s"] for c in counts),
+    }
 
 
 # ------------------------------------------------------------------------------------------------
@@ -703,6 +769,7 @@ def run_stress(
     plugins: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
     executor: Executor | None = None,
+    temporal: bool = False,
 ) -> StressResults:
     """Runs the stress tests.
 
@@ -726,6 +793,8 @@ def run_stress(
             and the frame.
         progress: called with one line of text as stages start and tasks finish.
         executor: where the units run, instead of ``jobs`` local processes.
+        temporal: also score every detector's group events in time at every point
+            (`StressPoint.temporal`).
 
     Returns:
         The curves with their confidence intervals, the training summary and the timings.
@@ -848,7 +917,12 @@ def run_stress(
 
     # The detectors are shared by every task: sent once to each worker (Ray: once in all).
     results = _parallel(
-        _call, tasks, shared=(detectors,), executor=executor, progress=report, cpu=cpu
+        _call,
+        tasks,
+        shared=(detectors, bool(temporal)),
+        executor=executor,
+        progress=report,
+        cpu=cpu,
     )
     timings["scoring"] = time.perf_counter() - t0
 
@@ -896,9 +970,13 @@ def run_stress(
     )
 
 
-def _call(task: tuple[Callable[..., Any], tuple[Any, ...]], detectors: Mapping[str, Any]) -> Any:
+def _call(
+    task: tuple[Callable[..., Any], tuple[Any, ...]],
+    detectors: Mapping[str, Any],
+    temporal: bool = False,
+) -> Any:
     function, args = task
-    return function(*args, detectors)
+    return function(*args, detectors, temporal)
 
 
 def sensor_description(name: str) -> str:

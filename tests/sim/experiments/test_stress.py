@@ -247,3 +247,36 @@ def test_the_whole_catalogue_runs_beside_the_built_ins(detectors) -> None:
     clean = results.axis("dropout").points[0].scores
     assert clean["majority"]["2/3"].f1.value == 0.0
     assert clean["gcff"]["2/3"].f1.value > 0.5  # the test parties' groups are there to find
+
+
+def test_temporal_scores_every_point_in_time_and_leaves_the_frame_scores_alone(
+    detectors, results, tmp_path
+) -> None:
+    from reform import Majority
+
+    timed = run_stress(
+        TINY,
+        seed=0,
+        jobs=1,
+        detectors=detectors,
+        axes=["event-rate"],
+        plugins={"majority": Majority()},
+        temporal=True,
+    )
+    for point, plain in zip(
+        timed.axis("event-rate").points, results.axis("event-rate").points, strict=True
+    ):
+        assert point.scores == {d: plain.scores[d] for d in plain.scores} | {
+            "majority": point.scores["majority"]
+        }
+        assert set(point.temporal) == {*DETECTORS, "majority"}
+        for scores in point.temporal.values():
+            assert scores["true_events"] > 0 and scores["tolerance_s"] == 2.0  # 0.5 Hz frames
+        # everyone alone: no event detected, none invented, none found
+        majority = point.temporal["majority"]
+        assert (majority["detected_events"], majority["false_events_per_minute"]) == (0, 0.0)
+        assert majority["recall"] == 0.0 and majority["precision"] is None
+        assert "temporal" in point.to_json() and "temporal" not in plain.to_json()
+    write_report(timed, tmp_path, command="reform-sim stress --temporal")
+    page = (tmp_path / "stress.md").read_text()
+    assert "## Groups in time (false events per minute / event recall %" in page
