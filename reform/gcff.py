@@ -116,6 +116,7 @@ TRIPLE_BYTES = 64  # bytes per (group, person, person) triple of the visibility 
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
 _MATMUL_MAX_PEOPLE = 64  # up to this many people, per-label sums by a (small) matrix product
 _SPARSE_PEOPLE = 256  # alpha_expansion on more people evaluates only who a move can relabel
+_CHUNK_CELLS = 2**16  # cells of the (groups, people) temporaries computed at once
 _PLAIN_PEOPLE = 12  # gcff_labels on at most this many people runs in plain Python (numpy's
 # per-call overhead dominates there); the same arithmetic, operation for operation
 _ROUNDING = 4 * np.finfo(np.float64).eps  # per term, a generous bound on a sum's rounding
@@ -204,10 +205,16 @@ def unary_costs(
 
 
 def _group_costs(
-    points: npt.ArrayLike, position: npt.ArrayLike, labels: npt.ArrayLike, *, mdl: float
+    points: npt.ArrayLike,
+    position: npt.ArrayLike,
+    labels: npt.ArrayLike,
+    *,
+    mdl: float,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """:func:`unary_costs` transposed: (K, n), a row per group (the layout a crowd's
-    alpha-moves read); the same values."""
+    alpha-moves read); the same values. ``out``: an (m >= K, n) float64 C-ordered buffer whose
+    first K rows receive the costs (a frame's refits reuse one), or None for a new array."""
     points = np.asarray(points, dtype=np.float64)
     position = np.asarray(position, dtype=np.float64)
     labels = np.asarray(labels, dtype=np.int64)
@@ -217,15 +224,24 @@ def _group_costs(
     counts = np.bincount(labels, minlength=n_groups).astype(np.float64)
     centre_x = np.bincount(labels, weights=points[:, 0], minlength=n_groups) / counts
     centre_y = np.bincount(labels, weights=points[:, 1], minlength=n_groups) / counts
-    costs = points[None, :, 0] - centre_x[:, None]  # dx, then the costs, in place
-    dy = points[None, :, 1] - centre_y[:, None]
+    costs = np.empty((n_groups, n)) if out is None else out[:n_groups]
+    np.subtract(points[None, :, 0], centre_x[:, None], out=costs)  # dx, then the costs
     np.multiply(costs, costs, out=costs)
-    np.multiply(dy, dy, out=dy)
-    np.add(costs, dy, out=costs)  # dx * dx + dy * dy, (K, n)
+    # dy and the neighbourhoods a block of groups at a time: no (K, n) temporaries
+    rows = max(1, _CHUNK_CELLS // max(n, 1))
+    dy = np.empty((min(rows, n_groups), n))
+    entries = []  # flat (group, person) indices of the neighbourhoods, by group then person
+    for lo in range(0, n_groups, rows):
+        block = dy[: min(rows, n_groups - lo)]
+        part = costs[lo : lo + rows]
+        np.subtract(points[None, :, 1], centre_y[lo : lo + rows, None], out=block)
+        np.multiply(block, block, out=block)
+        np.add(part, block, out=part)  # dx * dx + dy * dy
+        entries.append(np.flatnonzero(part < mdl) + lo * n)
     del dy
 
-    # Neighbourhood entries (k, i), ordered by group then person.
-    group, person = np.divmod(np.flatnonzero(costs < mdl), n)  # np.nonzero's order, faster
+    # Neighbourhood entries (k, i), ordered by group then person (np.nonzero's order).
+    group, person = np.divmod(np.concatenate(entries) if entries else np.zeros(0, int), n)
     if group.size == 0:
         return costs
     vx = position[person, 0] - centre_x[group]
@@ -396,7 +412,7 @@ def alpha_expansion(unary: npt.ArrayLike, labels: npt.ArrayLike, *, label_cost: 
         raise ValueError(f"labels must have shape ({n},), got {labels.shape}")
     if n and (labels.min() < 0 or labels.max() >= k):
         raise ValueError(f"labels must lie in [0, {k - 1}], got {labels.min()}..{labels.max()}")
-    if not np.all(np.isfinite(unary)):
+    if not (np.isfinite(unary.sum()) or np.all(np.isfinite(unary))):  # a sum first: no temporary
         raise ValueError("unary must be finite, got NaN or inf")
     label_cost = float(label_cost)
     if not (np.isfinite(label_cost) and label_cost >= 0.0):
@@ -477,6 +493,8 @@ def _sparse_expansion(unary: np.ndarray, labels: np.ndarray, label_cost: float) 
     energies = [current]
     terms = n + k
     steps = np.arange(min(k, _WINDOW))
+    d_buffer = np.empty((steps.size, n))  # a window's d
+    reach_buffer = np.empty((steps.size, n), dtype=bool)
     moved_person = np.zeros(n, dtype=bool)  # scratch marks, cleared after each use
     touched_label = np.zeros(k, dtype=bool)
     alpha = 0
@@ -487,11 +505,10 @@ def _sparse_expansion(unary: np.ndarray, labels: np.ndarray, label_cost: float) 
         m = alphas.size
         # d of every (window place, person); the move of alpha may relabel only d <= label_cost
         rows = by_group[alpha : alpha + m] if alpha + m <= k else by_group[alphas]
-        d_all = rows - cost
-        reach = np.flatnonzero(d_all <= label_cost)
+        d_all = np.subtract(rows, cost, out=d_buffer[:m])
+        reach = np.flatnonzero(np.less_equal(d_all, label_cost, out=reach_buffer[:m]))
         entry_alpha, person = np.divmod(reach, n)  # by place, then person
         delta = d_all.reshape(-1)[reach]
-        del d_all
         label = labels[person]
         # Per (window place, label) groups, members in person order.
         key = entry_alpha * k + label
@@ -776,10 +793,12 @@ def gcff_labels(
     points = segment_points(position_cm, yaw, stride=stride_cm)
     if n <= _PLAIN_PEOPLE:
         return _plain_labels(position_cm, points, mdl_cm2)
-    crowd = n > _SPARSE_PEOPLE  # costs kept a row per group, as the crowd's moves read them
+    # A crowd's costs: a row per group, as its moves read them, in one buffer for every refit
+    # (groups only merge: K <= n).
+    buffer = np.empty((n, n)) if n > _SPARSE_PEOPLE else None
     for _ in range(MAX_REFITS):
-        if crowd:
-            unary = _group_costs(points, position_cm, labels, mdl=mdl_cm2).T
+        if buffer is not None:
+            unary = _group_costs(points, position_cm, labels, mdl=mdl_cm2, out=buffer).T
         else:
             unary = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
         expanded = _renumber(alpha_expansion(unary, labels, label_cost=mdl_cm2).labels)
