@@ -115,7 +115,7 @@ TRIPLE_BYTES = 64  # bytes per (group, person, person) triple of the visibility 
 # ordered pair of people within a group's neighbourhood, O(K·N²) in a dense crowd
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
 _MATMUL_MAX_PEOPLE = 64  # up to this many people, per-label sums by a (small) matrix product
-_SPARSE_PEOPLE = 256  # alpha_expansion on more people evaluates only who a move can relabel
+_SPARSE_PEOPLE = 64  # alpha_expansion on more people evaluates only who a move can relabel
 _CHUNK_CELLS = 2**16  # cells of the (groups, people) temporaries computed at once
 _PLAIN_PEOPLE = 12  # gcff_labels on at most this many people runs in plain Python (numpy's
 # per-call overhead dominates there); the same arithmetic, operation for operation
