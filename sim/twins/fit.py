@@ -198,10 +198,12 @@ def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
     """How far two `spacing_shape` signatures are: squared log ratios of the six distance
     ratios and of the mean sizes of clumps and of vote clumps, plus the squared differences of
     the shares standing apart, in clumps of 4 or more and voting alone (each times 4) and of
-    the angles off facing a common point (radians)."""
+    the lower quartile and median of the angles off facing a common point (radians; the upper
+    quartile is left to the people standing beside someone they do not face, whom the share
+    voting alone counts, and not to the noise on facings)."""
     ratios = np.log(np.maximum(twin[[*range(6), 12, 15]], 1e-6))
     ratios -= np.log(np.maximum(real[[*range(6), 12, 15]], 1e-6))
-    facing = twin[9:12] - real[9:12]
+    facing = twin[9:11] - real[9:11]
     shares = twin[[6, 13, 14]] - real[[6, 13, 14]]
     return float(np.sum(ratios**2) + 4.0 * np.sum(shares**2) + np.sum(facing**2))
 

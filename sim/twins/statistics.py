@@ -34,7 +34,7 @@ MAX_GAP_STEPS = 1.5  # consecutive frames are at most this many median steps apa
 RAYLEIGH_MEDIAN = math.sqrt(2.0 * math.log(2.0)) * math.sqrt(2.0)  # |difference of two jitters|
 HALF_NORMAL_MEDIAN = 0.6744897501960817 * math.sqrt(2.0)  # |difference of two yaw jitters|
 CLUMP_LINK = 1.3  # median nearest-neighbour distances: people closer than this are one clump
-VOTE_AHEAD = 0.6  # median nearest-neighbour distances: an o-space vote this far ahead of a person
+VOTE_AHEAD = (0.3, 0.6, 0.9)  # median nearest-neighbour distances: o-space votes this far ahead
 VOTE_LINK = 0.5  # median nearest-neighbour distances: votes closer than this are one clump
 SHAPE_SIZE = 16  # entries of `spacing_shape`
 
@@ -118,12 +118,16 @@ def _clump_sizes(d: np.ndarray, link: float) -> np.ndarray:
 
 
 def _votes(position: np.ndarray, yaw: np.ndarray, median: float) -> np.ndarray:
-    """(n,) the size of each person's o-space vote clump (see `spacing_shape`)."""
-    ahead = VOTE_AHEAD * median * np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
-    v = position + ahead
-    d = np.hypot(v[:, None, 0] - v[None, :, 0], v[:, None, 1] - v[None, :, 1])
-    np.fill_diagonal(d, np.inf)
-    return _clump_sizes(d, VOTE_LINK * median)
+    """(n,) the size of each person's o-space vote clump, the largest over the distances ahead
+    of `VOTE_AHEAD` (see `spacing_shape`)."""
+    facing = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+    sizes = np.ones(len(position), dtype=np.int64)
+    for ahead in VOTE_AHEAD:
+        v = position + ahead * median * facing
+        d = np.hypot(v[:, None, 0] - v[None, :, 0], v[:, None, 1] - v[None, :, 1])
+        np.fill_diagonal(d, np.inf)
+        sizes = np.maximum(sizes, _clump_sizes(d, VOTE_LINK * median))
+    return sizes
 
 
 def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
@@ -143,10 +147,12 @@ def spacing_shape(frames: Sequence[Frame]) -> np.ndarray:
     - 12-13: clumps, people linked in a chain by distances under `CLUMP_LINK` medians: the mean
       size of the clump a person stands in (over people not alone in one) and the share of
       people in clumps of 4 or more (how large groups are and how close groups stand);
-    - 14-15: o-space votes, the point `VOTE_AHEAD` medians ahead of each person, linked in a
-      chain by distances under `VOTE_LINK` medians: the share of people whose vote is alone
-      and the mean size of a vote's clump over the others (label-free evidence of how many
-      people share an o-space, which clumps of bodies blur when groups stand close).
+    - 14-15: o-space votes, the point each of `VOTE_AHEAD` medians ahead of each person,
+      linked in a chain by distances under `VOTE_LINK` medians (each distance ahead on its
+      own, a person's clump the largest of them, so that o-spaces of every size are found):
+      the share of people whose vote is alone and the mean size of a vote's clump over the
+      others (label-free evidence of how many people share an o-space, which clumps of bodies
+      blur when groups stand close).
     """
     near, facing, common, clumps, votes = [], [], [], [], []
     for frame in frames:
