@@ -61,6 +61,8 @@ def _nearest_existing(path: Path, target: str | os.PathLike[str]) -> Path:
             found = f"a link to nothing ({folder.readlink()})"
             raise OutputPathError(target, f"expected a folder at {folder}, found {found}")
         if folder.exists():
+            if folder.is_dir():  # made meanwhile, by another process writing beside us
+                return folder
             raise OutputPathError(target, f"expected a folder at {folder}, found a file")
     return Path(".")  # pragma: no cover - a relative path's parents end at "."
 

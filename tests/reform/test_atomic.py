@@ -166,3 +166,23 @@ def test_a_fifo_or_a_device_is_not_replaced_by_a_file_of_results(tmp_path, kind)
     with pytest.raises(OutputPathError, match=f"expected a file path, found {found}"):
         check_file_path(target)
     assert stat.S_ISFIFO(target.stat().st_mode) if kind == "fifo" else target.is_char_device()
+
+
+def test_a_folder_another_process_makes_meanwhile_is_taken_as_a_folder(tmp_path, monkeypatch):
+    # Two workers writing beside each other: the folder is missing when one looks, and there when
+    # it looks again (another worker made it); it is a folder, not "a file".
+    folder = tmp_path / "_commits"
+    is_dir = Path.is_dir
+    looked: list[Path] = []
+
+    def made_meanwhile(path: Path) -> bool:
+        if path == folder and not looked:
+            looked.append(path)
+            folder.mkdir()
+            return False
+        return is_dir(path)
+
+    monkeypatch.setattr(Path, "is_dir", made_meanwhile)
+    with atomic_open(folder / "episode=1.json", "w", encoding="utf-8") as handle:
+        handle.write("{}")
+    assert looked == [folder] and (folder / "episode=1.json").read_text() == "{}"
