@@ -19,9 +19,9 @@ first frame of a size.
 GCFF (``Gcff()``, the reference code's settings) is timed on the same frames, median of a
 size's frames (at most `GCFF_FRAMES`).
 
-Both detectors change method with the frame's size (REFORM beyond
-``reform.detector.LARGE_FRAME_PEOPLE`` = 256 people, GCFF's alpha-expansion beyond 256 too), so
-the growth exponents from 200 people span the small frames' path and the crowds'.
+REFORM changes method with the frame's size (beyond ``reform.detector.LARGE_FRAME_PEOPLE`` = 256
+people), so its growth exponent from 200 people spans the small frames' path and the crowds';
+GCFF takes its crowd path from 65 people on, at every size here.
 
 Run: ``python benchmarks/bench_crowd.py [--quick] [--sizes 200 500 1000 2000]``
 (``--quick``: 200 and 400 people, two frames each, models trained on 100 frames). Targets

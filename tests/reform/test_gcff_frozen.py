@@ -1,6 +1,6 @@
 """GCFF's labels on seeded frames of 6 to 700 people, frozen before its speed paths were written.
 
-Every path ``gcff_labels`` takes (plain Python up to 12 people, the dense sweep up to 256, the
+Every path ``gcff_labels`` takes (plain Python up to 12 people, the dense sweep up to 64, the
 crowd's sparse sweep beyond) must keep giving these labels: the speed work changes no answer.
 The frames are random and adversarial (positions and facings on a lattice, so costs tie
 exactly; people packed three to a square metre, so every neighbourhood holds many).
