@@ -204,44 +204,100 @@ def unary_costs(
     return np.ascontiguousarray(_group_costs(points, position, labels, mdl=mdl).T)
 
 
+class _CostBuffer:
+    """A frame's (people x people) cost buffer, shared by its refits, and what its rows hold.
+
+    Attributes:
+        costs: (n, n) float64; rows 0..K-1 the costs of the last refit's groups.
+        labels: (n,) the labels those rows were computed for, or None before the first refit.
+        near: (n,) int64 neighbourhood size of each row's group (people within ``mdl``).
+    """
+
+    def __init__(self, n: int) -> None:
+        self.costs = np.empty((n, n))
+        self.labels: np.ndarray | None = None
+        self.near = np.zeros(n, dtype=np.int64)
+
+
+def _same_groups(
+    previous: np.ndarray, labels: np.ndarray, n_groups: int, counts: np.ndarray
+) -> np.ndarray:
+    """For each group of ``labels``, the group of ``previous`` with exactly its members, or -1."""
+    lowest = np.full(n_groups, np.iinfo(np.int64).max)
+    highest = np.full(n_groups, -1)
+    np.minimum.at(lowest, labels, previous)
+    np.maximum.at(highest, labels, previous)
+    before = np.bincount(previous, minlength=int(previous.max()) + 1)
+    same = (lowest == highest) & (before[highest] == counts)
+    return np.where(same, highest, -1)
+
+
 def _group_costs(
     points: npt.ArrayLike,
     position: npt.ArrayLike,
     labels: npt.ArrayLike,
     *,
     mdl: float,
-    out: np.ndarray | None = None,
+    buffer: _CostBuffer | None = None,
 ) -> np.ndarray:
     """:func:`unary_costs` transposed: (K, n), a row per group (the layout a crowd's
-    alpha-moves read); the same values. ``out``: an (m >= K, n) float64 C-ordered buffer whose
-    first K rows receive the costs (a frame's refits reuse one), or None for a new array."""
+    alpha-moves read); the same values.
+
+    With a ``buffer``, the costs are its first K rows, and a group whose members are exactly
+    those of a group of the buffer's last refit takes that group's row as it is: a row is a
+    function of its group's members alone (their mean segment point, then everyone's distance
+    and visibility from it), so it is the row a new computation would give, bit for bit.
+    """
     points = np.asarray(points, dtype=np.float64)
     position = np.asarray(position, dtype=np.float64)
     labels = np.asarray(labels, dtype=np.int64)
     n = labels.size
     n_groups = int(labels.max()) + 1 if n else 0
     _check_memory(n, n_groups)
-    counts = np.bincount(labels, minlength=n_groups).astype(np.float64)
+    counts = np.bincount(labels, minlength=n_groups)
     centre_x = np.bincount(labels, weights=points[:, 0], minlength=n_groups) / counts
     centre_y = np.bincount(labels, weights=points[:, 1], minlength=n_groups) / counts
-    costs = np.empty((n_groups, n)) if out is None else out[:n_groups]
-    np.subtract(points[None, :, 0], centre_x[:, None], out=costs)  # dx, then the costs
-    np.multiply(costs, costs, out=costs)
-    # dy and the neighbourhoods a block of groups at a time: no (K, n) temporaries
+    todo = None  # the groups whose rows are computed; None: all, in place
+    if buffer is None:
+        costs = np.empty((n_groups, n))
+        near = np.zeros(n_groups, dtype=np.int64)
+    else:
+        costs = buffer.costs[:n_groups]
+        near = buffer.near
+        if buffer.labels is not None:
+            source = _same_groups(buffer.labels, labels, n_groups, counts)
+            kept = np.flatnonzero(source >= 0)
+            moved = kept[source[kept] != kept]
+            # the right sides are copies, read before any row is written
+            costs[moved] = buffer.costs[source[moved]]
+            near[moved] = near[source[moved]]
+            todo = np.flatnonzero(source < 0)
+        buffer.labels = labels
+    ids_all = np.arange(n_groups) if todo is None else todo
+    # The rows a block of groups at a time: no (K, n) temporaries
     rows = max(1, _CHUNK_CELLS // max(n, 1))
-    dy = np.empty((min(rows, n_groups), n))
+    dx = np.empty((min(rows, ids_all.size), n))
+    dy = np.empty_like(dx)
     entries = []  # flat (group, person) indices of the neighbourhoods, by group then person
-    for lo in range(0, n_groups, rows):
-        block = dy[: min(rows, n_groups - lo)]
-        part = costs[lo : lo + rows]
-        np.subtract(points[None, :, 1], centre_y[lo : lo + rows, None], out=block)
+    for lo in range(0, ids_all.size, rows):
+        ids = ids_all[lo : lo + rows]
+        part = costs[lo : lo + ids.size] if todo is None else dx[: ids.size]
+        block = dy[: ids.size]
+        np.subtract(points[None, :, 0], centre_x[ids, None], out=part)
+        np.multiply(part, part, out=part)
+        np.subtract(points[None, :, 1], centre_y[ids, None], out=block)
         np.multiply(block, block, out=block)
         np.add(part, block, out=part)  # dx * dx + dy * dy
-        entries.append(np.flatnonzero(part < mdl) + lo * n)
-    del dy
+        row, person = np.nonzero(part < mdl)
+        near[ids] = np.bincount(row, minlength=ids.size)
+        entries.append(ids[row] * n + person)
+        if todo is not None:
+            costs[ids] = part
+    del dx, dy
 
     # Neighbourhood entries (k, i), ordered by group then person (np.nonzero's order).
     group, person = np.divmod(np.concatenate(entries) if entries else np.zeros(0, int), n)
+    _check_memory(n, n_groups, int(np.dot(near[:n_groups], near[:n_groups])))
     if group.size == 0:
         return costs
     vx = position[person, 0] - centre_x[group]
@@ -250,7 +306,6 @@ def _group_costs(
     # Every ordered pair (behind, front) of entries of the same group, behind-major, front
     # ascending: the order in which the reference adds the penalties.
     size = np.bincount(group, minlength=n_groups)
-    _check_memory(n, n_groups, int(np.dot(size, size)))
     start = np.concatenate(([0], np.cumsum(size)[:-1]))
     repeats = size[group]
     behind = np.repeat(np.arange(group.size), repeats)
@@ -795,10 +850,10 @@ def gcff_labels(
         return _plain_labels(position_cm, points, mdl_cm2)
     # A crowd's costs: a row per group, as its moves read them, in one buffer for every refit
     # (groups only merge: K <= n).
-    buffer = np.empty((n, n)) if n > _SPARSE_PEOPLE else None
+    buffer = _CostBuffer(n) if n > _SPARSE_PEOPLE else None
     for _ in range(MAX_REFITS):
         if buffer is not None:
-            unary = _group_costs(points, position_cm, labels, mdl=mdl_cm2, out=buffer).T
+            unary = _group_costs(points, position_cm, labels, mdl=mdl_cm2, buffer=buffer).T
         else:
             unary = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
         expanded = _renumber(alpha_expansion(unary, labels, label_cost=mdl_cm2).labels)

@@ -109,3 +109,29 @@ def test_the_hidden_person_with_the_penalty_off_takes_the_plain_path_too(monkeyp
     assert gcff_labels(position_cm / 100, yaw, stride=0.7, mdl=1.0).tolist() == [0, 0, 1]
     monkeypatch.setattr(gcff_module, "VISIBILITY_COSINE", 1.1)
     assert gcff_labels(position_cm / 100, yaw, stride=0.7, mdl=1.0).tolist() == [0, 0, 0]
+
+
+@settings(max_examples=10, deadline=None)
+@given(
+    n=st.integers(gcff_module._SPARSE_PEOPLE + 1, 400),
+    seed=st.integers(0, 2**32 - 1),
+    kind=st.sampled_from(["spread", "lattice", "packed"]),
+    mdl_cm2=st.sampled_from([6_000.0, 10_000.0, 30_000.0]),
+)
+def test_a_crowds_reused_rows_are_the_costs_computed_afresh(n, seed, kind, mdl_cm2):
+    """A crowd's refits keep the rows of unchanged groups: every refit's costs must be those
+    computed from nothing, bit for bit, through all the refits of a run."""
+    position, yaw = small_scene(seed, n, kind)
+    position_cm = position * (100 * math.sqrt(n / 12))  # as dense as the small scenes
+    points = segment_points(position_cm, yaw, stride=70.0)
+    labels = np.arange(n)
+    buffer = gcff_module._CostBuffer(n)
+    for _ in range(gcff_module.MAX_REFITS):
+        costs = gcff_module._group_costs(points, position_cm, labels, mdl=mdl_cm2, buffer=buffer)
+        fresh = unary_costs(points, position_cm, labels, mdl=mdl_cm2)
+        np.testing.assert_array_equal(costs.T, fresh)
+        expanded = alpha_expansion(costs.T, labels, label_cost=mdl_cm2).labels
+        expanded = np.unique(expanded, return_inverse=True)[1]
+        if np.array_equal(expanded, labels):
+            break
+        labels = expanded
