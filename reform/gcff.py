@@ -46,6 +46,14 @@ Numerical fidelity:
       answer (it does on 103 of 1,143 SALSA frames shuffled at random). The detector keeps the
       frame's row order; renaming the ids changes nothing.
 
+Speed:
+    :func:`gcff_labels` takes one of three paths by the frame's size, all with the same
+    arithmetic in the same order, so all give the same labels: plain Python up to
+    ``_PLAIN_PEOPLE`` (12) people, where numpy's per-call overhead would dominate; the dense
+    windowed sweep up to ``_SPARSE_PEOPLE`` (64); beyond, the crowd sweep, which reads only the
+    people a move can relabel, keeps the evaluations a kept move did not affect, and keeps the
+    cost rows of groups whose members did not change from one refit to the next.
+
 Example:
     >>> detector = Gcff(stride=0.7, mdl=1.0)          # doctest: +SKIP
     >>> detector.predict(dataset.annotated())[0]       # doctest: +SKIP
