@@ -3,7 +3,8 @@ real datasets, and what the temporal filters buy (``reform-sim experiment tempor
 
 The protocol is the benchmark's (`sim.experiments.benchmark`, ``--temporal``), over one more
 dataset: the **default party**, ``episodes`` episodes of ``mingle`` at its default options
-(seeds from the master seed, `reform.seeding.Role.TEMPORAL_PARTY`), ``duration`` seconds each at
+(seeds from the master seed, `reform.seeding.Role.TEMPORAL_PARTY`; and the same episodes with
+scripted changes, ``event_rate`` 4 a minute), ``duration`` seconds each at
 ``rate`` frames per second, written to a Parquet file in a temporary folder and read back like
 any dataset. Every catalogued detector that runs with its defaults, or learns on training frames
 (fitted on the first 60 % of each recording, scored on the rest, as the benchmark does), is
@@ -44,9 +45,14 @@ __all__ = [
 ]
 
 PARTY = "party (simulated)"  # the simulated dataset's label
+SCRIPTED = "party with scripted changes (simulated)"
 SCENARIO = "mingle"
-EPISODES = 6
-DURATION_S = 300.0
+# The parties simulated: the default one (the filters' goal), and the same with scripted
+# changes (latecomers, people drifting away, groups merging), whose joins and leaves the
+# default party's own comings and goings rarely make.
+PARTIES: Mapping[str, Mapping[str, Any]] = {PARTY: {}, SCRIPTED: {"event_rate": 4.0}}
+EPISODES = 4
+DURATION_S = 240.0
 RATE_HZ = 5.0
 # Each filter against the detector it wraps at its catalogue default.
 FILTERS: Mapping[str, str] = {"smoothed": "gcff", "hysteresis": "reform-trained"}
@@ -54,8 +60,17 @@ MAX_FLICKER_RATIO = 0.5  # the filter's false events per minute over the detecto
 MAX_ADDED_LATENCY_S = 1.0  # seconds of median latency a filter may add
 
 
-def party_frames(*, seed: int, episodes: int, duration: float, rate: float) -> Dataset:
-    """The default party: ``episodes`` episodes of ``mingle`` at its defaults, one sequence each."""
+def party_frames(
+    *,
+    seed: int,
+    episodes: int,
+    duration: float,
+    rate: float,
+    options: Mapping[str, Any] | None = None,
+    name: str = PARTY,
+) -> Dataset:
+    """A party: ``episodes`` episodes of ``mingle`` with ``options`` (default: its defaults),
+    one sequence each; the same seeds whatever the options."""
     frames = []
     for i in range(episodes):
         episode = simulate_episode(
@@ -63,10 +78,11 @@ def party_frames(*, seed: int, episodes: int, duration: float, rate: float) -> D
             seed=derive_int(seed, Role.TEMPORAL_PARTY, i),
             duration=duration,
             rate=rate,
+            options=dict(options or {}),
             sequence=f"party-{i}",
         )
         frames.extend(episode.dataset.frames)
-    return Dataset(frames=tuple(frames), name=PARTY, source=f"{SCENARIO}, seed {seed}")
+    return Dataset(frames=tuple(frames), name=name, source=f"{SCENARIO}, seed {seed}")
 
 
 @dataclass(frozen=True)
@@ -170,11 +186,26 @@ def run_temporal(
     for name in names:
         detector_info(name)  # an unknown name: one line, before any work
     specs = [detector_spec(name) for name in names]
-    party = party_frames(seed=seed, episodes=episodes, duration=duration, rate=rate)
-    say(f"simulated the party: {episodes} episodes of {duration:g} s at {rate:g} Hz")
+    parties = {
+        label: party_frames(
+            seed=seed,
+            episodes=episodes,
+            duration=duration,
+            rate=rate,
+            options=options,
+            name=label,
+        )
+        for label, options in PARTIES.items()
+    }
+    say(f"simulated the parties: {episodes} episodes each of {duration:g} s at {rate:g} Hz")
     with tempfile.TemporaryDirectory(prefix="reform-sim-temporal-") as folder:
-        path = write_parquet(party, Path(folder) / "party.parquet")
-        datasets = [DatasetSpec(name=PARTY, path=str(path)), *real]
+        datasets = [
+            DatasetSpec(
+                name=label, path=str(write_parquet(party, Path(folder) / f"party-{k}.parquet"))
+            )
+            for k, (label, party) in enumerate(parties.items())
+        ]
+        datasets += list(real)
         total = len(datasets) * len(specs)
 
         def done(count: int, _total: int, cell: Any) -> None:
@@ -183,7 +214,7 @@ def run_temporal(
         benchmark = run_benchmark(
             datasets, specs, jobs=jobs, executor=executor, progress=done, temporal=True
         )
-    people = [f.n_people for f in party.frames]
+    people = [f.n_people for f in parties[PARTY].frames]
     return TemporalResult(
         benchmark=benchmark,
         goals=tuple(filter_goals(benchmark)),
@@ -193,7 +224,8 @@ def run_temporal(
             "episodes": episodes,
             "duration_s": duration,
             "rate_hz": rate,
-            "frames": len(party.frames),
+            "frames": len(parties[PARTY].frames),
+            "scripted_options": dict(PARTIES[SCRIPTED]),
             "people_per_frame": sum(people) / len(people) if people else 0.0,
         },
         seconds=time.perf_counter() - start,

@@ -9,7 +9,13 @@ import pytest
 from cli_errors import cli_error
 
 from sim.cli import main
-from sim.experiments.temporal import MAX_ADDED_LATENCY_S, MAX_FLICKER_RATIO, party_frames
+from sim.experiments.temporal import (
+    MAX_ADDED_LATENCY_S,
+    MAX_FLICKER_RATIO,
+    PARTIES,
+    SCRIPTED,
+    party_frames,
+)
 
 
 def test_the_party_is_the_same_for_the_same_seed():
@@ -17,6 +23,8 @@ def test_the_party_is_the_same_for_the_same_seed():
     again = party_frames(seed=3, episodes=2, duration=10.0, rate=2.0)
     other = party_frames(seed=4, episodes=2, duration=10.0, rate=2.0)
     assert one.frames == again.frames and one.frames != other.frames
+    scripted = party_frames(seed=3, episodes=2, duration=10.0, rate=2.0, options=PARTIES[SCRIPTED])
+    assert scripted.frames != one.frames  # the same seeds, changes scripted in
     assert [f.sequence for f in one.frames[::20]] == ["party-0", "party-1"]
 
 
@@ -32,7 +40,13 @@ def report(tmp_path_factory):
 def test_the_report_holds_every_cell_in_time_and_the_filters_goal(report):
     document = json.loads((report / "temporal.json").read_text())
     assert document["party"]["frames"] == 2 * 40 * 2
-    cells = {c["detector"]: c for c in document["benchmark"]["cells"]}
+    datasets = {c["dataset"] for c in document["benchmark"]["cells"]}
+    assert datasets == {"party (simulated)", "party with scripted changes (simulated)"}
+    cells = {
+        c["detector"]: c
+        for c in document["benchmark"]["cells"]
+        if c["dataset"] == "party (simulated)"
+    }
     assert set(cells) == {"GCFF, one setting (0.7 m, 30,000 cm²)", "smoothed"}
     base, filtered = cells["GCFF, one setting (0.7 m, 30,000 cm²)"], cells["smoothed"]
     (goal,) = document["goals"]
@@ -50,6 +64,7 @@ def test_the_report_holds_every_cell_in_time_and_the_filters_goal(report):
     assert goal["met"] == expected
     page = (report / "temporal.md").read_text()
     assert "## The filters on the default party" in page and "## party (simulated)" in page
+    assert "## party with scripted changes (simulated)" in page
     assert (report / "temporal.png").stat().st_size > 0
 
 
