@@ -39,6 +39,19 @@ def _run(args: argparse.Namespace) -> int:
     check_backend(args)
     check_output("--out", args.out, folder=True)
     names = args.data
+    given = [
+        flag
+        for flag, value in (
+            ("--units", args.units),
+            ("--time-unit", args.time_unit),
+            ("--metres-per-pixel", args.metres_per_pixel),
+        )
+        if value is not None
+    ]
+    if given and not names:
+        raise CliError(f"{given[0]} says how to read the datasets given with --data; give --data")
+    if args.metres_per_pixel is not None and args.units != "px":
+        raise CliError("--metres-per-pixel is the scale of --units px; give --units px too")
     if not names:
         names, left_out = one_recording_each(found_datasets())
         print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
@@ -51,7 +64,17 @@ def _run(args: argparse.Namespace) -> int:
     if not 0.0 < fraction < 1.0:
         raise CliError(f"--train-fraction must lie in (0, 1), got {fraction}")
     split = tuple(args.test_split or ("salsa",))
-    datasets = [dataset_spec(name, test_split=split, train_fraction=fraction) for name in names]
+    datasets = [
+        dataset_spec(
+            name,
+            test_split=split,
+            train_fraction=fraction,
+            units=args.units,
+            metres_per_pixel=args.metres_per_pixel,
+            time_unit=args.time_unit,
+        )
+        for name in names
+    ]
     if args.frames is not None:
         datasets = [dataclasses.replace(d, split=args.frames) for d in datasets]
     unknown = [name for name in args.test_split or () if name not in {d.name for d in datasets}]
@@ -124,6 +147,13 @@ def _command(args: argparse.Namespace) -> str:
             words += [flag, value]
     if args.train_fraction is not None:
         words += ["--train-fraction", f"{args.train_fraction:g}"]
+    for flag, value in (
+        ("--units", args.units),
+        ("--metres-per-pixel", args.metres_per_pixel),
+        ("--time-unit", args.time_unit),
+    ):
+        if value is not None:
+            words += [flag, f"{value:g}" if isinstance(value, float) else value]
     if args.temporal:
         words.append("--temporal")
     if args.out != DEFAULT_OUT:

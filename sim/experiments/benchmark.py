@@ -124,6 +124,8 @@ class DatasetSpec:
         format: the format, or None to detect it.
         units: the file's length unit, or None for the format's default.
         metres_per_pixel: the scale of ``units="px"``.
+        time_unit: the unit of the files' time stamps (GCFF and DANTE), or None to read it from
+            them (`reform.datasets.load_dataset`).
         split: ``"all"`` (every annotated frame) or ``"test"`` (the test part of
             :func:`reform.time_split`, for a dataset that detectors were trained on).
         train_fraction: the split's training share.
@@ -134,6 +136,7 @@ class DatasetSpec:
     format: str | None = None
     units: str | None = None
     metres_per_pixel: float | None = None
+    time_unit: str | None = None
     split: str = "all"
     train_fraction: float = DEFAULT_TRAIN_FRACTION
 
@@ -151,6 +154,7 @@ class DatasetSpec:
             format=self.format,
             units=self.units,
             metres_per_pixel=self.metres_per_pixel,
+            time_unit=self.time_unit,
         )
 
     def frames(self, dataset: Dataset) -> tuple[Frame, ...]:
@@ -340,6 +344,7 @@ def dataset_spec(
     format: str | None = None,  # noqa: A002
     units: str | None = None,
     metres_per_pixel: float | None = None,
+    time_unit: str | None = None,
 ) -> DatasetSpec:
     """The dataset a ``--data`` value names: a path, or a fetched or local dataset's name."""
     path = resolve(data)
@@ -350,6 +355,7 @@ def dataset_spec(
         format=format,
         units=units,
         metres_per_pixel=metres_per_pixel,
+        time_unit=time_unit,
         split="test" if name in test_split else "all",
         train_fraction=train_fraction,
     )

@@ -213,6 +213,20 @@ def test_the_cli_refuses_pixels_in_one_line(tmp_path, capsys):
     assert main(["data", "info", "--data", str(folder), "--units", "cm"]) == 0
 
 
+def test_benchmark_reads_the_datasets_given_in_the_units_given(tmp_path, capsys):
+    folder = _gcff(tmp_path / "pose", [1, 2], people=PIXELS)
+    argv = ["benchmark", "--data", str(folder), "--detector", "majority", "--no-recordings"]
+    argv += ["--out", str(tmp_path / "out"), "-q"]
+    assert main(argv) != 0  # pixels taken for centimetres: refused, naming the option
+    assert "--units px" in capsys.readouterr().err
+    assert main([*argv, "--units", "px", "--metres-per-pixel", "0.0025"]) == 0
+    report = (tmp_path / "out" / "benchmark.md").read_text()
+    assert "--units px --metres-per-pixel 0.0025" in report
+    assert main(["benchmark", "--units", "px", "--out", str(tmp_path / "o2")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.endswith("--units says how to read the datasets given with --data; give --data")
+
+
 @pytest.mark.parametrize("name", ["coffeebreak", "synth"])
 def test_the_public_gcff_sets_load_as_before(shared_datasets, name):
     """No unit given: the same frames as centimetres stated (the check passes them: medians of
