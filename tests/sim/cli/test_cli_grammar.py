@@ -33,6 +33,7 @@ LONG = {
     "experiment hri",
     "experiment sim2real",
     "experiment twins",
+    "experiment temporal",
     "simulate",
     "generate",
     "calibrate",
