@@ -36,6 +36,7 @@ def run_info(args: argparse.Namespace) -> int:
     format, dataset = _load(args)
     summary = summarise(dataset)
     summary["format"] = format
+    summary["group_events"] = _event_counts(dataset)
     if args.json:
         json.dump(summary, sys.stdout, indent=2, allow_nan=False)
         sys.stdout.write("\n")
@@ -50,6 +51,18 @@ def run_convert(args: argparse.Namespace) -> int:
     write_parquet(dataset, args.out)
     print(f"wrote {args.out}: {len(dataset)} frames", file=sys.stderr)
     return 0
+
+
+def _event_counts(dataset: Any) -> dict[str, int]:
+    """The dataset's group events per kind (`reform.datasets.dataset_group_events`: stored in
+    generated shards, else found on the annotated frames), every kind listed."""
+    from reform.datasets import dataset_group_events
+    from reform.events import EVENT_KINDS
+
+    counts = dict.fromkeys(EVENT_KINDS, 0)
+    for event in dataset_group_events(dataset):
+        counts[event.kind] += 1
+    return counts
 
 
 def format_info(summary: dict[str, Any], *, metadata: dict[str, Any]) -> str:
@@ -90,6 +103,13 @@ def format_info(summary: dict[str, Any], *, metadata: dict[str, Any]) -> str:
     else:
         lines.append("  (no annotated frames)")
     lines.append(f"F-formations     {summary['fformations']} (groups of 2 or more)")
+    events = summary.get("group_events")
+    if events is not None:
+        lines.append(
+            "group events     "
+            + ", ".join(f"{count} {kind}" for kind, count in events.items())
+            + " (docs/guide/temporal.md)"
+        )
     settings = metadata.get("settings_gc")
     if settings:
         lines.append(f"settings_gc      {json.dumps(settings)}")

@@ -92,3 +92,17 @@ def test_a_detector_that_never_changes_its_answer_invents_no_event(tmp_path, cap
     assert main([str(a) for a in argv]) == 0
     temporal = json.loads((tmp_path / "evaluation.json").read_text())["temporal"]
     assert temporal["detected_events"] == 0 and temporal["false_events_per_minute"] == 0.0
+
+
+def test_data_info_counts_the_group_events(toy_dataset, capsys):
+    from collections import Counter
+
+    from reform import group_events
+
+    assert main(["data", "info", "--data", str(toy_dataset), "--json"]) == 0
+    counts = json.loads(capsys.readouterr().out)["group_events"]
+    expected = Counter(e.kind for e in group_events(sequence_frames()))
+    assert counts == {kind: expected.get(kind, 0) for kind in counts}
+    assert counts["joins"] == 2 and counts["leaves"] == 2 and counts["forms"] == 1
+    assert main(["data", "info", "--data", str(toy_dataset)]) == 0
+    assert "group events     1 forms, 0 dissolves, 2 joins, 2 leaves" in capsys.readouterr().out
