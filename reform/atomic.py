@@ -4,13 +4,24 @@ A reader never sees a half-written file, and an interrupted write leaves the old
 A target that cannot be written (an existing folder, a path under a file, a folder that cannot be
 created) raises `OutputPathError` naming the path before anything is written;
 :func:`check_file_path` and :func:`check_folder_path` say so up front, before a long run.
+
+A process killed while it writes leaves its temporary file behind (a killed ``simulate --save``
+leaves tens of megabytes). Temporary names carry their writer's process id and machine,
+``.NAME.PID@HOST.RANDOM.tmp`` (HOST: six hex digits of the host name's hash), and the first write
+of a process into a folder removes the temporaries of that naming whose writer, on this machine,
+is no longer alive (:func:`remove_stale_temporaries`); nothing else is ever removed: not another
+machine's, not a live process's, not a file named otherwise.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import hashlib
 import os
+import re
+import shutil
+import socket
 import stat
 import tempfile
 from collections.abc import Iterator
@@ -24,9 +35,103 @@ __all__ = [
     "check_file_path",
     "check_folder_path",
     "file_kind",
+    "remove_stale_temporaries",
+    "temporary_folder",
 ]
 
 _DEFAULT_FILE_MODE = 0o666
+# A temporary of this module's: ".NAME.PID@HOST.RANDOM.tmp" (RANDOM: tempfile's 8 characters).
+_TEMPORARY = re.compile(r"\..+\.(?P<pid>[0-9]+)@(?P<host>[0-9a-f]{6})\.[a-z0-9_]{8}\.tmp")
+_cleaned: set[str] = set()  # folders this process has cleaned of stale temporaries
+
+
+def _host() -> str:
+    """This machine, as six hex digits of its host name's hash (a name part without dots)."""
+    return hashlib.sha256(socket.gethostname().encode()).hexdigest()[:6]
+
+
+def _temporary_prefix(target: Path) -> str:
+    return f".{target.name}.{os.getpid()}@{_host()}."
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` of this machine may be alive (when unsure: yes)."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (OSError, OverflowError):  # another user's (EPERM), or no such id at all
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
+    """Removes the temporaries of killed writers from ``folder`` (not its subfolders).
+
+    A temporary file or folder is removed when it is named as this module names them
+    (``.NAME.PID@HOST.RANDOM.tmp``), was made on this machine, and its writer's process is gone.
+    Anything else is left alone. A no-op where processes cannot be asked whether they live
+    without signalling them (not POSIX).
+
+    Returns:
+        The paths removed.
+    """
+    if os.name != "posix":
+        return []
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return []
+    host, removed = _host(), []
+    for name in names:
+        found = _TEMPORARY.fullmatch(name)
+        if found is None or found["host"] != host:
+            continue
+        pid = int(found["pid"])
+        if pid <= 0 or _alive(pid):
+            continue
+        path = Path(folder, name)
+        try:
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path)
+            else:
+                path.unlink()
+        except FileNotFoundError:  # removed meanwhile, by another process cleaning up
+            continue
+        except OSError:
+            continue  # left for a later run: a clean-up never fails a write
+        removed.append(path)
+    return removed
+
+
+def _clean_once(folder: Path) -> None:
+    """:func:`remove_stale_temporaries` on ``folder``, the first time this process writes there."""
+    key = os.path.abspath(folder)
+    if key not in _cleaned:
+        _cleaned.add(key)
+        remove_stale_temporaries(folder)
+
+
+@contextlib.contextmanager
+def temporary_folder(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yields a new hidden folder beside ``path``, named as this module names temporaries (so
+    that a killed writer's is removed by a later write there), and removes it at the end.
+
+    For writers that make files of their own names: write there, then `os.replace` the result
+    onto ``path``. Missing folders are created.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    _clean_once(target.parent)
+    scratch = Path(
+        tempfile.mkdtemp(prefix=_temporary_prefix(target), suffix=".tmp", dir=target.parent)
+    )
+    try:
+        yield scratch
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 class OutputPathError(ValueError):
@@ -164,7 +269,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
     Use it with writers that take a path (``pyarrow.parquet.write_table``, ``skops.io.dump``).
     Missing folders are created. On an exception the temporary file is removed and ``path`` is
-    left untouched.
+    left untouched; a killed writer's is removed by the next write into that folder (see the
+    module notes).
 
     Raises:
         OutputPathError: ``path`` is an existing folder, one of its folders is a file, or its
@@ -177,8 +283,11 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise OutputPathError(
             path, f"folder {target.parent} cannot be created ({exc.strerror or exc})"
         ) from exc
+    _clean_once(target.parent)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        fd, tmp_name = tempfile.mkstemp(
+            prefix=_temporary_prefix(target), suffix=".tmp", dir=target.parent
+        )
     except OSError as exc:
         raise OutputPathError(
             path, f"cannot write in folder {target.parent} ({exc.strerror or exc})"

@@ -40,7 +40,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 from urllib.parse import quote, unquote, urlsplit
 
-from reform.atomic import atomic_open, check_folder_path, file_kind
+from reform.atomic import atomic_open, check_folder_path, file_kind, temporary_folder
 from reform.datasets.errors import DataFormatError
 from reform.path_argument import path_argument
 
@@ -743,14 +743,17 @@ def _download(
             hooks={"response": deadline.capture},
         )
     try:
-        with _quiet(pooch), deadline:
+        # pooch's temporary file goes in a folder of ours, named for this process: one that a
+        # killed or hung fetch leaves is removed by the next fetch into that folder.
+        with _quiet(pooch), deadline, temporary_folder(target) as scratch:
             pooch.retrieve(
                 url,
                 known_hash=f"sha256:{file.sha256}",
                 fname=target.name,
-                path=target.parent,
+                path=scratch,
                 downloader=_checked(inner, file),
             )
+            os.replace(scratch / target.name, target)
     except _Problem as exc:
         if deadline.expired:
             raise FetchError(
