@@ -15,7 +15,9 @@ units finish, for a caller that handles each result as it comes (writes a datase
 Backends (:data:`BACKENDS`):
 
 * ``"local"``: ``jobs`` worker processes on this machine (joblib's loky; every core by
-  default). With one job, or one unit, the units run in this process, in order.
+  default). With one job, or one unit, the units run in this process, in order. A run stopped
+  by an exception (Ctrl-C, SIGTERM through `sim.cli`) terminates its workers; a driver killed
+  outright takes them with it (each ends as soon as its parent is gone).
 * ``"ray"``: one Ray task per unit on every CPU of the cluster at ``address``, of the Ray
   instance this process has already joined, or of one started on this machine. A task whose
   worker process dies (a node lost, a process killed, out of memory) is run again by Ray, up
@@ -34,8 +36,11 @@ from __future__ import annotations
 
 import os
 import pickle
+import signal
 import socket
 import sys
+import threading
+import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -62,6 +67,9 @@ AUTO = "auto"  # the cluster started on this machine by ``ray start --head``
 RAY_ADDRESS_VARIABLE = "RAY_ADDRESS"
 GCS_PROBE_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"  # every Ray GCS serves it
 RAY_INSTALL = "pip install 'reform-sim[ray]' (or pip install ray)"
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>: the signal a process gets when its parent dies
+PARENT_CHECK_S = 0.5  # seconds between a local worker's looks at its parent (not on Linux)
+EXIT_ORPHANED = 1  # exit status of a local worker whose parent is gone
 
 
 def _last_line(exc: BaseException) -> str:
@@ -221,10 +229,45 @@ def _not_a_cluster(host: str, port: int) -> str | None:
     return None
 
 
-def _set_environment(values: dict[str, str]) -> None:
-    """A local worker's initializer: ``os.environ.update`` itself would travel as a bound
-    method of a copy of this process's ``os.environ``, and update that copy."""
-    os.environ.update(values)
+def _start_worker(parent: int, environment: dict[str, str] | None) -> None:
+    """A local worker's initializer: it ends with its parent, and sets ``environment``
+    (``os.environ.update`` itself would travel as a bound method of a copy of this process's
+    ``os.environ``, and update that copy)."""
+    _end_with_parent(parent)
+    if environment is not None:
+        os.environ.update(environment)
+
+
+def _end_with_parent(parent: int) -> None:
+    """Makes this process end as soon as ``parent`` (the process that started it) is gone: a
+    driver killed with SIGKILL cannot stop its workers, which would otherwise compute and write
+    on for minutes.
+
+    On Linux the kernel sends this process SIGKILL when its parent dies (``PR_SET_PDEATHSIG``;
+    it follows the thread that started the worker, which in joblib's pool lives as long as the
+    pool); elsewhere a daemon thread looks every :data:`PARENT_CHECK_S` seconds. A parent gone
+    before either was set up is seen at once.
+    """
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        armed = libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0
+    else:
+        armed = False
+    if os.getppid() != parent:
+        os._exit(EXIT_ORPHANED)
+    if not armed:
+        threading.Thread(
+            target=_watch_parent, args=(parent,), name="reform-sim-parent", daemon=True
+        ).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        time.sleep(PARENT_CHECK_S)
+        if os.getppid() != parent:
+            os._exit(EXIT_ORPHANED)
 
 
 def _apply(function: Callable[..., Any], unit: Any, *shared: Any) -> Any:
@@ -427,11 +470,13 @@ class Executor:
             return
         from joblib import Parallel, delayed
 
-        setup = {}
-        if self.environment is not None:
-            setup = {"initializer": _set_environment, "initargs": (self.environment,)}
         parallel = Parallel(
-            n_jobs=workers, backend="loky", return_as="generator_unordered", batch_size=1, **setup
+            n_jobs=workers,
+            backend="loky",
+            return_as="generator_unordered",
+            batch_size=1,
+            initializer=_start_worker,
+            initargs=(os.getpid(), self.environment),
         )
         try:
             yield from parallel(

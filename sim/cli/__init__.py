@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 
 from sim.cli._common import CliError, Command, CommandParser, add_commands, check_jobs
-from sim.cli._interrupt import sigint_to_main_only
+from sim.cli._interrupt import Stopped, sigint_to_main_only, sigterm_stops
 
 # The subcommands, in the order of ``reform-sim --help``: each a name, its help line and the
 # module of its arguments (`sim.cli._NAME`; what it does is `sim.cli.NAME`).
@@ -141,14 +141,15 @@ def _resumes(args: argparse.Namespace) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Runs ``reform-sim argv``; returns the exit status (2 for bad input, reported in one
-    line on stderr). Ctrl-C raises KeyboardInterrupt to the caller, as any Python call does;
-    the console command (:func:`console_main`) reports it instead."""
+    line on stderr). Ctrl-C raises KeyboardInterrupt to the caller, as any Python call does,
+    and SIGTERM its subclass `sim.cli._interrupt.Stopped`, once the command has stopped its
+    workers; the console command (:func:`console_main`) reports them instead."""
     return _run(argv, report_interrupt=False)
 
 
 def console_main() -> int:
     """The ``reform-sim`` console command: :func:`main`, with Ctrl-C reported in one line
-    (exit status 130) rather than as a traceback."""
+    (exit status 130) rather than as a traceback, and SIGTERM likewise (status 143)."""
     return _run(None, report_interrupt=True)
 
 
@@ -157,7 +158,7 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
     args = parser.parse_args(argv)
     try:
         check_jobs(args)
-        with sigint_to_main_only():
+        with sigterm_stops(), sigint_to_main_only():
             return int(args.handler(args) or 0)
     except BrokenPipeError:  # the reader of stdout left (`reform-sim scenarios | head`): done
         _drop_stdout()
@@ -175,10 +176,15 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
             file=sys.stderr,
         )
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         if not report_interrupt:
             raise
         again = "; run the same command again to resume" if _resumes(args) else ""
+        if isinstance(exc, Stopped):  # SIGTERM: 128 + its number, as a shell reports it
+            print(
+                f"reform-sim {args.command}: stopped by {exc.signal.name}{again}", file=sys.stderr
+            )
+            return 128 + exc.signal
         print(f"reform-sim {args.command}: interrupted{again}", file=sys.stderr)
         return INTERRUPTED
 

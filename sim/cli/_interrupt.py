@@ -13,6 +13,11 @@ a system call (a detector's ``time.sleep``, a socket, a lock) would wait on. So 
 arrival is also written to a wake-up socket (`signal.set_wakeup_fd`), and a thread reading it
 sends the main thread SIGUSR1, whose handler does nothing: the call is interrupted, and Python
 runs the pending SIGINT handler on its way back.
+
+SIGTERM (``kill PID``, a job scheduler, a container stopping) stops a command the same way: it
+raises `Stopped`, a KeyboardInterrupt, in the main thread (:func:`sigterm_stops`), so that the
+workers are terminated with the command rather than left computing without it. A second SIGTERM
+ends the process at once, as SIGTERM does by default (its workers end with it).
 """
 
 from __future__ import annotations
@@ -23,6 +28,8 @@ import signal
 import socket
 import threading
 from collections.abc import Iterator
+
+__all__ = ["Stopped", "sigint_to_main_only", "sigterm_stops"]
 
 _parked: threading.Thread | None = None
 _TRACKER_FILTER = "ignore:resource_tracker:UserWarning"  # loky's tracker's leftover warnings
@@ -36,6 +43,42 @@ def _park() -> None:
             target=threading.Event().wait, name="reform-sim-sigint", daemon=True
         )
         _parked.start()
+
+
+class Stopped(KeyboardInterrupt):
+    """A command stopped by a signal other than Ctrl-C's (SIGTERM), raised in the main thread.
+
+    Attributes:
+        signal: the signal that stopped it.
+    """
+
+    def __init__(self, signum: int) -> None:
+        self.signal = signal.Signals(signum)
+        super().__init__(self.signal.name)
+
+
+def _raise_stopped(signum: int, _frame: object) -> None:
+    signal.signal(signum, signal.SIG_DFL)  # a second one ends the process at once
+    raise Stopped(signum)
+
+
+@contextlib.contextmanager
+def sigterm_stops() -> Iterator[None]:
+    """Within: SIGTERM raises `Stopped` in this (the main) thread. A no-op outside the main
+    thread, where there is no SIGTERM, and when SIGTERM has a disposition of the caller's (a
+    handler, or ignored) rather than the default."""
+    if (
+        not hasattr(signal, "SIGTERM")
+        or threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    ):
+        yield
+        return
+    signal.signal(signal.SIGTERM, _raise_stopped)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 @contextlib.contextmanager
@@ -108,7 +151,8 @@ def _nothing(_signum: int, _frame: object) -> None:
 
 
 def _wake(reader: socket.socket, main: int | None) -> None:
-    """Sends the main thread SIGUSR1 whenever the wake-up socket says SIGINT arrived."""
+    """Sends the main thread SIGUSR1 whenever the wake-up socket says SIGINT (or SIGTERM)
+    arrived."""
     while True:
         try:
             data = reader.recv(64)
@@ -116,5 +160,5 @@ def _wake(reader: socket.socket, main: int | None) -> None:
             return
         if not data:
             return
-        if signal.SIGINT in data and main is not None:
+        if main is not None and any(s in data for s in (signal.SIGINT, signal.SIGTERM)):
             signal.pthread_kill(main, signal.SIGUSR1)
