@@ -12,6 +12,7 @@ import sys
 from collections.abc import Sequence
 
 from sim.cli._common import CliError, Command, CommandParser, add_commands, check_jobs
+from sim.cli._exit_guard import EXIT_STATUS, ProcessExit, os_exit_reported
 from sim.cli._interrupt import Stopped, sigint_to_main_only, sigterm_stops
 
 # The subcommands, in the order of ``reform-sim --help``: each a name, its help line and the
@@ -158,8 +159,13 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
     args = parser.parse_args(argv)
     try:
         check_jobs(args)
-        with sigterm_stops(), sigint_to_main_only():
+        with os_exit_reported(args.command), sigterm_stops(), sigint_to_main_only():
             return int(args.handler(args) or 0)
+    except ProcessExit as exc:  # someone's os._exit, outside a detector's guard
+        print(
+            f"reform-sim {args.command}: error: {exc} before the command finished", file=sys.stderr
+        )
+        return EXIT_STATUS
     except BrokenPipeError:  # the reader of stdout left (`reform-sim scenarios | head`): done
         _drop_stdout()
         return 0
