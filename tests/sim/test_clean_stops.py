@@ -130,3 +130,40 @@ def test_sigterm_stops_stress_and_its_workers(tmp_path):
     assert "Traceback" not in err, err
     assert err.strip().splitlines()[-1] == "reform-sim stress: stopped by SIGTERM"
     assert status == 128 + signal.SIGTERM
+
+
+def test_a_killed_simulates_recording_is_removed_by_the_next_run_there(tmp_path):
+    """``simulate --save`` killed while it writes its recording leaves a hidden temporary file
+    (tens of megabytes on a long episode); the next run writing in that folder removes it."""
+    argv = ["simulate", "--scenario", "mingle", "--seed", "0", "--duration", "3600"]
+    process = subprocess.Popen(
+        [sys.executable, "-c", START, *argv, "--out", "long.parquet", "--save", "long.rrd"],
+        cwd=tmp_path,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+
+    def writing() -> bool:
+        return any(p.stat().st_size > 0 for p in tmp_path.glob(".long.rrd.*.tmp"))
+
+    try:
+        deadline = time.monotonic() + WAIT_S
+        while not writing():
+            assert process.poll() is None, "simulate ended before it was killed"
+            assert time.monotonic() < deadline, "simulate did not start its recording"
+            time.sleep(0.05)
+    finally:
+        process.kill()
+        process.wait()
+    assert [p.name for p in tmp_path.glob(".*.tmp")] != []  # left behind
+    argv = ["simulate", "--scenario", "mingle", "--seed", "0", "--duration", "5"]
+    subprocess.run(
+        [sys.executable, "-c", START, *argv, "--out", "short.parquet", "--save", "short.rrd"],
+        cwd=tmp_path,
+        check=True,
+        capture_output=True,
+        timeout=WAIT_S,
+    )
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert {"short.parquet", "short.rrd"} <= set(left)
+    assert [name for name in left if name.startswith(".")] == []
