@@ -48,7 +48,12 @@ def _alive(processes: list[psutil.Process]) -> list[str]:
 
 
 def _stop(
-    argv: list[str], tmp_path: Path, sig: signal.Signals, *, started: Callable[[], bool]
+    argv: list[str],
+    tmp_path: Path,
+    sig: signal.Signals,
+    *,
+    started: Callable[[], bool],
+    start: str = START,
 ) -> tuple[int, str, list[str]]:
     """Runs ``reform-sim argv``, waits until ``started()`` holds and two workers run below it,
     sends ``sig`` to the command's process alone, and waits for it to end.
@@ -60,7 +65,7 @@ def _stop(
     log = tmp_path / "stderr.txt"
     with log.open("w") as err:
         process = subprocess.Popen(
-            [sys.executable, "-c", START, *argv],
+            [sys.executable, "-c", start, *argv],
             cwd=ROOT,
             stdout=subprocess.DEVNULL,
             stderr=err,
@@ -167,3 +172,22 @@ def test_a_killed_simulates_recording_is_removed_by_the_next_run_there(tmp_path)
     left = sorted(p.name for p in tmp_path.iterdir())
     assert {"short.parquet", "short.rrd"} <= set(left)
     assert [name for name in left if name.startswith(".")] == []
+
+
+def test_sigterm_stops_benchmark_and_its_workers(tmp_path):
+    """Two workers each in a detector's predict that would sleep ten minutes."""
+    from quiet_generate import generate_quietly
+
+    (tmp_path / "sleepy.py").write_text(
+        "import time\n\n\nclass Sleepy:\n    def predict(self, frames):\n"
+        "        time.sleep(600)\n\n\ndef make():\n    return Sleepy()\n"
+    )
+    for k in (1, 2):
+        generate_quietly("hri-conversation", tmp_path / f"ds{k}", episodes=1, seed=k, duration=5.0)
+    argv = ["benchmark", "--data", str(tmp_path / "ds1"), "--data", str(tmp_path / "ds2")]
+    argv += ["--detector", "sleepy:make", "--jobs", "2", "--quiet", "--out", str(tmp_path / "b")]
+    start = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); " + START
+    status, err, left = _stop(argv, tmp_path, signal.SIGTERM, started=lambda: True, start=start)
+    assert left == []
+    assert err.strip().splitlines() == ["reform-sim benchmark: stopped by SIGTERM"]
+    assert status == 128 + signal.SIGTERM
