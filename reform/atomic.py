@@ -7,10 +7,11 @@ created) raises `OutputPathError` naming the path before anything is written;
 
 A process killed while it writes leaves its temporary file behind (a killed ``simulate --save``
 leaves tens of megabytes). Temporary names carry their writer's process id and machine,
-``.NAME.PID@HOST.RANDOM.tmp`` (HOST: six hex digits of the host name's hash), and the first write
-of a process into a folder removes the temporaries of that naming whose writer, on this machine,
-is no longer alive (:func:`remove_stale_temporaries`); nothing else is ever removed: not another
-machine's, not a live process's, not a file named otherwise.
+``.NAME.PID@HOST.RANDOM.tmp`` (HOST: six hex digits of a hash of the host name and the process-id
+namespace), and the first write of a process into a folder removes the temporaries of that naming
+whose writer, on this machine, is no longer alive (:func:`remove_stale_temporaries`); nothing else
+is ever removed: not another machine's or container's, not a live process's, not a file named
+otherwise.
 """
 
 from __future__ import annotations
@@ -46,8 +47,14 @@ _cleaned: set[str] = set()  # folders this process has cleaned of stale temporar
 
 
 def _host() -> str:
-    """This machine, as six hex digits of its host name's hash (a name part without dots)."""
-    return hashlib.sha256(socket.gethostname().encode()).hexdigest()[:6]
+    """Where process ids mean the same as this process's: six hex digits of a hash of the host
+    name and, on Linux, of the process-id namespace (two containers sharing a folder on one
+    machine number their processes apart)."""
+    try:
+        namespace = os.stat("/proc/self/ns/pid").st_ino
+    except OSError:
+        namespace = 0
+    return hashlib.sha256(f"{socket.gethostname()}:{namespace}".encode()).hexdigest()[:6]
 
 
 def _temporary_prefix(target: Path) -> str:
@@ -71,7 +78,8 @@ def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     """Removes the temporaries of killed writers from ``folder`` (not its subfolders).
 
     A temporary file or folder is removed when it is named as this module names them
-    (``.NAME.PID@HOST.RANDOM.tmp``), was made on this machine, and its writer's process is gone.
+    (``.NAME.PID@HOST.RANDOM.tmp``), was made where process ids mean what they mean here (this
+    machine, this container), and its writer's process is gone.
     Anything else is left alone. A no-op where processes cannot be asked whether they live
     without signalling them (not POSIX).
 
