@@ -495,6 +495,7 @@ def _read_file(
 
     data: dict[str, np.ndarray] = {}
     null: dict[str, np.ndarray] = {}
+    texts: dict[str, list[str]] = {}
     for name, (type_name, nullable, _, _) in COLUMNS.items():
         if name not in columns:
             raise DataFormatError(path, None, name, f"a column {name!r}", f"columns {columns}")
@@ -504,18 +505,21 @@ def _read_file(
             type_name == "string" and column.type == pa.large_string()
         ):
             raise DataFormatError(path, None, name, f"type {expected}", f"{column.type}")
-        mask = column.is_null().to_numpy(zero_copy_only=False)
+        if column.null_count:
+            mask = column.is_null().to_numpy(zero_copy_only=False)
+        else:
+            mask = np.zeros(len(column), dtype=bool)
         if not nullable:
             DataFormatError.check_rows(
                 mask, path, lambda row: f"row {row}", name, "a value", show=lambda _: "null"
             )
         null[name] = mask
         if type_name == "string":
-            data[name] = np.array(column.to_pylist(), dtype=object)
+            data[name], texts[name] = _dictionary(column)
         else:
             filled = column.fill_null(False if type_name == "bool" else 0) if mask.any() else column
             data[name] = filled.to_numpy()
-    frames = _frames(path, data, null)
+    frames = _frames(path, data, null, texts)
     return _with_listed_groups(path, frames, header.get("listed_groups")), header
 
 
@@ -561,7 +565,28 @@ def _negative_member(groups: Any) -> Any:
     return None
 
 
-def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]) -> list[Frame]:
+def _dictionary(column: Any) -> tuple[np.ndarray, list[str]]:
+    """A string column as codes into its distinct texts, in order of first appearance: row
+    ``r`` holds ``texts[codes[r]]``, and a null row the code ``len(texts)``."""
+    encoded = column.combine_chunks().dictionary_encode()
+    texts = encoded.dictionary.to_pylist()
+    return encoded.indices.fill_null(len(texts)).to_numpy(), texts
+
+
+def _objects(codes: np.ndarray, texts: list[str]) -> np.ndarray:
+    """The string column of ``codes`` into ``texts`` as an object array, None where null."""
+    return np.array([*texts, None], dtype=object)[codes]
+
+
+def _frames(
+    path: Path,
+    data: dict[str, np.ndarray],
+    null: dict[str, np.ndarray],
+    texts: dict[str, list[str]],
+) -> list[Frame]:
+    """The frames of a file's columns (string columns as codes into ``texts``), each rule of
+    the format checked: on whole columns first; then, when a frame breaks a rule that
+    `_frames_from_columns` checks only as a whole, by `_frames_one_by_one`, which names it."""
     n_rows = data["frame"].size
     if n_rows == 0:
         return []
@@ -604,6 +629,23 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
     )
     _check_heads(path, index, data, null)
 
+    frames = _frames_from_columns(data, null, texts, starts, ends)
+    if frames is not None:
+        return frames
+    objects = {name: _objects(data[name], words) for name, words in texts.items()}
+    return _frames_one_by_one(path, data | objects, null, starts, ends)
+
+
+def _frames_one_by_one(
+    path: Path,
+    data: dict[str, np.ndarray],
+    null: dict[str, np.ndarray],
+    starts: np.ndarray,
+    ends: np.ndarray,
+) -> list[Frame]:
+    """The frames of a file's columns (string columns as object arrays), whose whole-column
+    rules hold, built and checked one at a time: the first frame to break a rule is named
+    (which frame, rows, field), as `_frames_from_columns` cannot."""
     frames = []
     last_time: dict[str, tuple[int, float]] = {}  # sequence -> (frame, time) of its last frame
     for k, (a, b) in enumerate(zip(starts.tolist(), ends.tolist(), strict=True)):
@@ -702,6 +744,177 @@ def _frames(path: Path, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
     return frames
 
 
+def _frames_from_columns(
+    data: dict[str, np.ndarray],
+    null: dict[str, np.ndarray],
+    texts: dict[str, list[str]],
+    starts: np.ndarray,
+    ends: np.ndarray,
+) -> list[Frame] | None:
+    """The frames of a file's columns, every rule `_frames_one_by_one` checks frame by frame
+    checked at once on whole columns; None when a frame breaks one (the caller then reads the
+    file frame by frame, to name it). Same frames as `_frames_one_by_one`, value for value.
+
+    ``data`` and ``null``: each column (string ones as codes into ``texts``) and its nulls,
+    whose whole-column rules hold (`_frames`: rows grouped by frame, poses finite and in range,
+    heads whole, ids unique within a frame and >= 0, times finite). ``starts``, ``ends``: each
+    frame's first row and one past its last.
+    """
+    index = data["frame"]
+    n_frames = starts.size
+    counts = ends - starts
+    # One value a frame: its sequence, time, whether annotated, whether with heads.
+    for name in ("sequence", "time", "annotated", "has_head"):
+        if np.any(data[name] != data[name][starts][index]):
+            return None
+    sequence_code, times = data["sequence"][starts], data["time"][starts]
+    # Times increase within each sequence (frames of different sequences may interleave).
+    order = np.argsort(sequence_code, kind="stable")
+    same = sequence_code[order][1:] == sequence_code[order][:-1]
+    if np.any(same & ~(times[order][1:] > times[order][:-1])):
+        return None
+    # A frame with nobody is one row whose person_id is null; its other columns are not read.
+    empty = null["person_id"][starts]
+    if np.any(np.bincount(index, weights=null["person_id"], minlength=n_frames) > empty):
+        return None
+    if np.any(empty & (counts != 1)):
+        return None
+    people = ~null["person_id"]  # the rows of frames with people
+    heads = data["has_head"]
+    if any(np.any(people & null[name]) for name in ("kind", "x", "y", "yaw")):
+        return None
+    known_kind = np.array([word in KINDS for word in texts["kind"]] + [False])
+    if not np.all(known_kind[data["kind"][people]]):
+        return None
+    for name in ("head_x", "head_y", "head_yaw"):
+        if np.any(people & (null[name] == heads)):  # null exactly where the frame has no heads
+            return None
+    frame_groups = _frame_groups(data, null, starts, counts, people)
+    if frame_groups is None:
+        return None
+
+    # Each frame's arrays are views of the columns (a frame with nobody: of none of its rows).
+    n_people = np.where(empty, 0, counts)
+    ids = _pieces(data["person_id"], starts, n_people)
+    position = _pieces(np.column_stack([data["x"], data["y"]]), starts, n_people)
+    yaw = _pieces(data["yaw"], starts, n_people)
+    has_head = heads[starts]
+    head_position = head_yaw = [None] * n_frames
+    if has_head.any():
+        head_position = _pieces(np.column_stack([data["head_x"], data["head_y"]]), starts, n_people)
+        head_yaw = _pieces(data["head_yaw"], starts, n_people)
+        if not has_head.all():
+            where = has_head.tolist()
+            head_position = [v if h else None for v, h in zip(head_position, where, strict=True)]
+            head_yaw = [v if h else None for v, h in zip(head_yaw, where, strict=True)]
+    kinds = _kinds(data["kind"][people], texts["kind"], n_people)
+    sequences = _objects(sequence_code, texts["sequence"]).tolist()
+    trusted = Frame._trusted
+    return [
+        trusted(
+            ids=i,
+            position=p,
+            yaw=y,
+            kinds=k,
+            head_position=hp,
+            head_yaw=hy,
+            groups=g,
+            time=t,
+            sequence=s,
+        )
+        for i, p, y, k, hp, hy, g, t, s in zip(
+            ids,
+            position,
+            yaw,
+            kinds,
+            head_position,
+            head_yaw,
+            frame_groups,
+            times.tolist(),
+            sequences,
+            strict=True,
+        )
+    ]
+
+
+def _frame_groups(
+    data: dict[str, np.ndarray],
+    null: dict[str, np.ndarray],
+    starts: np.ndarray,
+    counts: np.ndarray,
+    people: np.ndarray,
+) -> list[tuple[Group, ...] | None] | None:
+    """Each frame's groups (None where not annotated) from the columns ``group`` and
+    ``group_member`` of the rows of frames with people (``people``); None when a frame's
+    breaks a rule of `_groups`. ``starts``, ``counts``: each frame's first row and rows."""
+    index, annotated = data["frame"], data["annotated"]
+    in_group = people & ~null["group"]
+    if np.any(people & (null["group"] != null["group_member"])) or np.any(in_group & ~annotated):
+        return None
+    # The groups, checked and put in order without sorting: a group's slot is its frame's
+    # first row plus its index, a member's place the group's first place plus its position.
+    rows = np.flatnonzero(in_group)
+    frame_of = index[rows]
+    group = data["group"][rows].astype(np.int64)
+    member = data["group_member"][rows].astype(np.int64)
+    n_listed = counts[frame_of]
+    if np.any((group < 0) | (group >= n_listed) | (member < 0) | (member >= n_listed)):
+        return None
+    slot = starts[frame_of] + group
+    size = np.bincount(slot, minlength=index.size)
+    if np.any(size[slot[group > 0] - 1] == 0):  # a frame's groups 0, 1, 2, ... each used
+        return None
+    if np.any(member >= size[slot]):
+        return None
+    offset = np.cumsum(size) - size
+    place = offset[slot] + member
+    taken = np.zeros(rows.size, dtype=bool)
+    taken[place] = True
+    if not taken.all():  # two members at one place in a group
+        return None
+    in_order = np.empty(rows.size, dtype=np.int64)
+    in_order[place] = data["person_id"][rows]
+    used = np.flatnonzero(size)
+    bounds = [*offset[used].tolist(), rows.size]
+    members = in_order.tolist()
+    all_groups = [tuple(members[a:b]) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    group_starts = np.searchsorted(index[used], np.arange(starts.size + 1)).tolist()
+    return [
+        tuple(all_groups[a:b]) if note else None
+        for a, b, note in zip(
+            group_starts[:-1], group_starts[1:], annotated[starts].tolist(), strict=True
+        )
+    ]
+
+
+def _kinds(codes: np.ndarray, words: list[str], n_people: np.ndarray) -> list[tuple[str, ...]]:
+    """Each frame's kinds, from the kind ``codes`` into ``words`` of the rows of frames with
+    people (a frame with nobody: no row, no kind). Frames of one kind throughout (SALSA's
+    humans) share one tuple per size."""
+    sizes = n_people.tolist()
+    if codes.size and np.all(codes == codes[0]):
+        by_size = {n: (words[codes[0]],) * n for n in set(sizes)}
+        return [by_size[n] for n in sizes]
+    kind_of_row = _objects(codes, words).tolist()
+    firsts = np.cumsum(n_people) - n_people  # each frame's first row among the rows with people
+    return [tuple(kind_of_row[a : a + n]) for a, n in zip(firsts.tolist(), sizes, strict=True)]
+
+
+def _pieces(values: np.ndarray, starts: np.ndarray, sizes: np.ndarray) -> list[np.ndarray]:
+    """``values[starts[k] : starts[k] + sizes[k]]`` for each k, read-only views of ``values``
+    (an array this reading made, which nothing else holds: as private as copies). A run of
+    consecutive frames of one size is cut as one block reshaped, frame by row (iterating over
+    its rows is many times faster than slicing each frame)."""
+    values.flags.writeable = False
+    change = np.flatnonzero(sizes[1:] != sizes[:-1]) + 1
+    out: list[np.ndarray] = []
+    for first, last in zip([0, *change.tolist()], [*change.tolist(), sizes.size], strict=True):
+        start, size = int(starts[first]), int(sizes[first])
+        block = values[start : start + (last - first) * size]
+        out.extend(block.reshape(last - first, size, *values.shape[1:]))
+    return out
+
+
 def _frame_row(index: np.ndarray, row: int) -> str:
     """Where row ``row`` (0-based) is in a file whose frame of each row is ``index``."""
     return f"frame {int(index[row])} (row {row})"
@@ -731,7 +944,7 @@ def _check_unique_ids(
 ) -> None:
     """Refuses a person id listed twice in one frame, naming the second row."""
     rows = np.flatnonzero(~empty)
-    if rows.size < 2:
+    if rows.size < 2 or _unique_by_count(index[rows], person_id[rows]):
         return
     ordered = rows[np.lexsort((rows, person_id[rows], index[rows]))]
     same = (index[ordered[1:]] == index[ordered[:-1]]) & (
@@ -751,13 +964,28 @@ def _check_unique_ids(
     )
 
 
+def _unique_by_count(frame: np.ndarray, ids: np.ndarray) -> bool:
+    """True when no id occurs twice in one frame, found by counting each (frame, id) pair;
+    False when one does, or when ids spread too wide to count in memory proportional to the
+    rows (the caller then sorts)."""
+    low, high = int(ids.min()), int(ids.max())
+    span = high - low + 1
+    n_pairs = (int(frame.max()) + 1) * span
+    if n_pairs > 4 * frame.size + 1024:
+        return False
+    return int(np.bincount(frame * span + (ids - low), minlength=1).max()) <= 1
+
+
 def _check_heads(
     path: Path, index: np.ndarray, data: dict[str, np.ndarray], null: dict[str, np.ndarray]
 ) -> None:
     """Refuses a head observed in part: head_x, head_y, head_yaw are all numbers or all NaN."""
     names = ("head_x", "head_y", "head_yaw")
     valued = ~(null["head_x"] | null["head_y"] | null["head_yaw"])
-    missing = np.column_stack([np.isnan(data[n]) for n in names])
+    nan_x, nan_y, nan_yaw = (np.isnan(data[n]) for n in names)
+    if not np.any(valued & ((nan_x != nan_y) | (nan_x != nan_yaw))):
+        return
+    missing = np.column_stack([nan_x, nan_y, nan_yaw])
     partial = valued & missing.any(axis=1) & ~missing.all(axis=1)
     if not partial.any():
         return
