@@ -198,42 +198,49 @@ class Frame:
         object.__setattr__(self, "sequence", str(self.sequence))
 
     @classmethod
-    def _trusted(
+    def _trusted_frames(
         cls,
-        *,
-        ids: np.ndarray,
-        position: np.ndarray,
-        yaw: np.ndarray,
-        kinds: tuple[str, ...],
-        head_position: np.ndarray | None,
-        head_yaw: np.ndarray | None,
-        groups: tuple[Group, ...] | None,
-        time: float,
-        sequence: str,
-    ) -> Frame:
-        """A frame from a maker that has checked every value as ``__post_init__`` would, on
+        ids: Iterable[np.ndarray],
+        position: Iterable[np.ndarray],
+        yaw: Iterable[np.ndarray],
+        kinds: Iterable[tuple[str, ...]],
+        head_position: Iterable[np.ndarray | None],
+        head_yaw: Iterable[np.ndarray | None],
+        groups: Iterable[tuple[Group, ...] | None],
+        time: Iterable[float],
+        sequence: Iterable[str],
+    ) -> list[Frame]:
+        """Frames from a maker that has checked every value as ``__post_init__`` would, on
         whole columns (the Parquet reader: a file's rows checked at once), made without the
-        checks, which cost a file's reading most of its time.
+        checks, which would cost a file's reading most of its time. Each argument holds one
+        entry a frame, in order.
 
         The maker guarantees what ``__post_init__`` gives: ``ids`` int64, ``position``,
-        ``yaw`` and the heads float64 of the shapes documented, read-only arrays nobody
-        else can write to; ``kinds`` a tuple of `KINDS`; ``groups`` a tuple of tuples of
-        Python ints; ``time`` a finite float; ``sequence`` a str.
+        ``yaw`` and the heads float64 of the shapes documented, C-contiguous, read-only arrays
+        nobody else can write to; ``kinds`` tuples of `KINDS`; ``groups`` tuples of tuples of
+        Python ints, disjoint, of the frame's ids; ``time`` finite floats; ``sequence`` strs.
         """
-        frame = object.__new__(cls)
-        frame.__dict__.update(
-            ids=ids,
-            position=position,
-            yaw=yaw,
-            kinds=kinds,
-            head_position=head_position,
-            head_yaw=head_yaw,
-            groups=groups,
-            time=time,
-            sequence=sequence,
-            listed_groups=None,
-        )
-        return frame
+        new = object.__new__
+        frames = []
+        for values in zip(
+            ids, position, yaw, kinds, head_position, head_yaw, groups, time, sequence, strict=True
+        ):
+            frame = new(cls)
+            fields = frame.__dict__  # frozen: filled directly, as __post_init__ would set them
+            (
+                fields["ids"],
+                fields["position"],
+                fields["yaw"],
+                fields["kinds"],
+                fields["head_position"],
+                fields["head_yaw"],
+                fields["groups"],
+                fields["time"],
+                fields["sequence"],
+            ) = values
+            fields["listed_groups"] = None
+            frames.append(frame)
+        return frames
 
     @property
     def n_people(self) -> int:

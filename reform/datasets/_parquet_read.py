@@ -809,32 +809,9 @@ def _frames_from_columns(
             head_yaw = [v if h else None for v, h in zip(head_yaw, where, strict=True)]
     kinds = _kinds(data["kind"][people], texts["kind"], n_people)
     sequences = _objects(sequence_code, texts["sequence"]).tolist()
-    trusted = Frame._trusted
-    return [
-        trusted(
-            ids=i,
-            position=p,
-            yaw=y,
-            kinds=k,
-            head_position=hp,
-            head_yaw=hy,
-            groups=g,
-            time=t,
-            sequence=s,
-        )
-        for i, p, y, k, hp, hy, g, t, s in zip(
-            ids,
-            position,
-            yaw,
-            kinds,
-            head_position,
-            head_yaw,
-            frame_groups,
-            times.tolist(),
-            sequences,
-            strict=True,
-        )
-    ]
+    return Frame._trusted_frames(
+        ids, position, yaw, kinds, head_position, head_yaw, frame_groups, times.tolist(), sequences
+    )
 
 
 def _frame_groups(
