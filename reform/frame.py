@@ -215,7 +215,7 @@ class Frame:
         checks, which would cost a file's reading most of its time. Each argument holds one
         entry a frame, in order.
 
-        The maker guarantees what ``__post_init__`` gives: ``ids`` int64, ``position``,
+        The maker guarantees what ``__post_init__`` gives: ``ids`` unique int64, ``position``,
         ``yaw`` and the heads float64 of the shapes documented, C-contiguous, read-only arrays
         nobody else can write to; ``kinds`` tuples of `KINDS`; ``groups`` tuples of tuples of
         Python ints, disjoint, of the frame's ids; ``time`` finite floats; ``sequence`` strs.

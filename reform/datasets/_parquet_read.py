@@ -887,6 +887,9 @@ def _pieces(values: np.ndarray, starts: np.ndarray, sizes: np.ndarray) -> list[n
     out: list[np.ndarray] = []
     for first, last in zip([0, *change.tolist()], [*change.tolist(), sizes.size], strict=True):
         start, size = int(starts[first]), int(sizes[first])
+        if last - first == 1:
+            out.append(values[start : start + size])
+            continue
         block = values[start : start + (last - first) * size]
         out.extend(block.reshape(last - first, size, *values.shape[1:]))
     return out
