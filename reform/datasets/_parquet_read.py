@@ -6,6 +6,12 @@ imports neither. A folder is read through a folder object (`_LocalFolder` here,
 `reform.datasets.store_dataset.StoreFolder` for a store) that lists, sizes and reads shards by
 relative path.
 
+A file's rules are checked on whole columns and its frames made without a check each
+(`reform.Frame._trusted_frames`), their arrays views of the columns read; a file that breaks a
+rule only a frame can name (a frame's rows disagreeing on its time, a gap in its group indices)
+is read again frame by frame, each frame checked and made on its own, so that the refusal names
+the file, the frame and its rows, and the field.
+
 pyarrow is imported only inside these functions.
 """
 
