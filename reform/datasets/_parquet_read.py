@@ -860,14 +860,32 @@ def _frame_groups(
     used = np.flatnonzero(size)
     bounds = [*offset[used].tolist(), rows.size]
     members = in_order.tolist()
-    all_groups = [tuple(members[a:b]) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
     group_starts = np.searchsorted(index[used], np.arange(starts.size + 1)).tolist()
-    return [
-        tuple(all_groups[a:b]) if note else None
-        for a, b, note in zip(
-            group_starts[:-1], group_starts[1:], annotated[starts].tolist(), strict=True
-        )
-    ]
+    # A frame whose groups are those of the frame before (most frames of a recording) shares
+    # them: same number of people in groups, same people at each place, same group breaks.
+    n_frames = starts.size
+    noted = annotated[starts]
+    listed = np.bincount(frame_of, minlength=n_frames)
+    frame_of_place = np.repeat(np.arange(n_frames), listed)
+    group_of_place = np.empty(rows.size, dtype=np.int64)
+    group_of_place[place] = group
+    again = np.zeros(n_frames, dtype=bool)
+    again[1:] = noted[1:] & noted[:-1] & (listed[1:] == listed[:-1])
+    back = np.arange(rows.size)
+    back = np.where(again[frame_of_place], back - np.repeat([0, *listed[:-1]], listed), back)
+    differ = (in_order != in_order[back]) | (group_of_place != group_of_place[back])
+    again &= np.bincount(frame_of_place, weights=differ, minlength=n_frames) == 0
+    out: list[tuple[Group, ...] | None] = []
+    for a, b, note, same in zip(
+        group_starts[:-1], group_starts[1:], noted.tolist(), again.tolist(), strict=True
+    ):
+        if same:
+            out.append(out[-1])
+        elif note:
+            out.append(tuple([tuple(members[bounds[j] : bounds[j + 1]]) for j in range(a, b)]))
+        else:
+            out.append(None)
+    return out
 
 
 def _kinds(codes: np.ndarray, words: list[str], n_people: np.ndarray) -> list[tuple[str, ...]]:
