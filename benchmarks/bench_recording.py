@@ -70,16 +70,17 @@ from sim.experiments.gcff import PAPER_MDL_M2, PAPER_STRIDE_M
 from sim.recording import (
     FrameColumns,
     default_blueprint,
-    group_events,
     log_events,
     log_frames,
     log_group_counts,
+    log_group_events,
     log_groups,
     log_room,
     log_running_scores,
     open_recording,
     record_episode,
     room_bounds,
+    stream_group_events,
 )
 
 SCENARIO = "word-improv"  # Babble's game: a moderator and six players
@@ -161,7 +162,11 @@ def stages(
         start = time.perf_counter()
         log_group_counts(rec, trees, clock=clock)
         log_running_scores(rec, evaluations, clock=clock)
-        log_events(rec, [*events, *group_events(truth)], clock=clock)
+        log_events(rec, events, clock=clock)
+        log_group_events(rec, stream_group_events(columns), name="truth", clock=clock)
+        for name, partitions in found.items():
+            detected = stream_group_events(detected_on, list(partitions))
+            log_group_events(rec, detected, name=name, clock=clock)
         out["counts, running scores, events"] = time.perf_counter() - start
         start = time.perf_counter()
     out["flush and close the file"] = time.perf_counter() - start
