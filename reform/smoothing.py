@@ -80,7 +80,23 @@ def _rebuild(together: np.ndarray, ids: np.ndarray) -> tuple[Group, ...]:
     return partition_from_labels(labels, ids.tolist())
 
 
-class SlidingMajority(BaseEstimator):
+class _Filter(BaseEstimator):
+    """What both filters share: the wrapped detector learns when the filter is fitted."""
+
+    detector: Any
+
+    def fit(self, frames: Sequence[Frame]) -> _Filter:
+        """Fits the wrapped detector on ``frames`` when it learns; returns ``self``."""
+        fit = getattr(self.detector, "fit", None)
+        if callable(fit):
+            self.detector = fit(frames) or self.detector
+        return self
+
+    def __sklearn_is_fitted__(self) -> bool:
+        return True
+
+
+class SlidingMajority(_Filter):
     """A detector's partitions voted over a window of past frames, pair by pair.
 
     Args:
@@ -95,13 +111,6 @@ class SlidingMajority(BaseEstimator):
     def __init__(self, detector: Any = None, *, window: float = 2.0) -> None:
         self.detector = detector
         self.window = window
-
-    def fit(self, frames: Sequence[Frame]) -> SlidingMajority:
-        """Fits the wrapped detector on ``frames`` when it learns; returns ``self``."""
-        fit = getattr(self.detector, "fit", None)
-        if callable(fit):
-            self.detector = fit(frames) or self.detector
-        return self
 
     def predict(self, frames: Sequence[Frame]) -> list[tuple[Group, ...]]:
         """One partition per frame, in the order given: the pair votes over each window."""
@@ -135,11 +144,8 @@ class SlidingMajority(BaseEstimator):
                 out[k] = _rebuild(voted, frame.ids)
         return out
 
-    def __sklearn_is_fitted__(self) -> bool:
-        return True
 
-
-class Hysteresis(BaseEstimator):
+class Hysteresis(_Filter):
     """A detector's pair probabilities switched with two thresholds, pair by pair over time.
 
     Args:
@@ -157,13 +163,6 @@ class Hysteresis(BaseEstimator):
         self.high = high
         self.low = low
         self.window = window
-
-    def fit(self, frames: Sequence[Frame]) -> Hysteresis:
-        """Fits the wrapped detector on ``frames`` when it learns; returns ``self``."""
-        fit = getattr(self.detector, "fit", None)
-        if callable(fit):
-            self.detector = fit(frames) or self.detector
-        return self
 
     def _check(self) -> float:
         window = _check_window(self.window, who="Hysteresis")
@@ -207,9 +206,6 @@ class Hysteresis(BaseEstimator):
                     state[key] = (now, frame.time)
                 out[k] = _rebuild(together, frame.ids)
         return out
-
-    def __sklearn_is_fitted__(self) -> bool:
-        return True
 
 
 def _inner(wrapper: str, detector: str, *, needs: tuple[str, ...]) -> tuple[str, Any]:

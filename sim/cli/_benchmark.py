@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import (
-    LENGTH_UNITS,
-    TIME_UNITS,
     add_backend_arguments,
+    add_unit_arguments,
     run_with,
 )
 from sim.cli._grammar import add_frames, add_quiet, add_recordings
@@ -55,27 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a dataset (repeatable): a path, or a fetched or local dataset's name "
         "(default: every dataset found)",
     )
-    parser.add_argument(
-        "--units",
-        choices=LENGTH_UNITS,
-        default=None,
-        help="length unit of the positions of the datasets given with --data (GCFF folders: "
-        "default cm; px for image pixels with --metres-per-pixel)",
-    )
-    parser.add_argument(
-        "--metres-per-pixel",
-        type=float,
-        default=None,
-        metavar="M",
-        help="with --units px: the scale of the pixel positions, metres per pixel",
-    )
-    parser.add_argument(
-        "--time-unit",
-        choices=TIME_UNITS,
-        default=None,
-        help="unit of the time stamps of the datasets given with --data (default: read from "
-        "them, as `reform-sim data info --help` says)",
-    )
+    add_unit_arguments(parser, whose="the --data datasets'")
     parser.add_argument(
         "--detector",
         action="append",

@@ -304,28 +304,7 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool 
         default=None,
         help="dataset format (default: detected from the path)",
     )
-    parser.add_argument(
-        "--units",
-        choices=LENGTH_UNITS,
-        default=None,
-        help="length unit of the file's positions (GCFF folders: default cm; DANTE text: "
-        "default m; px for image pixels with --metres-per-pixel; Babble and Parquet are metres)",
-    )
-    parser.add_argument(
-        "--time-unit",
-        choices=TIME_UNITS,
-        default=None,
-        help="unit of the file's time stamps (GCFF timestamp, DANTE t; default: seconds as "
-        "stored below 1e8, larger ones read as Unix times in the unit their magnitude and "
-        "spacing show, counted from each sequence's start; Babble and Parquet are seconds)",
-    )
-    parser.add_argument(
-        "--metres-per-pixel",
-        type=float,
-        default=None,
-        metavar="M",
-        help="with --units px: the scale of the pixel positions, metres per pixel",
-    )
+    add_unit_arguments(parser)
     parser.add_argument(
         "--strict",
         action="store_true",
@@ -640,3 +619,30 @@ def temporal_tolerance(args: argparse.Namespace, frames: Sequence[Any]) -> float
         return check_temporal(frames, tolerance)
     except ValueError as exc:
         raise CliError(f"--temporal: {args.data}: {' '.join(str(exc).split())}") from None
+
+
+def add_unit_arguments(parser: argparse.ArgumentParser, *, whose: str = "the file's") -> None:
+    """``--units cm|m|px``, ``--time-unit s|ms|us|ns`` and ``--metres-per-pixel M``: how to read
+    ``whose`` positions and time stamps (`reform.datasets.load_dataset`)."""
+    parser.add_argument(
+        "--units",
+        choices=LENGTH_UNITS,
+        default=None,
+        help=f"length unit of {whose} positions (GCFF folders: default cm; DANTE text: "
+        "default m; px for image pixels with --metres-per-pixel; Babble and Parquet are metres)",
+    )
+    parser.add_argument(
+        "--time-unit",
+        choices=TIME_UNITS,
+        default=None,
+        help=f"unit of {whose} time stamps (GCFF timestamp, DANTE t; default: seconds as "
+        "stored below 1e8, larger ones read as Unix times in the unit their magnitude and "
+        "spacing show, counted from each sequence's start; Babble and Parquet are seconds)",
+    )
+    parser.add_argument(
+        "--metres-per-pixel",
+        type=float,
+        default=None,
+        metavar="M",
+        help="with --units px: the scale of the pixel positions, metres per pixel",
+    )

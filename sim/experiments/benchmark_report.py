@@ -184,7 +184,8 @@ def to_markdown(benchmark: Benchmark, *, command: str, plot_name: str | None = N
     return "\n".join(lines) + "\n"
 
 
-def _seconds(value: float | None) -> str:
+def seconds_text(value: float | None) -> str:
+    """Seconds with one decimal, or a dash."""
     return "–" if value is None else f"{value:.1f}"
 
 
@@ -211,8 +212,8 @@ def _temporal_lines(benchmark: Benchmark) -> list[str]:
                     f"{temporal['true_events']:,}",
                     percent(temporal["recall"]),
                     percent(temporal["precision"]),
-                    _seconds(latency["median"]),
-                    _seconds(latency["p95"]),
+                    seconds_text(latency["median"]),
+                    seconds_text(latency["p95"]),
                     f"{temporal['false_events_per_minute']:.1f}",
                     f"{temporal['identity_switches']:,}",
                 ]

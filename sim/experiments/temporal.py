@@ -119,10 +119,10 @@ def filter_goals(benchmark: Benchmark) -> list[FilterGoal]:
     goals = []
     for name, inner in FILTERS.items():
         base, filtered = _cell(benchmark, PARTY, inner), _cell(benchmark, PARTY, name)
-        if base is None or filtered is None or base.scores is None or filtered.scores is None:
-            continue
-        if "skipped" in (base.temporal or {"skipped": ""}) or "skipped" in (
-            filtered.temporal or {"skipped": ""}
+        cells = (base, filtered)
+        if any(
+            c is None or c.scores is None or not c.temporal or "skipped" in c.temporal
+            for c in cells
         ):
             continue
         flicker = (

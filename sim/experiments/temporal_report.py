@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.experiments.benchmark import percent
+from sim.experiments.benchmark_report import seconds_text
 from sim.experiments.benchmark_report import to_json as benchmark_json
 from sim.experiments.figures import pyplot, save_png
 from sim.experiments.temporal import (
@@ -24,10 +25,6 @@ def _interval(temporal: dict[str, Any], name: str, show) -> str:
     if not interval or interval.get("low") is None:
         return ""
     return f" ({show(interval['low'])}–{show(interval['high'])})"
-
-
-def _seconds(value: float | None) -> str:
-    return "–" if value is None else f"{value:.1f}"
 
 
 def _rows(result: TemporalResult, dataset: Any) -> list[list[str]]:
@@ -48,8 +45,9 @@ def _rows(result: TemporalResult, dataset: Any) -> list[list[str]]:
                 f"{percent(f1)}" + ("" if ci is None else f" ({percent(ci[0])}–{percent(ci[1])})"),
                 percent(temporal["recall"]) + _interval(temporal, "recall", percent),
                 percent(temporal["precision"]) + _interval(temporal, "precision", percent),
-                _seconds(latency["median"]) + _interval(temporal, "latency_median_s", _seconds),
-                _seconds(latency["p95"]),
+                seconds_text(latency["median"])
+                + _interval(temporal, "latency_median_s", seconds_text),
+                seconds_text(latency["p95"]),
                 f"{temporal['false_events_per_minute']:.1f}"
                 + _interval(temporal, "false_events_per_minute", lambda v: f"{v:.1f}"),
                 f"{temporal['identity_switches']:,}",
@@ -116,7 +114,7 @@ def to_markdown(result: TemporalResult, *, command: str, figure: str | None = No
                     goal.filter,
                     goal.detector,
                     f"{goal.flicker[0]:.1f} → {goal.flicker[1]:.1f}",
-                    f"{_seconds(goal.latency[0])} → {_seconds(goal.latency[1])}",
+                    f"{seconds_text(goal.latency[0])} → {seconds_text(goal.latency[1])}",
                     f"{percent(goal.f1[0])} → {percent(goal.f1[1])}",
                     "yes" if goal.met else "**no**",
                 ]
