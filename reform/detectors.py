@@ -43,6 +43,8 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from reform.deadline import DeadlineExpired, within
+
 if TYPE_CHECKING:
     from reform.frame import Frame, Group
 
@@ -51,6 +53,9 @@ __all__ = [
     "Detector",
     "DetectorError",
     "DetectorInfo",
+    "IMPORT_TIMEOUT_S",
+    "PREDICT_TIMEOUT_S",
+    "PREDICT_TIMEOUT_S_PER_PAIR",
     "Option",
     "check_predictions",
     "builtin_names",
@@ -59,6 +64,7 @@ __all__ = [
     "detector_options",
     "fit_detector",
     "make_detector",
+    "predict_deadline",
     "prepare_detector",
     "register_detector",
     "run_detector",
@@ -66,6 +72,12 @@ __all__ = [
 
 ENTRY_POINT_GROUP = "reform_sim.detectors"  # installed packages add detectors by name here
 _SPEC_FORM = "package.module:factory"
+# Deadlines on a detector's code, unless the caller gives one (``--detector-timeout``): generous,
+# about a thousand times what the built-ins take (milliseconds a frame of twenty people).
+IMPORT_TIMEOUT_S = 60.0  # seconds to import a detector's module, and again to call its factory
+PREDICT_TIMEOUT_S = 5.0  # seconds a frame, plus PREDICT_TIMEOUT_S_PER_PAIR for each pair in it
+PREDICT_TIMEOUT_S_PER_PAIR = 0.05  # seconds a frame for each pair of people in it
+_TIMEOUT_HINT = "give it longer with --detector-timeout DURATION"
 
 
 class DetectorError(ValueError):
@@ -501,11 +513,17 @@ def _describe(value: Any) -> str:
     return f"a {type(value).__name__} ({reprlib.repr(value)})"
 
 
-def _import(name: str, spec: str) -> Any:
-    """The object ``spec`` (``package.module:attribute``) names, imported."""
+def _import(name: str, spec: str, deadline_s: float) -> Any:
+    """The object ``spec`` (``package.module:attribute``) names, imported within
+    ``deadline_s`` seconds."""
     module_name, attribute = _parse_spec(spec)
     try:
-        module = importlib.import_module(module_name)
+        module = within(deadline_s, importlib.import_module, module_name)
+    except DeadlineExpired as exc:
+        raise DetectorError(
+            f"detector {name!r}: the detector did not finish within {exc.seconds:g} s (import "
+            f"of module {module_name!r}); {_TIMEOUT_HINT}"
+        ) from None
     except _RAISED as exc:  # the plugin's own code runs here (a sys.exit too): its error
         hint = ""
         if isinstance(exc, ModuleNotFoundError) and module_name.startswith(str(exc.name)):
@@ -555,12 +573,16 @@ def _check_options(name: str, factory: Callable[..., Any], options: Mapping[str,
         )
 
 
-def make_detector(name_or_path: str, **options: Any) -> Detector:
+def make_detector(
+    name_or_path: str, *, deadline_s: float | None = None, **options: Any
+) -> Detector:
     """A detector ready to ``predict`` (or to ``fit``), made by the factory its name names.
 
     Args:
         name_or_path: a name of :func:`detector_names` or a plugin's
             ``package.module:factory`` path (imported now).
+        deadline_s: seconds its module may take to import, and its factory to return
+            (default :data:`IMPORT_TIMEOUT_S`).
         **options: the factory's keyword arguments, e.g. ``stride=0.6`` for ``gcff``
             (metres), ``model="m.skops"`` for ``reform``.
 
@@ -571,8 +593,10 @@ def make_detector(name_or_path: str, **options: Any) -> Detector:
     Raises:
         DetectorError: one line: an unknown name, a plugin that does not import or has no such
             attribute, an unknown or missing option, a factory that raises, an object without
-            a callable ``predict``.
+            a callable ``predict``; an import or a factory that did not finish within
+            ``deadline_s``.
     """
+    deadline_s = IMPORT_TIMEOUT_S if deadline_s is None else deadline_s
     info = detector_info(name_or_path)
     name = info.name
     if info.options:  # the declared defaults, then what was given, each checked
@@ -580,7 +604,7 @@ def make_detector(name_or_path: str, **options: Any) -> Detector:
         defaults = {o.name: o.default for o in info.options if o.default is not None}
         options = {**defaults, **given}
     if isinstance(info.factory, str):
-        label, target = info.factory, _import(name, info.factory)
+        label, target = info.factory, _import(name, info.factory, deadline_s)
     else:
         label, target = getattr(info.factory, "__qualname__", repr(info.factory)), info.factory
     if _has_predict(target):
@@ -597,7 +621,12 @@ def make_detector(name_or_path: str, **options: Any) -> Detector:
         )
     _check_options(name, target, options)
     try:
-        detector = target(**options)
+        detector = within(deadline_s, target, **options)
+    except DeadlineExpired as exc:
+        raise DetectorError(
+            f"detector {name!r}: the detector did not finish within {exc.seconds:g} s (build: "
+            f"its factory {label}); {_TIMEOUT_HINT}"
+        ) from None
     except DetectorError:
         raise
     except _RAISED as exc:  # the factory is the plugin's code (a sys.exit too)
@@ -694,8 +723,40 @@ def _without_truth(frames: Sequence[Frame]) -> list[Frame]:
     return [f if f.groups is None else f.replace(groups=None, listed_groups=None) for f in frames]
 
 
+def predict_deadline(frames: Sequence[Frame], per_frame_s: float | None = None) -> float:
+    """Seconds a detector may take to predict ``frames``: ``per_frame_s`` for each frame, by
+    default :data:`PREDICT_TIMEOUT_S` plus :data:`PREDICT_TIMEOUT_S_PER_PAIR` for each pair of
+    people in it (a frame of 20 people: 14.5 s)."""
+    if per_frame_s is not None:
+        return per_frame_s * max(1, len(frames))
+    sizes = [len(getattr(f, "ids", ())) for f in frames]
+    pairs = sum(n * (n - 1) // 2 for n in sizes)
+    return PREDICT_TIMEOUT_S * max(1, len(frames)) + PREDICT_TIMEOUT_S_PER_PAIR * pairs
+
+
+def _held(stack: Sequence[Any], frames: Sequence[Frame]) -> int | None:
+    """The index in ``frames`` of the frame that the innermost Python frame of ``stack``
+    holding one of them has as a local variable (what a detector was working on), or None."""
+    index = {id(frame): k for k, frame in enumerate(frames)}
+    for python_frame in stack:
+        try:
+            values = list(python_frame.f_locals.values())
+        except Exception:  # noqa: BLE001 - a frame that cannot show its locals says nothing
+            continue
+        for value in values:
+            if id(value) in index:
+                return index[id(value)]
+    return None
+
+
 def run_detector(
-    name: str, detector: Any, frames: Sequence[Frame], *, oracle: bool = False
+    name: str,
+    detector: Any,
+    frames: Sequence[Frame],
+    *,
+    oracle: bool = False,
+    deadline_s: float | None = None,
+    source: str = "",
 ) -> list[Sequence[Group]]:
     """``detector.predict(frames)``, checked by :func:`check_predictions`.
 
@@ -711,21 +772,36 @@ def run_detector(
         frames: the frames to partition.
         oracle: hand the frames over with their ground truth: only for a detector that reads
             it on purpose, as an upper bound (the gymnasium environment's ``"truth"``).
+        deadline_s: seconds ``predict`` may take for each frame (the batch gets as many times
+            this as it has frames); default :func:`predict_deadline`'s, scaled by the people in
+            each frame. At the deadline ``predict`` is stopped (`reform.deadline.within`).
+        source: where the frames come from (a file, a dataset), for messages.
 
     Returns:
         One partition per frame, as a list.
 
     Raises:
-        DetectorError: the detector has no callable ``predict``, raised, or returned something
-            that is not one partition per frame.
+        DetectorError: the detector has no callable ``predict``, raised, returned something
+            that is not one partition per frame, or did not return by the deadline (naming the
+            frame it was working on, where a local variable of its code holds one).
     """
     predict = getattr(detector, "predict", None)
     if not callable(predict):
         raise DetectorError(f"{name}: {_describe(detector)} has no callable predict(frames)")
     frames = list(frames)
     unlabelled = frames if oracle else _without_truth(frames)
+    seconds = predict_deadline(frames, deadline_s)
     try:
-        partitions = _read_lazy(predict(unlabelled))
+        partitions = within(seconds, lambda: _read_lazy(predict(unlabelled)))
+    except DeadlineExpired as exc:
+        held = _held(exc.stack, unlabelled)
+        where = "the batch" if held is None else _frame_text(held, frames[held])
+        of = f" of {source}" if source else ""
+        batch = f", {len(frames)} frames in one call" if len(frames) > 1 else ""
+        raise DetectorError(
+            f"{name}: the detector did not finish within {exc.seconds:g} s (predict on "
+            f"{where}{of}{batch}); {_TIMEOUT_HINT}"
+        ) from None
     except _RAISED as exc:  # the detector is someone's code: report it in one line
         where, alone = _culprit(predict, unlabelled)
         where = where or f"a batch of {len(frames)} frames (no frame alone)"

@@ -31,6 +31,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
+from reform.deadline import DURATION_FORM, duration
+
 __all__ = [
     "TIMEOUT_S",
     "TIMEOUT_VARIABLE",
@@ -43,8 +45,6 @@ __all__ = [
 
 TIMEOUT_S = 60.0  # seconds a store may take to answer one request, unless TIMEOUT_VARIABLE says
 TIMEOUT_VARIABLE = "REFORM_SIM_STORE_TIMEOUT"
-_DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s|m|min)?\s*$")
-_UNIT_S = {None: 1.0, "s": 1.0, "ms": 1e-3, "m": 60.0, "min": 60.0}
 _URI = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
 # The package each common scheme needs (fsspec's own registry knows the rest).
 _PACKAGES = {"s3": "s3fs", "s3a": "s3fs", "gs": "gcsfs", "gcs": "gcsfs", "az": "adlfs"}
@@ -71,13 +71,9 @@ def timeout(text: str | None = None) -> float:
         text = os.environ.get(TIMEOUT_VARIABLE)
         if text is None or not text.strip():
             return TIMEOUT_S
-    match = _DURATION.match(text)
-    seconds = float(match.group(1)) * _UNIT_S[match.group(2)] if match else 0.0
-    if not seconds > 0.0:
-        raise StoreError(
-            f"{TIMEOUT_VARIABLE} must be a duration above zero (seconds, or with a unit: 90s, 2m, "
-            f"500ms), got {text!r}"
-        )
+    seconds = duration(text)
+    if seconds is None:
+        raise StoreError(f"{TIMEOUT_VARIABLE} must be {DURATION_FORM}, got {text!r}")
     return seconds
 
 

@@ -9,6 +9,7 @@ from sim.cli._common import (
     add_unit_arguments,
     run_with,
 )
+from sim.cli._detectors import add_detector_timeout
 from sim.cli._grammar import add_frames, add_quiet, add_recordings
 
 DEFAULT_OUT = "benchmark-output"
@@ -101,6 +102,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="also score each detector's group events in time (docs/guide/temporal.md)",
     )
+    add_detector_timeout(parser)
     add_recordings(parser, default=True, each="dataset")
     add_backend_arguments(parser, jobs_default="1")
     add_quiet(parser)

@@ -33,7 +33,13 @@ def detect_frames(
     started = time.perf_counter()
     if show_progress(args):
         print(f"running {args.detector} on {len(frames):,} frames ...", file=sys.stderr)
-    partitions = run_detector(args.detector, detector, frames)
+    partitions = run_detector(
+        args.detector,
+        detector,
+        frames,
+        deadline_s=args.detector_timeout,
+        source=getattr(args, "data", None) or "",
+    )
     if show_progress(args):
         seconds = time.perf_counter() - started
         print(f"{args.detector}: {len(frames):,} frames in {seconds:.1f} s", file=sys.stderr)

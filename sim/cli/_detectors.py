@@ -35,11 +35,13 @@ __all__ = [
     "DETECTORS",
     "DetectorSpec",
     "add_detector_arguments",
+    "add_detector_timeout",
     "build_detector",
     "check_detector",
     "cli_detector",
     "detector_name",
     "detector_params",
+    "detector_timeout",
     "make_plugin",
 ]
 
@@ -304,7 +306,7 @@ def _build_from_catalogue(args: argparse.Namespace) -> Any:
 
     name = args.detector
     options = {**_settings_options(args), **_options(args)}
-    detector = make_plugin(name, **options)
+    detector = make_plugin(name, deadline_s=getattr(args, "detector_timeout", None), **options)
     needs = detector_info(name).needs if ":" not in name else ""
     training = None
     if needs == "training":
@@ -359,6 +361,33 @@ def detector_name(text: str) -> str:
     return text
 
 
+def detector_timeout(text: str) -> float:
+    """``--detector-timeout``'s type: a duration above zero, as seconds
+    (`reform.deadline.duration`); refused in one line before any work."""
+    from reform.deadline import DURATION_FORM, duration
+
+    seconds = duration(text)
+    if seconds is None:
+        raise argparse.ArgumentTypeError(f"expected {DURATION_FORM}, got {text!r}")
+    return seconds
+
+
+def add_detector_timeout(parser: argparse.ArgumentParser) -> None:
+    """``--detector-timeout DURATION``: the deadline on a detector's code
+    (`reform.detectors.make_detector`, `reform.detectors.run_detector`)."""
+    parser.add_argument(
+        "--detector-timeout",
+        type=detector_timeout,
+        metavar="DURATION",
+        default=None,
+        help="how long a detector may take to import its module, to be made by its factory, and "
+        "to predict each frame (N frames in one call: N times it); seconds, or 90s, 2m, 500ms. "
+        "At the deadline the run ends in one line naming the detector, what it was doing and the "
+        "frame (default: 60 s to import and to make; 5 s a frame plus 0.05 s for each pair of "
+        "people in it)",
+    )
+
+
 def catalogue_help() -> str:
     """Every catalogued detector with its help line and declared options, for ``--help``."""
     from reform.detectors import detector_info, detector_names
@@ -407,14 +436,17 @@ def add_detector_arguments(parser: argparse.ArgumentParser) -> None:
         "grid-searches stride and mdl on them, objective F1 at T = 2/3); give training data "
         "only, never the dataset scored",
     )
+    add_detector_timeout(parser)
     for spec in DETECTORS.values():
         if spec.add_arguments is not None:
             spec.add_arguments(parser)
 
 
-def make_plugin(name: str, **options: Any) -> Any:
+def make_plugin(name: str, *, deadline_s: float | None = None, **options: Any) -> Any:
     """The registry's detector ``name`` made with ``options``, the current folder searched
-    for a ``module:factory`` path after the installed packages, as ``python -m`` would.
+    for a ``module:factory`` path after the installed packages, as ``python -m`` would; its
+    import and its factory each within ``deadline_s`` seconds (`make_detector`'s default
+    without it).
 
     Raises:
         reform.detectors.DetectorError: one line, if it cannot be found or made.
@@ -423,7 +455,7 @@ def make_plugin(name: str, **options: Any) -> Any:
 
     if ":" in name and os.getcwd() not in sys.path and "" not in sys.path:
         sys.path.append(os.getcwd())
-    return make_detector(name, **options)
+    return make_detector(name, deadline_s=deadline_s, **options)
 
 
 def check_detector(args: argparse.Namespace) -> DetectorSpec:

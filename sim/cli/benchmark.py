@@ -88,6 +88,7 @@ def _run(args: argparse.Namespace) -> int:
         named = [*builtin_names(), *(n for n in named if n != "all")]
     detectors = [detector_spec(spec) for spec in dict.fromkeys(named)]
     detectors += [model_spec(path) for path in args.model or ()]
+    detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
 
     bar = None
@@ -130,7 +131,7 @@ def _check_detectors(detectors) -> None:
     for detector in detectors:
         if detector.spec.startswith(("reform:", "dante:")):
             continue
-        make_plugin(detector.spec)
+        make_plugin(detector.spec, deadline_s=detector.deadline_s)
 
 
 def _command(args: argparse.Namespace) -> str:

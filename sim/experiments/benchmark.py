@@ -184,6 +184,8 @@ class DetectorSpec:
         registered: the `reform.detectors.DetectorInfo` of a name registered in this process
             (`reform.register_detector`), registered again in a worker that has not seen it,
             or None.
+        deadline_s: seconds the detector may take to import, to be made, and to predict each
+            frame (`reform.detectors.run_detector`), or None for the registry's defaults.
     """
 
     label: str
@@ -191,6 +193,7 @@ class DetectorSpec:
     kind: str = ""
     search: str | None = field(default=None, compare=False)
     registered: Any = field(default=None, compare=False)
+    deadline_s: float | None = field(default=None, compare=False)
 
     @property
     def key(self) -> str:
@@ -234,7 +237,7 @@ class DetectorSpec:
                 citation=info.citation,
                 needs=info.needs,
             )
-        detector = make_detector(self.spec)
+        detector = make_detector(self.spec, deadline_s=self.deadline_s)
         if ":" in self.spec:
             return detector, None
         try:
@@ -531,7 +534,9 @@ def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec, temporal: boo
     if detector is None:
         return Cell(label, detector_spec.label, None, skipped=reason)
     start = time.perf_counter()
-    predictions = run_detector(detector_spec.label, detector, frames)
+    predictions = run_detector(
+        detector_spec.label, detector, frames, deadline_s=detector_spec.deadline_s, source=label
+    )
     seconds = time.perf_counter() - start
     evaluation = evaluate(frames, predictions)
     by_sequence = {
