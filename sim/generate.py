@@ -117,6 +117,7 @@ from sim.episode import (
 from sim.executor import BACKENDS, Executor, cpu_count
 from sim.recording import FieldOfView, record_episode
 from sim.sensor import Sensor
+from sim.ticking import ticking
 
 __all__ = [
     "BACKENDS",
@@ -1625,9 +1626,7 @@ def _check_scenario(spec: GenerationSpec) -> tuple[dict[str, Any], Any]:
         The scenario's options with its defaults filled in, and episode 0's made scenario.
     """
 
-    known = scenarios.names()
-    if spec.scenario not in known:
-        raise ValueError(f"scenario must be one of {', '.join(known)}; got {spec.scenario!r}")
+    scenarios.describe(spec.scenario)  # an unknown name: the registry's one message
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, 0), options=spec.options)
     scene_spec(made.stage, name=made.name)
     if spec.view == "robot" and made.stage.robot is None:
@@ -1650,7 +1649,8 @@ def _check_size(
 ) -> sizing.Estimate:
     """Refuses, before any work, a dataset that cannot fit this machine (`sim.sizing.check`):
     its episodes sized like episode 0 (``made``), ``workers`` of them held at once; the disk
-    needed is for the episodes whose shards are not there yet."""
+    needed is for the episodes whose shards are not there yet. Returns episode 0's estimate,
+    which `_say_estimate` scales to the episodes left once they are known."""
 
     one = estimate_episode(
         made, duration=spec.duration, rate=spec.rate, view=spec.view, recording=save_recordings
@@ -1676,7 +1676,30 @@ def _check_size(
         out_option="out_dir",
         disk_needed=estimate.disk * missing / episodes,
     )
-    return estimate
+    return one
+
+
+def _say_estimate(
+    spec: GenerationSpec,
+    one: sizing.Estimate,
+    *,
+    todo: int,
+    episodes: int,
+    workers: int,
+    save_recordings: bool,
+) -> None:
+    """States on stderr, once, what the ``todo`` episodes left of ``episodes`` will take on
+    ``workers`` processes (their start included: `sim.sizing.pool_start`); nothing when none
+    is left, the run having nothing to do."""
+    if not todo:
+        return
+    left = sizing.dataset_estimate(
+        one, episodes=todo, workers=workers, arrays=spec.view == "truth" and not save_recordings
+    )
+    what = f"{sizing.count(todo)} episode{'s' * (todo != 1)} of {spec.scenario}"
+    if todo < episodes:
+        what += f" ({sizing.count(episodes - todo)} of {sizing.count(episodes)} already there)"
+    print(sizing.describe(left, what), file=sys.stderr, flush=True)
 
 
 def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
@@ -1822,7 +1845,7 @@ def generate_dataset(
     if store is None:
         out_dir = Path(out_dir)
     resolved, made = _check_scenario(spec)
-    estimate = _check_size(
+    one = _check_size(
         spec,
         made,
         episodes=episodes,
@@ -1846,10 +1869,6 @@ def generate_dataset(
     else:
         parameters = spec.parameters()
         _check_folder(out_dir, parameters, episodes)
-        if progress:  # stated once, the time being an estimate a run is not refused on
-            what = f"{sizing.count(episodes)} episode{'s' * (episodes != 1)} of {spec.scenario}"
-            print(sizing.describe(estimate, what), file=sys.stderr, flush=True)
-
         with _folder_lock(out_dir), executor:
             _check_folder(out_dir, parameters, episodes)  # again, now that no other run can write
             folder = _Folder(out_dir, folder_layout(out_dir))
@@ -1875,6 +1894,15 @@ def generate_dataset(
                 ),
             )
             workers, batches = _plan(executor, todo, n_jobs)
+            if progress:  # stated once, the time being an estimate a run is not refused on
+                _say_estimate(
+                    spec,
+                    one,
+                    todo=len(todo),
+                    episodes=episodes,
+                    workers=workers,
+                    save_recordings=save_recordings,
+                )
             if executor.remote:  # the shards come back as bytes, written here
                 shared: tuple[Any, ...] = (spec, save_recordings)
                 results = _written(
@@ -1988,15 +2016,18 @@ def _drain(
     scenario: str,
     progress: bool,
 ) -> None:
-    with tqdm(
-        total=episodes,
-        initial=len(shards),
-        desc=f"generate {scenario}",
-        unit="episode",
-        file=sys.stderr,
-        disable=not progress,
-        dynamic_ncols=True,
-    ) as bar:
+    with (
+        tqdm(
+            total=episodes,
+            initial=len(shards),
+            desc=f"generate {scenario}",
+            unit="episode",
+            file=sys.stderr,
+            disable=not progress,
+            dynamic_ncols=True,
+        ) as bar,
+        ticking(bar),
+    ):
         frames = 0
         for batch in results:
             for summary in batch:

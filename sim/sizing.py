@@ -55,6 +55,7 @@ __all__ = [
     "describe",
     "measure",
     "parse_size",
+    "pool_start",
     "python_name",
     "total_memory",
 ]
@@ -82,6 +83,9 @@ SECONDS_PER_OBSERVED_AGENT_FRAME = 1.8e-5  # seconds per agent per frame the rob
 SECONDS_PER_RECORDED_AGENT_FRAME = 1.0e-6  # seconds per agent-frame recorded for Rerun
 SECONDS_PER_EPISODE = 0.076  # seconds per generated episode beside its frames (scenario,
 # scene, World, shard)
+WORKER_START_SECONDS = 3.0  # seconds for a pool of worker processes to start: each imports
+# NumPy, MuJoCo and the package before its first unit (`reform-sim generate --jobs 2` took 2 to
+# 5 s to its first episode on two shared cores, against 0.2 s of episodes estimated)
 SCHEDULE_BYTES_PER_STEP = 8  # bytes: the world's step schedule, one int64 per control step of a
 # block of output rows (sim.world.World.rollout, World.step)
 
@@ -315,10 +319,16 @@ def dataset_estimate(
         memory=workers * per_worker + card,
         memory_cause=cause,
         disk=float(episodes) * (episode.disk + CARD_DISK_EPISODE_BYTES),
-        seconds=float(episodes) * episode.seconds / workers,
+        seconds=float(episodes) * episode.seconds / workers + pool_start(workers),
         frames=episodes * episode.frames,
         agents=episode.agents,
     )
+
+
+def pool_start(workers: int) -> float:
+    """Seconds before ``workers`` worker processes take their first unit
+    (`WORKER_START_SECONDS`; none for one, which works in the calling process)."""
+    return WORKER_START_SECONDS if workers > 1 else 0.0
 
 
 def stress_estimate(
@@ -384,7 +394,8 @@ def stress_estimate(
         memory=BASE_MEMORY_BYTES + sum(parts.values()),
         memory_cause=max(parts, key=parts.__getitem__),
         disk=STRESS_REPORT_BYTES + scored * STRESS_RESULT_BYTES,
-        seconds=(simulate + agent_frames * SECONDS_PER_SCORED_AGENT_FRAME) / workers,
+        seconds=(simulate + agent_frames * SECONDS_PER_SCORED_AGENT_FRAME) / workers
+        + pool_start(workers),
         frames=int(scored) * frames,
         agents=largest,
     )

@@ -10,7 +10,7 @@ from sim.cli._common import (
     run_with,
 )
 from sim.cli._detectors import add_detector_timeout
-from sim.cli._grammar import add_frames, add_quiet, add_recordings
+from sim.cli._grammar import add_frames, add_out, add_quiet, add_recordings
 
 DEFAULT_OUT = "benchmark-output"
 DEFAULT_DETECTORS = (
@@ -94,8 +94,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="with --twin: its generated dataset (default: twin-data/ beside twin.json)",
     )
-    parser.add_argument(
-        "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder (./{DEFAULT_OUT})"
+    add_out(
+        parser,
+        folder=True,
+        default=DEFAULT_OUT,
+        help="folder for benchmark.md, benchmark.json, benchmark.png and recordings/",
     )
     parser.add_argument(
         "--temporal",
@@ -104,6 +107,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_detector_timeout(parser)
     add_recordings(parser, default=True, each="dataset")
-    add_backend_arguments(parser, jobs_default="1")
+    add_backend_arguments(parser)
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.benchmark:_run"))

@@ -6,7 +6,7 @@ import argparse
 
 from sim.cli._common import add_backend_arguments, run_with
 from sim.cli._experiment_io import add_dataset_arguments
-from sim.cli._grammar import add_episodes, add_quiet
+from sim.cli._grammar import add_episodes, add_out, add_quiet
 
 DESCRIPTION = """\
 Simulates word-improv and mingle with default options and compares them with Babble and SALSA:
@@ -19,14 +19,12 @@ BASENAME = "calibration"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--out", required=True, metavar="DIR", help=f"folder for {BASENAME}.md and {BASENAME}.json"
-    )
+    add_out(parser, folder=True, help=f"folder for {BASENAME}.md and {BASENAME}.json (created)")
     add_dataset_arguments(parser)
     add_episodes(parser, help="episodes per scenario (default 8)", old="--seeds")
     parser.add_argument(
         "--check", action="store_true", help="exit with status 1 when a target is missed"
     )
-    add_backend_arguments(parser, jobs_default="every core", jobs_help="episodes at once")
+    add_backend_arguments(parser, jobs_help="episodes at once")
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.calibrate:run"))

@@ -10,6 +10,7 @@ subcommand's arguments module is imported when that subcommand is parsed or its 
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import os
 import sys
@@ -32,6 +33,7 @@ TIME_UNITS = ("s", "ms", "us", "ns")
 TRAIN_FRACTION = 0.6
 DEFAULT_DATASETS = "../shared/datasets"  # the real datasets beside a clone
 DATASETS_VARIABLE = "REFORM_SIM_DATASETS"  # environment variable naming them elsewhere
+DEFAULT_JOBS = "every core"  # what --jobs is when not given, in every command (`job_count`)
 
 
 def read_text(option: str, path: str, *, expected: str) -> str:
@@ -94,7 +96,46 @@ class CommandParser(argparse.ArgumentParser):
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> tuple[argparse.Namespace, list[str]]:
         self._ensure_arguments()
-        return super().parse_known_args(args, namespace)
+        self._given = list(sys.argv[1:] if args is None else args)
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras and not self._has_subcommands():  # nothing below this parser takes them
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
+
+    def _has_subcommands(self) -> bool:
+        return any(isinstance(a, argparse._SubParsersAction) for a in self._actions)
+
+    def _unknown_flags(self) -> list[str]:
+        """The flags given to this parser that none of its options is, nor abbreviates."""
+        unknown = []
+        for word in getattr(self, "_given", ()):
+            if word == "--":
+                break
+            flag = word.partition("=")[0]
+            if not flag.startswith("-") or flag == "-" or self._negative_number_matcher.match(flag):
+                continue
+            if not any(option.startswith(flag) for option in self._option_string_actions):
+                unknown.append(flag)
+        return unknown
+
+    def _suggestions(self) -> str:
+        """``; did you mean --jobs?`` for each unknown flag close to one this parser takes."""
+        shown = [
+            flag
+            for action in self._actions
+            if action.help is not argparse.SUPPRESS
+            for flag in action.option_strings
+            if flag.startswith("--")
+        ]
+        close = {
+            flag: match[0]
+            for flag in self._unknown_flags()
+            if (match := difflib.get_close_matches(flag, shown, n=1, cutoff=0.6))
+        }
+        if len(close) == 1:
+            return f"; did you mean {next(iter(close.values()))}?"
+        said = [f"{match} for {flag}" for flag, match in close.items()]
+        return f"; did you mean {', '.join(said)}?" if said else ""
 
     def format_usage(self) -> str:
         self._ensure_arguments()
@@ -106,7 +147,14 @@ class CommandParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         """A malformed command line in one line, as every other error: what was wrong and where
-        the usage is (argparse prints the whole usage first)."""
+        the usage is (argparse prints the whole usage first). A flag none of the command's
+        options is comes first, with the closest one the command takes (argparse names
+        neither: a misspelt required flag is otherwise reported as missing)."""
+        unknown = self._unknown_flags()
+        if unknown and not message.startswith("unrecognized arguments"):
+            message = f"unrecognized arguments: {' '.join(unknown)}"
+        if unknown:
+            message += self._suggestions()
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
@@ -318,25 +366,39 @@ def add_data_arguments(parser: argparse.ArgumentParser, *, old_positional: bool 
     )
 
 
+def add_jobs_argument(parser: argparse.ArgumentParser, *, does: str = "worker processes") -> None:
+    """``--jobs N``: the local processes a command's work runs on, default `DEFAULT_JOBS` in
+    every command (None until :func:`job_count` reads it); ``does``: what they do, for the help."""
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"{does} (default: {DEFAULT_JOBS}); results do not depend on it",
+    )
+
+
+def job_count(args: argparse.Namespace) -> int:
+    """``--jobs`` as a count of processes: the number given, else every core this process may
+    run on (`DEFAULT_JOBS`)."""
+    if args.jobs is not None:
+        return args.jobs
+    from sim.executor import cpu_count
+
+    return cpu_count()
+
+
 def add_backend_arguments(
-    parser: argparse.ArgumentParser, *, jobs_default: str, jobs_help: str = "worker processes"
+    parser: argparse.ArgumentParser, *, jobs_help: str = "worker processes"
 ) -> None:
     """``--jobs N``, ``--backend local|ray`` and ``--address ADDR``: where a command's
     independent units of work run (`sim.executor.Executor`), checked by :func:`check_backend`
     and made into an executor by :func:`executor_from_args`.
 
     Args:
-        jobs_default: what ``--jobs`` defaults to, for the help (``"all cores"``).
         jobs_help: what the local processes do, for the help.
     """
-    parser.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        metavar="N",
-        help=f"{jobs_help} with --backend local (default: {jobs_default}); results do not "
-        "depend on it",
-    )
+    add_jobs_argument(parser, does=f"{jobs_help} with --backend local")
     parser.add_argument(
         "--backend",
         choices=("local", "ray"),

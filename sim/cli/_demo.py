@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
-from sim.cli._grammar import add_quiet, add_seed, rename, setter
+from sim.cli._common import add_jobs_argument, run_with
+from sim.cli._grammar import add_out, add_quiet, add_seed, rename, setter
 from sim.experiments.demo_files import DEFAULT_OUT
 
 DESCRIPTION = """\
@@ -26,13 +26,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "../shared/datasets when it exists, else the fetched ones, else synthetic data only)",
     )
     rename(parser, "--datasets", "--data", setter("data"), metavar="DIR")
-    parser.add_argument(
-        "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder ({DEFAULT_OUT})"
+    add_out(
+        parser,
+        folder=True,
+        default=DEFAULT_OUT,
+        help="folder for the report, the model, the plots and the recordings",
     )
     add_seed(parser)
-    parser.add_argument(
-        "--jobs", type=int, default=None, metavar="N", help="worker processes (every core)"
-    )
+    add_jobs_argument(parser)
     parser.add_argument(
         "--quick", action="store_true", help="tiny budgets: a smoke run in well under a minute"
     )

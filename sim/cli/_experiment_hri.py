@@ -38,9 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="V1,V2",
         help=f"views to score (default {','.join(VIEW_NAMES)})",
     )
-    add_backend_arguments(
-        parser, jobs_default="every core", jobs_help="worker processes (training, episodes)"
-    )
+    add_backend_arguments(parser, jobs_help="worker processes (training, episodes)")
     add_recordings(parser, default=False, each="scene (its first episode, robot view)", folder=True)
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.experiment_hri:run"))

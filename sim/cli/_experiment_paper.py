@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_jobs_argument, run_with
 from sim.cli._experiment_io import add_salsa_split_arguments
 from sim.cli._grammar import add_quiet
 
@@ -24,7 +24,7 @@ BASENAME = "paper-experiment"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_salsa_split_arguments(parser, basename=BASENAME, use="for training (0.6)")
     parser.add_argument("--folds", type=int, default=5, metavar="K", help="CV folds (5)")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel CV fits")
+    add_jobs_argument(parser, does="processes fitting the cross-validation folds")
     parser.add_argument(
         "--no-diagnostics", action="store_true", help="skip the diagnostic reruns (faster)"
     )

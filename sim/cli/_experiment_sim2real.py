@@ -17,14 +17,15 @@ found (SALSA's test split, every annotated frame of the others) beside REFORM tr
 training split, GCFF with one setting and with each dataset's own settings, and REFORM trained on
 the other real datasets (leave one dataset out); reports the rank agreement (Kendall's tau)
 between the simulated party and the real datasets, the goals, and plots. The synthetic data are
-generated once under --synthetic and reused. Writes DIR/sim2real.md, DIR/sim2real.json,
+generated once under --synthetic (default: DIR/synthetic) and reused; nothing is
+written outside DIR unless --synthetic names another folder. Writes DIR/sim2real.md, DIR/sim2real.json,
 DIR/sim2real.png, DIR/sim2real-rank.png, DIR/sim2real-calibration.png and
 DIR/recommended.skops, and prints the Markdown.
 """
 
 BASENAME = "sim2real"
 
-DEFAULT_SYNTHETIC = "runs/sim2real"
+SYNTHETIC = "synthetic"  # the synthetic data's folder in --out, when --synthetic is not given
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,9 +41,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_out_argument(parser, basename=BASENAME)
     parser.add_argument(
         "--synthetic",
-        default=DEFAULT_SYNTHETIC,
+        default=None,
         metavar="DIR",
-        help=f"folder of the generated synthetic data, reused when present ({DEFAULT_SYNTHETIC})",
+        help=f"folder of the generated synthetic data, reused when present (default: "
+        f"OUT/{SYNTHETIC})",
     )
     add_seed(parser)
     parser.add_argument(
@@ -58,8 +60,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="A,B",
         help="REFORM classifiers compared (default: logistic-regression,weighted-knn,bagged-trees)",
     )
-    add_backend_arguments(
-        parser, jobs_default="every core", jobs_help="worker processes (generation, training)"
-    )
+    add_backend_arguments(parser, jobs_help="worker processes (generation, training)")
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.experiment_sim2real:run"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_jobs_argument, run_with
 from sim.cli._experiment_io import add_out_argument
 from sim.cli._grammar import add_quiet, add_seed
 from sim.experiments.temporal import DURATION_S, EPISODES, RATE_HZ
@@ -54,9 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--rate", type=float, default=RATE_HZ, metavar="HZ", help=f"frames per second ({RATE_HZ:g})"
     )
-    parser.add_argument(
-        "--jobs", type=int, default=1, metavar="N", help="local worker processes (1)"
-    )
+    add_jobs_argument(parser)
     add_out_argument(parser, basename=BASENAME)
     add_seed(parser)
     add_quiet(parser)

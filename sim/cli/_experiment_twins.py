@@ -10,7 +10,7 @@ from sim.cli._grammar import add_quiet, add_seed
 
 DESCRIPTION = """\
 For every real dataset found: fits its label-free venue twin (`reform-sim twin`), generates the
-twin's data (under --twins, reused), and measures, on the second half of each recording, (1)
+twin's data (under --twins, default DIR/twins, reused), and measures, on the second half of each recording, (1)
 tuning: GCFF, the proximity baseline and REFORM with one setting for every dataset, tuned on
 the twin, and tuned on the first half's labels (the ceiling); (2) prediction: every catalogued
 detector's F1 on the twin against its real F1 (Pearson r, Spearman, Kendall's tau, mean absolute
@@ -20,7 +20,7 @@ DIR/twins.png, and prints the Markdown.
 """
 
 BASENAME = "twins"
-DEFAULT_TWINS = "runs/twins"
+TWINS = "twins"  # the twins' folder in --out, when --twins is not given
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -35,9 +35,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_out_argument(parser, basename=BASENAME)
     parser.add_argument(
         "--twins",
-        default=DEFAULT_TWINS,
+        default=None,
         metavar="DIR",
-        help=f"folder of the twins and their generated data, reused when present ({DEFAULT_TWINS})",
+        help=f"folder of the twins and their generated data, reused when present (default: "
+        f"OUT/{TWINS})",
     )
     add_seed(parser)
     add_quiet(parser)

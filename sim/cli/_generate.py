@@ -56,8 +56,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_view_argument(parser)
     add_sensor_arguments(parser)
-    add_backend_arguments(parser, jobs_default="all cores")
-    add_recordings(parser, default=False, each="episode (DIR/recordings/episode=K.rrd)")
+    add_backend_arguments(parser)
+    add_recordings(parser, default=False, each="episode (episode=K.rrd)")
     rename(parser, "--save-recordings", "--recordings", setter("recordings", True), nargs=0)
     parser.add_argument(
         "--annotation",

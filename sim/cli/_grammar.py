@@ -7,10 +7,11 @@ walks every parser and checks it):
 data in            ``--data PATH|NAME`` (repeatable where a command reads several;
                    ``NAME=PATH`` says which dataset a path is)
 results out        ``--out DIR`` where a command writes several files, ``--out FILE`` where
-                   it writes exactly one
+                   it writes exactly one; an optional ``--out`` states its default in the help
 seed               ``--seed S``, default 0
 counts             ``--episodes N``
-parallel work      ``--jobs N`` (with ``--backend``/``--address`` where Ray can run it)
+parallel work      ``--jobs N``, default every core (``DEFAULT_JOBS``) in every command (with
+                   ``--backend``/``--address`` where Ray can run it)
 progress           bars and lines on stderr; ``--quiet`` silences them
 one recording      ``--save PATH.rrd``, ``--connect [--url URL]``, ``--serve``, ``--headless``
                    (the flags of ``rr.script_add_args``)
@@ -19,7 +20,9 @@ frames scored      ``--frames all|train|test`` with ``--train-fraction F``
 =================  =====================================================================
 
 Old spellings keep working for one release: `rename` declares one, hidden from the help, which
-prints a line naming the new spelling and then does what the new one does.
+prints a line naming the new spelling and then does what the new one does. A flag a command does
+not take is refused with the closest one it does (`sim.cli._common.CommandParser`), and an
+unknown scenario with the registry's one message (`scenarios.describe`).
 """
 
 from __future__ import annotations
@@ -211,7 +214,8 @@ def add_report_out(parser: argparse.ArgumentParser, *, basename: str, holds: str
         "--out",
         default=None,
         metavar="DIR",
-        help=f"write {basename}.json ({holds}) and {basename}.md in this folder",
+        help=f"write {basename}.json ({holds}) and {basename}.md in this folder (default: "
+        "printed only)",
     )
     parser.set_defaults(old_json=None, old_markdown=None)
     rename(parser, "--json", "--out DIR", setter("old_json"), metavar="FILE")

@@ -40,7 +40,10 @@ def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
         "policy's upper bound)",
     )
     parser.add_argument(
-        "--out", default=None, metavar="FILE.json", help="write the results as JSON here"
+        "--out",
+        default=None,
+        metavar="FILE.json",
+        help="write the results as JSON here (default: printed only)",
     )
     rename(parser, "--json", "--out", setter("out"), metavar="FILE")
     add_quiet(parser, old=())

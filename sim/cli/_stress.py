@@ -6,7 +6,7 @@ import argparse
 
 from sim.cli._common import add_backend_arguments, add_max_memory_argument, run_with
 from sim.cli._detectors import detector_name
-from sim.cli._grammar import add_episodes, add_quiet, add_seed
+from sim.cli._grammar import add_episodes, add_out, add_quiet, add_seed
 from sim.experiments.stress_grid import AXES, GRIDS
 from sim.recording import add_recording_arguments
 
@@ -57,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="A,B,...",
         help=f"axes to run (default all): {','.join(AXES)}",
     )
-    add_backend_arguments(parser, jobs_default="every core")
+    add_backend_arguments(parser)
     parser.add_argument(
         "--detector",
         action="append",
@@ -70,11 +70,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "group reform_sim.detectors), or package.module:factory (the current folder is searched "
         "too); fitted on the training frames when it has fit()",
     )
-    parser.add_argument(
-        "--out",
-        default="stress",
-        metavar="DIR",
-        help="folder for stress.md, stress.json and the plots (default: ./stress)",
+    add_out(
+        parser, folder=True, default="stress", help="folder for stress.md, stress.json and the plots"
     )
     parser.add_argument(
         "--temporal",

@@ -8,7 +8,7 @@ import argparse
 from reform.classifiers import CLASSIFIERS
 from reform.features import DEFAULT_FEATURES, FEATURES
 from reform.reconstruction import RECONSTRUCTIONS
-from sim.cli._common import add_data_arguments, run_with
+from sim.cli._common import add_data_arguments, add_jobs_argument, run_with
 from sim.cli._grammar import add_frames, add_quiet
 
 DESCRIPTION = """\
@@ -78,7 +78,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="choose hyper-parameters by time-blocked cross-validation on the training frames",
     )
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel CV fits")
+    add_jobs_argument(parser, does="with --tune: processes fitting the cross-validation folds")
     parser.add_argument(
         "--features",
         default=None,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import run_with
+from sim.cli._common import add_jobs_argument, run_with
 from sim.cli._grammar import add_quiet
 
 DESCRIPTION = """\
@@ -40,8 +40,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="the twin's generated dataset (default: twin-data/ beside twin.json; made if absent)",
     )
-    parser.add_argument(
-        "--jobs", type=int, default=None, metavar="N", help="processes generating the twin's data"
-    )
+    add_jobs_argument(parser, does="processes generating the twin's data")
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.tune:_run"))

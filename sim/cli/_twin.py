@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import add_data_arguments, run_with
-from sim.cli._grammar import add_seed
+from sim.cli._grammar import add_out, add_seed
 
 DEFAULT_OUT = "twin"
 
@@ -23,9 +23,7 @@ group, o-space radii) from the annotated frames: a separate mode, recorded in tw
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_data_arguments(parser)
-    parser.add_argument(
-        "--out", default=DEFAULT_OUT, metavar="DIR", help=f"output folder (./{DEFAULT_OUT})"
-    )
+    add_out(parser, folder=True, default=DEFAULT_OUT, help="folder for twin.json and twin.png")
     add_seed(parser, help="master seed of the pilot parties and of the twin's data")
     parser.add_argument(
         "--use-labels",

@@ -18,6 +18,7 @@ from sim.cli._common import (
     CliError,
     check_backend,
     check_output,
+    job_count,
 )
 from sim.cli._detectors import make_plugin
 from sim.experiments.benchmark import (
@@ -107,7 +108,7 @@ def _run(args: argparse.Namespace) -> int:
         benchmark = run_benchmark(
             datasets,
             detectors,
-            jobs=args.jobs or 1,
+            jobs=job_count(args),
             backend=args.backend,
             address=args.address,
             progress=progress,

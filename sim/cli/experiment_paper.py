@@ -13,6 +13,7 @@ from sim.cli._common import (
     TRAIN_FRACTION,
     CliError,
     check_train_fraction,
+    job_count,
 )
 from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
 from sim.cli._experiment_paper import BASENAME
@@ -51,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         load_babble(resolve(data["babble"])),
         train_fraction=args.train_fraction,
         n_folds=args.folds,
-        n_jobs=args.jobs,
+        n_jobs=job_count(args),
         diagnostics=not args.no_diagnostics,
         progress=progress,
     )

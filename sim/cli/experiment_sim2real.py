@@ -15,7 +15,7 @@ from reform.datasets import DataFormatError, detect_format, load_dataset, resolv
 from reform.frame import Dataset
 from sim.cli._common import CliError, backend_words, check_output, executor_from_args
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
-from sim.cli._experiment_sim2real import BASENAME
+from sim.cli._experiment_sim2real import BASENAME, SYNTHETIC
 from sim.experiments.benchmark import found_datasets, one_recording_each
 from sim.experiments.sim2real import CLASSIFIER_NAMES, RECIPES, SALSA, sim_to_real
 from sim.experiments.sim2real_report import (
@@ -117,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
             )
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, *FIGURES))
     check_report(out, suffixes=(*REPORT_SUFFIXES, *FIGURES))
-    check_output("--synthetic", args.synthetic, folder=True)
+    synthetic = args.synthetic if args.synthetic is not None else out.parent / SYNTHETIC
+    check_output("--synthetic", synthetic, folder=True)
     executor = executor_from_args(args, progress=not args.quiet)  # the Ray address probed
     real = load_named(args.data)
     recipes = tuple(r.scaled(args.episodes_scale) for r in RECIPES)
@@ -132,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     with executor:
         result = sim_to_real(
             real,
-            synthetic_root=args.synthetic,
+            synthetic_root=synthetic,
             recipes=recipes,
             classifiers=classifiers,
             seed=args.seed,

@@ -9,7 +9,7 @@ import shlex
 import sys
 import time
 
-from sim.cli._common import CliError
+from sim.cli._common import CliError, job_count
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
 from sim.cli._experiment_temporal import BASENAME
 from sim.experiments.temporal import DURATION_S, EPISODES, RATE_HZ
@@ -67,7 +67,6 @@ def run(args: argparse.Namespace) -> int:
         ("--episodes", args.episodes, 1),
         ("--duration", args.duration, 1.0),
         ("--rate", args.rate, 0.1),
-        ("--jobs", args.jobs, 1),
     ):
         if value < low:
             raise CliError(f"{flag} must be at least {low:g}, got {value:g}")
@@ -94,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         duration=args.duration,
         rate=args.rate,
         detectors=args.detector or None,
-        jobs=args.jobs,
+        jobs=job_count(args),
         progress=progress,
     )
     command = _command(args)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from sim.cli._common import CliError, check_output
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
-from sim.cli._experiment_twins import BASENAME, DEFAULT_TWINS
+from sim.cli._experiment_twins import BASENAME, TWINS
 
 FIGURE = ".png"
 
@@ -48,7 +48,7 @@ def _command(args: argparse.Namespace) -> str:
     words = ["reform-sim", "experiment", "twins"]
     for value in args.data:
         words += ["--data", value]
-    if args.twins != DEFAULT_TWINS:
+    if args.twins is not None:
         words += ["--twins", args.twins]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
@@ -62,7 +62,8 @@ def run(args: argparse.Namespace) -> int:
 
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, FIGURE))
     check_report(out, suffixes=(*REPORT_SUFFIXES, FIGURE))
-    check_output("--twins", args.twins, folder=True)
+    twins = args.twins if args.twins is not None else out.parent / TWINS
+    check_output("--twins", twins, folder=True)
     real = _load(args.data)
     started = time.perf_counter()
 
@@ -72,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
                 f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
             )
 
-    result = run_twins(real, root=args.twins, seed=args.seed, progress=progress)
+    result = run_twins(real, root=twins, seed=args.seed, progress=progress)
     command = _command(args)
     figure = scatter_figure(result, out.with_name(out.name + FIGURE)).name
     markdown = to_markdown(result, command=command, figure=figure)

@@ -18,6 +18,7 @@ from sim.cli._common import (
     CliError,
     check_frames,
     check_output,
+    job_count,
     load_data,
     select_frames,
 )
@@ -70,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
             print(
                 f"cross-validating {args.classifier} on {len(frames)} frames ...", file=sys.stderr
             )
-        tuning = tune(args.classifier, frames, features=features, n_jobs=args.jobs)
+        tuning = tune(args.classifier, frames, features=features, n_jobs=job_count(args))
         params = classifier_params(args.classifier, tuning.best_params)
         for candidate, score in zip(tuning.candidates, tuning.mean_score, strict=True):
             if args.quiet:

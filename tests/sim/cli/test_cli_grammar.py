@@ -5,10 +5,12 @@ saying which spelling replaces it."""
 from __future__ import annotations
 
 import argparse
+import re
 
 import pytest
 
 from sim.cli import build_parser, main
+from sim.cli._common import DEFAULT_JOBS, job_count
 from sim.cli._grammar import FRAME_CHOICES, RENAMED
 
 # Spellings that the grammar replaced: none of them may be shown in a command's help.
@@ -192,3 +194,79 @@ def test_help_shows_no_dest_names_as_metavars():
         for action in _visible(parser):
             if action.option_strings and action.nargs != 0 and action.dest.upper() in text:
                 assert action.metavar or action.choices, f"{command}: {action.dest.upper()}"
+
+
+def _option(parser: argparse.ArgumentParser, flag: str) -> argparse.Action | None:
+    return next((a for a in _visible(parser) if flag in a.option_strings), None)
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_jobs_out_and_recordings_keep_the_grammar(command):
+    parser = COMMANDS[command]
+    jobs = _option(parser, "--jobs")
+    if jobs is not None:  # one default everywhere, stated in the help
+        assert (jobs.default, jobs.metavar) == (None, "N"), command
+        assert f"(default: {DEFAULT_JOBS})" in jobs.help, f"{command}: --jobs {jobs.help}"
+    out = _option(parser, "--out")
+    if out is not None and not out.required:  # an optional --out says what happens without it
+        assert "(default: " in out.help, f"{command}: --out {out.help}"
+    if out is not None and out.default is not None:
+        assert out.metavar.startswith("DIR") and f"(default: {out.default})" in out.help, command
+    saves = _option(parser, "--save") is not None
+    recordings = _option(parser, "--recordings")
+    assert not (saves and recordings), f"{command}: --save and --recordings"
+    if saves:
+        assert RERUN_FLAGS <= _flags(parser), command
+    if recordings is not None:
+        assert "--no-recordings" in recordings.option_strings, command
+        assert re.search(r"in OUT/recordings/ \(default: (yes|no)\)$", recordings.help), command
+    for flag in _flags(parser) - RERUN_FLAGS - {"--recordings", "--no-recordings"}:
+        assert not re.search("record|rrd|rerun", flag), f"{command}: {flag}, a third spelling"
+
+
+def test_jobs_left_out_is_every_core():
+    from sim.executor import cpu_count
+
+    args = build_parser().parse_args(["benchmark"])
+    assert args.jobs is None and job_count(args) == cpu_count()
+    assert job_count(build_parser().parse_args(["benchmark", "--jobs", "3"])) == 3
+
+
+def _mistyped(parser: argparse.ArgumentParser) -> str:
+    """A long flag of the parser with an extra letter, a prefix of none of its flags."""
+    flag = sorted(f for f in _flags(parser) if f.startswith("--") and f != "--help")[0]
+    return flag + "x"
+
+
+@pytest.mark.parametrize("command", sorted(c for c in COMMANDS if _flags(COMMANDS[c]) - {"-h"}))
+def test_an_unknown_flag_names_the_closest_one(command, capsys):
+    typo = _mistyped(COMMANDS[command])
+    with pytest.raises(SystemExit) as stop:
+        build_parser().parse_args([*command.split(), typo])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2
+    assert err.count("\n") == 1 and f"reform-sim {command}: error: " in err, err
+    assert f"unrecognized arguments: {typo}; did you mean {typo[:-1]}?" in err, err
+
+
+# How each command that takes a scenario's name is asked for one (a new one is added here).
+SCENARIO_RUNS = {
+    "simulate": ["simulate", "--out", "{out}/o.parquet", "--scenario"],
+    "generate": ["generate", "--episodes", "1", "--out", "{out}", "--scenario"],
+    "scenarios": ["scenarios"],
+}
+
+
+def test_an_unknown_scenario_gets_one_message_from_every_command(tmp_path, capsys):
+    import scenarios
+
+    takes = {c for c, p in COMMANDS.items() if "--scenario" in _flags(p)}
+    assert takes and takes <= set(SCENARIO_RUNS), takes - set(SCENARIO_RUNS)
+    with pytest.raises(ValueError) as registry:
+        scenarios.describe("no-such-scene")
+    for command, words in SCENARIO_RUNS.items():
+        out = tmp_path / command
+        assert main([w.format(out=out) for w in words] + ["no-such-scene"]) == 2, command
+        err = capsys.readouterr().err
+        assert err == f"reform-sim {command}: error: {registry.value}\n", (command, err)
+        assert not out.exists(), f"{command} wrote before refusing"

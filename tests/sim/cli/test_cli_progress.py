@@ -1,0 +1,76 @@
+"""Long work is never silent, and what it says it will take is what it takes: a real
+``reform-sim generate`` (worker processes, episodes), its stderr read as it comes, every piece
+stamped with its time (a bar redraws with ``\\r``), checked for its longest silence and for its
+estimate against the time the work then took.
+
+The one figure the command's own start-up governs (imports before the first line) is held to a
+looser bound here; `test_cli_startup.py` is about it."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from sim.cli import main
+
+SILENCE_S = 5.0  # seconds: the longest a running command may say nothing
+START_S = 15.0  # seconds: the longest before its first line (imports, checks; a shared machine)
+RATIO = 3.0  # an estimate is within this factor of the time measured
+_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "days": 86400.0}
+# Small, but large enough to start two worker processes and give each episodes.
+GENERATE = ["generate", "--scenario", "mingle", "--episodes", "4", "--duration", "10"]
+
+
+def _stamped(argv: list[str], cwd: Path) -> tuple[list[tuple[float, str]], float, int]:
+    """The pieces of ``reform-sim argv``'s stderr with the seconds since its start at which each
+    came, the seconds it ran and its exit status."""
+    started = time.monotonic()
+    process = subprocess.Popen(
+        [sys.executable, "-m", "sim.cli", *argv],
+        cwd=cwd,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        env=dict(os.environ, COLUMNS="120"),
+    )
+    pieces = []
+    while chunk := os.read(process.stderr.fileno(), 65536):
+        now = time.monotonic() - started
+        text = chunk.decode(errors="replace")
+        pieces += [(now, piece) for piece in re.split(r"[\r\n]", text) if piece.strip()]
+    status = process.wait(timeout=120)
+    return pieces, time.monotonic() - started, status
+
+
+def _estimate_s(line: str) -> float:
+    """The seconds an estimate line states (``about 3.2 s``, ``about 12 min``)."""
+    value, unit = re.search(r"about ([\d.e+]+) (s|min|h|days)\b", line).groups()
+    return float(value) * _UNITS[unit]
+
+
+def test_generate_is_never_silent_and_its_estimate_holds(tmp_path):
+    pieces, ran, status = _stamped([*GENERATE, "--jobs", "2", "--out", "g"], tmp_path)
+    assert status == 0, pieces[-3:]
+    times = [t for t, _ in pieces]
+    gaps = [later - earlier for earlier, later in zip(times, [*times[1:], ran], strict=True)]
+    print(f"first line at {times[0]:.1f} s, longest silence after it {max(gaps):.1f} s")
+    assert times[0] <= START_S, pieces[:2]
+    assert max(gaps) <= SILENCE_S, [(round(t, 1), p[:60]) for t, p in pieces]
+    (said, line), *_ = [(t, p) for t, p in pieces if " about " in p]
+    done = max(t for t, p in pieces if "4/4" in p)  # the bar full: every episode written
+    estimate = _estimate_s(line)
+    ratio = (done - said) / estimate
+    print(f"estimated {estimate:.1f} s, took {done - said:.1f} s: ratio {ratio:.2f}")
+    assert 1 / RATIO <= ratio <= RATIO, (line, done - said)
+
+
+def test_no_estimate_when_nothing_is_left_to_do(tmp_path, capsys):
+    argv = [*GENERATE[:4], "2", "--duration", "4", "--jobs", "1", "--out", str(tmp_path / "g")]
+    assert main(argv) == 0
+    assert " about " in capsys.readouterr().err  # the first run says what it will take
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert " about " not in err and "2/2" in err, err
