@@ -17,12 +17,16 @@ Backends (:data:`BACKENDS`):
 * ``"local"``: ``jobs`` worker processes on this machine (joblib's loky; every core by
   default). With one job, or one unit, the units run in this process, in order. A run stopped
   by an exception (Ctrl-C, SIGTERM through `sim.cli`) terminates its workers; a driver killed
-  outright takes them with it (each ends as soon as its parent is gone).
+  outright takes them with it (each ends as soon as its parent is gone). A worker killed by a
+  signal (the out-of-memory killer's SIGKILL, a crash in compiled code) stops the run with one
+  `WorkerDied` naming the unit it held (each worker notes the unit it runs in a folder of the
+  run's, with where a crash happened) and, for SIGKILL, the likely cause.
 * ``"ray"``: one Ray task per unit on every CPU of the cluster at ``address``, of the Ray
-  instance this process has already joined, or of one started on this machine. A task whose
-  worker process dies (a node lost, a process killed, out of memory) is run again by Ray, up
-  to :data:`MAX_RETRIES` times. An exception the function raises is not retried (it would
-  raise again): the run stops with that exception, as on the local backend.
+  instance this process has already joined, or of one started on this machine. A unit whose
+  node or result is lost runs again, up to :data:`MAX_RETRIES` times; one whose worker process
+  died runs again once, and a second death is blamed on the unit (named, as `WorkerDied`), as
+  is a worker Ray stopped for lack of memory. An exception the function raises is not retried
+  (it would raise again): the run stops with that exception, as on the local backend.
 
 Arguments every unit shares (``shared``: fitted detectors, a training set) are sent once: Ray
 puts them in its object store once and each task reads them from there.
@@ -34,11 +38,15 @@ own long connection timeouts.
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import pickle
+import re
+import shutil
 import signal
 import socket
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -51,6 +59,7 @@ __all__ = [
     "BACKENDS",
     "MAX_RETRIES",
     "ClusterError",
+    "WorkerDied",
     "Executor",
     "check_address",
     "cpu_count",
@@ -58,7 +67,7 @@ __all__ = [
 ]
 
 BACKENDS = ("local", "ray")
-MAX_RETRIES = 3  # times Ray runs a unit again after its worker process died
+MAX_RETRIES = 3  # times a unit runs again after its Ray node or its result was lost
 PROBE_TIMEOUT_S = 3.0  # seconds a cluster address has to accept a connection
 GCS_PORT = 6379  # Ray's default cluster (GCS) port: ``ray start --head`` listens there
 CLIENT_PORT = 10001  # Ray Client's default port (``ray://host``)
@@ -68,6 +77,7 @@ RAY_ADDRESS_VARIABLE = "RAY_ADDRESS"
 GCS_PROBE_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"  # every Ray GCS serves it
 RAY_INSTALL = "pip install 'reform-sim[ray]' (or pip install ray)"
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>: the signal a process gets when its parent dies
+NOTE_POLL_S = 0.1  # seconds between a run's looks for units its workers start
 PARENT_CHECK_S = 0.5  # seconds between a local worker's looks at its parent (not on Linux)
 EXIT_ORPHANED = 1  # exit status of a local worker whose parent is gone
 
@@ -82,6 +92,11 @@ def _last_line(exc: BaseException) -> str:
 class ClusterError(ConnectionError):
     """A Ray cluster that cannot be reached, or that lost a unit's worker more often than
     :data:`MAX_RETRIES` allows. One line, naming the address or the unit."""
+
+
+class WorkerDied(ChildProcessError):
+    """A local worker process killed by a signal while it ran a unit: one line naming the unit
+    (what ``describe`` says of it), the signal and, for SIGKILL, the likely cause."""
 
 
 def cpu_count() -> int:
@@ -274,8 +289,137 @@ def _apply(function: Callable[..., Any], unit: Any, *shared: Any) -> Any:
     return function(unit, *shared)
 
 
-def _indexed(function: Callable[..., Any], k: int, unit: Any, *shared: Any) -> tuple[int, Any]:
-    return k, function(unit, *shared)
+def _noted(
+    notes: str, function: Callable[..., Any], k: int, unit: Any, *shared: Any
+) -> tuple[int, Any]:
+    """``(k, function(unit, *shared))`` in a local worker, which notes in the folder ``notes``
+    that it runs unit ``k`` while it does (a crash's traceback written under the note), so that
+    the driver can name the unit of a worker killed meanwhile."""
+    path = os.path.join(notes, f"{k}.unit")
+    with open(path, "w") as note:
+        note.write(f"{os.getpid()}\n")
+        note.flush()
+        faulthandler.enable(file=note)  # a crash's Python traceback: here, not on the terminal
+        try:
+            result = function(unit, *shared)
+        finally:
+            faulthandler.disable()
+    os.remove(path)
+    return k, result
+
+
+class _DeathWatch:
+    """Watches the worker processes the notes in a folder name, and remembers the first to end:
+    when one is killed, the pool kills the others at once, and only this order tells which
+    worker's unit was the cause (Linux's process file descriptors; elsewhere nothing is
+    remembered, and every unit that was running is named)."""
+
+    def __init__(self, notes: str) -> None:
+        self.notes = notes
+        self.first: int | None = None  # the process id of the first worker seen to end
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        if hasattr(os, "pidfd_open"):
+            self._thread = threading.Thread(
+                target=self._watch, name="reform-sim-deaths", daemon=True
+            )
+            self._thread.start()
+
+    def _watch(self) -> None:
+        import select
+
+        watched: dict[int, int] = {}  # pidfd -> pid
+        try:
+            while not self._stop.is_set() and self.first is None:
+                for pid in _noted_pids(self.notes):
+                    if pid not in watched.values():
+                        try:
+                            watched[os.pidfd_open(pid)] = pid
+                        except OSError:  # gone already
+                            self.first = pid
+                            return
+                ready, _, _ = select.select(list(watched), [], [], NOTE_POLL_S)
+                if ready:
+                    self.first = watched[ready[0]]
+        finally:
+            for fd in watched:
+                os.close(fd)
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2 * NOTE_POLL_S)
+
+
+def _noted_pids(notes: str) -> list[int]:
+    """The process ids the notes in ``notes`` name (units being run)."""
+    pids = []
+    for entry in os.listdir(notes) if os.path.isdir(notes) else ():
+        try:
+            with open(os.path.join(notes, entry)) as note:
+                pids.append(int(note.readline()))
+        except (OSError, ValueError):  # removed meanwhile, or not written yet
+            continue
+    return pids
+
+
+_CODES = re.compile(r"\b(SIG[A-Z0-9]+)\((-?\d+)\)|\bEXIT\((-?\d+)\)")
+_CRASH_AT = re.compile(r'File "([^"]+)", line (\d+) in (\S+)')
+
+
+def _died(
+    exc: BaseException,
+    notes: str,
+    units: Sequence[Any],
+    describe: Callable[[Any], str] | None,
+    first: int | None = None,
+) -> WorkerDied:
+    """The one-line `WorkerDied` for loky's ``TerminatedWorkerError`` ``exc``: the signal from
+    the exit codes it lists, the unit(s) the notes in ``notes`` say were running: one whose note
+    holds a crash's traceback, with where it crashed, else that of the worker ``first`` to end,
+    else every one."""
+    codes = _CODES.findall(str(exc))
+    signals = [name for name, _, _ in codes if name]
+    status = next((code for name, _, code in codes if not name), None)
+    held: list[tuple[bool, int, str]] = []
+    for entry in os.listdir(notes) if os.path.isdir(notes) else ():
+        if not entry.endswith(".unit"):
+            continue
+        with open(os.path.join(notes, entry), errors="replace") as note:
+            text = note.read()
+        k = int(entry.removesuffix(".unit"))
+        crash = _CRASH_AT.search(text)
+        where = (
+            f" (crashed in {crash.group(3)} at {crash.group(1)}:{crash.group(2)})" if crash else ""
+        )
+        if crash is not None or text.split("\n", 1)[0] == str(first):
+            held = [(False, k, where)]
+            break
+        held.append((True, k, where))
+    held.sort()
+
+    def name(k: int) -> str:
+        return describe(units[k]) if describe is not None else f"unit {k}"
+
+    if not held:
+        what = "a unit of the run"
+    elif not held[0][0] or len(held) == 1:
+        what = name(held[0][1]) + held[0][2]
+    else:
+        what = " or ".join(name(k) for _, k, _ in held) + " (one of these)"
+    if "SIGKILL" in signals:
+        return WorkerDied(
+            f"a worker process was killed (SIGKILL) while it ran {what}: most likely the machine "
+            "ran out of memory and the system's out-of-memory killer ended it (see `dmesg`); "
+            "give the run more memory, or run fewer units at once (--jobs)"
+        )
+    if signals:
+        return WorkerDied(
+            f"a worker process died of {signals[0]} while it ran {what}: a crash in compiled code "
+            "it called (a native extension, a detector's library)"
+        )
+    how = f"with status {status}" if status is not None else "unexpectedly"
+    return WorkerDied(f"a worker process ended {how} while it ran {what}")
 
 
 class Executor:
@@ -415,6 +559,7 @@ class Executor:
         desc: str | None = None,
         unit: str = "task",
         on_done: Callable[[int, int, Any], None] | None = None,
+        describe: Callable[[Any], str] | None = None,
     ) -> list[Any]:
         """``[function(u, *shared) for u in units]``, the units run in parallel.
 
@@ -425,6 +570,8 @@ class Executor:
             desc: the progress bar's label (no bar without it, or with ``progress=False``).
             unit: what a unit is called in the bar.
             on_done: called as ``on_done(done, total, result)`` as each unit finishes.
+            describe: what a unit is, in a message (``"detector gcff on salsa"``), for a unit
+                whose worker died; ``"unit K"`` without it.
 
         Returns:
             The results in the order of ``units``.
@@ -440,7 +587,7 @@ class Executor:
             dynamic_ncols=True,
         ) as bar:
             for done, (k, result) in enumerate(
-                self.imap_unordered(function, units, shared=shared), start=1
+                self.imap_unordered(function, units, shared=shared, describe=describe), start=1
             ):
                 results[k] = result
                 bar.update(1)
@@ -449,19 +596,29 @@ class Executor:
         return results
 
     def imap_unordered(
-        self, function: Callable[..., Any], units: Sequence[Any], *, shared: Sequence[Any] = ()
+        self,
+        function: Callable[..., Any],
+        units: Sequence[Any],
+        *,
+        shared: Sequence[Any] = (),
+        describe: Callable[[Any], str] | None = None,
     ) -> Iterator[tuple[int, Any]]:
-        """``(k, function(units[k], *shared))`` for every unit, as units finish."""
+        """``(k, function(units[k], *shared))`` for every unit, as units finish (``describe``:
+        as in `map`)."""
         units = list(units)
         shared = tuple(shared)
         if not units:
             return iter(())
         if self.backend == "ray":
-            return self._ray_stream(function, units, shared)
-        return self._local_stream(function, units, shared)
+            return self._ray_stream(function, units, shared, describe)
+        return self._local_stream(function, units, shared, describe)
 
     def _local_stream(
-        self, function: Callable[..., Any], units: list[Any], shared: tuple[Any, ...]
+        self,
+        function: Callable[..., Any],
+        units: list[Any],
+        shared: tuple[Any, ...],
+        describe: Callable[[Any], str] | None = None,
     ) -> Iterator[tuple[int, Any]]:
         workers = min(self.workers, len(units))
         if workers <= 1:
@@ -469,7 +626,10 @@ class Executor:
                 yield k, function(item, *shared)
             return
         from joblib import Parallel, delayed
+        from joblib.externals.loky.process_executor import TerminatedWorkerError
 
+        notes = tempfile.mkdtemp(prefix="reform-sim-units-")  # what each worker runs
+        deaths = _DeathWatch(notes)
         parallel = Parallel(
             n_jobs=workers,
             backend="loky",
@@ -480,8 +640,11 @@ class Executor:
         )
         try:
             yield from parallel(
-                delayed(_indexed)(function, k, item, *shared) for k, item in enumerate(units)
+                delayed(_noted)(notes, function, k, item, *shared) for k, item in enumerate(units)
             )
+        except TerminatedWorkerError as exc:
+            deaths.close()
+            raise _died(exc, notes, units, describe, deaths.first) from None
         except pickle.PicklingError as exc:  # something the work holds cannot be sent
             what = _last_line(exc.__cause__ or exc)
             raise ValueError(
@@ -489,31 +652,52 @@ class Executor:
                 "holds, such as a detector's lock, socket or open file, cannot be copied to "
                 "another process; keep such things out of its attributes, or run with --jobs 1"
             ) from exc
+        finally:
+            deaths.close()
+            shutil.rmtree(notes, ignore_errors=True)
 
     def _ray_stream(
-        self, function: Callable[..., Any], units: list[Any], shared: tuple[Any, ...]
+        self,
+        function: Callable[..., Any],
+        units: list[Any],
+        shared: tuple[Any, ...],
+        describe: Callable[[Any], str] | None = None,
     ) -> Iterator[tuple[int, Any]]:
+        """Every unit a Ray task, run again here (not by Ray: the reason decides) when its
+        worker is lost: a lost node or object up to :data:`MAX_RETRIES` times; a worker process
+        that died under the unit once (the same unit ending a second worker is the unit's doing:
+        a crash in compiled code, an exit, memory); never when Ray stopped it for memory."""
         ray = self._connect()
         if self._task is None:
-            self._task = ray.remote(num_cpus=1, max_retries=MAX_RETRIES, retry_exceptions=False)(
-                _apply
-            )
+            self._task = ray.remote(num_cpus=1, max_retries=0, retry_exceptions=False)(_apply)
         refs = [ray.put(value) for value in shared]
         index = {}
         for k, item in enumerate(units):
             index[self._task.remote(function, item, *refs)] = k
         pending = list(index)
+        lost = dict.fromkeys(range(len(units)), 0)
         try:
             while pending:
                 done, pending = ray.wait(pending, num_returns=1)
-                k = index[done[0]]
-                yield k, self._get(ray, done[0], k)
+                k = index.pop(done[0])
+                what = describe(units[k]) if describe is not None else f"unit {k}"
+                try:
+                    result = self._get(ray, done[0], what, lost[k])
+                except _Lost:
+                    lost[k] += 1
+                    again = self._task.remote(function, units[k], *refs)
+                    index[again] = k
+                    pending.append(again)
+                    continue
+                yield k, result
         finally:
             for ref in pending:  # stopped early (an error, Ctrl-C): the rest need not run
                 ray.cancel(ref, force=True)
 
-    def _get(self, ray: Any, ref: Any, k: int) -> Any:
-        from ray.exceptions import RayError, RayTaskError
+    def _get(self, ray: Any, ref: Any, what: str, lost: int) -> Any:
+        """The task's result; its own error raised as it was; `_Lost` when it should run
+        again (``lost``: times its worker was lost before); else one line naming ``what``."""
+        from ray.exceptions import OutOfMemoryError, RayError, RayTaskError, WorkerCrashedError
 
         try:
             return ray.get(ref)
@@ -522,9 +706,29 @@ class Executor:
             if isinstance(cause, BaseException):  # the function's own error, as locally
                 raise cause from None
             raise
-        except RayError as exc:  # the worker (or its node) died more often than retried
+        except RayError as exc:
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            why = f"{type(exc).__name__}: {first}"
+            if isinstance(exc, OutOfMemoryError):
+                raise WorkerDied(
+                    f"Ray stopped the worker that ran {what} for lack of memory ({why}); give "
+                    "the cluster's nodes more memory, or run fewer units on each"
+                ) from None
+            if isinstance(exc, WorkerCrashedError):
+                if lost < 1:
+                    raise _Lost from None
+                raise WorkerDied(
+                    f"{what} ended the Ray worker process that ran it, twice ({why}): the unit "
+                    "itself ends its process (a crash in compiled code it calls, an exit, or "
+                    "the system's out-of-memory killer), not the cluster; the worker's log "
+                    "(python-core-worker-*.log) has its last words"
+                ) from None
+            if lost < MAX_RETRIES:
+                raise _Lost from None
             raise ClusterError(
-                f"unit {k} was lost {MAX_RETRIES + 1} times on the Ray cluster "
-                f"({type(exc).__name__}: {first})"
+                f"{what} was lost {MAX_RETRIES + 1} times on the Ray cluster ({why})"
             ) from None
+
+
+class _Lost(Exception):
+    """A Ray task's worker was lost and the unit should run again."""

@@ -71,6 +71,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -1712,6 +1713,12 @@ def _batches(episodes: Sequence[int], workers: int) -> list[list[int]]:
     return [list(episodes[i : i + size]) for i in range(0, len(episodes), size)]
 
 
+def _batch_text(scenario: str, batch: Sequence[int]) -> str:
+    """A batch in a message: ``"episodes 4-7 of mingle"`` (a worker that died held it)."""
+    span = f" {batch[0]}" if len(batch) == 1 else f"s {batch[0]}-{batch[-1]}"
+    return f"episode{span} of {scenario}"
+
+
 # ------------------------------------------------------------------------------------------
 # Backends
 
@@ -1894,6 +1901,7 @@ def generate_dataset(
                 ),
             )
             workers, batches = _plan(executor, todo, n_jobs)
+            describe = functools.partial(_batch_text, spec.scenario)
             if progress:  # stated once, the time being an estimate a run is not refused on
                 _say_estimate(
                     spec,
@@ -1906,12 +1914,18 @@ def generate_dataset(
             if executor.remote:  # the shards come back as bytes, written here
                 shared: tuple[Any, ...] = (spec, save_recordings)
                 results = _written(
-                    executor.imap_unordered(_run_batch_bytes, batches, shared=shared), folder
+                    executor.imap_unordered(
+                        _run_batch_bytes, batches, shared=shared, describe=describe
+                    ),
+                    folder,
                 )
             else:
                 shared = (spec, folder, save_recordings)
                 results = (
-                    b for _, b in executor.imap_unordered(_run_batch, batches, shared=shared)
+                    b
+                    for _, b in executor.imap_unordered(
+                        _run_batch, batches, shared=shared, describe=describe
+                    )
                 )
             with contextlib.closing(results):  # stops the workers, if interrupted, while they run
                 _drain(results, shards, episodes, spec.scenario, progress)
@@ -1980,7 +1994,11 @@ def _generate_store(
         # Every worker writes its shards to the store itself; only summaries come back.
         workers, batches = _plan(executor, todo, n_jobs)
         shared = (spec, store.uri, save_recordings)
-        results = _collect(executor.imap_unordered(_run_batch_store, batches, shared=shared), files)
+        describe = functools.partial(_batch_text, spec.scenario)
+        results = _collect(
+            executor.imap_unordered(_run_batch_store, batches, shared=shared, describe=describe),
+            files,
+        )
         with contextlib.closing(results):  # stops the workers, if interrupted, while they run
             _drain(results, shards, episodes, spec.scenario, progress)
         summaries = [shards[k] for k in range(episodes)]

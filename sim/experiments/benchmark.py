@@ -558,6 +558,11 @@ def _score_unit(unit: tuple[DatasetSpec, DetectorSpec, bool]) -> Cell:
     return _score(*unit)
 
 
+def _describe_unit(unit: tuple[DatasetSpec, DetectorSpec, bool]) -> str:
+    """What a cell is, in a message: ``"detector gcff on salsa"``."""
+    return f"detector {unit[1].label} on {unit[0].label}"
+
+
 def run_benchmark(
     datasets: Sequence[DatasetSpec],
     detectors: Sequence[DetectorSpec],
@@ -609,9 +614,9 @@ def run_benchmark(
     if executor is None:
         local = backend == "local"
         with Executor(backend, jobs=jobs if local else None, address=address) as own:
-            cells = own.map(_score_unit, units, on_done=progress)
+            cells = own.map(_score_unit, units, on_done=progress, describe=_describe_unit)
     else:
-        cells = executor.map(_score_unit, units, on_done=progress)
+        cells = executor.map(_score_unit, units, on_done=progress, describe=_describe_unit)
     return Benchmark(
         datasets=datasets,
         detectors=detectors,
