@@ -15,9 +15,8 @@ import importlib
 import os
 import sys
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 if TYPE_CHECKING:
     from sim.sizing import RequestTooLarge
@@ -158,9 +157,9 @@ class CommandParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-@dataclass(frozen=True)
-class Command:
-    """One subcommand of a command table.
+class Command(NamedTuple):
+    """One subcommand of a command table (a named tuple: building the parser needs no
+    `dataclasses`, whose imports are a third of ``reform-sim --help``'s).
 
     Attributes:
         name: what is typed (``reform-sim NAME``).
@@ -189,8 +188,7 @@ def add_commands(subparsers: argparse._SubParsersAction, commands: Sequence[Comm
         )
 
 
-@dataclass(frozen=True)
-class Action:
+class Action(NamedTuple):
     """One action of a subcommand that has several (``reform-sim data info``).
 
     Attributes:

@@ -25,9 +25,12 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import socket
 import threading
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import socket
 
 __all__ = ["Stopped", "sigint_to_main_only", "sigterm_stops"]
 
@@ -129,6 +132,8 @@ def _wake_main_on_sigint() -> Iterator[None]:
         signal.set_wakeup_fd(theirs)
         yield
         return
+    import socket  # here: ``reform-sim --help`` exits before any command runs, without it
+
     reader, writer = socket.socketpair()
     writer.setblocking(False)
     signal.signal(signal.SIGUSR1, _nothing)
