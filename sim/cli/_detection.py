@@ -64,6 +64,10 @@ def record_detection(
         frames, predictions: the frames the detector ran on and its partitions.
         evaluation: the `reform.metrics.Evaluation` of the predictions, if scored.
     """
+    from sim.recording import target_from_args
+
+    if target_from_args(args) is None:  # nothing to record: Rerun is not even imported
+        return
     from sim.recording import record_from_args
 
     record_from_args(
