@@ -58,7 +58,6 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.tree import BaseDecisionTree
 from sklearn.tree._tree import Tree
 from sklearn.utils.validation import check_is_fitted
-from skops.io._protocol import PROTOCOL
 
 import reform
 from reform.atomic import atomic_open
@@ -518,6 +517,9 @@ class _Schema:
         if not isinstance(schema, dict):
             self.fail("", f"expected a JSON object, found {_json_kind(schema)}")
         protocol = schema.get("protocol")
+        _skops_io()  # skops, or its install command
+        from skops.io._protocol import PROTOCOL
+
         if isinstance(protocol, bool) or protocol != PROTOCOL or not isinstance(protocol, int):
             found = "none" if "protocol" not in schema else _json_kind(protocol)
             self.fail(

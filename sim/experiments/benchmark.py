@@ -59,7 +59,6 @@ from reform.detectors import (
 from reform.frame import Dataset, Frame, Group
 from reform.json_values import json_float
 from reform.metrics import evaluate
-from reform.persistence import load_model, model_info
 from reform.seeding import Role, derive_rng
 from reform.splits import DEFAULT_TRAIN_FRACTION, time_split
 from sim.executor import BACKENDS, Executor
@@ -221,6 +220,8 @@ class DetectorSpec:
         made with its declared defaults, specialised to ``dataset`` when it runs on a dataset's
         own settings, fitted on ``training`` when it :attr:`learns`."""
         if self.spec.startswith(REFORM_PREFIX):
+            from reform.persistence import load_model  # here: a run without models needs no skops
+
             return load_model(self.spec[len(REFORM_PREFIX) :]), None
         if self.spec.startswith(DANTE_PREFIX):
             return make_detector("dante", model=self.spec[len(DANTE_PREFIX) :]), None
@@ -283,6 +284,8 @@ def model_spec(path: str | os.PathLike[str]) -> DetectorSpec:
         return DetectorSpec(
             label=f"DANTE ({Path(path).stem})", spec=f"{DANTE_PREFIX}{path}", kind="dante"
         )
+    from reform.persistence import model_info  # here: a run without models needs no skops
+
     info = model_info(path)
     kind = _classifier_kind(str(info.get("classifier_repr", "")))
     name = Path(path).stem

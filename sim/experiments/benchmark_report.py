@@ -20,7 +20,6 @@ from sim.experiments.benchmark import (
 )
 from sim.experiments.figures import pyplot, save_png
 from sim.experiments.report_files import write_json, write_markdown
-from sim.recording import record_evaluation
 
 __all__ = [
     "JSON_NAME",
@@ -357,6 +356,8 @@ def _slug(label: str) -> str:
 def record(benchmark: Benchmark, folder: str | Path) -> dict[str, Path]:
     """One ``.rrd`` per dataset: its scored frames, the ground truth and every detector's groups
     with their mistakes, and the running scores. Returns dataset label -> path."""
+    from sim.recording import record_evaluation  # here: a run without recordings needs no Rerun
+
     folder = Path(folder)
     written = {}
     for dataset in benchmark.datasets:

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from io import BytesIO
 from typing import Any
 
-import mujoco
 import numpy as np
 import rerun as rr
 from PIL import Image
@@ -69,6 +68,8 @@ def _rotate(wxyz: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _name(model, body: int) -> str:
+    import mujoco  # here, as in `log_model`: a recording of a dataset has no MuJoCo model
+
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
 
@@ -118,6 +119,8 @@ def log_model(
     Returns:
         Number of geoms logged per kind (``"capsules"``, ``"boxes"``, ...), and ``"skipped"``.
     """
+
+    import mujoco  # here: recording a dataset, which has no MuJoCo model, does not import it
 
     if not isinstance(model, mujoco.MjModel):
         raise ValueError(f"model must be a compiled mujoco.MjModel, got {type(model).__name__}")
