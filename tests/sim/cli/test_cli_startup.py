@@ -180,3 +180,42 @@ def test_a_reader_that_leaves_early_is_no_error() -> None:
     err = process.stderr.read().decode()
     assert process.wait(timeout=60) == 0, err
     assert err == ""
+
+
+def test_help_loads_no_module_a_bare_start_does_not_need() -> None:
+    """``reform-sim --help`` within 2x of a bare Python start (issue 31): its parser needs
+    neither `dataclasses` (with `inspect`, a third of its imports) nor `socket`."""
+    bare = set(_python("import sys; print(' '.join(sys.modules))").split())
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import build_parser\n"
+        "build_parser().format_help()\n"
+        "print(' '.join(sys.modules))\n"
+    )
+    assert not {"dataclasses", "inspect", "socket"} & (set(loaded.split()) - bare)
+
+
+# The libraries a run may import only when it uses them: Rerun when it records, skops (which
+# imports torch, through scikit-learn's list of estimators) when it reads a model file.
+UNUSED = "[m for m in ('rerun', 'skops', 'torch', 'mujoco') if m in sys.modules]"
+
+
+def test_evaluate_without_a_recording_imports_no_rerun(babble_dir) -> None:
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        f"main(['evaluate', '--detector', 'gcff', '--data', {str(babble_dir)!r}, '--quiet'])\n"
+        f"print({UNUSED})\n"
+    )
+    assert loaded.splitlines()[-1] == "[]"
+
+
+def test_benchmark_without_a_model_imports_no_skops(babble_dir, tmp_path) -> None:
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        f"main(['benchmark', '--data', {str(babble_dir)!r}, '--detector', 'majority',\n"
+        f"      '--no-recordings', '--jobs', '1', '--quiet', '--out', {str(tmp_path)!r}])\n"
+        "print([m for m in ('skops', 'torch', 'mujoco') if m in sys.modules])\n"
+    )
+    assert loaded.splitlines()[-1] == "[]"
