@@ -47,8 +47,10 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^pair_feature_samples +[\d.]+ ms +per-item loop +[\d.]+ ms +ratio +[\d.]+x$",
     ),
     "bench_cli_startup": (
-        r"^--help +median +[\d.]+ s +best +[\d.]+ s$",
+        r"^--help +median +[\d.]+ s +best +[\d.]+ s +CPU +[\d.]+ s$",
         r"^every parser / --help: [\d.]+x$",
+        r"^--help / python, CPU: [\d.]+x \(goal <= 2x: (met|NOT met)\)$",
+        r"^scenarios +[\d.]+s +[\d.]+s +[\d.]+% ",
     ),
     "bench_crowd": (
         r"^ +400 +[\d.]+ +[\d.]+ +[\d.]+x +[\d.]+ +[\d.]+ +- +[\d.]+  same$",
