@@ -38,6 +38,7 @@ from reform.machine import available_memory, total_memory
 __all__ = [
     "MAX_RUN_SECONDS",
     "Estimate",
+    "busy",
     "RequestTooLarge",
     "available_memory",
     "check",
@@ -86,6 +87,7 @@ SECONDS_PER_EPISODE = 0.076  # seconds per generated episode beside its frames (
 WORKER_START_SECONDS = 3.0  # seconds for a pool of worker processes to start: each imports
 # NumPy, MuJoCo and the package before its first unit (`reform-sim generate --jobs 2` took 2 to
 # 5 s to its first episode on two shared cores, against 0.2 s of episodes estimated)
+BUSY_SAID = 1.25  # a machine this many times slower than idle is said to be busy in an estimate
 SCHEDULE_BYTES_PER_STEP = 8  # bytes: the world's step schedule, one int64 per control step of a
 # block of output rows (sim.world.World.rollout, World.step)
 
@@ -421,11 +423,26 @@ def gcff_tuning_estimate(*, settings: int, tuning_frames: int, scored_frames: in
     )
 
 
+def busy() -> tuple[float, float, int]:
+    """How much longer work takes now than on this machine idle: the load average of the last
+    minute over the CPUs this process may use, at least 1; with the load and the CPUs."""
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cpus = max(1, cpus or 1)
+    try:
+        load = os.getloadavg()[0]
+    except OSError:  # no load average on this platform
+        return 1.0, 0.0, cpus
+    return max(1.0, load / cpus), load, cpus
+
+
 def describe(estimate: Estimate, what: str) -> str:
     """One line stating an estimate before a long run starts: ``the stress test: about 12 min
-    on this machine, 1.3 GiB of memory, 2.1 MiB written (estimates)``."""
+    on this machine, 1.3 GiB of memory, 2.1 MiB written (estimates)``. The time is the
+    estimate's on this machine as busy as it is now (`busy`: other work shares its CPUs)."""
+    factor, load, cpus = busy()
+    shared = f" (busy: load {load:.1f} on {cpus} CPUs)" if factor > BUSY_SAID else ""
     return (
-        f"{what}: about {format_duration(estimate.seconds)} on this machine, "
+        f"{what}: about {format_duration(estimate.seconds * factor)} on this machine{shared}, "
         f"{format_size(estimate.memory)} of memory, {format_size(estimate.disk)} written "
         "(estimates, sim.sizing)"
     )

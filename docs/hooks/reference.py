@@ -65,9 +65,7 @@ def catalogue_markdown() -> str:
         "(`reform/catalogue.py`) when this site is built. Options are set with `--option "
         "NAME=VALUE` or a settings file (`--settings FILE.json`) and checked against the "
         "range below; `benchmark --detector all` and `stress --detector all` run every "
-        "detector that needs no model file ("
-        + ", ".join(f"`{n}`" for n in builtin_names())
-        + ").",
+        "detector that needs no model file (" + ", ".join(f"`{n}`" for n in builtin_names()) + ").",
         "",
         "| name | what it is | options | needs before it predicts | paper |",
         "|---|---|---|---|---|",
@@ -112,10 +110,41 @@ def cli_markdown() -> str:
     ]
     for command in COMMANDS:
         lines.append(f"| [`{command.name}`](#reform-sim-{command.name}) | {_cell(command.help)} |")
+    lines += ["", "## One grammar", "", *_grammar_table()]
     lines += ["", "## `reform-sim`", "", _usage(parser), ""]
     lines += _options(parser)
     lines += _subcommands(parser, "reform-sim", level=2)
     return "\n".join(lines) + "\n"
+
+
+def _grammar_table() -> list[str]:
+    """The grammar every subcommand keeps, as `sim.cli._grammar` states it (its table, each
+    concept and its one spelling), and the old spellings that still work."""
+    from sim.cli import _grammar
+
+    text = _grammar.__doc__
+    intro, table, outro = text.split("\n=")[0], text.split("=\n")[1], text.split("=\n")[-1]
+    rows: list[list[str]] = []
+    for line in table.splitlines():
+        if line.startswith("="):
+            break
+        concept, spelling = line[:19].strip(), line[19:].strip()
+        if concept:
+            rows.append([concept, spelling])
+        else:
+            rows[-1][1] += " " + spelling
+    lines = [_rst(" ".join(intro.split()[intro.split().index("Each") :])), ""]
+    lines += ["| concept | spelling |", "|---|---|"]
+    # Python-Markdown's tables keep a pipe inside a code span as it is: no escape.
+    lines += [f"| {concept} | {_rst(spelling)} |" for concept, spelling in rows]
+    return [*lines, "", _rst(" ".join(outro.split()))]
+
+
+def _rst(text: str) -> str:
+    """reStructuredText literals (````x````) and references (`` `x` ``) as Markdown code spans,
+    the text between them shown as it is (`_text`)."""
+    parts = text.replace("``", "`").split("`")
+    return "`".join(part if k % 2 else _text(part) for k, part in enumerate(parts))
 
 
 def _subcommands(parser: argparse.ArgumentParser, prog: str, *, level: int) -> list[str]:

@@ -30,6 +30,7 @@ from sim.experiments.benchmark import (
     run_benchmark,
 )
 from sim.experiments.benchmark_report import write_report
+from sim.ticking import ticking
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -92,19 +93,20 @@ def _run(args: argparse.Namespace) -> int:
     detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
 
-    bar = None
-    if not args.quiet:
-        bar = tqdm(
-            total=len(datasets) * len(detectors), desc="benchmark", unit="cell", file=sys.stderr
-        )
+    bar = tqdm(
+        total=len(datasets) * len(detectors),
+        desc="benchmark",
+        unit="cell",
+        file=sys.stderr,
+        disable=args.quiet,
+    )
 
     def progress(done: int, total: int, cell) -> None:  # noqa: ARG001
-        if bar is not None:
-            f1 = "skipped" if cell.scores is None else f"F1 {100 * cell.scores.at['2/3'][2]:.1f}"
-            bar.set_postfix_str(f"{cell.dataset} × {cell.detector}: {f1}", refresh=False)
-            bar.update(1)
+        f1 = "skipped" if cell.scores is None else f"F1 {100 * cell.scores.at['2/3'][2]:.1f}"
+        bar.set_postfix_str(f"{cell.dataset} × {cell.detector}: {f1}", refresh=False)
+        bar.update(1)
 
-    try:
+    with bar, ticking(bar):  # redrawn while a long cell (or the workers' start) keeps it still
         benchmark = run_benchmark(
             datasets,
             detectors,
@@ -114,10 +116,10 @@ def _run(args: argparse.Namespace) -> int:
             progress=progress,
             temporal=args.temporal,
         )
-    finally:
-        if bar is not None:
-            bar.close()
     command = _command(args)
+    if not args.quiet:
+        files = f" and {len(datasets)} recording(s)" if args.recordings else ""
+        print(f"writing the report, its plot{files} into {args.out}/ ...", file=sys.stderr)
     written = write_report(benchmark, args.out, command=command, recordings=args.recordings)
     print(written["markdown"].read_text(), end="")
     print(f"wrote {args.out}/: " + ", ".join(p.name for p in written.values()), file=sys.stderr)

@@ -81,6 +81,7 @@ from sim.experiments.synthetic import (
     generate_sources,
 )
 from sim.recording import record_episode, record_evaluation
+from sim.ticking import ticking
 
 __all__ = [
     "DEFAULT_OUT",
@@ -255,7 +256,9 @@ class _Stages:
 
 
 def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = True) -> Any:
-    return tqdm(
+    """``iterable`` counted by a bar on stderr that keeps ticking while an item takes long
+    (`sim.ticking`): a stage is never silent."""
+    bar = tqdm(
         iterable,
         desc=desc,
         total=total,
@@ -264,6 +267,8 @@ def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = Tru
         dynamic_ncols=True,
         leave=False,
     )
+    with bar, ticking(bar):
+        yield from bar
 
 
 def _find_datasets(datasets: str | os.PathLike[str] | None) -> dict[str, Dataset]:
@@ -434,7 +439,7 @@ def run_demo(
         jobs=jobs,
         axes=budget.stress_axes,
         detectors={**{n: models[n] for n in CLASSIFIERS}, STRESS_GCFF: gcff},
-        progress=lambda line: None,
+        progress=lambda line: say(f"  stress: {line.strip()}"),  # tasks done, as they finish
     )
     command = _command(out, datasets, seed, quick=quick)
     stress_files = write_stress(stress, out / "stress", command=command)

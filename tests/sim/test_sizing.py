@@ -493,7 +493,8 @@ def test_generate_states_its_estimate_once(machine, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("1 episode of mingle: about ") == 1
     assert re.search(
-        r"1 episode of mingle: about [\d.]+ s on this machine, [\d.]+ MiB of memory, "
+        r"1 episode of mingle: about [\d.]+ s on this machine"
+        r"( \(busy: load [\d.]+ on \d+ CPUs\))?, [\d.]+ MiB of memory, "
         r"[\d.]+ KiB written \(estimates, sim.sizing\)",
         err,
     ), err
