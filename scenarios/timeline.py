@@ -5,8 +5,9 @@ A scenario draws everything random when it is made (from its generator) and writ
 (`PlannedGroup`: members, their places on the o-space circle and the way each faces), and
 `ScenarioEvent`s for the logs. `TimelineBuilder.build` freezes this into a `Timeline`, the
 `scenarios.script.Script` the world samples: ``intents(t)`` is a binary search into the
-precomputed snapshots (the same mapping object is returned until something changes, so the
-world skips unchanged intents), ``groups(t)`` lists the planned groups whose window holds ``t``.
+change times, every agent's intents then written out from the nearest checkpoint (the same
+mapping object is returned until something changes, so the world skips unchanged intents),
+``groups(t)`` lists the planned groups whose window holds ``t``.
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from scenarios.script import Intent
 __all__ = ["PlannedGroup", "ScenarioEvent", "Timeline", "TimelineBuilder"]
 
 _TIME_SLACK_S = 1e-9  # seconds: a change at t applies to samples at t despite rounding
+CHECKPOINT_CHANGES = 64  # a built timeline writes every agent's intents out once per this many
+# changes (memory: agents x changes / 64 entries, rather than agents x changes)
 
 
 @dataclass(frozen=True)
@@ -122,16 +125,60 @@ class Timeline:
                 f"{len(snapshots)}"
             )
         self._times = [float(t) for t in times]
-        self._snapshots = tuple(snapshots)
+        self._snapshots: tuple[Mapping[int, Intent], ...] | None = tuple(snapshots)
+        self._deltas: tuple[dict[int, Intent], ...] = ()
+        self._checkpoints: tuple[dict[int, Intent], ...] = ()
+        self._last: tuple[int, Mapping[int, Intent]] = (-1, MappingProxyType({}))
         self._empty: Mapping[int, Intent] = MappingProxyType({})
         self.plan = tuple(sorted(plan, key=lambda g: g.start))
         self.events = tuple(sorted(events, key=lambda e: e.time))
         self._starts = [g.start for g in self.plan]
 
+    @classmethod
+    def _of_changes(
+        cls,
+        times: Sequence[float],
+        deltas: Sequence[dict[int, Intent]],
+        plan: Sequence[PlannedGroup],
+        events: Sequence[ScenarioEvent],
+    ) -> Timeline:
+        """A timeline kept as the intents that change at each time (``deltas``), with every
+        agent's intents written out only every `CHECKPOINT_CHANGES` changes: a crowd's script
+        changes someone's intent thousands of times, and a full snapshot per change would grow
+        as agents times changes. ``intents`` writes a snapshot out when it is asked for."""
+        timeline = cls(times, [{}] * len(times), plan, events)
+        timeline._snapshots = None
+        timeline._deltas = tuple(deltas)
+        current: dict[int, Intent] = {}
+        checkpoints = []
+        for k, delta in enumerate(timeline._deltas):
+            current.update(delta)
+            if k % CHECKPOINT_CHANGES == 0:
+                checkpoints.append(dict(current))
+        timeline._checkpoints = tuple(checkpoints)
+        return timeline
+
     def intents(self, t: float) -> Mapping[int, Intent]:
         """Every agent's intent at ``t`` (the same object until the next change)."""
         k = bisect.bisect_right(self._times, t + _TIME_SLACK_S) - 1
-        return self._snapshots[k] if k >= 0 else self._empty
+        if k < 0:
+            return self._empty
+        if self._snapshots is not None:
+            return self._snapshots[k]
+        last, snapshot = self._last
+        if k == last:
+            return snapshot
+        start = k - k % CHECKPOINT_CHANGES
+        if start <= last < k:  # on from the last one asked for (times asked in order)
+            current = dict(snapshot)
+            start = last
+        else:
+            current = dict(self._checkpoints[k // CHECKPOINT_CHANGES])
+        for delta in self._deltas[start + 1 : k + 1]:
+            current.update(delta)
+        snapshot = MappingProxyType(current)
+        self._last = (k, snapshot)
+        return snapshot
 
     def groups(self, t: float) -> tuple[tuple[int, ...], ...]:
         """The planned groups whose window ``[start, end)`` holds ``t`` (walking up included;
@@ -219,20 +266,20 @@ class TimelineBuilder:
         """The frozen `Timeline`."""
         self._changes.sort(key=lambda c: (c[0], c[1]))
         times: list[float] = []
-        snapshots: list[Mapping[int, Intent]] = []
-        current: dict[int, Intent] = {}
+        deltas: list[dict[int, Intent]] = []
         k = 0
         n = len(self._changes)
         while k < n:
             t = self._changes[k][0]
+            delta = {}
             while k < n and self._changes[k][0] == t:
-                current[self._changes[k][2]] = self._changes[k][3]
+                delta[self._changes[k][2]] = self._changes[k][3]
                 k += 1
             times.append(t)
-            snapshots.append(MappingProxyType(dict(current)))
+            deltas.append(delta)
         groups = [dict(g) for g in self._groups]
         for k in range(len(groups) - 1, -1, -1):  # the newest first: chains resolve in one pass
             for handle in self._continues[k]:
                 groups[handle]["end"] = max(groups[handle]["end"], groups[k]["end"])
         plan = [PlannedGroup(**g) for g in groups if g["end"] > g["start"]]
-        return Timeline(times, snapshots, plan, self._events)
+        return Timeline._of_changes(times, deltas, plan, self._events)
