@@ -302,6 +302,7 @@ class _Party:
         side: float,
         *,
         keep_clear: tuple[np.ndarray, ...] = (),
+        first_id: int = 1,
     ) -> None:
         self.p = params
         self.keep_clear = keep_clear  # spots no group or person may take (the robot's)
@@ -312,7 +313,7 @@ class _Party:
             params.radius_spread,
             CircleNoise(params.position_noise, params.orientation_noise, params.spacing),
         )
-        self.ids = list(range(1, params.people + 1))
+        self.ids = list(range(first_id, first_id + params.people))
         self.records: list[_Record] = []
         self.alone: list[_Alone] = []
         self.walks: list[tuple[float, int, Intent]] = []
@@ -816,6 +817,44 @@ class _Party:
             t, _, kind, payload = heapq.heappop(self.queue)
             getattr(self, "on_" + kind)(t, *payload)
 
+    def translate(self, offset: np.ndarray) -> None:
+        """Moves the planned party by ``offset`` (2,) metres: every walk, group record, spot of
+        someone alone and start position (a party planned in its own square, then put where
+        it stands in a larger hall)."""
+        dx, dy = float(offset[0]), float(offset[1])
+
+        def moved(point: tuple[float, float] | None) -> tuple[float, float] | None:
+            return None if point is None else (point[0] + dx, point[1] + dy)
+
+        self.walks = [
+            (
+                t,
+                m,
+                dataclasses.replace(
+                    intent,
+                    goal=moved(intent.goal),
+                    face_point=moved(intent.face_point),
+                    gaze_point=moved(intent.gaze_point),
+                    appear_at=moved(intent.appear_at),
+                ),
+            )
+            for t, m, intent in self.walks
+        ]
+        for rec in self.records:
+            g = rec.group
+            rec.group = PlannedGroup(
+                g.members,
+                g.places + offset,
+                g.facings,
+                g.centre + offset,
+                g.start,
+                g.end,
+                newcomers=g.newcomers,
+            )
+        for entry in self.alone:
+            entry.spot = entry.spot + offset
+        self.start_position = {m: p + offset for m, p in self.start_position.items()}
+
     def on_leave(self, t: float, m: int, version: int) -> None:
         if version != self.version[m] or m not in self.group_of:
             return
@@ -1276,21 +1315,10 @@ def _on_wall(side: int, along: float, edge: float) -> np.ndarray:
     ][side]
 
 
-def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
-    """The party of ``params`` drawn with ``seed``."""
-    params.check(name)
-    rng = np.random.default_rng(seed)
-    side = params.side()
-    robot = None
-    if params.robot:
-        robot = RobotPlace(id=ROBOT_ID, position=(-0.5 * side + ROBOT_WALL_GAP_M, 0.0), yaw=0.0)
-    keep_clear = () if robot is None else (np.array(robot.position),)
-    party = _Party(params, rng, side, keep_clear=keep_clear)
-    party.run()
-    people = party.ids
-    passers = list(range(params.people + 1, params.people + params.passers_by + 1))
-    agents = [*people, *passers] + ([ROBOT_ID] if params.robot else [])
-    builder = TimelineBuilder(agents)
+def write_party(builder: TimelineBuilder, party: _Party, rng: np.random.Generator) -> None:
+    """Writes a planned party (`_Party.run`) into ``builder``: its walks, every group record
+    with its conversation, the glances of everyone standing alone and its events."""
+    params = party.p
     for t, m, intent in party.walks:
         builder.set(t, m, intent)
     handles: dict[int, int] = {}  # record -> planned group in the builder
@@ -1322,9 +1350,27 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
         )
     for entry in party.alone:
         if entry.end > entry.start:
-            _glances(builder, entry, params.duration, rng, people)
+            _glances(builder, entry, params.duration, rng, party.ids)
     for t, kind, detail in party.events:
         builder.event(t, kind, detail)
+
+
+def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
+    """The party of ``params`` drawn with ``seed``."""
+    params.check(name)
+    rng = np.random.default_rng(seed)
+    side = params.side()
+    robot = None
+    if params.robot:
+        robot = RobotPlace(id=ROBOT_ID, position=(-0.5 * side + ROBOT_WALL_GAP_M, 0.0), yaw=0.0)
+    keep_clear = () if robot is None else (np.array(robot.position),)
+    party = _Party(params, rng, side, keep_clear=keep_clear)
+    party.run()
+    people = party.ids
+    passers = list(range(params.people + 1, params.people + params.passers_by + 1))
+    agents = [*people, *passers] + ([ROBOT_ID] if params.robot else [])
+    builder = TimelineBuilder(agents)
+    write_party(builder, party, rng)
     for t, kind, detail in _passers(builder, passers, 0.5 * side, params.duration, rng):
         builder.event(t, kind, detail)
     if robot is not None:
