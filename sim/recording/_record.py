@@ -10,6 +10,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import rerun as rr
 
 from reform import Evaluation, Frame, Group, GroupEvent
@@ -34,13 +35,25 @@ from sim.recording._scene import (
     log_camera_images,
     log_model,
     log_room,
+    person_bodies,
     room_bounds,
 )
 from sim.recording._stream import open_recording, recording_id
 from sim.recording._target import RecordingTarget, target_from_args
 from sim.recording._timeline import Clock
 
-__all__ = ["Recorded", "record_episode", "record_evaluation", "record_from_args"]
+__all__ = [
+    "CROWD_PEOPLE",
+    "Recorded",
+    "record_episode",
+    "record_evaluation",
+    "record_from_args",
+]
+
+# People: a recording of more leaves the people's MuJoCo bodies out of the model's geometry and
+# draws everyone batched (`log_frames`' capsules): one entity per body stays usable for a party
+# (18 people: 54 bodies) but not for a concourse (1,000 people: 9,000 entities, 40 MB for 10 s).
+CROWD_PEOPLE = 100
 
 Partition = Sequence[Group]
 
@@ -217,6 +230,9 @@ def record_episode(
             ``events/<detector>``.
         model: the compiled ``mujoco.MjModel`` of the scene: its geometry is drawn (static)
             and, with ``body_poses``, moves per frame; people are then not drawn as capsules.
+            With more than `CROWD_PEOPLE` people, the level of detail drops: their bodies are
+            left out of the model's geometry and everyone is drawn as capsules, one batched
+            entity for all people (``world/people/bodies``).
         body_poses: the bodies' poses per frame (needs ``model``).
         cameras: rendered camera images (the robot's head camera), when rendering is on.
         seed: the episode's seed (with ``name``, it fixes the recording id).
@@ -244,6 +260,9 @@ def record_episode(
     blueprint = _run_blueprint(
         world, detections, events, found, bounds=bounds, cameras=tuple(c.name for c in cameras)
     )
+    bodies = None  # every body of the model
+    if model is not None and len(np.unique(world.ids[~world.robot])) > CROWD_PEOPLE:
+        bodies = np.setdiff1d(np.arange(model.nbody), person_bodies(model))
     with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
         log_frames(
             rec,
@@ -251,12 +270,12 @@ def record_episode(
             observed=seen,
             clock=clock,
             field_of_view=field_of_view,
-            shapes=body_poses is None,
+            shapes=body_poses is None or bodies is not None,
         )
         if model is not None:
-            log_model(rec, model, static_poses=body_poses is None)
+            log_model(rec, model, static_poses=body_poses is None, bodies=bodies)
             if body_poses is not None:
-                log_body_poses(rec, model, body_poses, clock=clock)
+                log_body_poses(rec, model, body_poses, clock=clock, bodies=bodies)
         else:
             log_room(rec, bounds)
         for camera in cameras:

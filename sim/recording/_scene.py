@@ -8,7 +8,8 @@ Entity tree:
   transform, or one per frame from :func:`log_body_poses`); under it ``capsules``, ``boxes``,
   ``spheres`` (and ellipsoids), ``cylinders``, ``planes`` and ``meshes`` hold that body's geoms
   in the body's frame, static. The world body's geoms (floor, walls) sit under
-  ``world/model/world``.
+  ``world/model/world``. A crowd's recording leaves the people's bodies out (one entity per
+  body would make thousands): people are drawn batched under ``world/people``.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ __all__ = [
     "log_camera_images",
     "log_model",
     "log_room",
+    "person_bodies",
     "room_bounds",
 ]
 
@@ -99,6 +101,7 @@ def log_model(
     static_poses: bool = True,
     root: str = MODEL_ROOT,
     geom_groups: Iterable[int] = VISIBLE_GEOM_GROUPS,
+    bodies: Iterable[int] | None = None,
 ) -> dict[str, int]:
     """Logs every visible geom of a compiled ``mujoco.MjModel`` as Rerun shapes, static.
 
@@ -115,6 +118,9 @@ def log_model(
             come per frame from :func:`log_body_poses` (a static pose would hide them).
         root: entity under which the bodies go.
         geom_groups: MuJoCo geom groups to draw.
+        bodies: the bodies to log (ids); default every body. A crowd's recording leaves its
+            people's bodies out (:func:`person_bodies`): one entity per body would make
+            thousands.
 
     Returns:
         Number of geoms logged per kind (``"capsules"``, ``"boxes"``, ...), and ``"skipped"``.
@@ -138,7 +144,7 @@ def log_model(
         "meshes": 0,
         "skipped": 0,
     }
-    for body in range(model.nbody):
+    for body in range(model.nbody) if bodies is None else sorted(set(bodies)):
         entity = body_entity(model, body, root=root)
         geoms = np.flatnonzero((model.geom_bodyid == body) & visible)
         if static_poses and body > 0:
@@ -293,6 +299,7 @@ def log_body_poses(
     *,
     clock: Clock | None = None,
     root: str = MODEL_ROOT,
+    bodies: Iterable[int] | None = None,
 ) -> int:
     """Logs the bodies' poses over a run: moving bodies per frame, still ones once (static).
 
@@ -305,6 +312,7 @@ def log_body_poses(
         clock: the run's clock, to place each row by (sequence, time); default: row ``i`` is
             frame ``i`` and ``sim_time`` is ``poses.time``.
         root: as given to :func:`log_model`.
+        bodies: as given to :func:`log_model` (the world body is never logged here).
 
     Returns:
         Number of bodies logged per frame (the moving ones).
@@ -319,7 +327,7 @@ def log_body_poses(
         )
     times = _time_columns(clock, poses.sequence, poses.time, what="poses.time")
     moving = 0
-    for body in range(1, model.nbody):
+    for body in range(1, model.nbody) if bodies is None else sorted(set(bodies) - {0}):
         entity = body_entity(model, body, root=root)
         position = poses.position[:, body]
         quaternion = _xyzw(poses.quaternion[:, body])
@@ -353,6 +361,21 @@ def _time_columns(
     sequences = [sequence] * time.size
     clock = Clock.from_times(sequences, time) if clock is None else clock
     return clock.columns(clock.rows_at(sequences, time, what=what))
+
+
+def person_bodies(model) -> np.ndarray:
+    """(k,) int64 ids of the bodies of the people in a scene built by `sim.scene.build_scene`
+    (their names start with `sim.scene.PERSON_PREFIX`), in body order."""
+    import mujoco  # here, as in `log_model`: a recording of a dataset has no MuJoCo model
+
+    from sim.scene import PERSON_PREFIX
+
+    names = (
+        mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)
+    )
+    return np.array(
+        [b for b, name in enumerate(names) if name.startswith(PERSON_PREFIX)], dtype=np.int64
+    )
 
 
 def room_bounds(

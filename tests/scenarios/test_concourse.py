@@ -1,5 +1,5 @@
-"""The concourse: walkers crossing, a queue, groups aside; its ground truth and its refusals, on
-real MuJoCo episodes of 150 people."""
+"""The concourse: walkers crossing, a queue, groups aside; its ground truth, its refusals and its
+recording (a crowd's level of detail), on real MuJoCo episodes of 150 people."""
 
 from __future__ import annotations
 
@@ -7,10 +7,12 @@ import re
 
 import numpy as np
 import pytest
+from rerun.chunk import RrdReader
 
 import scenarios
 from scenarios.concourse import ConcourseParams
 from sim.episode import Episode, simulate_episode
+from sim.recording import CROWD_PEOPLE, record_episode
 
 OPTIONS = {"people": 150, "duration": 20.0}
 SEED = 4
@@ -108,3 +110,25 @@ def test_the_size_named_as_fitting_fits():
     ConcourseParams(people=1500, hall_side=side).check("concourse")
     with pytest.raises(ValueError, match="1500 people do not fit"):
         ConcourseParams(people=1500, hall_side=side - 1.0).check("concourse")
+
+
+def test_a_crowds_recording_batches_its_people(episode, tmp_path):
+    """Beyond CROWD_PEOPLE people, no entity per MuJoCo body: the people are one batched
+    entity holding everyone present in each frame; the room's geometry is still logged."""
+    assert len(episode.scenario.stage.people) > CROWD_PEOPLE
+    path = tmp_path / "concourse.rrd"
+    record_episode(path, episode.truth, events=episode.events, model=episode.model, seed=SEED)
+    chunks = list(RrdReader(path).stream().collect().stream())
+    entities = {str(c.entity_path) for c in chunks}
+    assert not [e for e in entities if e.startswith("/world/model/person")]
+    assert "/world/model/world/boxes" in entities  # walls and the counter
+    assert len(entities) < 30
+    counts = {}  # frame -> capsules drawn
+    for chunk in chunks:
+        if str(chunk.entity_path) != "/world/people/bodies":
+            continue
+        data = chunk.to_record_batch().to_pydict()
+        if "Capsules3D:translations" in data:
+            for frame, row in zip(data["frame"], data["Capsules3D:translations"], strict=True):
+                counts[frame] = len(row)
+    assert [counts[k] for k in sorted(counts)] == [len(f.ids) for f in episode.truth]
