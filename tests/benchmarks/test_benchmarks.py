@@ -52,6 +52,11 @@ FIGURES: dict[str, tuple[str, ...]] = {
         r"^--help / python, CPU: [\d.]+x \(goal <= 2x: (met|NOT met)\)$",
         r"^scenarios +[\d.]+s +[\d.]+s +[\d.]+% ",
     ),
+    "bench_concourse": (
+        r"^bare mj_kinematics +[\d.]+x real time$",
+        r"^rollout +[\d.]+x real time +rollout / bare: [\d.]+x$",
+        r"^Target: the rollout at >= 10x real time at 1,000 people: [\d.]+x at 150 \(",
+    ),
     "bench_crowd": (
         r"^ +400 +[\d.]+ +[\d.]+ +[\d.]+x +[\d.]+ +[\d.]+ +- +[\d.]+  same$",
         r"^growth from 200 to 400 people: REFORM time n\^-?[\d.]+, memory n\^-?[\d.]+; GCFF ",
