@@ -8,6 +8,7 @@ import argparse
 import dataclasses
 import shlex
 import sys
+from pathlib import Path
 
 from tqdm import tqdm
 
@@ -117,12 +118,19 @@ def _run(args: argparse.Namespace) -> int:
             temporal=args.temporal,
         )
     command = _command(args)
+    out = Path(args.out)
     if not args.quiet:
         files = f" and {len(datasets)} recording(s)" if args.recordings else ""
-        print(f"writing the report, its plot{files} into {args.out}/ ...", file=sys.stderr)
-    written = write_report(benchmark, args.out, command=command, recordings=args.recordings)
+        print(f"writing the report, its plot{files} into {out}/ ...", file=sys.stderr)
+    written = write_report(
+        benchmark,
+        out,
+        command=command,
+        recordings=args.recordings,
+        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True)),
+    )
     print(written["markdown"].read_text(), end="")
-    print(f"wrote {args.out}/: " + ", ".join(p.name for p in written.values()), file=sys.stderr)
+    print(f"wrote {out}/: " + ", ".join(p.name for p in written.values()), file=sys.stderr)
     return 0
 
 

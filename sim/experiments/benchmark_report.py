@@ -5,7 +5,7 @@ Imports the run (:mod:`sim.experiments.benchmark`); the run never imports its re
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -353,9 +353,12 @@ def _slug(label: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "-" for c in label).strip("-")
 
 
-def record(benchmark: Benchmark, folder: str | Path) -> dict[str, Path]:
+def record(
+    benchmark: Benchmark, folder: str | Path, *, progress: Callable[[str], None] | None = None
+) -> dict[str, Path]:
     """One ``.rrd`` per dataset: its scored frames, the ground truth and every detector's groups
-    with their mistakes, and the running scores. Returns dataset label -> path."""
+    with their mistakes, and the running scores. Returns dataset label -> path; ``progress`` is
+    called with a line as each recording is written."""
     from sim.recording import record_evaluation  # here: a run without recordings needs no Rerun
 
     folder = Path(folder)
@@ -374,14 +377,22 @@ def record(benchmark: Benchmark, folder: str | Path) -> dict[str, Path]:
             path, frames, predictions, name=f"benchmark-{dataset.name}", dataset=dataset.name
         )
         written[dataset.label] = path
+        if progress is not None:
+            progress(f"recorded {dataset.name}: {path}")
     return written
 
 
 def write_report(
-    benchmark: Benchmark, out_dir: str | Path, *, command: str, recordings: bool = True
+    benchmark: Benchmark,
+    out_dir: str | Path,
+    *,
+    command: str,
+    recordings: bool = True,
+    progress: Callable[[str], None] | None = None,
 ) -> Mapping[str, Path]:
     """Writes ``benchmark.md``, ``benchmark.json``, ``benchmark.png`` and, with ``recordings``,
-    ``recordings/<dataset>.rrd`` into ``out_dir`` (atomically). Returns what was written."""
+    ``recordings/<dataset>.rrd`` into ``out_dir`` (atomically). Returns what was written;
+    ``progress`` is called with a line as each recording is written (they take seconds)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Path] = {"plot": plot(benchmark, out / PLOT_NAME)}
@@ -390,6 +401,6 @@ def write_report(
     )
     written["json"] = write_json(out / JSON_NAME, to_json(benchmark, command=command), indent=1)
     if recordings:
-        for label, path in record(benchmark, out / RECORDINGS).items():
+        for label, path in record(benchmark, out / RECORDINGS, progress=progress).items():
             written[f"recording:{label}"] = path
     return written
