@@ -55,6 +55,8 @@ from typing import Any
 
 from tqdm import tqdm
 
+from sim.ticking import ticking
+
 __all__ = [
     "BACKENDS",
     "MAX_RETRIES",
@@ -578,14 +580,17 @@ class Executor:
         """
         units = list(units)
         results: list[Any] = [None] * len(units)
-        with tqdm(
-            total=len(units),
-            desc=desc,
-            unit=unit,
-            file=sys.stderr,
-            disable=not (self.progress and desc),
-            dynamic_ncols=True,
-        ) as bar:
+        with (
+            tqdm(
+                total=len(units),
+                desc=desc,
+                unit=unit,
+                file=sys.stderr,
+                disable=not (self.progress and desc),
+                dynamic_ncols=True,
+            ) as bar,
+            ticking(bar),
+        ):  # redrawn while the workers start or a long unit runs
             for done, (k, result) in enumerate(
                 self.imap_unordered(function, units, shared=shared, describe=describe), start=1
             ):
