@@ -13,7 +13,8 @@ from sim.recording import add_recording_arguments
 DESCRIPTION = """\
 F1 at T = 2/3 and T = 1 of REFORM (weighted KNN, bagged trees, logistic regression) and GCFF as
 functions of position noise, orientation noise, tracking dropout, crowd density, number and size
-of groups, and the sensor (ground truth against the robot's head sensor with occlusion), with
+of groups, the sensor (ground truth against the robot's head sensor with occlusion), scripted
+changes and the size of a crowd (a concourse of up to 1,000 people), with
 95% bootstrap intervals over several test episodes per point. The detectors are trained once on
 a synthetic training set (mingle and word-improv episodes whose seeds differ from the test
 episodes'); no real data is needed. Writes DIR/stress.md (tables and plots), DIR/stress.json and

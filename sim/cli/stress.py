@@ -9,6 +9,7 @@ import dataclasses
 import os
 import shlex
 import sys
+from collections.abc import Callable
 
 from reform.detectors import builtin_names
 from sim import sizing
@@ -23,7 +24,7 @@ from sim.cli._common import (
 )
 from sim.cli._detectors import make_plugin
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
-from sim.experiments.stress_grid import BASE_PEOPLE, StressGrid
+from sim.experiments.stress_grid import BASE_PEOPLE, CROWD_MIN_PEOPLE, StressGrid
 from sim.experiments.stress_report import write_report
 from sim.recording import target_from_args
 from sim.sizing import check_episodes
@@ -52,27 +53,35 @@ def _check_size(grid: StressGrid, axes: list[str] | None, args: argparse.Namespa
     """Refuses, before any work, a stress test that cannot fit this machine (memory, disk at
     --out, a week), and states its estimate once."""
     names = list(AXES) if axes is None else axes
-    scene_agents = []
-    for name in names:
-        if AXES[name].kind != "scene":
-            continue
-        for level in grid.levels(name):
-            if name == "groups":
-                scene_agents.append((int(level), False))
-            elif name == "sensor":
-                scene_agents.append((BASE_PEOPLE + 1, level != "truth"))
-            else:
-                scene_agents.append((BASE_PEOPLE, False))
-    estimate = sizing.stress_estimate(
-        seeds=grid.seeds,
-        frames=max(1, round(grid.duration_s * grid.rate_hz)),
-        rate_hz=grid.rate_hz,
-        base_people=BASE_PEOPLE,
-        perturb_levels=sum(len(grid.levels(a)) for a in names if AXES[a].kind == "perturb"),
-        scene_agents=scene_agents,
-        train_frames=round(grid.train_episodes * grid.train_duration_s * grid.train_rate_hz),
-        workers=args.jobs or os.cpu_count() or 1,
-    )
+    workers = args.jobs or os.cpu_count() or 1
+
+    def estimate_with(crowds: tuple[int, ...]) -> sizing.Estimate:
+        """The run's estimate, the crowd axis's levels being ``crowds``."""
+        scene_agents = []
+        for name in names:
+            if AXES[name].kind != "scene":
+                continue
+            for level in crowds if name == "crowd" else grid.levels(name):
+                if name in ("groups", "crowd"):
+                    scene_agents.append((int(level), False))
+                elif name == "sensor":
+                    scene_agents.append((BASE_PEOPLE + 1, level != "truth"))
+                else:
+                    scene_agents.append((BASE_PEOPLE, False))
+        return sizing.stress_estimate(
+            seeds=grid.seeds,
+            frames=max(1, round(grid.duration_s * grid.rate_hz)),
+            rate_hz=grid.rate_hz,
+            base_people=BASE_PEOPLE,
+            perturb_levels=sum(len(grid.levels(a)) for a in names if AXES[a].kind == "perturb"),
+            scene_agents=scene_agents,
+            train_frames=round(grid.train_episodes * grid.train_duration_s * grid.train_rate_hz),
+            workers=workers,
+        )
+
+    estimate = estimate_with(grid.crowd_people)
+    if "crowd" in names:
+        _check_crowd(grid, estimate_with, args, workers)
     try:
         sizing.check(
             estimate,
@@ -85,6 +94,40 @@ def _check_size(grid: StressGrid, axes: list[str] | None, args: argparse.Namespa
     except sizing.RequestTooLarge as exc:
         raise size_error(exc) from None
     print(sizing.describe(estimate, "the stress test"), file=sys.stderr, flush=True)
+
+
+def _check_crowd(
+    grid: StressGrid,
+    estimate_with: Callable[[tuple[int, ...]], sizing.Estimate],
+    args: argparse.Namespace,
+    workers: int,
+) -> None:
+    """Refuses, before any work, a crowd axis whose largest crowd this machine cannot hold (or
+    --max-memory), naming the crowd asked and the largest that fits. A run that cannot hold
+    even the smallest crowd is left to the whole run's check, which names every way to shrink
+    it."""
+    limit = max_memory(args)
+    limit_text = f"--max-memory {sizing.format_size(limit)}" if limit is not None else ""
+    if limit is None:
+        limit = sizing.available_memory()
+        limit_text = f"the {sizing.format_size(limit)} of memory this machine has available"
+
+    def fits(people: int) -> bool:
+        return estimate_with(tuple(min(p, people) for p in grid.crowd_people)).memory <= limit
+
+    asked = max(grid.crowd_people)
+    if fits(asked) or not fits(CROWD_MIN_PEOPLE):
+        return
+    low, high = CROWD_MIN_PEOPLE, asked  # fits(low), not fits(high)
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (middle, high) if fits(middle) else (low, middle)
+    raise CliError(
+        f"the crowd axis of --grid {args.grid} asks for a concourse of {asked:,} people, more "
+        f"than {limit_text} holds with {workers} worker{'s' * (workers != 1)}: at most {low:,} "
+        "people fit; leave crowd out of --axes, run the small --grid, give fewer --jobs or a "
+        "larger --max-memory"
+    )
 
 
 def run(args: argparse.Namespace) -> int:

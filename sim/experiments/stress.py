@@ -14,7 +14,9 @@ paper's three pair classifiers and of GCFF, as functions of:
   occlusion plus Kinect-like tracking errors;
 * the ``event-rate``: scripted changes per minute on top of the party's own (`mingle`'s
   ``event_rate``, `scenarios.changes`): latecomers walking up to groups, members drifting away,
-  groups walking over to merge.
+  groups walking over to merge;
+* the ``crowd``: people in a ``concourse`` (`scenarios.concourse`: walkers crossing, a queue,
+  groups standing aside), from a hundred up to a concourse of thousands.
 
 Protocol. The detectors are trained once: REFORM's three classifiers on a synthetic training set
 of ``mingle`` and ``word-improv`` episodes, GCFF tuned (stride and mdl, by grid search with the
@@ -109,6 +111,7 @@ THRESHOLDS = ("2/3", "1")  # matching thresholds scored (exact: T_TWO_THIRDS, T_
 _THRESHOLD_VALUES = {"2/3": T_TWO_THIRDS, "1": T_ONE}
 
 TEST_SCENARIO = "mingle"  # the party every point is scored on
+CROWD_SCENARIO = "concourse"  # the crowd axis's scene
 TRAINING_SCENARIOS = ("mingle", "word-improv")
 BASE_DENSITY_PER_M2 = 0.4  # guests per m² of the test party (mingle's default, SALSA-like)
 
@@ -197,6 +200,7 @@ def _scene_spec(grid: StressGrid, axis: str | None, level: Any, seed: int) -> _E
     """The test episode of level ``level`` of scene axis ``axis`` (None: the base party)."""
     options: dict[str, Any] = {"duration": grid.duration_s}
     sensor = "truth"
+    scenario = TEST_SCENARIO
     if axis == "density":
         options["room_side"] = _room_side(BASE_PEOPLE, float(level))
     elif axis == "groups":
@@ -208,8 +212,11 @@ def _scene_spec(grid: StressGrid, axis: str | None, level: Any, seed: int) -> _E
         sensor = str(level)
     elif axis == "event-rate":
         options["event_rate"] = float(level)
+    elif axis == "crowd":
+        scenario = CROWD_SCENARIO
+        options["people"] = int(level)
     return _EpisodeSpec(
-        TEST_SCENARIO, seed, tuple(sorted(options.items())), grid.duration_s, grid.rate_hz, sensor
+        scenario, seed, tuple(sorted(options.items())), grid.duration_s, grid.rate_hz, sensor
     )
 
 
@@ -479,7 +486,7 @@ def _cost(grid: StressGrid, task: tuple[Callable[..., Any], tuple[Any, ...]]) ->
         return len(grid.levels(args[1])) * BASE_PEOPLE
     axis, k = args[1], args[2]
     level = grid.levels(axis)[k]
-    if axis == "groups":
+    if axis in ("groups", "crowd"):
         people = float(level)
     elif axis == "sensor":
         people = BASE_PEOPLE * (1.0 if level == "truth" else ROBOT_VIEW_COST)

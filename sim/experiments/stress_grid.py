@@ -16,6 +16,8 @@ from typing import Any
 __all__ = [
     "AXES",
     "BASE_PEOPLE",
+    "CROWD_MAX_PEOPLE",
+    "CROWD_MIN_PEOPLE",
     "GRIDS",
     "SENSOR_NAMES",
     "StressGrid",
@@ -24,6 +26,8 @@ __all__ = [
 ]
 
 BASE_PEOPLE = 18  # guests of the test party (SALSA: 18)
+# People of the crowd axis's concourse: the range of the scenario's option people.
+CROWD_MIN_PEOPLE, CROWD_MAX_PEOPLE = 50, 3000
 # The sensor levels, in order (`sim.experiments.stress.SENSORS` holds their sensor models): the
 # ground truth of everyone in the room, then the robot's head sensor with field of view and range
 # only, with occlusion, and with occlusion and tracking errors.
@@ -97,6 +101,15 @@ AXES: Mapping[str, _AxisInfo] = MappingProxyType(
                 "truth or by the robot's head sensor.",
             ),
             _AxisInfo(
+                "crowd",
+                "Crowd size",
+                "people in the concourse",
+                "scene",
+                "The concourse (scenarios.concourse) with this many people in its hall: walkers "
+                "crossing, a queue, groups standing aside in the corners (the ground truth's only "
+                "groups).",
+            ),
+            _AxisInfo(
                 "event-rate",
                 "Scripted changes",
                 "scripted changes per minute",
@@ -142,6 +155,7 @@ _GRID_FIELDS = (
     ("density_per_m2", "floats", 0.01, 1.0),
     ("people", "ints", 2, 100),
     ("max_group_size", "ints", 2, 12),
+    ("crowd_people", "ints", CROWD_MIN_PEOPLE, CROWD_MAX_PEOPLE),
     ("event_rate_per_min", "floats", 0.0, 20.0),
     ("seeds", "int", 1, 10**6),
     ("duration_s", "float", 1e-3, 1e6),
@@ -167,6 +181,7 @@ class StressGrid:
         density_per_m2: guests per m² (mingle's planner lays out 18 guests up to about 0.5).
         people: numbers of guests at the default density.
         max_group_size: largest groups allowed (2-12).
+        crowd_people: people in the concourse of the crowd axis (50-3,000).
         sensors: sensor levels, names of :data:`SENSOR_NAMES`.
         event_rate_per_min: scripted changes per minute of the party (0-20; mingle's
             ``event_rate``).
@@ -188,6 +203,7 @@ class StressGrid:
     density_per_m2: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5)
     people: tuple[int, ...] = (6, 12, 18, 30, 48)
     max_group_size: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
+    crowd_people: tuple[int, ...] = (100, 300, 1000)
     sensors: tuple[str, ...] = SENSOR_NAMES
     event_rate_per_min: tuple[float, ...] = (0.0, 2.0, 4.0, 8.0, 12.0)
     seeds: int = 5
@@ -231,6 +247,7 @@ class StressGrid:
             "groups": self.people,
             "group-size": self.max_group_size,
             "sensor": self.sensors,
+            "crowd": self.crowd_people,
             "event-rate": self.event_rate_per_min,
         }[check_axis(axis)]
 
@@ -248,6 +265,7 @@ GRIDS: Mapping[str, StressGrid] = MappingProxyType(
             density_per_m2=(0.2, 0.4),
             people=(6, 18),
             max_group_size=(3, 8),
+            crowd_people=(60, 150),
             sensors=("truth", "occlusion"),
             event_rate_per_min=(0.0, 8.0),
             seeds=2,

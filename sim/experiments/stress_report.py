@@ -366,6 +366,12 @@ _READING_NOTES = (
         "fit, so read the density they ran at in the guests/m² column.",
     ),
     (
+        ("crowd",),
+        "**Crowd size** scores a `concourse`: walkers crossing and a queue beside the groups "
+        "standing aside. Walkers and queuers are singletons in the truth, so a detector that "
+        "groups a queue or people passing close loses precision there.",
+    ),
+    (
         tuple(name for name, info in AXES.items() if info.kind == "scene"),
         "Scene axes draw a new party per level with the same seeds, so their levels differ "
         "in the whole party, not only in the option; perturbation axes change nothing but "

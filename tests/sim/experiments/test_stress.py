@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import matplotlib.image
 import pytest
@@ -30,6 +31,7 @@ TINY = dataclasses.replace(
         for axis in ("position_noise_m", "orientation_noise_deg", "dropout")
     },
     people=(8, 24),
+    crowd_people=(50, 100),
     duration_s=30.0,
     train_duration_s=60.0,
     resamples=100,
@@ -86,6 +88,10 @@ def test_scene_axes_change_the_scene(results) -> None:
         assert point.people_per_m2 == pytest.approx(point.value, rel=0.01)
     dropout = results.axis("dropout").points
     assert dropout[1].people_per_frame < dropout[0].people_per_frame
+    # A larger concourse: more people in each frame (walkers come and go) and more groups.
+    small, large = results.axis("crowd").points
+    assert 30 < small.people_per_frame <= 50 < large.people_per_frame <= 100
+    assert large.fformations_per_frame > small.fformations_per_frame
 
 
 def test_the_event_rate_axis_scripts_changes_into_the_same_parties(results) -> None:
@@ -100,6 +106,30 @@ def test_the_event_rate_axis_scripts_changes_into_the_same_parties(results) -> N
     # Eight changes a minute: people walk up, drift away and merge, so the groups differ.
     assert busy.frames == still.frames and busy.people_per_frame == still.people_per_frame
     assert busy.fformations_per_frame != still.fformations_per_frame
+
+
+def test_a_crowd_axis_past_the_machine_is_refused_before_any_work(tmp_path, capsys) -> None:
+    """The default grid's crowd axis (up to 1,000 people) in 1 GiB with two workers: refused
+    in one line naming the crowd asked, the largest that fits and what to change; nothing is
+    written."""
+    out = tmp_path / "report"
+    code = main(
+        ["stress", "--axes", "crowd", "--jobs", "2", "--max-memory", "1G", "--out", str(out)]
+    )
+    assert code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    found = re.search(
+        r"the crowd axis of --grid default asks for a concourse of 1,000 people, more than "
+        r"--max-memory 1 GiB holds with 2 workers: at most (\d+) people fit; leave crowd out "
+        r"of --axes, run the small --grid, give fewer --jobs or a larger --max-memory$",
+        line,
+    )
+    assert found and 50 <= int(found[1]) < 1000, line
+    assert not out.exists()
+    with pytest.raises(
+        ValueError, match=r"StressGrid.crowd_people values must lie in \[50, 3000\], got 5000"
+    ):
+        StressGrid(crowd_people=(100, 5000))
 
 
 def test_training_and_test_seeds_differ() -> None:
