@@ -12,7 +12,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from reform.detectors import builtin_names
+from reform.detectors import builtin_names, detector_info, detector_names
 from reform.splits import DEFAULT_TRAIN_FRACTION
 from sim.cli._benchmark import DEFAULT_DETECTORS, DEFAULT_OUT
 from sim.cli._common import (
@@ -137,10 +137,13 @@ def _run(args: argparse.Namespace) -> int:
 def _check_detectors(detectors) -> None:
     """Every plugin is made once up front, so that a bad one is named before any work (the
     current folder searched for a ``module:factory`` path, as `evaluate` and `detect` do; the
-    workers inherit the search path)."""
+    workers inherit the search path). The catalogue's own detectors are made where they run
+    only: making them here would import their libraries into a process that runs none."""
 
     for detector in detectors:
         if detector.spec.startswith(("reform:", "dante:")):
+            continue
+        if detector.spec in detector_names() and detector_info(detector.spec).source == "built-in":
             continue
         make_plugin(detector.spec, deadline_s=detector.deadline_s)
 

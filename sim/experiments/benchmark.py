@@ -517,11 +517,33 @@ def _temporal(label: str, frames: Sequence[Frame], predictions: Sequence[Any]) -
         return {"skipped": " ".join(str(exc).split())}
 
 
-def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec, temporal: bool = False) -> Cell:
-    """One cell: load, build, predict (checked), evaluate (and, with ``temporal``, score the
-    group events in time). A detector that learns is fitted on the training part of the
-    dataset's time split and scored on its test part only."""
-    dataset = dataset_spec.load()
+# The datasets this process has loaded in the run under way: the cells of one dataset that run
+# here (one process, or each worker) read it once, whichever detectors they score.
+_LOADED: dict[str, Any] = {"run": None, "datasets": {}}
+
+
+def _load_once(dataset_spec: DatasetSpec, run: str | None) -> Dataset:
+    """``dataset_spec.load()``, read once per process in run ``run`` (None: read now)."""
+    if run is None:
+        return dataset_spec.load()
+    if _LOADED["run"] != run:  # a new run: the last run's datasets are let go
+        _LOADED.update(run=run, datasets={})
+    key = replace(dataset_spec, split="all", train_fraction=DEFAULT_TRAIN_FRACTION)
+    if key not in _LOADED["datasets"]:
+        _LOADED["datasets"][key] = dataset_spec.load()
+    return _LOADED["datasets"][key]
+
+
+def _score(
+    dataset_spec: DatasetSpec,
+    detector_spec: DetectorSpec,
+    temporal: bool = False,
+    run: str | None = None,
+) -> Cell:
+    """One cell: load (once per process in run ``run``), build, predict (checked), evaluate
+    (and, with ``temporal``, score the group events in time). A detector that learns is fitted
+    on the training part of the dataset's time split and scored on its test part only."""
+    dataset = _load_once(dataset_spec, run)
     label = dataset_spec.label  # the row's dataset, whichever of its frames this cell scores
     training: tuple[Frame, ...] = ()
     if detector_spec.learns:
@@ -557,11 +579,11 @@ def _score(dataset_spec: DatasetSpec, detector_spec: DetectorSpec, temporal: boo
     )
 
 
-def _score_unit(unit: tuple[DatasetSpec, DetectorSpec, bool]) -> Cell:
+def _score_unit(unit: tuple[DatasetSpec, DetectorSpec, bool, str]) -> Cell:
     return _score(*unit)
 
 
-def _describe_unit(unit: tuple[DatasetSpec, DetectorSpec, bool]) -> str:
+def _describe_unit(unit: tuple[DatasetSpec, DetectorSpec, bool, str]) -> str:
     """What a cell is, in a message: ``"detector gcff on salsa"``."""
     return f"detector {unit[1].label} on {unit[0].label}"
 
@@ -612,14 +634,18 @@ def run_benchmark(
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
-    units = [(d, m, bool(temporal)) for d in datasets for m in detectors]
+    run = f"{os.getpid()}-{time.time_ns()}"  # each process reads a dataset once in this run
+    units = [(d, m, bool(temporal), run) for d in datasets for m in detectors]
     start = time.perf_counter()
-    if executor is None:
-        local = backend == "local"
-        with Executor(backend, jobs=jobs if local else None, address=address) as own:
-            cells = own.map(_score_unit, units, on_done=progress, describe=_describe_unit)
-    else:
-        cells = executor.map(_score_unit, units, on_done=progress, describe=_describe_unit)
+    try:
+        if executor is None:
+            local = backend == "local"
+            with Executor(backend, jobs=jobs if local else None, address=address) as own:
+                cells = own.map(_score_unit, units, on_done=progress, describe=_describe_unit)
+        else:
+            cells = executor.map(_score_unit, units, on_done=progress, describe=_describe_unit)
+    finally:
+        _LOADED.update(run=None, datasets={})  # this process's, when the cells ran here
     return Benchmark(
         datasets=datasets,
         detectors=detectors,
