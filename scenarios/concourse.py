@@ -41,7 +41,7 @@ from scenarios.mingle import (
     SETTLE_S,
     MingleParams,
     NoFloorError,
-    _Party,
+    Party,
     write_party,
 )
 from scenarios.registry import Range, SceneSeconds, check_ranges, register
@@ -296,7 +296,7 @@ def _rng(seed: int, part: int, k: int = 0) -> np.random.Generator:
 
 def _corner_parties(
     params: ConcourseParams, layout: _Layout, guests: int, seed: int
-) -> list[tuple[_Party, np.random.Generator]]:
+) -> list[tuple[Party, np.random.Generator]]:
     """The parties standing aside, planned (ids from 1) and moved to where they stand: each
     corner cut into k x k square patches of at most `PATCH_PEOPLE` guests, a party each (the
     planner's work grows faster than its guests)."""
@@ -325,7 +325,7 @@ def _corner_parties(
             mean_utterance=params.mean_utterance,
             event_rate=params.event_rate,
         )
-        party = _Party(zone, rng, side, first_id=first)
+        party = Party(zone, rng, side, first_id=first)
         party.run()
         party.translate(centre)
         parties.append((party, rng))

@@ -23,7 +23,7 @@ members unevenly round elliptical o-spaces (SALSA's Symmetry by size), ``arrange
 share of the groups stand side by side or as presenter and audience, and ``furniture`` puts
 tables, bar counters and posters in the room with groups standing at them.
 
-Everything is drawn when the scenario is made: an event-driven planner (`_Party`) walks
+Everything is drawn when the scenario is made: an event-driven planner (`Party`) walks
 through the party's timeline (joins, leaves, merges, splits, pairings, passers-by), reserving
 floor space for every group so that groups never overlap, then the conversations and glances
 are written for every group and every person standing alone.
@@ -86,9 +86,11 @@ __all__ = [
     "SALSA_RADIUS",
     "MingleParams",
     "NoFloorError",
+    "Party",
     "build_mingle",
     "build_mingle_in_room",
     "mingle",
+    "write_party",
 ]
 
 SALSA_RADIUS = RadiusLaw(base=0.444, per_member=0.067)  # metres, fit to SALSA (module doc)
@@ -292,8 +294,9 @@ class _Alone:
     end: float = math.inf
 
 
-class _Party:
-    """Plans the party: who is where, in which group, from when to when."""
+class Party:
+    """Plans the party: who is where, in which group, from when to when (`run`); a patch of a
+    larger scene too (``first_id``, `translate`; `scenarios.concourse`)."""
 
     def __init__(
         self,
@@ -1315,8 +1318,8 @@ def _on_wall(side: int, along: float, edge: float) -> np.ndarray:
     ][side]
 
 
-def write_party(builder: TimelineBuilder, party: _Party, rng: np.random.Generator) -> None:
-    """Writes a planned party (`_Party.run`) into ``builder``: its walks, every group record
+def write_party(builder: TimelineBuilder, party: Party, rng: np.random.Generator) -> None:
+    """Writes a planned party (`Party.run`) into ``builder``: its walks, every group record
     with its conversation, the glances of everyone standing alone and its events."""
     params = party.p
     for t, m, intent in party.walks:
@@ -1364,7 +1367,7 @@ def build_mingle(params: MingleParams, *, seed: int, name: str) -> Scenario:
     if params.robot:
         robot = RobotPlace(id=ROBOT_ID, position=(-0.5 * side + ROBOT_WALL_GAP_M, 0.0), yaw=0.0)
     keep_clear = () if robot is None else (np.array(robot.position),)
-    party = _Party(params, rng, side, keep_clear=keep_clear)
+    party = Party(params, rng, side, keep_clear=keep_clear)
     party.run()
     people = party.ids
     passers = list(range(params.people + 1, params.people + params.passers_by + 1))
