@@ -39,9 +39,12 @@ from scenarios.conversation import standing
 from scenarios.mingle import (
     DENSITY_PER_M2,
     SETTLE_S,
+    LargestGroup,
+    MeanSeconds,
     MingleParams,
     NoFloorError,
     Party,
+    UtteranceSeconds,
     write_party,
 )
 from scenarios.registry import Range, SceneSeconds, check_ranges, register
@@ -111,11 +114,11 @@ class ConcourseParams:
     queue_share: Annotated[float, Range(0.0, 0.5)] = 0.1
     service_time: Annotated[float, Range(MIN_SERVICE_S, 600.0, unit="s")] = 10.0
     mean_wait: Annotated[float, Range(MIN_WAIT_S, 600.0, unit="s")] = 30.0
-    max_group_size: Annotated[int, Range(2, 12)] = 8
-    mean_stay: Annotated[float, Range(1.0, unit="s")] = 300.0
-    mean_alone: Annotated[float, Range(1.0, unit="s")] = 10.0
-    mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 4.0
-    event_rate: EventRate = 0.0
+    max_group_size: LargestGroup = MingleParams.max_group_size
+    mean_stay: MeanSeconds = MingleParams.mean_stay
+    mean_alone: MeanSeconds = MingleParams.mean_alone
+    mean_utterance: UtteranceSeconds = MingleParams.mean_utterance
+    event_rate: EventRate = MingleParams.event_rate
 
     def counts(self) -> tuple[int, int, int]:
         """(standing in the corners, queuing, walking) people."""

@@ -84,6 +84,9 @@ from scenarios.timeline import PlannedGroup, TimelineBuilder
 
 __all__ = [
     "SALSA_RADIUS",
+    "LargestGroup",
+    "MeanSeconds",
+    "UtteranceSeconds",
     "MingleParams",
     "NoFloorError",
     "Party",
@@ -148,6 +151,15 @@ CHANGED_MAX = 6  # people: a scripted join or merge makes a group of at most thi
 APPROACH_SPEED_M_S = 1.0  # m/s, default speed of a latecomer walking up
 
 
+# Option types of a party, declared alike by every scenario that plans one (`scenarios.concourse`).
+LargestGroup = Annotated[int, Range(2, 12)]
+"""The largest group a party allows, people: 2 to 12."""
+MeanSeconds = Annotated[float, Range(1.0, unit="s")]
+"""A mean time of a party's comings and goings (a stay in a group, a time alone), seconds: >= 1."""
+UtteranceSeconds = Annotated[float, Range(0.5, 60.0, unit="s")]
+"""The mean length of one speaker's turn, seconds: 0.5 to 60."""
+
+
 class NoFloorError(ValueError):
     """The party's groups and people do not fit the room."""
 
@@ -197,7 +209,7 @@ class MingleParams:
     people: Annotated[int, Range(2, 100)] = 18
     duration: SceneSeconds = 600.0
     room_side: Annotated[float, Range(0.0, 100.0, unit="m")] = 0.0
-    max_group_size: Annotated[int, Range(2, 12)] = 8
+    max_group_size: LargestGroup = 8
     robot: bool = False
     passers_by: Annotated[int, Range(0, 20)] = 0
     radius_base: Annotated[float, Range(0.3, 2.0, unit="m")] = SALSA_RADIUS.base
@@ -206,10 +218,10 @@ class MingleParams:
     position_noise: PlaceNoise = 0.05
     orientation_noise: Annotated[float, Range(0.0, 1.0)] = 0.7
     head_noise: Annotated[float, Range(0.0, 1.0, unit="rad")] = 0.2
-    mean_stay: Annotated[float, Range(1.0, unit="s")] = 300.0
-    mean_alone: Annotated[float, Range(1.0, unit="s")] = 10.0
+    mean_stay: MeanSeconds = 300.0
+    mean_alone: MeanSeconds = 10.0
     alone_share: Annotated[float, Range(0.0, 1.0)] = 0.08
-    mean_utterance: Annotated[float, Range(0.5, 60.0, unit="s")] = 4.0
+    mean_utterance: UtteranceSeconds = 4.0
     spacing: Annotated[float, Range(0.43, 1.0, unit="m")] = SPACING_M
     unevenness: Annotated[float, Range(0.0, 1.0)] = 0.0
     arrangements: Annotated[float, Range(0.0, 1.0)] = 0.0
