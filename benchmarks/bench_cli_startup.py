@@ -24,9 +24,10 @@ alike.
 
 **Imports' share** of two short commands on the real datasets: ``evaluate --detector gcff
 --data salsa`` and ``benchmark`` on salsa, babble, coffeebreak and synth (with its recordings
-and figure, into a temporary folder). Every Python process of the command (its worker processes
-too) clocks the CPU time of its imports (each outermost import, whatever it imports in turn);
-the command's CPU time is that of its process and the processes it waited for. Printed: the
+and figure, into a temporary folder), on every core as by default and with ``--jobs 1``.
+Every Python process of the command (its worker processes too) clocks the CPU time of its
+imports (each outermost import, whatever it imports in turn); the command's CPU time is that
+of its process and the processes it waited for. Printed: the
 median share over ``--repeats``, beside the CPU time of ``python -c pass`` in the same run, and
 which of the heavy libraries each command imported (a command imports only what it uses:
 evaluate without ``--save`` imports no Rerun, neither imports torch). Goals (issue 31): imports
@@ -169,6 +170,7 @@ def _shares(args, pycache: str) -> None:
             "benchmark (4 datasets)": ["benchmark", "--quiet"]
             + [w for name in DATASETS for w in ("--data", name)],
         }
+        commands["benchmark --jobs 1"] = [*commands["benchmark (4 datasets)"], "--jobs", "1"]
         needed = list(DATASETS)
     if any(name not in found for name in needed):
         print(f"\nimports' share: skipped, {', '.join(needed)} not all in {folder} (--datasets)")
