@@ -3,7 +3,9 @@
 Baselines, run in the same process: SALSA and Babble - read the file and convert every numeric
 token with ``float()`` (no validation, no frames); Parquet - ``pyarrow.parquet.read_table`` of the
 same file (raw columnar read, no frames), and ``write_table`` of that table for writing; the
-frames read back must equal SALSA's (checked). Prints medians and ratios (loader / baseline).
+frames read back must equal SALSA's (checked). Each loader and its baseline run one after the
+other, ``--repeats`` times; prints the medians and the median of the ratios loader / baseline
+of each such pair, so that a change of load on the machine hits both alike.
 
     python benchmarks/bench_loaders.py [--datasets ../shared/datasets] [--repeats 5] [--quick]
 
@@ -12,6 +14,7 @@ frames read back must equal SALSA's (checked). Prints medians and ratios (loader
 
 from __future__ import annotations
 
+import statistics
 import tempfile
 from pathlib import Path
 
@@ -71,9 +74,15 @@ def main() -> None:
         ]
         print(f"{'task':<22} {'median s':>9} {'baseline s':>11} {'ratio':>7}")
         for name, loader, baseline in rows:
-            measured = median_seconds(loader, args.repeats)
-            floor = median_seconds(baseline, args.repeats)
-            print(f"{name:<22} {measured:9.3f} {floor:11.3f} {measured / floor:6.1f}x")
+            loader(), baseline()  # warmed: the file cached, the code paths loaded
+            pairs = [
+                (median_seconds(loader, 1), median_seconds(baseline, 1))
+                for _ in range(args.repeats)
+            ]
+            measured = statistics.median(m for m, _ in pairs)
+            floor = statistics.median(f for _, f in pairs)
+            ratio = statistics.median(m / f for m, f in pairs)
+            print(f"{name:<22} {measured:9.3f} {floor:11.3f} {ratio:6.1f}x")
 
 
 if __name__ == "__main__":
