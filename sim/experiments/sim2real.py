@@ -48,6 +48,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -56,6 +57,7 @@ from typing import Any
 
 import numpy as np
 from scipy.stats import kendalltau
+from tqdm import tqdm
 
 from reform.annotation import AnnotationModel
 from reform.bootstrap import bootstrap_weights
@@ -83,6 +85,7 @@ from sim.experiments.synthetic import (
     generate_sources,
     nearest_neighbour_quantiles,
 )
+from sim.ticking import ticking
 
 __all__ = [
     "CLASSIFIER_NAMES",
@@ -922,28 +925,38 @@ def sim_to_real(
     scored_sets = [*party_views, *validation_names, *tests]
     units: list[tuple[str, Any, Sequence[str]]] = []
     roles: dict[str, str] = {}
-    for name in classifiers:
-        label = f"REFORM {DISPLAY[name]}, trained on SALSA's training split"
-        model = Reform(make_classifier(name)).fit(salsa_train)
-        units.append((label, model, scored_sets))
-        roles[label] = "salsa-trained"
-    gcff_one = f"GCFF, one setting ({PAPER_STRIDE_M:g} m, {PAPER_MDL_M2 * 1e4:,.0f} cm²)"
-    units.append(
-        (
-            gcff_one,
-            make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
-            (*scored_sets, SALSA_TRAIN_SET),
-        )
+    bar = tqdm(  # fits and grid searches in this process: seconds to a minute each
+        total=len(classifiers) + len(real),
+        desc="sim2real baselines' fits",
+        unit="detector",
+        file=sys.stderr,
+        disable=not progress_bars,
+        dynamic_ncols=True,
     )
-    roles[gcff_one] = "gcff-one"
-    gcff_own = "GCFF, each dataset's own settings"
-    notes: dict[str, str] = {}
-    for name, dataset in real.items():
-        detector, note = _gcff_own(
-            dataset, tests[labels[name]], salsa_train if name == SALSA else None, gcff_grids or {}
+    with bar, ticking(bar):
+        for name in classifiers:
+            label = f"REFORM {DISPLAY[name]}, trained on SALSA's training split"
+            model = Reform(make_classifier(name)).fit(salsa_train)
+            units.append((label, model, scored_sets))
+            roles[label] = "salsa-trained"
+            bar.update(1)
+        gcff_one = f"GCFF, one setting ({PAPER_STRIDE_M:g} m, {PAPER_MDL_M2 * 1e4:,.0f} cm²)"
+        units.append(
+            (
+                gcff_one,
+                make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2),
+                (*scored_sets, SALSA_TRAIN_SET),
+            )
         )
-        notes[labels[name]] = note
-        units.append((f"{gcff_own} [{labels[name]}]", detector, (labels[name],)))
+        roles[gcff_one] = "gcff-one"
+        gcff_own = "GCFF, each dataset's own settings"
+        notes: dict[str, str] = {}
+        for name, dataset in real.items():
+            train = salsa_train if name == SALSA else None
+            detector, note = _gcff_own(dataset, tests[labels[name]], train, gcff_grids or {})
+            notes[labels[name]] = note
+            units.append((f"{gcff_own} [{labels[name]}]", detector, (labels[name],)))
+            bar.update(1)
     results = executor.map(_detector_unit, units, shared=(sets,), desc="sim2real baselines")
     for (label, _, _), evals in zip(units, results, strict=True):
         if label.startswith(gcff_own):
