@@ -431,13 +431,19 @@ def _natural_key(relative: Path) -> tuple:
     )
 
 
-def _check_rows_fit(path: Path | str, pq: Any, source: Any = None) -> None:
+def _check_rows_fit(path: Path | str, pq: Any, source: Any = None) -> Any:
     """Refuses, before reading it, a file whose rows cannot fit the memory available (a few MB
-    of Parquet can claim a hundred million rows)."""
+    of Parquet can claim a hundred million rows). Returns the file's schema as pyarrow reads
+    it, or None when its footer cannot be read (read_table names that)."""
     try:
-        rows = pq.ParquetFile(path if source is None else source).metadata.num_rows
+        file = pq.ParquetFile(path if source is None else source)
+        rows = file.metadata.num_rows
     except Exception:  # noqa: BLE001 - a corrupt footer is named by read_table below
-        return
+        return None
+    try:
+        schema = file.schema_arrow
+    except Exception:  # noqa: BLE001 - named by read_table below, as a corrupt footer is
+        schema = None
     need = rows * READ_BYTES_PER_ROW
     available = available_memory()
     if available and need > available:
@@ -448,6 +454,23 @@ def _check_rows_fit(path: Path | str, pq: Any, source: Any = None) -> None:
             f"a file whose rows fit the {available / 2**30:.1f} GiB of memory available",
             f"{rows:,} rows needing about {need / 2**30:.1f} GiB to read",
         )
+    return schema
+
+
+def _as_codes(pa: Any, schema: Any) -> list[str]:
+    """The format's string columns that ``schema`` (a file's) holds as plain text: read as
+    codes into their distinct texts (``read_dictionary``), which pyarrow does faster than
+    reading the texts to encode them again (`_dictionary`). A column stored with another type
+    is read as stored, to be refused by its type."""
+    if schema is None:
+        return []
+    out = []
+    for name, (type_name, _, _, _) in COLUMNS.items():
+        index = schema.get_field_index(name)  # -1: absent, or more than one column so named
+        if type_name == "string" and index >= 0:
+            if schema.field(index).type in (pa.string(), pa.large_string()):
+                out.append(name)
+    return out
 
 
 def _read_file(
@@ -459,9 +482,13 @@ def _read_file(
     if (len(content) if content is not None else Path(path).stat().st_size) == 0:
         raise DataFormatError(path, None, None, "a Parquet file", "an empty file")
     source = None if content is None else pa.BufferReader(content)
-    _check_rows_fit(path, pq, source)
+    as_codes = _as_codes(pa, _check_rows_fit(path, pq, source))
     try:
-        table = pq.read_table(path if source is None else source, partitioning=None)
+        table = pq.read_table(
+            path if source is None else source,
+            partitioning=None,
+            read_dictionary=as_codes or None,
+        )
     except Exception as exc:  # pyarrow raises ArrowInvalid, OSError... on corrupt files
         raise DataFormatError(
             path, None, None, "a readable Parquet file", f"{type(exc).__name__}: {exc}"
@@ -507,10 +534,10 @@ def _read_file(
             raise DataFormatError(path, None, name, f"a column {name!r}", f"columns {columns}")
         column = table.column(name)
         expected = _arrow_type(pa, type_name)
-        if column.type != expected and not (
-            type_name == "string" and column.type == pa.large_string()
-        ):
-            raise DataFormatError(path, None, name, f"type {expected}", f"{column.type}")
+        coded = name in as_codes and pa.types.is_dictionary(column.type)
+        found = column.type.value_type if coded else column.type
+        if found != expected and not (type_name == "string" and found == pa.large_string()):
+            raise DataFormatError(path, None, name, f"type {expected}", f"{found}")
         if column.null_count:
             mask = column.is_null().to_numpy(zero_copy_only=False)
         else:
@@ -521,7 +548,7 @@ def _read_file(
             )
         null[name] = mask
         if type_name == "string":
-            data[name], texts[name] = _dictionary(column)
+            data[name], texts[name] = _codes(column) if coded else _dictionary(column)
         else:
             filled = column.fill_null(False if type_name == "bool" else 0) if mask.any() else column
             data[name] = filled.to_numpy()
@@ -576,6 +603,18 @@ def _dictionary(column: Any) -> tuple[np.ndarray, list[str]]:
     ``r`` holds ``texts[codes[r]]``, and a null row the code ``len(texts)``."""
     encoded = column.combine_chunks().dictionary_encode()
     texts = encoded.dictionary.to_pylist()
+    return encoded.indices.fill_null(len(texts)).to_numpy(), texts
+
+
+def _codes(column: Any) -> tuple[np.ndarray, list[str]]:
+    """`_dictionary` of a string column read as codes (`_as_codes`): its dictionaries made one,
+    in order of first appearance (each chunk's own order, as a file's writer made it, and the
+    texts of later chunks after those of earlier ones); encoded again by `_dictionary` where a
+    file's dictionary lists one text twice, so that one text always has one code."""
+    encoded = column.combine_chunks()
+    texts = encoded.dictionary.to_pylist()
+    if len(set(texts)) < len(texts):
+        return _dictionary(column.cast(column.type.value_type))
     return encoded.indices.fill_null(len(texts)).to_numpy(), texts
 
 

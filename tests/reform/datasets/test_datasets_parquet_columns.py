@@ -277,3 +277,31 @@ def test_every_altered_file_is_refused_or_read_as_frame_by_frame(tmp_path, monke
         path.unlink()
     # Both kinds of file were met: files read (their frames compared) and files refused.
     assert outcomes["read"] > 200 and outcomes["refused"] > 200, outcomes
+
+
+def _rewritten(path: Path, out: Path, *, kind: pa.DataType, row_group_size: int) -> Path:
+    """The file at ``path`` written again, its ``kind`` column cast to ``kind`` (its dictionary
+    encoded with ``pa.dictionary``), in row groups of ``row_group_size`` rows."""
+    table = pq.read_table(path)
+    index = table.schema.get_field_index("kind")
+    column = table.column("kind")
+    column = column.dictionary_encode() if pa.types.is_dictionary(kind) else column.cast(kind)
+    table = table.set_column(index, "kind", column)
+    pq.write_table(table, out, row_group_size=row_group_size)
+    return out
+
+
+def test_text_columns_read_the_same_however_a_file_stores_them(tmp_path, monkeypatch):
+    """Text columns are read as codes into their texts: the same frames from large strings and
+    from row groups whose dictionaries differ; a column whose own type is a dictionary is refused
+    by its type, as it always was."""
+    dataset = _random_dataset(np.random.default_rng(5), n_frames=40)
+    path = write_parquet(dataset, tmp_path / "random.parquet")
+    large = _rewritten(path, tmp_path / "large.parquet", kind=pa.large_string(), row_group_size=7)
+    by_columns = _read_by_columns(large, monkeypatch)
+    _assert_identical(by_columns, _read_frame_by_frame(large, monkeypatch))
+    assert by_columns.frames == dataset.frames
+    coded = pa.dictionary(pa.int32(), pa.string())
+    stored = _rewritten(path, tmp_path / "coded.parquet", kind=coded, row_group_size=1000)
+    with pytest.raises(DataFormatError, match=r"kind.*type string.*dictionary<values=string"):
+        read_parquet(stored)
