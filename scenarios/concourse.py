@@ -19,14 +19,15 @@ stand, unless a side is given) laid out as a cross of floor for flows and four c
 Walkers and queuers are never in a conversational group: a queue is not an F-formation, so the
 ground truth holds only the corners' planned groups (`scenarios.truth`), as for every scenario.
 
-A crowd that cannot fit its hall (more than `MAX_GROUP_DENSITY_PER_M2` people per m^2 where
-groups stand, a queue longer than its corner holds, or more than `MAX_WALKER_DENSITY_PER_M2`
-walkers per m^2 of the cross) is refused, naming the size asked, the size that fits and the
-option to change.
+A crowd that cannot fit its hall (more than `MAX_GROUP_DENSITY_PER_M2` guests per m^2 of the
+floor the corners' parties plan on, a queue longer than its corner holds, or more than
+`MAX_WALKER_DENSITY_PER_M2` walkers per m^2 of the cross) is refused, naming the size asked,
+the size that fits and the option to change.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Annotated, Any
@@ -47,6 +48,7 @@ from scenarios.mingle import (
     UtteranceSeconds,
     write_party,
 )
+from scenarios.mingle import WALL_GAP_M as PARTY_WALL_GAP_M
 from scenarios.registry import Range, SceneSeconds, check_ranges, register
 from scenarios.scenario import Scenario
 from scenarios.script import Intent
@@ -60,9 +62,12 @@ MIN_HALL_M = 20.0  # metres, smallest hall side picked
 CROSS_SHARE = 0.2  # the cross of floor for flows is this share of the hall's side wide
 PATCH_PEOPLE = 120  # most guests planned as one party (a corner holds k x k such patches)
 LANE_SHARE = 0.4  # share of an arm's width a lane spans, from the arm's middle to its right
-MAX_GROUP_DENSITY_PER_M2 = 0.7  # people per m^2 where groups stand: beyond, no room to mingle
+# Guests per m^2 of the floor a patch's party plans on (inside its margins): the party's planner
+# lays out 0.5 for every seed tried, 0.6 for most, 0.7 for none; beyond, no room to mingle.
+MAX_GROUP_DENSITY_PER_M2 = 0.5
 MAX_WALKER_DENSITY_PER_M2 = 0.3  # walkers per m^2 of the cross: beyond, no room to cross
-WALL_GAP_M = 0.35 + PLANNING_RADIUS_M  # metres from a wall to the nearest place (a body)
+WALL_GAP_M = PARTY_WALL_GAP_M + PLANNING_RADIUS_M  # metres from a wall to the nearest place
+# (a patch's party keeps as far from its edges: the floor it plans on is this much smaller)
 WALK_SPEED_M_S = (1.1, 1.5)  # m/s, walkers cross at these speeds
 QUEUE_SPEED_M_S = 0.8  # m/s, queuers step forward at this speed
 SLOT_M = 0.75  # metres between two places of the queue in a row
@@ -89,8 +94,9 @@ class ConcourseParams:
         people: everyone in the scene: standing in groups (or alone beside them), queuing,
             and walking through.
         duration: length of the scene, seconds.
-        hall_side: side of the square hall, metres; 0: 0.4 people per m^2 where groups stand
-            (at least 20 m, at most 100 m, and large enough for the queue and the walkers).
+        hall_side: side of the square hall, metres; 0: the smallest (at least 20 m, at most
+            100 m) with 0.4 guests per m^2 where groups stand and room for the queue and the
+            walkers.
         entrances: doors in the middle of the walls: west and east, then north, then south.
         group_share: share of the people standing in the corners, in conversational groups or
             alone beside them.
@@ -164,7 +170,7 @@ class ConcourseParams:
                 fix = f"a hall_side of at least {need:g} m"
             raise ValueError(
                 f"{name}: {self.people} people do not fit {given} at a sane density "
-                f"(at most {MAX_GROUP_DENSITY_PER_M2:g} per m^2 where groups stand, "
+                f"(at most {MAX_GROUP_DENSITY_PER_M2:g} guests per m^2 of the corners' floor, "
                 f"{MAX_WALKER_DENSITY_PER_M2:g} walkers per m^2 of the cross, a queue its "
                 f"corner holds), i.e. {most} people; give {fix}"
             )
@@ -173,10 +179,7 @@ class ConcourseParams:
         """The hall's side, metres."""
         if self.hall_side > 0.0:
             return self.hall_side
-        guests = self.counts()[0]
-        corner = math.sqrt(guests / self.corners() / DENSITY_PER_M2)
-        side = max(MIN_HALL_M, math.ceil(corner / (1.0 - CROSS_SHARE) * 2.0))
-        return min(MAX_HALL_M, max(side, _least_side(self) or MAX_HALL_M))
+        return _least_side(self, density=DENSITY_PER_M2) or MAX_HALL_M
 
 
 @dataclass(frozen=True)
@@ -269,26 +272,54 @@ def _right(heading: tuple[float, float] | np.ndarray) -> np.ndarray:
     return np.array([heading[1], -heading[0]], dtype=np.float64)
 
 
-def _most_people(params: ConcourseParams, side: float) -> int:
-    """The most people of ``params``'s shares that a hall of ``side`` metres holds."""
+def _patches(guests: int, corners: int) -> int:
+    """Patches along a corner's side (k: k x k patches a corner) for ``guests`` in ``corners``."""
+    return max(1, math.ceil(math.sqrt(guests / corners / PATCH_PEOPLE)))
+
+
+def _fits(
+    params: ConcourseParams,
+    people: int,
+    side: float,
+    *,
+    density: float = MAX_GROUP_DENSITY_PER_M2,
+) -> bool:
+    """Whether ``people`` in ``params``'s shares fit a hall of ``side`` metres: the guests at most
+    ``density`` per m^2 of the floor their patches' parties plan on, the queue within the slots
+    its corner holds, the walkers at most `MAX_WALKER_DENSITY_PER_M2` per m^2 of the cross."""
+    params = dataclasses.replace(params, people=people)
     layout = _Layout(side)
-    guests, queuers, walkers = (x / params.people for x in params.counts())
-    bounds = []
+    guests, queuers, walkers = params.counts()
     if guests:
-        room = MAX_GROUP_DENSITY_PER_M2 * params.corners() * layout.corner**2
-        bounds.append(room / guests)
-    if queuers:
-        bounds.append(len(layout.queue_slots()[0]) / QUEUE_STANDING / queuers)
-    if walkers:
-        cross = side**2 - 4.0 * layout.corner**2
-        bounds.append(MAX_WALKER_DENSITY_PER_M2 * cross / walkers)
-    return int(min(bounds)) if bounds else params.people
+        corners = params.corners()
+        k = _patches(guests, corners)
+        floor = corners * max(layout.corner - 2.0 * k * WALL_GAP_M, 0.0) ** 2
+        if guests > density * floor:
+            return False
+    if queuers and queuers > len(layout.queue_slots()[0]) / QUEUE_STANDING:
+        return False
+    cross = side**2 - 4.0 * layout.corner**2
+    return walkers <= MAX_WALKER_DENSITY_PER_M2 * cross
 
 
-def _least_side(params: ConcourseParams) -> float | None:
-    """The smallest whole hall side (metres) that holds ``params``'s people; None: none does."""
+def _most_people(params: ConcourseParams, side: float) -> int:
+    """The most people in ``params``'s shares that a hall of ``side`` metres holds (`_fits`)."""
+    low, high = 0, 1
+    while _fits(params, high, side):
+        low, high = high, 2 * high
+    while high - low > 1:  # _fits(low), not _fits(high)
+        middle = (low + high) // 2
+        low, high = (middle, high) if _fits(params, middle, side) else (low, middle)
+    return low
+
+
+def _least_side(
+    params: ConcourseParams, *, density: float = MAX_GROUP_DENSITY_PER_M2
+) -> float | None:
+    """The smallest whole hall side (metres, from `MIN_HALL_M`) that holds ``params``'s people
+    (`_fits`, guests at ``density``); None: no hall does."""
     for side in range(int(MIN_HALL_M), int(MAX_HALL_M) + 1):
-        if _most_people(params, float(side)) >= params.people:
+        if _fits(params, params.people, float(side), density=density):
             return float(side)
     return None
 
@@ -304,7 +335,7 @@ def _corner_parties(
     corner cut into k x k square patches of at most `PATCH_PEOPLE` guests, a party each (the
     planner's work grows faster than its guests)."""
     corners = params.corners()
-    k = math.ceil(math.sqrt(guests / corners / PATCH_PEOPLE))
+    k = _patches(guests, corners)
     side = layout.corner / k
     patches = [
         layout.corner_centre(c) + side * (np.array([i, j]) - 0.5 * (k - 1))

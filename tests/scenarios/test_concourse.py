@@ -14,7 +14,7 @@ from scenarios.concourse import ConcourseParams
 from sim.episode import Episode, simulate_episode
 from sim.recording import CROWD_PEOPLE, record_episode
 
-OPTIONS = {"people": 150, "duration": 20.0}
+OPTIONS = {"people": 150, "duration": 30.0}
 SEED = 4
 
 
@@ -96,15 +96,16 @@ def test_a_crowd_that_cannot_fit_is_refused_in_one_line(options, match):
 
 
 def test_the_size_named_as_fitting_fits():
-    """The refusal's sizes are the truth: the people it says fit do, one more does not, and
-    the hall side it asks for holds the crowd."""
+    """The refusal's sizes are the truth: the people it says fit do (their parties are laid
+    out), one more does not, and the hall side it asks for holds the crowd."""
     with pytest.raises(ValueError) as refused:
         ConcourseParams(people=1500, hall_side=40.0).check("concourse")
     found = re.search(
         r"i\.e\. (\d+) people; give a hall_side of at least (\d+) m$", str(refused.value)
     )
     most, side = int(found[1]), float(found[2])
-    ConcourseParams(people=most, hall_side=40.0).check("concourse")
+    made = scenarios.make("concourse", seed=1, people=most, hall_side=40.0, duration=5.0)
+    assert len(made.stage.people) == most and made.stage.room == (40.0, 40.0)
     with pytest.raises(ValueError, match=f"^concourse: {most + 1} people do not fit"):
         ConcourseParams(people=most + 1, hall_side=40.0).check("concourse")
     ConcourseParams(people=1500, hall_side=side).check("concourse")
