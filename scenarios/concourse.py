@@ -431,22 +431,24 @@ def _queue(
                 del walking_in[m]
 
     t = max(float(rng.exponential(params.service_time)), MIN_SERVICE_S)
-    while t < params.duration and line:
+    while t < params.duration:
         take_places(t)
-        served = line.pop(0)
-        walking_in.pop(served, None)
-        speed = float(rng.uniform(*WALK_SPEED_M_S))
-        path = _way_out(layout, places[0], exit_door, rng)
-        builder.set(t, served, Intent(goal=(float(path[1][0]), float(path[1][1])), speed=speed))
-        gone = _walk(builder, served, t, path, speed) + SETTLE_S
-        builder.set(gone, served, Intent(present=False))
-        builder.event(t, "served", f"person {served} is served at the counter and leaves")
-        for k, m in enumerate(line):
-            if m not in walking_in:
-                builder.set(t, m, standing(places[k], facings[k], speed=QUEUE_SPEED_M_S))
-        outside.append((gone, served))
-        outside.sort()
-        if outside[0][0] <= t:  # someone comes in through an entrance, by the hall's middle
+        if line:  # the head is served and leaves; the others step forward
+            served = line.pop(0)
+            walking_in.pop(served, None)
+            speed = float(rng.uniform(*WALK_SPEED_M_S))
+            path = _way_out(layout, places[0], exit_door, rng)
+            goal = (float(path[1][0]), float(path[1][1]))
+            builder.set(t, served, Intent(goal=goal, speed=speed))
+            gone = _walk(builder, served, t, path, speed) + SETTLE_S
+            builder.set(gone, served, Intent(present=False))
+            builder.event(t, "served", f"person {served} is served at the counter and leaves")
+            for k, m in enumerate(line):
+                if m not in walking_in:
+                    builder.set(t, m, standing(places[k], facings[k], speed=QUEUE_SPEED_M_S))
+            outside.append((gone, served))
+            outside.sort()
+        if outside and outside[0][0] <= t:  # someone comes in, by the hall's middle
             _, m = outside.pop(0)
             door, middle = layout.entry(int(rng.integers(doors)), rng)
             line.append(m)
