@@ -116,7 +116,6 @@ from sim.episode import (
     simulate_episode,
 )
 from sim.executor import BACKENDS, Executor, cpu_count
-from sim.recording import FieldOfView, record_episode
 from sim.sensor import Sensor
 from sim.ticking import ticking
 
@@ -709,6 +708,7 @@ def _write_commit(folder: _Folder, summary: ShardSummary, files: Mapping[str, An
 
 def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None:
     """One Rerun recording of the episode: the scene, everyone, the groups, the robot's view."""
+    from sim.recording import FieldOfView, record_episode  # here: only a recording needs Rerun
 
     # Rerun writes to a path ending in .rrd: a hidden scratch folder beside it, then a rename.
     path.parent.mkdir(parents=True, exist_ok=True)

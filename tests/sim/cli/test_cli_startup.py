@@ -219,3 +219,14 @@ def test_benchmark_without_a_model_imports_no_skops(babble_dir, tmp_path) -> Non
         "print([m for m in ('skops', 'torch', 'mujoco') if m in sys.modules])\n"
     )
     assert loaded.splitlines()[-1] == "[]"
+
+
+def test_generate_without_recordings_imports_no_rerun(tmp_path) -> None:
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        "main(['generate', '--scenario', 'hri-passing', '--episodes', '1', '--duration', '2',\n"
+        f"      '--jobs', '1', '--quiet', '--out', {str(tmp_path / 'data')!r}])\n"
+        "print([m for m in ('rerun', 'skops', 'torch') if m in sys.modules])\n"
+    )
+    assert loaded.splitlines()[-1] == "[]"
