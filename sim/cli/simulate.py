@@ -26,7 +26,7 @@ from sim.cli._common import (
     size_error,
 )
 from sim.episode import estimate_episode, prepare, simulate_episode, write_episode
-from sim.recording import FieldOfView, record_episode, rerun_in_this_shell, target_from_args
+from sim.recording import target_from_args
 from sim.sensor import Sensor
 
 _STREAMING = (
@@ -113,6 +113,7 @@ def _run_recorded(
     start: float,
 ) -> int:
     """The whole episode in memory, written to --out and recorded."""
+    from sim.recording import FieldOfView, record_episode, rerun_in_this_shell  # Rerun: here only
 
     episode = simulate_episode(
         made, duration=args.duration, view=args.view, sensor=sensor, **kwargs
