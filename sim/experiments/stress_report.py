@@ -33,12 +33,7 @@ from sim.experiments.stress import (
     sensor_description,
 )
 from sim.experiments.tables import command_block, percent, render_table
-from sim.recording import (
-    RecordingTarget,
-    default_blueprint,
-    log_stress_curves,
-    open_recording,
-)
+from sim.recording import RecordingTarget
 
 __all__ = [
     "MARKDOWN_NAME",
@@ -397,6 +392,8 @@ def _slug(threshold: str) -> str:
 
 def log_results(rec: Any, results: StressResults) -> None:
     """Every axis's F1 curves, at each threshold, as stress bar charts in ``rec``."""
+    from sim.recording import log_stress_curves  # here: a report without a recording needs no Rerun
+
     labels = _report_labels(results.detectors)
     for axis in results.axes:
         for threshold in THRESHOLDS:
@@ -449,6 +446,8 @@ def write_report(
 def record(results: StressResults, target: RecordingTarget | str | Path) -> Path | None:
     """The curves as a Rerun recording sent to ``target`` (a ``.rrd`` path or a
     `sim.recording.RecordingTarget`); the ``.rrd`` saved, if any."""
+    from sim.recording import default_blueprint, open_recording  # Rerun: only to record
+
     target = RecordingTarget.coerce(target)
     blueprint = default_blueprint(
         scene=False, scores=False, events=False, stress=recording_names(results)
