@@ -1,8 +1,8 @@
 """Every ``reform-sim`` command the README and the documentation show parses as written: its
 subcommand exists, its flags are the command's (no old spelling), its values fit their types.
 
-Runs no command (the tutorials' blocks run in test_tutorials.py); it catches a page left behind
-by a renamed flag, a changed metavar or a removed subcommand, in a second."""
+Runs no command (the tutorials' blocks run in test_tutorials.py, slowly); it catches a page left
+behind by a renamed flag, a changed metavar or a removed subcommand, by parsing alone."""
 
 from __future__ import annotations
 
