@@ -217,11 +217,10 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         viewer: str | None = None,
     ) -> None:
         if isinstance(scenario, str):
-            if scenario not in scenarios.names():
-                raise ValueError(
-                    f"scenario must be one of {list(scenarios.names())} or a factory, "
-                    f"got {scenario!r}"
-                )
+            try:
+                scenarios.describe(scenario)  # an unknown name: the registry's one message
+            except ValueError as exc:
+                raise ValueError(f"{exc} (or give a scenario factory)") from None
             self._factory: ScenarioFactory | None = None
             self._scenario_name = scenario
         elif callable(scenario):
