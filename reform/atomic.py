@@ -12,6 +12,10 @@ namespace), and the first write of a process into a folder removes the temporari
 whose writer, on this machine, is no longer alive (:func:`remove_stale_temporaries`); nothing else
 is ever removed: not another machine's or container's, not a live process's, not a file named
 otherwise.
+
+A write that fills the disk (no space left on the device, or the user's quota spent) raises
+`DiskFull`, an OSError naming the path, the bytes written before it stopped, the space left
+there and, where the writer says, the space needed; its temporary file is removed.
 """
 
 from __future__ import annotations
@@ -30,12 +34,14 @@ from pathlib import Path
 from typing import IO
 
 __all__ = [
+    "DiskFull",
     "OutputPathError",
     "atomic_open",
     "atomic_path",
     "check_file_path",
     "check_folder_path",
     "file_kind",
+    "is_disk_full",
     "remove_stale_temporaries",
     "temporary_folder",
 ]
@@ -271,8 +277,57 @@ def check_folder_path(path: str | os.PathLike[str]) -> Path:
     return target
 
 
+_FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT)  # what a full disk (or a spent quota) raises
+
+
+class DiskFull(OSError):
+    """A write that found the disk full: one line naming the path, what was written, the space
+    left and the space needed (``errno`` is ENOSPC)."""
+
+    def __init__(self, path: Path, *, written: int, needed: float | None = None) -> None:
+        free = _free_bytes(path.parent)  # the unfinished file removed
+        left = "" if free is None else f"; {_size(free)} free there without it"
+        need = (
+            f"about {_size(needed)} needed"
+            if needed is not None and needed > written
+            else f"more than {_size(written)} needed"
+        )
+        self.message = (
+            f"{path}: the disk is full (no space left on the device after {_size(written)} of it "
+            f"were written{left}, {need}); free some space there or write elsewhere"
+        )
+        super().__init__(errno.ENOSPC, self.message)
+        self.path = path
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def _free_bytes(folder: Path) -> int | None:
+    try:
+        return shutil.disk_usage(folder).free
+    except OSError:
+        return None
+
+
+def _size(n: float) -> str:
+    """Bytes as ``"61 kB"``, ``"1.4 MB"`` (decimal units, as ``df -H``)."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{int(n)} bytes"
+
+
+def is_disk_full(exc: BaseException) -> bool:
+    """Whether ``exc`` says the disk is full (ENOSPC, EDQUOT), as an OSError or in the words
+    of a library that wraps it."""
+    if isinstance(exc, OSError) and exc.errno in _FULL_ERRNOS:
+        return True
+    return any(os.strerror(code) in str(exc) for code in _FULL_ERRNOS)
+
+
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike[str], *, needed: float | None = None) -> Iterator[Path]:
     """Yields a temporary path in the target's folder; renames it onto ``path`` on success.
 
     Use it with writers that take a path (``pyarrow.parquet.write_table``, ``skops.io.dump``).
@@ -280,9 +335,14 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     left untouched; a killed writer's is removed by the next write into that folder (see the
     module notes).
 
+    Args:
+        path: the file to write.
+        needed: the bytes the file is expected to take, if known, for the message of a full disk.
+
     Raises:
         OutputPathError: ``path`` is an existing folder, one of its folders is a file, or its
             folder cannot be created or written in (raised before the caller writes anything).
+        DiskFull: the writer found the disk full.
     """
     target, _ = _check_file_kinds(path)
     try:
@@ -307,6 +367,15 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         # mkstemp creates the file owner-only; give the result the permissions of a plain open().
         os.chmod(tmp, _DEFAULT_FILE_MODE & ~_current_umask())
         os.replace(tmp, target)
+    except Exception as exc:
+        try:
+            written = tmp.stat().st_size
+        except OSError:
+            written = 0
+        tmp.unlink(missing_ok=True)
+        if is_disk_full(exc):
+            raise DiskFull(target, written=written, needed=needed) from exc
+        raise
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise

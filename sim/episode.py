@@ -252,7 +252,13 @@ def _plan(
 
 
 def _estimate(
-    plan: _Plan, *, view: str, streamed: bool, recording: bool, block_rows: int | None = None
+    plan: _Plan,
+    *,
+    view: str,
+    streamed: bool,
+    recording: bool,
+    block_rows: int | None = None,
+    recording_model: bool = False,
 ) -> sizing.Estimate:
     """The plan's `sizing.Estimate`: every frame held unless ``streamed`` (then a chunk of
     `STREAM_CHUNK_BYTES`); the robot's view schedules one frame's steps at a time."""
@@ -269,6 +275,7 @@ def _estimate(
         view=view,
         held_frames=chunk if streamed else plan.count,
         recording=recording,
+        recording_model=recording_model,
     )
 
 
@@ -289,11 +296,13 @@ def estimate_episode(
     options: Mapping[str, Any] | None = None,
     streamed: bool = False,
     recording: bool = False,
+    recording_model: bool = False,
 ) -> sizing.Estimate:
     """What an episode will take (memory, disk, time), from its arguments alone.
 
     Arguments as for `simulate_episode`; ``streamed``: written by `write_episode` (a chunk of
-    frames held at a time) rather than returned whole; ``recording``: also recorded for Rerun.
+    frames held at a time) rather than returned whole; ``recording``: also recorded for Rerun
+    (``recording_model``: the people's bodies drawn from the scene's model).
     Nothing is simulated; the scenario is made (pass a made one to make it once).
 
     Raises:
@@ -312,7 +321,9 @@ def estimate_episode(
         options=options,
         sequence=None,
     )
-    return _estimate(plan, view=view, streamed=streamed, recording=recording)
+    return _estimate(
+        plan, view=view, streamed=streamed, recording=recording, recording_model=recording_model
+    )
 
 
 def _world(plan: _Plan) -> World:

@@ -1654,7 +1654,12 @@ def _check_size(
     which `_say_estimate` scales to the episodes left once they are known."""
 
     one = estimate_episode(
-        made, duration=spec.duration, rate=spec.rate, view=spec.view, recording=save_recordings
+        made,
+        duration=spec.duration,
+        rate=spec.rate,
+        view=spec.view,
+        recording=save_recordings,
+        recording_model=save_recordings,  # `_record` draws the scene's model
     )
     estimate = sizing.dataset_estimate(
         one,

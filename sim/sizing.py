@@ -58,6 +58,7 @@ __all__ = [
     "parse_size",
     "pool_start",
     "python_name",
+    "recording_disk",
     "total_memory",
 ]
 
@@ -74,7 +75,19 @@ RECORDING_AGENT_FRAME_BYTES = 1_100  # bytes of memory per agent-frame while a f
 # is recorded for Rerun (its columns and the logged chunks)
 DISK_AGENT_FRAME_BYTES = 58  # bytes of Parquet (zstd) per agent of a frame written
 DISK_EPISODE_BYTES = 9_800  # bytes of Parquet per file beside its rows (footer, metadata)
-RECORDING_DISK_AGENT_FRAME_BYTES = 73  # bytes of .rrd per agent-frame recorded
+# A .rrd as `simulate --save` and `generate --save-recordings` write it (measured by writing
+# them: mingle with 4, 18 and 40 people, 20 s and 80 s at 2 Hz, truth and robot views; fitted by
+# hand to the sizes, which the fit meets within 15 %). A short recording is mostly its fixed
+# part: the figure of long ones alone (73 bytes an agent-frame) underestimated them about 4x.
+RECORDING_DISK_BYTES = 110_000  # bytes of .rrd per recording beside its frames (blueprint,
+# layout, static scene, the recording's properties)
+RECORDING_DISK_AGENT_BYTES = 530  # bytes of .rrd per agent beside its frames (its entities)
+RECORDING_DISK_MODEL_AGENT_BYTES = 38_000  # bytes of .rrd per agent whose body is drawn from
+# the scene's model (static meshes: what `generate --save-recordings` records)
+RECORDING_DISK_FRAME_BYTES = 280  # bytes of .rrd per frame beside its agents (times, scores)
+RECORDING_DISK_AGENT_FRAME_BYTES = 89  # bytes of .rrd per agent-frame recorded
+RECORDING_DISK_OBSERVED_AGENT_FRAME_BYTES = 15  # bytes of .rrd per agent-frame the robot
+# observes (the observed stream beside the truth)
 CARD_EPISODE_BYTES = 4_800  # bytes of memory per episode a generated dataset's card lists
 CARD_DISK_EPISODE_BYTES = 600  # bytes per episode of the card written (JSON and Markdown)
 SECONDS_PER_AGENT_STEP = 3.5e-7  # seconds per agent per control step (motion, kinematics)
@@ -246,6 +259,7 @@ def episode_estimate(
     view: str = "truth",
     held_frames: int,
     recording: bool = False,
+    recording_model: bool = False,
 ) -> Estimate:
     """The cost of one simulated episode written as Parquet.
 
@@ -259,6 +273,7 @@ def episode_estimate(
         held_frames: frames held in memory at once: all of them when the episode is returned
             whole (or recorded), a chunk when it streams to disk.
         recording: the finished episode is also recorded for Rerun (memory, time, a ``.rrd``).
+        recording_model: the recording draws the people's bodies from the scene's model.
 
     Returns:
         The `Estimate`: peak memory, bytes written (Parquet, and the ``.rrd`` when recording),
@@ -278,7 +293,7 @@ def episode_estimate(
     }
     disk = agent_frames * DISK_AGENT_FRAME_BYTES + DISK_EPISODE_BYTES
     if recording:
-        disk += agent_frames * RECORDING_DISK_AGENT_FRAME_BYTES
+        disk += recording_disk(agents, frames, view=view, model=recording_model)
     return Estimate(
         memory=BASE_MEMORY_BYTES + sum(parts.values()),
         memory_cause=max(parts, key=parts.__getitem__),
@@ -287,6 +302,23 @@ def episode_estimate(
         + _episode_seconds(agents, frames, steps_per_frame, view, recording),
         frames=frames,
         agents=agents,
+    )
+
+
+def recording_disk(agents: int, frames: int, *, view: str = "truth", model: bool = False) -> float:
+    """Bytes of the ``.rrd`` of an episode of ``agents`` agents and ``frames`` frames, its robot's
+    observed frames too when ``view`` is ``"robot"``, the people's bodies drawn from the scene's
+    model when ``model``."""
+    agent_frames = float(frames) * agents
+    per_agent = RECORDING_DISK_AGENT_BYTES + (RECORDING_DISK_MODEL_AGENT_BYTES if model else 0)
+    per_agent_frame = RECORDING_DISK_AGENT_FRAME_BYTES + (
+        RECORDING_DISK_OBSERVED_AGENT_FRAME_BYTES if view == "robot" else 0
+    )
+    return (
+        RECORDING_DISK_BYTES
+        + agents * per_agent
+        + float(frames) * RECORDING_DISK_FRAME_BYTES
+        + agent_frames * per_agent_frame
     )
 
 

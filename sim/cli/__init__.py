@@ -99,6 +99,7 @@ COMMANDS = (
 # synthetic data of sim2real): run again, they carry on.
 _RESUMING = frozenset({"generate", "demo"})
 _RESUMING_EXPERIMENTS = frozenset({"sim2real"})
+RERUN_LOG = "warn,re_log_encoding=off,re_sdk=off"  # Rerun's log, its sinks' errors left out
 INTERRUPTED = 130  # exit status after Ctrl-C: 128 + SIGINT, as a shell reports it
 
 
@@ -157,6 +158,9 @@ def console_main() -> int:
 def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    # Rerun's own log of a sink's failure (a full disk) would add lines to the command's one:
+    # the command reports it (sim.recording); a RUST_LOG the user set wins.
+    os.environ.setdefault("RUST_LOG", RERUN_LOG)
     try:
         check_jobs(args)
         with os_exit_reported(args.command), sigterm_stops(), sigint_to_main_only():

@@ -41,6 +41,7 @@ from sim.recording._scene import (
 from sim.recording._stream import open_recording, recording_id
 from sim.recording._target import RecordingTarget, target_from_args
 from sim.recording._timeline import Clock
+from sim.sizing import recording_disk
 
 __all__ = [
     "CROWD_PEOPLE",
@@ -263,7 +264,15 @@ def record_episode(
     bodies = None  # every body of the model
     if model is not None and len(np.unique(world.ids[~world.robot])) > CROWD_PEOPLE:
         bodies = np.setdiff1d(np.arange(model.nbody), person_bodies(model))
-    with open_recording(target, name=name, seed=seed, blueprint=blueprint) as rec:
+    expected = recording_disk(
+        max(1, round(float(np.mean(world.counts)))),
+        len(world),
+        view="truth" if seen is None else "robot",
+        model=model is not None and bodies is None,
+    )
+    with open_recording(
+        target, name=name, seed=seed, blueprint=blueprint, expected_bytes=expected
+    ) as rec:
         log_frames(
             rec,
             world,

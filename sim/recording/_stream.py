@@ -9,14 +9,18 @@ timelines are off: a recording holds only the run's own ``frame`` and ``sim_time
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import shutil
 import socket
 import subprocess
 import sys
+import threading
 import time
 import urllib.parse
 import uuid
 from collections.abc import Iterator
+from pathlib import Path
 
 import rerun as rr
 
@@ -33,6 +37,10 @@ __all__ = ["APPLICATION_ID", "open_recording", "recording_id"]
 
 APPLICATION_ID = "reform-sim"
 WEB_VIEWER_START_S = 20.0  # seconds the web viewer of --serve is given to answer
+FULL_DISK_BYTES = 1_000_000  # bytes: a folder with less left when a write stopped is full
+FLUSH_S = 10.0  # seconds the end of a recording may take to reach its sinks, plus its size at
+FLUSH_BYTES_PER_S = 10e6  # bytes a second (a slow disk)
+DISCONNECT_S = 5.0  # seconds a recording whose sink failed is given to disconnect
 # Namespace of the recording ids (uuid5 of "name:seed"): fixed, so ids are stable across runs.
 _RECORDING_NAMESPACE = uuid.UUID("6f1c2a4e-0d5b-4c59-9a64-2f6f3c1b7e21")
 
@@ -51,6 +59,7 @@ def open_recording(
     name: str,
     seed: int | None = None,
     blueprint: rr.blueprint.BlueprintLike | None = None,
+    expected_bytes: float | None = None,
 ) -> Iterator[rr.RecordingStream]:
     """A recording stream for one run, sent to ``target``; closed (and the file renamed into
     place) when the block ends.
@@ -60,15 +69,23 @@ def open_recording(
         name: the run's name, shown by the viewer; with ``seed`` it fixes the recording id.
         seed: the run's seed, or None.
         blueprint: the default layout (e.g. :func:`sim.recording.default_blueprint`).
+        expected_bytes: the size the ``.rrd`` is expected to reach (`sim.sizing.recording_disk`),
+            for the message of a full disk.
 
     Yields:
         The stream; pass it to the ``log_*`` functions.
+
+    Raises:
+        reform.atomic.DiskFull: the disk the ``.rrd`` is saved on filled up (one line naming the
+            file, what was written, the space left and the space needed).
+        OSError: a viewer that cannot be reached, or a file that cannot be written.
     """
     target = RecordingTarget.coerce(target)
     with contextlib.ExitStack() as stack:
         sinks: list[object] = []
         if target.save is not None:
-            sinks.append(rr.FileSink(stack.enter_context(atomic_path(target.save))))
+            saving = stack.enter_context(atomic_path(target.save, needed=expected_bytes))
+            sinks.append(rr.FileSink(saving))
         if target.connect is not None:
             sinks.append(rr.GrpcSink(target.connect or None))
         server = None
@@ -82,6 +99,7 @@ def open_recording(
             # One chunk per log call: chunk boundaries do not depend on timing.
             batcher_config=rr.ChunkBatcherConfig(flush_num_rows=1),
         )
+        failed = False
         try:
             rec.set_log_time_enabled(False)
             rec.set_log_tick_enabled(False)
@@ -89,14 +107,47 @@ def open_recording(
             rec.send_recording_name(name)
             yield rec
             try:
-                rec.flush()
-            except RuntimeError as exc:  # a viewer that cannot be reached: one line, naming it
+                rec.flush(timeout_sec=_flush_seconds(expected_bytes))
+            except RuntimeError as exc:  # a viewer that cannot be reached, a file not written
+                failed = True
+                text = " ".join(str(exc).split())
+                if target.save is not None and target.connect is None:
+                    raise _file_error(saving, text) from None
                 where = f"--connect {target.connect or 'the default viewer'}"
-                raise OSError(f"{where}: {' '.join(str(exc).split())}") from None
+                raise OSError(f"{where}: {text}") from None
             if server is not None:
                 _serve_until_interrupted(server.uri)
         finally:
-            rec.disconnect()
+            if failed:  # Rerun's disconnect can wait for ever on a sink that failed
+                _disconnect_within(rec, DISCONNECT_S)
+            else:
+                rec.disconnect()
+
+
+def _disconnect_within(rec: rr.RecordingStream, seconds: float) -> None:
+    """``rec.disconnect()``, left to a daemon thread after ``seconds``."""
+    thread = threading.Thread(target=rec.disconnect, name="rerun disconnect", daemon=True)
+    thread.start()
+    thread.join(seconds)
+
+
+def _flush_seconds(expected_bytes: float | None) -> float:
+    """Seconds the last of a recording may take to reach its sinks: Rerun's flush can wait for
+    ever on a file writer that stopped (a full disk)."""
+    return FLUSH_S + (expected_bytes or 0.0) / FLUSH_BYTES_PER_S
+
+
+def _file_error(path: Path, text: str) -> OSError:
+    """What Rerun's file writer stopping on ``path`` means: a full disk when its folder has less
+    than `FULL_DISK_BYTES` left (Rerun says only that its writer stopped; its own log, which the
+    command line silences, names the system's error), else ``text``."""
+    try:
+        free = shutil.disk_usage(path.parent).free
+    except OSError:
+        free = None
+    if free is not None and free < FULL_DISK_BYTES:
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+    return OSError(f"{path}: the recording could not be written ({text})")
 
 
 def _serve_until_interrupted(uri: str) -> None:
