@@ -613,11 +613,58 @@ def _copy_file(url: str, output_file: str, pooch: Any) -> None:
         raise _Problem("a readable file", exc.strerror or str(exc)) from None
 
 
-def _checked(downloader: Callable[..., Any], file: DatasetFile) -> Callable[..., None]:
+class _SizeCap:
+    """What pooch takes for a progress bar, which stops a download once it is larger than the
+    registry's size for the file (`TooLarge`): a mirror that never stops sending must not fill
+    the disk. Passes the progress on to ``bar`` (a tqdm bar), if any."""
+
+    def __init__(self, file: DatasetFile, bar: Any = None) -> None:
+        self.file = file
+        self.bar = bar
+        self.path: str | None = None  # the file being written (set by `_checked`)
+
+    @property
+    def total(self) -> int:
+        return self.file.bytes
+
+    @total.setter
+    def total(self, announced: int) -> None:  # the server's Content-Length
+        if announced > self.file.bytes:
+            raise _Problem(
+                f"{self.file.bytes} bytes",
+                f"{announced} bytes announced by the server: too large, not the file the "
+                "registry names (nothing kept)",
+            )
+
+    def update(self, n: int) -> None:
+        if self.path is not None and os.path.getsize(self.path) > self.file.bytes:
+            raise _Problem(
+                f"{self.file.bytes} bytes",
+                f"more than {self.file.bytes} bytes, cut off there: too large, the download did "
+                "not end at the registry's size (nothing kept)",
+            )
+        if self.bar is not None:
+            self.bar.update(n)
+
+    def reset(self) -> None:
+        if self.bar is not None:
+            self.bar.reset()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _checked(
+    downloader: Callable[..., Any], file: DatasetFile, cap: _SizeCap | None = None
+) -> Callable[..., None]:
     """``downloader``, its failures made `_Problem`s and its output's size checked, so that a
-    truncated file is named as one before pooch checks the sha256."""
+    truncated file is named as one before pooch checks the sha256 (``cap``: told the file
+    being written, to cut it at the registry's size)."""
 
     def download(url: str, output_file: str, pooch: Any) -> None:
+        if cap is not None:
+            cap.path = str(output_file)
         try:
             downloader(url, output_file, pooch)
         except OSError as exc:  # requests' errors are OSErrors
@@ -721,6 +768,7 @@ def _download(
     its size and sha256 match), or raises `FetchError`. ``label`` names the progress bar."""
     pooch = _pooch()
     bar = None
+    cap = None
     deadline = _Deadline(download_deadline(file.bytes))
     if urlsplit(url).scheme == "file":
         inner: Callable[..., Any] = _copy_file
@@ -737,8 +785,9 @@ def _download(
                 file=sys.stderr,
                 leave=False,
             )
+        cap = _SizeCap(file, bar)
         inner = pooch.HTTPDownloader(
-            progressbar=bar if bar is not None else False,
+            progressbar=cap,
             timeout=DOWNLOAD_TIMEOUT_S,
             hooks={"response": deadline.capture},
         )
@@ -751,7 +800,7 @@ def _download(
                 known_hash=f"sha256:{file.sha256}",
                 fname=target.name,
                 path=scratch,
-                downloader=_checked(inner, file),
+                downloader=_checked(inner, file, cap),
             )
             os.replace(scratch / target.name, target)
     except _Problem as exc:

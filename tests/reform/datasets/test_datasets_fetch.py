@@ -108,6 +108,8 @@ class _Server(http.server.ThreadingHTTPServer):
     truncate: dict[str, tuple[int, int]]
     # path -> seconds between bytes: a mirror that trickles, each byte in time for a read timeout.
     trickle: dict[str, float]
+    # paths sent without end, as fast as they are read: the file, then zeros until the client goes.
+    endless: set[str]
 
 
 class _Handler(http.server.SimpleHTTPRequestHandler):
@@ -117,6 +119,9 @@ class _Handler(http.server.SimpleHTTPRequestHandler):
         self.server.requests.append(self.path)
         if self.path in self.server.trickle:
             self._trickle(self.server.trickle[self.path])
+            return
+        if self.path in self.server.endless:
+            self._endless()
             return
         cut = self.server.truncate.get(self.path)
         if cut is None:
@@ -144,6 +149,18 @@ class _Handler(http.server.SimpleHTTPRequestHandler):
                 return
             time.sleep(every_s)
 
+    def _endless(self) -> None:
+        self.send_response(200)
+        self.end_headers()  # no Content-Length: the body ends when the connection does
+        self.close_connection = True
+        chunk = Path(self.translate_path(self.path)).read_bytes()
+        while True:
+            try:
+                self.wfile.write(chunk)
+            except OSError:  # the client has gone
+                return
+            chunk = bytes(64 * 1024)
+
     def log_message(self, format: str, *args) -> None:  # noqa: A002 - the base's signature
         pass
 
@@ -157,6 +174,7 @@ def _serve(root: Path) -> Iterator[tuple[str, _Server]]:
     server.requests = []
     server.truncate = {}
     server.trickle = {}
+    server.endless = set()
     thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
     thread.start()
     try:
@@ -378,6 +396,33 @@ def test_a_mirror_that_trickles_is_cut_off_at_its_deadline(
         r"found \d+ bytes when cut off: too slow a mirror \(try another --mirror\)$", str(error)
     )
     assert not [p for p in cache.rglob("*") if p.is_file()]  # no temporary file left behind
+
+
+def test_a_download_that_never_ends_is_cut_at_the_registrys_size(http_mirror, cache, registry_file):
+    base, server = http_mirror
+    path, commit, data = FILES["tiny"][0]
+    server.endless.add(f"/{REPO}/{commit}/{path}")
+    started = time.monotonic()
+    found = (
+        f"expected {len(data)} bytes, found more than {len(data)} bytes, cut off there: too "
+        "large, the download did not end at the registry's size (nothing kept)"
+    )
+    _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file)
+    assert time.monotonic() - started < 10
+    assert not [p for p in cache.rglob("*") if p.is_file()]  # no temporary file left behind
+
+
+def test_a_download_announced_larger_than_the_registrys_size_is_refused_at_once(
+    http_mirror, cache, registry_file
+):
+    base, server = http_mirror
+    path, commit, data = FILES["tiny"][0]
+    server.truncate[f"/{REPO}/{commit}/{path}"] = (len(data), 10**12)
+    found = (
+        f"expected {len(data)} bytes, found {10**12} bytes announced by the server: too large, "
+        "not the file the registry names (nothing kept)"
+    )
+    _assert_fetch_fails(base, "tiny", 0, found, cache, registry_file)
 
 
 def test_a_file_missing_from_the_http_mirror(http_mirror, mirror_dir, cache, registry_file):
