@@ -30,6 +30,7 @@ import socket
 import stat
 import tempfile
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
@@ -40,7 +41,9 @@ __all__ = [
     "atomic_path",
     "check_file_path",
     "check_folder_path",
+    "Temporary",
     "file_kind",
+    "find_temporaries",
     "is_disk_full",
     "remove_stale_temporaries",
     "temporary_folder",
@@ -80,6 +83,49 @@ def _alive(pid: int) -> bool:
     return True
 
 
+@dataclass(frozen=True)
+class Temporary:
+    """A temporary file or folder of this module's naming found in a folder.
+
+    Attributes:
+        path: where it is.
+        pid: its writer's process id.
+        state: ``"stale"`` (its writer, of this machine, is gone: a killed run's), ``"live"``
+            (its writer may still be writing it) or ``"elsewhere"`` (written on another machine
+            or container, whose processes cannot be asked).
+    """
+
+    path: Path
+    pid: int
+    state: str
+
+
+def find_temporaries(folder: str | os.PathLike[str]) -> list[Temporary]:
+    """The temporaries of this module's naming in ``folder`` (not its subfolders), each with
+    whether its writer is gone; nothing is removed. Empty where processes cannot be asked
+    whether they live without signalling them (not POSIX)."""
+    if os.name != "posix":
+        return []
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError:
+        return []
+    host, found = _host(), []
+    for name in names:
+        match = _TEMPORARY.fullmatch(name)
+        if match is None:
+            continue
+        pid = int(match["pid"])
+        if match["host"] != host:
+            state = "elsewhere"
+        elif pid <= 0 or _alive(pid):
+            state = "live"
+        else:
+            state = "stale"
+        found.append(Temporary(Path(folder, name), pid, state))
+    return found
+
+
 def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     """Removes the temporaries of killed writers from ``folder`` (not its subfolders).
 
@@ -92,21 +138,11 @@ def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     Returns:
         The paths removed.
     """
-    if os.name != "posix":
-        return []
-    try:
-        names = os.listdir(folder)
-    except OSError:
-        return []
-    host, removed = _host(), []
-    for name in names:
-        found = _TEMPORARY.fullmatch(name)
-        if found is None or found["host"] != host:
+    removed = []
+    for temporary in find_temporaries(folder):
+        if temporary.state != "stale":
             continue
-        pid = int(found["pid"])
-        if pid <= 0 or _alive(pid):
-            continue
-        path = Path(folder, name)
+        path = temporary.path
         try:
             if path.is_dir() and not path.is_symlink():
                 shutil.rmtree(path)

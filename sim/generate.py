@@ -131,6 +131,7 @@ __all__ = [
     "episode_seed",
     "folder_layout",
     "generate_dataset",
+    "leftovers",
     "read_card",
     "shard_path",
 ]
@@ -1084,6 +1085,79 @@ def _folder_lock(out_dir: Path) -> Iterator[None]:
         finally:
             path.unlink(missing_ok=True)
             fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def leftovers(out_dir: str | os.PathLike[str]) -> list[str]:
+    """What killed runs left in a generated folder (never removed here), one line each: their
+    temporary files and folders (in the folder and every folder below it), and a lock no run
+    holds. A temporary being written now by a live process, and a lock a run holds, are not
+    leftovers and are not listed.
+
+    Args:
+        out_dir: the folder (on this machine).
+    """
+    from reform.atomic import find_temporaries
+
+    root = Path(out_dir)
+    lines = []
+    for folder, names, _ in os.walk(root):
+        named = {t.path.name: t for t in find_temporaries(folder)}
+        for name in sorted(names):  # temporary folders are not walked
+            if name in named or (name.startswith(".") and name.endswith(".tmp")):
+                names.remove(name)
+        for name in sorted(os.listdir(folder)):
+            path = Path(folder, name)
+            temporary = named.get(name)
+            if temporary is None and not (name.startswith(".") and name.endswith(".tmp")):
+                continue
+            size = sizing.format_size(_tree_bytes(path))
+            if temporary is None:
+                lines.append(
+                    f"{path}: a leftover temporary file ({size}) of a run that did not finish; "
+                    "the next generate run in this folder removes it"
+                )
+            elif temporary.state == "stale":
+                lines.append(
+                    f"{path}: a leftover temporary file ({size}) of a killed run (process "
+                    f"{temporary.pid} of this machine, gone); the next write into "
+                    f"{path.parent} removes it"
+                )
+            elif temporary.state == "elsewhere":
+                lines.append(
+                    f"{path}: a temporary file ({size}) of process {temporary.pid} of another "
+                    "machine or container; remove it if no run there writes this folder"
+                )
+    lock = root / LOCK_FILE
+    if lock.exists() and not _lock_held(lock):
+        lines.append(
+            f"{lock}: a lock left by a run that did not finish (no run holds it); the next "
+            "generate run in this folder takes it over"
+        )
+    return lines
+
+
+def _tree_bytes(path: Path) -> int:
+    if not path.is_dir():
+        return path.lstat().st_size
+    return sum(p.lstat().st_size for p in path.rglob("*") if not p.is_dir())
+
+
+def _lock_held(path: Path) -> bool:
+    """Whether a live run holds the lock file ``path`` (`_folder_lock`); when unsure: yes."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no lock to ask
+        return True
+    try:
+        with open(path, encoding="utf-8") as handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                return True
+            fcntl.flock(handle, fcntl.LOCK_UN)
+            return False
+    except OSError:
+        return True
 
 
 def _remove_stale_temporaries(out_dir: Path) -> None:

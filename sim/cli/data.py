@@ -11,19 +11,27 @@ from typing import Any
 
 from reform.datasets import detect_format, resolve, write_parquet
 from reform.datasets.parquet import verify_folder
+from reform.datasets.store import is_uri
 from reform.datasets.summary import summarise
 from sim.cli._common import check_output, data_path, load_data
 
 
 def run_verify(args: argparse.Namespace) -> int:
+    from sim.generate import leftovers  # MuJoCo's importers: only for this action
+
     path = data_path(args)
     problems = verify_folder(path)
-    for problem in problems:
-        print(problem)
+    left = [] if is_uri(path) else leftovers(path)
+    for line in [*problems, *left]:
+        print(line)
+    behind = f"; {len(left)} leftover(s) of runs that did not finish, listed above" if left else ""
     if problems:
-        print(f"{path}: {len(problems)} problem(s); the dataset is not whole", file=sys.stderr)
+        print(
+            f"{path}: {len(problems)} problem(s); the dataset is not whole{behind}",
+            file=sys.stderr,
+        )
         return 1
-    print(f"{path}: whole (every shard its card lists is there, unaltered)")
+    print(f"{path}: whole (every shard its card lists is there, unaltered){behind}")
     return 0
 
 
