@@ -34,14 +34,25 @@ What differs from the papers, and why:
 * The constants the papers leave open (``stride``, ``radius``, ``min_share``, the multi-scale
   ``spacing``) are options whose defaults were chosen on SALSA's training split alone (see the
   detectors' pages).
+
+**Crowds.** Nothing in the method reaches beyond an accumulator cell: a person counts at a
+centre only through their own votes within ``radius`` of it, so people whose votes never back a
+common centre cannot change each other's groups. Up to :data:`CROWD_PEOPLE` people the
+accumulator is a dense (centres x people) matrix; beyond, only the shares that make a backer are
+kept and the frame is read part by part (:func:`hough_labels` says why the labels are the same,
+numbering included, and ``tests/reform/test_hough_crowd.py`` checks it against the dense reading),
+in time and memory that grow with the people and their votes rather than their square.
 """
 
 from __future__ import annotations
 
+import heapq
 from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 
@@ -51,6 +62,7 @@ from reform.gcff import labels_to_partition
 
 __all__ = [
     "CANDIDATES",
+    "CROWD_PEOPLE",
     "MAX_SIZE",
     "MIN_SHARE",
     "MULTISCALE_RADIUS_M",
@@ -80,6 +92,7 @@ SPACING_M = 1.0  # metres between neighbours on a group's circle (multi-scale)
 MAX_SIZE = 6  # the largest group size with a scale of its own (multi-scale)
 CANDIDATES = 8  # votes of each person tried as candidate centres
 RANDOM_STATE = 0  # the default seed of the votes' noise
+CROWD_PEOPLE = 400  # beyond this many people the accumulator is read part by part (same labels)
 
 
 def vote_noise(
@@ -103,18 +116,45 @@ def _votes(position, yaw, offset, turn, stride) -> np.ndarray:
     return np.stack([x + stride * np.cos(heading), y + stride * np.sin(heading)], axis=2)
 
 
+def _near_votes(votes: np.ndarray, candidates: int, radius: float) -> tuple[np.ndarray, ...]:
+    """Every (candidate centre, vote) pair closer than ``radius``: the cell ``centre * n +
+    voter`` of each and the vote's kernel weight ``1 - (r / radius)²``, in the order the
+    accumulator sums them (the centres are every person's first ``candidates`` votes)."""
+    n, samples, _ = votes.shape
+    flat = votes.reshape(-1, 2)
+    centres = votes[:, :candidates].reshape(-1, 2)
+    near = cKDTree(centres).sparse_distance_matrix(cKDTree(flat), radius, output_type="ndarray")
+    weight = 1.0 - (near["v"] / radius) ** 2
+    voter = near["j"] // samples
+    return near["i"].astype(np.int64) * n + voter, weight
+
+
 def _shares(votes: np.ndarray, candidates: int, radius: float) -> np.ndarray:
     """(n * candidates, n) shares: the kernel-weighted part of each person's votes within
     ``radius`` of each candidate centre (every person's first ``candidates`` votes)."""
     n, samples, _ = votes.shape
-    flat = votes.reshape(-1, 2)
-    centres = votes[:, :candidates].reshape(-1, 2)
-    near = cKDTree(centres).sparse_distance_matrix(cKDTree(flat), radius, output_type="coo_matrix")
-    weight = 1.0 - (near.data / radius) ** 2
-    voter = near.col // samples
-    cell = near.row.astype(np.int64) * n + voter
-    total = np.bincount(cell, weights=weight, minlength=centres.shape[0] * n)
-    return total.reshape(centres.shape[0], n) / samples
+    cell, weight = _near_votes(votes, candidates, radius)
+    total = np.bincount(cell, weights=weight, minlength=n * candidates * n)
+    return total.reshape(n * candidates, n) / samples
+
+
+def _backers(
+    votes: np.ndarray, candidates: int, radius: float, min_share: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The entries of :func:`_shares` that make a backer (share >= ``min_share``), without the
+    dense matrix: (centre, person, share) by centre then person. Each share is summed over the
+    same votes in the same order as :func:`_shares` sums it, so it is the same number."""
+    n, samples, _ = votes.shape
+    cell, weight = _near_votes(votes, candidates, radius)
+    # A stable sort keeps each cell's votes in the order the dense accumulator adds them.
+    order = np.argsort(cell, kind="stable")
+    cell, weight = cell[order], weight[order]
+    starts = np.diff(cell, prepend=-1) != 0  # cell numbers are >= 0
+    keys = cell[starts]
+    share = np.bincount(np.cumsum(starts) - 1, weights=weight, minlength=keys.size) / samples
+    backs = share >= min_share
+    centre, person = np.divmod(keys[backs], n)
+    return centre, person, share[backs]
 
 
 def scale_strides(spacing: float, max_size: int) -> np.ndarray:
@@ -129,12 +169,136 @@ def _scores(share: np.ndarray, backs: np.ndarray, low: np.ndarray, high: np.ndar
     (``-inf`` for a centre whose number of backers is outside ``[low, high]``)."""
     count = backs.sum(axis=1)
     kept = np.where(backs, share, 0.0)
-    total = kept.sum(axis=1)
+    # Sums run person by person (cumsum, not numpy's pairwise sum), so that a centre's score is
+    # the same number whether its row spans the whole frame or only the people near it.
+    total = np.cumsum(kept, axis=1)[:, -1] if kept.shape[1] else np.zeros(kept.shape[0])
     with np.errstate(divide="ignore", invalid="ignore"):
         p = kept / total[:, None]
-        entropy = -np.where(kept > 0, p * np.log(p), 0.0).sum(axis=1)
+        terms = np.where(kept > 0, p * np.log(p), 0.0)
+        entropy = -np.cumsum(terms, axis=1)[:, -1] if kept.shape[1] else np.zeros(kept.shape[0])
     valid = (count >= low) & (count <= high)
     return np.where(valid, total * np.exp(entropy), -np.inf)
+
+
+def _greedy(
+    share: np.ndarray,
+    backs: np.ndarray,
+    owner: np.ndarray,
+    low: np.ndarray,
+    high: np.ndarray,
+) -> list[tuple[float, int, np.ndarray]]:
+    """The greedy reading of the accumulator: the best centre's backers are a group, their votes
+    are withdrawn, and so on while a centre has a valid set of backers.
+
+    Args:
+        share: (centres, people) shares (only backers' are read).
+        backs: (centres, people) whether each person backs each centre (changed in place).
+        owner: (centres,) the person (column) whose vote each centre is.
+        low, high: (centres,) the fewest and most backers a centre of each row's scale needs.
+
+    Returns:
+        The groups in the order they are taken: each one's score, row and members (columns).
+    """
+    # Backers only ever leave a centre: after each group only the centres it touched are
+    # scored again.
+    score = _scores(share, backs, low, high)
+    free = np.ones(backs.shape[1], dtype=bool)
+    taken = []
+    while score.size and np.isfinite(score.max()):
+        best = int(np.argmax(score))
+        members = backs[best].copy()
+        taken.append((float(score[best]), best, np.flatnonzero(members)))
+        free &= ~members
+        touched = backs[:, members].any(axis=1)
+        backs[:, members] = False
+        score[touched] = _scores(share[touched], backs[touched], low[touched], high[touched])
+        score[~free[owner]] = -np.inf
+    return taken
+
+
+def _whole_frame(
+    votes: list[np.ndarray],
+    candidates: int,
+    sizes: Sequence[tuple[int, int]],
+    radius: float,
+    min_share: float,
+) -> list[np.ndarray]:
+    """:func:`_greedy` on the dense accumulator of the whole frame (every centre by every
+    person); the groups as members' rows, in the order taken."""
+    n = votes[0].shape[0]
+    share = np.concatenate([_shares(v, candidates, radius) for v in votes])
+    owner = np.tile(np.repeat(np.arange(n), candidates), len(votes))
+    low = np.repeat([s[0] for s in sizes], n * candidates)
+    high = np.repeat([s[1] for s in sizes], n * candidates)
+    backs = share >= min_share
+    kept = backs.sum(axis=1) >= 2  # a centre with fewer than two backers never makes a group
+    share, backs, owner = share[kept], backs[kept], owner[kept]
+    low, high = np.maximum(low[kept], 2), high[kept]
+    return [members for _, _, members in _greedy(share, backs, owner, low, high)]
+
+
+def _by_parts(
+    votes: list[np.ndarray],
+    candidates: int,
+    sizes: Sequence[tuple[int, int]],
+    radius: float,
+    min_share: float,
+) -> list[np.ndarray]:
+    """What :func:`_whole_frame` gives, read part by part (see :func:`hough_labels`): the votes
+    of each scale (n, samples, 2) in, the groups as members' rows out, in the order taken."""
+    n = votes[0].shape[0]
+    per_scale = n * candidates
+    centre, person, share = [], [], []
+    for k, v in enumerate(votes):
+        c, p, s = _backers(v, candidates, radius, min_share)
+        centre.append(c + k * per_scale)
+        person.append(p)
+        share.append(s)
+    centre, person, share = np.concatenate(centre), np.concatenate(person), np.concatenate(share)
+    count = np.bincount(centre, minlength=len(votes) * per_scale)
+    keep = count[centre] >= 2  # a centre with fewer than two backers never makes a group
+    centre, person, share = centre[keep], person[keep], share[keep]
+    owner = (centre % per_scale) // candidates
+    # People joined through a centre (its owner and its backers) fall in one part.
+    links = coo_array((np.ones(centre.size, dtype=np.int8), (owner, person)), shape=(n, n))
+    _, part = connected_components(links, directed=False)
+    low_of = np.array([max(s[0], 2) for s in sizes])
+    high_of = np.array([s[1] for s in sizes])
+    order = np.lexsort((person, centre, part[owner]))  # by part, then centre, then person
+    centre, person, share, owner = centre[order], person[order], share[order], owner[order]
+    bounds = np.flatnonzero(np.diff(part[owner])) + 1
+    heads = []
+    sequences = []
+    for rows in np.split(np.arange(centre.size), bounds):
+        if not rows.size:
+            continue
+        people, column = np.unique(np.concatenate([person[rows], owner[rows]]), return_inverse=True)
+        column = column.ravel()
+        rows_of, row = np.unique(centre[rows], return_inverse=True)
+        row = row.ravel()
+        dense = np.zeros((rows_of.size, people.size))
+        dense[row, column[: rows.size]] = share[rows]
+        backs = np.zeros(dense.shape, dtype=bool)
+        backs[row, column[: rows.size]] = True
+        local_owner = np.searchsorted(people, (rows_of % per_scale) // candidates)
+        scale = rows_of // per_scale
+        taken = _greedy(dense, backs, local_owner, low_of[scale], high_of[scale])
+        sequence = [(score, int(rows_of[r]), people[m]) for score, r, m in taken]
+        if sequence:
+            heads.append((-sequence[0][0], sequence[0][1], len(sequences), 0))
+            sequences.append(sequence)
+    # The whole frame takes, at each step, the best centre of all (the first row among equals);
+    # a part's own sequence does not depend on the others, so the next group of the whole frame
+    # is the best of the parts' next groups.
+    heapq.heapify(heads)
+    groups = []
+    while heads:
+        _, _, which, at = heapq.heappop(heads)
+        groups.append(sequences[which][at][2])
+        if at + 1 < len(sequences[which]):
+            score, row, _ = sequences[which][at + 1]
+            heapq.heappush(heads, (-score, row, which, at + 1))
+    return groups
 
 
 def hough_labels(
@@ -149,6 +313,16 @@ def hough_labels(
     min_share: float,
 ) -> np.ndarray:
     """Groups by Hough voting at one or several scales, as per-person labels.
+
+    Up to :data:`CROWD_PEOPLE` people the accumulator is a dense (centres x people) matrix of
+    shares. Beyond, only the shares that make a backer are kept, and the frame is read in
+    parts: people joined by a centre (its owner and its backers) are in one part. A part's
+    groups depend on its people alone (a centre is scored on its backers' shares, taking a
+    group withdraws votes only from centres those people back, and voids only the centres they
+    own), so each part's sequence of groups is the one the whole frame takes there, and the
+    whole frame's order is the parts' sequences merged by taking the best next group (the first
+    row among equal scores), as the whole frame does. Shares and scores are summed in the same
+    order on both paths: the labels are the same, numbering included.
 
     Args:
         position: (n, 2) positions, metres.
@@ -167,39 +341,16 @@ def hough_labels(
     yaw = np.asarray(yaw, dtype=np.float64)
     n = position.shape[0]
     labels = np.full(n, -1, dtype=np.int64)
-    group = 0
+    groups = []
     if n >= 2:
         candidates = min(CANDIDATES, offset.shape[0])
-        owner = np.repeat(np.arange(n), candidates)
-        scales = [
-            _shares(_votes(position, yaw, offset, turn, stride), candidates, radius)
-            for stride in strides
-        ]
-        share = np.concatenate(scales)  # (scales * n * candidates, n)
-        owner = np.tile(owner, len(scales))
-        low = np.repeat([s[0] for s in sizes], n * candidates)
-        high = np.repeat([s[1] for s in sizes], n * candidates)
-        backs = share >= min_share
-        # Backers only ever leave a centre, so a centre with fewer than two now never makes a
-        # group: only the others are kept, and after each group only the centres it touched
-        # are scored again.
-        kept = backs.sum(axis=1) >= 2
-        share, backs, owner = share[kept], backs[kept], owner[kept]
-        low, high = np.maximum(low[kept], 2), high[kept]
-        score = _scores(share, backs, low, high)
-        free = np.ones(n, dtype=bool)
-        while score.size and np.isfinite(score.max()):
-            best = int(np.argmax(score))
-            members = backs[best].copy()
-            labels[members] = group
-            group += 1
-            free &= ~members
-            touched = backs[:, members].any(axis=1)
-            backs[:, members] = False
-            score[touched] = _scores(share[touched], backs[touched], low[touched], high[touched])
-            score[~free[owner]] = -np.inf
+        votes = [_votes(position, yaw, offset, turn, stride) for stride in strides]
+        read = _whole_frame if n <= CROWD_PEOPLE else _by_parts
+        groups = read(votes, candidates, sizes, radius, min_share)
+    for group, members in enumerate(groups):
+        labels[members] = group
     alone = labels < 0
-    labels[alone] = group + np.arange(int(alone.sum()))
+    labels[alone] = len(groups) + np.arange(int(alone.sum()))
     return labels
 
 
