@@ -21,6 +21,24 @@ direction to the other within ``field_of_view / 2`` of one's orientation), zero 
 
 The replicator dynamics and the peeling (:func:`dominant_set_labels`) are shared with GTCG
 (`reform.gtcg`), which feeds them its frustum affinities.
+
+**Crowds: the whole frame at once.** Unlike HVFF's accumulator (`reform.hough`), the peeling
+cannot be cut into parts of the frame that are peeled on their own with the same groups, for
+three reasons, and so it runs on the whole frame at every size (its time grows about as n^3
+on crowds: ``python benchmarks/bench_field_detectors.py --crowd``):
+
+* the affinity is never zero between two people in each other's view closer than about 38.6
+  sigma (62 m at the default sigma, where the Gaussian underflows), so in a crowd everyone is
+  joined to everyone by chains of non-zero affinities;
+* each set is the one the replicator dynamics reach from the centre of the simplex over
+  *everyone left*, a race that the strongest set of the whole frame wins: the order in which
+  sets are taken, and so who is still there when a neighbourhood is peeled, is the frame's;
+* with ``global_context``, the first set that is not dominant stops the peeling for everyone,
+  people far away included, who are all left alone. Even where the affinities split the frame
+  into parts that share none, the parts' sets are (in exact arithmetic) the whole frame's, but
+  whose non-dominant set comes first, and so which parts stop early, is decided by the race
+  across them (``tests/reform/test_dominant_sets_crowd.py`` pins a far-away pair left alone
+  so).
 """
 
 from __future__ import annotations

@@ -31,6 +31,16 @@ What differs from the authors' MATLAB code, and why:
   frames before it with equal weights, the authors' ``EQUAL`` mode; their default weights, from
   a multi-objective linear programme, are not implemented. The window is taken among the frames
   given to one ``predict`` call, by sequence and time.
+
+**Crowds: the whole frame at once.** Frustums that share no bin keep the affinity
+``exp(-1 / sigma)`` (0.19 at the default sigma; 0 only with ``zero_disjoint``), so every person
+is joined to every other however far apart, and a set is kept only while its cohesion exceeds
+what anyone far away earns from it, that same ``exp(-1 / sigma)``. With the replicator
+dynamics' race over everyone left and the global stopping rule (`reform.dominant_sets` says
+why they tie the groups to the whole frame), the frame cannot be cut into parts peeled on their
+own with the same groups, and GTCG peels the whole frame at every size: the divergences are
+computed only for pairs close enough to share a bin, but the peeling's time grows about as n^3
+on crowds (``python benchmarks/bench_field_detectors.py --crowd``).
 """
 
 from __future__ import annotations
