@@ -452,12 +452,23 @@ class Cell:
 
 @dataclass(frozen=True)
 class Benchmark:
-    """Every cell, and the specs that made them."""
+    """Every cell, and the specs that made them.
+
+    Attributes:
+        run: the run that made it (`run_benchmark`), whose datasets this process has read,
+            if it scored them here; None for a benchmark made otherwise.
+    """
 
     datasets: tuple[DatasetSpec, ...]
     detectors: tuple[DetectorSpec, ...]
     cells: tuple[Cell, ...]
     seconds: float
+    run: str | None = field(default=None, compare=False, repr=False)
+
+    def scored_frames(self, dataset: DatasetSpec) -> tuple[Frame, ...]:
+        """The frames of ``dataset`` its cells scored (`DatasetSpec.frames`), read once in this
+        process: the run's own reading where the run scored the dataset here."""
+        return dataset.frames(_load_once(dataset, self.run))
 
     def cell(self, dataset: DatasetSpec, detector: DetectorSpec) -> Cell:
         for cell in self.cells:
@@ -517,8 +528,9 @@ def _temporal(label: str, frames: Sequence[Frame], predictions: Sequence[Any]) -
         return {"skipped": " ".join(str(exc).split())}
 
 
-# The datasets this process has loaded in the run under way: the cells of one dataset that run
-# here (one process, or each worker) read it once, whichever detectors they score.
+# The datasets this process has read in the last run (`run_benchmark`) it took part in: the
+# cells of one dataset that run here (one process, or each worker) and the recordings of the
+# run read it once, whichever detectors they score; let go when the next run starts here.
 _LOADED: dict[str, Any] = {"run": None, "datasets": {}}
 
 
@@ -634,23 +646,23 @@ def run_benchmark(
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
-    run = f"{os.getpid()}-{time.time_ns()}"  # each process reads a dataset once in this run
+    # Each process reads a dataset once in this run, this one too (for the recordings, say):
+    # what it read is let go when the next run starts here.
+    run = f"{os.getpid()}-{time.time_ns()}"
     units = [(d, m, bool(temporal), run) for d in datasets for m in detectors]
     start = time.perf_counter()
-    try:
-        if executor is None:
-            local = backend == "local"
-            with Executor(backend, jobs=jobs if local else None, address=address) as own:
-                cells = own.map(_score_unit, units, on_done=progress, describe=_describe_unit)
-        else:
-            cells = executor.map(_score_unit, units, on_done=progress, describe=_describe_unit)
-    finally:
-        _LOADED.update(run=None, datasets={})  # this process's, when the cells ran here
+    if executor is None:
+        local = backend == "local"
+        with Executor(backend, jobs=jobs if local else None, address=address) as own:
+            cells = own.map(_score_unit, units, on_done=progress, describe=_describe_unit)
+    else:
+        cells = executor.map(_score_unit, units, on_done=progress, describe=_describe_unit)
     return Benchmark(
         datasets=datasets,
         detectors=detectors,
         cells=tuple(cells),
         seconds=time.perf_counter() - start,
+        run=run,
     )
 
 

@@ -371,7 +371,7 @@ def record(
                 predictions[detector.key] = list(cell.predictions)
         if not predictions:
             continue
-        frames = dataset.frames(dataset.load())
+        frames = benchmark.scored_frames(dataset)
         path = folder / f"{_slug(dataset.name)}.rrd"
         record_evaluation(
             path, frames, predictions, name=f"benchmark-{dataset.name}", dataset=dataset.name

@@ -87,6 +87,19 @@ def test_local_workers_give_the_same_cells(small):
     assert strip == [(c.dataset, c.detector, c.scores, c.skipped, c.predictions) for c in two.cells]
 
 
+def test_a_run_reads_each_dataset_once_for_its_cells_and_recordings(small, monkeypatch):
+    read = []
+    load = DatasetSpec.load
+    monkeypatch.setattr(DatasetSpec, "load", lambda spec: read.append(spec.name) or load(spec))
+    detectors = [detector_spec(s) for s in ("gcff", "gcff-own", "majority")]
+    result = run_benchmark(small, detectors)
+    assert sorted(read) == ["bare", "shipped"]
+    assert [len(result.scored_frames(d)) for d in small] == [2, 2]
+    assert sorted(read) == ["bare", "shipped"]  # the recordings' frames: the run's reading
+    run_benchmark(small, detectors[2:])
+    assert sorted(read) == ["bare", "bare", "shipped", "shipped"]  # a new run reads again
+
+
 def test_test_split_scores_only_the_frames_training_leaves_out(tmp_path):
     folder = _gcff(tmp_path / "d", [(PAIR, [[1, 2]])] * 10)
     spec = DatasetSpec(name="d", path=str(folder), split="test", train_fraction=0.6)
