@@ -17,9 +17,10 @@ from sim.cli._common import CommandParser
 ROOT = Path(__file__).resolve().parents[3]
 # Packages a command needs only once it runs (each costs 0.1 to 0.7 s to import). The package
 # `reform` itself is light (its names load on first use); its modules are not, but for the
-# detector catalogue, pure Python, which ``--help`` reads to list the detectors and options.
+# detector catalogue, pure Python, which ``--help`` reads to list the detectors and options (with
+# the deadlines on a detector's code, the standard library only).
 HEAVY = ("gymnasium", "numpy", "scipy", "sklearn", "rerun", "mujoco", "scenarios")
-LIGHT = ("reform._lazy", "reform.detectors", "reform.catalogue")
+LIGHT = ("reform._lazy", "reform.detectors", "reform.catalogue", "reform.deadline")
 LOADED = (
     f"[m for m in sys.modules if m in {HEAVY!r} or m.startswith('reform.') and m not in {LIGHT!r}]"
 )
