@@ -42,7 +42,6 @@ import faulthandler
 import os
 import pickle
 import re
-import shutil
 import signal
 import socket
 import sys
@@ -55,6 +54,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from reform.atomic import temporary_folder
 from sim.ticking import ticking
 
 __all__ = [
@@ -80,6 +80,7 @@ GCS_PROBE_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"  # every Ray GCS s
 RAY_INSTALL = "pip install 'reform-sim[ray]' (or pip install ray)"
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>: the signal a process gets when its parent dies
 NOTE_POLL_S = 0.1  # seconds between a run's looks for units its workers start
+NOTES_FOLDER = "reform-sim"  # in the system's temporary folder: where runs note their units
 PARENT_CHECK_S = 0.5  # seconds between a local worker's looks at its parent (not on Linux)
 EXIT_ORPHANED = 1  # exit status of a local worker whose parent is gone
 
@@ -633,8 +634,6 @@ class Executor:
         from joblib import Parallel, delayed
         from joblib.externals.loky.process_executor import TerminatedWorkerError
 
-        notes = tempfile.mkdtemp(prefix="reform-sim-units-")  # what each worker runs
-        deaths = _DeathWatch(notes)
         parallel = Parallel(
             n_jobs=workers,
             backend="loky",
@@ -643,23 +642,29 @@ class Executor:
             initializer=_start_worker,
             initargs=(os.getpid(), self.environment),
         )
-        try:
-            yield from parallel(
-                delayed(_noted)(notes, function, k, item, *shared) for k, item in enumerate(units)
-            )
-        except TerminatedWorkerError as exc:
-            deaths.close()
-            raise _died(exc, notes, units, describe, deaths.first) from None
-        except pickle.PicklingError as exc:  # something the work holds cannot be sent
-            what = _last_line(exc.__cause__ or exc)
-            raise ValueError(
-                f"the work cannot be sent to {workers} worker processes ({what}): something it "
-                "holds, such as a detector's lock, socket or open file, cannot be copied to "
-                "another process; keep such things out of its attributes, or run with --jobs 1"
-            ) from exc
-        finally:
-            deaths.close()
-            shutil.rmtree(notes, ignore_errors=True)
+        # What each worker runs, noted in a folder named for this process: one that a killed
+        # driver leaves is removed by the next run (reform.atomic's temporaries).
+        with temporary_folder(Path(tempfile.gettempdir()) / NOTES_FOLDER / "units") as folder:
+            notes = str(folder)
+            deaths = _DeathWatch(notes)
+            try:
+                yield from parallel(
+                    delayed(_noted)(notes, function, k, item, *shared)
+                    for k, item in enumerate(units)
+                )
+            except TerminatedWorkerError as exc:
+                deaths.close()
+                raise _died(exc, notes, units, describe, deaths.first) from None
+            except pickle.PicklingError as exc:  # something the work holds cannot be sent
+                what = _last_line(exc.__cause__ or exc)
+                raise ValueError(
+                    f"the work cannot be sent to {workers} worker processes ({what}): something "
+                    "it holds, such as a detector's lock, socket or open file, cannot be copied "
+                    "to another process; keep such things out of its attributes, or run with "
+                    "--jobs 1"
+                ) from exc
+            finally:
+                deaths.close()
 
     def _ray_stream(
         self,
