@@ -2,7 +2,7 @@
 part by part (people joined by a centre they own or back). It must give the labels of the dense
 whole-frame accumulator, numbering included: on random crowds, on groups just inside and just
 outside the distance at which one group's votes back the other's centre, on several separated
-clusters, and on exact ties between parts."""
+clusters, and on exact ties within and between parts."""
 
 from __future__ import annotations
 
@@ -80,6 +80,29 @@ def circles(n: int, seed: int, *, density_per_m2: float) -> tuple[np.ndarray, np
 def test_random_crowds_give_the_whole_frame_labels(n, density, seed, name):
     position, yaw = circles(n, seed, density_per_m2=density)
     whole, parts = both_paths(position, yaw, scales=SCALES[name], noise=noise(seed))
+    np.testing.assert_array_equal(parts, whole)
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    spacing=st.sampled_from([0.5, 0.7, 1.0, 1.4]),
+    fill=st.sampled_from([0.3, 0.7, 1.0]),
+    seed=st.integers(0, 2**32 - 1),
+    name=st.sampled_from(sorted(SCALES)),
+)
+def test_lattices_of_exact_votes_tie_everywhere(spacing, fill, seed, name):
+    # People on a square lattice facing along its axes, votes without noise: many centres hold
+    # the same shares and the same scores, within a part and across parts.
+    rng = np.random.default_rng(seed)
+    cells = np.stack(np.meshgrid(np.arange(10), np.arange(10)), axis=-1).reshape(-1, 2)
+    cells = cells[rng.random(len(cells)) < fill]
+    if len(cells) < 2:
+        return
+    position = spacing * cells.astype(float)
+    yaw = wrap_angle(rng.integers(0, 4, len(cells)) * (np.pi / 2))
+    whole, parts = both_paths(
+        position, yaw, scales=SCALES[name], noise=noise(exact=True, samples=16)
+    )
     np.testing.assert_array_equal(parts, whole)
 
 
