@@ -149,7 +149,7 @@ def bench(model: Reform, n: int, quick: bool) -> dict:
     k_naive = 5 if quick else 40
     k_single = 20 if quick else 300
     frames = [scene(rng, n) for _ in range(max(k_naive, k_single))]
-    model.predict(frames[:3])  # warm-up (the compiled classifier is built at fit)
+    model.compile().predict(frames[:3])  # warm-up: the compiled classifier, as a long run's
 
     naive_out = [naive_predict(model, f) for f in frames[:k_naive]]
     naive_s = timed_each(lambda f: naive_predict(model, f), frames[:k_naive]).median
@@ -239,13 +239,13 @@ def options_ratios(train: tuple[Frame, ...], quick: bool) -> list[str]:
     """Batch predict time of each option set over the defaults' on the same frames, Bagged
     Trees, median of three runs each (a ratio: both measured in this process, now)."""
     count = 200 if quick else OPTION_FRAMES
-    default = Reform().fit(train)
+    default = Reform().fit(train).compile()  # each model compiled, as a long run's
     lines = []
     for n in OPTION_SIZES:
         frames = distinct_frames(n, count)
         base = median_seconds(functools.partial(default.predict, frames), 3)
         for options in OPTION_SETS:
-            model = Reform(**options).fit(train)
+            model = Reform(**options).fit(train).compile()
             seconds = median_seconds(functools.partial(model.predict, frames), 3)
             words = ", ".join(f"{k}={v!r}" for k, v in options.items())
             lines.append(

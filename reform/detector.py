@@ -21,6 +21,7 @@ import contextlib
 import gc
 import math
 import operator
+import time
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
@@ -53,6 +54,11 @@ from reform.reconstruction import (
 from reform.splits import time_blocks
 
 CHUNK_PAIRS = 1 << 18  # pairs classified at once when predicting many frames
+# Seconds a detector spends in its scikit-learn classifier before it compiles it (reform.fast),
+# about what compiling Bagged Trees' table takes (0.2 s): a short run (a few hundred frames of a
+# party: 0.06 s) is not worth it, a long run, a stream of frames or a crowd is, and no run
+# spends more than twice what the better choice would have (same labels either way).
+COMPILE_AFTER_S = 0.2
 LARGE_FRAME_PEOPLE = 256  # frames of more people are predicted one by one, keeping only the
 # pairs predicted together (Reform.predict notes)
 SEARCH_MARGIN = 1e-9  # relative: the neighbour search reaches this much beyond the distance
@@ -93,7 +99,9 @@ class Reform(BaseEstimator):
             with ``predict_proba``. With ``"correlation"``, the probability at which a pair
             weighs nothing (None: 0.5).
         fast: classify with the compiled classifier of :mod:`reform.fast` (same labels, much
-            faster); False calls the scikit-learn classifier once per batch.
+            faster), compiled once it pays: after `COMPILE_AFTER_S` spent in scikit-learn's,
+            at a crowd's frame, or at `compile`. False calls the scikit-learn classifier once
+            per batch.
         calibration: None (the classifier's own probabilities), ``"sigmoid"`` (Platt) or
             ``"isotonic"``: the classifier is wrapped in scikit-learn's
             ``CalibratedClassifierCV``, whose folds are stretches of time
@@ -192,8 +200,14 @@ class Reform(BaseEstimator):
         self.features_ = features
         self.training_summary_ = _summary(frames, y_all)
         self._compiled = None
-        if self.fast:
-            self._pair_classifier()
+        self._sklearn_s = 0.0
+        return self
+
+    def compile(self) -> Reform:
+        """Compiles the classifier now (:mod:`reform.fast`) rather than once it pays: for
+        timing a long run's pace from its first frame. Same labels; no-op without ``fast``."""
+        check_is_fitted(self, "classifier_")
+        self._pair_classifier(now=True)
         return self
 
     def predict(self, frames: Iterable[Frame]) -> list[Partition]:
@@ -283,7 +297,7 @@ class Reform(BaseEstimator):
         order = _id_order(frame)
         ordered = frame if order is None else _reordered(frame, order)
         arrays = frame_arrays(ordered)
-        compiled = self._pair_classifier()
+        compiled = self._pair_classifier(now=True)  # a crowd pays, and its table skips far pairs
         first, second = [np.zeros(0, dtype=np.intp)], [np.zeros(0, dtype=np.intp)]
         for i, j in self._candidate_pairs(arrays["position"], compiled):
             x = batch_pair_features(
@@ -296,7 +310,7 @@ class Reform(BaseEstimator):
                 pairs=(i, j),
             )[0]
             if compiled is None:
-                together = sklearn_pair_labels(self.classifier_, x, threshold=self.threshold)
+                together = self._sklearn_labels(x)
             else:
                 together = compiled.predict(x)
             first.append(i[together])
@@ -381,6 +395,7 @@ class Reform(BaseEstimator):
     def __getstate__(self) -> dict[str, Any]:
         state = dict(super().__getstate__())  # object.__getstate__ gives the live __dict__
         state.pop("_compiled", None)  # derived from classifier_, rebuilt on demand
+        state.pop("_sklearn_s", None)
         for name, default in _LATER_DEFAULTS.items():
             if name in state and state[name] is default:
                 del state[name]
@@ -389,12 +404,25 @@ class Reform(BaseEstimator):
     def __setstate__(self, state: dict[str, Any]) -> None:
         super().__setstate__({**_LATER_DEFAULTS, **state})
 
-    def _pair_classifier(self) -> PairClassifier | None:
+    def _pair_classifier(self, *, now: bool = False) -> PairClassifier | None:
+        """The compiled classifier (None: classify with scikit-learn's), compiled once it pays:
+        ``now``, or once this detector has spent `COMPILE_AFTER_S` in scikit-learn's
+        (`_sklearn_labels`); never without ``fast``."""
         compiled = getattr(self, "_compiled", None)
-        if compiled is None and self.fast:
+        if compiled is None and self.fast and (now or self._sklearn_seconds() >= COMPILE_AFTER_S):
             compiled = compile_classifier(self.classifier_, threshold=self.threshold)
             self._compiled = compiled
         return compiled
+
+    def _sklearn_seconds(self) -> float:
+        return getattr(self, "_sklearn_s", 0.0)
+
+    def _sklearn_labels(self, x: np.ndarray) -> np.ndarray:
+        """Pair labels by the scikit-learn classifier, its time counted (`_pair_classifier`)."""
+        started = time.perf_counter()
+        labels = sklearn_pair_labels(self.classifier_, x, threshold=self.threshold)
+        self._sklearn_s = self._sklearn_seconds() + time.perf_counter() - started
+        return labels
 
     def _classify_chunk(
         self, frames: list[Frame], n: int, *, proba: bool = False
@@ -444,7 +472,7 @@ class Reform(BaseEstimator):
             return ids, probability[:, column].reshape(len(frames), -1)
         compiled = self._pair_classifier()
         if compiled is None:
-            labels = sklearn_pair_labels(self.classifier_, flat, threshold=self.threshold)
+            labels = self._sklearn_labels(flat)
         else:
             labels = compiled.predict(flat)
         return ids, labels.reshape(len(frames), -1)

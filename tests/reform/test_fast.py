@@ -9,8 +9,10 @@ from sklearn.linear_model import LogisticRegression
 from sklearn.naive_bayes import GaussianNB
 from sklearn.neighbors import KNeighborsClassifier
 from sklearn.tree import DecisionTreeClassifier
+from toy_scenes import toy_frames
 
 from reform.classifiers import bagged_trees, logistic_regression, weighted_knn
+from reform.detector import COMPILE_AFTER_S, Reform
 from reform.fast import compile_classifier, sklearn_pair_labels
 
 
@@ -133,3 +135,19 @@ def test_only_a_table_knows_a_distance_from_which_every_pair_is_apart():
     y_far[x[:, 0] > 8.0] = 1
     trees = bagged_trees(min_samples_leaf=5).fit(x, y_far)
     assert compile_classifier(trees).apart_from(0) is None
+
+
+def test_a_detector_compiles_its_classifier_once_it_pays():
+    model = Reform(bagged_trees()).fit(toy_frames(0, 30))
+    few = toy_frames(5, 4)
+    first = model.predict(few)  # a short run: scikit-learn's own classifier
+    assert model._compiled is None
+    for _ in range(10_000):  # a stream of frames: compiled once it has cost COMPILE_AFTER_S
+        model.predict(few[:1])
+        if model._compiled is not None:
+            break
+    assert model._compiled is not None
+    assert model._sklearn_s >= COMPILE_AFTER_S
+    assert model.predict(few) == first  # the compiled table gives the same groups
+    plain = Reform(bagged_trees(), fast=False).fit(toy_frames(0, 30))
+    assert plain.compile()._compiled is None
