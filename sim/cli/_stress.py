@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import add_backend_arguments, add_max_memory_argument, run_with
-from sim.cli._detectors import detector_name
+from sim.cli._detectors import add_detector_timeout, detector_name
 from sim.cli._grammar import add_episodes, add_out, add_quiet, add_seed
 from sim.experiments.stress_grid import AXES, GRIDS
 from sim.recording import add_recording_arguments
@@ -71,8 +71,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "group reform_sim.detectors), or package.module:factory (the current folder is searched "
         "too); fitted on the training frames when it has fit()",
     )
+    add_detector_timeout(parser)
     add_out(
-        parser, folder=True, default="stress", help="folder for stress.md, stress.json and the plots"
+        parser,
+        folder=True,
+        default="stress",
+        help="folder for stress.md, stress.json and the plots",
     )
     parser.add_argument(
         "--temporal",

@@ -43,6 +43,8 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--detector", name]
     if args.temporal:
         words.append("--temporal")
+    if args.detector_timeout is not None:
+        words += ["--detector-timeout", f"{args.detector_timeout:g}"]
     words += ["--out", args.out]
     if args.save is not None:
         words += ["--save", args.save]
@@ -160,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
             )
         if name in plugins:
             raise CliError(f"--detector {name} is given twice")
-        plugins[name] = make_plugin(name)
+        plugins[name] = make_plugin(name, deadline_s=args.detector_timeout)
     executor = executor_from_args(args)  # a Ray address is probed here, before the estimate
     _check_size(grid, axes, args)  # the last check: its estimate is said once all have passed
 
@@ -177,6 +179,7 @@ def run(args: argparse.Namespace) -> int:
             progress=progress,
             executor=executor,
             temporal=args.temporal,
+            detector_timeout=args.detector_timeout,
         )
     if results.grid_name == "custom":
         results = dataclasses.replace(

@@ -384,14 +384,18 @@ def _event_counts(frames: Sequence[Frame], predictions: Sequence[Any]) -> dict[s
 
 
 def _score(
-    frames: Sequence[Frame], detectors: Mapping[str, Any], density: float, temporal: bool = False
+    frames: Sequence[Frame],
+    detectors: Mapping[str, Any],
+    density: float,
+    temporal: bool = False,
+    deadline_s: float | None = None,
 ) -> _Scored:
     precision, recall, correct = {}, {}, {}
     events: dict[str, Mapping[str, Any]] = {}
     sequence: tuple[str, ...] = ()
     pairs = 0
     for name, detector in detectors.items():
-        predictions = run_detector(name, detector, frames)
+        predictions = run_detector(name, detector, frames, deadline_s=deadline_s)
         evaluation = evaluate(frames, predictions)
         if temporal:
             events[name] = _event_counts(frames, predictions)
@@ -437,6 +441,7 @@ def _perturb_task(
     seed: int,
     detectors: Mapping[str, Any],
     temporal: bool = False,
+    deadline_s: float | None = None,
 ) -> list[tuple[str, int, int, _Scored | str]]:
     frames, density = base
     out: list[tuple[str, int, int, _Scored | str]] = []
@@ -445,7 +450,8 @@ def _perturb_task(
         # The same draws at every level.
         rng = derive_rng(seed, Role.STRESS_PERTURB, axis_index, episode)
         perturbed = perturbation.apply_all(frames, rng)
-        out.append((axis, k, episode, _score(perturbed, detectors, density, temporal)))
+        scored = _score(perturbed, detectors, density, temporal, deadline_s)
+        out.append((axis, k, episode, scored))
     return out
 
 
@@ -456,6 +462,7 @@ def _scene_task(
     seed: int,
     detectors: Mapping[str, Any],
     temporal: bool = False,
+    deadline_s: float | None = None,
 ) -> list[tuple[str, int, int, _Scored | str]]:
     """Every test episode of level ``k`` of a scene axis (one task: the detectors are unpacked
     and compiled once per task)."""
@@ -471,7 +478,7 @@ def _scene_task(
             except ValueError as exc:  # the planner cannot lay out this party: draw another
                 notes.append(f"seed {spec.seed}: {exc}")
                 continue
-            scored = _score(frames, detectors, density, temporal)
+            scored = _score(frames, detectors, density, temporal, deadline_s)
             out.append((axis, k, episode, _Scored.noted(scored, notes)))
             break
         else:
@@ -777,6 +784,7 @@ def run_stress(
     progress: Callable[[str], None] | None = None,
     executor: Executor | None = None,
     temporal: bool = False,
+    detector_timeout: float | None = None,
 ) -> StressResults:
     """Runs the stress tests.
 
@@ -802,6 +810,9 @@ def run_stress(
         executor: where the units run, instead of ``jobs`` local processes.
         temporal: also score every detector's group events in time at every point
             (`StressPoint.temporal`).
+        detector_timeout: seconds each detector may take to predict a frame
+            (`reform.detectors.run_detector`'s ``deadline_s``; None: its default, scaled by the
+            people in the frame).
 
     Returns:
         The curves with their confidence intervals, the training summary and the timings.
@@ -926,7 +937,7 @@ def run_stress(
     results = _parallel(
         _call,
         tasks,
-        shared=(detectors, bool(temporal)),
+        shared=(detectors, bool(temporal), detector_timeout),
         executor=executor,
         progress=report,
         cpu=cpu,
@@ -981,9 +992,10 @@ def _call(
     task: tuple[Callable[..., Any], tuple[Any, ...]],
     detectors: Mapping[str, Any],
     temporal: bool = False,
+    deadline_s: float | None = None,
 ) -> Any:
     function, args = task
-    return function(*args, detectors, temporal)
+    return function(*args, detectors, temporal, deadline_s)
 
 
 def sensor_description(name: str) -> str:

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
-from cli_errors import cli_error
+from cli_errors import cli_error, run_cli
 from killed_run import CLI
 from quiet_generate import generate_quietly
 
@@ -102,16 +102,36 @@ def test_predict_past_its_deadline_ends_benchmark_in_one_line(lab, capsys, monke
     ), line
 
 
-@pytest.mark.parametrize("command", ["detect", "evaluate", "benchmark"])
+def test_predict_past_its_deadline_ends_stress_in_one_line(lab, capsys, monkeypatch):
+    """In a worker of the stress tests (one dropout level, one short episode of 20 frames)."""
+    monkeypatch.chdir(lab)
+    monkeypatch.syspath_prepend(str(lab))
+    started = time.monotonic()
+    status, _, err = run_cli(
+        ["stress", "--grid", "small", "--episodes", "1", "--axes", "dropout", "--jobs", "1"]
+        + ["--detector", "stuck_in_predict:make", "--detector-timeout", "0.1", "--out", "st"]
+        + ["--quiet"],
+        capsys,
+    )
+    assert time.monotonic() - started < 20 * 0.1 + SLACK_S + 20.0  # its episode simulated first
+    assert status == 2
+    estimate, line = err.strip().splitlines()  # the stated estimate, then the error
+    assert estimate.startswith("the stress test: about "), estimate
+    assert re.fullmatch(
+        r"reform-sim stress: error: stuck_in_predict:make: the detector did not finish within "
+        r"2 s \(predict .*\); " + re.escape(HINT),
+        line,
+    ), line
+
+
+@pytest.mark.parametrize("command", ["detect", "evaluate", "benchmark", "stress"])
 @pytest.mark.parametrize("value", ["0", "-2", "0s", "soon", "2 hours"])
 def test_a_deadline_that_is_not_a_duration_above_zero_is_one_line_before_any_work(
     command, value, capsys, tmp_path
 ):
+    data = [] if command == "stress" else ["--data", str(tmp_path / "none")]
     with pytest.raises(SystemExit) as exit_info:
-        main(
-            [command, "--detector", "majority", "--data", str(tmp_path / "none")]
-            + [f"--detector-timeout={value}"]
-        )
+        main([command, "--detector", "majority", *data, f"--detector-timeout={value}"])
     assert exit_info.value.code == 2
     line = capsys.readouterr().err
     assert line.count("\n") == 1
