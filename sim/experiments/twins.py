@@ -17,7 +17,9 @@ For every real dataset, `run_twins`:
    rho, Kendall's tau, the mean absolute error (points) and the mean maximum rank violation
    (SIMPLER's MMRV: per dataset, for each detector the largest real gap to a detector the
    prediction orders the other way, averaged, then averaged over datasets), each with a 95 %
-   bootstrap interval (detectors resampled, the same in every dataset);
+   bootstrap interval (detectors resampled, the same in every dataset); and the **noise floor**
+   of the last two (`noise_floor`): what a predictor that knew each cell's expected real F1
+   would score against the second halves, from each real F1's own block-bootstrap spread;
 5. **leave one out**: the twin recipe (`sim.twins.fit`) has no constant chosen on the real
    datasets' labels (each twin reads only its own frames), so its figures are already those of a
    recipe fixed without the dataset; beside them, one recipe constant that labels could fix, a
@@ -49,6 +51,7 @@ __all__ = [
     "TwinsResult",
     "agreement",
     "mmrv",
+    "noise_floor",
     "run_twins",
 ]
 
@@ -56,6 +59,10 @@ TUNED = ("gcff", "proximity", "reform")  # detectors tuned three ways (grids of 
 HALF = 0.5  # share of each sequence's annotated frames in the first half
 RESAMPLES = 2000  # bootstrap resamples of the agreement figures
 BOOTSTRAP = 31  # seed role of those draws
+SPREAD_RESAMPLES = 500  # block-bootstrap resamples of each real F1 (its sampling spread)
+SPREAD = 32  # seed role of those
+FLOOR_DRAWS = 2000  # draws of the real scores about their expected values (the noise floor)
+FLOOR = 33  # seed role of those
 GOALS = {  # issue 28's figures (F1 points at T = 2/3)
     "tuning_gain": 5.0,  # GCFF twin-tuned at least this above one setting (mean)
     "tuning_gap": 2.0,  # ... and within this of the label-tuned search
@@ -75,9 +82,12 @@ class TwinsResult:
         frames: dataset -> (annotated frames of the first half, of the second half).
         tuning: rows ``{"dataset", "detector", "how", "options", "f1"}`` (``how``: ``one
             setting``, ``twin``, ``labels``).
-        cells: rows ``{"dataset", "detector", "predicted", "low", "high", "real",
-            "first_half"}``.
+        cells: rows ``{"dataset", "detector", "predicted", "low", "high", "real", "real_sd",
+            "first_half"}`` (``real_sd``: the real F1's sampling spread, `_real_score`).
         agreement: ``{"twin": {...}, "ceiling": {...}}``: each measure's value and interval.
+        noise_floor: the MAE and MMRV (points) a predictor that knew every cell's expected
+            real F1 would score against the real scores, from their own sampling spread
+            (`noise_floor`): ``{"mae": {...}, "mmrv": {...}}``, each value and interval.
         seconds: wall-clock time of the run.
     """
 
@@ -88,6 +98,7 @@ class TwinsResult:
     cells: tuple[Mapping[str, Any], ...]
     agreement: Mapping[str, Any]
     own_settings: Mapping[str, float] = field(default_factory=dict)
+    noise_floor: Mapping[str, Any] = field(default_factory=dict)
     seconds: float = 0.0
 
     def to_json(self, *, command: str = "") -> dict[str, Any]:
@@ -101,6 +112,7 @@ class TwinsResult:
             "cells": [dict(c) for c in self.cells],
             "agreement": dict(self.agreement),
             "own_settings": dict(self.own_settings),
+            "noise_floor": dict(self.noise_floor),
             "leave_one_out": "the twin recipe fixes no constant on the datasets' labels; each "
             "twin reads its own frames only; loo_calibrated: each cell through the line from twin "
             "F1 to real F1 fitted on the other datasets' cells",
@@ -124,6 +136,57 @@ def mmrv(predicted: Sequence[float], real: Sequence[float]) -> float:
     disagree = np.sign(p[:, None] - p[None, :]) != np.sign(r[:, None] - r[None, :])
     gaps = np.where(disagree, np.abs(r[:, None] - r[None, :]), 0.0)
     return float(gaps.max(axis=1).mean())
+
+
+def _real_score(
+    name: str, detector: Any, frames: Sequence[Frame], weights: np.ndarray
+) -> tuple[float, float]:
+    """F1 at T = 2/3 of ``detector`` on the annotated ``frames`` (as `_f1`), and its sampling
+    spread: the standard deviation of that F1 over the block-bootstrap ``weights`` (resamples x
+    frames; contiguous stretches of each recording resampled whole)."""
+    from reform.detectors import run_detector
+    from reform.metrics import evaluate
+    from sim.twins.tune import THRESHOLD
+
+    frames = [f for f in frames if f.groups is not None]
+    scores = evaluate(frames, run_detector(name, detector, frames), thresholds=(THRESHOLD,))
+    scores = scores.at(THRESHOLD)
+    total = weights.sum(axis=1)
+    p = weights @ np.asarray(scores.frame_precision, dtype=float) / total
+    r = weights @ np.asarray(scores.frame_recall, dtype=float) / total
+    both = p + r
+    f1 = np.where(both > 0, 2.0 * p * r / np.where(both > 0, both, 1.0), 0.0)
+    return float(scores.f1), float(np.std(f1))
+
+
+def noise_floor(
+    cells: Sequence[Mapping[str, Any]], *, seed: int = 0, draws: int = FLOOR_DRAWS
+) -> dict[str, dict[str, float]]:
+    """What the real scores' own sampling error costs any prediction: the MAE and MMRV
+    (points) of a predictor that knew every cell's expected real F1 exactly, against real
+    scores drawn about it with each cell's spread (``real_sd``, `_real_score`; normal, clipped
+    to [0, 1]); each ``{"value", "low", "high"}``: the mean over ``draws`` and its 95 % range.
+    The twin's figures cannot be expected below these."""
+    rng = derive_rng(seed, FLOOR)
+    by_dataset: dict[str, list[Mapping[str, Any]]] = {}
+    for c in cells:
+        by_dataset.setdefault(c["dataset"], []).append(c)
+    errors, violations = [], []
+    for _ in range(draws):
+        apart, ranks = [], []
+        for group in by_dataset.values():
+            expected = np.array([c["real"] for c in group], dtype=float)
+            spread = np.array([c["real_sd"] for c in group], dtype=float)
+            drawn = np.clip(expected + rng.normal(0.0, 1.0, expected.size) * spread, 0.0, 1.0)
+            apart.append(np.abs(drawn - expected))
+            ranks.append(mmrv(expected, drawn))
+        errors.append(100.0 * float(np.mean(np.concatenate(apart))))
+        violations.append(100.0 * float(np.mean(ranks)))
+    out = {}
+    for name, values in (("mae", errors), ("mmrv", violations)):
+        low, high = np.quantile(values, [0.025, 0.975])
+        out[name] = {"value": float(np.mean(values)), "low": float(low), "high": float(high)}
+    return out
 
 
 def _measures(cells: Sequence[Mapping[str, Any]], key: str) -> dict[str, float]:
@@ -235,8 +298,10 @@ def run_twins(
         jobs: processes generating the twins' data (None: every core).
         progress: called with a line at each step.
     """
+    from reform.bootstrap import bootstrap_weights
     from reform.detectors import make_detector
     from reform.splits import time_split
+    from sim.experiments.benchmark import bootstrap_blocks
     from sim.twins import fit_twin, twin_data, write_twin
     from sim.twins.predict import catalogue_candidates, predict
     from sim.twins.tune import search_grid, tune_detector, tuning_frames
@@ -256,6 +321,11 @@ def run_twins(
         data = list(twin_data(twin, root / name / "twin-data", n_jobs=jobs))
         first, second = time_split(dataset.annotated(), HALF)
         frames_of[name] = (len(first), len(second))
+        spread = bootstrap_weights(
+            bootstrap_blocks(second),
+            rng=derive_rng(seed, SPREAD, len(frames_of)),
+            resamples=SPREAD_RESAMPLES,
+        )
 
         say(f"{name}: tuning {', '.join(tuned)} on the twin and on the first half's labels")
         twin_options = {}
@@ -304,6 +374,7 @@ def run_twins(
                 continue
             label = p.label
             name_of = next(c.name for c in candidates if c.label == label)
+            score, score_sd = _real_score(name_of, p.detector, second, spread)
             cells.append(
                 {
                     "dataset": name,
@@ -311,7 +382,8 @@ def run_twins(
                     "predicted": p.f1,
                     "low": p.low,
                     "high": p.high,
-                    "real": _f1(name_of, p.detector, second),
+                    "real": score,
+                    "real_sd": score_sd,
                     "first_half": _f1(name_of, p.detector, first),
                 }
             )
@@ -333,5 +405,6 @@ def run_twins(
         cells=tuple(cells),
         agreement=result_agreement,
         own_settings=own,
+        noise_floor=noise_floor(cells, seed=seed),
         seconds=time.perf_counter() - started,
     )

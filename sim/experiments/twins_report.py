@@ -111,6 +111,19 @@ def to_markdown(result: TwinsResult, *, command: str, figure: str | None = None)
         f"{s['mmrv']:.1f} | {yes(met['mmrv'])} |",
         "",
     ]
+    floor = result.noise_floor
+    if floor:
+        mae, ranks = floor["mae"], floor["mmrv"]
+        lines += [
+            "The real scores carry their own sampling error, which sets a floor under the last "
+            "two: a predictor that knew every cell's expected F1 exactly would score a mean "
+            f"absolute error of {mae['value']:.1f} points ({mae['low']:.1f} to {mae['high']:.1f}) "
+            f"and a mean maximum rank violation of {ranks['value']:.1f} points ({ranks['low']:.1f} "
+            f"to {ranks['high']:.1f}) against these second halves (each real F1 drawn about "
+            "itself with its spread: the standard deviation of a block bootstrap of its second "
+            "half, 95 % ranges over the draws).",
+            "",
+        ]
     if figure:
         lines += [f"![{figure}]({figure})", ""]
     lines += [

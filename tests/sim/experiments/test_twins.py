@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from reform.frame import Dataset
-from sim.experiments.twins import agreement, mmrv, run_twins
+from sim.experiments.twins import agreement, mmrv, noise_floor, run_twins
 from sim.experiments.twins_report import scatter_figure, to_markdown
 from tests.sim.test_twin import _frames
 
@@ -28,6 +28,26 @@ def test_agreement_of_a_perfect_prediction():
     assert out["mae"]["value"] == 0.0 and out["mmrv"]["value"] == 0.0
 
 
+def test_the_noise_floor_grows_with_the_real_scores_spread():
+    cells = [
+        {"dataset": d, "detector": k, "real": v, "real_sd": 0.0}
+        for d, values in (("a", (0.2, 0.5, 0.52, 0.9)), ("b", (0.3, 0.6, 0.61, 0.7)))
+        for k, v in zip("wxyz", values, strict=True)
+    ]
+    exact = noise_floor(cells, draws=200)
+    assert exact["mae"]["value"] == 0.0 and exact["mmrv"]["value"] == 0.0
+    spread = [dict(c, real_sd=0.04) for c in cells]
+    noisy = noise_floor(spread, draws=2000)
+    # |N(0, 0.04)| has mean 0.04 sqrt(2/pi) = 3.2 points (a little less: clipped to [0, 1])
+    assert noisy["mae"]["value"] == pytest.approx(100 * 0.04 * (2 / 3.14159) ** 0.5, rel=0.1)
+    assert noisy["mae"]["low"] < noisy["mae"]["value"] < noisy["mae"]["high"]
+    # the close pairs (0.5, 0.52) and (0.6, 0.61) swap often; the far ones almost never
+    assert 0.0 < noisy["mmrv"]["value"] < 10.0
+    wider = noise_floor([dict(c, real_sd=0.08) for c in cells], draws=2000)
+    assert wider["mmrv"]["value"] > noisy["mmrv"]["value"]
+    assert noise_floor(spread, draws=50, seed=3) == noise_floor(spread, draws=50, seed=3)
+
+
 def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     real = {
         name: Dataset(tuple(_frames(people=9, n_frames=30, seed=s)), name=name)
@@ -39,10 +59,12 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     )  # fmt: skip
     assert result.datasets == ("one", "two")
     assert {c["detector"] for c in result.cells} == {"proximity", "majority"}
+    assert all(c["real_sd"] >= 0.0 for c in result.cells)
+    assert set(result.noise_floor) == {"mae", "mmrv"}
     assert {r["how"] for r in result.tuning} == {"one setting", "twin", "labels"}
     assert (tmp_path / "twins" / "one" / "twin.json").is_file()
     page = to_markdown(result, command="reform-sim experiment twins --out x", figure="t.png")
-    for heading in ("## Tuning", "## Prediction", "## Leave one out", "Goals met"):
+    for heading in ("## Tuning", "## Prediction", "## Leave one out", "Goals met", "a floor"):
         assert heading in page
     for table in page.split("\n\n"):  # no table broken by a blank line between its rows
         lines = table.strip().splitlines()
