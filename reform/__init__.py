@@ -38,6 +38,7 @@ _EXPORTS = {
     "detector_names": "reform.detectors",
     "fit_detector": "reform.detectors",
     "make_detector": "reform.detectors",
+    "Estimator": "reform.estimator",
     "prepare_detector": "reform.detectors",
     "register_detector": "reform.detectors",
     "run_detector": "reform.detectors",

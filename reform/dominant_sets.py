@@ -47,9 +47,9 @@ from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
-from sklearn.base import BaseEstimator
 
 from reform._params import ORIENTATIONS, check_choice, check_number, orientation_of
+from reform.estimator import Estimator
 from reform.frame import Frame, Group, check_frames, wrap_angle
 from reform.gcff import labels_to_partition
 
@@ -217,7 +217,7 @@ def hung_krose_affinity(
     return affinity
 
 
-class DominantSets(BaseEstimator):
+class DominantSets(Estimator):
     """Dominant-sets detector (Hung & Kröse 2011) on proximity and mutual view.
 
     Follows the detector protocol: ``fit(frames) -> self`` (nothing to learn) and

@@ -73,9 +73,8 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from sklearn.base import BaseEstimator
-from sklearn.exceptions import NotFittedError
 
+from reform.estimator import Estimator, not_fitted_error
 from reform.frame import POSITION_LIMIT_M, Frame, Group, check_frames
 
 __all__ = [
@@ -1034,7 +1033,7 @@ def grid_search(
     )
 
 
-class Gcff(BaseEstimator):
+class Gcff(Estimator):
     """GCFF detector (Setti et al. 2015), faithful to the reference code, in metres.
 
     Follows the detector protocol: ``fit(frames) -> self`` and ``predict(frames)`` -> one full
@@ -1144,7 +1143,7 @@ class Gcff(BaseEstimator):
     def _settings(self) -> tuple[float, float]:
         if self.tune:
             if not hasattr(self, "stride_"):
-                raise NotFittedError(
+                raise not_fitted_error(
                     "Gcff(tune=True) must be fitted on training frames before predict; "
                     "call fit(frames) first, or use tune=False with explicit stride and mdl"
                 )
@@ -1168,7 +1167,7 @@ class Gcff(BaseEstimator):
         return not self.tune or hasattr(self, "stride_")
 
 
-class GcffBySequence(BaseEstimator):
+class GcffBySequence(Estimator):
     """GCFF with each sequence's own settings: the field's per-dataset protocol.
 
     The GCFF authors tuned ``stride`` and ``mdl`` for every dataset and shipped them beside it
@@ -1247,7 +1246,7 @@ class GcffBySequence(BaseEstimator):
         return True
 
 
-class GcffOwn(BaseEstimator):
+class GcffOwn(Estimator):
     """GCFF with the settings the dataset it runs on ships: the catalogue's ``gcff-own``.
 
     Made without a dataset, it is specialised to one by :meth:`for_dataset` (the commands that

@@ -50,10 +50,10 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 from scipy.spatial import cKDTree
-from sklearn.base import BaseEstimator
 
 from reform._params import ORIENTATIONS, check_choice, check_number, orientation_of
 from reform.dominant_sets import dominant_set_labels
+from reform.estimator import Estimator
 from reform.frame import Frame, Group, check_frames
 from reform.gcff import labels_to_partition
 
@@ -238,7 +238,7 @@ def _window_affinity(
     return total / (1 + len(past))
 
 
-class Gtcg(BaseEstimator):
+class Gtcg(Estimator):
     """GTCG detector (Vascon et al. 2016), per frame, on frustum affinities.
 
     Follows the detector protocol: ``fit(frames) -> self`` (nothing to learn) and

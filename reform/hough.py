@@ -54,9 +54,9 @@ import numpy.typing as npt
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
-from sklearn.base import BaseEstimator
 
 from reform._params import ORIENTATIONS, check_choice, check_number, orientation_of
+from reform.estimator import Estimator
 from reform.frame import Frame, Group, check_frames
 from reform.gcff import labels_to_partition
 
@@ -354,7 +354,7 @@ def hough_labels(
     return labels
 
 
-class _HoughBase(BaseEstimator):
+class _HoughBase(Estimator):
     """What HVFF and its multi-scale form share: the votes' noise and the accumulator."""
 
     def _check_common(self) -> dict:

@@ -9,14 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from sklearn.base import BaseEstimator
-
+from reform.estimator import Estimator
 from reform.frame import Frame, Group, check_frames
 
 __all__ = ["Majority"]
 
 
-class Majority(BaseEstimator):
+class Majority(Estimator):
     """Majority-class detector: predicts every person a singleton.
 
     It follows the detector protocol (``fit(frames) -> self``, ``predict(frames)`` -> one full

@@ -14,9 +14,9 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
-from sklearn.base import BaseEstimator
 
 from reform._params import check_number
+from reform.estimator import Estimator
 from reform.frame import Frame, Group, check_frames
 from reform.gcff import labels_to_partition
 
@@ -49,7 +49,7 @@ def proximity_labels(position: np.ndarray, *, distance: float) -> np.ndarray:
     return order[labels].astype(np.int64)
 
 
-class Proximity(BaseEstimator):
+class Proximity(Estimator):
     """Proximity baseline: groups are people linked by distances of at most ``distance``.
 
     Follows the detector protocol: ``fit(frames) -> self`` (nothing to learn) and

@@ -28,8 +28,8 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from sklearn.base import BaseEstimator
 
+from reform.estimator import Estimator
 from reform.features import pair_indices
 from reform.frame import Frame, Group, check_frames, complete_partition
 from reform.reconstruction import UNION, batch_greedy_labels, partition_from_labels
@@ -80,7 +80,7 @@ def _rebuild(together: np.ndarray, ids: np.ndarray) -> tuple[Group, ...]:
     return partition_from_labels(labels, ids.tolist())
 
 
-class _Filter(BaseEstimator):
+class _Filter(Estimator):
     """What both filters share: the wrapped detector learns when the filter is fitted."""
 
     detector: Any

@@ -211,6 +211,19 @@ def test_evaluate_without_a_recording_imports_no_rerun(babble_dir) -> None:
     assert loaded.splitlines()[-1] == "[]"
 
 
+def test_evaluate_gcff_imports_no_scikit_learn(babble_dir) -> None:
+    """GCFF learns nothing with scikit-learn, so its estimator base is reform's own
+    (`reform.estimator`): scikit-learn and what its base imports (scipy.stats, pandas) cost a
+    second of CPU that `evaluate --detector gcff` would spend importing (issue 31)."""
+    loaded = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        f"main(['evaluate', '--detector', 'gcff', '--data', {str(babble_dir)!r}, '--quiet'])\n"
+        "print(sorted(m for m in ('sklearn', 'scipy.stats', 'pandas') if m in sys.modules))\n"
+    )
+    assert loaded.splitlines()[-1] == "[]"
+
+
 def test_benchmark_without_a_model_imports_no_skops(babble_dir, tmp_path) -> None:
     loaded = _python(
         "import sys\n"
