@@ -15,8 +15,9 @@ scenario's natural length (600 s, 1,200 frames), ground-truth view. Measured in 
   process, then with ``--jobs`` processes (joblib/loky, the pool warmed up first; the cold start
   is printed too), medians over ``--repeats`` runs: frames per wall-clock second and per CPU
   second (this process and its workers), the ratio parallel / serial, the ratio to the poses
-  floor, and the time one million annotated frames would take. Every run must write the same
-  number of annotated frames (checked).
+  floor, the serial run's CPU time per frame beyond the floor (the scenario and columns stages
+  above, and the rest), and the time one million annotated frames would take. Every run must
+  write the same number of annotated frames (checked).
 
 The machine's load average is printed: on a machine shared with other work the wall-clock
 figures fall behind the CPU figures; "on free cores" divides the CPU cost by the cores.
@@ -219,6 +220,14 @@ def main() -> None:
         f"{parallel_cpu / floor:>8.2f}"
     )
     print(f"{args.jobs} processes / serial, wall clock: {parallel_wall / serial_wall:.2f}x")
+    beyond = 1.0 / serial_cpu - per_frame["poses"]
+    rest = beyond - per_frame["scenario"] - per_frame["columns"]
+    print(
+        f"serial, CPU time per annotated frame beyond the floor: {beyond * 1e6:.0f} us (the "
+        f"scenario {per_frame['scenario'] * 1e6:.0f} us, the columns "
+        f"{per_frame['columns'] * 1e6:.0f} us, the rest {rest * 1e6:.0f} us: group events, "
+        "summaries, checksums and commits, the card, garbage collection)"
+    )
     minutes = MILLION / parallel_wall / 60.0
     minutes_serial = MILLION / serial_wall / 60.0
     minutes_free = MILLION / (parallel_cpu * args.jobs) / 60.0

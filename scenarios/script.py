@@ -53,7 +53,7 @@ def _agent_id(name: str, value: Any) -> int | None:
     return int(value)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Intent:
     """What one agent wants at one time.
 
@@ -82,47 +82,71 @@ class Intent:
     present: bool = True
     appear_at: Point | None = None
 
-    def __post_init__(self) -> None:
-        # Written out field by field: scripts make thousands of intents per episode.
-        set_ = object.__setattr__
-        for name, value in (
-            ("goal", self.goal),
-            ("face_point", self.face_point),
-            ("gaze_point", self.gaze_point),
-            ("appear_at", self.appear_at),
-        ):
-            if value is not None:
-                set_(self, name, _point(name, value))
-        if self.face_agent is not None:
-            set_(self, "face_agent", _agent_id("face_agent", self.face_agent))
-        if self.gaze_agent is not None:
-            set_(self, "gaze_agent", _agent_id("gaze_agent", self.gaze_agent))
-        speed = self.speed
+    def __init__(
+        self,
+        goal: Point | None = None,
+        speed: float = WALK_SPEED_M_S,
+        face_yaw: float | None = None,
+        face_point: Point | None = None,
+        face_agent: int | None = None,
+        gaze_point: Point | None = None,
+        gaze_agent: int | None = None,
+        present: bool = True,
+        appear_at: Point | None = None,
+    ) -> None:
+        # Every field checked (and normalised) once, then all set at once: scripts make
+        # thousands of intents per episode, and the frozen dataclass's own __init__ and a
+        # __post_init__ setting fields one by one cost several times this.
+        if goal is not None:
+            goal = _point("goal", goal)
+        if face_point is not None:
+            face_point = _point("face_point", face_point)
+        if gaze_point is not None:
+            gaze_point = _point("gaze_point", gaze_point)
+        if appear_at is not None:
+            appear_at = _point("appear_at", appear_at)
+        if face_agent is not None and type(face_agent) is not int:
+            face_agent = _agent_id("face_agent", face_agent)
+        if gaze_agent is not None and type(gaze_agent) is not int:
+            gaze_agent = _agent_id("gaze_agent", gaze_agent)
         if type(speed) is not float or not 0.0 < speed < math.inf:
+            given = speed
             speed = float(speed)
             if not (math.isfinite(speed) and speed > 0.0):
-                raise ValueError(
-                    f"Intent.speed must be positive and finite (m/s), got {self.speed!r}"
-                )
-            set_(self, "speed", speed)
-        if self.face_yaw is not None:
-            face_yaw = float(self.face_yaw)
+                raise ValueError(f"Intent.speed must be positive and finite (m/s), got {given!r}")
+        if face_yaw is not None:
+            given = face_yaw
+            face_yaw = float(face_yaw)
             if not math.isfinite(face_yaw):
-                raise ValueError(f"Intent.face_yaw must be finite (radians), got {self.face_yaw!r}")
-            set_(self, "face_yaw", face_yaw)
-        if (self.face_yaw is not None) + (self.face_point is not None) + (
-            self.face_agent is not None
-        ) > 1:
+                raise ValueError(f"Intent.face_yaw must be finite (radians), got {given!r}")
+        if (face_yaw is not None) + (face_point is not None) + (face_agent is not None) > 1:
             faces = [
-                n for n in ("face_yaw", "face_point", "face_agent") if getattr(self, n) is not None
+                name
+                for name, value in (
+                    ("face_yaw", face_yaw),
+                    ("face_point", face_point),
+                    ("face_agent", face_agent),
+                )
+                if value is not None
             ]
             raise ValueError(
                 f"Intent takes at most one of face_yaw, face_point, face_agent, got {faces}"
             )
-        if self.gaze_point is not None and self.gaze_agent is not None:
+        if gaze_point is not None and gaze_agent is not None:
             raise ValueError("Intent takes at most one of gaze_point, gaze_agent, got both")
-        if type(self.present) is not bool:
-            set_(self, "present", bool(self.present))
+        if type(present) is not bool:
+            present = bool(present)
+        self.__dict__.update(
+            goal=goal,
+            speed=speed,
+            face_yaw=face_yaw,
+            face_point=face_point,
+            face_agent=face_agent,
+            gaze_point=gaze_point,
+            gaze_agent=gaze_agent,
+            present=present,
+            appear_at=appear_at,
+        )
 
 
 @runtime_checkable

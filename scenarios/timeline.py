@@ -82,7 +82,7 @@ class PlannedGroup:
             raise ValueError(f"PlannedGroup.members must be >= 2 distinct ids, got {members}")
         for name, shape in (("places", (k, 2)), ("facings", (k,)), ("centre", (2,))):
             array = np.array(getattr(self, name), dtype=np.float64)
-            if array.shape != shape or not np.all(np.isfinite(array)):
+            if array.shape != shape or not np.isfinite(array).all():
                 raise ValueError(f"PlannedGroup.{name} must be finite with shape {shape}")
             array.flags.writeable = False
             object.__setattr__(self, name, array)
@@ -211,7 +211,7 @@ class TimelineBuilder:
         """From ``t`` on, ``agent`` wants ``intent`` (a later call for the same time wins)."""
         if agent not in self._known:
             raise ValueError(f"agent {agent} is not on the stage (ids {list(self._agents)})")
-        if not math.isfinite(t) or t < 0.0:
+        if not 0.0 <= t < math.inf:  # NaN fails too
             raise ValueError(f"intent time must be a finite time >= 0 s, got {t}")
         self._changes.append((float(t), len(self._changes), int(agent), intent))
 
@@ -264,7 +264,7 @@ class TimelineBuilder:
 
     def build(self) -> Timeline:
         """The frozen `Timeline`."""
-        self._changes.sort(key=lambda c: (c[0], c[1]))
+        self._changes.sort()  # by time, then order of setting (unique: intents never compared)
         times: list[float] = []
         deltas: list[dict[int, Intent]] = []
         k = 0

@@ -106,6 +106,7 @@ from reform.events import EVENT_KINDS
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
 from reform.seeding import ANNOTATION, ANNOTATION_DRAW, derive_int, derive_rng
+from scenarios import Scenario
 from sim import sizing
 from sim.episode import (
     DEFAULT_RATE_HZ,
@@ -583,21 +584,37 @@ def _summarise_frames(
 
 
 def _summarise_block(
-    spec: GenerationSpec, episode: int, block: FrameBlock, events: Mapping[str, Any]
+    spec: GenerationSpec,
+    episode: int,
+    block: FrameBlock,
+    events: Mapping[str, Any],
+    groups: Sequence[tuple[tuple[int, ...], ...] | None] | None = None,
 ) -> ShardSummary:
-    """As `_summarise_frames`, for the frames of a block, without making them."""
-    sizes: Counter[int] = Counter()
-    annotated = 0
-    counts = block.present.sum(axis=1)
-    for t, groups in enumerate(block.present_groups()):
-        if groups is None:
+    """As `_summarise_frames`, for the frames of a block, without making them. ``groups``:
+    ``block.present_groups()``, when already worked out.
+
+    `FrameBlock.present_groups` gives one object for a run of instants whose groups and
+    people do not change: each run is counted once, times its length."""
+    if groups is None:
+        groups = block.present_groups()
+    counts = block.present.sum(axis=1).tolist()
+    runs: list[tuple[tuple[tuple[int, ...], ...], int, int]] = []  # (groups, people, instants)
+    for frame_groups, people in zip(groups, counts, strict=True):
+        if frame_groups is None:
             continue
-        annotated += 1
-        sizes.update(len(group) for group in groups)
-        grouped = sum(len(group) for group in groups)
-        if counts[t] > grouped:
-            sizes[1] += int(counts[t]) - grouped
-    return _summary(spec, episode, len(block), annotated, int(counts.sum()), sizes, events)
+        if runs and runs[-1][0] is frame_groups and runs[-1][1] == people:
+            runs[-1] = (frame_groups, people, runs[-1][2] + 1)
+        else:
+            runs.append((frame_groups, people, 1))
+    sizes: Counter[int] = Counter()
+    for frame_groups, people, instants in runs:
+        for group in frame_groups:
+            sizes[len(group)] += instants
+        alone = people - sum(len(group) for group in frame_groups)
+        if alone > 0:
+            sizes[1] += alone * instants
+    annotated = sum(instants for _, _, instants in runs)
+    return _summary(spec, episode, len(block), annotated, sum(counts), sizes, events)
 
 
 def _shard_metadata(
@@ -621,11 +638,18 @@ def _shard_metadata(
 
 
 def _write_episode(
-    spec: GenerationSpec, folder: _Folder, episode: int, *, save_recordings: bool
+    spec: GenerationSpec,
+    folder: _Folder,
+    episode: int,
+    *,
+    save_recordings: bool,
+    made: Scenario | None = None,
 ) -> ShardSummary:
     """`_simulate_and_write`, its errors naming the episode and its seed (to reproduce it)."""
     try:
-        return _simulate_and_write(spec, folder, episode, save_recordings=save_recordings)
+        return _simulate_and_write(
+            spec, folder, episode, save_recordings=save_recordings, made=made
+        )
     except ValueError as exc:
         raise ValueError(
             f"episode {episode} of {spec.scenario} (episode seed {episode_seed(spec.seed, episode)}"
@@ -634,7 +658,12 @@ def _write_episode(
 
 
 def _simulate_and_write(
-    spec: GenerationSpec, folder: _Folder, episode: int, *, save_recordings: bool
+    spec: GenerationSpec,
+    folder: _Folder,
+    episode: int,
+    *,
+    save_recordings: bool,
+    made: Scenario | None = None,
 ) -> ShardSummary:
     """Simulates one episode and writes its recording (if asked) and then its shard.
 
@@ -643,9 +672,13 @@ def _simulate_and_write(
     (`reform.datasets.write_parquet` of a `reform.FrameBlock`), no `Frame` per instant. The file
     is the one the frame path writes, byte for byte. An annotation model records the simulated
     frames as it says; the recording, when asked for, is of the simulation itself.
+
+    ``made``: the episode's scenario when it is already made (episode 0's, made by
+    `_check_scenario` in this process), else it is made here.
     """
 
-    made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
+    if made is None:
+        made = prepare(spec.scenario, seed=episode_seed(spec.seed, episode), options=spec.options)
     sequence = _sequence_name(spec.scenario, episode)
     source = f"reform-sim generate --scenario {spec.scenario} --seed {spec.seed}"
     path = folder.shard(spec.scenario, episode)
@@ -654,10 +687,9 @@ def _simulate_and_write(
         block = FrameBlock.concatenate(
             list(episode_blocks(made, duration=spec.duration, rate=spec.rate, sequence=sequence))
         )
-        events = group_events_record(
-            partitions=block.present_groups(), times=block.time, sequences=block.sequence
-        )
-        summary = _summarise_block(spec, episode, block, events)
+        groups = block.present_groups()
+        events = group_events_record(partitions=groups, times=block.time, sequences=block.sequence)
+        summary = _summarise_block(spec, episode, block, events, groups)
         with atomic_path(path) as tmp:
             write_parquet(
                 block,
@@ -731,10 +763,21 @@ def _record(spec: GenerationSpec, episode: int, result: Any, path: Path) -> None
 
 
 def _run_batch(
-    episodes: Sequence[int], spec: GenerationSpec, folder: _Folder, save_recordings: bool
+    episodes: Sequence[int],
+    spec: GenerationSpec,
+    folder: _Folder,
+    save_recordings: bool,
+    first: Scenario | None = None,
 ) -> list[ShardSummary]:
-    """A batch of episodes, written straight into ``folder`` (local workers)."""
-    return [_write_episode(spec, folder, k, save_recordings=save_recordings) for k in episodes]
+    """A batch of episodes, written straight into ``folder`` (local workers). ``first``:
+    episode 0's made scenario, when the batch runs in the process that made it for its
+    checks (`_check_scenario`): it is not made a second time."""
+    return [
+        _write_episode(
+            spec, folder, k, save_recordings=save_recordings, made=first if k == 0 else None
+        )
+        for k in episodes
+    ]
 
 
 def _run_batch_bytes(
@@ -1999,7 +2042,9 @@ def generate_dataset(
                     folder,
                 )
             else:
-                shared = (spec, folder, save_recordings)
+                # One worker runs the batches in this process: episode 0's scenario, made for
+                # the checks above, is used as it is rather than made again.
+                shared = (spec, folder, save_recordings, made if workers == 1 else None)
                 results = (
                     b
                     for _, b in executor.imap_unordered(
