@@ -11,7 +11,8 @@ results out        ``--out DIR`` where a command writes several files, ``--out F
 seed               ``--seed S``, default 0
 counts             ``--episodes N``
 parallel work      ``--jobs N``, default every core (``DEFAULT_JOBS``) in every command (with
-                   ``--backend``/``--address`` where Ray can run it)
+                   ``--backend``/``--address`` where Ray can run it); ``benchmark`` starts no
+                   more workers than its cells pay for (``CELLS_PER_WORKER``)
 progress           bars and lines on stderr; ``--quiet`` silences them
 one recording      ``--save PATH.rrd``, ``--connect [--url URL]``, ``--serve``, ``--headless``
                    (the flags of ``rr.script_add_args``)

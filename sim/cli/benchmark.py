@@ -14,7 +14,7 @@ from tqdm import tqdm
 
 from reform.detectors import builtin_names, detector_info, detector_names
 from reform.splits import DEFAULT_TRAIN_FRACTION
-from sim.cli._benchmark import DEFAULT_DETECTORS, DEFAULT_OUT
+from sim.cli._benchmark import CELLS_PER_WORKER, DEFAULT_DETECTORS, DEFAULT_OUT
 from sim.cli._common import (
     CliError,
     check_backend,
@@ -32,6 +32,14 @@ from sim.experiments.benchmark import (
 )
 from sim.experiments.benchmark_report import write_report
 from sim.ticking import ticking
+
+
+def _jobs(args: argparse.Namespace, *, cells: int) -> int:
+    """``--jobs``, or by default every core but one process per `CELLS_PER_WORKER` cells: a run
+    too small to pay for worker processes runs in this one."""
+    if args.jobs is not None:
+        return job_count(args)
+    return max(1, min(job_count(args), cells // CELLS_PER_WORKER))
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -111,7 +119,7 @@ def _run(args: argparse.Namespace) -> int:
         benchmark = run_benchmark(
             datasets,
             detectors,
-            jobs=job_count(args),
+            jobs=_jobs(args, cells=len(datasets) * len(detectors)),
             backend=args.backend,
             address=args.address,
             progress=progress,

@@ -232,6 +232,19 @@ def test_jobs_left_out_is_every_core():
     assert job_count(build_parser().parse_args(["benchmark", "--jobs", "3"])) == 3
 
 
+def test_benchmark_starts_no_more_workers_than_its_cells_pay_for(monkeypatch):
+    from sim.cli._benchmark import CELLS_PER_WORKER
+    from sim.cli.benchmark import _jobs
+
+    monkeypatch.setattr("sim.executor.cpu_count", lambda: 8)
+    default = build_parser().parse_args(["benchmark"])
+    assert _jobs(default, cells=12) == 1  # the default detectors on the four datasets at hand
+    assert _jobs(default, cells=3 * CELLS_PER_WORKER) == 3
+    assert _jobs(default, cells=100 * CELLS_PER_WORKER) == 8  # every core at most
+    given = build_parser().parse_args(["benchmark", "--jobs", "4"])
+    assert _jobs(given, cells=1) == 4  # --jobs given is obeyed
+
+
 def _mistyped(parser: argparse.ArgumentParser) -> str:
     """A long flag of the parser with an extra letter, a prefix of none of its flags."""
     flag = sorted(f for f in _flags(parser) if f.startswith("--") and f != "--help")[0]
