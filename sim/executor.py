@@ -52,9 +52,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from tqdm import tqdm
-
 from reform.atomic import temporary_folder
+from sim.progress import progress_bar
 from sim.ticking import ticking
 
 __all__ = [
@@ -582,7 +581,7 @@ class Executor:
         units = list(units)
         results: list[Any] = [None] * len(units)
         with (
-            tqdm(
+            progress_bar(
                 total=len(units),
                 desc=desc,
                 unit=unit,

@@ -10,8 +10,6 @@ import shlex
 import sys
 from pathlib import Path
 
-from tqdm import tqdm
-
 from reform.detectors import builtin_names, detector_info, detector_names
 from reform.splits import DEFAULT_TRAIN_FRACTION
 from sim.cli._benchmark import CELLS_PER_WORKER, DEFAULT_DETECTORS, DEFAULT_OUT
@@ -31,6 +29,7 @@ from sim.experiments.benchmark import (
     run_benchmark,
 )
 from sim.experiments.benchmark_report import write_report
+from sim.progress import progress_bar
 from sim.ticking import ticking
 
 
@@ -102,7 +101,7 @@ def _run(args: argparse.Namespace) -> int:
     detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
 
-    bar = tqdm(
+    bar = progress_bar(
         total=len(datasets) * len(detectors),
         desc="benchmark",
         unit="cell",
