@@ -1,9 +1,11 @@
 """A truth-view dataset's counts (the card's totals, each shard's summary) are those of the
-frames its shards hold, and the shards do not depend on which process made episode 0's scenario
-(the one that checked it, or a worker)."""
+frames its shards hold, the shards do not depend on which process made episode 0's scenario
+(the one that checked it, or a worker), and a run leaves Python's cycle collector as it found
+it."""
 
 from __future__ import annotations
 
+import gc
 from collections import Counter
 from pathlib import Path
 
@@ -74,3 +76,17 @@ def test_episode_zero_made_by_a_worker_gives_the_same_shards(serial, tmp_path):
             shard_path(out, SCENARIO, k).read_bytes()
             == shard_path(serial, SCENARIO, k).read_bytes()
         )
+
+
+def test_the_collector_is_left_as_it_was(tmp_path):
+    assert gc.get_freeze_count() == 0
+    generate_quietly(SCENARIO, tmp_path / "a", episodes=1, seed=SEED, duration=5.0, options=OPTIONS)
+    assert gc.get_freeze_count() == 0  # what the run froze is collected again
+    gc.freeze()
+    try:
+        generate_quietly(
+            SCENARIO, tmp_path / "b", episodes=1, seed=SEED, duration=5.0, options=OPTIONS
+        )
+        assert gc.get_freeze_count() > 0  # the caller's own freeze is kept (not undone)
+    finally:
+        gc.unfreeze()
