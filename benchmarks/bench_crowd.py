@@ -152,7 +152,7 @@ def main() -> None:
     args = parser.parse_args()
     sizes = sorted(args.sizes)
     train, source = training_frames(args.quick)
-    model = Reform().fit(train)
+    model = Reform().fit(train).compile()  # a long run's pace from the first frame
     compiled = compile_classifier(model.classifier_, threshold=model.threshold)
     print(
         f"Crowds of {', '.join(map(str, sizes))} people (seed {SEED}); REFORM trained on {source}."

@@ -373,7 +373,7 @@ def main() -> None:
     training = simulate_episode(
         SCENARIO, seed=args.seed + 1, duration=train_duration, rate=TRAIN_RATE_HZ
     )
-    reform = Reform().fit(training.truth)
+    reform = Reform().fit(training.truth).compile()  # the pace of a long run
     print(
         f"REFORM (bagged trees) trained on seed {args.seed + 1}'s {train_duration / 60:g} "
         f"minutes at {TRAIN_RATE_HZ:g} Hz in {time.perf_counter() - start:.1f} s"
