@@ -1018,12 +1018,14 @@ def sim_to_real(
     rank_recorded = rank_agreement(
         ranked, weights, tuple(tests), simulated=tuple(party_views), benchmark=SIM_RECORDED
     )
+    say("  between the real datasets, each ranking the others")
     rank_between_real = tuple(
         rank_agreement(
             ranked, weights, [t for t in tests if t != name], simulated=(name,), benchmark=name
         )
         for name in (tests if len(tests) > 1 else ())
     )
+    say("  the configurations compared, and SALSA's training split ranking the rest")
     compared = {d: e for d, e in ranked.items() if roles.get(d) or d == recommended.label}
     rank_compared = rank_agreement(compared, weights, tuple(tests))
     never_trained = {d: e for d, e in ranked.items() if roles.get(d) != "salsa-trained"}
@@ -1043,12 +1045,15 @@ def sim_to_real(
     )
 
     say("calibration: the recommended recipe's data against each real dataset")
+    say(f"  shapes of {recommended.recipe}'s synthetic data")
     calibration = {
         f"synthetic: {recommended.recipe}": shape_statistics(training[recommended.recipe])
     }
+    say(f"  shapes of {SALSA_TRAIN_SET}")
     calibration[SALSA_TRAIN_SET] = shape_statistics(salsa_train)
     for name in real:
         if name != SALSA:
+            say(f"  shapes of {labels[name]}")
             calibration[labels[name]] = shape_statistics(tests[labels[name]])
 
     result = SimToReal(
