@@ -120,6 +120,9 @@ def open_recording(
         finally:
             if failed:  # Rerun's disconnect can wait for ever on a sink that failed
                 _disconnect_within(rec, DISCONNECT_S)
+                # and so can the flush of every stream Rerun makes at exit: the streams that
+                # did not fail were flushed and disconnected where they ended, as this one
+                rr.unregister_shutdown()
             else:
                 rec.disconnect()
 
