@@ -27,7 +27,7 @@ from collections.abc import Callable
 from types import FrameType
 from typing import Any, TypeVar
 
-__all__ = ["DURATION_FORM", "DeadlineExpired", "duration", "within"]
+__all__ = ["DURATION_FORM", "DeadlineExpired", "duration", "in_thread", "within"]
 
 DURATION_FORM = "a duration above zero (seconds, or with a unit: 90s, 2m, 500ms)"
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s|m|min)?\s*$")
@@ -82,7 +82,7 @@ def within(seconds: float, call: Callable[..., T], *args: Any, **kwargs: Any) ->
         raise ValueError(f"seconds must be above zero, got {seconds!r}")
     main = threading.current_thread() is threading.main_thread()
     if not main or not hasattr(signal, "setitimer"):
-        return _in_thread(seconds, call, *args, **kwargs)
+        return in_thread(seconds, call, *args, **kwargs)
     if signal.getitimer(signal.ITIMER_REAL)[0] > 0.0:  # inside another deadline: it holds
         return call(*args, **kwargs)
 
@@ -98,8 +98,21 @@ def within(seconds: float, call: Callable[..., T], *args: Any, **kwargs: Any) ->
         signal.signal(signal.SIGALRM, previous)
 
 
-def _in_thread(seconds: float, call: Callable[..., T], *args: Any, **kwargs: Any) -> T:
-    """``call`` in a daemon thread, abandoned (left running) at the deadline."""
+def in_thread(
+    seconds: float,
+    call: Callable[..., T],
+    /,
+    *args: Any,
+    thread_name: str = "deadline",
+    **kwargs: Any,
+) -> T:
+    """``call(*args, **kwargs)`` in a daemon thread (``thread_name``), abandoned (left running,
+    never keeping the process) when it has not returned within ``seconds``.
+
+    Raises:
+        DeadlineExpired: it did not return in time (its stack: the thread's frames then).
+        Whatever ``call`` raises.
+    """
     outcome: dict[str, Any] = {}
 
     def run() -> None:
@@ -108,7 +121,7 @@ def _in_thread(seconds: float, call: Callable[..., T], *args: Any, **kwargs: Any
         except BaseException as exc:  # noqa: BLE001 - raised again in the caller
             outcome["error"] = exc
 
-    thread = threading.Thread(target=run, name="deadline", daemon=True)
+    thread = threading.Thread(target=run, name=thread_name, daemon=True)
     thread.start()
     thread.join(seconds)
     if thread.is_alive():

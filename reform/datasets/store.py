@@ -25,13 +25,12 @@ from __future__ import annotations
 
 import os
 import re
-import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
-from reform.deadline import DURATION_FORM, duration
+from reform.deadline import DURATION_FORM, DeadlineExpired, duration, in_thread
 
 __all__ = [
     "TIMEOUT_S",
@@ -122,19 +121,11 @@ class Store:
 
     def _within(self, what: str, relative: str, call: Callable[..., Any], *args, **kwargs) -> Any:
         """``call(*args, **kwargs)``, or a `StoreError` once the store has not answered within
-        `timeout` seconds (the request is left to a thread that does not keep the process)."""
-        outcome: dict[str, Any] = {}
-
-        def run() -> None:
-            try:
-                outcome["value"] = call(*args, **kwargs)
-            except BaseException as exc:  # noqa: BLE001 - raised again in the caller
-                outcome["error"] = exc
-
-        thread = threading.Thread(target=run, name=f"store {what}", daemon=True)
-        thread.start()
-        thread.join(self.timeout)
-        if thread.is_alive():
+        `timeout` seconds (the request is left to a thread that does not keep the process:
+        `reform.deadline.in_thread`)."""
+        try:
+            return in_thread(self.timeout, call, *args, thread_name=f"store {what}", **kwargs)
+        except DeadlineExpired:
             loop = getattr(self.fs, "loop", None)  # an async filesystem's (s3fs, gcsfs)
             if loop is not None:  # its abandoned requests fail as the process ends: not news
                 loop.set_exception_handler(lambda loop, context: None)
@@ -142,10 +133,7 @@ class Store:
                 f"{self.url(relative)}: the store did not answer within {self.timeout:g} s "
                 f"({what}); check the store and the network, or give it longer with "
                 f"{TIMEOUT_VARIABLE}=SECONDS"
-            )
-        if "error" in outcome:
-            raise outcome["error"]
-        return outcome.get("value")
+            ) from None
 
     def _forget(self, relative: str) -> None:
         """Drops what the filesystem remembers of listings (another process may have written
