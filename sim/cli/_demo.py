@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import add_jobs_argument, run_with
-from sim.cli._grammar import add_out, add_quiet, add_seed, rename, setter
+from sim.cli._grammar import add_out, add_quiet, add_recordings, add_seed, rename, setter
 from sim.experiments.demo_files import DEFAULT_OUT
 
 DESCRIPTION = """\
@@ -36,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_jobs_argument(parser)
     parser.add_argument(
         "--quick", action="store_true", help="tiny budgets: a smoke run in well under a minute"
+    )
+    add_recordings(
+        parser, default=True, each="scenario, evaluation and HRI scene, and the stress curves"
     )
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.demo:run"))

@@ -27,6 +27,7 @@ def run(args: argparse.Namespace) -> int:
         quick=args.quick,
         progress=(lambda _line: None) if args.quiet else None,
         progress_bars=not args.quiet,
+        recordings=args.recordings,
     )
     written = write_report(result)
     seconds = time.perf_counter() - started
@@ -35,10 +36,13 @@ def run(args: argparse.Namespace) -> int:
     print(f"  report:     {written['markdown']}")
     print(f"  numbers:    {written['json']}")
     print(f"  model:      {result.model}")
-    print(f"  recordings: {len(result.recordings)} .rrd files in {out / 'recordings'}/")
-    rerun = rerun_in_this_shell()
-    for path in result.recordings:
-        print(f"    {rerun} {path}")
+    if args.recordings:
+        print(f"  recordings: {len(result.recordings)} .rrd files in {out / 'recordings'}/")
+        rerun = rerun_in_this_shell()
+        for path in result.recordings:
+            print(f"    {rerun} {path}")
+    else:
+        print("  recordings: none (--no-recordings)")
     print(f"  figures:    {len(result.figures)} PNG files")
     missing = [name for name in ("salsa", "babble") if name not in result.datasets]
     if missing:

@@ -319,6 +319,7 @@ def run_demo(
     quick: bool = False,
     progress: Callable[[str], None] | None = None,
     progress_bars: bool = True,
+    recordings: bool = True,
 ) -> DemoResult:
     """Runs the demo and writes its episodes, model, recordings and figures into ``out_dir``.
 
@@ -334,6 +335,8 @@ def run_demo(
         quick: tiny budgets (:data:`QUICK`) instead of :data:`FULL`.
         progress: ``callable(str)`` told each stage (default: print to stderr).
         progress_bars: tqdm bars on stderr.
+        recordings: write the Rerun recordings (False: none, and no ``recordings/`` folder;
+            every score is the same).
 
     Returns:
         The :class:`DemoResult`.
@@ -347,10 +350,11 @@ def run_demo(
     out = Path(out_dir)
     real = _find_datasets(datasets)
     out.mkdir(parents=True, exist_ok=True)
-    (out / RECORDINGS).mkdir(exist_ok=True)
+    if recordings:
+        (out / RECORDINGS).mkdir(exist_ok=True)
     (out / FIGURES).mkdir(exist_ok=True)
     stages = _Stages(7, say)
-    recordings: list[Path] = []
+    recorded: list[Path] = []
     figures: list[Path] = []
     say(
         f"reform-sim demo ({budget.name} budget, seed {seed}) -> {out}; real data: "
@@ -441,10 +445,11 @@ def run_demo(
         detectors={**{n: models[n] for n in CLASSIFIERS}, STRESS_GCFF: gcff},
         progress=lambda line: say(f"  stress: {line.strip()}"),  # tasks done, as they finish
     )
-    command = _command(out, datasets, seed, quick=quick)
+    command = _command(out, datasets, seed, quick=quick, recordings=recordings)
     stress_files = write_stress(stress, out / "stress", command=command)
     figures += [p for k, p in stress_files.items() if k.startswith("plot:")]
-    recordings.append(record_stress(stress, out / RECORDINGS / "stress.rrd"))
+    if recordings:
+        recorded.append(record_stress(stress, out / RECORDINGS / "stress.rrd"))
 
     # 6. The HRI re-enactment.
     stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
@@ -470,30 +475,41 @@ def run_demo(
         executor=Executor("local", jobs=1, progress=progress_bars),  # the episodes, as by default
     )
     write_markdown(out / "hri.md", hri_markdown(hri, command=command))
-    recordings += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
+    if recordings:
+        recorded += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
 
     # 7. Recordings, figures, report.
-    stages.begin("report", "writing recordings (.rrd), figures (PNG) and the report")
+    stages.begin(
+        "report",
+        "writing recordings (.rrd), figures (PNG) and the report"
+        if recordings
+        else "writing figures (PNG) and the report",
+    )
 
     reform_main = models[SAVED_CLASSIFIER]
     main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
     scenario_rows = []
-    for name in _bar(names, desc="recordings", show=progress_bars):
+    for name in _bar(names, desc="scenes", show=progress_bars):
         episode = episodes[name]
         frames = episode.truth
         reform_parts = run_detector(main_label, reform_main, frames)
         gcff_parts = run_detector(GCFF_LABEL, gcff, frames)
+        parts = {"reform": reform_parts, "gcff": gcff_parts}
+        annotated = any(f.annotated for f in frames)
+        scored = {d: evaluate(frames, p) for d, p in parts.items()} if annotated else {}
         path = out / RECORDINGS / f"scenario-{name}.rrd"
-        recorded = record_episode(
-            path,
-            frames,
-            detections={"reform": reform_parts, "gcff": gcff_parts},
-            events=episode.events,
-            model=episode.model,
-            seed=episode.scenario.seed,
-            name=f"scenario {name}",
-        )
-        recordings.append(path)
+        if recordings:
+            record_episode(
+                path,
+                frames,
+                detections=parts,
+                evaluations=scored,
+                events=episode.events,
+                model=episode.model,
+                seed=episode.scenario.seed,
+                name=f"scenario {name}",
+            )
+            recorded.append(path)
         k = _snapshot_index(frames)
         snapshot = frames[k]
         figures.append(
@@ -508,7 +524,6 @@ def run_demo(
                 title=f"{name}, t = {snapshot.time:g} s",
             )
         )
-        evaluations_here = recorded.evaluations
         scenario_rows.append(
             {
                 "scenario": name,
@@ -517,32 +532,33 @@ def run_demo(
                 "seconds": len(frames) / episode.dataset.metadata["rate_hz"],
                 "frames": len(frames),
                 "fformations_per_frame": float(np.mean([len(f.fformations()) for f in frames])),
-                "reform_f1": _f1(evaluations_here.get("reform")),
-                "gcff_f1": _f1(evaluations_here.get("gcff")),
-                "recording": str(path.relative_to(out)),
+                "reform_f1": _f1(scored.get("reform")),
+                "gcff_f1": _f1(scored.get("gcff")),
+                "recording": str(path.relative_to(out)) if recordings else None,
                 "figure": f"{FIGURES}/scenario-{name}.png",
             }
         )
-    for dataset, frames in tests.items():
-        slug = dataset.lower().replace(" ", "-")
-        path = out / RECORDINGS / f"evaluation-{slug}.rrd"
-        record_evaluation(
-            path,
-            frames,
-            {
-                "reform": predictions[(main_label, dataset)],
-                "gcff": predictions[(GCFF_LABEL, dataset)],
-            },
-            {
-                "reform": evaluations[(main_label, dataset)],
-                "gcff": evaluations[(GCFF_LABEL, dataset)],
-            },
-            name=f"evaluation {dataset}",
-            dataset=slug,
-            seed=seed,
-            classifier=reform_main.classifier_,
-        )
-        recordings.append(path)
+    if recordings:  # each test set's REFORM and GCFF, scored frame by frame
+        for dataset, frames in tests.items():
+            slug = dataset.lower().replace(" ", "-")
+            path = out / RECORDINGS / f"evaluation-{slug}.rrd"
+            record_evaluation(
+                path,
+                frames,
+                {
+                    "reform": predictions[(main_label, dataset)],
+                    "gcff": predictions[(GCFF_LABEL, dataset)],
+                },
+                {
+                    "reform": evaluations[(main_label, dataset)],
+                    "gcff": evaluations[(GCFF_LABEL, dataset)],
+                },
+                name=f"evaluation {dataset}",
+                dataset=slug,
+                seed=seed,
+                classifier=reform_main.classifier_,
+            )
+            recorded.append(path)
     bars = {
         dataset: [
             Bar(detector, 100 * evaluations[(detector, dataset)].at(T_TWO_THIRDS).f1)
@@ -565,7 +581,7 @@ def run_demo(
     return DemoResult(
         out_dir=out,
         model=model_path,
-        recordings=tuple(recordings),
+        recordings=tuple(recorded),
         figures=tuple(figures),
         scores=scores,
         timings=timings,
@@ -615,7 +631,12 @@ def _f1(evaluation: Evaluation | None) -> float | None:
 
 
 def _command(
-    out: Path, datasets: str | os.PathLike[str] | None, seed: int, *, quick: bool = False
+    out: Path,
+    datasets: str | os.PathLike[str] | None,
+    seed: int,
+    *,
+    quick: bool = False,
+    recordings: bool = True,
 ) -> str:
     words = ["reform-sim", "demo"]
     if datasets is not None:
@@ -625,4 +646,6 @@ def _command(
         words += ["--seed", str(seed)]
     if quick:
         words.append("--quick")
+    if not recordings:
+        words.append("--no-recordings")
     return shlex.join(words)

@@ -41,6 +41,7 @@ def to_markdown(result: DemoResult) -> str:
     """The report page: what ran, the scenarios, the training set, the scores, the stress
     curves, the HRI re-enactment and where every file is."""
     budget = result.budget
+    recorded = bool(result.recordings)
     lines = ["# reform-sim demo", ""]
     lines += command_block(result.command)
     lines += [
@@ -59,8 +60,8 @@ def to_markdown(result: DemoResult) -> str:
         "Every registered scenario, simulated briefly in MuJoCo (ground truth), with the groups "
         f"REFORM ({SAVED_TEXT}, trained on the synthetic set below) and GCFF (the paper's "
         "setting) find. F1 at T = 2/3 over the episode's annotated frames (`-`: no "
-        "F-formation to find and none found scores no frame). Open a recording with "
-        "`rerun <file>`.",
+        "F-formation to find and none found scores no frame)."
+        + (" Open a recording with `rerun <file>`." if recorded else ""),
         "",
     ]
     rows = [
@@ -72,7 +73,7 @@ def to_markdown(result: DemoResult) -> str:
             f"{s['fformations_per_frame']:.2f}",
             percent(s["reform_f1"]),
             percent(s["gcff_f1"]),
-            f"[{s['recording']}]({s['recording']})",
+            f"[{s['recording']}]({s['recording']})" if s["recording"] else "-",
         ]
         for s in result.scenarios
     ]
@@ -160,7 +161,8 @@ def to_markdown(result: DemoResult) -> str:
         "",
         "F1 of the demo's REFORM models and GCFF as tracking gets worse and crowds change, "
         "scored on held-out `mingle` parties (`sim.experiments.stress.run_stress`). Full tables: "
-        "[`stress/stress.md`](stress/stress.md); curves also in `recordings/stress.rrd`.",
+        "[`stress/stress.md`](stress/stress.md)"
+        + ("; curves also in `recordings/stress.rrd`." if recorded else "."),
         "",
     ]
     stress = result.stress
@@ -185,8 +187,12 @@ def to_markdown(result: DemoResult) -> str:
         "",
         "The three proof-of-concept scenes with the Directions Robot (two people and the robot "
         "converse; two people converse, the robot left out; people walk past), "
-        f"{hri.seeds} episode(s) each. Full page: [`hri.md`](hri.md); recordings of each scene "
-        "from the robot's view under `recordings/hri/`.",
+        f"{hri.seeds} episode(s) each. Full page: [`hri.md`](hri.md)"
+        + (
+            "; recordings of each scene from the robot's view under `recordings/hri/`."
+            if recorded
+            else "."
+        ),
         "",
     ]
     rows = []

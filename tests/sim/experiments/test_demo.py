@@ -127,20 +127,25 @@ def test_model_reproduces_the_reported_scores(demo) -> None:
     assert train and card["parameters"]["seed"] != train_card["parameters"]["seed"]
 
 
-def test_without_real_data(tmp_path) -> None:
-    """No datasets: the synthetic parts run, the real rows are left out."""
+def test_without_real_data_or_recordings(tmp_path, request) -> None:
+    """No datasets and --no-recordings: the synthetic parts run, the real rows are left out,
+    no recording is written, and every scenario scores as in a run that records."""
     result = run_demo(
         out_dir=tmp_path / "out",
         datasets=None,
-        seed=1,
+        seed=3,
         jobs=1,
         quick=True,
         progress=lambda line: None,
         progress_bars=False,
+        recordings=False,
     )
     assert result.datasets == ()
     assert {d for _, d in result.scores} == {"held-back synthetic"}
     assert result.model.is_file()
+    assert result.recordings == () and not list((tmp_path / "out").rglob("*.rrd"))
+    assert not (tmp_path / "out" / "recordings").exists()
+    assert result.command.endswith("--quick --no-recordings")
     assert not (tmp_path / "out" / "report.md").exists()  # the run writes no report
     written = write_report(result)
     assert written == {
@@ -148,8 +153,16 @@ def test_without_real_data(tmp_path) -> None:
         "json": tmp_path / "out" / "results.json",
     }
     data = json.loads(written["json"].read_text())
-    assert data["files"]["report"] == "report.md"
-    assert f"`{RECOMMENDED.recipe}`" in written["markdown"].read_text()
+    assert data["files"]["report"] == "report.md" and data["files"]["recordings"] == []
+    page = written["markdown"].read_text()
+    assert f"`{RECOMMENDED.recipe}`" in page and "recordings/" not in page
+    try:  # the same seed, recorded (needs the real datasets, which scenarios do not use)
+        recorded = json.loads((request.getfixturevalue("demo") / "results.json").read_text())
+    except pytest.skip.Exception:
+        return
+    f1 = [(s["scenario"], s["reform_f1"], s["gcff_f1"]) for s in data["scenarios"]]
+    assert f1 == [(s["scenario"], s["reform_f1"], s["gcff_f1"]) for s in recorded["scenarios"]]
+    assert any(s["reform_f1"] is not None for s in data["scenarios"])
 
 
 def test_budgets() -> None:
