@@ -23,10 +23,12 @@ Backends (:data:`BACKENDS`):
   run's, with where a crash happened) and, for SIGKILL, the likely cause.
 * ``"ray"``: one Ray task per unit on every CPU of the cluster at ``address``, of the Ray
   instance this process has already joined, or of one started on this machine. A unit whose
-  node or result is lost runs again, up to :data:`MAX_RETRIES` times; one whose worker process
-  died runs again once, and a second death is blamed on the unit (named, as `WorkerDied`), as
-  is a worker Ray stopped for lack of memory. An exception the function raises is not retried
-  (it would raise again): the run stops with that exception, as on the local backend.
+  node or result is lost runs again, up to :data:`MAX_RETRIES` times, with one line on stderr
+  naming the node (a cluster left with no CPU is waited for :data:`NODE_WAIT_S` seconds, then
+  the run stops with one `ClusterError`); one whose worker process died runs again once, and a
+  second death is blamed on the unit (named, as `WorkerDied`), as is a worker Ray stopped for
+  lack of memory. An exception the function raises is not retried (it would raise again): the
+  run stops with that exception, as on the local backend.
 
 Arguments every unit shares (``shared``: fitted detectors, a training set) are sent once: Ray
 puts them in its object store once and each task reads them from there.
@@ -82,6 +84,9 @@ NOTE_POLL_S = 0.1  # seconds between a run's looks for units its workers start
 NOTES_FOLDER = "reform-sim"  # in the system's temporary folder: where runs note their units
 PARENT_CHECK_S = 0.5  # seconds between a local worker's looks at its parent (not on Linux)
 EXIT_ORPHANED = 1  # exit status of a local worker whose parent is gone
+NODE_CHECK_S = 5.0  # seconds between a Ray run's looks at its cluster's CPUs while it waits
+NODE_WAIT_S = 300.0  # seconds a Ray run that lost a node waits for a CPU when none is left
+_CRASHED = "WorkerCrashedError"  # a Ray unit whose worker process died: run again once
 
 
 def _last_line(exc: BaseException) -> str:
@@ -675,7 +680,11 @@ class Executor:
         """Every unit a Ray task, run again here (not by Ray: the reason decides) when its
         worker is lost: a lost node or object up to :data:`MAX_RETRIES` times; a worker process
         that died under the unit once (the same unit ending a second worker is the unit's doing:
-        a crash in compiled code, an exit, memory); never when Ray stopped it for memory."""
+        a crash in compiled code, an exit, memory); never when Ray stopped it for memory.
+
+        Each unit run again is one line on stderr naming why (the node lost, by its IP and ID as
+        Ray gives them). Once a node was lost, a run whose cluster has no CPU left waits
+        :data:`NODE_WAIT_S` seconds for a node to join, then stops in one line."""
         ray = self._connect()
         if self._task is None:
             self._task = ray.remote(num_cpus=1, max_retries=0, retry_exceptions=False)(_apply)
@@ -685,15 +694,28 @@ class Executor:
             index[self._task.remote(function, item, *refs)] = k
         pending = list(index)
         lost = dict.fromkeys(range(len(units)), 0)
+        nodes: dict[int, list[str]] = {}  # unit -> the nodes lost while they ran it, in order
+        starved_since: float | None = None  # when the cluster was first seen with no CPU
         try:
             while pending:
-                done, pending = ray.wait(pending, num_returns=1)
+                done, pending = ray.wait(pending, num_returns=1, timeout=NODE_CHECK_S)
+                if not done:
+                    if nodes and _cluster_cpus(ray) == 0:
+                        starved_since = starved_since or time.monotonic()
+                        if time.monotonic() - starved_since >= NODE_WAIT_S:
+                            raise _starved(index, units, describe, nodes)
+                    else:
+                        starved_since = None
+                    continue
                 k = index.pop(done[0])
-                what = describe(units[k]) if describe is not None else f"unit {k}"
+                what = _name(units, k, describe)
                 try:
-                    result = self._get(ray, done[0], what, lost[k])
-                except _Lost:
+                    result = self._get(ray, done[0], what, lost[k], nodes.get(k, []))
+                except _Lost as exc:
                     lost[k] += 1
+                    if exc.node is not None:
+                        nodes.setdefault(k, []).append(exc.node)
+                    _say(_rerun_line(ray, what, exc, lost[k]))
                     again = self._task.remote(function, units[k], *refs)
                     index[again] = k
                     pending.append(again)
@@ -703,9 +725,10 @@ class Executor:
             for ref in pending:  # stopped early (an error, Ctrl-C): the rest need not run
                 ray.cancel(ref, force=True)
 
-    def _get(self, ray: Any, ref: Any, what: str, lost: int) -> Any:
+    def _get(self, ray: Any, ref: Any, what: str, lost: int, nodes: list[str]) -> Any:
         """The task's result; its own error raised as it was; `_Lost` when it should run
-        again (``lost``: times its worker was lost before); else one line naming ``what``."""
+        again (``lost``: times its worker was lost before, ``nodes``: the nodes lost under it);
+        else one line naming ``what``."""
         from ray.exceptions import OutOfMemoryError, RayError, RayTaskError, WorkerCrashedError
 
         try:
@@ -718,6 +741,7 @@ class Executor:
         except RayError as exc:
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             why = f"{type(exc).__name__}: {first}"
+            node = _lost_node(exc)
             if isinstance(exc, OutOfMemoryError):
                 raise WorkerDied(
                     f"Ray stopped the worker that ran {what} for lack of memory ({why}); give "
@@ -725,7 +749,7 @@ class Executor:
                 ) from None
             if isinstance(exc, WorkerCrashedError):
                 if lost < 1:
-                    raise _Lost from None
+                    raise _Lost(None, _CRASHED) from None
                 raise WorkerDied(
                     f"{what} ended the Ray worker process that ran it, twice ({why}): the unit "
                     "itself ends its process (a crash in compiled code it calls, an exit, or "
@@ -733,11 +757,103 @@ class Executor:
                     "(python-core-worker-*.log) has its last words"
                 ) from None
             if lost < MAX_RETRIES:
-                raise _Lost from None
+                raise _Lost(node, type(exc).__name__) from None
+            if node is not None:
+                nodes = [*nodes, node]
+            if nodes:
+                why = f"the cluster lost {_nodes(nodes)}, which ran it"
+            times = "once" if MAX_RETRIES == 0 else f"{MAX_RETRIES + 1} times"
             raise ClusterError(
-                f"{what} was lost {MAX_RETRIES + 1} times on the Ray cluster ({why})"
+                f"{what} was lost {times} on the Ray cluster ({why}): its nodes "
+                "keep failing (`ray list nodes --detail` says why: preemption, memory, a crashed "
+                "raylet); run the command again on a steadier cluster"
             ) from None
 
 
 class _Lost(Exception):
-    """A Ray task's worker was lost and the unit should run again."""
+    """A Ray task's worker was lost and the unit should run again: ``node``, the node lost
+    (its IP and ID as Ray gives them) when that was the cause, else ``cause``, Ray's error."""
+
+    def __init__(self, node: str | None, cause: str) -> None:
+        super().__init__(node or cause)
+        self.node = node
+        self.cause = cause
+
+
+def _name(units: Sequence[Any], k: int, describe: Callable[[Any], str] | None) -> str:
+    return describe(units[k]) if describe is not None else f"unit {k}"
+
+
+_NODE_DIED = re.compile(r"Node IP: (?P<ip>[^\s,]+), node ID: (?P<id>[0-9a-fA-F]+)")
+
+
+def _lost_node(exc: BaseException) -> str | None:
+    """The node a Ray error says was lost, as ``IP (ID id)``; None for another error. Ray
+    names it in its text only (`ray.exceptions.NodeDiedError`)."""
+    found = _NODE_DIED.search(str(exc))
+    if found is None:
+        return None
+    return f"{found['ip']} (ID {found['id']})"
+
+
+def _nodes(names: Sequence[str]) -> str:
+    unique = list(dict.fromkeys(names))
+    return f"node {unique[0]}" if len(unique) == 1 else f"nodes {', '.join(unique)}"
+
+
+def _cluster_cpus(ray: Any) -> float:
+    """The CPUs of the cluster's live nodes."""
+    return float(ray.cluster_resources().get("CPU", 0))
+
+
+def _say(line: str) -> None:
+    """A line on stderr, above any progress bar being drawn."""
+    tqdm = sys.modules.get("tqdm")
+    if tqdm is not None:
+        tqdm.tqdm.write(line, file=sys.stderr)
+    else:
+        print(line, file=sys.stderr, flush=True)
+
+
+def _rerun_line(ray: Any, what: str, lost: _Lost, times: int) -> str:
+    """The line a unit run again gets: what was lost, and where the unit runs now."""
+    if lost.cause == _CRASHED:
+        return (
+            f"reform-sim: the Ray worker process that ran {what} died; it runs again once (a "
+            "second death is blamed on it)"
+        )
+    if lost.node is None:
+        return (
+            f"reform-sim: Ray lost {what} ({lost.cause}); it runs again ({times} of {MAX_RETRIES})"
+        )
+    if _cluster_cpus(ray) == 0:
+        where = (
+            f"when a node with a CPU joins the cluster: none is left, and the run waits "
+            f"{NODE_WAIT_S:g} s for one"
+        )
+    else:
+        where = "on the cluster's other nodes"
+    return (
+        f"reform-sim: the Ray cluster lost node {lost.node} while it ran {what}; it runs again "
+        f"({times} of {MAX_RETRIES}) {where}"
+    )
+
+
+def _starved(
+    index: Mapping[Any, int],
+    units: Sequence[Any],
+    describe: Callable[[Any], str] | None,
+    nodes: Mapping[int, list[str]],
+) -> ClusterError:
+    """The error of a run whose cluster lost its nodes and has had no CPU for
+    :data:`NODE_WAIT_S` seconds: the unit waiting to run again, the nodes lost, what to do."""
+    waiting = sorted(set(index.values()))
+    again = [k for k in waiting if k in nodes] or waiting
+    what = _name(units, again[0], describe)
+    more = f" (and {len(waiting) - 1} more unit(s))" if len(waiting) > 1 else ""
+    lost = _nodes([node for k in sorted(nodes) for node in nodes[k]])
+    return ClusterError(
+        f"{what}{more} cannot run: the Ray cluster lost {lost}, which ran it, and has had no "
+        f"node with a CPU for {NODE_WAIT_S:g} s; add nodes to the cluster (`ray start "
+        "--address HEAD:PORT` on another machine) and run the command again"
+    )

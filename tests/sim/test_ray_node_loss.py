@@ -1,0 +1,120 @@
+"""A Ray node lost while it runs a unit: the unit runs again on the nodes left, with one line on
+stderr naming the node and the unit; with no node left, or its retries spent, the run stops in
+one line naming the node(s), the unit and what to do. A real cluster of several Ray nodes on
+this machine (`ray.cluster_utils.Cluster`), nodes added and removed as a test goes."""
+
+from __future__ import annotations
+
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+import sim.executor
+from sim.executor import ClusterError, Executor
+
+START_S = 60.0  # at most this long for a unit to start on a new node (the machine is shared)
+STORE_BYTES = 80 * 2**20  # each node's object store
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A Ray cluster whose head has no CPU (units run only on the nodes a test adds), joined by
+    this process; shut down, with every process it started, when the module is done. The
+    tests' local Ray instance, if this process had joined it, is left first (one per process)."""
+    ray = pytest.importorskip("ray")
+    from ray.cluster_utils import Cluster
+
+    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    if ray.is_initialized():
+        ray.shutdown()
+    cluster = Cluster(
+        initialize_head=True,
+        head_node_args=dict(num_cpus=0, include_dashboard=False, object_store_memory=STORE_BYTES),
+    )
+    try:
+        ray.init(address=cluster.address, log_to_driver=False)
+        yield cluster
+    finally:
+        ray.shutdown()
+        cluster.shutdown()
+
+
+def _runs_on(x: int, folder: str, doomed: str) -> int:
+    """Notes which node runs unit ``x`` (a file named for the node's ID), then waits there
+    for the node's end on the ``doomed`` node, or a moment elsewhere."""
+    import ray
+
+    node = ray.get_runtime_context().get_node_id()
+    (Path(folder) / node).write_text(str(x))
+    time.sleep(START_S if node == doomed else 0.2)
+    return x
+
+
+def _lose_node_under(cluster, units: list[int], folder: Path) -> tuple[object, int, object]:
+    """Runs ``units`` on the cluster with one node added, and removes that node while it runs a
+    unit: ``(the node, the unit it ran, the run's future)``."""
+    doomed = cluster.add_node(num_cpus=1, object_store_memory=STORE_BYTES)
+    cluster.wait_for_nodes()
+    pool = ThreadPoolExecutor(1)
+    executor = Executor("ray", progress=False)
+    run = pool.submit(executor.map, _runs_on, units, shared=(str(folder), doomed.node_id))
+    pool.shutdown(wait=False)
+    note = folder / doomed.node_id
+    deadline = time.monotonic() + START_S
+    while not note.exists() and time.monotonic() < deadline and not run.done():
+        time.sleep(0.05)
+    assert note.exists(), "no unit started on the node added"
+    cluster.remove_node(doomed)
+    return doomed, int(note.read_text()), run
+
+
+def _named(node) -> str:
+    return f"{node.node_ip_address} (ID {node.node_id})"
+
+
+def test_work_whose_node_is_lost_completes_on_the_others(cluster, tmp_path, capsys) -> None:
+    kept = cluster.add_node(num_cpus=1, object_store_memory=STORE_BYTES)
+    try:
+        doomed, unit, run = _lose_node_under(cluster, [0, 1], tmp_path)
+        assert run.result(timeout=START_S) == [0, 1]
+    finally:
+        cluster.remove_node(kept)
+    assert (tmp_path / kept.node_id).read_text() in ("0", "1")
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [
+        f"reform-sim: the Ray cluster lost node {_named(doomed)} while it ran unit {unit}; it "
+        f"runs again (1 of {sim.executor.MAX_RETRIES}) on the cluster's other nodes"
+    ]
+
+
+def test_a_run_with_no_node_left_stops_in_one_line(cluster, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sim.executor, "NODE_WAIT_S", 1.0)
+    monkeypatch.setattr(sim.executor, "NODE_CHECK_S", 0.2)
+    doomed, unit, run = _lose_node_under(cluster, [0], tmp_path)
+    with pytest.raises(ClusterError) as info:
+        run.result(timeout=START_S)
+    assert str(info.value) == (
+        f"unit 0 cannot run: the Ray cluster lost node {_named(doomed)}, which ran it, and has "
+        "had no node with a CPU for 1 s; add nodes to the cluster (`ray start --address "
+        "HEAD:PORT` on another machine) and run the command again"
+    )
+    assert capsys.readouterr().err.splitlines() == [
+        f"reform-sim: the Ray cluster lost node {_named(doomed)} while it ran unit 0; it runs "
+        "again (1 of 3) when a node with a CPU joins the cluster: none is left, and the run "
+        "waits 1 s for one"
+    ]
+
+
+def test_a_unit_whose_retries_run_out_is_one_line(cluster, tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(sim.executor, "MAX_RETRIES", 0)
+    doomed, unit, run = _lose_node_under(cluster, [0], tmp_path)
+    with pytest.raises(ClusterError) as info:
+        run.result(timeout=START_S)
+    assert str(info.value) == (
+        f"unit 0 was lost once on the Ray cluster (the cluster lost node {_named(doomed)}, which "
+        "ran it): its nodes keep failing (`ray list nodes --detail` says why: preemption, "
+        "memory, a crashed raylet); run the command again on a steadier cluster"
+    )
