@@ -8,9 +8,17 @@ running then (so that a caller can say which of its data the call held).
 In the main thread the call runs where it is (its ``sys.exit``, ``os._exit`` and Ctrl-C behave as
 they would without a deadline) and a timer signal (``SIGALRM``) raises `DeadlineExpired` inside
 it at the deadline, which stops it. Elsewhere (another thread, a platform without the signal) it
-runs in a daemon thread of its own, abandoned at the deadline. Neither can stop a call stuck in
-compiled code that never releases the interpreter. A call made while another's deadline runs
-(one within another) keeps the outer deadline.
+runs in a daemon thread of its own, abandoned at the deadline. A call made while another's
+deadline runs (one within another) keeps the outer deadline.
+
+Neither can stop a call stuck in compiled code that never returns to the interpreter (a
+deadlock, an endless loop in C holding the interpreter's lock): the signal's handler never
+runs. For that, a command may turn on :func:`hard_stops`: a main-thread deadline given a
+``stuck`` line also arms a watcher process, which, when the call has still not returned
+:data:`STUCK_GRACE_S` seconds after its deadline, writes that line on stderr and ends this
+process (SIGKILL, the one signal that needs no cooperation from it). The watcher is started
+once, the first time it is needed, costs two short pipe writes per call, and ends when this
+process does.
 
 Durations are read by :func:`duration`: seconds (``30``, ``1.5``) or with a unit (``90s``, ``2m``,
 ``500ms``); every deadline a user gives is read by it and refused in the words of
@@ -19,20 +27,35 @@ Durations are read by :func:`duration`: seconds (``30``, ``1.5``) or with a unit
 
 from __future__ import annotations
 
+import atexit
+import contextlib
+import os
 import re
 import signal
 import sys
 import threading
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
 from types import FrameType
 from typing import Any, TypeVar
 
-__all__ = ["DURATION_FORM", "DeadlineExpired", "duration", "in_thread", "within"]
+__all__ = [
+    "DURATION_FORM",
+    "STUCK_GRACE_S",
+    "DeadlineExpired",
+    "duration",
+    "hard_stops",
+    "in_thread",
+    "within",
+]
 
 DURATION_FORM = "a duration above zero (seconds, or with a unit: 90s, 2m, 500ms)"
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s|m|min)?\s*$")
 _UNIT_S = {None: 1.0, "s": 1.0, "ms": 1e-3, "m": 60.0, "min": 60.0}
 _STACK_DEPTH = 64  # Python frames kept of a call stopped at its deadline, innermost first
+# Seconds past its deadline a call may go on holding the interpreter before hard_stops ends the
+# process: room for a busy machine to run the deadline's own handler, which stops it cleanly.
+STUCK_GRACE_S = 10.0
 
 T = TypeVar("T")
 
@@ -70,8 +93,15 @@ def _stack(frame: FrameType | None) -> list[FrameType]:
     return out
 
 
-def within(seconds: float, call: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+def within(
+    seconds: float, call: Callable[..., T], /, *args: Any, stuck: str | None = None, **kwargs: Any
+) -> T:
     """``call(*args, **kwargs)``, stopped when it has not returned within ``seconds``.
+
+    Args:
+        stuck: under :func:`hard_stops`, the line said before the process is ended when the
+            call has not returned :data:`STUCK_GRACE_S` seconds after its deadline (it holds
+            the interpreter in compiled code); None: no such backstop.
 
     Raises:
         DeadlineExpired: it did not return in time (see the module notes).
@@ -90,12 +120,119 @@ def within(seconds: float, call: Callable[..., T], *args: Any, **kwargs: Any) ->
         raise DeadlineExpired(seconds, _stack(frame))
 
     previous = signal.signal(signal.SIGALRM, expire)
+    watched = stuck is not None and _WATCH.arm(seconds + STUCK_GRACE_S, stuck)
     signal.setitimer(signal.ITIMER_REAL, seconds)
     try:
         return call(*args, **kwargs)
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, previous)
+        if watched:
+            _WATCH.clear()
+
+
+@contextlib.contextmanager
+def hard_stops(prefix: str) -> Iterator[None]:
+    """Within: a call :func:`within` stops with a ``stuck`` line is ended, process and all,
+    when it holds the interpreter past its deadline (see the module notes); the line is written
+    after ``prefix`` (``"reform-sim detect: error: "``)."""
+    before = _WATCH.prefix
+    _WATCH.prefix = prefix
+    try:
+        yield
+    finally:
+        _WATCH.prefix = before
+
+
+# The watcher: reads "arm SECONDS LINE" and "clear" on its stdin; at an armed moment (the
+# monotonic clock, shared by every process of the machine) it writes LINE on its stderr (this
+# process's) and kills PARENT; at the end of its stdin (this process gone) it ends.
+_WATCHER = """\
+import os, select, signal, sys, time
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+parent, pending, armed = int(sys.argv[1]), b"", None
+while True:
+    wait = None if armed is None else max(0.0, armed[0] - time.monotonic())
+    if not select.select([0], [], [], wait)[0]:
+        os.write(2, armed[1] + b"\\n")
+        os.kill(parent, signal.SIGKILL)
+        break
+    chunk = os.read(0, 65536)
+    if not chunk:
+        break
+    *lines, pending = (pending + chunk).split(b"\\n")
+    for line in lines:
+        word, _, rest = line.partition(b" ")
+        if word == b"arm":
+            at, _, text = rest.partition(b" ")
+            armed = (float(at), text)
+        elif word == b"clear":
+            armed = None
+"""
+
+
+class _Watch:
+    """This process's watcher (started at the first `arm` under `hard_stops`)."""
+
+    def __init__(self) -> None:
+        self.prefix: str | None = None
+        self._process: Any = None  # a subprocess.Popen
+        self._owner = 0
+
+    def arm(self, seconds: float, line: str) -> bool:
+        """Arms the watcher to say ``line`` and end this process in ``seconds``; False (nothing
+        armed) outside `hard_stops` or when no watcher can be started."""
+        if self.prefix is None:
+            return False
+        text = " ".join(f"{self.prefix}{line}".split())
+        at = time.monotonic() + seconds
+        return self._send(f"arm {at:.3f} {text}\n".encode(errors="replace"))
+
+    def clear(self) -> None:
+        self._send(b"clear\n")
+
+    def _send(self, data: bytes) -> bool:
+        process = self._started()
+        if process is None or process.stdin is None:
+            return False
+        try:
+            process.stdin.write(data)
+            process.stdin.flush()
+        except OSError:  # the watcher is gone: calls go unwatched, as without hard_stops
+            return False
+        return True
+
+    def _started(self) -> Any:
+        if self._process is not None and self._owner == os.getpid():
+            return self._process
+        import subprocess  # here: a process that arms no watcher never imports it
+
+        try:  # -I -S: no user site, no site packages: a bare interpreter starts in milliseconds
+            self._process = subprocess.Popen(
+                [sys.executable, "-I", "-S", "-c", _WATCHER, str(os.getpid())],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.DEVNULL,
+                close_fds=True,
+            )
+        except OSError:
+            self._process = None
+            return None
+        self._owner = os.getpid()
+        atexit.register(self._stop)
+        return self._process
+
+    def _stop(self) -> None:
+        process, self._process = self._process, None
+        if process is None or self._owner != os.getpid():
+            return
+        with contextlib.suppress(OSError):
+            if process.stdin is not None:
+                process.stdin.close()  # its end of input: it ends
+        with contextlib.suppress(Exception):  # subprocess.TimeoutExpired: left to end alone
+            process.wait(timeout=5.0)
+
+
+_WATCH = _Watch()
 
 
 def in_thread(

@@ -43,7 +43,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from reform.deadline import DeadlineExpired, within
+from reform.deadline import STUCK_GRACE_S, DeadlineExpired, within
 
 if TYPE_CHECKING:
     from reform.frame import Frame, Group
@@ -78,6 +78,16 @@ IMPORT_TIMEOUT_S = 60.0  # seconds to import a detector's module, and again to c
 PREDICT_TIMEOUT_S = 5.0  # seconds a frame, plus PREDICT_TIMEOUT_S_PER_PAIR for each pair in it
 PREDICT_TIMEOUT_S_PER_PAIR = 0.05  # seconds a frame for each pair of people in it
 _TIMEOUT_HINT = "give it longer with --detector-timeout DURATION"
+
+
+def _stuck(what: str, seconds: float) -> str:
+    """The line `reform.deadline.hard_stops` says of ``what`` (``"detector 'x': ... (predict
+    on 12 frames)"``) still running in compiled code after its deadline of ``seconds``."""
+    return (
+        f"{what} did not finish within {seconds:g} s and had not returned to Python "
+        f"{STUCK_GRACE_S:g} s later (stuck in compiled code, where it cannot be stopped): the "
+        f"process was ended; {_TIMEOUT_HINT}"
+    )
 
 
 class DetectorError(ValueError):
@@ -518,7 +528,8 @@ def _import(name: str, spec: str, deadline_s: float) -> Any:
     ``deadline_s`` seconds."""
     module_name, attribute = _parse_spec(spec)
     try:
-        module = within(deadline_s, importlib.import_module, module_name)
+        stuck = _stuck(f"detector {name!r}: the import of module {module_name!r}", deadline_s)
+        module = within(deadline_s, importlib.import_module, module_name, stuck=stuck)
     except DeadlineExpired as exc:
         raise DetectorError(
             f"detector {name!r}: the detector did not finish within {exc.seconds:g} s (import "
@@ -621,7 +632,8 @@ def make_detector(
         )
     _check_options(name, target, options)
     try:
-        detector = within(deadline_s, target, **options)
+        stuck = _stuck(f"detector {name!r}: its factory {label}", deadline_s)
+        detector = within(deadline_s, target, stuck=stuck, **options)
     except DeadlineExpired as exc:
         raise DetectorError(
             f"detector {name!r}: the detector did not finish within {exc.seconds:g} s (build: "
@@ -791,12 +803,13 @@ def run_detector(
     frames = list(frames)
     unlabelled = frames if oracle else _without_truth(frames)
     seconds = predict_deadline(frames, deadline_s)
+    of = f" of {source}" if source else ""
+    stuck = _stuck(f"{name}: predict on {len(frames)} frame(s){of}", seconds)
     try:
-        partitions = within(seconds, lambda: _read_lazy(predict(unlabelled)))
+        partitions = within(seconds, lambda: _read_lazy(predict(unlabelled)), stuck=stuck)
     except DeadlineExpired as exc:
         held = _held(exc.stack, unlabelled)
         where = "the batch" if held is None else _frame_text(held, frames[held])
-        of = f" of {source}" if source else ""
         batch = f", {len(frames)} frames in one call" if len(frames) > 1 else ""
         raise DetectorError(
             f"{name}: the detector did not finish within {exc.seconds:g} s (predict on "

@@ -7,6 +7,7 @@ so that ``reform-sim --help`` answers at once.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Sequence
@@ -163,7 +164,14 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
     os.environ.setdefault("RUST_LOG", RERUN_LOG)
     try:
         check_jobs(args)
-        with os_exit_reported(args.command), sigterm_stops(), sigint_to_main_only():
+        with contextlib.ExitStack() as guards:
+            guards.enter_context(os_exit_reported(args.command))
+            guards.enter_context(sigterm_stops())
+            guards.enter_context(sigint_to_main_only())
+            if report_interrupt:  # the console command: a stuck detector may end the process
+                from reform.deadline import hard_stops
+
+                guards.enter_context(hard_stops(f"reform-sim {args.command}: error: "))
             return int(args.handler(args) or 0)
     except ProcessExit as exc:  # someone's os._exit, outside a detector's guard
         print(

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import importlib
 import re
+import signal
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -18,7 +20,7 @@ from cli_errors import cli_error, run_cli
 from killed_run import CLI
 from quiet_generate import generate_quietly
 
-from reform.deadline import DeadlineExpired, duration, within
+from reform.deadline import STUCK_GRACE_S, DeadlineExpired, duration, within
 from sim.cli import main
 
 DEADLINE_S = 0.5  # seconds: the deadline the tests give (4 frames: 2 s to predict them)
@@ -37,6 +39,19 @@ PLUGINS = {
         "def make():\n    return Stuck()\n"
     ),
 }
+# Waits for ever in compiled code, holding the interpreter: a mutex locked twice by one thread
+# (a deadlock no signal interrupts), through ctypes.PyDLL, which keeps the interpreter's lock.
+STUCK_IN_C = (
+    "import ctypes\n\n\nclass Stuck:\n    def predict(self, frames):\n"
+    "        libc = ctypes.PyDLL(None)\n        mutex = ctypes.create_string_buffer(64)\n"
+    "        libc.pthread_mutex_lock(mutex)\n        libc.pthread_mutex_lock(mutex)\n\n\n"
+    "def make():\n    return Stuck()\n"
+)
+CONSOLE = [
+    sys.executable,
+    "-c",
+    "import sys; from sim.cli import console_main; sys.exit(console_main())",
+]
 # What each line says after "reform-sim COMMAND: error: " (a regular expression).
 MESSAGES = {
     "stuck_at_import": (
@@ -58,7 +73,7 @@ MESSAGES = {
 def lab(tmp_path_factory) -> Path:
     """A folder holding the plugins and a tiny generated dataset (``ds``, 4 frames)."""
     root = tmp_path_factory.mktemp("detector-deadline")
-    for module, source in PLUGINS.items():
+    for module, source in {**PLUGINS, "stuck_in_c": STUCK_IN_C}.items():
         (root / f"{module}.py").write_text(source)
     generate_quietly("hri-conversation", root / "ds", episodes=1, seed=1, duration=2.0)
     return root
@@ -80,6 +95,30 @@ def test_a_detector_that_never_returns_ends_detect_within_its_deadline(lab, plug
     pattern = f"reform-sim detect: error: {MESSAGES[plugin]}{re.escape(HINT)}\n"
     assert re.fullmatch(pattern, run.stderr), run.stderr
     assert seconds < 4 * DEADLINE_S + SLACK_S
+    assert not (lab / "out.json").exists()
+
+
+def test_a_detector_stuck_in_compiled_code_is_ended_with_its_process_in_one_line(lab):
+    """No signal handler runs while compiled code holds the interpreter: the deadline's watcher
+    process says the line and ends the command STUCK_GRACE_S after the deadline."""
+    started = time.monotonic()
+    run = subprocess.run(
+        [*CONSOLE, "detect", "--detector", "stuck_in_c:make", "--data", "ds", "--out", "out.json"]
+        + ["--detector-timeout", f"{DEADLINE_S:g}s"],
+        cwd=lab,
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE_S * 4 + STUCK_GRACE_S + SLACK_S + 30,
+    )
+    seconds = time.monotonic() - started
+    assert run.returncode == -signal.SIGKILL, (run.returncode, run.stderr)
+    pattern = (
+        r"reform-sim detect: error: stuck_in_c:make: predict on 4 frame\(s\) of ds did not finish "
+        rf"within 2 s and had not returned to Python {STUCK_GRACE_S:g} s later \(stuck in compiled "
+        r"code, where it cannot be stopped\): the process was ended; " + re.escape(HINT) + "\n"
+    )
+    assert re.fullmatch(pattern, run.stderr), run.stderr
+    assert 4 * DEADLINE_S + STUCK_GRACE_S - 1 < seconds < 4 * DEADLINE_S + STUCK_GRACE_S + SLACK_S
     assert not (lab / "out.json").exists()
 
 
