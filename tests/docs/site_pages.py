@@ -11,15 +11,26 @@ A page's fenced ``bash`` and ``python`` blocks run in order, in one empty folder
 * blocks of other languages (``text``, ``toml``) are shown, not run.
 
 A page that needs the field's real datasets says so with ``<!-- needs: datasets -->``.
+
+The ``reform-sim`` commands every page shows, in its blocks and inline, are :func:`commands`
+(``test_documented_commands.py`` parses them, ``benchmarks/documented_commands.py`` runs them).
 """
 
 from __future__ import annotations
 
 import re
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
+REPO = DOCS.parent
+# The pages whose commands are checked: the README and every page but the results', whose
+# commands are the records of past runs.
+COMMAND_PAGES = (
+    REPO / "README.md",
+    *sorted(p for p in DOCS.rglob("*.md") if p.parent.name != "results"),
+)
 # The pages whose blocks run: getting started and every tutorial.
 RUNNABLE_PAGES = (
     "getting-started.md",
@@ -31,6 +42,9 @@ NEEDS_DATASETS = "<!-- needs: datasets -->"
 _FENCE = re.compile(r"^(?P<indent> *)(?P<fence>```+)(?P<info>[^`]*)$")
 _NOT_RUN = re.compile(r"^\s*<!-- not run: .+ -->\s*$")
 _TITLE = re.compile(r'title="(?P<path>[^"]+)"')
+# Words that mark a line as a pattern rather than a command (alternatives, elisions, prompts).
+_PLACEHOLDER = re.compile(r"\.\.\.|…|<[A-Za-z]|\|(?!\|)|\[--|\bNAME\b(?!=)|\$\w")
+_REFUSAL = re.compile(r"reform-sim [\w ]+: error:")
 
 
 @dataclass(frozen=True)
@@ -109,3 +123,60 @@ def page_script(text: str) -> str:
                 f"exec(compile({block.code!r}, 'line {block.line}', 'exec'), _page)"
             )
     return "\n".join(steps) + "\n"
+
+
+@dataclass(frozen=True)
+class Command:
+    """One ``reform-sim`` command a page shows.
+
+    Attributes:
+        line: its line on the page (1-based).
+        text: the command as a user types it (a continuation joined, a ``$`` prompt dropped).
+        whole: in a code block, whole; else inline in the text, perhaps a fragment
+            (``reform-sim generate --twin``) whose other flags the text leaves out.
+        refusal: the ``reform-sim X: error: ...`` line the page shows right after it (bad
+            input shown with its refusal, docs/bad-input.md), or None.
+    """
+
+    line: int
+    text: str
+    whole: bool
+    refusal: str | None = None
+
+
+def commands(text: str) -> list[Command]:
+    """The ``reform-sim`` commands of a page: its code blocks' whole ones, then its inline ones."""
+    found = []
+    for block in blocks(text):
+        if block.title is not None:
+            continue
+        lines = block.code.split("\n")
+        k = 0
+        while k < len(lines):
+            start, line = k, lines[k]
+            while line.rstrip().endswith("\\") and k + 1 < len(lines):
+                k += 1
+                line = line.rstrip()[:-1] + " " + lines[k].strip()
+            k += 1
+            line = line.strip().removeprefix("$ ")
+            answer = lines[k].strip() if k < len(lines) else ""
+            refusal = answer if _REFUSAL.match(answer) else None
+            if line.startswith("reform-sim ") and not _REFUSAL.match(line):
+                found.append(Command(block.line + 1 + start, line, True, refusal))
+            k += refusal is not None  # the refusal is the page's answer, not a command
+    for n, line in enumerate(text.split("\n"), start=1):
+        found += [Command(n, m, False) for m in re.findall(r"`(reform-sim [^`]+)`", line)]
+    return found
+
+
+def command_words(command: str) -> list[str] | None:
+    """The command's words after ``reform-sim``, or None when it is a pattern or a pipeline."""
+    command = re.split(r"\s+#", command)[0]
+    for stop in (" | ", " && ", " > ", " 2>", "; "):
+        command = command.split(stop)[0]
+    if _PLACEHOLDER.search(command) or re.match(r"reform-sim [\w ]+: ", command):
+        return None  # a pattern, or an error message quoted
+    try:
+        return shlex.split(command)[1:]
+    except ValueError:
+        return None
