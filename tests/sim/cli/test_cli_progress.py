@@ -8,6 +8,7 @@ looser bound here; `test_cli_startup.py` is about it."""
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import subprocess
@@ -15,12 +16,20 @@ import sys
 import time
 from pathlib import Path
 
+from quiet_generate import generate_quietly
+
 from sim.cli import main
 
 SILENCE_S = 5.0  # seconds: the longest a running command may say nothing
 START_S = 15.0  # seconds: the longest before its first line (imports, checks; a shared machine)
 RATIO = 3.0  # an estimate is within this factor of the time measured
 _UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "days": 86400.0}
+# A detector that predicts its frames in one call, for 2.5 s (GTCG on SALSA: about a minute).
+SLOW_PLUGIN = (
+    "import time\n\n\nclass Slow:\n    def predict(self, frames):\n        time.sleep(2.5)\n"
+    "        return [[(int(i),) for i in frame.ids] for frame in frames]\n\n\n"
+    "def make():\n    return Slow()\n"
+)
 # Small, but large enough to start two worker processes and give each episodes.
 GENERATE = ["generate", "--scenario", "mingle", "--episodes", "4", "--duration", "10"]
 
@@ -74,3 +83,22 @@ def test_no_estimate_when_nothing_is_left_to_do(tmp_path, capsys):
     assert main(argv) == 0
     err = capsys.readouterr().err
     assert " about " not in err and "2/2" in err, err
+
+
+class _Terminal(io.StringIO):
+    """A stderr that is a terminal: short commands show their progress only on one."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_a_detector_predicting_in_one_call_keeps_its_bar_moving(tmp_path, monkeypatch):
+    (tmp_path / "slow.py").write_text(SLOW_PLUGIN)
+    generate_quietly("hri-conversation", tmp_path / "ds", episodes=1, seed=1, duration=2.0)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    assert main(["evaluate", "--detector", "slow:make", "--data", "ds"]) == 0
+    err = sys.stderr.getvalue()
+    # Redrawn, its time moving, while predict had not yet returned a frame.
+    assert re.search(r"running slow:make: +0%\|[^\r]*\| 0/\d+ \[00:0[2-9]<", err), err
+    assert re.search(r"\nslow:make: \d+ frames in [\d.]+ s\n", err), err
