@@ -62,15 +62,18 @@ whose objects match their recorded size and sha256 (each read back to be checked
 named on stderr) and writes the others again (an uncommitted shard object is never taken for done,
 nor read). Two runs on one prefix are refused: the lock object ``.generate.lock`` is created only if
 there is none (S3: ``If-None-Match: *``); one left by a killed run on this machine (its process
-gone) is taken over with a conditional overwrite (``If-Match`` its ETag). An unusable store (no
-credentials, unreachable, no such bucket) or a prefix holding something else is refused in one line
-before any work.
+gone) is taken over with a conditional overwrite (``If-Match`` its ETag); the multipart uploads a
+killed run left unfinished below the prefix (S3: objects of 100 MiB and more are sent in parts) are
+aborted by the next run, and listed by `leftovers` until then. An unusable store (no credentials,
+unreachable, no such bucket) or a prefix holding something else is refused in one line before any
+work.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import datetime
 import functools
 import gc
 import hashlib
@@ -1025,16 +1028,9 @@ def _store_lock(store: Store) -> Iterator[None]:
     ).encode()
     if not store.create(LOCK_FILE, mine):
         tag = store.tag(LOCK_FILE)
-        try:
-            holder = json.loads(store.read(LOCK_FILE) or b"{}")
-        except (UnicodeDecodeError, json.JSONDecodeError):
-            holder = {}
-        holder = holder if isinstance(holder, dict) else {}
+        holder = _lock_holder(store) or {}
         pid = holder.get("pid")
-        gone = (
-            holder.get("host") == socket.gethostname() and isinstance(pid, int) and not _alive(pid)
-        )
-        if not (gone and tag and store.replace(LOCK_FILE, mine, tag)):
+        if not (_holder_state(holder) == "stale" and tag and store.replace(LOCK_FILE, mine, tag)):
             raise ValueError(
                 f"out_dir {store.uri} is being written by another reform-sim generate run "
                 f"(host {holder.get('host', '?')}, process {pid or '?'}, since "
@@ -1053,6 +1049,70 @@ def _store_lock(store: Store) -> Iterator[None]:
 def _release_store_lock(store: Store, mine: bytes) -> None:
     if store.read(LOCK_FILE) == mine:
         store.delete(LOCK_FILE)
+
+
+def _lock_holder(store: Store) -> dict[str, Any] | None:
+    """What the lock object of a prefix says of its run (host, pid, started); None without
+    one, empty when it says nothing readable."""
+    text = store.read(LOCK_FILE)
+    if text is None:
+        return None
+    try:
+        holder = json.loads(text or b"{}")
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return {}
+    return holder if isinstance(holder, dict) else {}
+
+
+def _holder_state(holder: Mapping[str, Any]) -> str:
+    """``"stale"``: a run of this machine whose process is gone; ``"live"``: one whose process
+    runs; ``"elsewhere"``: a run of another machine (or one the lock does not name), whose
+    process this machine cannot ask about."""
+    pid = holder.get("pid")
+    if holder.get("host") != socket.gethostname() or not isinstance(pid, int):
+        return "elsewhere"
+    return "live" if _alive(pid) else "stale"
+
+
+def _store_leftovers(store: Store) -> list[str]:
+    """`leftovers` of a prefix in a store: the unfinished multipart uploads below it (a writer
+    killed while it sent a large object in parts; none while a run of this machine holds the
+    lock, they may be its own) and a lock no run holds."""
+    holder = _lock_holder(store)
+    state = None if holder is None else _holder_state(holder)
+    lines = []
+    if state != "live":
+        now = datetime.datetime.now(datetime.UTC)
+        for upload in store.uploads():
+            size = sizing.format_size(upload.size)
+            age = sizing.format_duration(max(0.0, (now - upload.written).total_seconds()))
+            lines.append(
+                f"{store.url(upload.relative)}: an unfinished upload ({size} sent, last written "
+                f"{age} ago; upload ID {upload.upload_id}) of a run that did not finish; the next "
+                "generate run in this prefix removes it"
+            )
+    if holder is not None and state != "live":
+        since = holder.get("started", "?")
+        if state == "stale":
+            lines.append(
+                f"{store.url(LOCK_FILE)}: a lock left by a run that did not finish (process "
+                f"{holder['pid']} of this machine, gone, since {since}); the next generate run "
+                "in this prefix takes it over"
+            )
+        else:
+            lines.append(
+                f"{store.url(LOCK_FILE)}: a lock of process {holder.get('pid', '?')} of host "
+                f"{holder.get('host', '?')} (since {since}), which this machine cannot ask about; "
+                "delete it if no run there writes this prefix"
+            )
+    return lines
+
+
+def _remove_unfinished_uploads(store: Store) -> None:
+    """Aborts what killed runs left unfinished below a prefix whose lock this run holds (no
+    other run writes there); a clean-up never fails a run."""
+    with contextlib.suppress(OSError, StoreError):
+        store.abort(*store.uploads())
 
 
 def _committed_shards(
@@ -1155,11 +1215,16 @@ def leftovers(out_dir: str | os.PathLike[str]) -> list[str]:
     holds. A temporary being written now by a live process, and a lock a run holds, are not
     leftovers and are not listed.
 
+    In a store (``out_dir`` a URI), what killed runs leave is unfinished multipart uploads
+    and a lock no run holds (`_store_leftovers`).
+
     Args:
-        out_dir: the folder (on this machine).
+        out_dir: the folder (on this machine), or its URI in a store.
     """
     from reform.atomic import find_temporaries
 
+    if is_uri(out_dir):
+        return _store_leftovers(open_store(str(out_dir)))
     root = Path(out_dir)
     lines = []
     for folder, names, _ in os.walk(root):
@@ -2123,6 +2188,7 @@ def _generate_store(
     _check_store(store, parameters, episodes)
     with _store_lock(store), executor:
         _check_store(store, parameters, episodes)  # again, now that no other run can write
+        _remove_unfinished_uploads(store)
         checking = time.perf_counter()
         existing = _committed_shards(store, spec, episodes)
         check_seconds = time.perf_counter() - checking

@@ -25,9 +25,10 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from datetime import datetime
 from typing import Any
 
 from reform.deadline import DURATION_FORM, DeadlineExpired, duration, in_thread
@@ -37,6 +38,7 @@ __all__ = [
     "TIMEOUT_VARIABLE",
     "StoreError",
     "Store",
+    "Upload",
     "is_uri",
     "open_store",
     "timeout",
@@ -79,6 +81,26 @@ def timeout(text: str | None = None) -> float:
 def is_uri(location: str | os.PathLike[str]) -> bool:
     """True for ``scheme://…`` (a store); False for a path on this machine."""
     return isinstance(location, str) and bool(_URI.match(location))
+
+
+@dataclass(frozen=True)
+class Upload:
+    """A multipart upload begun and neither finished nor aborted: what a writer killed while it
+    sent a large object in parts leaves (s3fs sends objects of 100 MiB and more so). It is no
+    object (listings do not show it), but the store keeps its parts, and bills them, until it
+    is aborted.
+
+    Attributes:
+        relative: the object's path, relative to the store's folder.
+        upload_id: the store's ID of the upload.
+        size: bytes of the parts sent, bytes.
+        written: when it was begun or its last part was sent (timezone-aware).
+    """
+
+    relative: str
+    upload_id: str
+    size: int
+    written: datetime
 
 
 @dataclass(frozen=True)
@@ -198,6 +220,76 @@ class Store:
         paths = [self.path(r) for r in relative]
         if paths:
             self._within("delete", relative[0], self.fs.rm, paths)
+
+    def uploads(self, relative: str = "") -> list[Upload]:
+        """The unfinished multipart uploads below ``relative`` (S3; none elsewhere: other
+        filesystems' partial uploads are not listed), each with the bytes sent and when."""
+        if type(self.fs).__name__ != "S3FileSystem":
+            return []
+        bucket, key, _ = self.fs.split_path(self.path(relative))
+        _, root, _ = self.fs.split_path(self.root)
+        found = []
+        for upload in self._pages(
+            "list uploads",
+            relative,
+            "list_multipart_uploads",
+            "Uploads",
+            ("KeyMarker", "UploadIdMarker"),
+            Bucket=bucket,
+            Prefix=f"{key.rstrip('/')}/" if key else "",
+        ):
+            size, written = 0, upload["Initiated"]
+            for part in self._pages(
+                "list parts",
+                relative,
+                "list_parts",
+                "Parts",
+                ("PartNumberMarker",),
+                Bucket=bucket,
+                Key=upload["Key"],
+                UploadId=upload["UploadId"],
+            ):
+                size += int(part.get("Size", 0))
+                written = max(written, part.get("LastModified", written))
+            name = upload["Key"].removeprefix(f"{root}/") if root else upload["Key"]
+            found.append(Upload(name, upload["UploadId"], size, written))
+        return found
+
+    def _pages(
+        self,
+        what: str,
+        relative: str,
+        method: str,
+        field: str,
+        markers: tuple[str, ...],
+        **params: Any,
+    ) -> Iterator[dict[str, Any]]:
+        """The items (``field``) of every page of an S3 listing (``method``); ``markers``: the
+        parameters whose ``Next…`` answers ask for the next page."""
+        while True:
+            page = self._within(what, relative, self.fs.call_s3, method, **params)
+            yield from page.get(field, [])
+            if not page.get("IsTruncated"):
+                return
+            params |= {m: page[f"Next{m}"] for m in markers if f"Next{m}" in page}
+
+    def abort(self, *uploads: Upload) -> None:
+        """Aborts unfinished multipart uploads (their parts are deleted); one already gone is
+        not missed."""
+        for upload in uploads:
+            bucket, key, _ = self.fs.split_path(self.path(upload.relative))
+            try:
+                self._within(
+                    "abort upload",
+                    upload.relative,
+                    self.fs.call_s3,
+                    "abort_multipart_upload",
+                    Bucket=bucket,
+                    Key=key,
+                    UploadId=upload.upload_id,
+                )
+            except FileNotFoundError:  # NoSuchUpload: finished or aborted meanwhile
+                continue
 
     def sizes(self, relative: str = "") -> dict[str, int]:
         """Every object below ``relative``: its path relative to the folder -> bytes."""

@@ -11,7 +11,6 @@ from typing import Any
 
 from reform.datasets import detect_format, resolve, write_parquet
 from reform.datasets.parquet import verify_folder
-from reform.datasets.store import is_uri
 from reform.datasets.summary import summarise
 from sim.cli._common import check_output, data_path, load_data
 
@@ -21,7 +20,7 @@ def run_verify(args: argparse.Namespace) -> int:
 
     path = data_path(args)
     problems = verify_folder(path)
-    left = [] if is_uri(path) else leftovers(path)
+    left = leftovers(path)
     for line in [*problems, *left]:
         print(line)
     behind = f"; {len(left)} leftover(s) of runs that did not finish, listed above" if left else ""

@@ -503,3 +503,91 @@ def test_a_resume_checks_each_committed_object_it_keeps(server, tmp_path):
     reference = tmp_path / "reference"
     generate(reference, episodes=1)
     same_as_reference(uri, reference, episodes=1)
+
+
+# A child that begins a multipart upload of ARGV[2] in the store at ARGV[1] (as s3fs sends an
+# object of 100 MiB and more), sends its first part, says the upload's ID and waits to be killed.
+UPLOADER = (
+    "import sys, time\n"
+    "from reform.datasets.store import open_store\n"
+    "store = open_store(sys.argv[1])\n"
+    "bucket, key, _ = store.fs.split_path(store.path(sys.argv[2]))\n"
+    "upload = store.fs.call_s3('create_multipart_upload', Bucket=bucket, Key=key)['UploadId']\n"
+    "store.fs.call_s3('upload_part', Bucket=bucket, Key=key, UploadId=upload, PartNumber=1,\n"
+    "                 Body=b'half a shard' * 1000)\n"
+    "print(upload, flush=True)\n"
+    "time.sleep(600)\n"
+)
+
+
+def _killed_uploader(uri: str, relative: str) -> str:
+    """The ID of the upload of a child killed (SIGKILL) while it sent ``relative``."""
+    child = subprocess.Popen(
+        [sys.executable, "-c", UPLOADER, uri, relative], stdout=subprocess.PIPE, text=True
+    )
+    upload = child.stdout.readline().strip()
+    child.kill()
+    child.wait(timeout=RUN_TIMEOUT_S)
+    child.stdout.close()
+    assert upload, "the child ended before it sent a part"
+    return upload
+
+
+def test_data_verify_lists_what_killed_runs_left_in_the_store_and_the_next_run_removes_it(
+    server, capsys
+):
+    """An upload a killed writer never finished (no object, but its parts kept and billed) and
+    a lock of a killed run are listed, with the upload's size and age, never removed by verify;
+    none while a live run holds the lock; the next run in the prefix removes them."""
+    uri = f"s3://{BUCKET}/leftovers"
+    generate(uri, episodes=1)
+    store = open_store(uri)
+    relative = f"data/scenario={SCENARIO}/episode=1/part.parquet"  # the next run's
+    upload = _killed_uploader(uri, relative)
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    gone = {
+        "host": socket.gethostname(),
+        "pid": int(dead.stdout),
+        "started": "2026-12-05T10:00:00Z",
+    }
+    store.write(".generate.lock", json.dumps(gone).encode())
+
+    assert main(["data", "verify", "--data", uri]) == 0
+    first, *rest = capsys.readouterr().out.splitlines()
+    assert re.fullmatch(
+        rf"{re.escape(uri)}/{re.escape(relative)}: an unfinished upload \(11\.7 KiB sent, last "
+        rf"written [\d.]+ s ago; upload ID {re.escape(upload)}\) of a run that did not finish; "
+        "the next generate run in this prefix removes it",
+        first,
+    )
+    assert rest == [
+        f"{uri}/.generate.lock: a lock left by a run that did not finish (process {gone['pid']} "
+        "of this machine, gone, since 2026-12-05T10:00:00Z); the next generate run in this "
+        "prefix takes it over",
+        f"{uri}: whole (every shard its card lists is there, unaltered); 2 leftover(s) of runs "
+        "that did not finish, listed above",
+    ]
+    assert [u.upload_id for u in store.uploads()] == [upload]  # listed, not removed
+
+    # A run of this machine that holds the lock now may be sending the upload: nothing listed.
+    live = {"host": socket.gethostname(), "pid": os.getpid(), "started": "now"}
+    store.write(".generate.lock", json.dumps(live).encode())
+    assert main(["data", "verify", "--data", uri]) == 0
+    assert (
+        capsys.readouterr().out
+        == f"{uri}: whole (every shard its card lists is there, unaltered)\n"
+    )
+
+    store.write(".generate.lock", json.dumps(gone).encode())
+    generate(uri, episodes=2)
+    assert store.uploads() == [] and ".generate.lock" not in objects(uri)
+    assert main(["data", "verify", "--data", uri]) == 0
+    assert (
+        capsys.readouterr().out
+        == f"{uri}: whole (every shard its card lists is there, unaltered)\n"
+    )
