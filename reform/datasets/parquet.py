@@ -156,7 +156,10 @@ def _check_ids_written(dataset: Dataset | FrameBlock) -> None:
 
 
 def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The long table's columns (as :func:`_columns` makes them) from a block's arrays."""
+    """The long table's columns (as :func:`_columns` makes them) from a block's arrays.
+
+    Whole arrays at once: the groups are laid out once per run of instants that share them
+    (`FrameBlock.present_groups` gives one object for such a run), not person by person."""
     time, ids, present, n_frames, n = (
         block.time,
         block.ids,
@@ -174,16 +177,12 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
     n_rows = t_of.size
     empty = a_of == n
     a_safe = np.where(empty, 0, a_of)
-    row_of = np.full(slots.shape, -1, dtype=np.int64)
-    row_of[t_of, a_of] = np.arange(n_rows)
 
-    out = _PersonRows(n_rows)
+    out = _PersonRows(n_rows, kinds=False)
     out.empty[:] = empty
-    out.person_id[:] = np.where(empty, 0, ids[a_safe] if n else 0)
     if n:
-        out.kind[:] = np.array(block.kinds, dtype=object)[a_safe]
-    out.kind[empty] = None
-    if n:
+        out.person_id[:] = ids[a_safe]
+        out.person_id[empty] = 0
         out.body[:, :2] = block.position[t_of, a_safe]
         out.body[:, 2] = block.yaw[t_of, a_safe]
         if has_head:
@@ -192,21 +191,45 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
     out.body[empty] = 0.0
     out.head[empty] = 0.0
 
+    # Each instant's group and place in it by roster slot (-1: in none; column n: the empty
+    # frame's row), set once per run of instants with the same groups.
+    group_of = np.full((n_frames, n + 1), -1, dtype=np.int32)
+    member_of = np.full((n_frames, n + 1), -1, dtype=np.int32)
     annotated_frame = np.zeros(n_frames, dtype=bool)
     index_of = {int(i): a for a, i in enumerate(ids.tolist())}
+    laid_out: dict[int, tuple[list[int], list[int], list[int]]] = {}
+    runs = []  # (first instant, end, groups)
     for t, frame_groups in enumerate(block.present_groups()):
         if frame_groups is None:
             continue
-        annotated_frame[t] = True
-        rows = row_of[t]
-        for g, members in enumerate(frame_groups):
-            for m, person in enumerate(members):
-                out.group[rows[index_of[int(person)]]] = g
-                out.member[rows[index_of[int(person)]]] = m
+        if runs and runs[-1][2] is frame_groups and runs[-1][1] == t:
+            runs[-1][1] = t + 1
+        else:
+            runs.append([t, t + 1, frame_groups])
+    for start, end, frame_groups in runs:
+        annotated_frame[start:end] = True
+        layout = laid_out.get(id(frame_groups))
+        if layout is None:
+            layout = ([], [], [])
+            for g, members in enumerate(frame_groups):
+                for m, person in enumerate(members):
+                    layout[0].append(index_of[int(person)])
+                    layout[1].append(g)
+                    layout[2].append(m)
+            laid_out[id(frame_groups)] = layout
+        if layout[0]:
+            group_of[start:end, layout[0]] = layout[1]
+            member_of[start:end, layout[0]] = layout[2]
+    out.group[:] = group_of[t_of, a_of]
+    out.member[:] = member_of[t_of, a_of]
 
+    # The string columns as Arrow arrays straight away: each row's kind taken from the roster's
+    # (null for an empty frame's row), the one sequence name repeated.
+    pa, _ = _pyarrow()
+    out.kind = pa.array([*block.kinds, None], type=pa.string()).take(a_of)
     counts = np.bincount(t_of, minlength=n_frames)
     return out.columns(
-        sequence=np.full(n_rows, block.sequence, dtype=object),
+        sequence=pa.repeat(pa.scalar(block.sequence, type=pa.string()), n_rows),
         frame=t_of.astype(np.int64),
         time=np.repeat(time, counts),
         annotated=np.repeat(annotated_frame, counts),
@@ -254,7 +277,10 @@ def _write_table(
     for name, (type_name, nullable, unit, description) in COLUMNS.items():
         values, mask = columns[name]
         arrow_type = _arrow_type(pa, type_name)
-        arrays.append(pa.array(values, type=arrow_type, mask=mask if nullable else None))
+        if isinstance(values, pa.Array):  # made as Arrow already, its nulls included
+            arrays.append(values)
+        else:
+            arrays.append(pa.array(values, type=arrow_type, mask=mask if nullable else None))
         meta = {b"description": description.encode()}
         if unit:
             meta[b"unit"] = unit.encode()
@@ -309,11 +335,12 @@ def _columns(frames: tuple[Frame, ...]) -> dict[str, tuple[np.ndarray, np.ndarra
 class _PersonRows:
     """The long table's per-person arrays, one entry a row, while a writer fills them: ids,
     kinds, ``body`` and ``head`` poses ((n_rows, 3): x, y, yaw), the group and the place in it
-    (-1: in none), and ``empty``: the one row of a frame with nobody (person columns null)."""
+    (-1: in none), and ``empty``: the one row of a frame with nobody (person columns null).
+    ``kinds=False``: the writer sets ``kind`` itself, as an Arrow string array."""
 
-    def __init__(self, n_rows: int) -> None:
+    def __init__(self, n_rows: int, *, kinds: bool = True) -> None:
         self.person_id = np.zeros(n_rows, dtype=np.int64)
-        self.kind = np.empty(n_rows, dtype=object)
+        self.kind: Any = np.empty(n_rows, dtype=object) if kinds else None
         self.body = np.zeros((n_rows, 3))
         self.head = np.zeros((n_rows, 3))
         self.group = np.full(n_rows, -1, dtype=np.int32)
@@ -330,7 +357,8 @@ class _PersonRows:
         has_head: np.ndarray,
     ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Every column of the long table, values and null masks (True = null), given the
-        frame-level ones (one entry a row)."""
+        frame-level ones (one entry a row). A value that is an Arrow array already carries
+        its nulls (`_write_table` takes it as it is)."""
         empty = self.empty
         no_head = empty | ~has_head
         no_group = self.group < 0
