@@ -683,8 +683,9 @@ class Executor:
         a crash in compiled code, an exit, memory); never when Ray stopped it for memory.
 
         Each unit run again is one line on stderr naming why (the node lost, by its IP and ID as
-        Ray gives them). Once a node was lost, a run whose cluster has no CPU left waits
-        :data:`NODE_WAIT_S` seconds for a node to join, then stops in one line."""
+        Ray gives them). A run whose cluster had CPUs and has none left (its nodes lost, under a
+        unit or between two) waits :data:`NODE_WAIT_S` seconds for a node to join, then stops in
+        one line."""
         ray = self._connect()
         if self._task is None:
             self._task = ray.remote(num_cpus=1, max_retries=0, retry_exceptions=False)(_apply)
@@ -695,17 +696,21 @@ class Executor:
         pending = list(index)
         lost = dict.fromkeys(range(len(units)), 0)
         nodes: dict[int, list[str]] = {}  # unit -> the nodes lost while they ran it, in order
+        known = _cpu_nodes(ray)  # every node with CPUs seen during the run
         starved_since: float | None = None  # when the cluster was first seen with no CPU
         try:
             while pending:
                 done, pending = ray.wait(pending, num_returns=1, timeout=NODE_CHECK_S)
                 if not done:
-                    if nodes and _cluster_cpus(ray) == 0:
+                    live = _cpu_nodes(ray)
+                    known.update(live)
+                    # A cluster that never had a CPU may be starting its first node (autoscaler).
+                    if live or not (known or nodes):
+                        starved_since = None
+                    else:
                         starved_since = starved_since or time.monotonic()
                         if time.monotonic() - starved_since >= NODE_WAIT_S:
-                            raise _starved(index, units, describe, nodes)
-                    else:
-                        starved_since = None
+                            raise _starved(index, units, describe, nodes, list(known.values()))
                     continue
                 k = index.pop(done[0])
                 what = _name(units, k, describe)
@@ -801,9 +806,13 @@ def _nodes(names: Sequence[str]) -> str:
     return f"node {unique[0]}" if len(unique) == 1 else f"nodes {', '.join(unique)}"
 
 
-def _cluster_cpus(ray: Any) -> float:
-    """The CPUs of the cluster's live nodes."""
-    return float(ray.cluster_resources().get("CPU", 0))
+def _cpu_nodes(ray: Any) -> dict[str, str]:
+    """The cluster's live nodes with CPUs: ID -> ``IP (ID id)``, as `_lost_node` names them."""
+    return {
+        node["NodeID"]: f"{node['NodeManagerAddress']} (ID {node['NodeID']})"
+        for node in ray.nodes()
+        if node.get("Alive") and node.get("Resources", {}).get("CPU", 0) > 0
+    }
 
 
 def _say(line: str) -> None:
@@ -826,7 +835,7 @@ def _rerun_line(ray: Any, what: str, lost: _Lost, times: int) -> str:
         return (
             f"reform-sim: Ray lost {what} ({lost.cause}); it runs again ({times} of {MAX_RETRIES})"
         )
-    if _cluster_cpus(ray) == 0:
+    if not _cpu_nodes(ray):
         where = (
             f"when a node with a CPU joins the cluster: none is left, and the run waits "
             f"{NODE_WAIT_S:g} s for one"
@@ -844,16 +853,25 @@ def _starved(
     units: Sequence[Any],
     describe: Callable[[Any], str] | None,
     nodes: Mapping[int, list[str]],
+    known: Sequence[str],
 ) -> ClusterError:
-    """The error of a run whose cluster lost its nodes and has had no CPU for
-    :data:`NODE_WAIT_S` seconds: the unit waiting to run again, the nodes lost, what to do."""
+    """The error of a run whose cluster lost its nodes (``nodes``: those lost under a unit, by
+    unit; ``known``: every node with CPUs the run saw, gone now) and has had no CPU for
+    :data:`NODE_WAIT_S` seconds: a unit waiting to run (one that ran on a lost node first), the
+    nodes lost, what to do."""
     waiting = sorted(set(index.values()))
-    again = [k for k in waiting if k in nodes] or waiting
-    what = _name(units, again[0], describe)
+    again = [k for k in waiting if k in nodes]
+    first = (again or waiting)[0]
+    what = _name(units, first, describe)
     more = f" (and {len(waiting) - 1} more unit(s))" if len(waiting) > 1 else ""
-    lost = _nodes([node for k in sorted(nodes) for node in nodes[k]])
+    ran = list(dict.fromkeys(nodes.get(first, [])))
+    others = [node for node in dict.fromkeys(known) if node not in ran]
+    if ran:
+        lost = f"{_nodes(ran)}, which ran it," + (f" and {_nodes(others)}," if others else "")
+    else:
+        lost = _nodes(others)
     return ClusterError(
-        f"{what}{more} cannot run: the Ray cluster lost {lost}, which ran it, and has had no "
-        f"node with a CPU for {NODE_WAIT_S:g} s; add nodes to the cluster (`ray start "
-        "--address HEAD:PORT` on another machine) and run the command again"
+        f"{what}{more} cannot run: the Ray cluster lost {lost} and has had no node with a CPU "
+        f"for {NODE_WAIT_S:g} s; add nodes to the cluster (`ray start --address HEAD:PORT` on "
+        "another machine) and run the command again"
     )

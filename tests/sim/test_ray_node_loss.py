@@ -5,6 +5,7 @@ this machine (`ray.cluster_utils.Cluster`), nodes added and removed as a test go
 
 from __future__ import annotations
 
+import re
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -13,6 +14,7 @@ from pathlib import Path
 import pytest
 
 import sim.executor
+from sim.cli import main
 from sim.executor import ClusterError, Executor
 
 START_S = 60.0  # at most this long for a unit to start on a new node (the machine is shared)
@@ -118,3 +120,36 @@ def test_a_unit_whose_retries_run_out_is_one_line(cluster, tmp_path, monkeypatch
         "ran it): its nodes keep failing (`ray list nodes --detail` says why: preemption, "
         "memory, a crashed raylet); run the command again on a steadier cluster"
     )
+
+
+def test_a_command_whose_cluster_loses_its_last_node_ends_in_one_line(
+    cluster, tmp_path, capsys, monkeypatch
+) -> None:
+    """generate on the cluster, its only node with CPUs removed once the first shard is back:
+    the lines that say what was run again, then the command's one line, never a traceback."""
+    monkeypatch.setattr(sim.executor, "NODE_WAIT_S", 1.0)
+    monkeypatch.setattr(sim.executor, "NODE_CHECK_S", 0.2)
+    node = cluster.add_node(num_cpus=1, object_store_memory=STORE_BYTES)
+    cluster.wait_for_nodes()
+    out = tmp_path / "ds"
+    argv = ["generate", "--scenario", "hri-conversation", "--episodes", "8", "--seed", "1"]
+    argv += ["--duration", "60", "--out", str(out), "--backend", "ray", "--quiet"]
+    pool = ThreadPoolExecutor(1)
+    run = pool.submit(main, argv)
+    pool.shutdown(wait=False)
+    deadline = time.monotonic() + START_S
+    while not any(out.rglob("part.parquet")) and time.monotonic() < deadline and not run.done():
+        time.sleep(0.05)
+    cluster.remove_node(node)
+    assert run.result(timeout=START_S) == 2
+    *rerun, line = capsys.readouterr().err.splitlines()
+    named = re.escape(_named(node))
+    assert re.fullmatch(
+        rf"reform-sim generate: error: episodes \d+-\d+ of hri-conversation( \(and \d+ more "
+        rf"unit\(s\)\))? cannot run: the Ray cluster lost node {named}(, which ran it,)? and has "
+        r"had no node with a CPU for 1 s; add nodes to the cluster \(`ray start --address "
+        r"HEAD:PORT` on another machine\) and run the command again",
+        line,
+    )
+    for said in rerun:  # a unit the node was running when it went
+        assert said.startswith(f"reform-sim: the Ray cluster lost node {_named(node)} while it ")
