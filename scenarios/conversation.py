@@ -36,21 +36,15 @@ def standing(
     )
 
 
-def _gaze(
-    looker: int,
-    target: int,
-    spots: dict[int, np.ndarray],
-    rng: np.random.Generator,
-    head_noise: float,
-) -> dict[str, object]:
-    """Look at ``target``; with head noise, at a point off it by a random angle."""
-    if head_noise <= 0.0:
-        rng.normal()  # keep the stream the same whatever the noise
-        return {"gaze_agent": target}
-    (hx, hy), (tx, ty) = spots[looker], spots[target]
-    angle = math.atan2(ty - hy, tx - hx) + float(rng.normal()) * head_noise
+def _off_target(
+    head: tuple[float, float], target: tuple[float, float], drawn: float, head_noise: float
+) -> tuple[float, float]:
+    """Where a head at ``head`` looks, off ``target`` by ``drawn`` (a standard normal draw)
+    times ``head_noise`` radians, at the target's distance (0.5 m at least)."""
+    (hx, hy), (tx, ty) = head, target
+    angle = math.atan2(ty - hy, tx - hx) + drawn * head_noise
     reach = max(math.hypot(tx - hx, ty - hy), 0.5)
-    return {"gaze_point": (hx + reach * math.cos(angle), hy + reach * math.sin(angle))}
+    return (hx + reach * math.cos(angle), hy + reach * math.sin(angle))
 
 
 def converse(
@@ -83,18 +77,34 @@ def converse(
     spots = {m: (float(places[k][0]), float(places[k][1])) for k, m in enumerate(members)}
     facing = {m: float(facings[k]) for k, m in enumerate(members)}
     allowed = members if speakers is None else [int(s) for s in speakers]
+    # Each member stands the same way all along: that intent is made (and checked) once, and
+    # each turn gives it the turn's gaze (`Intent.looking_at`).
     t = float(start)
+    stand = {
+        m: standing(
+            spots[m], facing[m], speed=speed.get(m) if isinstance(speed, Mapping) else speed
+        )
+        for m in members
+        if t < end
+    }
     speaker = allowed[int(rng.integers(len(allowed)))]
     turns = []
     while t < end:
         turns.append((t, speaker))
         listeners = [m for m in members if m != speaker]
         addressee = listeners[int(rng.integers(len(listeners)))]
-        for m in members:
+        # A standard normal draw per member, in member order, whatever the head noise (so
+        # that the stream does not depend on it).
+        noise = rng.normal(size=len(members)).tolist()
+        for m, drawn in zip(members, noise, strict=True):
             target = addressee if m == speaker else speaker
-            gaze = _gaze(m, target, spots, rng, head_noise)
-            pace = speed.get(m) if isinstance(speed, Mapping) else speed
-            builder.set(t, m, standing(spots[m], facing[m], speed=pace, **gaze))
+            if head_noise <= 0.0:
+                intent = stand[m].looking_at(agent=target)
+            else:
+                intent = stand[m].looking_at(
+                    point=_off_target(spots[m], spots[target], drawn, head_noise)
+                )
+            builder.set(t, m, intent)
         length = rng.exponential(mean_utterance)
         t += min(max(length, MIN_UTTERANCE_S), MAX_UTTERANCE_FACTOR * mean_utterance)
         others = [s for s in allowed if s != speaker] or allowed

@@ -184,10 +184,18 @@ def separate(places: np.ndarray, *, spacing: float = SPACING_M, iterations: int 
     metres (or ``iterations`` passes are done); places far enough apart do not move."""
     out = np.array(places, dtype=np.float64)
     k = out.shape[0]
+    # Pairs whose squared distance clears spacing² by more than rounding can are far enough
+    # apart without the exact distance (np.hypot, as always where it decides).
+    clear = spacing * spacing * (1.0 + 1e-9)
     for _ in range(iterations):
         moved = False
+        points = out.tolist()
         for i in range(k):
+            xi, yi = points[i]
             for j in range(i + 1, k):
+                dx, dy = points[j][0] - xi, points[j][1] - yi
+                if dx * dx + dy * dy > clear:
+                    continue
                 d = out[j] - out[i]
                 dist = float(np.hypot(*d))
                 if dist >= spacing:
@@ -196,6 +204,8 @@ def separate(places: np.ndarray, *, spacing: float = SPACING_M, iterations: int 
                 push = 0.5 * (spacing - dist) + 1e-6
                 out[i] -= unit * push
                 out[j] += unit * push
+                points[i], points[j] = out[i].tolist(), out[j].tolist()
+                xi, yi = points[i]
                 moved = True
         if not moved:
             break

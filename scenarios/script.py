@@ -148,6 +148,22 @@ class Intent:
             appear_at=appear_at,
         )
 
+    def looking_at(self, *, agent: int | None = None, point: Point | None = None) -> Intent:
+        """This intent, looking at ``agent`` or at ``point`` instead: what
+        ``Intent(..., gaze_agent=agent, gaze_point=point)`` with this intent's other fields
+        makes, with only the gaze checked (the other fields were, when this one was made).
+        Conversations change a standing member's gaze at every turn."""
+        if agent is not None:
+            if type(agent) is not int:
+                agent = _agent_id("gaze_agent", agent)
+            if point is not None:
+                raise ValueError("Intent takes at most one of gaze_point, gaze_agent, got both")
+        elif point is not None:
+            point = _point("gaze_point", point)
+        looking = object.__new__(Intent)
+        looking.__dict__.update(self.__dict__, gaze_agent=agent, gaze_point=point)
+        return looking
+
 
 @runtime_checkable
 class Script(Protocol):

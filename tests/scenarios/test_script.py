@@ -120,3 +120,19 @@ def test_intent_is_a_frozen_value() -> None:
 def test_bad_intents_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Intent(**kwargs)
+
+
+def test_looking_at_is_the_intent_made_with_that_gaze() -> None:
+    standing = Intent(goal=(1.0, 2.0), speed=0.8, face_yaw=0.5)
+    by_agent = standing.looking_at(agent=np.int64(3))
+    assert by_agent == Intent(goal=(1.0, 2.0), speed=0.8, face_yaw=0.5, gaze_agent=3)
+    assert type(by_agent.gaze_agent) is int
+    by_point = by_agent.looking_at(point=np.array([4, 5]))
+    assert by_point == Intent(goal=(1.0, 2.0), speed=0.8, face_yaw=0.5, gaze_point=(4.0, 5.0))
+    assert standing.gaze_agent is None  # the original is left as it was
+    with pytest.raises(ValueError, match="at most one of gaze_point, gaze_agent"):
+        standing.looking_at(agent=3, point=(0.0, 0.0))
+    with pytest.raises(ValueError, match=r"Intent.gaze_point must be a finite \(x, y\)"):
+        standing.looking_at(point=(math.nan, 0.0))
+    with pytest.raises(ValueError, match="Intent.gaze_agent must be an agent id"):
+        standing.looking_at(agent=True)
