@@ -78,6 +78,7 @@ __all__ = [
     "found_datasets",
     "one_recording_each",
     "run_benchmark",
+    "scored_part",
 ]
 
 THRESHOLDS = ("2/3", "1")
@@ -470,6 +471,32 @@ class Benchmark:
         process: the run's own reading where the run scored the dataset here."""
         return dataset.frames(_load_once(dataset, self.run))
 
+    def cell_frames(self, dataset: DatasetSpec, detector: DetectorSpec) -> tuple[Frame, ...]:
+        """The frames ``detector``'s cell scored on ``dataset``: the dataset's scored frames, or
+        their test part for a detector that learns on the rest (:func:`scored_part`)."""
+        return self.scored_frames(scored_part(dataset, detector))
+
+    def recorded(
+        self, dataset: DatasetSpec
+    ) -> tuple[list[Frame], dict[str, list[tuple[Group, ...]]]]:
+        """What a recording of ``dataset`` shows: the frames every detector scored on it (its
+        test part where one learns on the rest, ``gcff-tuned``), and each scored detector's
+        partition of each of them, by the detector's key."""
+        scored = {}  # detector key -> (the frames its cell scored, its partition of each)
+        for detector in self.detectors:
+            cell = self.cell(dataset, detector)
+            if cell.scores is not None:
+                scored[detector.key] = (self.cell_frames(dataset, detector), cell.predictions)
+        if not scored:
+            return [], {}
+        common = set.intersection(*({_at(f) for f in part} for part, _ in scored.values()))
+        frames = [f for f in self.scored_frames(dataset) if _at(f) in common]
+        predictions = {
+            key: [p for f, p in zip(part, partitions, strict=True) if _at(f) in common]
+            for key, (part, partitions) in scored.items()
+        }
+        return frames, predictions
+
     def cell(self, dataset: DatasetSpec, detector: DetectorSpec) -> Cell:
         for cell in self.cells:
             if cell.dataset == dataset.label and cell.detector == detector.label:
@@ -546,6 +573,17 @@ def _load_once(dataset_spec: DatasetSpec, run: str | None) -> Dataset:
     return _LOADED["datasets"][key]
 
 
+def _at(frame: Frame) -> tuple[str, float]:
+    """A frame's place in its dataset: its sequence and time."""
+    return frame.sequence, frame.time
+
+
+def scored_part(dataset_spec: DatasetSpec, detector_spec: DetectorSpec) -> DatasetSpec:
+    """The part of ``dataset_spec`` that ``detector_spec``'s cell scores: the test part of its
+    time split for a detector that learns (it is fitted on the training part), else the whole."""
+    return replace(dataset_spec, split="test") if detector_spec.learns else dataset_spec
+
+
 def _score(
     dataset_spec: DatasetSpec,
     detector_spec: DetectorSpec,
@@ -558,8 +596,8 @@ def _score(
     dataset = _load_once(dataset_spec, run)
     label = dataset_spec.label  # the row's dataset, whichever of its frames this cell scores
     training: tuple[Frame, ...] = ()
+    dataset_spec = scored_part(dataset_spec, detector_spec)
     if detector_spec.learns:
-        dataset_spec = replace(dataset_spec, split="test")
         train, _ = time_split(dataset.frames, dataset_spec.train_fraction)
         training = tuple(f for f in train if f.groups is not None)
     frames = dataset_spec.frames(dataset)

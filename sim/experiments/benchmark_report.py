@@ -357,21 +357,17 @@ def record(
     benchmark: Benchmark, folder: str | Path, *, progress: Callable[[str], None] | None = None
 ) -> dict[str, Path]:
     """One ``.rrd`` per dataset: its scored frames, the ground truth and every detector's groups
-    with their mistakes, and the running scores. Returns dataset label -> path; ``progress`` is
+    with their mistakes, and the running scores (`Benchmark.recorded`: the test part where a
+    detector learns on the rest). Returns dataset label -> path; ``progress`` is
     called with a line as each recording is written."""
     from sim.recording import record_evaluation  # here: a run without recordings needs no Rerun
 
     folder = Path(folder)
     written = {}
     for dataset in benchmark.datasets:
-        predictions = {}
-        for detector in benchmark.detectors:
-            cell = benchmark.cell(dataset, detector)
-            if cell.scores is not None:
-                predictions[detector.key] = list(cell.predictions)
-        if not predictions:
+        frames, predictions = benchmark.recorded(dataset)
+        if not frames:
             continue
-        frames = benchmark.scored_frames(dataset)
         path = folder / f"{_slug(dataset.name)}.rrd"
         record_evaluation(
             path, frames, predictions, name=f"benchmark-{dataset.name}", dataset=dataset.name

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import subprocess
 import sys
 import textwrap
 import zlib
@@ -393,3 +394,39 @@ def test_the_report_has_a_groups_in_time_table(tmp_path, capsys):
     assert row.split(" | ")[2:4] == ["1", "0.0"]  # one join, none found
     cell = json.loads((tmp_path / "out" / "benchmark.json").read_text())["cells"][0]
     assert cell["temporal"]["true_events"] == 1
+
+
+def test_a_recording_holds_the_frames_every_detector_scored(small, tmp_path):
+    # gcff-tuned learns on the first 3 of 5 frames and is scored on the last 2; majority on all
+    # 5. The recording shows the 2 both scored, each detector's groups of those.
+    from rerun.chunk import RrdReader
+
+    five = _gcff(tmp_path / "five", FRAMES * 2 + FRAMES[:1])
+    dataset = DatasetSpec(name="five", path=str(five))
+    tuned, majority = (detector_spec(s) for s in ("gcff-tuned", "majority"))
+    result = run_benchmark([dataset], [tuned, majority])
+    frames, predictions = result.recorded(dataset)
+    assert [f.time for f in frames] == [f.time for f in result.cell_frames(dataset, tuned)]
+    assert len(frames) == 2 and len(result.cell_frames(dataset, majority)) == 5
+    assert predictions[tuned.key] == list(result.cell(dataset, tuned).predictions)
+    assert predictions[majority.key] == list(result.cell(dataset, majority).predictions[3:])
+    out = tmp_path / "out"
+    argv = ["benchmark", "--data", str(five), "--detector", "gcff-tuned", "--detector", "majority"]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0
+    entities = {c.entity_path for c in RrdReader(out / "recordings" / "five.rrd").stream()}
+    assert any(e.startswith(f"/world/groups/{tuned.key}") for e in entities), entities
+
+
+def test_the_plot_is_drawn_without_pyplot_and_no_recording_imports_no_rerun(small, tmp_path):
+    out = tmp_path / "out"
+    argv = ["benchmark", "--quiet", "--no-recordings", "--out", str(out)]
+    argv += [w for spec in small for w in ("--data", spec.path)]
+    code = (
+        "import sys; from sim.cli import main; main(sys.argv[1:]); "
+        "print(sorted({'matplotlib', 'matplotlib.pyplot', 'rerun'} & set(sys.modules)))"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code, *argv], capture_output=True, text=True, check=True
+    )
+    assert run.stdout.splitlines()[-1] == "['matplotlib']"
+    assert (out / "benchmark.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
