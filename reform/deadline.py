@@ -44,6 +44,7 @@ __all__ = [
     "STUCK_GRACE_S",
     "DeadlineExpired",
     "duration",
+    "hard_stopping",
     "hard_stops",
     "in_thread",
     "within",
@@ -55,7 +56,7 @@ _UNIT_S = {None: 1.0, "s": 1.0, "ms": 1e-3, "m": 60.0, "min": 60.0}
 _STACK_DEPTH = 64  # Python frames kept of a call stopped at its deadline, innermost first
 # Seconds past its deadline a call may go on holding the interpreter before hard_stops ends the
 # process: room for a busy machine to run the deadline's own handler, which stops it cleanly.
-STUCK_GRACE_S = 10.0
+STUCK_GRACE_S = 5.0
 
 T = TypeVar("T")
 
@@ -132,21 +133,28 @@ def within(
 
 
 @contextlib.contextmanager
-def hard_stops(prefix: str) -> Iterator[None]:
+def hard_stops(prefix: str, *, to: str | None = None) -> Iterator[None]:
     """Within: a call :func:`within` stops with a ``stuck`` line is ended, process and all,
     when it holds the interpreter past its deadline (see the module notes); the line is written
-    after ``prefix`` (``"reform-sim detect: error: "``)."""
-    before = _WATCH.prefix
-    _WATCH.prefix = prefix
+    after ``prefix`` (``"reform-sim detect: error: "``) on stderr, or appended to the file
+    ``to`` (a worker's note, which the process that started it reads)."""
+    before = _WATCH.prefix, _WATCH.to
+    _WATCH.prefix, _WATCH.to = prefix, to
     try:
         yield
     finally:
-        _WATCH.prefix = before
+        _WATCH.prefix, _WATCH.to = before
 
 
-# The watcher: reads "arm SECONDS LINE" and "clear" on its stdin; at an armed moment (the
-# monotonic clock, shared by every process of the machine) it writes LINE on its stderr (this
-# process's) and kills PARENT; at the end of its stdin (this process gone) it ends.
+def hard_stopping() -> str | None:
+    """The prefix of the :func:`hard_stops` this process is within, or None."""
+    return _WATCH.prefix
+
+
+# The watcher: reads "arm<TAB>WHEN<TAB>FILE<TAB>LINE" and "clear" on its stdin; at an armed
+# moment (the monotonic clock, shared by every process of the machine) it writes LINE on its
+# stderr (this process's), or appends it to FILE when one is given, and kills PARENT; at the end
+# of its stdin (this process gone) it ends.
 _WATCHER = """\
 import os, select, signal, sys, time
 signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -154,7 +162,8 @@ parent, pending, armed = int(sys.argv[1]), b"", None
 while True:
     wait = None if armed is None else max(0.0, armed[0] - time.monotonic())
     if not select.select([0], [], [], wait)[0]:
-        os.write(2, armed[1] + b"\\n")
+        out = os.open(armed[1], os.O_WRONLY | os.O_APPEND) if armed[1] else 2
+        os.write(out, armed[2] + b"\\n")
         os.kill(parent, signal.SIGKILL)
         break
     chunk = os.read(0, 65536)
@@ -162,10 +171,9 @@ while True:
         break
     *lines, pending = (pending + chunk).split(b"\\n")
     for line in lines:
-        word, _, rest = line.partition(b" ")
+        word, *rest = line.split(b"\\t", 3)
         if word == b"arm":
-            at, _, text = rest.partition(b" ")
-            armed = (float(at), text)
+            armed = (float(rest[0]), rest[1], rest[2])
         elif word == b"clear":
             armed = None
 """
@@ -176,6 +184,7 @@ class _Watch:
 
     def __init__(self) -> None:
         self.prefix: str | None = None
+        self.to: str | None = None
         self._process: Any = None  # a subprocess.Popen
         self._owner = 0
 
@@ -186,7 +195,8 @@ class _Watch:
             return False
         text = " ".join(f"{self.prefix}{line}".split())
         at = time.monotonic() + seconds
-        return self._send(f"arm {at:.3f} {text}\n".encode(errors="replace"))
+        to = self.to or ""
+        return self._send(f"arm\t{at:.3f}\t{to}\t{text}\n".encode(errors="replace"))
 
     def clear(self) -> None:
         self._send(b"clear\n")

@@ -40,6 +40,7 @@ own long connection timeouts.
 
 from __future__ import annotations
 
+import contextlib
 import faulthandler
 import os
 import pickle
@@ -55,6 +56,7 @@ from pathlib import Path
 from typing import Any
 
 from reform.atomic import temporary_folder
+from reform.deadline import hard_stopping, hard_stops
 from sim.progress import progress_bar
 from sim.ticking import ticking
 
@@ -81,6 +83,7 @@ GCS_PROBE_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"  # every Ray GCS s
 RAY_INSTALL = "pip install 'reform-sim[ray]' (or pip install ray)"
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>: the signal a process gets when its parent dies
 NOTE_POLL_S = 0.1  # seconds between a run's looks for units its workers start
+STUCK_NOTE = "stuck: "  # before the line of a worker's unit stuck in compiled code, in its note
 NOTES_FOLDER = "reform-sim"  # in the system's temporary folder: where runs note their units
 PARENT_CHECK_S = 0.5  # seconds between a local worker's looks at its parent (not on Linux)
 EXIT_ORPHANED = 1  # exit status of a local worker whose parent is gone
@@ -297,18 +300,26 @@ def _apply(function: Callable[..., Any], unit: Any, *shared: Any) -> Any:
 
 
 def _noted(
-    notes: str, function: Callable[..., Any], k: int, unit: Any, *shared: Any
+    notes: str,
+    stop: str | None,
+    function: Callable[..., Any],
+    k: int,
+    unit: Any,
+    *shared: Any,
 ) -> tuple[int, Any]:
     """``(k, function(unit, *shared))`` in a local worker, which notes in the folder ``notes``
     that it runs unit ``k`` while it does (a crash's traceback written under the note), so that
-    the driver can name the unit of a worker killed meanwhile."""
+    the driver can name the unit of a worker killed meanwhile; with ``stop`` (the driver's
+    `reform.deadline.hard_stops`), a call stuck in compiled code past its deadline ends the
+    worker, its line written under the note after :data:`STUCK_NOTE`."""
     path = os.path.join(notes, f"{k}.unit")
     with open(path, "w") as note:
         note.write(f"{os.getpid()}\n")
         note.flush()
         faulthandler.enable(file=note)  # a crash's Python traceback: here, not on the terminal
         try:
-            result = function(unit, *shared)
+            with hard_stops(STUCK_NOTE, to=path) if stop else contextlib.nullcontext():
+                result = function(unit, *shared)
         finally:
             faulthandler.disable()
     os.remove(path)
@@ -370,6 +381,7 @@ def _noted_pids(notes: str) -> list[int]:
     return pids
 
 
+_STUCK = re.compile(f"^{STUCK_NOTE}(.+)$", re.MULTILINE)
 _CODES = re.compile(r"\b(SIG[A-Z0-9]+)\((-?\d+)\)|\bEXIT\((-?\d+)\)")
 _CRASH_AT = re.compile(r'File "([^"]+)", line (\d+) in (\S+)')
 
@@ -394,6 +406,9 @@ def _died(
             continue
         with open(os.path.join(notes, entry), errors="replace") as note:
             text = note.read()
+        stuck = _STUCK.search(text)
+        if stuck is not None:  # its deadline's watcher ended it, and said why
+            return WorkerDied(stuck.group(1))
         k = int(entry.removesuffix(".unit"))
         crash = _CRASH_AT.search(text)
         where = (
@@ -652,8 +667,9 @@ class Executor:
             notes = str(folder)
             deaths = _DeathWatch(notes)
             try:
+                stop = hard_stopping()  # a unit stuck in compiled code ends its worker (the note)
                 yield from parallel(
-                    delayed(_noted)(notes, function, k, item, *shared)
+                    delayed(_noted)(notes, stop, function, k, item, *shared)
                     for k, item in enumerate(units)
                 )
             except TerminatedWorkerError as exc:

@@ -98,12 +98,23 @@ def test_a_detector_that_never_returns_ends_detect_within_its_deadline(lab, plug
     assert not (lab / "out.json").exists()
 
 
-def test_a_detector_stuck_in_compiled_code_is_ended_with_its_process_in_one_line(lab):
+@pytest.mark.parametrize(
+    ("command", "status"),
+    [
+        (["detect", "--out", "out.json"], -signal.SIGKILL),  # in the command's own process
+        # in a worker process, the other detector in the other worker
+        (["benchmark", "--detector", "majority", "--jobs", "2", "--out", "out", "--quiet"], 2),
+    ],
+    ids=["detect", "benchmark-workers"],
+)
+def test_a_detector_stuck_in_compiled_code_is_ended_with_its_process_in_one_line(
+    lab, command, status
+):
     """No signal handler runs while compiled code holds the interpreter: the deadline's watcher
-    process says the line and ends the command STUCK_GRACE_S after the deadline."""
+    process ends the process STUCK_GRACE_S after the deadline, and the command says one line."""
     started = time.monotonic()
     run = subprocess.run(
-        [*CONSOLE, "detect", "--detector", "stuck_in_c:make", "--data", "ds", "--out", "out.json"]
+        [*CONSOLE, *command, "--detector", "stuck_in_c:make", "--data", "ds"]
         + ["--detector-timeout", f"{DEADLINE_S:g}s"],
         cwd=lab,
         capture_output=True,
@@ -111,15 +122,17 @@ def test_a_detector_stuck_in_compiled_code_is_ended_with_its_process_in_one_line
         timeout=DEADLINE_S * 4 + STUCK_GRACE_S + SLACK_S + 30,
     )
     seconds = time.monotonic() - started
-    assert run.returncode == -signal.SIGKILL, (run.returncode, run.stderr)
+    assert run.returncode == status, (run.returncode, run.stderr)
     pattern = (
-        r"reform-sim detect: error: stuck_in_c:make: predict on 4 frame\(s\) of ds did not finish "
-        rf"within 2 s and had not returned to Python {STUCK_GRACE_S:g} s later \(stuck in compiled "
-        r"code, where it cannot be stopped\): the process was ended; " + re.escape(HINT) + "\n"
+        rf"reform-sim {command[0]}: error: stuck_in_c:make: predict on 4 frame\(s\) of ds did not "
+        rf"finish within 2 s and had not returned to Python {STUCK_GRACE_S:g} s later \(stuck in "
+        r"compiled code, where it cannot be stopped\): the process was ended; "
+        + re.escape(HINT)
+        + "\n"
     )
     assert re.fullmatch(pattern, run.stderr), run.stderr
     assert 4 * DEADLINE_S + STUCK_GRACE_S - 1 < seconds < 4 * DEADLINE_S + STUCK_GRACE_S + SLACK_S
-    assert not (lab / "out.json").exists()
+    assert not (lab / "out.json").exists() and not (lab / "out").exists()
 
 
 def test_predict_past_its_deadline_ends_benchmark_in_one_line(lab, capsys, monkeypatch):
