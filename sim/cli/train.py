@@ -23,6 +23,8 @@ from sim.cli._common import (
     select_frames,
 )
 from sim.cli._grammar import show_progress
+from sim.progress import progress_bar
+from sim.ticking import ticking
 
 # REFORM's own options: (flag, attribute); refused with --detector dante.
 _REFORM_OPTIONS = (
@@ -149,12 +151,19 @@ def _run_dante(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
 
+    bar = progress_bar(
+        total=model.epochs, desc="epochs", unit="epoch", file=sys.stderr, disable=args.quiet
+    )
+
     def progress(epoch: int, epochs: int, loss: float, validation_loss: float | None) -> None:
         held = "" if validation_loss is None else f", validation loss {validation_loss:.4f}"
-        print(f"  epoch {epoch}/{epochs}: loss {loss:.4f}{held}", file=sys.stderr, flush=True)
+        bar.write(f"  epoch {epoch}/{epochs}: loss {loss:.4f}{held}", file=sys.stderr)
+        bar.update(1)
 
     try:
-        model.fit(frames, validation=validation, progress=None if args.quiet else progress)
+        # Redrawn while an epoch runs: one on SALSA takes a minute or more on two cores.
+        with bar, ticking(bar):
+            model.fit(frames, validation=validation, progress=None if args.quiet else progress)
     except ValueError as exc:
         raise CliError(f"{args.data}: {' '.join(str(exc).split())}") from None
     path = model.save(args.out)

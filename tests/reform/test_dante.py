@@ -359,6 +359,7 @@ def test_train_dante_writes_a_model_that_evaluate_uses(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "trained DANTE on 12 frames of toy" in captured.out
     assert "epoch 2/2: loss" in captured.err
+    assert "epochs: 100%" in captured.err  # the bar, redrawn while an epoch runs
     assert load_dante(out).get_params()["random_state"] == 1
     assert (
         main(["evaluate", "--detector", "dante", "--option", f"model={out}", "--data", str(data)])
