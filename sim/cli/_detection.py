@@ -31,17 +31,19 @@ def detect_frames(
     a partition of each frame's people is one line naming it and the frame)."""
     from reform.detectors import run_detector
 
-    detector = spec.build(args)
     started = time.perf_counter()
     bar = progress_bar(
         total=len(frames),
         desc=f"running {args.detector}",
         unit="frame",
         file=sys.stderr,
+        leave=False,  # the line below says what it did; a refusal stays one line
         disable=not show_progress(args),
     )
-    # Redrawn while the detector predicts every frame in one call (GTCG on SALSA: a minute).
+    # Redrawn while the detector is made (a model file read: seconds) and predicts every frame
+    # in one call (GTCG on SALSA: a minute).
     with bar, ticking(bar):
+        detector = spec.build(args)
         partitions = run_detector(
             args.detector,
             detector,
