@@ -9,7 +9,8 @@ assumes), each in a new shell with the virtualenv's bin first on PATH, ``REFORM_
 set and the clone's code imported (``PYTHONPATH``), on a terminal of its own as a user's (a
 short command shows its progress lines only on a terminal). Every page's clone is of one commit,
 HEAD when the run starts. A command run before, on this page or an earlier one (comments and
-spacing aside), is not run again. The files a page asks its reader to write (its blocks with
+spacing aside), is not run again, unless it writes files (``--out``, ``--save``) that the page's
+next commands may read. The files a page asks its reader to write (its blocks with
 ``title="PATH"``) are written in its folder before its first command. A pattern, or a command with a
 placeholder for the user's own value (``--data PATH``), is shown, not run.
 
@@ -57,6 +58,8 @@ _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")  # a terminal's colour and cursor 
 # A word standing for the user's own value: --data PATH, --tune-on TRAIN, detector=NAME.
 _PLACEHOLDER = re.compile(r"^(?:[\w-]+=)?[A-Z][A-Z_]{2,}/?$")
 _REFUSAL = re.compile(r"^(reform-sim [\w ]+): error:")
+# A command that writes files, which the page's next commands may read: run on every page.
+_WRITES = re.compile(r"\s--(?:out|save)\b")
 
 
 def _site_pages():
@@ -251,7 +254,7 @@ def run_pages(pages: list[Path], *, timeout: float, out: Path) -> list[Row]:
                 key = _normalised(command.text)
                 if words is None or any(_PLACEHOLDER.match(w) for w in words):
                     row = Row(where, command.text, "not run: a pattern or a placeholder", None)
-                elif key in done:
+                elif key in done and not _WRITES.search(key):
                     first = done[key]
                     row = Row(where, command.text, f"as {first.where}", None, first.outcome)
                 else:
