@@ -11,9 +11,7 @@ from typing import Any
 
 from sim.cli._common import add_data_arguments
 from sim.cli._detectors import DetectorSpec, add_detector_arguments
-from sim.cli._grammar import add_quiet, show_progress
-from sim.progress import progress_bar
-from sim.ticking import ticking
+from sim.cli._grammar import add_quiet, show_progress, ticking_bar
 
 
 def add_detection_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,17 +30,9 @@ def detect_frames(
     from reform.detectors import run_detector
 
     started = time.perf_counter()
-    bar = progress_bar(
-        total=len(frames),
-        desc=f"running {args.detector}",
-        unit="frame",
-        file=sys.stderr,
-        leave=False,  # the line below says what it did; a refusal stays one line
-        disable=not show_progress(args),
-    )
-    # Redrawn while the detector is made (a model file read: seconds) and predicts every frame
-    # in one call (GTCG on SALSA: a minute).
-    with bar, ticking(bar):
+    # The bar moves while the detector is made (a model file read: seconds of imports) and
+    # predicts every frame in one call.
+    with ticking_bar(args, f"running {args.detector}", len(frames)):
         detector = spec.build(args)
         partitions = run_detector(
             args.detector,
@@ -51,7 +41,6 @@ def detect_frames(
             deadline_s=args.detector_timeout,
             source=getattr(args, "data", None) or "",
         )
-        bar.update(len(frames))
     if show_progress(args):
         seconds = time.perf_counter() - started
         print(f"{args.detector}: {len(frames):,} frames in {seconds:.1f} s", file=sys.stderr)

@@ -29,12 +29,15 @@ unknown scenario with the registry's one message (`scenarios.describe`).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 from sim.cli._common import TRAIN_FRACTION, check_output, warn_deprecated
+from sim.progress import progress_bar
+from sim.ticking import ticking
 
 DEFAULT_SEED = 0
 FRAME_CHOICES = ("all", "train", "test")
@@ -146,6 +149,26 @@ def show_progress(args: argparse.Namespace) -> bool:
     """Whether a short command shows its progress lines: not ``--quiet``, and stderr a
     terminal (a log or a pipe gets the result and errors alone)."""
     return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+@contextlib.contextmanager
+def ticking_bar(args: argparse.Namespace, what: str, frames: int) -> Iterator[None]:
+    """Where a short command shows its progress (`show_progress`), a bar of ``frames`` frames
+    redrawn every few seconds while the block does ``what`` with them all in one call (GTCG
+    predicting SALSA, REFORM fitting on it: a minute, half a minute on two cores), full when
+    the block ends and then cleared: the line that follows says what was done, and a refusal
+    stays one line."""
+    bar = progress_bar(
+        total=frames,
+        desc=what,
+        unit="frame",
+        file=sys.stderr,
+        leave=False,
+        disable=not show_progress(args),
+    )
+    with bar, ticking(bar):
+        yield
+        bar.update(frames)
 
 
 def add_out(

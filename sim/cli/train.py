@@ -22,7 +22,7 @@ from sim.cli._common import (
     load_data,
     select_frames,
 )
-from sim.cli._grammar import show_progress
+from sim.cli._grammar import show_progress, ticking_bar
 from sim.progress import progress_bar
 from sim.ticking import ticking
 
@@ -73,7 +73,8 @@ def run(args: argparse.Namespace) -> int:
             print(
                 f"cross-validating {args.classifier} on {len(frames)} frames ...", file=sys.stderr
             )
-        tuning = tune(args.classifier, frames, features=features, n_jobs=job_count(args))
+        with ticking_bar(args, "cross-validating", len(frames)):
+            tuning = tune(args.classifier, frames, features=features, n_jobs=job_count(args))
         params = classifier_params(args.classifier, tuning.best_params)
         for candidate, score in zip(tuning.candidates, tuning.mean_score, strict=True):
             if args.quiet:
@@ -81,13 +82,14 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {candidate}: CV pairwise accuracy {100 * score:.2f} %", file=sys.stderr)
     if show_progress(args):
         print(f"fitting {args.classifier} on {len(frames):,} frames ...", file=sys.stderr)
-    model = Reform(
-        make_classifier(args.classifier, **params),
-        features=features,
-        reconstruction=args.reconstruction,
-        threshold=args.threshold,
-    ).fit(frames)
-    path = save_model(model, args.out)
+    with ticking_bar(args, f"fitting {args.classifier}", len(frames)):
+        model = Reform(
+            make_classifier(args.classifier, **params),
+            features=features,
+            reconstruction=args.reconstruction,
+            threshold=args.threshold,
+        ).fit(frames)
+        path = save_model(model, args.out)
     summary = model.training_summary_
     print(
         f"trained REFORM ({args.classifier}{', ' + str(params) if params else ''}) on "
