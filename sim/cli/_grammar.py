@@ -152,23 +152,25 @@ def show_progress(args: argparse.Namespace) -> bool:
 
 
 @contextlib.contextmanager
-def ticking_bar(args: argparse.Namespace, what: str, frames: int) -> Iterator[None]:
-    """Where a short command shows its progress (`show_progress`), a bar of ``frames`` frames
+def ticking_bar(
+    args: argparse.Namespace, what: str, count: int, *, unit: str = "frame"
+) -> Iterator[None]:
+    """Where a short command shows its progress (`show_progress`), a bar of ``count`` units
     redrawn every few seconds while the block does ``what`` with them all in one call (GTCG
     predicting SALSA, REFORM fitting on it: a minute, half a minute on two cores), full when
     the block ends and then cleared: the line that follows says what was done, and a refusal
     stays one line."""
     bar = progress_bar(
-        total=frames,
+        total=count,
         desc=what,
-        unit="frame",
+        unit=unit,
         file=sys.stderr,
         leave=False,
         disable=not show_progress(args),
     )
     with bar, ticking(bar):
         yield
-        bar.update(frames)
+        bar.update(count)
 
 
 def add_out(

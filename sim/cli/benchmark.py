@@ -20,6 +20,7 @@ from sim.cli._common import (
     job_count,
 )
 from sim.cli._detectors import make_plugin
+from sim.cli._grammar import ticking_bar
 from sim.experiments.benchmark import (
     dataset_spec,
     detector_spec,
@@ -97,7 +98,9 @@ def _run(args: argparse.Namespace) -> int:
     if "all" in named:
         named = [*builtin_names(), *(n for n in named if n != "all")]
     detectors = [detector_spec(spec) for spec in dict.fromkeys(named)]
-    detectors += [model_spec(path) for path in args.model or ()]
+    if args.model:  # each file read, skops and scikit-learn imported: seconds
+        with ticking_bar(args, "reading models", len(args.model), unit="file"):
+            detectors += [model_spec(path) for path in args.model]
     detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
 
