@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 
 from sim.cli._common import CliError, check_output
+from sim.progress import progress_bar
+from sim.ticking import ticking
 
 MARKDOWN = "benchmark-twin.md"
 JSON = "benchmark-twin.json"
@@ -46,11 +48,25 @@ def run_twin(args: argparse.Namespace) -> int:
     folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
     frames = list(twin_data(twin, folder, n_jobs=args.jobs or 1, progress=not args.quiet))
 
-    def progress(label: str) -> None:
-        if not args.quiet:
-            print(f"benchmark --twin: {label}", file=sys.stderr, flush=True)
+    bar = progress_bar(
+        total=len(candidates),
+        desc="benchmark --twin",
+        unit="detector",
+        file=sys.stderr,
+        disable=args.quiet,
+    )
 
-    predictions = predict(frames, candidates, seed=twin.seed, progress=progress)
+    at_work: list[str] = []  # the detector being scored
+
+    def progress(label: str) -> None:  # called as each detector starts: the one before is done
+        bar.update(len(at_work))
+        at_work[:] = [label]
+        bar.set_postfix_str(label)
+
+    # Redrawn while a detector works (gcff-tuned tunes itself first: seconds).
+    with bar, ticking(bar):
+        predictions = predict(frames, candidates, seed=twin.seed, progress=progress)
+        bar.update(len(candidates) - bar.n)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     text = table(predictions, place=f"the place of {twin.name} ({twin.mode} twin, {args.twin})")
