@@ -28,6 +28,7 @@ from sim.cli._common import (
 from sim.episode import estimate_episode, prepare, simulate_episode, write_episode
 from sim.recording import target_from_args
 from sim.sensor import Sensor
+from sim.ticking import ticking
 
 _STREAMING = (
     "record nothing (no {save}, {connect}, {serve}) to stream the frames to {out} in bounded memory"
@@ -81,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         raise size_error(exc) from None
     start = time.perf_counter()
     if recording:
-        return _run_recorded(args, made, target, sensor, kwargs, out, start)
+        return _run_recorded(args, made, target, sensor, kwargs, out, start, estimate.frames)
     with tqdm(
         total=estimate.frames,
         unit="frame",
@@ -111,26 +112,50 @@ def _run_recorded(
     kwargs: dict[str, float],
     out: Path,
     start: float,
+    frames: int,
 ) -> int:
-    """The whole episode in memory, written to --out and recorded."""
+    """The whole episode in memory, written to --out and recorded; a bar of its ``frames``
+    (estimated) moves while it is simulated in one call, and while it is recorded."""
     from sim.recording import FieldOfView, record_episode, rerun_in_this_shell  # Rerun: here only
 
-    episode = simulate_episode(
-        made, duration=args.duration, view=args.view, sensor=sensor, **kwargs
+    bar = tqdm(
+        total=frames,
+        unit="frame",
+        desc=f"simulate {made.name}",
+        disable=args.quiet,
+        delay=1.0,  # short runs print nothing
+        leave=False,  # the report below says what was made
+        file=sys.stderr,
     )
+    with bar, ticking(bar):
+        episode = simulate_episode(
+            made, duration=args.duration, view=args.view, sensor=sensor, **kwargs
+        )
+        bar.update(frames)
     dataset = episode.dataset
     write_parquet(dataset, out)
     sizes = Counter(len(g) for f in dataset for g in f.groups or () if len(g) >= 2)
     _report(out, args, len(dataset), dataset.metadata, sizes, episode.events, start)
-    record_episode(
-        target,
-        episode.truth,
-        observed=dataset.frames if args.view == "robot" else None,
-        events=episode.events,
-        seed=args.seed,
-        name=dataset.frames[0].sequence if dataset.frames else args.scenario,
-        field_of_view=FieldOfView.of(sensor),
+    bar = tqdm(
+        total=len(episode.truth),
+        unit="frame",
+        desc="recording",
+        disable=args.quiet,
+        delay=1.0,
+        leave=False,  # the line below names the recording
+        file=sys.stderr,
     )
+    with bar, ticking(bar):
+        record_episode(
+            target,
+            episode.truth,
+            observed=dataset.frames if args.view == "robot" else None,
+            events=episode.events,
+            seed=args.seed,
+            name=dataset.frames[0].sequence if dataset.frames else args.scenario,
+            field_of_view=FieldOfView.of(sensor),
+        )
+        bar.update(len(episode.truth))
     if target.save is not None:
         rerun = rerun_in_this_shell()
         print(f"wrote {target.save} (open it with `{rerun} {target.save}`)", file=sys.stderr)

@@ -102,3 +102,22 @@ def test_a_detector_predicting_in_one_call_keeps_its_bar_moving(tmp_path, monkey
     # Redrawn, its time moving, while predict had not yet returned a frame.
     assert re.search(r"running slow:make: +0%\|[^\r]*\| 0/\d+ \[00:0[2-9]<", err), err
     assert re.search(r"[\r\n]slow:make: \d+ frames in [\d.]+ s\n", err), err  # the bar cleared
+
+
+def test_simulate_with_a_recording_keeps_its_bar_moving(tmp_path, monkeypatch):
+    import sim.cli.simulate
+    from sim.episode import simulate_episode
+
+    def slow(*args, **kwargs):  # the episode in memory, as a long one takes seconds
+        time.sleep(2.5)
+        return simulate_episode(*args, **kwargs)
+
+    monkeypatch.setattr(sim.cli.simulate, "simulate_episode", slow)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    argv = ["simulate", "--scenario", "hri-conversation", "--duration", "2", "--out", "a.parquet"]
+    assert main([*argv, "--save", "a.rrd"]) == 0
+    err = sys.stderr.getvalue()
+    # Redrawn, its time moving, while the episode had not yet been simulated.
+    assert re.search(r"simulate hri-conversation: +0%\|[^\r]*\| 0/\d+ \[00:0[2-9]<", err), err
+    assert "wrote a.rrd" in err
