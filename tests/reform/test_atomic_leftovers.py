@@ -23,7 +23,10 @@ from reform.atomic import atomic_open, atomic_path, remove_stale_temporaries, te
 from reform.datasets import fetch
 from reform.datasets.fetch import MANIFEST
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="kills processes with SIGKILL")
+pytestmark = [
+    pytest.mark.faults,
+    pytest.mark.skipif(os.name != "posix", reason="kills processes with SIGKILL"),
+]
 
 WAIT_S = 60.0  # seconds a child has to get to the middle of its write (the machine is shared)
 # A child that starts an atomic write of ARGV[1], says so on stdout, and waits to be killed.

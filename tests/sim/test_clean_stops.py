@@ -24,7 +24,10 @@ START = (
 WAIT_S = 120.0  # at most this long for the command to get going (the machine is shared)
 GONE_S = 5.0  # its workers must be gone this soon after it ended
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="sends POSIX signals")
+pytestmark = [
+    pytest.mark.faults,
+    pytest.mark.skipif(os.name != "posix", reason="sends POSIX signals"),
+]
 
 
 def _below(process: psutil.Process) -> list[psutil.Process]:

@@ -21,6 +21,8 @@ from sim.episode import estimate_episode
 from sim.recording import record_episode
 from sim.sizing import recording_disk
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 ROOT = Path(__file__).resolve().parents[2]
 RUN_TIMEOUT_S = 120.0  # a hang fails the test, not the suite
 SIMULATE = ["simulate", "--scenario", "mingle", "--set", "people=4", "--duration", "20"]

@@ -20,6 +20,8 @@ from reform.datasets.parquet import verify_folder
 from sim.cli import main
 from sim.generate import CARD_JSON, CARD_MARKDOWN, shard_path
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = "hri-conversation"  # two people and the robot: a cheap scene
 EPISODES = 3

@@ -29,6 +29,8 @@ from reform.datasets.store import StoreError, open_store
 from sim.cli import main
 from sim.generate import CARD_JSON, CARD_MARKDOWN, generate_dataset, shard_path
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 moto_server = pytest.importorskip("moto.server")
 pytest.importorskip("s3fs")
 

@@ -14,6 +14,8 @@ from reform.datasets.parquet import verify_folder
 from sim.cli import main
 from sim.generate import CARD_JSON, generate_dataset
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 EPISODES = 3
 
 

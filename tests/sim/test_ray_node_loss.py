@@ -17,6 +17,8 @@ import sim.executor
 from sim.cli import main
 from sim.executor import ClusterError, Executor
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 START_S = 60.0  # at most this long for a unit to start on a new node (the machine is shared)
 STORE_BYTES = 80 * 2**20  # each node's object store
 
@@ -46,12 +48,17 @@ def cluster():
 
 def _runs_on(x: int, folder: str, doomed: str) -> int:
     """Notes which node runs unit ``x`` (a file named for the node's ID), then waits there
-    for the node's end on the ``doomed`` node, or a moment elsewhere."""
+    for the node's end on the ``doomed`` node; elsewhere, until a unit has started on the
+    ``doomed`` one (so that a node slow to start its worker still gets a unit)."""
     import ray
 
     node = ray.get_runtime_context().get_node_id()
     (Path(folder) / node).write_text(str(x))
-    time.sleep(START_S if node == doomed else 0.2)
+    if node == doomed:
+        time.sleep(START_S)
+    deadline = time.monotonic() + START_S
+    while not (Path(folder) / doomed).exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
     return x
 
 
@@ -68,8 +75,8 @@ def _lose_node_under(cluster, units: list[int], folder: Path) -> tuple[object, i
     deadline = time.monotonic() + START_S
     while not note.exists() and time.monotonic() < deadline and not run.done():
         time.sleep(0.05)
+    cluster.remove_node(doomed)  # whether or not a unit started there: no node left over
     assert note.exists(), "no unit started on the node added"
-    cluster.remove_node(doomed)
     return doomed, int(note.read_text()), run
 
 

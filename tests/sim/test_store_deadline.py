@@ -19,6 +19,8 @@ from killed_run import CLI
 
 from reform.datasets.store import TIMEOUT_S, TIMEOUT_VARIABLE, StoreError, timeout
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 DEADLINE_S = 2.0  # seconds: the deadline the tests set
 SLACK_S = 10.0  # seconds a command may take beyond its deadline (start-up included)

@@ -17,6 +17,8 @@ from sim.executor import Executor, WorkerDied
 KILLER = """\
 import os, signal, time
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 
 class Killed:
     def predict(self, frames):

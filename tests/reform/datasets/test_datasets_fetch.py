@@ -37,6 +37,8 @@ from reform.datasets import (
 from reform.datasets.fetch import MANIFEST, download_deadline
 from sim.cli import main
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 REPO_ROOT = Path(__file__).resolve().parents[3]
 REPO = "lab/fformations"
 COMMIT = "1" * 40

@@ -15,7 +15,10 @@ import pytest
 from cli_errors import run_cli
 from quiet_generate import generate_quietly
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="kills processes with SIGKILL")
+pytestmark = [
+    pytest.mark.faults,
+    pytest.mark.skipif(os.name != "posix", reason="kills processes with SIGKILL"),
+]
 
 WAIT_S = 60.0  # seconds a child has to get to its write or its lock (the machine is shared)
 # A child that starts an atomic write of ARGV[1] (or takes the lock of folder ARGV[1]), says so on

@@ -23,6 +23,8 @@ from quiet_generate import generate_quietly
 from reform.deadline import STUCK_GRACE_S, DeadlineExpired, duration, within
 from sim.cli import main
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 DEADLINE_S = 0.5  # seconds: the deadline the tests give (4 frames: 2 s to predict them)
 SLACK_S = 10.0  # seconds a command may take beyond its deadline (start-up included)
 HINT = "give it longer with --detector-timeout DURATION"

@@ -21,7 +21,10 @@ START = (
 )
 WAIT_S = 60.0  # at most this long for the command to get going, and to stop
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="sends SIGINT to a process group")
+pytestmark = [
+    pytest.mark.faults,
+    pytest.mark.skipif(os.name != "posix", reason="sends SIGINT to a process group"),
+]
 
 
 @pytest.fixture(autouse=True)

@@ -12,6 +12,8 @@ import pytest
 from killed_run import CLI, RUN_TIMEOUT_S
 from quiet_generate import generate_quietly
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 PLUGINS = {
     "exit_at_import": "import sys\n\nsys.exit(0)\n\n\ndef make():\n    return None\n",
     "exit_in_factory": "import sys\n\n\ndef make():\n    sys.exit(0)\n",

@@ -14,6 +14,8 @@ import pytest
 from killed_run import CLI, RUN_TIMEOUT_S
 from quiet_generate import generate_quietly
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 PLUGINS = {
     "os_exit_at_import": "import os\n\nos._exit(0)\n\n\ndef make():\n    return None\n",
     "os_exit_in_factory": "import os\n\n\ndef make():\n    os._exit(0)\n",
