@@ -17,8 +17,11 @@ from sim.cli._common import (
 )
 from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
 from sim.cli._experiment_paper import BASENAME
+from sim.cli._grammar import show_progress
 from sim.experiments.paper import paper_experiment
 from sim.experiments.paper_report import to_markdown
+from sim.progress import progress_bar
+from sim.ticking import ticking
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -42,20 +45,36 @@ def run(args: argparse.Namespace) -> int:
     stem = report_target(args.out, BASENAME)
     started = time.perf_counter()
 
+    # On a terminal, a bar under the stage lines, its time redrawn while a stage works (a
+    # classifier's cross-validation: a minute on two cores).
+    bar = progress_bar(
+        desc="experiment paper",
+        bar_format="{desc}: stage {n}, {elapsed}",
+        file=sys.stderr,
+        leave=False,
+        disable=not show_progress(args),
+    )
+
     def progress(message: str) -> None:
         if args.quiet:
             return
-        print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr)
+        line = f"[{time.perf_counter() - started:6.1f} s] {message}"
+        if bar.disable:
+            print(line, file=sys.stderr)
+        else:
+            bar.update(1)  # the stage the line names
+            bar.write(line, file=sys.stderr)
 
-    experiment = paper_experiment(
-        load_salsa(resolve(data["salsa"])),
-        load_babble(resolve(data["babble"])),
-        train_fraction=args.train_fraction,
-        n_folds=args.folds,
-        n_jobs=job_count(args),
-        diagnostics=not args.no_diagnostics,
-        progress=progress,
-    )
+    with bar, ticking(bar):
+        experiment = paper_experiment(
+            load_salsa(resolve(data["salsa"])),
+            load_babble(resolve(data["babble"])),
+            train_fraction=args.train_fraction,
+            n_folds=args.folds,
+            n_jobs=job_count(args),
+            diagnostics=not args.no_diagnostics,
+            progress=progress,
+        )
     command = _command(args)
     publish(
         to_markdown(experiment, command=command), experiment.to_json(command=command), stem=stem
