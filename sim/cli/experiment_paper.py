@@ -5,8 +5,6 @@ Its arguments are `sim.cli._experiment_paper`."""
 from __future__ import annotations
 
 import argparse
-import sys
-import time
 
 from reform.datasets import load_babble, load_salsa, resolve
 from sim.cli._common import (
@@ -17,11 +15,9 @@ from sim.cli._common import (
 )
 from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
 from sim.cli._experiment_paper import BASENAME
-from sim.cli._grammar import show_progress
+from sim.cli._grammar import stage_lines
 from sim.experiments.paper import paper_experiment
 from sim.experiments.paper_report import to_markdown
-from sim.progress import progress_bar
-from sim.ticking import ticking
 
 
 def _command(args: argparse.Namespace) -> str:
@@ -43,29 +39,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--folds must be at least 2, got {args.folds}")
     data = named_datasets(args)
     stem = report_target(args.out, BASENAME)
-    started = time.perf_counter()
 
-    # On a terminal, a bar under the stage lines, its time redrawn while a stage works (a
-    # classifier's cross-validation: a minute on two cores).
-    bar = progress_bar(
-        desc="experiment paper",
-        bar_format="{desc}: stage {n}, {elapsed}",
-        file=sys.stderr,
-        leave=False,
-        disable=not show_progress(args),
-    )
-
-    def progress(message: str) -> None:
-        if args.quiet:
-            return
-        line = f"[{time.perf_counter() - started:6.1f} s] {message}"
-        if bar.disable:
-            print(line, file=sys.stderr)
-        else:
-            bar.update(1)  # the stage the line names
-            bar.write(line, file=sys.stderr)
-
-    with bar, ticking(bar):
+    with stage_lines(args, "experiment paper") as progress:
         experiment = paper_experiment(
             load_salsa(resolve(data["salsa"])),
             load_babble(resolve(data["babble"])),

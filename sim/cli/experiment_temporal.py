@@ -7,11 +7,11 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-import time
 
 from sim.cli._common import CliError, job_count
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
 from sim.cli._experiment_temporal import BASENAME
+from sim.cli._grammar import stage_lines
 from sim.experiments.temporal import DURATION_S, EPISODES, RATE_HZ
 
 FIGURE = ".png"
@@ -78,24 +78,17 @@ def run(args: argparse.Namespace) -> int:
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, FIGURE))
     check_report(out, suffixes=(*REPORT_SUFFIXES, FIGURE))
     real = _real(args.data)
-    started = time.perf_counter()
-
-    def progress(message: str) -> None:
-        if not args.quiet:
-            print(
-                f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
-            )
-
-    result = run_temporal(
-        real,
-        seed=args.seed,
-        episodes=args.episodes,
-        duration=args.duration,
-        rate=args.rate,
-        detectors=args.detector or None,
-        jobs=job_count(args),
-        progress=progress,
-    )
+    with stage_lines(args, "experiment temporal") as progress:
+        result = run_temporal(
+            real,
+            seed=args.seed,
+            episodes=args.episodes,
+            duration=args.duration,
+            rate=args.rate,
+            detectors=args.detector or None,
+            jobs=job_count(args),
+            progress=progress,
+        )
     command = _command(args)
     picture = figure(result, out.with_name(out.name + FIGURE)).name
     markdown = to_markdown(result, command=command, figure=picture)

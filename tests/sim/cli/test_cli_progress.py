@@ -121,3 +121,21 @@ def test_simulate_with_a_recording_keeps_its_bar_moving(tmp_path, monkeypatch):
     # Redrawn, its time moving, while the episode had not yet been simulated.
     assert re.search(r"simulate hri-conversation: +0%\|[^\r]*\| 0/\d+ \[00:0[2-9]<", err), err
     assert "wrote a.rrd" in err
+
+
+def test_stage_lines_keep_the_time_moving_under_them(monkeypatch):
+    from argparse import Namespace
+
+    from sim.cli._grammar import stage_lines
+
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    with stage_lines(Namespace(quiet=False), "experiment x") as progress:
+        progress("tuning")
+        time.sleep(2.5)  # a stage that works without a word
+    err = sys.stderr.getvalue()
+    assert re.search(r"\[ +0\.\d s\] tuning\n", err), err
+    assert "experiment x: 00:02 so far" in err, err
+    monkeypatch.setattr(sys, "stderr", io.StringIO())  # a log: the lines alone
+    with stage_lines(Namespace(quiet=False), "experiment x") as progress:
+        progress("tuning")
+    assert re.fullmatch(r"\[ +0\.\d s\] tuning\n", sys.stderr.getvalue())
