@@ -51,7 +51,7 @@ from pathlib import Path
 from timing import DATASETS_VARIABLE, REPO, BenchmarkParser, default_datasets
 
 SILENCE_GOAL_S = 5.0  # seconds: issue 33's longest silence of any documented command
-EXIT_GRACE_S = 5.0  # seconds the pipes may stay open after the command exits (its children's)
+EXIT_GRACE_S = 5.0  # seconds its terminal may stay open after the command exits (a child's)
 TAIL_BYTES = 65_536  # of output kept to read the refusal line
 TERMINAL_SIZE = (50, 120)  # rows, columns of the terminal the commands run on
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")  # a terminal's colour and cursor codes
@@ -196,11 +196,11 @@ def _clone(source: Path, folder: Path) -> Path:
     return folder
 
 
-def _page_folder(source: Path, folder: Path, page: Path) -> Path:
-    """A clone of ``source`` in ``folder`` holding the files ``page`` asks its reader to write
-    (its blocks with ``title="PATH"``)."""
+def _page_folder(source: Path, folder: Path, page: str) -> Path:
+    """A clone of ``source`` in ``folder`` holding the files the ``page`` (its text) asks its
+    reader to write (its blocks with ``title="PATH"``)."""
     _clone(source, folder)
-    for block in site_pages.blocks(page.read_text(encoding="utf-8")):
+    for block in site_pages.blocks(page):
         if block.title is not None:
             (folder / block.title).parent.mkdir(parents=True, exist_ok=True)
             (folder / block.title).write_text(block.code, encoding="utf-8")
@@ -245,8 +245,11 @@ def run_pages(pages: list[Path], *, timeout: float, out: Path) -> list[Row]:
         (Path(parent) / "shared" / "datasets").symlink_to(Path(default_datasets()).resolve())
         for k, page in enumerate(pages):
             name = str(page.relative_to(REPO))
+            if not (source / name).is_file():
+                continue  # a page not committed yet: a fresh clone has none
+            text = (source / name).read_text(encoding="utf-8")  # the page as the clone has it
             clone = None
-            for command in site_pages.commands(page.read_text(encoding="utf-8")):
+            for command in site_pages.commands(text):
                 if not command.whole:
                     continue
                 where = f"{name}:{command.line}"
@@ -259,7 +262,7 @@ def run_pages(pages: list[Path], *, timeout: float, out: Path) -> list[Row]:
                     row = Row(where, command.text, f"as {first.where}", None, first.outcome)
                 else:
                     if clone is None:
-                        clone = _page_folder(source, Path(parent) / f"page{k}", page)
+                        clone = _page_folder(source, Path(parent) / f"page{k}", text)
                     outcome = run_command(
                         command.text, cwd=clone, env=_environment(clone), timeout=timeout
                     )
