@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import contextlib
 import faulthandler
+import logging
 import os
 import pickle
 import re
@@ -252,6 +253,21 @@ def _not_a_cluster(host: str, port: int) -> str | None:
     finally:
         channel.close()
     return None
+
+
+@contextlib.contextmanager
+def _signals_kept() -> Iterator[None]:
+    """Within: whatever replaces this process's SIGTERM and SIGINT handlers is undone at the
+    end. Joining Ray installs its core's own (which logs a stack and exits with status 1),
+    over the command's, which stop its work and say so in one line."""
+    main = threading.current_thread() is threading.main_thread()
+    kept = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)} if main else {}
+    try:
+        yield
+    finally:
+        for signum, handler in kept.items():
+            if handler is not None:  # None: not set from Python, nothing to restore
+                signal.signal(signum, handler)
 
 
 def _start_worker(parent: int, environment: dict[str, str] | None) -> None:
@@ -538,7 +554,13 @@ class Executor:
             ray = import_ray()
             if not ray.is_initialized():
                 try:
-                    ray.init(address=self.address, log_to_driver=False, include_dashboard=False)
+                    with _signals_kept():
+                        ray.init(
+                            address=self.address,
+                            log_to_driver=False,
+                            include_dashboard=False,
+                            logging_level=logging.WARNING,  # not "Connected to Ray cluster."
+                        )
                 except (ConnectionError, RuntimeError) as exc:  # answered the probe, not Ray
                     first = str(exc).strip().splitlines()[0] if str(exc).strip() else repr(exc)
                     raise ClusterError(

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from sim.cli._common import CliError, Command, CommandParser, add_commands, check_jobs
 from sim.cli._exit_guard import EXIT_STATUS, ProcessExit, os_exit_reported
-from sim.cli._interrupt import Stopped, sigint_to_main_only, sigterm_stops
+from sim.cli._interrupt import Stopped, as_stopped, sigint_to_main_only, sigterm_stops
 
 # The subcommands, in the order of ``reform-sim --help``: each a name, its help line and the
 # module of its arguments (`sim.cli._NAME`; what it does is `sim.cli.NAME`).
@@ -194,9 +194,12 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
             file=sys.stderr,
         )
         return 2
-    except KeyboardInterrupt as exc:
+    except KeyboardInterrupt as caught:
+        exc = as_stopped(caught)
         if not report_interrupt:
-            raise
+            if exc is caught:
+                raise
+            raise exc from None
         again = "; run the same command again to resume" if _resumes(args) else ""
         if isinstance(exc, Stopped):  # SIGTERM: 128 + its number, as a shell reports it
             print(

@@ -60,9 +60,22 @@ class Stopped(KeyboardInterrupt):
         super().__init__(self.signal.name)
 
 
+_STOPPED: list[int] = []  # the signal sigterm_stops raised as Stopped, while it is in force
+
+
 def _raise_stopped(signum: int, _frame: object) -> None:
     signal.signal(signum, signal.SIG_DFL)  # a second one ends the process at once
+    _STOPPED.append(signum)
     raise Stopped(signum)
+
+
+def as_stopped(exc: KeyboardInterrupt) -> KeyboardInterrupt:
+    """``exc``, or the `Stopped` it stands for: code the signal's exception passed through (Ray's
+    wait, which checks for signals itself) may have raised a plain KeyboardInterrupt in its
+    place."""
+    if isinstance(exc, Stopped) or not _STOPPED:
+        return exc
+    return Stopped(_STOPPED[-1])
 
 
 @contextlib.contextmanager
@@ -78,6 +91,7 @@ def sigterm_stops() -> Iterator[None]:
         yield
         return
     signal.signal(signal.SIGTERM, _raise_stopped)
+    _STOPPED.clear()
     try:
         yield
     finally:

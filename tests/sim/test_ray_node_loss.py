@@ -1,11 +1,16 @@
 """A Ray node lost while it runs a unit: the unit runs again on the nodes left, with one line on
 stderr naming the node and the unit; with no node left, or its retries spent, the run stops in
-one line naming the node(s), the unit and what to do. A real cluster of several Ray nodes on
-this machine (`ray.cluster_utils.Cluster`), nodes added and removed as a test goes."""
+one line naming the node(s), the unit and what to do; a command stopped (SIGTERM, SIGKILL)
+leaves no unit running on the cluster. A real cluster of several Ray nodes on this machine
+(`ray.cluster_utils.Cluster`), nodes added and removed as a test goes."""
 
 from __future__ import annotations
 
+import contextlib
+import os
 import re
+import signal
+import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -21,6 +26,12 @@ pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
 
 START_S = 60.0  # at most this long for a unit to start on a new node (the machine is shared)
 STORE_BYTES = 80 * 2**20  # each node's object store
+GONE_S = 5.0  # a stopped command's units must be gone from the cluster this soon
+CONSOLE = [
+    sys.executable,
+    "-c",
+    "import sys; from sim.cli import console_main; sys.exit(console_main())",
+]
 
 
 @pytest.fixture(scope="module")
@@ -149,3 +160,54 @@ def test_a_command_whose_cluster_loses_its_last_node_ends_in_one_line(
             r"cluster: none is left, and the run waits 1 s for one",
             said,
         )
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["sigterm", "sigkill"])
+def test_a_stopped_command_leaves_no_task_running_on_the_cluster(cluster, tmp_path, sig) -> None:
+    """generate on the cluster, stopped by ``sig`` while its units run: within GONE_S seconds no
+    process of the cluster still runs one of them (Ray's idle workers may stay, computing
+    nothing); SIGTERM also says in one line how to resume."""
+    node = cluster.add_node(num_cpus=2, object_store_memory=STORE_BYTES)
+    cluster.wait_for_nodes()
+    argv = ["generate", "--scenario", "mingle", "--episodes", "40", "--seed", "0"]
+    argv += ["--duration", "20", "--out", str(tmp_path / "ds"), "--backend", "ray"]
+    argv += ["--address", cluster.address, "--quiet"]
+    try:
+        process = subprocess.Popen(
+            [*CONSOLE, *argv], stderr=subprocess.PIPE, text=True, start_new_session=True
+        )
+        deadline = time.monotonic() + START_S
+        while not _running_units() and process.poll() is None:
+            assert time.monotonic() < deadline, "no unit started on the cluster"
+            time.sleep(0.05)
+        assert process.poll() is None, process.stderr.read()
+        os.kill(process.pid, sig)
+        status = process.wait(timeout=START_S)
+        deadline = time.monotonic() + GONE_S
+        while _running_units() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert _running_units() == []
+        err = process.stderr.read()
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+        cluster.remove_node(node)
+    if sig == signal.SIGTERM:
+        assert status == 128 + signal.SIGTERM, err
+        assert err == (
+            "reform-sim generate: stopped by SIGTERM; run the same command again to resume\n"
+        )
+    else:
+        assert status == -signal.SIGKILL
+
+
+def _running_units() -> list[int]:
+    """The processes of this machine running a Ray task of sim.executor (titled ``ray::_apply``
+    by Ray while they run it)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError):
+                if (entry / "cmdline").read_bytes().startswith(b"ray::_apply"):
+                    found.append(int(entry.name))
+    return found
