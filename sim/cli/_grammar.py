@@ -175,11 +175,13 @@ def ticking_bar(
 
 
 @contextlib.contextmanager
-def stage_lines(args: argparse.Namespace, what: str) -> Iterator[Callable[[str], None]]:
+def stage_lines(
+    args: argparse.Namespace, what: str, *, stamp: bool = True
+) -> Iterator[Callable[[str], None]]:
     """``progress(message)`` for a long command that names its stages: each message a line
-    ``[  12.3 s] message`` on stderr (none with ``--quiet``) and, where the command shows its
-    progress (`show_progress`), a line under them with the time so far, redrawn while a stage
-    works (a classifier's cross-validation: a minute on two cores)."""
+    on stderr, ``[  12.3 s] message`` with ``stamp`` (none with ``--quiet``) and, where the
+    command shows its progress (`show_progress`), a line under them with the time so far,
+    redrawn while a stage works (a classifier's cross-validation: a minute on two cores)."""
     started = time.perf_counter()
     bar = progress_bar(
         desc=what,
@@ -192,7 +194,7 @@ def stage_lines(args: argparse.Namespace, what: str) -> Iterator[Callable[[str],
     def progress(message: str) -> None:
         if getattr(args, "quiet", False):
             return
-        line = f"[{time.perf_counter() - started:6.1f} s] {message}"
+        line = f"[{time.perf_counter() - started:6.1f} s] {message}" if stamp else message
         if bar.disable:
             print(line, file=sys.stderr, flush=True)
         else:

@@ -23,6 +23,7 @@ from sim.cli._common import (
     size_error,
 )
 from sim.cli._detectors import make_plugin
+from sim.cli._grammar import stage_lines
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
 from sim.experiments.stress_grid import BASE_PEOPLE, CROWD_MIN_PEOPLE, StressGrid
 from sim.experiments.stress_report import write_report
@@ -166,26 +167,27 @@ def run(args: argparse.Namespace) -> int:
     executor = executor_from_args(args)  # a Ray address is probed here, before the estimate
     _check_size(grid, axes, args)  # the last check: its estimate is said once all have passed
 
-    def progress(line: str) -> None:
-        if not args.quiet:
-            print(line, file=sys.stderr, flush=True)
-
-    with executor:
-        results = run_stress(
-            grid,
-            seed=args.seed,
-            axes=axes,
-            plugins=plugins,
-            progress=progress,
-            executor=executor,
-            temporal=args.temporal,
-            detector_timeout=args.detector_timeout,
+    # On a terminal the time so far moves under the stage lines while a stage works (the
+    # default grid's training set: a minute on two cores) and while the plots are drawn.
+    with stage_lines(args, "stress", stamp=False) as progress:
+        with executor:
+            results = run_stress(
+                grid,
+                seed=args.seed,
+                axes=axes,
+                plugins=plugins,
+                progress=progress,
+                executor=executor,
+                temporal=args.temporal,
+                detector_timeout=args.detector_timeout,
+            )
+        if results.grid_name == "custom":
+            results = dataclasses.replace(
+                results, grid_name=f"{args.grid} (--episodes {args.episodes})"
+            )
+        written = write_report(
+            results, args.out, command=_command(args), save=target_from_args(args)
         )
-    if results.grid_name == "custom":
-        results = dataclasses.replace(
-            results, grid_name=f"{args.grid} (--episodes {args.episodes})"
-        )
-    written = write_report(results, args.out, command=_command(args), save=target_from_args(args))
     print(
         f"stress tests done in {results.timings['total']:.0f} s "
         f"({results.environment.get('cpu_s', 0):.0f} CPU s on {results.jobs} "
