@@ -14,7 +14,8 @@ The recipe (`fit_twin`), each step matching one label-free statistic of the real
    (`SHAPE_CHOICES`: spacing, largest group, unevenness, share alone, arrangements, noise on
    facings) is searched one option at a time, `SHAPE_PASSES` passes, each choice kept where
    the pilot's `sim.twins.statistics.spacing_shape` comes closest to the recording's
-   (nearest-neighbour distances, facing a common point, clumps of bodies and of o-space votes);
+   (nearest-neighbour distances, facing away from the nearest, facing a common point, clumps
+   of bodies and of o-space votes);
 4. **orientation coding**: the number of directions every real yaw is coded in (continuous
    when none fits), the head's yaw when the recording's yaw is its head's;
 5. **tracker**: position and yaw jitter on top of the pilot's own, so that people standing still
@@ -197,13 +198,15 @@ def twin_sample(twin: Twin) -> list[Frame]:
 def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
     """How far two `spacing_shape` signatures are: squared log ratios of the six distance
     ratios and of the mean sizes of clumps and of vote clumps, plus the squared differences of
-    the shares standing apart, in clumps of 4 or more and voting alone (each times 4) and of
-    the lower quartile and median of the angles off facing a common point (radians; the upper
-    quartile is left to the people standing beside someone they do not face, whom the share
-    voting alone counts, and not to the noise on facings)."""
+    the shares standing apart, in clumps of 4 or more and voting alone (each times 4), of the
+    median angle a person faces away from their nearest neighbour (radians: back to back with
+    a neighbouring group's member, or facing them in one o-space) and of the lower quartile
+    and median of the angles off facing a common point (radians; the upper quartile is left
+    to the people standing beside someone they do not face, whom the share voting alone
+    counts, and not to the noise on facings)."""
     ratios = np.log(np.maximum(twin[[*range(6), 12, 15]], 1e-6))
     ratios -= np.log(np.maximum(real[[*range(6), 12, 15]], 1e-6))
-    facing = twin[9:11] - real[9:11]
+    facing = twin[[7, 9, 10]] - real[[7, 9, 10]]
     shares = twin[[6, 13, 14]] - real[[6, 13, 14]]
     return float(np.sum(ratios**2) + 4.0 * np.sum(shares**2) + np.sum(facing**2))
 
