@@ -98,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
         for name, value in (("stride_grid", args.stride_grid), ("mdl_grid", args.mdl_grid))
         if value is not None
     }
-    if not args.quiet:
+    if not args.quiet and sys.stderr.isatty():  # a refusal after it is one line in a pipe
         print("reading SALSA and Babble ...", file=sys.stderr, flush=True)
     salsa, babble = load_salsa(resolve(data["salsa"])), load_babble(resolve(data["babble"]))
     _check_size(args, salsa, babble)
