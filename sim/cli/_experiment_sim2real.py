@@ -17,8 +17,8 @@ found (SALSA's test split, every annotated frame of the others) beside REFORM tr
 training split, GCFF with one setting and with each dataset's own settings, and REFORM trained on
 the other real datasets (leave one dataset out); reports the rank agreement (Kendall's tau)
 between the simulated party and the real datasets, the goals, and plots. The synthetic data are
-generated once under --synthetic (default: DIR/synthetic) and reused; nothing is
-written outside DIR unless --synthetic names another folder. Writes DIR/sim2real.md, DIR/sim2real.json,
+generated once under --synthetic (default: DIR/synthetic) and reused; nothing is written
+outside DIR unless --synthetic names another folder. Writes DIR/sim2real.md, DIR/sim2real.json,
 DIR/sim2real.png, DIR/sim2real-rank.png, DIR/sim2real-calibration.png and
 DIR/recommended.skops, and prints the Markdown.
 """

@@ -10,13 +10,13 @@ from sim.cli._grammar import add_quiet, add_seed
 
 DESCRIPTION = """\
 For every real dataset found: fits its label-free venue twin (`reform-sim twin`), generates the
-twin's data (under --twins, default DIR/twins, reused), and measures, on the second half of each recording, (1)
-tuning: GCFF, the proximity baseline and REFORM with one setting for every dataset, tuned on
-the twin, and tuned on the first half's labels (the ceiling); (2) prediction: every catalogued
-detector's F1 on the twin against its real F1 (Pearson r, Spearman, Kendall's tau, mean absolute
-error, mean maximum rank violation, with bootstrap intervals), beside the real ceiling (the
-first half predicting the second); (3) leave one out. Writes DIR/twins.md, DIR/twins.json and
-DIR/twins.png, and prints the Markdown.
+twin's data (under --twins, default DIR/twins, reused), and measures, on the second half of
+each recording, (1) tuning: GCFF, the proximity baseline and REFORM with one setting for every
+dataset, tuned on the twin, and tuned on the first half's labels (the ceiling); (2) prediction:
+every catalogued detector's F1 on the twin against its real F1 (Pearson r, Spearman, Kendall's
+tau, mean absolute error, mean maximum rank violation, with bootstrap intervals), beside the
+real ceiling (the first half predicting the second); (3) leave one out. Writes DIR/twins.md,
+DIR/twins.json and DIR/twins.png, and prints the Markdown.
 """
 
 BASENAME = "twins"

@@ -274,7 +274,9 @@ def test_stress_runs_an_installed_plugin_beside_the_built_ins(lab):
     )
     assert scores[0]["value"] > scores[-1]["value"]  # 0.5 m of noise hurts it too
     assert result["training"]["plugins"]["pairs"].startswith("fitted on the ")
-    assert all(math.isfinite(p["scores"]["gcff-tuned"]["2/3"]["f1"]["value"]) for p in axis["points"])
+    assert all(
+        math.isfinite(p["scores"]["gcff-tuned"]["2/3"]["f1"]["value"]) for p in axis["points"]
+    )
 
 
 @pytest.mark.slow

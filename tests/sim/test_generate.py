@@ -314,7 +314,11 @@ def test_recordings_hold_each_episode(tmp_path):
 @pytest.mark.parametrize(
     ("scenario", "overrides", "match"),
     [
-        ("mingle-party", {}, r"unknown scenario 'mingle-party'; known scenarios: .*hri-conversation"),
+        (
+            "mingle-party",
+            {},
+            r"unknown scenario 'mingle-party'; known scenarios: .*hri-conversation",
+        ),
         ("word-improv", {"options": {"players": 1}}, r"players"),
         ("hri-passing", {"options": {"people": 300}}, r"option people must be within"),
         ("hri-passing", {"options": {"crowd": 3}}, r"unknown option 'crowd'"),

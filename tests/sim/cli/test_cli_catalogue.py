@@ -25,6 +25,7 @@ def toy_dataset(tmp_path):
 def test_help_lists_every_catalogued_detector_and_its_options(command, capsys):
     with pytest.raises(SystemExit):
         main([command, "--help"])
+
     def bare(text: str) -> str:  # argparse wraps lines at spaces and after hyphens
         return "".join(text.split())
 

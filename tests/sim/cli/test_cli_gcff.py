@@ -95,7 +95,8 @@ def test_gcff_options_by_flag_or_by_option(tmp_path, args):
     [
         (
             ["--option", "mdl=-1"],
-            "detector 'gcff': option mdl expects a float in m² from 1e-06 to 10,000, got a float (-1.0)",
+            "detector 'gcff': option mdl expects a float in m² from 1e-06 to 10,000, got a float "
+            "(-1.0)",
         ),
         (["--option", "mdl"], "--option expects NAME=VALUE, got 'mdl'"),
         (
