@@ -14,10 +14,10 @@ from quiet_generate import generate_quietly
 
 from sim.executor import Executor, WorkerDied
 
+pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
+
 KILLER = """\
 import os, signal, time
-
-pytestmark = pytest.mark.faults  # the fault suite: pytest -m faults
 
 
 class Killed:
