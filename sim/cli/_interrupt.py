@@ -60,7 +60,9 @@ class Stopped(KeyboardInterrupt):
         super().__init__(self.signal.name)
 
 
-_STOPPED: list[int] = []  # the signal sigterm_stops raised as Stopped, while it is in force
+# The signal the latest sigterm_stops raised as Stopped (cleared as each one begins): read after
+# it ends, by the command's report of the stop.
+_STOPPED: list[int] = []
 
 
 def _raise_stopped(signum: int, _frame: object) -> None:
@@ -83,15 +85,17 @@ def sigterm_stops() -> Iterator[None]:
     """Within: SIGTERM raises `Stopped` in this (the main) thread. A no-op outside the main
     thread, where there is no SIGTERM, and when SIGTERM has a disposition of the caller's (a
     handler, or ignored) rather than the default."""
+    main = threading.current_thread() is threading.main_thread()
+    if main:  # a command in another thread leaves the main thread's record alone
+        _STOPPED.clear()
     if (
         not hasattr(signal, "SIGTERM")
-        or threading.current_thread() is not threading.main_thread()
+        or not main
         or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
     ):
         yield
         return
     signal.signal(signal.SIGTERM, _raise_stopped)
-    _STOPPED.clear()
     try:
         yield
     finally:
