@@ -50,6 +50,8 @@ from pathlib import Path
 
 from timing import DATASETS_VARIABLE, REPO, BenchmarkParser, default_datasets
 
+from sim.experiments.report_files import write_markdown
+
 SILENCE_GOAL_S = 5.0  # seconds: issue 33's longest silence of any documented command
 EXIT_GRACE_S = 5.0  # seconds its terminal may stay open after the command exits (a child's)
 TAIL_BYTES = 65_536  # of output kept to read the refusal line
@@ -321,10 +323,7 @@ def write_table(rows: list[Row], out: Path, *, commit: str, partial: bool, timeo
             f"| {row.where} | `{_cell(row.command)}` | {exit_} | {seconds} | {silence} | "
             f"{_cell(row.verdict)} |"
         )
-    out.parent.mkdir(parents=True, exist_ok=True)
-    partial_file = out.with_name(out.name + ".part")
-    partial_file.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    os.replace(partial_file, out)
+    write_markdown(out, "\n".join(lines) + "\n")
 
 
 def main() -> None:
