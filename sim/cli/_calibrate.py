@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_backend_arguments, run_with
+from sim.cli._common import add_backend_arguments
 from sim.cli._experiment_io import add_dataset_arguments
-from sim.cli._grammar import add_episodes, add_out, add_quiet
+from sim.cli._grammar import add_episodes, add_out, add_quiet, run_loading
 
 DESCRIPTION = """\
 Simulates word-improv and mingle with default options and compares them with Babble and SALSA:
@@ -27,4 +27,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_backend_arguments(parser, jobs_help="episodes at once")
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.calibrate:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.calibrate:run", "MuJoCo"))

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import FORMATS, run_with
-from sim.cli._grammar import add_quiet, add_report_out
+from sim.cli._common import FORMATS
+from sim.cli._grammar import add_quiet, add_report_out, run_loading
 
 DESCRIPTION = """\
 Measures the ground-truth F-formations of one or more datasets (real or synthetic): Tightness
@@ -83,4 +83,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="Markdown file appended to the Markdown report as its discussion",
     )
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.characterize:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.characterize:run", "SciPy"))

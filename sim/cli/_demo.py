@@ -4,8 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_jobs_argument, run_with
-from sim.cli._grammar import add_out, add_quiet, add_recordings, add_seed, rename, setter
+from sim.cli._common import add_jobs_argument
+from sim.cli._grammar import (
+    add_out,
+    add_quiet,
+    add_recordings,
+    add_seed,
+    rename,
+    run_loading,
+    setter,
+)
 from sim.experiments.demo_files import DEFAULT_OUT
 
 DESCRIPTION = """\
@@ -41,4 +49,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser, default=True, each="scenario, evaluation and HRI scene, and the stress curves"
     )
     add_quiet(parser)
-    parser.set_defaults(handler=run_with("sim.cli.demo:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.demo:run", "MuJoCo, scikit-learn and Rerun"))

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_max_memory_argument, run_with
+from sim.cli._common import add_max_memory_argument
 from sim.cli._experiment_io import add_salsa_split_arguments
-from sim.cli._grammar import add_quiet
+from sim.cli._grammar import add_quiet, run_loading
 
 DESCRIPTION = """\
 Scores GCFF with the REFORM paper's setting (stride 0.7 m, MDL 30000 read as 30000 cm² =
@@ -52,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_max_memory_argument(parser, holds="the grid search holds the scores of every setting")
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.experiment_gcff:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.experiment_gcff:run", "scikit-learn"))
 
 
 def _floats(text: str) -> tuple[float, ...]:

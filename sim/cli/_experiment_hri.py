@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_backend_arguments, run_with
+from sim.cli._common import add_backend_arguments
 from sim.cli._experiment_io import add_io_arguments
-from sim.cli._grammar import add_episodes, add_quiet, add_recordings, add_seed
+from sim.cli._grammar import add_episodes, add_quiet, add_recordings, add_seed, run_loading
 from sim.experiments.hri_views import DEFAULT_SEEDS, VIEW_NAMES
 
 DESCRIPTION = """\
@@ -41,4 +41,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_backend_arguments(parser, jobs_help="worker processes (training, episodes)")
     add_recordings(parser, default=False, each="scene (its first episode, robot view)", folder=True)
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.experiment_hri:run"))
+    parser.set_defaults(
+        handler=run_loading("sim.cli.experiment_hri:run", "MuJoCo, scikit-learn and Rerun")
+    )

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_jobs_argument, run_with
+from sim.cli._common import add_jobs_argument
 from sim.cli._experiment_io import add_salsa_split_arguments
-from sim.cli._grammar import add_quiet
+from sim.cli._grammar import add_quiet, run_loading
 
 DESCRIPTION = """\
 Trains REFORM with the paper's three classifiers on the SALSA training split (reform.time_split:
@@ -29,4 +29,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--no-diagnostics", action="store_true", help="skip the diagnostic reruns (faster)"
     )
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.experiment_paper:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.experiment_paper:run", "scikit-learn"))

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_backend_arguments, run_with
+from sim.cli._common import add_backend_arguments
 from sim.cli._experiment_io import add_out_argument
-from sim.cli._grammar import add_quiet, add_seed
+from sim.cli._grammar import add_quiet, add_seed, run_loading
 
 DESCRIPTION = """\
 Trains REFORM only on generated data: every candidate (recipes of synthetic data x the paper's
@@ -62,4 +62,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_backend_arguments(parser, jobs_help="worker processes (generation, training)")
     add_quiet(parser)
-    parser.set_defaults(handler=run_with("sim.cli.experiment_sim2real:run"))
+    parser.set_defaults(
+        handler=run_loading("sim.cli.experiment_sim2real:run", "MuJoCo and scikit-learn")
+    )

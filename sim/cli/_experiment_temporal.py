@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_jobs_argument, run_with
+from sim.cli._common import add_jobs_argument
 from sim.cli._experiment_io import add_out_argument
-from sim.cli._grammar import add_quiet, add_seed
+from sim.cli._grammar import add_quiet, add_seed, run_loading
 from sim.experiments.temporal import DURATION_S, EPISODES, RATE_HZ
 
 DESCRIPTION = """\
@@ -58,4 +58,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_out_argument(parser, basename=BASENAME)
     add_seed(parser)
     add_quiet(parser)
-    parser.set_defaults(handler=run_with("sim.cli.experiment_temporal:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.experiment_temporal:run", "MuJoCo"))

@@ -10,9 +10,8 @@ from sim.cli._common import (
     add_overrides_argument,
     add_sensor_arguments,
     add_view_argument,
-    run_with,
 )
-from sim.cli._grammar import add_quiet, add_recordings, add_seed, rename, setter
+from sim.cli._grammar import add_quiet, add_recordings, add_seed, rename, run_loading, setter
 
 DESCRIPTION = """\
 Simulates EPISODES episodes of a scenario and writes them as hive-partitioned Parquet
@@ -73,4 +72,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_max_memory_argument(
         parser, holds="each worker holds the episode it writes (episodes do not stream)"
     )
-    parser.set_defaults(handler=run_with("sim.cli.generate:_run"))
+    parser.set_defaults(handler=run_loading("sim.cli.generate:_run", "MuJoCo"))

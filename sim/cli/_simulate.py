@@ -9,9 +9,8 @@ from sim.cli._common import (
     add_overrides_argument,
     add_sensor_arguments,
     add_view_argument,
-    run_with,
 )
-from sim.cli._grammar import add_quiet, add_seed
+from sim.cli._grammar import add_quiet, add_seed, run_loading
 from sim.recording import add_recording_arguments
 
 DESCRIPTION = """\
@@ -59,4 +58,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         holds="a recording holds the whole episode, the frames otherwise stream to --out",
     )
     add_quiet(parser)
-    parser.set_defaults(handler=run_with("sim.cli.simulate:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.simulate:run", "MuJoCo"))

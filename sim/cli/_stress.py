@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_backend_arguments, add_max_memory_argument, run_with
+from sim.cli._common import add_backend_arguments, add_max_memory_argument
 from sim.cli._detectors import add_detector_timeout, detector_name
-from sim.cli._grammar import add_episodes, add_out, add_quiet, add_seed
+from sim.cli._grammar import add_episodes, add_out, add_quiet, add_seed, run_loading
 from sim.experiments.stress_grid import AXES, GRIDS
 from sim.recording import add_recording_arguments
 
@@ -88,4 +88,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser, holds="the stress test holds its test episodes and their scores"
     )
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.stress:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.stress:run", "MuJoCo and scikit-learn"))

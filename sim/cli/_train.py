@@ -8,8 +8,8 @@ import argparse
 from reform.classifiers import CLASSIFIERS
 from reform.features import DEFAULT_FEATURES, FEATURES
 from reform.reconstruction import RECONSTRUCTIONS
-from sim.cli._common import add_data_arguments, add_jobs_argument, run_with
-from sim.cli._grammar import add_frames, add_quiet
+from sim.cli._common import add_data_arguments, add_jobs_argument
+from sim.cli._grammar import add_frames, add_quiet, run_loading
 
 DESCRIPTION = """\
 Deconstructs the annotated frames of a dataset into pairs (Distance, Effort Angle), fits one of
@@ -106,4 +106,4 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="model file to write (.skops for reform, .safetensors for dante)",
     )
     add_quiet(parser, old=())
-    parser.set_defaults(handler=run_with("sim.cli.train:run"))
+    parser.set_defaults(handler=run_loading("sim.cli.train:run", "scikit-learn"))
