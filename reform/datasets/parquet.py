@@ -165,7 +165,8 @@ def _check_ids_written(dataset: Dataset | FrameBlock) -> None:
 def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """The long table's columns (as :func:`_columns` makes them) from a block's arrays.
 
-    Whole arrays at once: the groups are laid out once per run of instants that share them
+    Whole arrays at once: each row's values taken from the block's arrays by one flat index
+    (instant x roster slot), the groups laid out once per run of instants that share them
     (`FrameBlock.present_groups` gives one object for such a run), not person by person."""
     time, ids, present, n_frames, n = (
         block.time,
@@ -177,28 +178,29 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
     has_head = block.head_position is not None
 
     # Row order: frame by frame, the people present in roster order; an empty frame gets one
-    # row in an extra column n (its person columns null).
+    # row in an extra slot n (its person columns null).
     empty_frame = ~present.any(axis=1)
     slots = np.concatenate([present, empty_frame[:, None]], axis=1)
     t_of, a_of = np.nonzero(slots)
     n_rows = t_of.size
     empty = a_of == n
     a_safe = np.where(empty, 0, a_of)
+    flat = t_of * n + a_safe  # the row's place in a (T, n) array
 
     out = _PersonRows(n_rows, kinds=False)
     out.empty[:] = empty
     if n:
-        out.person_id[:] = ids[a_safe]
+        out.person_id[:] = ids.take(a_safe)
         out.person_id[empty] = 0
-        out.body[:, :2] = block.position[t_of, a_safe]
-        out.body[:, 2] = block.yaw[t_of, a_safe]
+        out.body[:, :2] = block.position.reshape(-1, 2).take(flat, axis=0)
+        out.body[:, 2] = block.yaw.reshape(-1).take(flat)
         if has_head:
-            out.head[:, :2] = block.head_position[t_of, a_safe]
-            out.head[:, 2] = block.head_yaw[t_of, a_safe]
+            out.head[:, :2] = block.head_position.reshape(-1, 2).take(flat, axis=0)
+            out.head[:, 2] = block.head_yaw.reshape(-1).take(flat)
     out.body[empty] = 0.0
     out.head[empty] = 0.0
 
-    # Each instant's group and place in it by roster slot (-1: in none; column n: the empty
+    # Each instant's group and place in it by roster slot (-1: in none; slot n: the empty
     # frame's row), set once per run of instants with the same groups.
     group_of = np.full((n_frames, n + 1), -1, dtype=np.int32)
     member_of = np.full((n_frames, n + 1), -1, dtype=np.int32)
@@ -227,8 +229,9 @@ def _block_columns(block: FrameBlock) -> dict[str, tuple[np.ndarray, np.ndarray]
         if layout[0]:
             group_of[start:end, layout[0]] = layout[1]
             member_of[start:end, layout[0]] = layout[2]
-    out.group[:] = group_of[t_of, a_of]
-    out.member[:] = member_of[t_of, a_of]
+    slot = t_of * (n + 1) + a_of  # the row's place in a (T, n + 1) array
+    out.group[:] = group_of.reshape(-1).take(slot)
+    out.member[:] = member_of.reshape(-1).take(slot)
 
     # The string columns as Arrow arrays straight away: each row's kind taken from the roster's
     # (null for an empty frame's row), the one sequence name repeated.
@@ -348,8 +351,9 @@ class _PersonRows:
     def __init__(self, n_rows: int, *, kinds: bool = True) -> None:
         self.person_id = np.zeros(n_rows, dtype=np.int64)
         self.kind: Any = np.empty(n_rows, dtype=object) if kinds else None
-        self.body = np.zeros((n_rows, 3))
-        self.head = np.zeros((n_rows, 3))
+        # Column-major: each of x, y, yaw one contiguous column, as Arrow takes it.
+        self.body = np.zeros((n_rows, 3), order="F")
+        self.head = np.zeros((n_rows, 3), order="F")
         self.group = np.full(n_rows, -1, dtype=np.int32)
         self.member = np.full(n_rows, -1, dtype=np.int32)
         self.empty = np.zeros(n_rows, dtype=bool)
