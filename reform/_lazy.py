@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 import sys
-from collections.abc import Callable, Mapping
-from typing import Any
+
+TYPE_CHECKING = False  # typing's own flag without importing typing (type checkers know it)
+if TYPE_CHECKING:  # importing no more than Python has at start: every command imports this
+    from collections.abc import Callable, Mapping
+    from typing import Any
 
 __all__ = ["lazy_exports"]
 
@@ -27,6 +28,9 @@ def lazy_exports(
     """
 
     def __getattr__(name: str) -> Any:
+        import importlib
+        import importlib.util
+
         module = exports.get(name)
         if module is None:
             # A subpackage or module of the package (``reform.datasets``), as an eager

@@ -18,6 +18,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
+from sim.cli._command import Command
+
 if TYPE_CHECKING:
     from sim.sizing import RequestTooLarge
 
@@ -155,24 +157,6 @@ class CommandParser(argparse.ArgumentParser):
         if unknown:
             message += self._suggestions()
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
-
-
-class Command(NamedTuple):
-    """One subcommand of a command table (a named tuple: building the parser needs no
-    `dataclasses`, whose imports are a third of ``reform-sim --help``'s).
-
-    Attributes:
-        name: what is typed (``reform-sim NAME``).
-        help: its line in the table's help.
-        arguments: the module adding its arguments: ``DESCRIPTION`` (shown as written) and
-            ``add_arguments(parser)``, which sets the ``handler`` default (`run_with`).
-        aliases: other names for it.
-    """
-
-    name: str
-    help: str
-    arguments: str
-    aliases: tuple[str, ...] = ()
 
 
 def add_commands(subparsers: argparse._SubParsersAction, commands: Sequence[Command]) -> None:
