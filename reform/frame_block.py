@@ -220,7 +220,11 @@ class FrameBlock:
         """Each instant's groups restricted to the agents present then (``None`` where not
         annotated): a group of which one member is present becomes that member, one left empty
         is dropped (`reform.perturb.restrict_groups`). Worked out again only where the declared
-        groups or the people present change."""
+        groups or the people present change, and once per block (a block does not change): the
+        writer and the summaries of a generated shard ask for them each."""
+        known = self.__dict__.get("_present_groups")
+        if known is not None:
+            return known
         changed = np.ones(len(self), dtype=bool)
         changed[1:] = np.any(self.present[1:] != self.present[:-1], axis=1)
         out: list[tuple[Group, ...] | None] = []
@@ -233,7 +237,9 @@ class FrameBlock:
                 restricted = restrict_groups(declared, set(self.ids[self.present[row]].tolist()))
             before = declared
             out.append(restricted)
-        return tuple(out)
+        groups = tuple(out)
+        object.__setattr__(self, "_present_groups", groups)
+        return groups
 
     def frame(self, row: int) -> Frame:
         """Instant ``row`` as a Frame of the agents present then, its groups restricted to them."""
