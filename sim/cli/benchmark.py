@@ -31,6 +31,7 @@ from sim.experiments.benchmark import (
 )
 from sim.experiments.benchmark_report import write_report
 from sim.progress import progress_bar
+from sim.recording import pandas_withheld
 from sim.ticking import ticking
 
 
@@ -132,13 +133,11 @@ def _run(args: argparse.Namespace) -> int:
     if not args.quiet:
         files = f" and {len(datasets)} recording(s)" if args.recordings else ""
         print(f"writing the report, its plot{files} into {out}/ ...", file=sys.stderr)
-    written = write_report(
-        benchmark,
-        out,
-        command=command,
-        recordings=args.recordings,
-        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True)),
-    )
+    said = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    with pandas_withheld():  # pyarrow, under Rerun, would import it for nothing: see there
+        written = write_report(
+            benchmark, out, command=command, recordings=args.recordings, progress=said
+        )
     print(written["markdown"].read_text(), end="")
     print(f"wrote {out}/: " + ", ".join(p.name for p in written.values()), file=sys.stderr)
     return 0

@@ -74,6 +74,7 @@ _EXPORTS = {
     "stream_group_events": "sim.recording._metrics",
     "log_group_counts": "sim.recording._metrics",
     "log_running_scores": "sim.recording._metrics",
+    "pandas_withheld": "sim.recording._arrow",
     "CROWD_PEOPLE": "sim.recording._record",
     "Recorded": "sim.recording._record",
     "record_episode": "sim.recording._record",
