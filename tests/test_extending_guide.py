@@ -18,7 +18,7 @@ GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide" / "extending.md"
 
 
 def _python_blocks() -> list[str]:
-    return re.findall(r"```python\n(.*?)```", GUIDE.read_text(), flags=re.S)
+    return re.findall(r"```python[^\n]*\n(.*?)```", GUIDE.read_text(), flags=re.S)
 
 
 @pytest.fixture
