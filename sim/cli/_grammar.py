@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.cli._common import TRAIN_FRACTION, check_output, run_with, warn_deprecated
-from sim.progress import progress_bar
+from sim.progress import elapsed_line, progress_bar
 from sim.ticking import ticking
 
 DEFAULT_SEED = 0
@@ -184,13 +184,7 @@ def stage_lines(
     command shows its progress (`show_progress`), a line under them with the time so far,
     redrawn while a stage works (a classifier's cross-validation: a minute on two cores)."""
     started = time.perf_counter()
-    bar = progress_bar(
-        desc=what,
-        bar_format="{desc}: {elapsed} so far",
-        file=sys.stderr,
-        leave=False,
-        disable=not show_progress(args),
-    )
+    bar = elapsed_line(what, disable=not show_progress(args))
 
     def progress(message: str) -> None:
         if getattr(args, "quiet", False):

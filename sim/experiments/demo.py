@@ -31,12 +31,13 @@ generated episodes. ``quick=True`` shrinks every budget (for tests).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import platform
 import shlex
 import sys
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -80,6 +81,7 @@ from sim.experiments.synthetic import (
     even_subset,
     generate_sources,
 )
+from sim.progress import elapsed_line
 from sim.recording import record_episode, record_evaluation
 from sim.ticking import ticking
 
@@ -231,25 +233,34 @@ class DemoResult:
 
 
 class _Stages:
-    """Announces stages on a callback and times them."""
+    """Announces stages on a callback and times them; with ``show``, on a terminal, a line
+    under a stage with its time so far (`_working`), redrawn while the stage works."""
 
-    def __init__(self, total: int, say: Callable[[str], None]) -> None:
+    def __init__(self, total: int, say: Callable[[str], None], *, show: bool = False) -> None:
         self.total = total
         self.say = say
+        self.show = show
         self.index = 0
         self.started = time.perf_counter()
         self.timings: dict[str, float] = {}
         self._name: str | None = None
         self._t0 = 0.0
+        self._working = contextlib.ExitStack()
 
-    def begin(self, name: str, text: str) -> None:
+    def begin(self, name: str, text: str, *, working: bool = True) -> None:
+        """Starts stage ``name``, said as ``text``; ``working``: its time-so-far line (False
+        for a stage whose own lines are printed past tqdm, as generation's estimates are)."""
         self.end()
         self.index += 1
         self._name, self._t0 = name, time.perf_counter()
         elapsed = time.perf_counter() - self.started
         self.say(f"[{self.index}/{self.total}] {text}  (at {elapsed:.0f} s)")
+        if working:
+            desc = f"[{self.index}/{self.total}] {name}"
+            self._working.enter_context(_working(desc, show=self.show))
 
     def end(self) -> None:
+        self._working.close()
         if self._name is not None:
             self.timings[self._name] = time.perf_counter() - self._t0
             self._name = None
@@ -269,6 +280,24 @@ def _bar(iterable: Any, *, desc: str, total: int | None = None, show: bool = Tru
     )
     with bar, ticking(bar):
         yield from bar
+
+
+@contextlib.contextmanager
+def _working(desc: str, *, show: bool = True) -> Iterator[None]:
+    """On a terminal, a line ``desc: 00:04 so far`` redrawn while a step with no bar of its own
+    works (`sim.ticking`: the stress test's episodes and plots, the model trained on SALSA, 4 to
+    15 s each on two busy cores), cleared when it ends. A log gets nothing."""
+    line = elapsed_line(desc, disable=not (show and sys.stderr.isatty()))
+    with line, ticking(line):
+        yield
+
+
+def _say(line: str) -> None:
+    """A stage's line on stderr: on a terminal above the bars being drawn (`tqdm.write`)."""
+    if sys.stderr.isatty():
+        tqdm.write(line, file=sys.stderr)
+    else:
+        print(line, file=sys.stderr, flush=True)
 
 
 def _find_datasets(datasets: str | os.PathLike[str] | None) -> dict[str, Dataset]:
@@ -346,236 +375,250 @@ def run_demo(
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
         raise ValueError(f"jobs must be None or an int >= 1, got {jobs!r}")
     budget = QUICK if quick else FULL
-    say = progress or (lambda line: print(line, file=sys.stderr, flush=True))
+    say = progress or _say
     out = Path(out_dir)
     real = _find_datasets(datasets)
     out.mkdir(parents=True, exist_ok=True)
     if recordings:
         (out / RECORDINGS).mkdir(exist_ok=True)
     (out / FIGURES).mkdir(exist_ok=True)
-    stages = _Stages(7, say)
-    recorded: list[Path] = []
-    figures: list[Path] = []
-    say(
-        f"reform-sim demo ({budget.name} budget, seed {seed}) -> {out}; real data: "
-        + (", ".join(sorted(real)) if real else "none found")
-    )
-
-    # 1. Every registered scenario, briefly.
-    names = scenarios.names()
-    stages.begin("scenarios", f"simulating every registered scenario ({len(names)}) briefly")
-    episodes = {}
-    for k, name in enumerate(_bar(names, desc="scenarios", show=progress_bars)):
-        made = scenarios.make(name, seed=seed + k)
-        duration = min(made.duration, budget.scenario_s)
-        episodes[name] = simulate_episode(made, duration=duration)
-
-    # 2. The synthetic training set.
-    stages.begin("synthetic", "generating the synthetic training set (Parquet shards)")
-    train_frames = generate_sources(
-        budget.train, root=out / SYNTHETIC / "train", seed=seed, n_jobs=jobs, progress=progress_bars
-    )
-    salsa_train: tuple[Frame, ...] = ()
-    salsa_test: tuple[Frame, ...] = ()
-    if "salsa" in real:
-        salsa_train, salsa_test = time_split(real["salsa"].annotated(), DEFAULT_TRAIN_FRACTION)
-    kept = balance_pairs(train_frames)
-    synthetic = tuple(f for frames in kept.values() for f in frames)
-    training_summary = {
-        name: {"frames": len(frames), "pairs": count_pairs(frames)} for name, frames in kept.items()
-    }
-
-    # 3. Training.
-    stages.begin("training", f"training REFORM on {len(synthetic)} synthetic frames")
-    models: dict[str, Any] = {}
-    for name in _bar(CLASSIFIERS, desc="classifiers", show=progress_bars):
-        options = dict(RECOMMENDED.options) if name == SAVED_CLASSIFIER else {}
-        models[name] = Reform(_classifier(name, jobs), **options).fit(synthetic)
-    model_path = save_model(models[SAVED_CLASSIFIER], out / MODEL)
-    salsa_model = None
-    if salsa_train:
-        salsa_model = Reform(_classifier(SAVED_CLASSIFIER, jobs)).fit(
-            _even(salsa_train, budget.salsa_train_frames)
+    stages = _Stages(7, say, show=progress_bars)
+    try:
+        recorded: list[Path] = []
+        figures: list[Path] = []
+        say(
+            f"reform-sim demo ({budget.name} budget, seed {seed}) -> {out}; real data: "
+            + (", ".join(sorted(real)) if real else "none found")
         )
 
-    # 4. Evaluation.
-    stages.begin("evaluation", "scoring REFORM and GCFF on held-back episodes and real data")
-    held = generate_sources(
-        budget.held_back,
-        root=out / SYNTHETIC / "held-back",
-        seed=seed + HELD_BACK_SEED_OFFSET,
-        n_jobs=jobs,
-        progress=progress_bars,
-    )
-    tests: dict[str, tuple[Frame, ...]] = {
-        "held-back synthetic": tuple(f for frames in held.values() for f in frames)
-    }
-    if salsa_test:
-        tests["SALSA test split"] = _even(salsa_test, budget.real_frames)
-    if "babble" in real:
-        tests["Babble"] = _even(real["babble"].annotated(), budget.real_frames)
-    gcff = make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)
-    detectors: dict[str, Any] = {
-        f"REFORM {CLASSIFIER_TEXT[n]} (synthetic)": models[n] for n in CLASSIFIERS
-    }
-    if salsa_model is not None:
-        detectors[f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (SALSA train)"] = salsa_model
-    detectors[GCFF_LABEL] = gcff
-    detectors[MAJORITY_LABEL] = make_detector("majority")
-    scores: dict[tuple[str, str], dict[str, Any]] = {}
-    evaluations: dict[tuple[str, str], Evaluation] = {}
-    predictions: dict[tuple[str, str], list[Any]] = {}
-    work = [(d, t) for t in tests for d in detectors]
-    for detector, dataset in _bar(work, desc="scoring", show=progress_bars):
-        frames = tests[dataset]
-        predicted = run_detector(detector, detectors[detector], frames)
-        evaluation = evaluate(frames, predicted)
-        predictions[(detector, dataset)] = predicted
-        evaluations[(detector, dataset)] = evaluation
-        scores[(detector, dataset)] = evaluation.to_json(detector=detector, dataset=dataset)
+        # 1. Every registered scenario, briefly.
+        names = scenarios.names()
+        stages.begin("scenarios", f"simulating every registered scenario ({len(names)}) briefly")
+        episodes = {}
+        for k, name in enumerate(_bar(names, desc="scenarios", show=progress_bars)):
+            made = scenarios.make(name, seed=seed + k)
+            duration = min(made.duration, budget.scenario_s)
+            episodes[name] = simulate_episode(made, duration=duration)
 
-    # 5. Stress tests.
-    stages.begin("stress", "stress tests on the small grid (noise, dropouts, crowds, sensor)")
+        # 2. The synthetic training set.
+        stages.begin(
+            "synthetic", "generating the synthetic training set (Parquet shards)", working=False
+        )
+        train_frames = generate_sources(
+            budget.train,
+            root=out / SYNTHETIC / "train",
+            seed=seed,
+            n_jobs=jobs,
+            progress=progress_bars,
+        )
+        salsa_train: tuple[Frame, ...] = ()
+        salsa_test: tuple[Frame, ...] = ()
+        if "salsa" in real:
+            salsa_train, salsa_test = time_split(real["salsa"].annotated(), DEFAULT_TRAIN_FRACTION)
+        kept = balance_pairs(train_frames)
+        synthetic = tuple(f for frames in kept.values() for f in frames)
+        training_summary = {
+            name: {"frames": len(frames), "pairs": count_pairs(frames)}
+            for name, frames in kept.items()
+        }
 
-    stress = run_stress(
-        _stress_grid(budget.stress_grid),
-        seed=seed,
-        jobs=jobs,
-        axes=budget.stress_axes,
-        detectors={**{n: models[n] for n in CLASSIFIERS}, STRESS_GCFF: gcff},
-        progress=lambda line: say(f"  stress: {line.strip()}"),  # tasks done, as they finish
-    )
-    command = _command(out, datasets, seed, quick=quick, recordings=recordings)
-    stress_files = write_stress(stress, out / "stress", command=command)
-    figures += [p for k, p in stress_files.items() if k.startswith("plot:")]
-    if recordings:
-        recorded.append(record_stress(stress, out / RECORDINGS / "stress.rrd"))
+        # 3. Training.
+        stages.begin("training", f"training REFORM on {len(synthetic)} synthetic frames")
+        models: dict[str, Any] = {}
+        for name in _bar(CLASSIFIERS, desc="classifiers", show=progress_bars):
+            options = dict(RECOMMENDED.options) if name == SAVED_CLASSIFIER else {}
+            models[name] = Reform(_classifier(name, jobs), **options).fit(synthetic)
+        model_path = save_model(models[SAVED_CLASSIFIER], out / MODEL)
+        salsa_model = None
+        if salsa_train:
+            salsa_model = Reform(_classifier(SAVED_CLASSIFIER, jobs)).fit(
+                _even(salsa_train, budget.salsa_train_frames)
+            )
 
-    # 6. The HRI re-enactment.
-    stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
+        # 4. Evaluation.
+        stages.begin(
+            "evaluation",
+            "scoring REFORM and GCFF on held-back episodes and real data",
+            working=False,
+        )
+        held = generate_sources(
+            budget.held_back,
+            root=out / SYNTHETIC / "held-back",
+            seed=seed + HELD_BACK_SEED_OFFSET,
+            n_jobs=jobs,
+            progress=progress_bars,
+        )
+        tests: dict[str, tuple[Frame, ...]] = {
+            "held-back synthetic": tuple(f for frames in held.values() for f in frames)
+        }
+        if salsa_test:
+            tests["SALSA test split"] = _even(salsa_test, budget.real_frames)
+        if "babble" in real:
+            tests["Babble"] = _even(real["babble"].annotated(), budget.real_frames)
+        gcff = make_detector("gcff", stride=PAPER_STRIDE_M, mdl=PAPER_MDL_M2)
+        detectors: dict[str, Any] = {
+            f"REFORM {CLASSIFIER_TEXT[n]} (synthetic)": models[n] for n in CLASSIFIERS
+        }
+        if salsa_model is not None:
+            detectors[f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (SALSA train)"] = salsa_model
+        detectors[GCFF_LABEL] = gcff
+        detectors[MAJORITY_LABEL] = make_detector("majority")
+        scores: dict[tuple[str, str], dict[str, Any]] = {}
+        evaluations: dict[tuple[str, str], Evaluation] = {}
+        predictions: dict[tuple[str, str], list[Any]] = {}
+        work = [(d, t) for t in tests for d in detectors]
+        for detector, dataset in _bar(work, desc="scoring", show=progress_bars):
+            frames = tests[dataset]
+            predicted = run_detector(detector, detectors[detector], frames)
+            evaluation = evaluate(frames, predicted)
+            predictions[(detector, dataset)] = predicted
+            evaluations[(detector, dataset)] = evaluation
+            scores[(detector, dataset)] = evaluation.to_json(detector=detector, dataset=dataset)
 
-    hri_detectors = reform_detectors(
-        {SAVED_CLASSIFIER: models[SAVED_CLASSIFIER]}, training="synthetic"
-    )
-    if salsa_model is not None:
-        hri_detectors += reform_detectors({SAVED_CLASSIFIER: salsa_model}, training="salsa")
-    hri_detectors += baseline_detectors(reference=False)
-    # What the HRI page says about the SALSA-trained model (the synthetic one is described in
-    # the demo's report: its training set is not sim.experiments.stress's).
-    hri_training: dict[str, Any] = {}
-    if salsa_model is not None:
-        hri_training["salsa"] = salsa_training(salsa_model, DEFAULT_TRAIN_FRACTION)
-    hri = hri_experiment(
-        seed=seed,
-        seeds=budget.hri_seeds,
-        views=budget.hri_views,
-        resamples=budget.resamples,
-        detectors=hri_detectors,
-        training=hri_training,
-        executor=Executor("local", jobs=1, progress=progress_bars),  # the episodes, as by default
-    )
-    write_markdown(out / "hri.md", hri_markdown(hri, command=command))
-    if recordings:
-        recorded += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
+        # 5. Stress tests.
+        stages.begin("stress", "stress tests on the small grid (noise, dropouts, crowds, sensor)")
 
-    # 7. Recordings, figures, report.
-    stages.begin(
-        "report",
-        "writing recordings (.rrd), figures (PNG) and the report"
-        if recordings
-        else "writing figures (PNG) and the report",
-    )
-
-    reform_main = models[SAVED_CLASSIFIER]
-    main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
-    scenario_rows = []
-    for name in _bar(names, desc="scenes", show=progress_bars):
-        episode = episodes[name]
-        frames = episode.truth
-        reform_parts = run_detector(main_label, reform_main, frames)
-        gcff_parts = run_detector(GCFF_LABEL, gcff, frames)
-        parts = {"reform": reform_parts, "gcff": gcff_parts}
-        annotated = any(f.annotated for f in frames)
-        scored = {d: evaluate(frames, p) for d, p in parts.items()} if annotated else {}
-        path = out / RECORDINGS / f"scenario-{name}.rrd"
+        stress = run_stress(
+            _stress_grid(budget.stress_grid),
+            seed=seed,
+            jobs=jobs,
+            axes=budget.stress_axes,
+            detectors={**{n: models[n] for n in CLASSIFIERS}, STRESS_GCFF: gcff},
+            progress=lambda line: say(f"  stress: {line.strip()}"),  # tasks done, as they finish
+        )
+        command = _command(out, datasets, seed, quick=quick, recordings=recordings)
+        stress_files = write_stress(stress, out / "stress", command=command)
+        figures += [p for k, p in stress_files.items() if k.startswith("plot:")]
         if recordings:
-            record_episode(
-                path,
-                frames,
-                detections=parts,
-                evaluations=scored,
-                events=episode.events,
-                model=episode.model,
-                seed=episode.scenario.seed,
-                name=f"scenario {name}",
+            recorded.append(record_stress(stress, out / RECORDINGS / "stress.rrd"))
+
+        # 6. The HRI re-enactment.
+        stages.begin("hri", "re-enacting the paper's HRI experiment (three scenes with the robot)")
+
+        hri_detectors = reform_detectors(
+            {SAVED_CLASSIFIER: models[SAVED_CLASSIFIER]}, training="synthetic"
+        )
+        if salsa_model is not None:
+            hri_detectors += reform_detectors({SAVED_CLASSIFIER: salsa_model}, training="salsa")
+        hri_detectors += baseline_detectors(reference=False)
+        # What the HRI page says about the SALSA-trained model (the synthetic one is described in
+        # the demo's report: its training set is not sim.experiments.stress's).
+        hri_training: dict[str, Any] = {}
+        if salsa_model is not None:
+            hri_training["salsa"] = salsa_training(salsa_model, DEFAULT_TRAIN_FRACTION)
+        hri = hri_experiment(
+            seed=seed,
+            seeds=budget.hri_seeds,
+            views=budget.hri_views,
+            resamples=budget.resamples,
+            detectors=hri_detectors,
+            training=hri_training,
+            # the episodes, as by default
+            executor=Executor("local", jobs=1, progress=progress_bars),
+        )
+        write_markdown(out / "hri.md", hri_markdown(hri, command=command))
+        if recordings:
+            recorded += record_scenes(hri_detectors, out / RECORDINGS / "hri", seed=seed)
+
+        # 7. Recordings, figures, report.
+        stages.begin(
+            "report",
+            "writing recordings (.rrd), figures (PNG) and the report"
+            if recordings
+            else "writing figures (PNG) and the report",
+        )
+
+        reform_main = models[SAVED_CLASSIFIER]
+        main_label = f"REFORM {CLASSIFIER_TEXT[SAVED_CLASSIFIER]} (synthetic)"
+        scenario_rows = []
+        for name in _bar(names, desc="scenes", show=progress_bars):
+            episode = episodes[name]
+            frames = episode.truth
+            reform_parts = run_detector(main_label, reform_main, frames)
+            gcff_parts = run_detector(GCFF_LABEL, gcff, frames)
+            parts = {"reform": reform_parts, "gcff": gcff_parts}
+            annotated = any(f.annotated for f in frames)
+            scored = {d: evaluate(frames, p) for d, p in parts.items()} if annotated else {}
+            path = out / RECORDINGS / f"scenario-{name}.rrd"
+            if recordings:
+                record_episode(
+                    path,
+                    frames,
+                    detections=parts,
+                    evaluations=scored,
+                    events=episode.events,
+                    model=episode.model,
+                    seed=episode.scenario.seed,
+                    name=f"scenario {name}",
+                )
+                recorded.append(path)
+            k = _snapshot_index(frames)
+            snapshot = frames[k]
+            figures.append(
+                top_view(
+                    snapshot,
+                    {
+                        "ground truth": snapshot.partition(),
+                        "REFORM": reform_parts[k],
+                        "GCFF": gcff_parts[k],
+                    },
+                    out / FIGURES / f"scenario-{name}.png",
+                    title=f"{name}, t = {snapshot.time:g} s",
+                )
             )
-            recorded.append(path)
-        k = _snapshot_index(frames)
-        snapshot = frames[k]
+            scenario_rows.append(
+                {
+                    "scenario": name,
+                    "description": episode.scenario.description,
+                    "people": max(f.n_people for f in frames),
+                    "seconds": len(frames) / episode.dataset.metadata["rate_hz"],
+                    "frames": len(frames),
+                    "fformations_per_frame": float(np.mean([len(f.fformations()) for f in frames])),
+                    "reform_f1": _f1(scored.get("reform")),
+                    "gcff_f1": _f1(scored.get("gcff")),
+                    "recording": str(path.relative_to(out)) if recordings else None,
+                    "figure": f"{FIGURES}/scenario-{name}.png",
+                }
+            )
+        if recordings:  # each test set's REFORM and GCFF, scored frame by frame
+            for dataset, frames in tests.items():
+                slug = dataset.lower().replace(" ", "-")
+                path = out / RECORDINGS / f"evaluation-{slug}.rrd"
+                record_evaluation(
+                    path,
+                    frames,
+                    {
+                        "reform": predictions[(main_label, dataset)],
+                        "gcff": predictions[(GCFF_LABEL, dataset)],
+                    },
+                    {
+                        "reform": evaluations[(main_label, dataset)],
+                        "gcff": evaluations[(GCFF_LABEL, dataset)],
+                    },
+                    name=f"evaluation {dataset}",
+                    dataset=slug,
+                    seed=seed,
+                    classifier=reform_main.classifier_,
+                )
+                recorded.append(path)
+        bars = {
+            dataset: [
+                Bar(detector, 100 * evaluations[(detector, dataset)].at(T_TWO_THIRDS).f1)
+                for detector in detectors
+                if detector != MAJORITY_LABEL
+            ]
+            for dataset in tests
+        }
         figures.append(
-            top_view(
-                snapshot,
-                {
-                    "ground truth": snapshot.partition(),
-                    "REFORM": reform_parts[k],
-                    "GCFF": gcff_parts[k],
-                },
-                out / FIGURES / f"scenario-{name}.png",
-                title=f"{name}, t = {snapshot.time:g} s",
+            score_bars(
+                bars,
+                out / FIGURES / "scores.png",
+                ylabel="F1 at T = 2/3 (%)",
+                title="REFORM trained on synthetic crowds, and GCFF",
             )
         )
-        scenario_rows.append(
-            {
-                "scenario": name,
-                "description": episode.scenario.description,
-                "people": max(f.n_people for f in frames),
-                "seconds": len(frames) / episode.dataset.metadata["rate_hz"],
-                "frames": len(frames),
-                "fformations_per_frame": float(np.mean([len(f.fformations()) for f in frames])),
-                "reform_f1": _f1(scored.get("reform")),
-                "gcff_f1": _f1(scored.get("gcff")),
-                "recording": str(path.relative_to(out)) if recordings else None,
-                "figure": f"{FIGURES}/scenario-{name}.png",
-            }
-        )
-    if recordings:  # each test set's REFORM and GCFF, scored frame by frame
-        for dataset, frames in tests.items():
-            slug = dataset.lower().replace(" ", "-")
-            path = out / RECORDINGS / f"evaluation-{slug}.rrd"
-            record_evaluation(
-                path,
-                frames,
-                {
-                    "reform": predictions[(main_label, dataset)],
-                    "gcff": predictions[(GCFF_LABEL, dataset)],
-                },
-                {
-                    "reform": evaluations[(main_label, dataset)],
-                    "gcff": evaluations[(GCFF_LABEL, dataset)],
-                },
-                name=f"evaluation {dataset}",
-                dataset=slug,
-                seed=seed,
-                classifier=reform_main.classifier_,
-            )
-            recorded.append(path)
-    bars = {
-        dataset: [
-            Bar(detector, 100 * evaluations[(detector, dataset)].at(T_TWO_THIRDS).f1)
-            for detector in detectors
-            if detector != MAJORITY_LABEL
-        ]
-        for dataset in tests
-    }
-    figures.append(
-        score_bars(
-            bars,
-            out / FIGURES / "scores.png",
-            ylabel="F1 at T = 2/3 (%)",
-            title="REFORM trained on synthetic crowds, and GCFF",
-        )
-    )
-    stages.end()
+    finally:
+        stages.end()
     timings = dict(stages.timings)
     timings["total"] = time.perf_counter() - stages.started
     return DemoResult(
