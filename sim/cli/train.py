@@ -22,7 +22,7 @@ from sim.cli._common import (
     load_data,
     select_frames,
 )
-from sim.cli._grammar import show_progress, ticking_bar
+from sim.cli._grammar import show_progress, stage_lines, ticking_bar
 from sim.progress import progress_bar
 from sim.ticking import ticking
 
@@ -126,7 +126,9 @@ def _run_dante(args: argparse.Namespace) -> int:
             raise CliError(str(exc)) from None
     from reform.dante import INSTALL, Dante, torch_available
 
-    if not torch_available():
+    with stage_lines(args, "loading PyTorch", stamp=False):  # 2 to 5 s on two busy cores
+        available = torch_available()
+    if not available:
         raise CliError(f"--detector dante needs PyTorch, which is not installed: {INSTALL}")
     dataset = load_data(args)
     frames = select_frames(args, dataset.frames, doing="train on")
