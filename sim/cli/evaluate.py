@@ -19,6 +19,7 @@ from sim.cli._detectors import check_detector, detector_params
 from sim.cli._evaluate import BASENAME
 from sim.cli._grammar import report_outputs, write_outputs
 from sim.experiments.tables import format_report
+from sim.recording import pandas_withheld
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,12 +51,13 @@ def run(args: argparse.Namespace) -> int:
     write_outputs(
         outputs, document=result, markdown=lambda: format_report(result, style="markdown")
     )
-    record_detection(
-        args,
-        command="evaluate",
-        dataset=dataset,
-        frames=frames,
-        predictions=predictions,
-        evaluation=evaluation,
-    )
+    with pandas_withheld():  # pyarrow, under Rerun, would import it for nothing: see there
+        record_detection(
+            args,
+            command="evaluate",
+            dataset=dataset,
+            frames=frames,
+            predictions=predictions,
+            evaluation=evaluation,
+        )
     return 0

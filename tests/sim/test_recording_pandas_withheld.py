@@ -66,3 +66,14 @@ def test_benchmark_records_without_importing_pandas(babble_dir, tmp_path) -> Non
         "print(sorted(m for m in ('rerun', 'pandas') if m in sys.modules))\n"
     )
     assert printed[-1] == "['rerun']"  # recorded: Rerun is used, pandas is not
+
+
+def test_evaluate_records_without_importing_pandas(babble_dir, tmp_path) -> None:
+    printed = _python(
+        "import sys\n"
+        "from sim.cli import main\n"
+        f"main(['evaluate', '--detector', 'gcff', '--data', {str(babble_dir)!r},\n"
+        f"      '--quiet', '--save', {str(tmp_path / 'babble.rrd')!r}])\n"
+        "print(sorted(m for m in ('rerun', 'pandas') if m in sys.modules))\n"
+    )
+    assert printed[-1] == "['rerun']"
