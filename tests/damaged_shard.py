@@ -14,8 +14,8 @@ COLUMN = "x"  # the float column whose value is changed (metres)
 
 def one_float_changed(content: bytes) -> bytes:
     """``content`` (a Parquet shard) with one value of column ``x`` changed in its last bit,
-    written again as the shard was (zstd), of the same size: the first row for which the
-    compressed file keeps its length.
+    written again as the shard was (zstd, the same columns with a dictionary), of the same size:
+    the first row for which the compressed file keeps its length.
 
     Raises:
         AssertionError: no row gives a file of the same size.
@@ -24,6 +24,12 @@ def one_float_changed(content: bytes) -> bytes:
     column = table.column(COLUMN).to_numpy(zero_copy_only=False)
     nulls = table.column(COLUMN).is_null().to_numpy(zero_copy_only=False)
     index = table.schema.get_field_index(COLUMN)
+    metadata = pq.ParquetFile(io.BytesIO(content)).metadata
+    dictionary = [
+        metadata.schema.column(i).name
+        for i in range(metadata.num_columns)
+        if metadata.row_group(0).column(i).has_dictionary_page
+    ]
     for row in range(1, len(column) - 1):
         if nulls[row] or not np.isfinite(column[row]):
             continue
@@ -33,7 +39,7 @@ def one_float_changed(content: bytes) -> bytes:
             index, table.schema.field(index), pa.array(values, type=pa.float64(), mask=nulls)
         )
         out = io.BytesIO()
-        pq.write_table(changed, out, compression="zstd")
+        pq.write_table(changed, out, compression="zstd", use_dictionary=dictionary)
         damaged = out.getvalue()
         if len(damaged) == len(content) and damaged != content:
             return damaged
