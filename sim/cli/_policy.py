@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import Action, add_actions, run_with
-from sim.cli._grammar import add_episodes, add_quiet, add_seed, rename, setter
+from sim.cli._common import Action, add_actions
+from sim.cli._grammar import add_episodes, add_quiet, add_seed, rename, run_loading, setter
 
 DESCRIPTION = """\
 Runs the scripted baseline of the joining task (go to the gap in the detected o-space, face the
@@ -48,7 +48,7 @@ def _evaluate_arguments(parser: argparse.ArgumentParser) -> None:
     rename(parser, "--json", "--out", setter("out"), metavar="FILE")
     add_quiet(parser, old=())
     rename(parser, "--progress", "(progress is shown by default)", setter("quiet", False), nargs=0)
-    parser.set_defaults(handler=run_with("sim.cli.policy:_evaluate"))
+    parser.set_defaults(handler=run_loading("sim.cli.policy:_evaluate", "Gymnasium and MuJoCo"))
 
 
 ACTIONS = (
