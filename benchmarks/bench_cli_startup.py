@@ -31,8 +31,10 @@ imports (each outermost import, whatever it imports in turn); the command's CPU 
 of its process and the processes it waited for. Printed: the
 median share over ``--repeats``, beside the CPU time of ``python -c pass`` in the same run, and
 which of the heavy libraries each command imported (a command imports only what it uses:
-evaluate without ``--save`` imports no Rerun, neither imports torch). Goals (issue 31): imports
-at most 25 % of each command's CPU time; ``--help`` within 2x of a bare Python start.
+evaluate without ``--save`` imports no Rerun; benchmark reads the GCFF sets' .mat files without
+scipy and writes its recordings without pandas, which pyarrow would import under Rerun; neither
+imports torch). Goals (issue 31): imports at most 25 % of each command's CPU time; ``--help``
+within 2x of a bare Python start.
 
 Run: ``python benchmarks/bench_cli_startup.py [--repeats 7] [--datasets DIR] [--quick]``
 (``--quick``: one run per case, nothing warmed first, and the share of ``scenarios`` only, which
@@ -88,7 +90,17 @@ DATASETS = ("salsa", "babble", "coffeebreak", "synth")  # the four datasets at h
 IMPORT_SHARE_GOAL = 0.25  # of a short command's CPU time
 HELP_GOAL = 2.0  # --help / python
 PYCACHE = "reform-sim-bench-pycache"  # the bytecode cache's folder, in the temporary folder
-HEAVY = ("rerun", "mujoco", "torch", "sklearn", "pandas", "matplotlib", "skops", "gymnasium")
+HEAVY = (
+    "rerun",
+    "mujoco",
+    "torch",
+    "sklearn",
+    "scipy",
+    "pandas",
+    "matplotlib",
+    "skops",
+    "gymnasium",
+)
 
 # Installed in every Python process of a measured command (as ``sitecustomize``): clocks the
 # CPU time of each outermost import, and writes it with the modules loaded to
