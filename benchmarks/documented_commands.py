@@ -21,13 +21,15 @@ documents: the page shows a ``reform-sim X: error:`` line right after it and the
 non-zero with a last line ``reform-sim X: error: ...``. A command still running at --timeout is
 stopped and counted "timed out", never passed.
 
-The table (page:line, command, exit, seconds, longest silence, verdict) is written to --out after
-each page, whole or not at all, so an interrupted run leaves the table of what ran, marked
-partial. One line is printed per command as it finishes, and a summary at the end.
+The table (page:line, commit, command, exit, seconds, longest silence, verdict) is written to
+--out after each page, whole or not at all, so an interrupted run leaves the table of what ran,
+marked partial. With --update, the rows --out already holds for the pages this run does not run
+are kept, each with the commit it ran on, so that a run of a few pages refreshes theirs in the
+whole table. One line is printed per command as it finishes, and a summary at the end.
 
 Run: ``python benchmarks/documented_commands.py [--pages GLOB ...] [--timeout S] [--out FILE]
-[--quick]`` (``--quick``: the README's commands only; a glob is relative to the repository,
-pages in the order of the globs given).
+[--update] [--quick]`` (``--quick``: the README's commands only; a glob is relative to the
+repository, pages in the order of the globs given).
 """
 
 from __future__ import annotations
@@ -103,6 +105,11 @@ class Row:
     verdict: str
     passed: bool | None  # None: not run
     outcome: Outcome | None = None
+    commit: str = ""  # the commit of the clone it ran on
+
+    @property
+    def page(self) -> str:
+        return self.where.rpartition(":")[0]
 
 
 def run_command(command: str, *, cwd: Path, env: dict[str, str], timeout: float) -> Outcome:
@@ -231,8 +238,11 @@ def pages_of(globs: list[str]) -> list[Path]:
     return list(dict.fromkeys(pages))
 
 
-def run_pages(pages: list[Path], *, timeout: float, out: Path) -> list[Row]:
-    """Runs every page's whole commands; prints a line per command; rewrites ``out`` per page."""
+def run_pages(
+    pages: list[Path], *, timeout: float, out: Path, kept: list[Row] | None = None
+) -> list[Row]:
+    """Runs every page's whole commands; prints a line per command; rewrites ``out`` per page,
+    with the rows of ``kept`` whose pages this run does not run (`merged`)."""
     rows: list[Row] = []
     done: dict[str, Row] = {}  # normalised command -> the row that ran it
     n_commands = sum(
@@ -258,10 +268,12 @@ def run_pages(pages: list[Path], *, timeout: float, out: Path) -> list[Row]:
                 words = site_pages.command_words(command.text)
                 key = _normalised(command.text)
                 if words is None or any(_PLACEHOLDER.match(w) for w in words):
-                    row = Row(where, command.text, "not run: a pattern or a placeholder", None)
+                    said = "not run: a pattern or a placeholder"
+                    row = Row(where, command.text, said, None, None, commit)
                 elif key in done and not _WRITES.search(key):
                     first = done[key]
-                    row = Row(where, command.text, f"as {first.where}", None, first.outcome)
+                    said = f"as {first.where}"
+                    row = Row(where, command.text, said, None, first.outcome, commit)
                 else:
                     if clone is None:
                         clone = _page_folder(source, Path(parent) / f"page{k}", text)
@@ -269,10 +281,57 @@ def run_pages(pages: list[Path], *, timeout: float, out: Path) -> list[Row]:
                         command.text, cwd=clone, env=_environment(clone), timeout=timeout
                     )
                     said, passed = verdict(outcome, command.refusal)
-                    row = done[key] = Row(where, command.text, said, passed, outcome)
+                    row = done[key] = Row(where, command.text, said, passed, outcome, commit)
                 rows.append(row)
                 _print_row(row, len(rows), n_commands)
-            write_table(rows, out, commit=commit, partial=k + 1 < len(pages), timeout=timeout)
+            table = merged(rows, kept or [], run=pages[: k + 1])
+            write_table(table, out, partial=k + 1 < len(pages), timeout=timeout)
+    return rows
+
+
+def merged(rows: list[Row], kept: list[Row], *, run: list[Path]) -> list[Row]:
+    """``rows``, and the rows of ``kept`` whose pages are not among the pages ``run``, page by
+    page in the order of the site's pages (a page no longer among them is left out)."""
+    names = {str(p.relative_to(REPO)) for p in run}
+    by_page: dict[str, list[Row]] = {}
+    for row in [r for r in kept if r.page not in names] + rows:
+        by_page.setdefault(row.page, []).append(row)
+    order = [str(p.relative_to(REPO)) for p in site_pages.COMMAND_PAGES]
+    return [row for page in order for row in by_page.get(page, [])]
+
+
+_CELL_SPLIT = re.compile(r"(?<!\\)\|")
+_COMMIT = re.compile(r"fresh clones? of (\w+)")
+
+
+def read_table(path: Path) -> list[Row]:
+    """The rows of a table `write_table` wrote (or its earlier form, without a commit column:
+    every row then of the commit its first paragraph names); none when ``path`` is missing."""
+    if not path.is_file():
+        return []
+    text = path.read_text(encoding="utf-8")
+    found = _COMMIT.search(text)
+    header_commit = found[1] if found else ""
+    rows = []
+    for line in text.splitlines():
+        if not line.startswith("| ") or line.startswith(("| page:line", "| ---")):
+            continue
+        cells = [c.strip().replace("\\|", "|") for c in _CELL_SPLIT.split(line)[1:-1]]
+        if len(cells) == 6:  # the earlier form
+            cells.insert(1, header_commit)
+        where, commit, command, exit_, seconds, silence, said = cells
+        command = command.strip("`")
+        outcome = None
+        if seconds:
+            status = None if exit_ == "-" else int(exit_)
+            outcome = Outcome(status, float(seconds), float(silence), "")
+        if said == "passed" or said.startswith("refused"):
+            passed = True
+        elif said.startswith(("not run", "as ")):
+            passed = None
+        else:
+            passed = False
+        rows.append(Row(where, command, said, passed, outcome, commit))
     return rows
 
 
@@ -289,16 +348,22 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
-def write_table(rows: list[Row], out: Path, *, commit: str, partial: bool, timeout: float) -> None:
+def write_table(rows: list[Row], out: Path, *, partial: bool, timeout: float) -> None:
     """Writes the Markdown table of ``rows`` to ``out``, whole or not at all."""
     run = [r for r in rows if r.passed is not None]
     loudest = max(run, key=lambda r: r.outcome.silence, default=None)
+    commits = list(dict.fromkeys(r.commit for r in rows if r.commit))
+    clones = (
+        f"a fresh clone of {commits[0]}"
+        if len(commits) == 1
+        else f"fresh clones of {', '.join(commits)} (each row's commit beside it)"
+    )
     lines = [
         "# Documented commands, run",
         "",
-        f"Every whole `reform-sim` command of the README and docs/ (not docs/results/), run on a "
-        f"fresh clone of {commit} by `python benchmarks/documented_commands.py`, each page in its "
-        f"own folder, each command at most {timeout:g} s. "
+        f"Every whole `reform-sim` command of the README and docs/ (not docs/results/), run on "
+        f"{clones} by `python benchmarks/documented_commands.py`, each page in its "
+        f"own folder, each command at most {timeout:g} s in the latest run. "
         f"{'**Partial: the run was stopped before its last page.** ' if partial else ''}"
         f"{len(run)} commands run, {sum(r.passed for r in run)} passed, "
         f"{sum(not r.passed for r in run)} failed or timed out; "
@@ -311,8 +376,8 @@ def write_table(rows: list[Row], out: Path, *, commit: str, partial: bool, timeo
         )
     lines += [
         "",
-        "| page:line | command | exit | seconds | longest silence (s) | verdict |",
-        "| --- | --- | ---: | ---: | ---: | --- |",
+        "| page:line | commit | command | exit | seconds | longest silence (s) | verdict |",
+        "| --- | --- | --- | ---: | ---: | ---: | --- |",
     ]
     for row in rows:
         o = row.outcome
@@ -320,8 +385,8 @@ def write_table(rows: list[Row], out: Path, *, commit: str, partial: bool, timeo
         seconds = "" if o is None else f"{o.seconds:.1f}"
         silence = "" if o is None else f"{o.silence:.1f}"
         lines.append(
-            f"| {row.where} | `{_cell(row.command)}` | {exit_} | {seconds} | {silence} | "
-            f"{_cell(row.verdict)} |"
+            f"| {row.where} | {row.commit} | `{_cell(row.command)}` | {exit_} | {seconds} | "
+            f"{silence} | {_cell(row.verdict)} |"
         )
     write_markdown(out, "\n".join(lines) + "\n")
 
@@ -348,6 +413,11 @@ def main() -> None:
         default=REPO / "docs" / "results" / "documented-commands.md",
         help="the Markdown table (default docs/results/documented-commands.md)",
     )
+    parser.add_argument(
+        "--update",
+        action="store_true",
+        help="keep the rows --out holds for the pages not run, each with its commit",
+    )
     args = parser.parse_args()
     if args.pages:
         pages = pages_of(args.pages)
@@ -357,7 +427,8 @@ def main() -> None:
         pages = list(site_pages.COMMAND_PAGES)
     if not pages:
         parser.error(f"--pages: no page with commands matches {args.pages}")
-    rows = run_pages(pages, timeout=args.timeout, out=args.out)
+    kept = read_table(args.out) if args.update else None
+    rows = run_pages(pages, timeout=args.timeout, out=args.out, kept=kept)
     run = [r for r in rows if r.passed is not None]
     failed = [r for r in run if not r.passed]
     print(

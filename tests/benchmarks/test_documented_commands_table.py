@@ -1,0 +1,82 @@
+"""``benchmarks/documented_commands.py --update`` keeps the rows of the pages it does not run: its
+table reads back as written, an earlier table without a commit column reads with the commit its
+first paragraph names, and a run of one page replaces that page's rows alone."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCHMARKS_DIR = Path(__file__).resolve().parents[2] / "benchmarks"
+# The earlier form of the table (docs/results/documented-commands.md at 4bc6404), two rows.
+EARLIER = """\
+# Documented commands, run
+
+Every whole `reform-sim` command of the README and docs/ (not docs/results/), run on a fresh \
+clone of 0449f13 by `python benchmarks/documented_commands.py`, each command at most 150 s.
+
+| page:line | command | exit | seconds | longest silence (s) | verdict |
+| --- | --- | ---: | ---: | ---: | --- |
+| README.md:91 | `reform-sim evaluate --help  # a \\| b` | 0 | 0.2 | 0.2 | passed |
+| docs/guide/twins.md:104 | `reform-sim detect --data DATASET` |  |  |  | not run: a pattern |
+| docs/guide/reform.md:71 | `reform-sim train --tune` | - | 150.2 | 147.1 | timed out |
+"""
+
+
+@pytest.fixture(scope="module")
+def script():
+    """The script as a module (it imports ``timing`` from beside it, as when run)."""
+    sys.path.insert(0, str(BENCHMARKS_DIR))
+    try:
+        path = BENCHMARKS_DIR / "documented_commands.py"
+        spec = importlib.util.spec_from_file_location("documented_commands_table", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = module  # its dataclasses look their module up there
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.path.remove(str(BENCHMARKS_DIR))
+
+
+def test_an_earlier_table_reads_with_its_commit(script, tmp_path):
+    (tmp_path / "t.md").write_text(EARLIER)
+    help_, pattern, train = script.read_table(tmp_path / "t.md")
+    assert help_ == script.Row(
+        "README.md:91",
+        "reform-sim evaluate --help  # a | b",
+        "passed",
+        True,
+        script.Outcome(0, 0.2, 0.2, ""),
+        "0449f13",
+    )
+    assert (pattern.passed, pattern.outcome, pattern.page) == (None, None, "docs/guide/twins.md")
+    assert (train.passed, train.outcome.exit, train.outcome.silence) == (False, None, 147.1)
+
+
+def test_the_table_reads_back_as_written(script, tmp_path):
+    (tmp_path / "t.md").write_text(EARLIER)
+    rows = script.read_table(tmp_path / "t.md")
+    script.write_table(rows, tmp_path / "u.md", partial=False, timeout=60)
+    assert script.read_table(tmp_path / "u.md") == rows
+    assert "a fresh clone of 0449f13" in (tmp_path / "u.md").read_text()
+
+
+def test_a_run_of_one_page_replaces_its_rows_alone(script, tmp_path):
+    (tmp_path / "t.md").write_text(EARLIER)
+    kept = script.read_table(tmp_path / "t.md")
+    page = script.REPO / "docs" / "guide" / "reform.md"
+    new = script.Row(
+        "docs/guide/reform.md:71", "reform-sim train --tune", "passed", True,
+        script.Outcome(0, 90.0, 2.1, ""), "abc1234",
+    )  # fmt: skip
+    rows = script.merged([new], kept, run=[page])
+    assert [r.where for r in rows if r.page == "docs/guide/reform.md"] == [new.where]
+    assert rows[rows.index(new)].commit == "abc1234"
+    assert {r.where for r in rows} == {r.where for r in kept}
+    script.write_table(rows, tmp_path / "u.md", partial=False, timeout=150)
+    text = (tmp_path / "u.md").read_text()
+    assert "fresh clones of 0449f13, abc1234" in text and "147.1" not in text
+    assert "Longest silence: 2.1 s (docs/guide/reform.md:71)" in text
