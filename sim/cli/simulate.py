@@ -5,6 +5,7 @@ Its arguments are `sim.cli._simulate`."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from collections import Counter
@@ -83,14 +84,18 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     if recording:
         return _run_recorded(args, made, target, sensor, kwargs, out, start, estimate.frames)
-    with tqdm(
+    bar = tqdm(
         total=estimate.frames,
         unit="frame",
         desc=f"simulate {made.name}",
         disable=args.quiet,
         delay=1.0,  # short runs print nothing
         file=sys.stderr,
-    ) as bar:
+    )
+    # On a terminal, redrawn while a frame takes long: the first compiles the motion kernel
+    # (10 s on two busy cores in a fresh clone, whose numba cache is empty).
+    moving = ticking(bar) if sys.stderr.isatty() else contextlib.nullcontext()
+    with bar, moving:
         written = write_episode(
             made,
             out,
