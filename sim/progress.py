@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from typing import Any
 
-__all__ = ["ELAPSED_FORMAT", "elapsed_line", "progress_bar"]
+__all__ = ["elapsed_line", "progress_bar"]
 
 ELAPSED_FORMAT = "{desc}: {elapsed} so far"  # a line counting no unit, only the time
 
@@ -56,20 +56,15 @@ def progress_bar(*, disable: bool = False, **options: Any) -> Any:
     return tqdm(**options)
 
 
-def elapsed_line(desc: str, *, disable: bool = False, file: Any = None) -> Any:
-    """A line ``desc: 00:12 so far`` on stderr (``file``), cleared when closed, for work that
-    counts no unit; `sim.ticking.ticking` keeps its time moving. Drawn at once, so that the work
-    is never silent from its start.
+def elapsed_line(desc: str, *, disable: bool = False) -> Any:
+    """A line ``desc: 00:12 so far`` on stderr, cleared when closed, for work that counts no
+    unit; `sim.ticking.ticking` keeps its time moving. Drawn at once, so that the work is never
+    silent from its start.
 
     Args:
         desc: what is being done.
         disable: draw nothing (tqdm not imported).
-        file: where to draw it (default: ``sys.stderr`` at the call).
     """
     return progress_bar(
-        desc=desc,
-        bar_format=ELAPSED_FORMAT,
-        file=sys.stderr if file is None else file,
-        leave=False,
-        disable=disable,
+        desc=desc, bar_format=ELAPSED_FORMAT, file=sys.stderr, leave=False, disable=disable
     )
