@@ -90,6 +90,7 @@ PARENT_CHECK_S = 0.5  # seconds between a local worker's looks at its parent (no
 EXIT_ORPHANED = 1  # exit status of a local worker whose parent is gone
 NODE_CHECK_S = 5.0  # seconds between a Ray run's looks at its cluster's CPUs while it waits
 NODE_WAIT_S = 300.0  # seconds a Ray run that lost a node waits for a CPU when none is left
+CANCEL_WAIT_S = 20.0  # seconds a stopped Ray run waits for its cancelled units to end
 _CRASHED = "WorkerCrashedError"  # a Ray unit whose worker process died: run again once
 
 
@@ -767,6 +768,8 @@ class Executor:
         finally:
             for ref in pending:  # stopped early (an error, Ctrl-C): the rest need not run
                 ray.cancel(ref, force=True)
+            if pending:  # and the run ends once they have: none is left computing after it
+                ray.wait(pending, num_returns=len(pending), timeout=CANCEL_WAIT_S)
 
     def _get(self, ray: Any, ref: Any, what: str, lost: int, nodes: list[str]) -> Any:
         """The task's result; its own error raised as it was; `_Lost` when it should run
