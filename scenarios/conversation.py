@@ -15,6 +15,7 @@ __all__ = ["MEAN_UTTERANCE_S", "converse", "standing"]
 MEAN_UTTERANCE_S = 4.0  # seconds, mean length of one person's turn to speak
 MIN_UTTERANCE_S = 1.0  # seconds
 MAX_UTTERANCE_FACTOR = 3.0  # an utterance lasts at most this many times the mean
+_TRUSTED = 1e100  # metres or radians: below this, sums and products of a few stay finite
 
 
 def standing(
@@ -36,15 +37,21 @@ def standing(
     )
 
 
+def _sight(head: tuple[float, float], target: tuple[float, float]) -> tuple[float, float]:
+    """(direction, reach) of a head at ``head`` looking at ``target``: the angle toward it,
+    radians, and its distance, 0.5 m at least."""
+    (hx, hy), (tx, ty) = head, target
+    return math.atan2(ty - hy, tx - hx), max(math.hypot(tx - hx, ty - hy), 0.5)
+
+
 def _off_target(
     head: tuple[float, float], target: tuple[float, float], drawn: float, head_noise: float
 ) -> tuple[float, float]:
     """Where a head at ``head`` looks, off ``target`` by ``drawn`` (a standard normal draw)
     times ``head_noise`` radians, at the target's distance (0.5 m at least)."""
-    (hx, hy), (tx, ty) = head, target
-    angle = math.atan2(ty - hy, tx - hx) + drawn * head_noise
-    reach = max(math.hypot(tx - hx, ty - hy), 0.5)
-    return (hx + reach * math.cos(angle), hy + reach * math.sin(angle))
+    direction, reach = _sight(head, target)
+    angle = direction + drawn * head_noise
+    return (head[0] + reach * math.cos(angle), head[1] + reach * math.sin(angle))
 
 
 def converse(
@@ -87,26 +94,66 @@ def converse(
         for m in members
         if t < end
     }
-    speaker = allowed[int(rng.integers(len(allowed)))]
+    integers, normal, exponential = rng.integers, rng.normal, rng.exponential
+    speaker = allowed[int(integers(len(allowed)))]
     turns = []
+    if t >= end:
+        return turns
+    builder.check_agents(members)
+    shortest = MIN_UTTERANCE_S
+    longest = MAX_UTTERANCE_FACTOR * mean_utterance
+    size = len(members)
+    # Who listens to each speaker and who may speak next, by speaker; each member's gaze at
+    # each target (by agent: one intent, made once; off target: the direction and distance,
+    # computed once, as `_off_target` computes them).
+    listening: dict[int, list[int]] = {}
+    next_ones: dict[int, list[int]] = {}
+    by_agent: dict[tuple[int, int], Intent] = {}
+    sights: dict[tuple[int, int], tuple[float, float, float, float]] = {}
+    # A gaze point made here from finite places, directions and draws is finite: it skips
+    # `Intent.looking_at`'s check (a place too large to make one is checked as before).
+    trusted = (
+        math.isfinite(head_noise)
+        and abs(head_noise) < _TRUSTED
+        and all(abs(x) < _TRUSTED and abs(y) < _TRUSTED for x, y in spots.values())
+    )
+    looks = {m: {**stand[m].__dict__, "gaze_agent": None} for m in members}
+    made = object.__new__
     while t < end:
         turns.append((t, speaker))
-        listeners = [m for m in members if m != speaker]
-        addressee = listeners[int(rng.integers(len(listeners)))]
+        listeners = listening.get(speaker)
+        if listeners is None:
+            listeners = listening[speaker] = [m for m in members if m != speaker]
+        addressee = listeners[int(integers(len(listeners)))]
         # A standard normal draw per member, in member order, whatever the head noise (so
         # that the stream does not depend on it).
-        noise = rng.normal(size=len(members)).tolist()
+        noise = normal(size=size).tolist()
+        intents = []
         for m, drawn in zip(members, noise, strict=True):
             target = addressee if m == speaker else speaker
             if head_noise <= 0.0:
-                intent = stand[m].looking_at(agent=target)
+                intent = by_agent.get((m, target))
+                if intent is None:
+                    intent = by_agent[m, target] = stand[m].looking_at(agent=target)
+            elif trusted:
+                sight = sights.get((m, target))
+                if sight is None:
+                    sight = sights[m, target] = (*spots[m], *_sight(spots[m], spots[target]))
+                hx, hy, direction, reach = sight
+                angle = direction + drawn * head_noise
+                point = (hx + reach * math.cos(angle), hy + reach * math.sin(angle))
+                intent = made(Intent)
+                intent.__dict__.update(looks[m], gaze_point=point)
             else:
                 intent = stand[m].looking_at(
                     point=_off_target(spots[m], spots[target], drawn, head_noise)
                 )
-            builder.set(t, m, intent)
-        length = rng.exponential(mean_utterance)
-        t += min(max(length, MIN_UTTERANCE_S), MAX_UTTERANCE_FACTOR * mean_utterance)
-        others = [s for s in allowed if s != speaker] or allowed
-        speaker = others[int(rng.integers(len(others)))]
+            intents.append(intent)
+        builder.set_many(t, members, intents)
+        length = exponential(mean_utterance)
+        t += min(max(length, shortest), longest)
+        others = next_ones.get(speaker)
+        if others is None:
+            others = next_ones[speaker] = [s for s in allowed if s != speaker] or allowed
+        speaker = others[int(integers(len(others)))]
     return turns

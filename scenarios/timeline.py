@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import operator
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -23,6 +24,8 @@ import numpy as np
 from scenarios.script import Intent
 
 __all__ = ["PlannedGroup", "ScenarioEvent", "Timeline", "TimelineBuilder"]
+
+_time = operator.itemgetter(0)
 
 _TIME_SLACK_S = 1e-9  # seconds: a change at t applies to samples at t despite rounding
 CHECKPOINT_CHANGES = 64  # a built timeline writes every agent's intents out once per this many
@@ -202,7 +205,7 @@ class TimelineBuilder:
     def __init__(self, agents: Iterable[int]) -> None:
         self._agents = tuple(int(a) for a in agents)
         self._known = set(self._agents)
-        self._changes: list[tuple[float, int, int, Intent]] = []
+        self._changes: list[tuple[float, int, Intent]] = []  # (time, agent, intent), as set
         self._groups: list[dict] = []
         self._continues: list[tuple[int, ...]] = []  # per planned group, the groups it continues
         self._events: list[ScenarioEvent] = []
@@ -213,7 +216,27 @@ class TimelineBuilder:
             raise ValueError(f"agent {agent} is not on the stage (ids {list(self._agents)})")
         if not 0.0 <= t < math.inf:  # NaN fails too
             raise ValueError(f"intent time must be a finite time >= 0 s, got {t}")
-        self._changes.append((float(t), len(self._changes), int(agent), intent))
+        self._changes.append((float(t), int(agent), intent))
+
+    def check_agents(self, agents: Iterable[int]) -> None:
+        """`ValueError` naming the first of ``agents`` not on the stage."""
+        agents = list(agents)
+        if not self._known.issuperset(agents):
+            agent = next(a for a in agents if a not in self._known)
+            raise ValueError(f"agent {agent} is not on the stage (ids {list(self._agents)})")
+
+    def set_many(self, t: float, agents: Sequence[int], intents: Sequence[Intent]) -> None:
+        """From ``t`` on, each of ``agents`` wants its intent in ``intents``: `set` for each in
+        turn, for agents already checked (`check_agents`) and given as ``int``."""
+        if not 0.0 <= t < math.inf:  # NaN fails too
+            raise ValueError(f"intent time must be a finite time >= 0 s, got {t}")
+        if len(agents) != len(intents):
+            raise ValueError(
+                f"agents and intents must have the same length, got {len(agents)} and "
+                f"{len(intents)}"
+            )
+        t = float(t)
+        self._changes.extend([(t, a, i) for a, i in zip(agents, intents, strict=True)])
 
     def group(
         self,
@@ -264,19 +287,18 @@ class TimelineBuilder:
 
     def build(self) -> Timeline:
         """The frozen `Timeline`."""
-        self._changes.sort()  # by time, then order of setting (unique: intents never compared)
+        self._changes.sort(key=_time)  # by time, then order of setting (the sort is stable)
         times: list[float] = []
         deltas: list[dict[int, Intent]] = []
-        k = 0
-        n = len(self._changes)
-        while k < n:
-            t = self._changes[k][0]
-            delta = {}
-            while k < n and self._changes[k][0] == t:
-                delta[self._changes[k][2]] = self._changes[k][3]
-                k += 1
-            times.append(t)
-            deltas.append(delta)
+        delta: dict[int, Intent] = {}
+        last = math.nan
+        for t, agent, intent in self._changes:
+            if t != last:
+                delta = {}
+                times.append(t)
+                deltas.append(delta)
+                last = t
+            delta[agent] = intent
         groups = [dict(g) for g in self._groups]
         for k in range(len(groups) - 1, -1, -1):  # the newest first: chains resolve in one pass
             for handle in self._continues[k]:
