@@ -388,41 +388,63 @@ class Party:
         ignore_groups: tuple[int, ...] = (),
         ignore_people: tuple[int, ...] = (),
     ) -> bool:
+        """Whether floor of radius ``claim`` round ``centre`` is inside the walls and clear of
+        every group, everyone alone and every kept spot (those ignored aside)."""
+        bound, obstacles = self.obstacles(claim, ignore_groups, ignore_people)
+        return _clear(float(centre[0]), float(centre[1]), bound, obstacles)
+
+    def obstacles(
+        self, claim: float, ignore_groups: tuple[int, ...], ignore_people: tuple[int, ...]
+    ) -> tuple[float, list[tuple[float, float, float]]]:
+        """What floor of radius ``claim`` must keep clear of: the farthest its centre may be
+        from the room's middle along either axis, metres, and ``(x, y, distance)`` of every
+        group's floor centre, spot of someone alone and kept spot (those ignored aside),
+        metres, with the distance ``claim`` must keep from it."""
         limit = self.half - WALL_GAP_M - PLANNING_RADIUS_M
         inner = claim - PLANNING_RADIUS_M - GROUP_MARGIN_M
-        x, y = float(centre[0]), float(centre[1])
-        if max(abs(x), abs(y)) > limit - max(inner, 0.0):
-            return False
-        hypot = math.hypot
+        obstacles = []
         for gid, g in self.groups.items():
             if gid in ignore_groups:
                 continue
             c = self.floor_centre(g)
-            if hypot(x - c[0], y - c[1]) < claim + self.reach(self.extent(g)):
-                return False
+            obstacles.append((float(c[0]), float(c[1]), claim + self.reach(self.extent(g))))
         for pid, a in self.alone_at.items():
             if pid in ignore_people:
                 continue
-            if hypot(x - a.spot[0], y - a.spot[1]) < claim + ALONE_CLAIM_M:
-                return False
+            obstacles.append((float(a.spot[0]), float(a.spot[1]), claim + ALONE_CLAIM_M))
         for spot in self.keep_clear:
-            if hypot(x - spot[0], y - spot[1]) < claim + ROBOT_CLAIM_M:
-                return False
-        return True
+            obstacles.append((float(spot[0]), float(spot[1]), claim + ROBOT_CLAIM_M))
+        return limit - max(inner, 0.0), obstacles
 
     def free_spot(
-        self, claim: float, *, near: np.ndarray | None = None, within: float = 0.0, **ignore
+        self,
+        claim: float,
+        *,
+        near: np.ndarray | None = None,
+        within: float = 0.0,
+        ignore_groups: tuple[int, ...] = (),
+        ignore_people: tuple[int, ...] = (),
     ) -> np.ndarray | None:
+        """(2,) a centre of free floor of radius ``claim`` (`fits`), metres: drawn uniform in
+        the room, or ``near`` a point (0.5 m to ``within`` from it, in a uniform direction);
+        None after `PLACE_TRIES` draws that do not fit."""
         limit = self.half - WALL_GAP_M - PLANNING_RADIUS_M
+        bound, obstacles = self.obstacles(claim, ignore_groups, ignore_people)
+        uniform = self.rng.uniform
+        if near is None:
+            for _ in range(PLACE_TRIES):
+                spot = uniform(-limit, limit, size=2)
+                if _clear(float(spot[0]), float(spot[1]), bound, obstacles):
+                    return spot
+            return None
+        # ``near + reach * (cos, sin)``, one coordinate at a time (the same sums and products)
+        nx, ny = float(near[0]), float(near[1])
         for _ in range(PLACE_TRIES):
-            if near is None:
-                spot = self.rng.uniform(-limit, limit, size=2)
-            else:
-                angle = self.rng.uniform(-math.pi, math.pi)
-                reach = self.rng.uniform(0.5, within)
-                spot = near + reach * np.array([math.cos(angle), math.sin(angle)])
-            if self.fits(spot, claim, **ignore):
-                return spot
+            angle = uniform(-math.pi, math.pi)
+            reach = uniform(0.5, within)
+            x, y = nx + reach * math.cos(angle), ny + reach * math.sin(angle)
+            if _clear(x, y, bound, obstacles):
+                return np.array([x, y])
         return None
 
     # -- groups -----------------------------------------------------------------------------
@@ -1262,6 +1284,18 @@ class Party:
         detail = f"group {sorted(walkers)} walks over to merge with group {sorted(g.members)}"
         self.events.append((t, MERGE, detail + " (scripted)"))
         return arrive
+
+
+def _clear(x: float, y: float, bound: float, obstacles: list[tuple[float, float, float]]) -> bool:
+    """Whether (x, y) (metres) lies within ``bound`` of the room's middle along both axes and
+    at least its distance from each of ``obstacles`` (`Party.obstacles`)."""
+    if max(abs(x), abs(y)) > bound:
+        return False
+    hypot = math.hypot
+    for ox, oy, distance in obstacles:
+        if hypot(x - ox, y - oy) < distance:
+            return False
+    return True
 
 
 def _glances(
