@@ -103,13 +103,13 @@ def converse(
     shortest = MIN_UTTERANCE_S
     longest = MAX_UTTERANCE_FACTOR * mean_utterance
     size = len(members)
-    # Who listens to each speaker and who may speak next, by speaker; each member's gaze at
-    # each target (by agent: one intent, made once; off target: the direction and distance,
-    # computed once, as `_off_target` computes them).
+    # Who listens to each speaker and who may speak next, by speaker; by speaker and addressee,
+    # whom each member looks at: the intents themselves when gazes are on target (made once),
+    # else each member's sight of its target (direction and distance, computed once, as
+    # `_off_target` computes them).
     listening: dict[int, list[int]] = {}
     next_ones: dict[int, list[int]] = {}
-    by_agent: dict[tuple[int, int], Intent] = {}
-    sights: dict[tuple[int, int], tuple[float, float, float, float]] = {}
+    rows: dict[tuple[int, int], list] = {}
     # A gaze point made here from finite places, directions and draws is finite: it skips
     # `Intent.looking_at`'s check (a place too large to make one is checked as before).
     trusted = (
@@ -117,6 +117,7 @@ def converse(
         and abs(head_noise) < _TRUSTED
         and all(abs(x) < _TRUSTED and abs(y) < _TRUSTED for x, y in spots.values())
     )
+    on_target = head_noise <= 0.0
     looks = {m: {**stand[m].__dict__, "gaze_agent": None} for m in members}
     made = object.__new__
     while t < end:
@@ -128,27 +129,43 @@ def converse(
         # A standard normal draw per member, in member order, whatever the head noise (so
         # that the stream does not depend on it).
         noise = normal(size=size).tolist()
-        intents = []
-        for m, drawn in zip(members, noise, strict=True):
-            target = addressee if m == speaker else speaker
-            if head_noise <= 0.0:
-                intent = by_agent.get((m, target))
-                if intent is None:
-                    intent = by_agent[m, target] = stand[m].looking_at(agent=target)
-            elif trusted:
-                sight = sights.get((m, target))
-                if sight is None:
-                    sight = sights[m, target] = (*spots[m], *_sight(spots[m], spots[target]))
-                hx, hy, direction, reach = sight
-                angle = direction + drawn * head_noise
-                point = (hx + reach * math.cos(angle), hy + reach * math.sin(angle))
-                intent = made(Intent)
-                intent.__dict__.update(looks[m], gaze_point=point)
+        if on_target or trusted:
+            row = rows.get((speaker, addressee))
+            if row is None:
+                targets = [addressee if m == speaker else speaker for m in members]
+                if on_target:
+                    row = [
+                        stand[m].looking_at(agent=x) for m, x in zip(members, targets, strict=True)
+                    ]
+                else:
+                    row = [
+                        (looks[m], *spots[m], *_sight(spots[m], spots[x]))
+                        for m, x in zip(members, targets, strict=True)
+                    ]
+                rows[speaker, addressee] = row
+            if on_target:
+                intents = row
             else:
-                intent = stand[m].looking_at(
-                    point=_off_target(spots[m], spots[target], drawn, head_noise)
+                intents = []
+                for (look, hx, hy, direction, reach), drawn in zip(row, noise, strict=True):
+                    angle = direction + drawn * head_noise
+                    intent = made(Intent)
+                    fields = intent.__dict__
+                    fields.update(look)
+                    fields["gaze_point"] = (
+                        hx + reach * math.cos(angle),
+                        hy + reach * math.sin(angle),
+                    )
+                    intents.append(intent)
+        else:
+            intents = [
+                stand[m].looking_at(
+                    point=_off_target(
+                        spots[m], spots[addressee if m == speaker else speaker], drawn, head_noise
+                    )
                 )
-            intents.append(intent)
+                for m, drawn in zip(members, noise, strict=True)
+            ]
         builder.set_many(t, members, intents)
         length = exponential(mean_utterance)
         t += min(max(length, shortest), longest)
