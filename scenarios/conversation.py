@@ -110,6 +110,7 @@ def converse(
     listening: dict[int, list[int]] = {}
     next_ones: dict[int, list[int]] = {}
     rows: dict[tuple[int, int], list] = {}
+    sights: dict[tuple[int, int], tuple] = {}  # by member and target
     # A gaze point made here from finite places, directions and draws is finite: it skips
     # `Intent.looking_at`'s check (a place too large to make one is checked as before).
     trusted = (
@@ -138,10 +139,16 @@ def converse(
                         stand[m].looking_at(agent=x) for m, x in zip(members, targets, strict=True)
                     ]
                 else:
-                    row = [
-                        (looks[m], *spots[m], *_sight(spots[m], spots[x]))
-                        for m, x in zip(members, targets, strict=True)
-                    ]
+                    row = []
+                    for m, x in zip(members, targets, strict=True):
+                        sight = sights.get((m, x))
+                        if sight is None:
+                            sight = sights[m, x] = (
+                                looks[m],
+                                *spots[m],
+                                *_sight(spots[m], spots[x]),
+                            )
+                        row.append(sight)
                 rows[speaker, addressee] = row
             if on_target:
                 intents = row
