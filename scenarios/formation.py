@@ -185,28 +185,31 @@ def separate(places: np.ndarray, *, spacing: float = SPACING_M, iterations: int 
     out = np.array(places, dtype=np.float64)
     k = out.shape[0]
     # Pairs whose squared distance clears spacing² by more than rounding can are far enough
-    # apart without the exact distance (np.hypot, as always where it decides).
+    # apart without the exact distance (np.hypot, as always where it decides). The places are
+    # moved as Python floats: the same differences, quotients and products as on the array.
     clear = spacing * spacing * (1.0 + 1e-9)
+    points = out.tolist()
+    hypot = np.hypot
+    changed = False
     for _ in range(iterations):
         moved = False
-        points = out.tolist()
         for i in range(k):
             xi, yi = points[i]
             for j in range(i + 1, k):
-                dx, dy = points[j][0] - xi, points[j][1] - yi
+                xj, yj = points[j]
+                dx, dy = xj - xi, yj - yi
                 if dx * dx + dy * dy > clear:
                     continue
-                d = out[j] - out[i]
-                dist = float(np.hypot(*d))
+                dist = float(hypot(dx, dy))
                 if dist >= spacing:
                     continue
-                unit = d / dist if dist > 1e-9 else np.array([1.0, 0.0])
+                ux, uy = (dx / dist, dy / dist) if dist > 1e-9 else (1.0, 0.0)
                 push = 0.5 * (spacing - dist) + 1e-6
-                out[i] -= unit * push
-                out[j] += unit * push
-                points[i], points[j] = out[i].tolist(), out[j].tolist()
-                xi, yi = points[i]
+                px, py = ux * push, uy * push
+                xi, yi = xi - px, yi - py
+                points[i], points[j] = [xi, yi], [xj + px, yj + py]
                 moved = True
         if not moved:
             break
-    return out
+        changed = True
+    return np.array(points, dtype=np.float64) if changed else out
