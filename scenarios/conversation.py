@@ -100,6 +100,7 @@ def converse(
     if t >= end:
         return turns
     builder.check_agents(members)
+    everyone = tuple(members)  # kept by the builder as it is, turn after turn
     shortest = MIN_UTTERANCE_S
     longest = MAX_UTTERANCE_FACTOR * mean_utterance
     size = len(members)
@@ -173,7 +174,7 @@ def converse(
                 )
                 for m, drawn in zip(members, noise, strict=True)
             ]
-        builder.set_many(t, members, intents)
+        builder.set_many(t, everyone, intents)
         length = exponential(mean_utterance)
         t += min(max(length, shortest), longest)
         others = next_ones.get(speaker)

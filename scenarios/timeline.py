@@ -205,7 +205,8 @@ class TimelineBuilder:
     def __init__(self, agents: Iterable[int]) -> None:
         self._agents = tuple(int(a) for a in agents)
         self._known = set(self._agents)
-        self._changes: list[tuple[float, int, Intent]] = []  # (time, agent, intent), as set
+        # (time, agents, their intents), as set: one entry per `set` or `set_many`
+        self._changes: list[tuple[float, tuple[int, ...], tuple[Intent, ...]]] = []
         self._groups: list[dict] = []
         self._continues: list[tuple[int, ...]] = []  # per planned group, the groups it continues
         self._events: list[ScenarioEvent] = []
@@ -216,7 +217,7 @@ class TimelineBuilder:
             raise ValueError(f"agent {agent} is not on the stage (ids {list(self._agents)})")
         if not 0.0 <= t < math.inf:  # NaN fails too
             raise ValueError(f"intent time must be a finite time >= 0 s, got {t}")
-        self._changes.append((float(t), int(agent), intent))
+        self._changes.append((float(t), (int(agent),), (intent,)))
 
     def check_agents(self, agents: Iterable[int]) -> None:
         """`ValueError` naming the first of ``agents`` not on the stage."""
@@ -235,8 +236,7 @@ class TimelineBuilder:
                 f"agents and intents must have the same length, got {len(agents)} and "
                 f"{len(intents)}"
             )
-        t = float(t)
-        self._changes.extend([(t, a, i) for a, i in zip(agents, intents, strict=True)])
+        self._changes.append((float(t), tuple(agents), tuple(intents)))
 
     def group(
         self,
@@ -292,13 +292,13 @@ class TimelineBuilder:
         deltas: list[dict[int, Intent]] = []
         delta: dict[int, Intent] = {}
         last = math.nan
-        for t, agent, intent in self._changes:
+        for t, agents, intents in self._changes:
             if t != last:
                 delta = {}
                 times.append(t)
                 deltas.append(delta)
                 last = t
-            delta[agent] = intent
+            delta.update(zip(agents, intents, strict=True))
         groups = [dict(g) for g in self._groups]
         for k in range(len(groups) - 1, -1, -1):  # the newest first: chains resolve in one pass
             for handle in self._continues[k]:
