@@ -310,11 +310,20 @@ def _options_of(name: str, source: Callable[..., Any] | type) -> tuple[Option, .
 def check_ranges(scenario: str, params: Any) -> None:
     """Checks each field of the dataclass instance ``params`` against its ``Range``
     annotation; `ValueError` naming ``scenario`` and the first field out of range."""
-    for key, hint, _ in _declared(type(params)):
+    for key, bounds in _ranges(type(params)):
+        bounds.check(getattr(params, key), scenario=scenario, name=key)
+
+
+@functools.cache
+def _ranges(source: type) -> tuple[tuple[str, Range], ...]:
+    """``(field, Range)`` of each ``Range`` annotating a field of dataclass ``source``, in
+    field order: read once per class (`typing.get_type_hints` takes a millisecond, and a
+    scenario's options are checked each time one is made)."""
+    out = []
+    for key, hint, _ in _declared(source):
         if typing.get_origin(hint) is Annotated:
-            for extra in typing.get_args(hint)[1:]:
-                if isinstance(extra, Range):
-                    extra.check(getattr(params, key), scenario=scenario, name=key)
+            out += [(key, e) for e in typing.get_args(hint)[1:] if isinstance(e, Range)]
+    return tuple(out)
 
 
 def _check_options_of(
