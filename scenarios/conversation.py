@@ -81,6 +81,10 @@ def converse(
         ``(time, speaker)`` of every utterance.
     """
     members = [int(m) for m in members]
+    if isinstance(places, np.ndarray):  # read as Python numbers at once, not entry by entry
+        places = places.tolist()
+    if isinstance(facings, np.ndarray):
+        facings = facings.tolist()
     spots = {m: (float(places[k][0]), float(places[k][1])) for k, m in enumerate(members)}
     facing = {m: float(facings[k]) for k, m in enumerate(members)}
     allowed = members if speakers is None else [int(s) for s in speakers]

@@ -934,14 +934,15 @@ class Party:
         self.start_alone(last, self.position[last], t)
 
     def pick_group(self, m: int, t: float, *, exclude: int = -1) -> int | None:
-        here = self.position[m]
+        hx, hy = self.position[m].tolist()
         options, weights = [], []
         for gid, g in self.groups.items():
             if gid == exclude or len(g.members) >= self.p.max_group_size:
                 continue
             if self.changing.get(gid, -math.inf) > t:  # a scripted change under way
                 continue
-            d = float(np.hypot(*(g.centre - here)))
+            cx, cy = g.centre.tolist()
+            d = float(np.hypot(cx - hx, cy - hy))
             options.append(gid)
             weights.append(math.exp(-d / JOIN_REACH_M) / (1.0 + JOIN_SIZE_PENALTY * len(g.members)))
         if not options:
