@@ -490,7 +490,7 @@ class Party:
             step = 2.0 * math.asin(min(1.0, step_m / (2.0 * radius)))
             mid = g.mid
             if mid is None:
-                mid = float(np.angle(np.exp(1j * np.array([angles[m] for m in members])).mean()))
+                mid = _mean_direction(np.array([angles[m] for m in members]))
             turns = [angles[m] % (2.0 * math.pi) for m in members]
             widths = np.diff(turns, append=turns[0] + 2.0 * math.pi)
             first = (int(np.argmax(widths)) + 1) % len(members)
@@ -523,7 +523,7 @@ class Party:
             return self.uneven(order, angles, radius)
         gap = 2.0 * math.pi / n
         offsets = np.array([angles[m] - k * gap for k, m in enumerate(order)])
-        base = float(np.angle(np.exp(1j * offsets).mean()))
+        base = _mean_direction(offsets)
         chord = 2.0 * radius * math.sin(min(gap, math.pi) / 2.0)
         room = max(0.0, 1.0 - self.p.spacing / chord) if n > 2 else ANGLE_JITTER
         share = min(ANGLE_JITTER, room)
@@ -549,7 +549,7 @@ class Party:
         order = order[first:] + order[:first]
         at = np.concatenate([[0.0], np.cumsum(gaps[:-1])])
         offsets = np.array([angles[m] for m in order]) - at
-        base = float(np.angle(np.exp(1j * offsets).mean()))
+        base = _mean_direction(offsets)
         return {m: base + float(at[k]) for k, m in enumerate(order)}
 
     def record(
@@ -577,10 +577,10 @@ class Party:
             d = targets - places
             facings = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) + noise)))
         edge = self.half - PLANNING_RADIUS_M - WALL_MARGIN_M
-        places = np.clip(places, -edge, edge)
+        places = _within(places, edge)
         if g.anchor >= 0:  # at a wall: the clip may bring two closer than the spacing
             for _ in range(10):
-                places = np.clip(separate(places, spacing=self.p.spacing), -edge, edge)
+                places = _within(separate(places, spacing=self.p.spacing), edge)
         planned = PlannedGroup(tuple(members), places, facings, g.centre, t, newcomers=newcomers)
         self.records.append(_Record(planned, speeds=speeds or {}, continues=continues))
         g.record = len(self.records) - 1
@@ -1285,6 +1285,20 @@ class Party:
         detail = f"group {sorted(walkers)} walks over to merge with group {sorted(g.members)}"
         self.events.append((t, MERGE, detail + " (scripted)"))
         return arrive
+
+
+def _mean_direction(angles: np.ndarray) -> float:
+    """The direction of the mean of unit vectors at ``angles`` (radians): ``np.angle`` of
+    ``np.exp(1j * angles).mean()``, the mean taken as ``mean`` takes it (the sum over the
+    count), without its overhead."""
+    unit = np.exp(1j * angles)
+    return float(np.angle(unit.sum() / unit.size))
+
+
+def _within(points: np.ndarray, edge: float) -> np.ndarray:
+    """``points`` clipped to [-edge, edge] on each axis: ``np.clip``'s values, without its
+    overhead."""
+    return np.minimum(np.maximum(points, -edge), edge)
 
 
 def _clear(x: float, y: float, bound: float, obstacles: list[tuple[float, float, float]]) -> bool:
