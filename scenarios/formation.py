@@ -172,11 +172,18 @@ def ellipse_offsets(angles: np.ndarray, aspect: float = 1.0, axis: float = 0.0) 
     ``sqrt(aspect)`` and ``1 / sqrt(aspect)``, the long one toward ``axis``)."""
     angles = np.asarray(angles, dtype=np.float64)
     if aspect == 1.0:
-        return np.stack([np.cos(angles), np.sin(angles)], axis=1)
-    long, short = math.sqrt(aspect), 1.0 / math.sqrt(aspect)
-    u, v = long * np.cos(angles - axis), short * np.sin(angles - axis)
-    c, s = math.cos(axis), math.sin(axis)
-    return np.stack([c * u - s * v, s * u + c * v], axis=1)
+        x, y = np.cos(angles), np.sin(angles)
+    else:
+        long, short = math.sqrt(aspect), 1.0 / math.sqrt(aspect)
+        u, v = long * np.cos(angles - axis), short * np.sin(angles - axis)
+        c, s = math.cos(axis), math.sin(axis)
+        x, y = c * u - s * v, s * u + c * v
+    if angles.ndim != 1:
+        return np.stack([x, y], axis=1)
+    out = np.empty((angles.size, 2))  # np.stack's array, with less overhead
+    out[:, 0] = x
+    out[:, 1] = y
+    return out
 
 
 def separate(places: np.ndarray, *, spacing: float = SPACING_M, iterations: int = 20) -> np.ndarray:

@@ -26,6 +26,7 @@ from scenarios.script import Intent
 __all__ = ["PlannedGroup", "ScenarioEvent", "Timeline", "TimelineBuilder"]
 
 _time = operator.itemgetter(0)
+_all_true = np.logical_and.reduce  # ndarray.all, without its Python wrapper
 
 _TIME_SLACK_S = 1e-9  # seconds: a change at t applies to samples at t despite rounding
 CHECKPOINT_CHANGES = 64  # a built timeline writes every agent's intents out once per this many
@@ -85,7 +86,7 @@ class PlannedGroup:
             raise ValueError(f"PlannedGroup.members must be >= 2 distinct ids, got {members}")
         for name, shape in (("places", (k, 2)), ("facings", (k,)), ("centre", (2,))):
             array = np.array(getattr(self, name), dtype=np.float64)
-            if array.shape != shape or not np.isfinite(array).all():
+            if array.shape != shape or not _all_true(np.isfinite(array), axis=None):
                 raise ValueError(f"PlannedGroup.{name} must be finite with shape {shape}")
             array.flags.writeable = False
             object.__setattr__(self, name, array)
