@@ -91,10 +91,9 @@ def converse(
     # Each member stands the same way all along: that intent is made (and checked) once, and
     # each turn gives it the turn's gaze (`Intent.looking_at`).
     t = float(start)
+    by_member = isinstance(speed, Mapping)
     stand = {
-        m: standing(
-            spots[m], facing[m], speed=speed.get(m) if isinstance(speed, Mapping) else speed
-        )
+        m: standing(spots[m], facing[m], speed=speed.get(m) if by_member else speed)
         for m in members
         if t < end
     }

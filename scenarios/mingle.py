@@ -1323,14 +1323,22 @@ def _glances(
     """Someone alone stands at their spot and looks around: a point or a person now and then."""
     t = entry.start
     targets = [o for o in targets if o != entry.person]
-    while t < min(entry.end, end):
+    stop = min(entry.end, end)
+    if not t < stop:
+        return
+    # One standing intent, made (and checked) once, given each glance's gaze; the point looked
+    # at summed coordinate by coordinate (the same sums and products as on the arrays).
+    stand = standing(entry.spot, entry.facing)
+    sx, sy = entry.spot.tolist()
+    while t < stop:
         if targets and rng.random() < 0.5:
-            gaze = {"gaze_agent": targets[int(rng.integers(len(targets)))]}
+            intent = stand.looking_at(agent=targets[int(rng.integers(len(targets)))])
         else:
             angle = entry.facing + rng.uniform(-1.0, 1.0)
-            point = entry.spot + 2.0 * np.array([math.cos(angle), math.sin(angle)])
-            gaze = {"gaze_point": (float(point[0]), float(point[1]))}
-        builder.set(t, entry.person, standing(entry.spot, entry.facing, **gaze))
+            intent = stand.looking_at(
+                point=(sx + 2.0 * math.cos(angle), sy + 2.0 * math.sin(angle))
+            )
+        builder.set(t, entry.person, intent)
         t += max(rng.exponential(GLANCE_MEAN_S), 1.0)
 
 
