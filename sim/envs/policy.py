@@ -26,6 +26,7 @@ the detector's groups, which people it is to join):
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -605,29 +606,34 @@ def evaluate_policy(
         results = []
         start = time.perf_counter()
         indices: Any = range(episodes)
-        if progress:
-            from tqdm import tqdm
+        with contextlib.ExitStack() as bars:
+            if progress:  # redrawn while an episode runs (the first compiles the motion kernels)
+                from tqdm import tqdm
 
-            indices = tqdm(indices, desc=env_id, unit="episode")
-        for k in indices:
-            observation, info = env.reset(seed=seed + k)
-            policy.reset()
-            total, steps, success, done = 0.0, 0, False, False
-            while not done:
-                observation, reward, terminated, truncated, info = env.step(policy(observation))
-                total += reward
-                steps += 1
-                success = success or bool(info["is_success"])
-                done = terminated or truncated
-            results.append(
-                EpisodeResult(
-                    seed=seed + k,
-                    success=success,
-                    steps=steps,
-                    episode_return=total,
-                    scenario_seed=int(info["episode"]["scenario_seed"]),
+                from sim.ticking import ticking
+
+                indices = bars.enter_context(
+                    ticking(bars.enter_context(tqdm(indices, desc=env_id, unit="episode")))
                 )
-            )
+            for k in indices:
+                observation, info = env.reset(seed=seed + k)
+                policy.reset()
+                total, steps, success, done = 0.0, 0, False, False
+                while not done:
+                    observation, reward, terminated, truncated, info = env.step(policy(observation))
+                    total += reward
+                    steps += 1
+                    success = success or bool(info["is_success"])
+                    done = terminated or truncated
+                results.append(
+                    EpisodeResult(
+                        seed=seed + k,
+                        success=success,
+                        steps=steps,
+                        episode_return=total,
+                        scenario_seed=int(info["episode"]["scenario_seed"]),
+                    )
+                )
         return PolicyEvaluation(
             env_id=env_id,
             seed=seed,

@@ -35,6 +35,7 @@ from sim.envs import (
 )
 from sim.envs.reward import assess, reward_terms
 from sim.envs.view import Eyes
+from sim.ticking import TICK_S
 from sim.world import World
 
 PAIR_HALF_M = 0.5  # metres, half the distance between the toy pair
@@ -894,6 +895,37 @@ def test_evaluate_policy_reports_seeded_episodes() -> None:
         evaluate_policy("ReformSim/HRIPassingObserve-v0", episodes=1)
     with pytest.raises(ValueError, match="episodes must be a positive int"):
         evaluate_policy("ReformSim/HRIPassing-v0", episodes=0)
+
+
+class _SlowFirstStep:
+    """The scripted baseline, whose first step takes ``seconds`` (as the first step of a fresh
+    install compiles the motion kernels)."""
+
+    def __init__(self, policy: JoinPolicy, seconds: float) -> None:
+        self.policy, self.seconds = policy, seconds
+
+    def reset(self) -> None:
+        self.policy.reset()
+
+    def __call__(self, observation):
+        time.sleep(self.seconds)
+        self.seconds = 0.0
+        return self.policy(observation)
+
+
+def test_evaluate_policy_redraws_its_bar_while_an_episode_runs(capsys) -> None:
+    env = gym.make("ReformSim/HRIRobotExcluded-v0", disable_env_checker=True)
+    base = env.unwrapped
+    policy = JoinPolicy(task=base.task, action_scale=base.action_scale, room=base.room)
+    env.close()
+    evaluate_policy(
+        "ReformSim/HRIRobotExcluded-v0",
+        episodes=1,
+        policy=_SlowFirstStep(policy, 2.5 * TICK_S),
+        progress=True,
+    )
+    before_the_episode_ends = capsys.readouterr().err.split("\r")
+    assert sum("0/1" in draw for draw in before_the_episode_ends) >= 3  # drawn, redrawn twice
 
 
 def test_policy_evaluate_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
