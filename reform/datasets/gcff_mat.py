@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from reform.datasets._isolated import IsolatedFailure, run_isolated
+from reform.datasets._mat5 import read_mat5
 from reform.datasets._validation import (
     ID_RULE,
     Repairs,
@@ -393,6 +394,9 @@ def _loadmat(path: Path) -> dict[str, Any]:
     if kind != "a file":
         raise DataFormatError(path, None, None, "a MATLAB .mat file", kind)
     check_inflated_size(path)
+    found = _read_plain(path)
+    if found is not None:
+        return found
     import scipy.io  # noqa: F401 - imported here, so that no child imports it again
 
     try:
@@ -406,6 +410,18 @@ def _loadmat(path: Path) -> dict[str, Any]:
         # scipy raises ValueError, TypeError, OSError, MemoryError... on corrupt files
         found = exc.message if exc.kind == "crash" else f"{exc.kind}: {exc.message}"
         raise DataFormatError(path, None, None, "a readable MATLAB .mat file", found) from None
+
+
+def _read_plain(path: Path) -> dict[str, Any] | None:
+    """The file read without scipy where it holds numeric matrices and cells only, as every
+    public GCFF file does (`reform.datasets._mat5`: scipy's answer, in this process, as pure
+    Python cannot crash it); None leaves the file to scipy."""
+    try:
+        if path.stat().st_size > MAT_INFLATED_LIMIT_BYTES:
+            return None
+        return read_mat5(path.read_bytes())
+    except OSError:
+        return None  # scipy's reader names the error
 
 
 def check_inflated_size(path: str | PathLike[str], *, limit: int | None = None) -> int:
