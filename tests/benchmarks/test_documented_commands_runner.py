@@ -7,30 +7,17 @@ shell lines of a second or two through the same function."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
-import sys
 from pathlib import Path
 
 import pytest
 
-BENCHMARKS_DIR = Path(__file__).resolve().parents[2] / "benchmarks"
 REFUSAL = "reform-sim data: error: broken/features.mat: frame 1, row 2: field 'ID': expected"
 
 
-@pytest.fixture(scope="module")
-def script():
-    """The script as a module (it imports ``timing`` from beside it, as when run)."""
-    sys.path.insert(0, str(BENCHMARKS_DIR))
-    try:
-        path = BENCHMARKS_DIR / "documented_commands.py"
-        spec = importlib.util.spec_from_file_location("documented_commands", path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[spec.name] = module  # its dataclasses look their module up there
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        sys.path.remove(str(BENCHMARKS_DIR))
+@pytest.fixture
+def script(documented_commands):
+    return documented_commands
 
 
 def _run(script, command: str, tmp_path: Path, *, timeout: float = 30.0):

@@ -4,13 +4,8 @@ first paragraph names, and a run of one page replaces that page's rows alone."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
 
-BENCHMARKS_DIR = Path(__file__).resolve().parents[2] / "benchmarks"
 # The earlier form of the table (docs/results/documented-commands.md at 4bc6404), two rows.
 EARLIER = """\
 # Documented commands, run
@@ -26,19 +21,9 @@ clone of 0449f13 by `python benchmarks/documented_commands.py`, each command at 
 """
 
 
-@pytest.fixture(scope="module")
-def script():
-    """The script as a module (it imports ``timing`` from beside it, as when run)."""
-    sys.path.insert(0, str(BENCHMARKS_DIR))
-    try:
-        path = BENCHMARKS_DIR / "documented_commands.py"
-        spec = importlib.util.spec_from_file_location("documented_commands_table", path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[spec.name] = module  # its dataclasses look their module up there
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        sys.path.remove(str(BENCHMARKS_DIR))
+@pytest.fixture
+def script(documented_commands):
+    return documented_commands
 
 
 def test_an_earlier_table_reads_with_its_commit(script, tmp_path):
