@@ -130,7 +130,11 @@ def converse(
         listeners = listening.get(speaker)
         if listeners is None:
             listeners = listening[speaker] = [m for m in members if m != speaker]
-        addressee = listeners[int(integers(len(listeners)))]
+        # ``integers(1)`` is 0 and draws nothing from the generator (numpy draws no bits for a
+        # range of one value): in a pair, the call is skipped
+        addressee = (
+            listeners[0] if len(listeners) == 1 else listeners[int(integers(len(listeners)))]
+        )
         # A standard normal draw per member, in member order, whatever the head noise (so
         # that the stream does not depend on it).
         noise = normal(size=size).tolist()
@@ -183,5 +187,5 @@ def converse(
         others = next_ones.get(speaker)
         if others is None:
             others = next_ones[speaker] = [s for s in allowed if s != speaker] or allowed
-        speaker = others[int(integers(len(others)))]
+        speaker = others[0] if len(others) == 1 else others[int(integers(len(others)))]
     return turns

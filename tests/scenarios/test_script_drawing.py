@@ -61,6 +61,16 @@ def test_a_conversation_draws_the_same_stream_whatever_the_head_noise() -> None:
     assert rng_on.bit_generator.state == rng_off.bit_generator.state
 
 
+def test_drawing_among_one_draws_nothing() -> None:
+    # A conversation of two skips ``integers(1)``: the stream is the same only while numpy
+    # draws no bits for a range of one value.
+    rng = np.random.default_rng(11)
+    rng.integers(5)  # half of a 64-bit draw kept for the next bounded integer
+    before = rng.bit_generator.state
+    assert int(rng.integers(1)) == 0
+    assert rng.bit_generator.state == before
+
+
 def test_gazes_on_target_look_at_the_speaker_and_the_speaker_at_a_listener() -> None:
     turns, builder, _ = _talk(0.0)
     timeline = builder.build()
