@@ -33,8 +33,8 @@ median share over ``--repeats``, beside the CPU time of ``python -c pass`` in th
 which of the heavy libraries each command imported (a command imports only what it uses:
 evaluate without ``--save`` imports no Rerun; benchmark reads the GCFF sets' .mat files without
 scipy (`reform.datasets._mat5`) and writes its recordings without pandas, which pyarrow would
-import under Rerun; neither imports torch). Goals (issue 31): imports at most 25 % of each command's CPU time; ``--help``
-within 2x of a bare Python start.
+import under Rerun; neither imports torch). Goals (issue 31): imports at most 25 % of each
+command's CPU time; ``--help`` within 2x of a bare Python start.
 
 Run: ``python benchmarks/bench_cli_startup.py [--repeats 7] [--datasets DIR] [--quick]``
 (``--quick``: one run per case, nothing warmed first, and the share of ``scenarios`` only, which
