@@ -96,7 +96,7 @@ COMMANDS = (
 
 _EXPORTS = {
     name: "sim.cli._main"
-    for name in ("INTERRUPTED", "RERUN_LOG", "build_parser", "main", "_resumes", "_one_line")
+    for name in ("INTERRUPTED", "RERUN_LOG", "build_parser", "main", "_resumes")
 }
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
