@@ -15,12 +15,16 @@ each recording, (1) tuning: GCFF, the proximity baseline and REFORM with one set
 dataset, tuned on the twin, and tuned on the first half's labels (the ceiling); (2) prediction:
 every catalogued detector's F1 on the twin against its real F1 (Pearson r, Spearman, Kendall's
 tau, mean absolute error, mean maximum rank violation, with bootstrap intervals), beside the
-real ceiling (the first half predicting the second); (3) leave one out. Writes DIR/twins.md,
-DIR/twins.json and DIR/twins.png, and prints the Markdown.
+real ceiling (the first half predicting the second); (3) leave one out. The whole experiment
+runs --repeats times, with master seeds S, S+1, ...: the tables are seed S's, the goals the mean
+over the seeds, with their range. Writes DIR/twins.md, DIR/twins.json and DIR/twins.png, and
+prints the Markdown.
 """
 
 BASENAME = "twins"
 TWINS = "twins"  # the twins' folder in --out, when --twins is not given
+REPEATS = 3  # master seeds the experiment runs with, by default
+MAX_REPEATS = 20
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -41,5 +45,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"OUT/{TWINS})",
     )
     add_seed(parser)
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=REPEATS,
+        metavar="N",
+        help=f"run the whole experiment with N master seeds, S to S+N-1 (1-{MAX_REPEATS}; "
+        f"default {REPEATS}); the twins of seed S+k are under --twins/seed-(S+k)",
+    )
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.experiment_twins:run"))

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from sim.cli._common import CliError, check_output
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
-from sim.cli._experiment_twins import BASENAME, TWINS
+from sim.cli._experiment_twins import BASENAME, MAX_REPEATS, REPEATS, TWINS
 
 FIGURE = ".png"
 
@@ -52,14 +52,20 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--twins", args.twins]
     if args.seed != 0:
         words += ["--seed", str(args.seed)]
+    if args.repeats != REPEATS:
+        words += ["--repeats", str(args.repeats)]
     words += ["--out", args.out]
     return shlex.join(words)
 
 
 def run(args: argparse.Namespace) -> int:
-    from sim.experiments.twins import run_twins
+    import dataclasses
+
+    from sim.experiments.twins import across_seeds, run_twins
     from sim.experiments.twins_report import scatter_figure, to_markdown
 
+    if not 1 <= args.repeats <= MAX_REPEATS:
+        raise CliError(f"--repeats: expected 1 to {MAX_REPEATS} seeds, found {args.repeats}")
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, FIGURE))
     check_report(out, suffixes=(*REPORT_SUFFIXES, FIGURE))
     twins = args.twins if args.twins is not None else out.parent / TWINS
@@ -73,7 +79,17 @@ def run(args: argparse.Namespace) -> int:
                 f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
             )
 
-    result = run_twins(real, root=twins, seed=args.seed, progress=progress)
+    seeds = [args.seed + k for k in range(args.repeats)]
+    results = []
+    for seed in seeds:
+        say = progress if len(seeds) == 1 else lambda m, seed=seed: progress(f"seed {seed}: {m}")
+        root = Path(twins) if seed == args.seed else Path(twins) / f"seed-{seed}"
+        results.append(run_twins(real, root=root, seed=seed, progress=say))
+    result = results[0]
+    if len(results) > 1:
+        result = dataclasses.replace(
+            result, seeds=across_seeds(results), seconds=time.perf_counter() - started
+        )
     command = _command(args)
     figure = scatter_figure(result, out.with_name(out.name + FIGURE)).name
     markdown = to_markdown(result, command=command, figure=figure)

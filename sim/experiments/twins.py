@@ -49,7 +49,9 @@ __all__ = [
     "GOALS",
     "TUNED",
     "TwinsResult",
+    "across_seeds",
     "agreement",
+    "goal_figures",
     "mmrv",
     "noise_floor",
     "run_twins",
@@ -89,6 +91,9 @@ class TwinsResult:
             real F1 would score against the real scores, from their own sampling spread
             (`noise_floor`): ``{"mae": {...}, "mmrv": {...}}``, each value and interval.
         seconds: wall-clock time of the run.
+        seed: the master seed of the twins and their data.
+        seeds: the goals' figures over runs with other master seeds (`across_seeds`), empty
+            for one run.
     """
 
     datasets: tuple[str, ...]
@@ -100,6 +105,8 @@ class TwinsResult:
     own_settings: Mapping[str, float] = field(default_factory=dict)
     noise_floor: Mapping[str, Any] = field(default_factory=dict)
     seconds: float = 0.0
+    seed: int = 0
+    seeds: Mapping[str, Any] = field(default_factory=dict)
 
     def to_json(self, *, command: str = "") -> dict[str, Any]:
         return {
@@ -117,8 +124,63 @@ class TwinsResult:
             "twin reads its own frames only; loo_calibrated: each cell through the line from twin "
             "F1 to real F1 fitted on the other datasets' cells",
             "goals": GOALS,
+            "seed": self.seed,
+            "seeds": dict(self.seeds),
             "seconds": self.seconds,
         }
+
+
+def goal_figures(result: TwinsResult) -> dict[str, float]:
+    """The goals' figures of one run (`GOALS`): GCFF tuned on the twin against one setting
+    (``tuning_gain``) and against the label search (``tuning_gap``: labels minus twin), mean
+    F1 points over the datasets; the twin's prediction over all cells: Pearson r, MAE and MMRV
+    (points)."""
+    gcff: dict[str, list[float]] = {}
+    for row in result.tuning:
+        if row["detector"] == "gcff":
+            gcff.setdefault(row["how"], []).append(100.0 * row["f1"])
+    mean = {how: float(np.mean(v)) for how, v in gcff.items()}
+    nan = math.nan
+    twin = result.agreement["twin"]
+    return {
+        "tuning_gain": mean.get("twin", nan) - mean.get("one setting", nan),
+        "tuning_gap": mean.get("labels", nan) - mean.get("twin", nan),
+        "pearson": float(twin["pearson"]["value"]),
+        "mae": float(twin["mae"]["value"]),
+        "mmrv": float(twin["mmrv"]["value"]),
+    }
+
+
+def across_seeds(results: Sequence[TwinsResult]) -> dict[str, Any]:
+    """The goals' figures of runs that differ only in their master seed (each twin fitted, its
+    data generated and its detectors scored again): each run's (`goal_figures`), their mean,
+    lowest and highest, and those of the **seeds' mean prediction** (each cell's predicted F1
+    averaged over the runs, against the same real F1)."""
+    per_seed = [goal_figures(r) for r in results]
+    spread = {
+        key: {
+            "mean": float(np.mean([f[key] for f in per_seed])),
+            "low": float(np.min([f[key] for f in per_seed])),
+            "high": float(np.max([f[key] for f in per_seed])),
+        }
+        for key in per_seed[0]
+    }
+    predicted: dict[tuple[str, str], list[float]] = {}
+    for r in results:
+        for c in r.cells:
+            predicted.setdefault((c["dataset"], c["detector"]), []).append(c["predicted"])
+    cells = [
+        dict(c, predicted=float(np.mean(predicted[c["dataset"], c["detector"]])))
+        for c in results[0].cells
+        if len(predicted[c["dataset"], c["detector"]]) == len(results)
+    ]
+    mean_prediction = agreement(cells, "predicted", seed=results[0].seed)
+    return {
+        "seeds": [r.seed for r in results],
+        "per_seed": per_seed,
+        "spread": spread,
+        "mean_prediction": {k: v["value"] for k, v in mean_prediction.items()},
+    }
 
 
 def _f1(name: str, detector: Any, frames: Sequence[Frame]) -> float:
@@ -407,4 +469,5 @@ def run_twins(
         own_settings=own,
         noise_floor=noise_floor(cells, seed=seed),
         seconds=time.perf_counter() - started,
+        seed=seed,
     )

@@ -2,10 +2,20 @@
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
 import pytest
 
 from reform.frame import Dataset
-from sim.experiments.twins import agreement, mmrv, noise_floor, run_twins
+from sim.experiments.twins import (
+    across_seeds,
+    agreement,
+    goal_figures,
+    mmrv,
+    noise_floor,
+    run_twins,
+)
 from sim.experiments.twins_report import scatter_figure, to_markdown
 from tests.sim.test_twin import _frames
 
@@ -71,3 +81,31 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
         if lines and lines[0].startswith("|"):
             assert len(lines) > 2 and lines[1].startswith(("|:", "|-")), table  # head, rows
     assert scatter_figure(result, tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
+
+    # the same run with another seed (here: every prediction 0.1 higher), and the two together
+    cells = tuple(dict(c, predicted=min(1.0, c["predicted"] + 0.1)) for c in result.cells)
+    other = dataclasses.replace(
+        result, seed=1, cells=cells, agreement={"twin": agreement(cells, "predicted")}
+    )
+    seeds = across_seeds([result, other])
+    assert seeds["seeds"] == [0, 1]
+    mae = [goal_figures(r)["mae"] for r in (result, other)]
+    assert seeds["spread"]["mae"] == {"mean": np.mean(mae), "low": min(mae), "high": max(mae)}
+    middle = [dict(c, predicted=(c["predicted"] + d["predicted"]) / 2) for c, d in
+              zip(result.cells, cells, strict=True)]  # fmt: skip
+    assert seeds["mean_prediction"]["mae"] == agreement(middle, "predicted")["mae"]["value"]
+    page = to_markdown(dataclasses.replace(result, seeds=seeds), command="x")
+    assert "## Seeds" in page and "mean over 2 seeds (lowest to highest)" in page
+
+
+@pytest.mark.parametrize("repeats", ["0", "21"])
+def test_repeats_out_of_range_are_refused_in_one_line(repeats, tmp_path, capsys):
+    from sim.cli import main
+
+    argv = ["experiment", "twins", "--out", str(tmp_path / "out"), "--repeats", repeats]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"reform-sim experiment: error: --repeats: expected 1 to 20 seeds, found {repeats}"
+    ]
+    assert not (tmp_path / "out").exists()
