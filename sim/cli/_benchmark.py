@@ -90,14 +90,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--twin",
+        action="append",
         metavar="TWIN.json",
         help="predict each detector's F1 at the place a venue twin (`reform-sim twin`) describes, "
-        "on the twin's data, before any label exists (writes OUT/benchmark-twin.md and .json)",
+        "on the twin's data, before any label exists (writes OUT/benchmark-twin.md and .json); "
+        "repeatable: twins of one place fitted with different --seed, each detector's "
+        "prediction their mean, each twin's beside it",
     )
     parser.add_argument(
         "--twin-data",
         metavar="DIR",
-        help="with --twin: its generated dataset (default: twin-data/ beside twin.json)",
+        help="with one --twin: its generated dataset (default: twin-data/ beside twin.json)",
     )
     add_out(
         parser,

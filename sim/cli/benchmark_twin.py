@@ -1,5 +1,7 @@
 """What ``reform-sim benchmark --twin`` does: each detector's F1 predicted at a place, on its
-venue twin, before any label exists (`sim.twins.predict`)."""
+venue twin, before any label exists (`sim.twins.predict`); with several twins of one place
+(fitted with different seeds), the mean of their predictions (`sim.twins.predict.mean_prediction`).
+"""
 
 from __future__ import annotations
 
@@ -7,6 +9,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from sim.cli._common import CliError, check_output
 from sim.progress import progress_bar
@@ -16,19 +19,46 @@ MARKDOWN = "benchmark-twin.md"
 JSON = "benchmark-twin.json"
 
 
+def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
+    """The --twin files and their twins, read and checked: one place, --twin-data with one
+    twin only, no --data."""
+    from sim.twins import read_twin
+
+    paths = [str(path) for path in args.twin]
+    twins = [read_twin(path) for path in paths]  # a nonsense twin is one line, before any work
+    if args.data:
+        raise CliError("--twin predicts for the twin's place; it takes no --data")
+    if args.twin_data and len(paths) > 1:
+        raise CliError(
+            f"--twin-data: expected one --twin with it, found {len(paths)} (each twin's data "
+            "are twin-data/ beside its file)"
+        )
+    for path, twin in zip(paths[1:], twins[1:], strict=True):
+        if twin.name != twins[0].name:
+            raise CliError(
+                f"--twin {path}: expected twins of one place, found a twin of {twin.name!r} "
+                f"beside one of {twins[0].name!r} ({paths[0]})"
+            )
+    return paths, twins
+
+
 def run_twin(args: argparse.Namespace) -> int:
     """``benchmark --twin``: --detector (catalogued names) and --model (REFORM files) narrow the
     candidates (default: every catalogued detector a twin can run, GCFF tuned on the twin and
     REFORM trained on it); --data is refused (the twin stands for the data)."""
     from reform.detectors import detector_names
     from reform.persistence import load_model
-    from sim.twins import read_twin, twin_data
+    from sim.twins import twin_data
     from sim.twins.data import DATA_FOLDER
-    from sim.twins.predict import Candidate, catalogue_candidates, predict, table
+    from sim.twins.predict import (
+        Candidate,
+        catalogue_candidates,
+        mean_prediction,
+        predict,
+        table,
+    )
 
-    twin = read_twin(args.twin)  # a nonsense twin is one line, before any work
-    if args.data:
-        raise CliError("--twin predicts for the twin's place; it takes no --data")
+    paths, twins = _twins(args)
     check_output("--out", args.out, folder=True)
     candidates = catalogue_candidates()
     if args.detector:
@@ -45,39 +75,39 @@ def run_twin(args: argparse.Namespace) -> int:
         for m in args.model or ()
     ]
     candidates += models
-    folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
-    frames = list(twin_data(twin, folder, n_jobs=args.jobs or 1, progress=not args.quiet))
 
-    bar = progress_bar(
-        total=len(candidates),
-        desc="benchmark --twin",
-        unit="detector",
-        file=sys.stderr,
-        disable=args.quiet,
-    )
+    runs = []
+    for path, twin in zip(paths, twins, strict=True):
+        folder = Path(args.twin_data) if args.twin_data else Path(path).parent / DATA_FOLDER
+        frames = list(twin_data(twin, folder, n_jobs=args.jobs or 1, progress=not args.quiet))
+        desc = "benchmark --twin" if len(paths) == 1 else f"benchmark --twin {path}"
+        bar = progress_bar(
+            total=len(candidates), desc=desc, unit="detector", file=sys.stderr, disable=args.quiet
+        )
+        at_work: list[str] = []  # the detector being scored
 
-    at_work: list[str] = []  # the detector being scored
+        def progress(label: str, bar: Any = bar, at_work: list[str] = at_work) -> None:
+            bar.update(len(at_work))  # called as each detector starts: the one before is done
+            at_work[:] = [label]
+            bar.set_postfix_str(label)
 
-    def progress(label: str) -> None:  # called as each detector starts: the one before is done
-        bar.update(len(at_work))
-        at_work[:] = [label]
-        bar.set_postfix_str(label)
+        # Redrawn while a detector works (gcff-tuned tunes itself first: seconds).
+        with bar, ticking(bar):
+            runs.append(predict(frames, candidates, seed=twin.seed, progress=progress))
+            bar.update(len(candidates) - bar.n)
 
-    # Redrawn while a detector works (gcff-tuned tunes itself first: seconds).
-    with bar, ticking(bar):
-        predictions = predict(frames, candidates, seed=twin.seed, progress=progress)
-        bar.update(len(candidates) - bar.n)
+    predictions = runs[0] if len(runs) == 1 else mean_prediction(runs)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    text = table(predictions, place=f"the place of {twin.name} ({twin.mode} twin, {args.twin})")
+    kind = f"{twins[0].mode} twin" + ("s" if len(paths) > 1 else "")
+    place = f"the place of {twins[0].name} ({kind}, {', '.join(paths)})"
+    text = table(predictions, place=place, twins=len(paths))
     (out / MARKDOWN).write_text(text)
-    (out / JSON).write_text(
-        json.dumps(
-            {"twin": str(args.twin), "predictions": [p.to_json() for p in predictions]},
-            indent=2,
-        )
-        + "\n"
-    )
+    record: dict[str, Any] = {"twin": paths[0] if len(paths) == 1 else paths}
+    record["predictions"] = [p.to_json() for p in predictions]
+    if len(runs) > 1:
+        record["each_twin"] = [[p.to_json() for p in run] for run in runs]
+    (out / JSON).write_text(json.dumps(record, indent=2) + "\n")
     print(text, end="")
     print(f"wrote {out}/: {MARKDOWN}, {JSON}", file=sys.stderr)
     return 0

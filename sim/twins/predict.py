@@ -22,6 +22,7 @@ __all__ = [
     "Candidate",
     "Prediction",
     "catalogue_candidates",
+    "mean_prediction",
     "predict",
     "split_episodes",
     "table",
@@ -171,16 +172,50 @@ def predict(
     return out
 
 
-def table(predictions: Sequence[Prediction], *, place: str) -> str:
-    """A Markdown table of ``predictions``, best first."""
+def mean_prediction(runs: Sequence[Sequence[Prediction]]) -> list[Prediction]:
+    """Each detector's prediction on several twins of one place (fitted with different seeds,
+    each run of `predict` with the same candidates): the mean of their F1s, within the lowest
+    low and the highest high of their intervals (the twins' episodes and their fits both), its
+    ``note`` each twin's F1 (%). A detector a twin could not run keeps that twin's note and no
+    F1."""
+    out = []
+    for row in zip(*runs, strict=True):
+        first = row[0]
+        failed = next((p for p in row if p.f1 is None), None)
+        if failed is not None:
+            out.append(Prediction(first.label, None, None, None, failed.frames, failed.note))
+            continue
+        each = ", ".join(f"{100 * p.f1:.1f}" for p in row)
+        out.append(
+            Prediction(
+                first.label,
+                sum(p.f1 for p in row) / len(row),
+                min(p.low for p in row),
+                max(p.high for p in row),
+                sum(p.frames for p in row),
+                f"each twin: {each}",
+            )
+        )
+    return out
+
+
+def table(predictions: Sequence[Prediction], *, place: str, twins: int = 1) -> str:
+    """A Markdown table of ``predictions``, best first (``twins``: how many twins of the place
+    they are the mean of, `mean_prediction`)."""
     rows = sorted(predictions, key=lambda p: -1.0 if p.f1 is None else -p.f1)
-    lines = [
-        f"Predicted F1 at T = 2/3 at {place}, on its venue twin (%, 95 % bootstrap interval "
-        "over the twin's scored episodes):",
-        "",
-        "| detector | predicted F1 | 95 % interval | note |",
-        "|:--|--:|--:|:--|",
-    ]
+    if twins == 1:
+        head = (
+            f"Predicted F1 at T = 2/3 at {place}, on its venue twin (%, 95 % bootstrap interval "
+            "over the twin's scored episodes):"
+        )
+    else:
+        head = (
+            f"Predicted F1 at T = 2/3 at {place}, the mean over {twins} venue twins fitted with "
+            "different seeds (%, from the lowest to the highest end of their 95 % bootstrap "
+            "intervals; each twin's F1 in the note):"
+        )
+    span = "95 % interval" if twins == 1 else "lowest-highest of the intervals"
+    lines = [head, "", f"| detector | predicted F1 | {span} | note |", "|:--|--:|--:|:--|"]
     for p in rows:
         if p.f1 is None:
             lines.append(f"| {p.label} | - | - | {p.note} |")

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from sim.twins import fit_twin, write_twin
+from sim.twins import fit_twin, read_twin, write_twin
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
@@ -53,3 +53,55 @@ def test_benchmark_twin_is_deterministic(twin_file, tmp_path, capsys):
 def test_benchmark_twin_refuses_in_one_line(twin_file, tmp_path, capsys, extra, message):
     line = cli_error(["benchmark", "--twin", twin_file, "--out", tmp_path / "b", *extra], capsys)
     assert message in line
+
+
+@pytest.fixture(scope="module")
+def second_twin(tmp_path_factory, twin_file):
+    """A twin of the same place fitted with another seed, and one of another place."""
+    again = dataclasses.replace(fit_twin(_frames(people=9), name="place", seed=1), episodes=3)
+    other = dataclasses.replace(read_twin(twin_file), name="elsewhere")
+    return (
+        write_twin(again, tmp_path_factory.mktemp("again") / "twin.json"),
+        write_twin(other, tmp_path_factory.mktemp("other") / "twin.json"),
+    )
+
+
+def test_twins_of_one_place_predict_their_mean(twin_file, second_twin, tmp_path, capsys):
+    again, _ = second_twin
+    alone = {}
+    for name, twin in (("a", twin_file), ("b", again)):
+        argv = ["benchmark", "--twin", twin, "--detector", "gcff", "--detector", "majority",
+                "--out", tmp_path / name, "-q"]  # fmt: skip
+        assert run_cli(argv, capsys)[0] == 0
+        data = json.loads((tmp_path / name / "benchmark-twin.json").read_text())
+        alone[name] = {p["detector"]: p for p in data["predictions"]}
+    argv = ["benchmark", "--twin", twin_file, "--twin", again, "--detector", "gcff",
+            "--detector", "majority", "--out", tmp_path / "both", "-q"]  # fmt: skip
+    status, out, err = run_cli(argv, capsys)
+    assert status == 0, err
+    data = json.loads((tmp_path / "both" / "benchmark-twin.json").read_text())
+    assert data["twin"] == [str(twin_file), str(again)]
+    for k, run in zip("ab", data["each_twin"], strict=True):  # each twin as it predicts alone
+        assert [p["f1"] for p in run] == [alone[k][p["detector"]]["f1"] for p in run]
+    for p in data["predictions"]:
+        a, b = alone["a"][p["detector"]], alone["b"][p["detector"]]
+        assert p["f1"] == pytest.approx((a["f1"] + b["f1"]) / 2)
+        assert (p["low"], p["high"]) == (min(a["low"], b["low"]), max(a["high"], b["high"]))
+    assert "the mean over 2 venue twins" in out and "each twin: " in out
+
+
+@pytest.mark.parametrize(
+    ("which", "extra", "message"),
+    [
+        (1, [], "expected twins of one place, found a twin of 'elsewhere' beside one of 'place'"),
+        (0, ["--twin-data", "d"], "--twin-data: expected one --twin with it, found 2"),
+    ],
+    ids=["two-places", "twin-data"],
+)
+def test_several_twins_refuse_in_one_line(
+    twin_file, second_twin, tmp_path, capsys, which, extra, message
+):
+    argv = ["benchmark", "--twin", twin_file, "--twin", second_twin[which], *extra,
+            "--out", tmp_path / "b"]  # fmt: skip
+    assert message in cli_error(argv, capsys)
+    assert not (tmp_path / "b").exists()
