@@ -58,12 +58,16 @@ def _twin_arguments(args: argparse.Namespace) -> None:
             f"--twin fixes the scenario, its options, annotation and rate; got {given[0]}"
         )
     from sim.twins import read_twin
+    from sim.twins.data import twin_options
 
     twin = read_twin(args.twin)
     args.scenario = twin.scenario
     args.episodes = twin.episodes if args.episodes is None else args.episodes
     args.rate = twin.rate_hz
     args.twin_model = twin
+    args.twin_options, grown = twin_options(twin, seed=args.seed, episodes=args.episodes)
+    if grown:
+        print(f"{args.twin}: {grown}", file=sys.stderr)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -83,7 +87,7 @@ def _run(args: argparse.Namespace) -> int:
             seed=args.seed,
             out_dir=args.out,
             options=(
-                dict(twin.options)
+                args.twin_options
                 if twin is not None
                 else parse_overrides(args.scenario, args.overrides)
             ),

@@ -5,13 +5,41 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 from reform.frame import Dataset
 from sim.twins.description import Twin
 
-__all__ = ["DATA_FOLDER", "generate_twin", "twin_data"]
+__all__ = ["DATA_FOLDER", "generate_twin", "twin_data", "twin_options"]
 
 DATA_FOLDER = "twin-data"  # beside twin.json: the twin's generated dataset
+
+
+def twin_options(
+    twin: Twin, *, seed: int | None = None, episodes: int | None = None
+) -> tuple[dict[str, Any], str]:
+    """The scenario options ``twin``'s data are generated with, for ``seed`` and ``episodes``
+    (default the twin's own), and a line saying what changed (empty when nothing did).
+
+    The fit sized the twin's room so that every party of the twin's own seed and episodes fits
+    (`sim.twins.fit.room_for_every_episode`). For another seed, or more episodes, the same rule
+    grows the room until every party of those fits too.
+    """
+    from sim.twins.fit import SCENARIO, room_for_every_episode
+
+    options = dict(twin.options)
+    seed = twin.seed if seed is None else seed
+    episodes = twin.episodes if episodes is None else episodes
+    if twin.scenario != SCENARIO or (seed == twin.seed and episodes <= twin.episodes):
+        return options, ""
+    grown = room_for_every_episode(options, seed=seed, episodes=episodes)
+    if grown["room_side"] == options["room_side"]:
+        return options, ""
+    return grown, (
+        f"the twin's room grew from {options['room_side']:g} m to {grown['room_side']:g} m so "
+        f"that every party of seed {seed}'s {episodes} episodes fits (the rule that sized it "
+        f"for its own seed, {twin.seed})"
+    )
 
 
 def generate_twin(
@@ -30,12 +58,13 @@ def generate_twin(
     `sim.generate.GenerationReport`."""
     from sim.generate import generate_dataset
 
+    options, _ = twin_options(twin, seed=seed, episodes=episodes)
     return generate_dataset(
         twin.scenario,
         episodes=twin.episodes if episodes is None else episodes,
         seed=twin.seed if seed is None else seed,
         out_dir=out_dir,
-        options=dict(twin.options),
+        options=options,
         rate=twin.rate_hz,
         annotation=None if twin.annotation.identity else twin.annotation,
         n_jobs=n_jobs,

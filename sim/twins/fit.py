@@ -48,6 +48,7 @@ __all__ = [
     "TwinInputError",
     "check_frames_for_twin",
     "fit_twin",
+    "room_for_every_episode",
     "twin_sample",
 ]
 
@@ -158,11 +159,13 @@ def _simulate(options: dict[str, Any], *, seed: int, rate: float) -> tuple[list[
     )
 
 
-def _room_for_every_episode(
+def room_for_every_episode(
     options: Mapping[str, Any], *, seed: int, episodes: int
 ) -> dict[str, Any]:
     """``options`` with a room every episode of the twin's data fits (each episode's party is
-    drawn, not simulated; the room grows by `ROOM_GROWTH` until all fit)."""
+    drawn, not simulated; the room grows by `ROOM_GROWTH` until all fit): the episodes
+    ``episode_seed(seed, k)`` for k below ``episodes`` (at least `MIN_EPISODES`), as
+    `sim.generate` seeds them."""
     import scenarios
     from scenarios.mingle import NoFloorError
     from sim.generate import episode_seed
@@ -378,7 +381,7 @@ def fit_twin(
     import scenarios
 
     options = scenarios.registry.check_options(SCENARIO, options)
-    options = _room_for_every_episode(options, seed=seed, episodes=episodes)
+    options = room_for_every_episode(options, seed=seed, episodes=episodes)
     mine = measure_place(_sample(options, annotation, seed=seed, rate=rate))
 
     searched = tuple(

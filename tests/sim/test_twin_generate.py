@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
 
+import scenarios
 from reform.datasets import read_parquet
-from sim.twins import fit_twin, write_twin
+from sim.generate import episode_seed
+from sim.twins import fit_twin, read_twin, write_twin
+from sim.twins.data import twin_options
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
@@ -82,3 +86,24 @@ def test_the_annotations_fixed_scale_multiplies_every_position_and_stays_off_old
     assert AnnotationModel(scale=0.5).to_json()["scale"] == 0.5
     with pytest.raises(ValueError, match=r"annotation scale must be a finite number > 0, got 0"):
         AnnotationModel(scale=0)
+
+
+def test_another_seed_grows_the_twins_room_until_its_parties_fit(twin_file, tmp_path, capsys):
+    twin = read_twin(twin_file)
+    crowded = {"people": 12, "room_side": 4.0, "duration": 10.0}
+    tight = dataclasses.replace(twin, options={**twin.options, **crowded})
+    assert twin_options(tight) == (dict(tight.options), "")  # its own seed: as fitted
+    grown, said = twin_options(tight, seed=tight.seed + 1, episodes=2)
+    assert grown["room_side"] > 4.0
+    assert said.startswith(f"the twin's room grew from 4 m to {grown['room_side']:g} m")
+    for k in range(2):  # every party of that seed fits the grown room
+        scenarios.make(tight.scenario, seed=episode_seed(tight.seed + 1, k), **grown)
+
+    path = write_twin(tight, tmp_path / "tight.json")
+    argv = ["generate", "--twin", path, "--seed", tight.seed + 1, "--episodes", 2,
+            "--out", tmp_path / "d", "--jobs", 1, "-q"]  # fmt: skip
+    status, _, err = run_cli(argv, capsys)
+    assert status == 0, err
+    assert f"{path}: {said}" in err.splitlines()
+    card = json.loads((tmp_path / "d" / "dataset.json").read_text())
+    assert card["parameters"]["options"]["room_side"] == grown["room_side"]
