@@ -25,11 +25,13 @@ The table (page:line, commit, command, exit, seconds, longest silence, verdict) 
 --out after each page, whole or not at all, so an interrupted run leaves the table of what ran,
 marked partial. With --update, the rows --out already holds for the pages this run does not run
 are kept, each with the commit it ran on, so that a run of a few pages refreshes theirs in the
-whole table. One line is printed per command as it finishes, and a summary at the end.
+whole table; with ``--only REGEX`` as well, only the commands matching REGEX run on those pages
+and the others keep their rows (the long commands a busy run stopped, run again on their own).
+One line is printed per command as it finishes, and a summary at the end.
 
 Run: ``python benchmarks/documented_commands.py [--pages GLOB ...] [--timeout S] [--out FILE]
-[--update] [--quick]`` (``--quick``: the README's commands only; a glob is relative to the
-repository, pages in the order of the globs given).
+[--update [--only REGEX]] [--quick]`` (``--quick``: the README's commands only; a glob is
+relative to the repository, pages in the order of the globs given).
 """
 
 from __future__ import annotations
@@ -239,10 +241,18 @@ def pages_of(globs: list[str]) -> list[Path]:
 
 
 def run_pages(
-    pages: list[Path], *, timeout: float, out: Path, kept: list[Row] | None = None
+    pages: list[Path],
+    *,
+    timeout: float,
+    out: Path,
+    kept: list[Row] | None = None,
+    only: re.Pattern[str] | None = None,
 ) -> list[Row]:
     """Runs every page's whole commands; prints a line per command; rewrites ``out`` per page,
-    with the rows of ``kept`` whose pages this run does not run (`merged`)."""
+    with the rows of ``kept`` whose pages this run does not run (`merged`). With ``only``, a
+    command it does not match keeps its row of ``kept`` (same place, same command) if there is
+    one, and is run otherwise."""
+    before = {(r.where, _normalised(r.command)): r for r in kept or []}
     rows: list[Row] = []
     done: dict[str, Row] = {}  # normalised command -> the row that ran it
     n_commands = sum(
@@ -270,6 +280,8 @@ def run_pages(
                 if words is None or any(_PLACEHOLDER.match(w) for w in words):
                     said = "not run: a pattern or a placeholder"
                     row = Row(where, command.text, said, None, None, commit)
+                elif only is not None and not only.search(key) and (where, key) in before:
+                    row = before[where, key]
                 elif key in done and not _WRITES.search(key):
                     first = done[key]
                     said = f"as {first.where}"
@@ -418,7 +430,16 @@ def main() -> None:
         action="store_true",
         help="keep the rows --out holds for the pages not run, each with its commit",
     )
+    parser.add_argument(
+        "--only",
+        type=re.compile,
+        metavar="REGEX",
+        help="with --update: on the pages run, run only the commands REGEX matches (Python "
+        "regular expression); the others keep the rows --out holds",
+    )
     args = parser.parse_args()
+    if args.only is not None and not args.update:
+        parser.error("--only keeps the other commands' rows: give it with --update")
     if args.pages:
         pages = pages_of(args.pages)
     elif args.quick:
@@ -428,7 +449,7 @@ def main() -> None:
     if not pages:
         parser.error(f"--pages: no page with commands matches {args.pages}")
     kept = read_table(args.out) if args.update else None
-    rows = run_pages(pages, timeout=args.timeout, out=args.out, kept=kept)
+    rows = run_pages(pages, timeout=args.timeout, out=args.out, kept=kept, only=args.only)
     run = [r for r in rows if r.passed is not None]
     failed = [r for r in run if not r.passed]
     print(

@@ -293,6 +293,16 @@ def add_max_memory_argument(parser: argparse.ArgumentParser, *, holds: str) -> N
     )
 
 
+def add_dry_run_argument(parser: argparse.ArgumentParser) -> None:
+    """``--dry-run``: size the run, state its estimate (or refuse it) and stop before any work."""
+    parser.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="check the arguments, state the run's estimate of time, memory and disk (or "
+        "refuse it, as the run would) and stop before any work",
+    )
+
+
 def max_memory(args: argparse.Namespace) -> int | None:
     """``--max-memory`` in bytes (None when not given); a `CliError` for a malformed size."""
     text = getattr(args, "max_memory", None)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_max_memory_argument
+from sim.cli._common import add_dry_run_argument, add_max_memory_argument
 from sim.cli._experiment_io import add_salsa_split_arguments
 from sim.cli._grammar import add_quiet, run_loading
 
@@ -51,6 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "of another detector on the same frames; repeatable",
     )
     add_max_memory_argument(parser, holds="the grid search holds the scores of every setting")
+    add_dry_run_argument(parser)
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_loading("sim.cli.experiment_gcff:run", "scikit-learn"))
 

@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_backend_arguments, add_max_memory_argument
+from sim.cli._common import (
+    add_backend_arguments,
+    add_dry_run_argument,
+    add_max_memory_argument,
+)
 from sim.cli._detectors import add_detector_timeout, detector_name
 from sim.cli._grammar import add_episodes, add_out, add_quiet, add_seed, run_loading
 from sim.experiments.stress_grid import AXES, GRIDS
@@ -87,5 +91,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_max_memory_argument(
         parser, holds="the stress test holds its test episodes and their scores"
     )
+    add_dry_run_argument(parser)
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_loading("sim.cli.stress:run", "MuJoCo and scikit-learn"))

@@ -102,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
         print("reading SALSA and Babble ...", file=sys.stderr, flush=True)
     salsa, babble = load_salsa(resolve(data["salsa"])), load_babble(resolve(data["babble"]))
     _check_size(args, salsa, babble)
+    if args.dry_run:
+        return 0
     if not args.quiet:
         print("tuning GCFF on the SALSA training split (a grid of settings) ...", file=sys.stderr)
     # The grid tuned and every row scored in one call: about a minute on two cores.

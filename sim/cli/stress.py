@@ -166,6 +166,8 @@ def run(args: argparse.Namespace) -> int:
         plugins[name] = make_plugin(name, deadline_s=args.detector_timeout)
     executor = executor_from_args(args)  # a Ray address is probed here, before the estimate
     _check_size(grid, axes, args)  # the last check: its estimate is said once all have passed
+    if args.dry_run:
+        return 0
 
     # On a terminal the time so far moves under the stage lines while a stage works (the
     # default grid's training set: a minute on two cores) and while the plots are drawn.

@@ -65,3 +65,25 @@ def test_a_run_of_one_page_replaces_its_rows_alone(script, tmp_path):
     text = (tmp_path / "u.md").read_text()
     assert "fresh clones of 0449f13, abc1234" in text and "147.1" not in text
     assert "Longest silence: 2.1 s (docs/guide/reform.md:71)" in text
+
+
+def test_only_runs_the_commands_it_matches_and_keeps_the_others_rows(script, tmp_path):
+    import re
+
+    page = script.REPO / "docs" / "bad-input.md"
+    commands = [c for c in script.site_pages.commands(page.read_text()) if c.whole]
+    name = "docs/bad-input.md"
+    kept = [
+        script.Row(f"{name}:{c.line}", c.text, "passed", True, script.Outcome(0, 1.0, 1.0, ""), "kept")
+        for c in commands
+    ]  # fmt: skip
+    chosen = [c for c in commands if "--episodes 1e9" in c.text]
+    assert len(chosen) == 1  # the page's refusal of a billion stress episodes: 0.1 s
+    rows = script.run_pages(
+        [page], timeout=30, out=tmp_path / "t.md", kept=kept, only=re.compile(r"episodes 1e9")
+    )
+    ran = [r for r in rows if r.commit != "kept"]
+    assert [r.where for r in ran] == [f"{name}:{chosen[0].line}"]
+    assert ran[0].verdict == "refused as the page shows" and ran[0].outcome.exit == 2
+    assert [r for r in rows if r.commit == "kept"] == [k for k in kept if k.where != ran[0].where]
+    assert script.read_table(tmp_path / "t.md") == script.merged(rows, kept, run=[page])

@@ -445,6 +445,24 @@ def test_the_stress_test_is_sized_before_it_runs(machine, tmp_path, capsys, monk
     assert not out.exists()
 
 
+@pytest.mark.parametrize("command", [["stress", "--episodes", 1000], ["experiment", "gcff"]])
+def test_a_dry_run_states_the_estimate_and_runs_nothing(
+    machine, command, salsa_dir, babble_dir, tmp_path, capsys
+):
+    out = tmp_path / "out"
+    data = ["--data", f"salsa={salsa_dir}", "--data", f"babble={babble_dir}"]
+    argv = command + (data if command[0] == "experiment" else []) + ["--out", out]
+    assert main([str(a) for a in argv + ["--dry-run"]]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].endswith("written (estimates, sim.sizing)"), lines
+    assert "about " in lines[0] and list(tmp_path.iterdir()) == []
+    # A request the run would refuse is refused the same way.
+    err = _one_line(argv + ["--max-memory", "1K", "--dry-run"], capsys)
+    assert "error: " in err and "--max-memory" in err
+
+
 def test_the_stress_estimate_grows_with_its_request():
     def estimate(seeds, levels):
         return sizing.stress_estimate(
