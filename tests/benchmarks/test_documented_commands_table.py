@@ -73,17 +73,21 @@ def test_only_runs_the_commands_it_matches_and_keeps_the_others_rows(script, tmp
     page = script.REPO / "docs" / "bad-input.md"
     commands = [c for c in script.site_pages.commands(page.read_text()) if c.whole]
     name = "docs/bad-input.md"
+    earlier = script.Outcome(0, 1.0, 1.0, "")
     kept = [
-        script.Row(f"{name}:{c.line}", c.text, "passed", True, script.Outcome(0, 1.0, 1.0, ""), "kept")
-        for c in commands
-    ]  # fmt: skip
+        script.Row(f"{name}:{c.line}", c.text, "passed", True, earlier, "kept") for c in commands
+    ]
     chosen = [c for c in commands if "--episodes 1e9" in c.text]
     assert len(chosen) == 1  # the page's refusal of a billion stress episodes: 0.1 s
     rows = script.run_pages(
         [page], timeout=30, out=tmp_path / "t.md", kept=kept, only=re.compile(r"episodes 1e9")
     )
-    ran = [r for r in rows if r.commit != "kept"]
+    ran = [r for r in rows if r.commit != "kept" and r.outcome is not None]
     assert [r.where for r in ran] == [f"{name}:{chosen[0].line}"]
     assert ran[0].verdict == "refused as the page shows" and ran[0].outcome.exit == 2
-    assert [r for r in rows if r.commit == "kept"] == [k for k in kept if k.where != ran[0].where]
-    assert script.read_table(tmp_path / "t.md") == script.merged(rows, kept, run=[page])
+    patterns = [r.where for r in rows if r.verdict.startswith("not run")]  # shown, never run
+    assert [r for r in rows if r.commit == "kept"] == [
+        k for k in kept if k.where != ran[0].where and k.where not in patterns
+    ]
+    table = [(r.where, r.verdict, r.commit) for r in script.read_table(tmp_path / "t.md")]
+    assert table == [(r.where, r.verdict, r.commit) for r in rows]
