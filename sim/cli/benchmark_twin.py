@@ -6,7 +6,6 @@ venue twin, before any label exists (`sim.twins.predict`); with several twins of
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -48,6 +47,7 @@ def run_twin(args: argparse.Namespace) -> int:
     REFORM trained on it); --data is refused (the twin stands for the data)."""
     from reform.detectors import detector_names
     from reform.persistence import load_model
+    from sim.experiments.report_files import write_json, write_markdown
     from sim.twins import twin_data
     from sim.twins.data import DATA_FOLDER
     from sim.twins.predict import (
@@ -98,16 +98,15 @@ def run_twin(args: argparse.Namespace) -> int:
 
     predictions = runs[0] if len(runs) == 1 else mean_prediction(runs)
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     kind = f"{twins[0].mode} twin" + ("s" if len(paths) > 1 else "")
     place = f"the place of {twins[0].name} ({kind}, {', '.join(paths)})"
     text = table(predictions, place=place, twins=len(paths))
-    (out / MARKDOWN).write_text(text)
+    write_markdown(out / MARKDOWN, text)
     record: dict[str, Any] = {"twin": paths[0] if len(paths) == 1 else paths}
     record["predictions"] = [p.to_json() for p in predictions]
     if len(runs) > 1:
         record["each_twin"] = [[p.to_json() for p in run] for run in runs]
-    (out / JSON).write_text(json.dumps(record, indent=2) + "\n")
+    write_json(out / JSON, record, indent=2)
     print(text, end="")
     print(f"wrote {out}/: {MARKDOWN}, {JSON}", file=sys.stderr)
     return 0
