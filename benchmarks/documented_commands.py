@@ -90,12 +90,15 @@ class Outcome:
         seconds: wall time from start to exit, seconds.
         silence: longest gap between consecutive lines of output, start and exit included, s.
         last_line: the last non-empty line of its output, for a refusal.
+        quiet_after: the last line before its longest silence ("" for the start): where to
+            look when the silence is too long.
     """
 
     exit: int | None
     seconds: float
     silence: float
     last_line: str
+    quiet_after: str = ""
 
 
 @dataclass(frozen=True)
@@ -136,7 +139,7 @@ def run_command(command: str, *, cwd: Path, env: dict[str, str], timeout: float)
         start_new_session=True,  # its own process group, stopped whole
     )
     os.close(slave)
-    tail, last_line_at, silence = b"", start, 0.0
+    tail, last_line_at, silence, quiet_after = b"", start, 0.0, ""
     exited_at, timed_out = None, False
     while True:
         now = time.monotonic()
@@ -159,10 +162,11 @@ def run_command(command: str, *, cwd: Path, env: dict[str, str], timeout: float)
             except subprocess.TimeoutExpired:
                 timed_out = True
             break
-        tail = (tail + chunk)[-TAIL_BYTES:]
+        before, tail = tail, (tail + chunk)[-TAIL_BYTES:]
         if b"\n" in chunk or b"\r" in chunk:
             now = time.monotonic()
-            silence = max(silence, now - last_line_at)
+            if now - last_line_at > silence:
+                silence, quiet_after = now - last_line_at, _last_line(before)
             last_line_at = now
     if exited_at is None and not timed_out:
         exited_at = time.monotonic()
@@ -173,15 +177,22 @@ def run_command(command: str, *, cwd: Path, env: dict[str, str], timeout: float)
         pass
     status = process.wait()
     end = time.monotonic() if timed_out else exited_at
-    silence = max(silence, end - last_line_at)
-    text = _ANSI.sub("", tail.decode("utf-8", "replace"))
-    lines = [line.strip() for line in re.split(r"[\r\n]", text) if line.strip()]
+    if end - last_line_at > silence:
+        silence, quiet_after = end - last_line_at, _last_line(tail)
     return Outcome(
         exit=None if timed_out else status,
         seconds=end - start,
         silence=silence,
-        last_line=lines[-1] if lines else "",
+        last_line=_last_line(tail),
+        quiet_after=quiet_after,
     )
+
+
+def _last_line(output: bytes) -> str:
+    """The last non-empty line of a terminal's ``output``, its colour codes removed."""
+    text = _ANSI.sub("", output.decode("utf-8", "replace"))
+    lines = [line.strip() for line in re.split(r"[\r\n]", text) if line.strip()]
+    return lines[-1] if lines else ""
 
 
 def verdict(outcome: Outcome, refusal: str | None) -> tuple[str, bool]:
@@ -353,6 +364,8 @@ def _print_row(row: Row, n: int, total: int) -> None:
         o = row.outcome
         exit_ = "-" if o.exit is None else o.exit
         figures = f"exit {exit_}  {o.seconds:.1f} s  silence {o.silence:.1f} s  "
+        if o.silence >= SILENCE_GOAL_S:
+            figures += f"(after {o.quiet_after[:80] or 'the start'!r})  "
     print(f"[{n}/{total}] {row.where}  {figures}{row.verdict}  ({row.command[:80]})", flush=True)
 
 

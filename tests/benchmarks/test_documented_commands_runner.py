@@ -31,7 +31,15 @@ def test_the_longest_silence_counts_redraws_and_the_wait_for_the_exit(script, tm
     outcome = _run(script, "sleep 0.3; printf 'bar\\r'; sleep 0.3; echo done; sleep 1.2", tmp_path)
     assert (outcome.exit, outcome.last_line) == (0, "done")
     assert 1.1 <= outcome.silence <= 2.5 and outcome.seconds >= outcome.silence
+    assert outcome.quiet_after == "done"  # the line the silence followed
     assert script.verdict(outcome, None) == ("passed", True)
+
+
+def test_the_line_before_the_longest_silence_is_named(script, tmp_path):
+    outcome = _run(script, "echo one; echo two; sleep 1.5; echo three; sleep 0.2", tmp_path)
+    assert outcome.quiet_after == "two" and outcome.silence >= 1.4
+    outcome = _run(script, "sleep 1.5; echo only", tmp_path)
+    assert outcome.quiet_after == ""  # silent from the start
 
 
 def test_a_refusal_passes_only_where_the_page_shows_one(script, tmp_path):
