@@ -16,6 +16,7 @@ from reform.frame import Dataset
 from sim.cli._common import CliError, backend_words, check_output, executor_from_args
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
 from sim.cli._experiment_sim2real import BASENAME, SYNTHETIC
+from sim.cli._grammar import ticking_bar
 from sim.experiments.benchmark import found_datasets, one_recording_each
 from sim.experiments.sim2real import CLASSIFIER_NAMES, RECIPES, SALSA, sim_to_real
 from sim.experiments.sim2real_report import (
@@ -145,8 +146,10 @@ def run(args: argparse.Namespace) -> int:
     command = _command(args)
     names = []
     drawings = (sim2real_figure, rank_figure, calibration_figure)
-    for suffix, draw in zip(FIGURES, drawings, strict=True):
-        names.append(draw(result, out.with_name(out.name + suffix)).name)
+    progress("drawing the figures")
+    with ticking_bar(args, "figures", len(FIGURES), unit="figure"):  # seconds on busy cores
+        for suffix, draw in zip(FIGURES, drawings, strict=True):
+            names.append(draw(result, out.with_name(out.name + suffix)).name)
     markdown = to_markdown(result, command=command, figures=names)
     write_report(out, markdown, result.to_json(command=command))
     print(markdown, end="")
