@@ -156,8 +156,8 @@ def format_size(size: float) -> str:
         if abs(size) < 1024.0 or unit == _UNITS[-1]:
             break
         size /= 1024.0
-    if unit == "B":
-        return f"{size:.0f} B"
+    if unit == "B" or 999.5 <= abs(size) < 1024.0:  # 1010 KiB, not 1.01e+03 KiB
+        return f"{size:.0f} {unit}"
     return f"{size:.3g} {unit}"
 
 

@@ -62,6 +62,8 @@ def test_parse_size_refuses_what_is_not_a_size(text):
         (0, "0 B"),
         (1023, "1023 B"),
         (1536, "1.5 KiB"),
+        (1010 * 1024, "1010 KiB"),
+        (999.4 * 1024, "999 KiB"),
         (8 * GiB, "8 GiB"),
         (3.6 * 2**40, "3.6 TiB"),
         (2.0**70, "1.02e+03 EiB"),
