@@ -13,9 +13,10 @@ The recipe (`fit_twin`), each step matching one label-free statistic of the real
    the real one (crowding); `PILOT_ROUNDS` rounds of both; before them, the crowd's shape
    (`SHAPE_CHOICES`: spacing, largest group, unevenness, share alone, arrangements, noise on
    facings) is searched one option at a time, `SHAPE_PASSES` passes, each choice kept where
-   the pilot's `sim.twins.statistics.spacing_shape` comes closest to the recording's
-   (nearest-neighbour distances, facing away from the nearest, facing a common point, clumps
-   of bodies and of o-space votes);
+   the pilot's `sim.twins.statistics.spacing_shape` and `sim.twins.statistics.detector_shape`
+   come closest to the recording's (nearest-neighbour distances, facing away from the nearest,
+   facing a common point, clumps of bodies and of o-space votes; how fixed detectors group the
+   people and how much they agree, on the pilot scaled to the recording's spacing);
 4. **orientation coding**: the number of directions every real yaw is coded in (continuous
    when none fits), the head's yaw when the recording's yaw is its head's;
 5. **tracker**: position and yaw jitter on top of the pilot's own, so that people standing still
@@ -41,7 +42,14 @@ from reform.annotation import AnnotationModel
 from reform.frame import Frame
 from reform.seeding import derive_int, derive_rng
 from sim.twins.description import Fitted, Twin
-from sim.twins.statistics import PlaceStatistics, measure_place, spacing_shape
+from sim.twins.statistics import (
+    SHAPE_SIZE,
+    PlaceStatistics,
+    detector_shape,
+    measure_place,
+    nearest_neighbour_distances,
+    spacing_shape,
+)
 
 __all__ = [
     "MIN_FRAMES",
@@ -64,6 +72,7 @@ PILOT_EPISODES = 3
 PILOT_S = 120.0  # seconds per pilot episode
 PILOT_RATE_HZ = 0.5
 PILOT_ROUNDS = 3
+AGREEMENT_WEIGHT = 8.0  # of the detectors' agreement in the shape distance
 SHAPE_PASSES = 2  # passes over the crowd options searched one at a time
 MIN_ROOM_M = 4.0  # metres (mingle's smallest room)
 MAX_ROOM_M = 100.0
@@ -91,7 +100,9 @@ SHAPE_STATISTIC = (
     "spacing shape: nearest-neighbour q10, q25, q75, q90, 2nd and 3rd nearest over the median "
     "nearest neighbour, share standing apart, facing away from the nearest (median, q75, rad), "
     "a person and the nearest off facing a common point (q25, median, q75, rad), clumps "
-    "(mean size, share in clumps of 4 or more), o-space votes (share alone, mean clump size)"
+    "(mean size, share in clumps of 4 or more), o-space votes (share alone, mean clump size); "
+    "detectors: share GCFF groups, its mean group size, F1 of GCFF at a 0.4 m stride and of "
+    "proximity against GCFF's groups"
 )
 
 
@@ -199,19 +210,29 @@ def twin_sample(twin: Twin) -> list[Frame]:
 
 
 def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
-    """How far two `spacing_shape` signatures are: squared log ratios of the six distance
-    ratios and of the mean sizes of clumps and of vote clumps, plus the squared differences of
-    the shares standing apart, in clumps of 4 or more and voting alone (each times 4), of the
-    median angle a person faces away from their nearest neighbour (radians: back to back with
-    a neighbouring group's member, or facing them in one o-space) and of the lower quartile
-    and median of the angles off facing a common point (radians; the upper quartile is left
-    to the people standing beside someone they do not face, whom the share voting alone
-    counts, and not to the noise on facings)."""
+    """How far two signatures (`spacing_shape`, then `detector_shape`) are: squared log ratios
+    of the six distance ratios and of the mean sizes of clumps and of vote clumps, plus the
+    squared differences of the shares standing apart, in clumps of 4 or more and voting alone
+    (each times 4), of the median angle a person faces away from their nearest neighbour
+    (radians: back to back with a neighbouring group's member, or facing them in one o-space)
+    and of the lower quartile and median of the angles off facing a common point (radians; the
+    upper quartile is left to the people standing beside someone they do not face, whom the
+    share voting alone counts, and not to the noise on facings); then, where the recording's
+    detectors found anything, the squared difference of the shares GCFF groups (times 4), the
+    squared log ratio of its mean group sizes and the squared differences of the detectors'
+    agreements (times `AGREEMENT_WEIGHT`)."""
     ratios = np.log(np.maximum(twin[[*range(6), 12, 15]], 1e-6))
     ratios -= np.log(np.maximum(real[[*range(6), 12, 15]], 1e-6))
     facing = twin[[7, 9, 10]] - real[[7, 9, 10]]
     shares = twin[[6, 13, 14]] - real[[6, 13, 14]]
-    return float(np.sum(ratios**2) + 4.0 * np.sum(shares**2) + np.sum(facing**2))
+    distance = float(np.sum(ratios**2) + 4.0 * np.sum(shares**2) + np.sum(facing**2))
+    if real.size > SHAPE_SIZE and np.all(np.isfinite(real[SHAPE_SIZE:])):
+        r, t = real[SHAPE_SIZE:], twin[SHAPE_SIZE:]
+        size = math.log(max(t[1], 1e-6) / max(r[1], 1e-6))
+        distance += (
+            4.0 * (t[0] - r[0]) ** 2 + size**2 + AGREEMENT_WEIGHT * np.sum((t[2:] - r[2:]) ** 2)
+        )
+    return distance
 
 
 def _fit_spacing_shape(
@@ -221,10 +242,9 @@ def _fit_spacing_shape(
     the pilot's `spacing_shape` closest to the recording's; `SHAPE_PASSES` passes, so that an
     option chosen early is chosen again beside the later ones) on a room sized once for the
     recording's crowding."""
-    target = spacing_shape(frames)
-    coding = AnnotationModel(directions=real.directions or None)  # yaws as the recording codes
+    target = np.concatenate([spacing_shape(frames), detector_shape(frames)])
     options = dict(options)
-    if not np.all(np.isfinite(target)):
+    if not np.all(np.isfinite(target[:SHAPE_SIZE])):
         return options, {}
     run = {**options, "duration": PILOT_S}
     sim_frames, run = _simulate(run, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
@@ -246,7 +266,7 @@ def _fit_spacing_shape(
                     sim_frames, _ = _simulate(
                         trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ
                     )
-                    signature = spacing_shape(coding.apply(sim_frames, derive_rng(seed, SHAPE)))
+                    signature = _signature(sim_frames, real, seed=seed)
                     seen[known] = (_shape_distance(target, signature), signature)
                 scores.append(seen[known])
             k = min(range(len(choices)), key=lambda j: scores[j][0])
@@ -254,6 +274,17 @@ def _fit_spacing_shape(
             best_shape = scores[k][1]
     shown = [float(f"{v:.4g}") for v in target]
     return options, {"real": shown, "twin": [float(f"{v:.4g}") for v in best_shape]}
+
+
+def _signature(sim_frames: Sequence[Frame], real: PlaceStatistics, *, seed: int) -> np.ndarray:
+    """A pilot's `spacing_shape` and `detector_shape`, its frames coded as the recording codes
+    yaws and scaled to the recording's median nearest neighbour (the detectors run in
+    metres)."""
+    nn = nearest_neighbour_distances(sim_frames)
+    scale = real.nn_median / float(np.median(nn)) if nn.size else 1.0
+    coding = AnnotationModel(directions=real.directions or None, scale=scale)
+    coded = coding.apply(sim_frames, derive_rng(seed, SHAPE))
+    return np.concatenate([spacing_shape(coded), detector_shape(coded)])
 
 
 def _labelled_shape(frames: Sequence[Frame]) -> dict[str, float]:

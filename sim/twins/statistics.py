@@ -19,8 +19,10 @@ from reform.frame import Frame, wrap_angle
 __all__ = [
     "CLUMP_LINK",
     "CODINGS",
+    "DETECTOR_SHAPE_SIZE",
     "SHAPE_SIZE",
     "PlaceStatistics",
+    "detector_shape",
     "measure_place",
     "nearest_neighbour_distances",
     "spacing_shape",
@@ -37,6 +39,9 @@ CLUMP_LINK = 1.3  # median nearest-neighbour distances: people closer than this 
 VOTE_AHEAD = (0.3, 0.6, 0.9)  # median nearest-neighbour distances: o-space votes this far ahead
 VOTE_LINK = 0.5  # median nearest-neighbour distances: votes closer than this are one clump
 SHAPE_SIZE = 16  # entries of `spacing_shape`
+DETECTOR_FRAMES = 150  # frames (evenly spread) the detectors of `detector_shape` run on
+DETECTOR_SHAPE_SIZE = 4  # entries of `detector_shape`
+SHORT_STRIDE_M = 0.4  # metres: the stride of the GCFF `detector_shape` compares with the default
 
 
 @dataclass(frozen=True)
@@ -296,3 +301,43 @@ def measure_place(frames: Sequence[Frame]) -> PlaceStatistics:
 
 def _quantile(values: np.ndarray, q: float) -> float:
     return float(np.quantile(values, q)) if values.size else math.nan
+
+
+def detector_shape(frames: Sequence[Frame]) -> np.ndarray:
+    """How fixed detectors group the frames, and how much they agree, without any label:
+    (DETECTOR_SHAPE_SIZE,), on at most `DETECTOR_FRAMES` frames of four or more people spread
+    over the recording (positions in metres):
+
+    - 0: the share of people GCFF (its catalogue settings) puts in a group of two or more;
+    - 1: the mean size of those groups;
+    - 2-3: the F1 at T = 2/3 of GCFF with a shorter stride (`SHORT_STRIDE_M`) and of the
+      proximity baseline (its catalogue distance), each scored against GCFF's own groups: where
+      detectors disagree, a place is hard to read, whatever its truth (1 where none of them
+      finds a group).
+
+    Every frame's groups are removed first: the detectors' groups are all it reads.
+    """
+    from fractions import Fraction
+
+    from reform.detectors import make_detector, run_detector
+    from reform.metrics import evaluate
+
+    crowded = [f.replace(groups=None) for f in frames if f.n_people >= 4]
+    if not crowded:
+        return np.full(DETECTOR_SHAPE_SIZE, math.nan)
+    step = max(1, len(crowded) // DETECTOR_FRAMES)
+    crowded = crowded[::step][:DETECTOR_FRAMES]
+    base = run_detector("gcff", make_detector("gcff"), crowded)
+    people = sum(f.n_people for f in crowded)
+    grouped = [len(g) for p in base for g in p if len(g) >= 2]
+    share = sum(grouped) / people
+    size = float(np.mean(grouped)) if grouped else 1.0
+    truth = [
+        f.replace(groups=tuple(tuple(g) for g in p)) for f, p in zip(crowded, base, strict=True)
+    ]
+    agreement = []
+    for name, options in (("gcff", {"stride": SHORT_STRIDE_M}), ("proximity", {})):
+        other = run_detector(name, make_detector(name, **options), crowded)
+        scores = evaluate(truth, other, thresholds=(Fraction(2, 3),))
+        agreement.append(float(scores.at(Fraction(2, 3)).f1))
+    return np.array([share, size, *agreement])
