@@ -463,11 +463,13 @@ def main() -> None:
         parser.error(f"--pages: no page with commands matches {args.pages}")
     kept = read_table(args.out) if args.update else None
     rows = run_pages(pages, timeout=args.timeout, out=args.out, kept=kept, only=args.only)
-    run = [r for r in rows if r.passed is not None]
+    earlier = {id(r) for r in kept or []}  # rows --only kept as they were
+    run = [r for r in rows if r.passed is not None and id(r) not in earlier]
     failed = [r for r in run if not r.passed]
     print(
         f"{len(run)} commands run, {len(run) - len(failed)} passed, {len(failed)} failed "
-        f"(timed out included), {len(rows) - len(run)} not run or run before; table: {args.out}"
+        f"(timed out included), {len(rows) - len(run)} not run, run before or kept; "
+        f"table: {args.out}"
     )
     if run:
         loudest = max(run, key=lambda r: r.outcome.silence)
