@@ -44,6 +44,7 @@ from reform.seeding import derive_int, derive_rng
 from sim.twins.description import Fitted, Twin
 from sim.twins.statistics import (
     SHAPE_SIZE,
+    SHORT_STRIDE_M,
     PlaceStatistics,
     detector_shape,
     measure_place,
@@ -101,8 +102,8 @@ SHAPE_STATISTIC = (
     "nearest neighbour, share standing apart, facing away from the nearest (median, q75, rad), "
     "a person and the nearest off facing a common point (q25, median, q75, rad), clumps "
     "(mean size, share in clumps of 4 or more), o-space votes (share alone, mean clump size); "
-    "detectors: share GCFF groups, its mean group size, F1 of GCFF at a 0.4 m stride and of "
-    "proximity against GCFF's groups"
+    f"detectors: share GCFF groups, its mean group size, F1 of GCFF at a {SHORT_STRIDE_M:g} m "
+    "stride and of proximity against GCFF's groups"
 )
 
 
@@ -232,7 +233,7 @@ def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
         distance += (
             4.0 * (t[0] - r[0]) ** 2 + size**2 + AGREEMENT_WEIGHT * np.sum((t[2:] - r[2:]) ** 2)
         )
-    return distance
+    return distance if math.isfinite(distance) else math.inf  # a pilot that says nothing: last
 
 
 def _fit_spacing_shape(
