@@ -36,6 +36,7 @@ relative to the repository, pages in the order of the globs given).
 
 from __future__ import annotations
 
+import dataclasses
 import fcntl
 import importlib.util
 import os
@@ -261,9 +262,13 @@ def run_pages(
 ) -> list[Row]:
     """Runs every page's whole commands; prints a line per command; rewrites ``out`` per page,
     with the rows of ``kept`` whose pages this run does not run (`merged`). With ``only``, a
-    command it does not match keeps its row of ``kept`` (same place, same command) if there is
-    one, and is run otherwise."""
-    before = {(r.where, _normalised(r.command)): r for r in kept or []}
+    command it does not match keeps its row of ``kept`` (same page, same command, the next
+    such row in page order, at the command's line now) if there is one, and is run
+    otherwise."""
+    # By page and command, in page order: a row follows its command when lines move above it.
+    before: dict[tuple[str, str], list[Row]] = {}
+    for r in kept or []:
+        before.setdefault((r.page, _normalised(r.command)), []).append(r)
     rows: list[Row] = []
     done: dict[str, Row] = {}  # normalised command -> the row that ran it
     n_commands = sum(
@@ -291,8 +296,8 @@ def run_pages(
                 if words is None or any(_PLACEHOLDER.match(w) for w in words):
                     said = "not run: a pattern or a placeholder"
                     row = Row(where, command.text, said, None, None, commit)
-                elif only is not None and not only.search(key) and (where, key) in before:
-                    row = before[where, key]
+                elif only is not None and not only.search(key) and before.get((name, key)):
+                    row = dataclasses.replace(before[name, key].pop(0), where=where)
                 elif key in done and not _WRITES.search(key):
                     first = done[key]
                     said = f"as {first.where}"
@@ -463,8 +468,10 @@ def main() -> None:
         parser.error(f"--pages: no page with commands matches {args.pages}")
     kept = read_table(args.out) if args.update else None
     rows = run_pages(pages, timeout=args.timeout, out=args.out, kept=kept, only=args.only)
-    earlier = {id(r) for r in kept or []}  # rows --only kept as they were
-    run = [r for r in rows if r.passed is not None and id(r) not in earlier]
+    earlier = {(r.command, r.commit, r.outcome) for r in kept or []}  # rows --only kept
+    run = [
+        r for r in rows if r.passed is not None and (r.command, r.commit, r.outcome) not in earlier
+    ]
     failed = [r for r in run if not r.passed]
     print(
         f"{len(run)} commands run, {len(run) - len(failed)} passed, {len(failed)} failed "

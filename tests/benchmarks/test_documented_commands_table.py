@@ -68,6 +68,7 @@ def test_a_run_of_one_page_replaces_its_rows_alone(script, tmp_path):
 
 
 def test_only_runs_the_commands_it_matches_and_keeps_the_others_rows(script, tmp_path):
+    import dataclasses
     import re
 
     page = script.REPO / "docs" / "bad-input.md"
@@ -89,5 +90,11 @@ def test_only_runs_the_commands_it_matches_and_keeps_the_others_rows(script, tmp
     assert [r for r in rows if r.commit == "kept"] == [
         k for k in kept if k.where != ran[0].where and k.where not in patterns
     ]
+    # A row follows its command when the page gains lines above it (kept rows a line early).
+    moved = [dataclasses.replace(k, where=f"{name}:{int(k.where.split(':')[1]) - 1}") for k in kept]
+    again = script.run_pages(
+        [page], timeout=30, out=tmp_path / "u.md", kept=moved, only=re.compile(r"episodes 1e9")
+    )
+    assert [(r.where, r.commit) for r in again] == [(r.where, r.commit) for r in rows]
     table = [(r.where, r.verdict, r.commit) for r in script.read_table(tmp_path / "t.md")]
     assert table == [(r.where, r.verdict, r.commit) for r in rows]
