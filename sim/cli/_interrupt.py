@@ -36,6 +36,7 @@ __all__ = ["Stopped", "sigint_to_main_only", "sigterm_stops"]
 
 _parked: threading.Thread | None = None
 _TRACKER_FILTER = "ignore:resource_tracker:UserWarning"  # loky's tracker's leftover warnings
+WAKER_JOIN_S = 1.0  # seconds: at most this long for the wake-up thread to stop at the end
 
 
 def _park() -> None:
@@ -163,9 +164,13 @@ def _wake_main_on_sigint() -> Iterator[None]:
         yield
     finally:
         signal.set_wakeup_fd(-1)
-        signal.signal(signal.SIGUSR1, signal.SIG_DFL)
-        writer.close()  # the waker reads the end of the stream and stops
-        waker.join(timeout=1.0)
+        writer.close()  # the waker reads what is left, then the end of the stream, and stops
+        waker.join(timeout=WAKER_JOIN_S)
+        # Only then is SIGUSR1's default (which ends the process) put back: a waker scheduled
+        # late on a busy machine may still be about to send it for the signal that stopped the
+        # command. One that has not caught up by now keeps its handler, which does nothing.
+        if not waker.is_alive():
+            signal.signal(signal.SIGUSR1, signal.SIG_DFL)
         reader.close()
 
 

@@ -140,3 +140,29 @@ def test_a_detector_waiting_in_a_system_call_is_interrupted(tmp_path, shared_dat
     assert "Traceback" not in err, err
     assert err.strip().splitlines()[-1] == "reform-sim evaluate: interrupted"
     assert status == 130
+
+
+def test_a_waker_scheduled_late_does_not_end_the_process():
+    """The thread that wakes the main thread on a signal may run late on a busy machine, after
+    the command has already stopped: its SIGUSR1 must not then find SIGUSR1's default (which
+    ends the process without a word) in place."""
+    code = (
+        "import signal, sys, time\n"
+        "import sim.cli._interrupt as interrupt\n"
+        "wake = interrupt._wake\n"
+        "def late(reader, main):\n"
+        "    time.sleep(0.3)  # scheduled late\n"
+        "    wake(reader, main)\n"
+        "interrupt._wake = late\n"
+        "try:\n"
+        "    with interrupt.sigterm_stops(), interrupt.sigint_to_main_only():\n"
+        "        signal.raise_signal(signal.SIGTERM)\n"
+        "        time.sleep(5.0)\n"
+        "except interrupt.Stopped:\n"
+        "    time.sleep(0.5)\n"
+        "    print('stopped', signal.getsignal(signal.SIGUSR1) is signal.SIG_DFL)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=WAIT_S
+    )
+    assert (done.returncode, done.stdout, done.stderr) == (0, "stopped True\n", "")
