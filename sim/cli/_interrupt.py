@@ -36,7 +36,8 @@ __all__ = ["Stopped", "sigint_to_main_only", "sigterm_stops"]
 
 _parked: threading.Thread | None = None
 _TRACKER_FILTER = "ignore:resource_tracker:UserWarning"  # loky's tracker's leftover warnings
-WAKER_JOIN_S = 1.0  # seconds: at most this long for the wake-up thread to stop at the end
+WAKER_JOIN_S = 5.0  # seconds: at most this long for the wake-up thread to stop at the end (it
+# stops at once unless the machine is too busy to run it)
 
 
 def _park() -> None:
