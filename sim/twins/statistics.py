@@ -38,6 +38,7 @@ HALF_NORMAL_MEDIAN = 0.6744897501960817 * math.sqrt(2.0)  # |difference of two y
 CLUMP_LINK = 1.3  # median nearest-neighbour distances: people closer than this are one clump
 VOTE_AHEAD = (0.3, 0.6, 0.9)  # median nearest-neighbour distances: o-space votes this far ahead
 VOTE_LINK = 0.5  # median nearest-neighbour distances: votes closer than this are one clump
+SMALL_CLUMP_PEOPLE = 64  # people: clumps of frames up to this size are found by squaring the links
 SHAPE_SIZE = 16  # entries of `spacing_shape`
 DETECTOR_FRAMES = 150  # frames (evenly spread) the detectors of `detector_shape` run on
 DETECTOR_SHAPE_SIZE = 4  # entries of `detector_shape`
@@ -115,10 +116,25 @@ def nearest_neighbour_distances(frames: Sequence[Frame]) -> np.ndarray:
 
 def _clump_sizes(d: np.ndarray, link: float) -> np.ndarray:
     """(n,) the size of each person's clump: people linked, in a chain, by distances under
-    ``link`` (``d`` (n, n) pairwise distances, infinite on the diagonal)."""
+    ``link`` (``d`` (n, n) pairwise distances, infinite on the diagonal).
+
+    A frame of up to `SMALL_CLUMP_PEOPLE` people: who reaches whom, the links' matrix squared
+    until it stops growing (chains of 2, 4, 8 ... links; a fit measures tens of thousands of
+    such frames, where scipy's graph routine spends most of its time setting up); a larger
+    one: scipy's connected components."""
+    linked = d < link
+    n = len(linked)
+    if n <= SMALL_CLUMP_PEOPLE:
+        reach = linked.astype(np.float64)
+        np.fill_diagonal(reach, 1.0)
+        while True:
+            wider = (reach @ reach > 0.0).astype(np.float64)
+            if np.array_equal(wider, reach):
+                return reach.sum(axis=1).astype(np.int64)
+            reach = wider
     from scipy.sparse.csgraph import connected_components
 
-    _, label = connected_components(d < link, directed=False)
+    _, label = connected_components(linked, directed=False)
     return np.bincount(label)[label]
 
 

@@ -1,5 +1,6 @@
 """The twins' detector statistics (`sim.twins.statistics.detector_shape`): how fixed detectors
-group a recording and how much they agree, read without its labels."""
+group a recording and how much they agree, read without its labels; and the clumps the spacing
+statistics count."""
 
 from __future__ import annotations
 
@@ -7,7 +8,12 @@ import numpy as np
 import pytest
 
 from reform.frame import Frame
-from sim.twins.statistics import DETECTOR_SHAPE_SIZE, detector_shape
+from sim.twins.statistics import (
+    DETECTOR_SHAPE_SIZE,
+    SMALL_CLUMP_PEOPLE,
+    _clump_sizes,
+    detector_shape,
+)
 
 
 def _two_pairs(gap: float, *, groups=None, frames: int = 5) -> list[Frame]:
@@ -53,3 +59,26 @@ def test_frames_of_fewer_than_four_people_say_nothing():
                  yaw=np.array([0.0, np.pi]), time=0.0, sequence="s")]  # fmt: skip
     shape = detector_shape(two)
     assert shape.shape == (DETECTOR_SHAPE_SIZE,) and np.isnan(shape).all()
+
+
+def _distances(points: np.ndarray) -> np.ndarray:
+    d = np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    return d
+
+
+@pytest.mark.parametrize("people", [1, 2, 7, SMALL_CLUMP_PEOPLE, SMALL_CLUMP_PEOPLE + 1, 90])
+def test_clumps_are_scipys_connected_components(people):
+    """The squared links of a small frame and scipy's routine for a large one give the same
+    clumps: random crowds, a single chain (the longest path to follow), everyone linked and
+    no one."""
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(people)
+    chain = np.stack([np.arange(people) * 0.9, np.zeros(people)], axis=1)
+    frames = [rng.uniform(0.0, 6.0, size=(people, 2)) for _ in range(20)] + [chain]
+    for points in frames:
+        d = _distances(points)
+        for link in (0.01, 0.5, 1.0, 100.0):
+            _, label = connected_components(d < link, directed=False)
+            assert _clump_sizes(d, link).tolist() == np.bincount(label)[label].tolist()
