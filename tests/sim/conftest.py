@@ -1,4 +1,5 @@
-"""Fixtures of the simulator's tests: a machine of known size, and a guard that no work starts."""
+"""Fixtures of the simulator's tests: a machine of known size, a guard that no work starts, and
+a small place's venue twin."""
 
 from __future__ import annotations
 
@@ -27,3 +28,14 @@ def no_work(monkeypatch):
         raise AssertionError("a World was built: the request was not refused first")
 
     monkeypatch.setattr(sim.episode, "World", refuse)
+
+
+@pytest.fixture(scope="session")
+def place_twin():
+    """The label-free twin of ``tests.sim.test_twin._frames(scale=1.5)`` (six people in two
+    clusters), named ``"place"``, seed 0: fitted once for every test that reads it (a fit runs
+    its pilot parties: about 12 s). A `sim.twins.Twin` is frozen; tests change copies of it."""
+    from sim.twins import fit_twin
+    from tests.sim.test_twin import _frames
+
+    return fit_twin(_frames(scale=1.5), name="place")

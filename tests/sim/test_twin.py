@@ -49,22 +49,22 @@ def _frames(*, n_frames: int = 24, people: int = 6, scale: float = 1.0, seed: in
 
 
 @pytest.fixture(scope="module")
-def fitted():
-    """A twin of ``_frames(scale=1.5)`` and its file's bytes (fitted once for the module)."""
-    return fit_twin(_frames(scale=1.5), name="place")
+def fitted(place_twin):
+    """The twin of ``_frames(scale=1.5)`` (fitted once for the session)."""
+    return place_twin
 
 
-def test_a_twin_never_reads_the_groups(tmp_path):
-    frames = _frames()
+def test_a_twin_never_reads_the_groups(place_twin, tmp_path):
+    frames = _frames(scale=1.5)  # place_twin's recording, with its groups
     removed = [f.replace(groups=None) for f in frames]
     rng = np.random.default_rng(0)
     shuffled = []
     for f in frames:
         ids = rng.permutation(f.ids)
         shuffled.append(f.replace(groups=(tuple(ids[:2].tolist()), tuple(ids[2:5].tolist()))))
-    files = [
+    files = [write_twin(place_twin, tmp_path / "0.json")] + [
         write_twin(fit_twin(fs, name="place"), tmp_path / f"{k}.json")
-        for k, fs in enumerate((frames, removed, shuffled))
+        for k, fs in enumerate((removed, shuffled), start=1)
     ]
     assert len({f.read_bytes() for f in files}) == 1  # same frames, same seed: same bytes
     assert read_twin(files[0]).to_json() == json.loads(files[0].read_text())  # round trip

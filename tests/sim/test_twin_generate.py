@@ -10,16 +10,15 @@ import pytest
 import scenarios
 from reform.datasets import read_parquet
 from sim.generate import episode_seed
-from sim.twins import fit_twin, read_twin, write_twin
+from sim.twins import read_twin, write_twin
 from sim.twins.data import twin_options
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
 
 @pytest.fixture(scope="module")
-def twin_file(tmp_path_factory):
-    twin = fit_twin(_frames(scale=1.5), name="place")
-    return write_twin(twin, tmp_path_factory.mktemp("twin") / "twin.json")
+def twin_file(place_twin, tmp_path_factory):
+    return write_twin(place_twin, tmp_path_factory.mktemp("twin") / "twin.json")
 
 
 def test_generate_twin_writes_the_twins_place(twin_file, tmp_path, capsys):

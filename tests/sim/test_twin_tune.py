@@ -9,15 +9,14 @@ import pytest
 
 from reform.persistence import load_model
 from reform.settings import read_settings
-from sim.twins import fit_twin, write_twin
+from sim.twins import write_twin
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
 
 @pytest.fixture(scope="module")
-def twin_file(tmp_path_factory):
-    twin = fit_twin(_frames(scale=1.5), name="place")
-    twin = dataclasses.replace(twin, episodes=2)  # a small twin: two episodes of 30 s
+def twin_file(place_twin, tmp_path_factory):
+    twin = dataclasses.replace(place_twin, episodes=2)  # a small twin: two episodes of 30 s
     return write_twin(twin, tmp_path_factory.mktemp("twin") / "twin.json")
 
 
