@@ -112,6 +112,7 @@ class Row:
     passed: bool | None  # None: not run
     outcome: Outcome | None = None
     commit: str = ""  # the commit of the clone it ran on
+    ran: bool = dataclasses.field(default=False, compare=False)  # run by this run (not a table's)
 
     @property
     def page(self) -> str:
@@ -309,7 +310,9 @@ def run_pages(
                         command.text, cwd=clone, env=_environment(clone), timeout=timeout
                     )
                     said, passed = verdict(outcome, command.refusal)
-                    row = done[key] = Row(where, command.text, said, passed, outcome, commit)
+                    row = done[key] = Row(
+                        where, command.text, said, passed, outcome, commit, ran=True
+                    )
                 rows.append(row)
                 _print_row(row, len(rows), n_commands)
             table = merged(rows, kept or [], run=pages[: k + 1])
@@ -468,10 +471,7 @@ def main() -> None:
         parser.error(f"--pages: no page with commands matches {args.pages}")
     kept = read_table(args.out) if args.update else None
     rows = run_pages(pages, timeout=args.timeout, out=args.out, kept=kept, only=args.only)
-    earlier = {(r.command, r.commit, r.outcome) for r in kept or []}  # rows --only kept
-    run = [
-        r for r in rows if r.passed is not None and (r.command, r.commit, r.outcome) not in earlier
-    ]
+    run = [r for r in rows if r.ran]
     failed = [r for r in run if not r.passed]
     print(
         f"{len(run)} commands run, {len(run) - len(failed)} passed, {len(failed)} failed "

@@ -338,11 +338,11 @@ def detector_shape(frames: Sequence[Frame]) -> np.ndarray:
     from reform.detectors import make_detector, run_detector
     from reform.metrics import evaluate
 
-    crowded = [f.replace(groups=None) for f in frames if f.n_people >= 4]
+    crowded = [f for f in frames if f.n_people >= 4]
     if not crowded:
         return np.full(DETECTOR_SHAPE_SIZE, math.nan)
     step = max(1, len(crowded) // DETECTOR_FRAMES)
-    crowded = crowded[::step][:DETECTOR_FRAMES]
+    crowded = [f.replace(groups=None) for f in crowded[::step][:DETECTOR_FRAMES]]
     base = run_detector("gcff", make_detector("gcff"), crowded)
     people = sum(f.n_people for f in crowded)
     grouped = [len(g) for p in base for g in p if len(g) >= 2]

@@ -85,6 +85,7 @@ def test_only_runs_the_commands_it_matches_and_keeps_the_others_rows(script, tmp
     )
     ran = [r for r in rows if r.commit != "kept" and r.outcome is not None]
     assert [r.where for r in ran] == [f"{name}:{chosen[0].line}"]
+    assert [r for r in rows if r.ran] == ran  # what the summary counts as run: none kept
     assert ran[0].verdict == "refused as the page shows" and ran[0].outcome.exit == 2
     patterns = [r.where for r in rows if r.verdict.startswith("not run")]  # shown, never run
     assert [r for r in rows if r.commit == "kept"] == [
