@@ -63,6 +63,9 @@ __all__ = ["FEATURES_FILE", "FIELDS_PER_PERSON", "GROUPS_FILE", "load_dante", "l
 
 FEATURES_FILE = "features.txt"
 GROUPS_FILE = "group_names.txt"
+# DANTE's repository keeps each dataset's two files in ``datasets/<dataset>/DS_utils/``: a folder
+# of this name is named after the one holding it.
+DANTE_FILES_FOLDER = "DS_utils"
 
 # Tokens per person block of each layout, and what its fields are.
 FIELDS_PER_PERSON = {5: "ID x y body head", 4: "ID x y θ"}
@@ -264,11 +267,19 @@ def load_dante(
         metadata["file_units"] = units
     return Dataset(
         frames=tuple(frames),
-        name=folder.name if name is None else name,
+        name=_dataset_name(folder) if name is None else name,
         source=str(path),
         units="m",
         metadata=metadata,
     )
+
+
+def _dataset_name(folder: Path) -> str:
+    """The name of the dataset whose files are in ``folder``: the folder's own, or for DANTE's
+    ``DS_utils`` its parent's (``datasets/cocktail_party/DS_utils`` is ``cocktail_party``)."""
+    if folder.name == DANTE_FILES_FOLDER and folder.resolve().parent.name:
+        return folder.resolve().parent.name
+    return folder.name
 
 
 @file_errors_as_data_errors

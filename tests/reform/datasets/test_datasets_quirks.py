@@ -251,6 +251,16 @@ def test_dante_with_four_fields_per_person(tmp_path):
     assert dataset.metadata["report"]["fake_blocks_skipped"] == 1
 
 
+def test_dantes_own_layout_is_named_after_the_dataset_not_ds_utils(tmp_path):
+    # DANTE's repository: datasets/<dataset>/DS_utils/{features,group_names}.txt
+    lines = (["0.0 ID_001 1.0 1.0 0.0 ID_002 2.0 1.0 3.1"], ["0.0 < ID_001 ID_002 >"])
+    folder = _dante(tmp_path / "cocktail_party" / "DS_utils", *lines)
+    assert load_dante(folder).name == "cocktail_party"
+    assert load_dante(folder / "features.txt").name == "cocktail_party"
+    assert load_dataset(folder).name == "cocktail_party"
+    assert load_dante(_dante(tmp_path / "utils", *lines)).name == "utils"
+
+
 def _dante_in_cm(folder: Path) -> Path:
     """Two lines as DANTE's CoffeeBreak text files write them: centimetres, not metres."""
     return _dante(
