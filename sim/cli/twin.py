@@ -5,11 +5,13 @@ Its arguments are `sim.cli._twin`."""
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from sim.cli._common import check_output, load_data
 from sim.cli._grammar import ticking_bar
 from sim.twins import check_frames_for_twin, fit_twin, twin_sample, write_twin
+from sim.twins.description import Fitted
 
 TWIN_JSON = "twin.json"
 TWIN_PNG = "twin.png"
@@ -33,10 +35,27 @@ def _run(args: argparse.Namespace) -> int:
 
         with ticking_bar(args, f"plotting {TWIN_PNG}", 1, unit="plot"):
             written.append(plot_twin(twin, frames, twin_sample(twin), out / TWIN_PNG))
-    for fitted in twin.fitted:
-        if fitted.name.startswith("("):
-            continue
-        beside = "" if fitted.real is None else f"  (real {fitted.real}, twin {fitted.twin})"
-        print(f"{fitted.name:28} {fitted.value!s:>10}  {fitted.statistic}{beside}")
+    print(_fitted_table(twin.fitted))
     print(f"wrote {', '.join(str(p) for p in written)} ({twin.mode})")
     return 0
+
+
+def _fitted_table(rows: Sequence[Fitted]) -> str:
+    """One line per fitted value: the value, the statistic that fixed it and its real and twin
+    figures. Values searched together on one statistic (the crowd's shape: a list of figures)
+    name it by a letter, and it is written out once below them with its two lists."""
+    lines, shared = [], {}
+    for fitted in rows:
+        if fitted.name.startswith("("):
+            continue
+        value = f"{fitted.value:.6g}" if isinstance(fitted.value, float) else str(fitted.value)
+        if isinstance(fitted.real, list):
+            key = (fitted.statistic, tuple(fitted.real), tuple(fitted.twin or ()))
+            mark = shared.setdefault(key, f"[{chr(ord('a') + len(shared))}]")
+            lines.append(f"{fitted.name:28} {value:>10}  searched on statistic {mark}")
+            continue
+        beside = "" if fitted.real is None else f"  (real {fitted.real}, twin {fitted.twin})"
+        lines.append(f"{fitted.name:28} {value:>10}  {fitted.statistic}{beside}")
+    for (statistic, real, twin), mark in shared.items():
+        lines += [f"{mark} {statistic}:", f"    real {list(real)}", f"    twin {list(twin)}"]
+    return "\n".join(lines)

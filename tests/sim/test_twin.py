@@ -165,6 +165,9 @@ def test_the_twin_command_writes_the_twin_and_its_plots(tmp_path, capsys):
     assert twin.options["people"] == 6
     assert (tmp_path / "twin" / "twin.png").read_bytes()[:4] == b"\x89PNG"
     assert "annotation.scale" in out
+    # The crowd options searched together name their statistic, written out once below them.
+    assert "options.spacing" in out and "searched on statistic [a]" in out
+    assert out.count("spacing shape:") == 1 and out.count("    real [") == 1
 
 
 def test_the_twin_command_refuses_a_small_recording_in_one_line(tmp_path, capsys):
