@@ -95,7 +95,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="predict each detector's F1 at the place a venue twin (`reform-sim twin`) describes, "
         "on the twin's data, before any label exists (writes OUT/benchmark-twin.md and .json); "
         "repeatable: twins of one place fitted with different --seed, each detector's "
-        "prediction their mean, each twin's beside it",
+        "prediction their mean, each twin's beside it; with --data, the place's recording "
+        "(its groups never read), each prediction calibrated there by the detectors' "
+        "agreement with their consensus",
     )
     parser.add_argument(
         "--twin-data",

@@ -1,6 +1,8 @@
 """What ``reform-sim benchmark --twin`` does: each detector's F1 predicted at a place, on its
-venue twin, before any label exists (`sim.twins.predict`); with several twins of one place
-(fitted with different seeds), the mean of their predictions (`sim.twins.predict.mean_prediction`).
+venue twin, before any label exists (`sim.twins.predict`); with the place's recording
+(``--data``, its groups never read), calibrated there by how much the detectors agree with one
+another; with several twins of one place (fitted with different seeds), the mean of their
+predictions (`sim.twins.predict.mean_prediction`).
 """
 
 from __future__ import annotations
@@ -20,13 +22,15 @@ JSON = "benchmark-twin.json"
 
 def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
     """The --twin files and their twins, read and checked: one place, --twin-data with one
-    twin only, no --data."""
+    twin only, at most one --data (the place's recording)."""
     from sim.twins import read_twin
 
     paths = [str(path) for path in args.twin]
     twins = [read_twin(path) for path in paths]  # a nonsense twin is one line, before any work
-    if args.data:
-        raise CliError("--twin predicts for the twin's place; it takes no --data")
+    if args.data and len(args.data) > 1:
+        raise CliError(
+            f"--data with --twin: expected the place's one recording, found {len(args.data)}"
+        )
     if args.twin_data and len(paths) > 1:
         raise CliError(
             f"--twin-data: expected one --twin with it, found {len(paths)} (each twin's data "
@@ -41,10 +45,26 @@ def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
     return paths, twins
 
 
+def _place(args: argparse.Namespace) -> list[Any] | None:
+    """The place's recording (--data), its groups removed as it is read: its frames calibrate
+    the predictions (`sim.twins.predict`); None without --data."""
+    if not args.data:
+        return None
+    from reform.datasets import load_dataset, resolve
+
+    dataset = load_dataset(
+        resolve(args.data[0]),
+        units=args.units,
+        metres_per_pixel=args.metres_per_pixel,
+        time_unit=args.time_unit,
+    )
+    return [f.replace(groups=None, listed_groups=None) for f in dataset]
+
+
 def run_twin(args: argparse.Namespace) -> int:
     """``benchmark --twin``: --detector (catalogued names) and --model (REFORM files) narrow the
     candidates (default: every catalogued detector a twin can run, GCFF tuned on the twin and
-    REFORM trained on it); --data is refused (the twin stands for the data)."""
+    REFORM trained on it); --data, the place's recording, calibrates the predictions there."""
     from reform.detectors import detector_names
     from reform.persistence import load_model
     from sim.experiments.report_files import write_json, write_markdown
@@ -60,6 +80,7 @@ def run_twin(args: argparse.Namespace) -> int:
 
     paths, twins = _twins(args)
     check_output("--out", args.out, folder=True)
+    place = _place(args)
     candidates = catalogue_candidates()
     if args.detector:
         unknown = [d for d in args.detector if d not in detector_names()]
@@ -93,16 +114,21 @@ def run_twin(args: argparse.Namespace) -> int:
 
         # Redrawn while a detector works (gcff-tuned tunes itself first: seconds).
         with bar, ticking(bar):
-            runs.append(predict(frames, candidates, seed=twin.seed, progress=progress))
+            runs.append(
+                predict(frames, candidates, place=place, seed=twin.seed, progress=progress)
+            )
             bar.update(len(candidates) - bar.n)
 
     predictions = runs[0] if len(runs) == 1 else mean_prediction(runs)
     out = Path(args.out)
     kind = f"{twins[0].mode} twin" + ("s" if len(paths) > 1 else "")
-    place = f"the place of {twins[0].name} ({kind}, {', '.join(paths)})"
-    text = table(predictions, place=place, twins=len(paths))
+    where = f"the place of {twins[0].name} ({kind}, {', '.join(paths)})"
+    if args.data:
+        where += f", its recording {args.data[0]}"
+    text = table(predictions, place=where, twins=len(paths))
     write_markdown(out / MARKDOWN, text)
     record: dict[str, Any] = {"twin": paths[0] if len(paths) == 1 else paths}
+    record["place"] = args.data[0] if args.data else None
     record["predictions"] = [p.to_json() for p in predictions]
     if len(runs) > 1:
         record["each_twin"] = [[p.to_json() for p in run] for run in runs]

@@ -12,14 +12,16 @@ For every real dataset, `run_twins`:
    trained on SALSA's first half, or Babble's for SALSA), tuned on the twin, and the same search
    run on the first half's labels (the ceiling);
 4. **prediction**: every catalogued detector a twin can run (`sim.twins.predict`), its F1 on the
-   twin (predicted) against its F1 on the real second half; and the **real ceiling**, its F1 on
-   the first half against the second. Over all (detector, dataset) cells: Pearson r, Spearman's
-   rho, Kendall's tau, the mean absolute error (points) and the mean maximum rank violation
-   (SIMPLER's MMRV: per dataset, for each detector the largest real gap to a detector the
-   prediction orders the other way, averaged, then averaged over datasets), each with a 95 %
-   bootstrap interval (detectors resampled, the same in every dataset); and the **noise floor**
-   of the last two (`noise_floor`): what a predictor that knew each cell's expected real F1
-   would score against the second halves, from each real F1's own block-bootstrap spread;
+   twin calibrated by the detectors' agreement on the second half's frames (groups removed:
+   predicted) against its F1 on the real second half, and beside it the twin's F1 alone; and the
+   **real ceiling**, its F1 on the first half against the second. Over all (detector, dataset)
+   cells: Pearson r, Spearman's rho, Kendall's tau, the mean absolute error (points) and the
+   mean maximum rank violation (SIMPLER's MMRV: per dataset, for each detector the largest real
+   gap to a detector the prediction orders the other way, averaged, then averaged over
+   datasets), each with a 95 % bootstrap interval (detectors resampled, the same in every
+   dataset); and the **noise floor** of the last two (`noise_floor`): what a predictor that knew
+   each cell's expected real F1 would score against the second halves, from each real F1's own
+   block-bootstrap spread;
 5. **leave one out**: the twin recipe (`sim.twins.fit`) has no constant chosen on the real
    datasets' labels (each twin reads only its own frames), so its figures are already those of a
    recipe fixed without the dataset; beside them, one recipe constant that labels could fix, a
@@ -84,9 +86,12 @@ class TwinsResult:
         frames: dataset -> (annotated frames of the first half, of the second half).
         tuning: rows ``{"dataset", "detector", "how", "options", "f1"}`` (``how``: ``one
             setting``, ``twin``, ``labels``).
-        cells: rows ``{"dataset", "detector", "predicted", "low", "high", "real", "real_sd",
-            "first_half"}`` (``real_sd``: the real F1's sampling spread, `_real_score`).
-        agreement: ``{"twin": {...}, "ceiling": {...}}``: each measure's value and interval.
+        cells: rows ``{"dataset", "detector", "predicted", "low", "high", "twin_alone",
+            "real", "real_sd", "first_half"}`` (``twin_alone``: the F1 on the twin before the
+            calibration at the place; ``real_sd``: the real F1's sampling spread,
+            `_real_score`).
+        agreement: ``{"twin": {...}, "twin_alone": {...}, "ceiling": {...}, ...}``: each
+            measure's value and interval.
         noise_floor: the MAE and MMRV (points) a predictor that knew every cell's expected
             real F1 would score against the real scores, from their own sampling spread
             (`noise_floor`): ``{"mae": {...}, "mmrv": {...}}``, each value and interval.
@@ -429,8 +434,15 @@ def run_twins(
         if detectors is not None:
             candidates = [c for c in candidates if c.name in detectors or c.label in detectors]
         say(f"{name}: predicting {len(candidates)} detectors on the twin")
+        # The second half's frames calibrate the predictions by the detectors' agreement there:
+        # `predict` removes their groups before it runs anything on them.
+        unlabelled = [f.replace(groups=None, listed_groups=None) for f in second]
         for p in predict(
-            data, candidates, seed=seed, progress=lambda label, name=name: say(f"{name}: {label}")
+            data,
+            candidates,
+            place=unlabelled,
+            seed=seed,
+            progress=lambda label, name=name: say(f"{name}: {label}"),
         ):
             if p.f1 is None:
                 continue
@@ -444,6 +456,7 @@ def run_twins(
                     "predicted": p.f1,
                     "low": p.low,
                     "high": p.high,
+                    "twin_alone": p.f1 if p.twin_f1 is None else p.twin_f1,
                     "real": score,
                     "real_sd": score_sd,
                     "first_half": _f1(name_of, p.detector, first),
@@ -453,6 +466,7 @@ def run_twins(
         cell["loo_calibrated"] = _loo_calibrated(cells, cell)
     result_agreement = {
         "twin": agreement(cells, "predicted", seed=seed),
+        "twin_alone": agreement(cells, "twin_alone", seed=seed),
         "ceiling": agreement(cells, "first_half", seed=seed),
         "twin_loo_calibrated": agreement(cells, "loo_calibrated", seed=seed),
         "twin_without_majority": agreement(

@@ -2,33 +2,61 @@
 
 The twin's generated episodes are split in two by episode: detectors that learn (REFORM trained
 on the twin, GCFF tuned on it) learn on the first part, and every detector is scored on the
-second (at most `PREDICT_FRAMES` frames spread over it). The predicted F1 (T = 2/3) is that
-score; its interval is the 95 % bootstrap of `reform.bootstrap` over those episodes (episodes
-resampled, then frames within them).
+second (at most `PREDICT_FRAMES` frames spread over it). Without the place's recording, the
+predicted F1 (T = 2/3) is that score; its interval is the 95 % bootstrap of `reform.bootstrap`
+over those episodes (episodes resampled, then frames within them).
+
+With the place's recording (its frames, groups removed: ``place``), the twin also says how a
+detector's F1 follows from how well it agrees with the others, and the recording says how well
+it agrees there. Every detector runs on the twin's scored frames and on the recording (at most
+`PREDICT_FRAMES` frames spread over it); on each, the **consensus** is the partition of the
+pairs that more than half of the detectors put together (`consensus`; the majority baseline,
+which puts no one together, has no vote), and each detector's **agreement** is its F1 against
+that consensus. A least-squares line across the detectors, from agreement to F1 on the twin
+(where the truth is known), is applied to each detector's agreement on the recording: the
+predicted F1 (`calibrated`). Where the twin is easier than the place, the detectors agree less
+on the recording than on the twin, and the line carries that into the prediction; a detector
+that parts from the others on the recording (one setting that fits the place badly) is
+predicted lower there. The interval is the twin's, moved with the prediction. Fewer than
+`MIN_CONSENSUS` voting detectors, or agreements on the twin that do not differ, leave the
+twin's own score.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
+import numpy as np
+
 from reform.frame import Frame
 from reform.seeding import derive_rng
 
+Partition = Sequence[Sequence[int]]  # one frame's groups, singletons included
+
 __all__ = [
+    "MIN_CONSENSUS",
+    "NO_VOTE",
     "PREDICT_FRAMES",
     "Candidate",
     "Prediction",
+    "agreements",
+    "calibrated",
     "catalogue_candidates",
+    "consensus",
     "mean_prediction",
     "predict",
     "split_episodes",
     "table",
 ]
 
-PREDICT_FRAMES = 200  # twin frames each detector is scored on at most
+PREDICT_FRAMES = 200  # twin frames each detector is scored on at most (and place frames)
+MIN_CONSENSUS = 3  # voting detectors a consensus needs
+NO_VOTE = ("majority",)  # catalogued detectors that put no one together: no vote in a consensus
 RESAMPLES = 1000  # bootstrap resamples of the interval
 THRESHOLD = Fraction(2, 3)
 BOOTSTRAP = 21  # seed role of the bootstrap draws
@@ -69,16 +97,22 @@ class Prediction:
     frames: int
     note: str = ""
     detector: Any = field(default=None, compare=False, repr=False)  # as run (fitted on the twin)
+    twin_f1: float | None = None  # its F1 on the twin (``f1`` too when no place was given)
+    agreement: tuple[float, float] | None = None  # with the consensus: on the twin, at the place
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        out = {
             "detector": self.label,
             "f1": self.f1,
             "low": self.low,
             "high": self.high,
             "frames": self.frames,
             "note": self.note,
+            "twin_f1": self.f1 if self.twin_f1 is None else self.twin_f1,
         }
+        if self.agreement is not None:
+            out["agreement_twin"], out["agreement_place"] = self.agreement
+        return out
 
 
 def split_episodes(frames: Sequence[Frame]) -> tuple[list[Frame], list[Frame]]:
@@ -128,14 +162,85 @@ def _detector(candidate: Candidate, learn: Sequence[Frame]) -> Any:
     return detector
 
 
+def consensus(
+    frames: Sequence[Frame], partitions: Sequence[Sequence[Partition]]
+) -> list[Partition]:
+    """Each frame's consensus of several detectors' ``partitions`` (one sequence per detector,
+    a partition per frame): the people linked, in a chain, by pairs that more than half of the
+    detectors put in one group; everyone else alone."""
+    from scipy.sparse.csgraph import connected_components
+
+    out = []
+    voters = len(partitions)
+    for k, frame in enumerate(frames):
+        ids = frame.ids.tolist()
+        index = {person: j for j, person in enumerate(ids)}
+        votes = np.zeros((len(ids), len(ids)), dtype=np.int64)
+        for partition in partitions:
+            for group in partition[k]:
+                rows = [index[m] for m in group]
+                if len(rows) > 1:
+                    votes[np.ix_(rows, rows)] += 1
+        linked = 2 * votes > voters
+        np.fill_diagonal(linked, True)
+        _, component = connected_components(linked, directed=False)
+        groups: dict[int, list[int]] = {}
+        for j, c in enumerate(component.tolist()):
+            groups.setdefault(c, []).append(ids[j])
+        out.append(tuple(tuple(g) for g in groups.values()))
+    return out
+
+
+def agreements(
+    frames: Sequence[Frame], partitions: Mapping[str, Sequence[Partition]]
+) -> dict[str, float] | None:
+    """Each detector's F1 at T = 2/3 against the `consensus` of the detectors that vote (not
+    `NO_VOTE`), on ``frames`` (their groups unread); None with fewer than `MIN_CONSENSUS`
+    voters."""
+    from reform.metrics import evaluate
+
+    voters = [p for label, p in partitions.items() if label not in NO_VOTE]
+    if len(voters) < MIN_CONSENSUS or not frames:
+        return None
+    agreed = [
+        f.replace(groups=g) for f, g in zip(frames, consensus(frames, voters), strict=True)
+    ]
+    return {
+        label: float(evaluate(agreed, p, thresholds=(THRESHOLD,)).at(THRESHOLD).f1)
+        for label, p in partitions.items()
+    }
+
+
+def calibrated(
+    twin_f1: Mapping[str, float],
+    on_twin: Mapping[str, float],
+    at_place: Mapping[str, float],
+) -> dict[str, float] | None:
+    """Each detector's F1 at the place: the least-squares line from agreement to F1 across the
+    detectors on the twin (``on_twin``, ``twin_f1``), applied to its agreement at the place
+    (``at_place``), clipped to [0, 1]; None when the twin's agreements do not differ."""
+    labels = list(twin_f1)
+    x = np.array([on_twin[label] for label in labels], dtype=float)
+    y = np.array([twin_f1[label] for label in labels], dtype=float)
+    if x.size < 2 or np.ptp(x) < 1e-9:
+        return None
+    slope, intercept = np.polyfit(x, y, 1)
+    return {
+        label: float(np.clip(intercept + slope * at_place[label], 0.0, 1.0)) for label in labels
+    }
+
+
 def predict(
     frames: Sequence[Frame],
     candidates: Sequence[Candidate],
     *,
+    place: Sequence[Frame] | None = None,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
 ) -> list[Prediction]:
-    """Each candidate's predicted F1 on the twin's ``frames`` (see the module docstring)."""
+    """Each candidate's predicted F1 on the twin's ``frames``, calibrated by the agreement of
+    the detectors on the ``place``'s frames when they are given (their groups are removed
+    first, never read); see the module docstring."""
     from reform.bootstrap import bootstrap_weights, score_intervals
     from reform.detectors import DetectorError, run_detector
     from reform.metrics import evaluate
@@ -143,20 +248,29 @@ def predict(
 
     learn, scored = split_episodes(frames)
     scored = tuning_frames(scored, PREDICT_FRAMES)
+    if place is not None:
+        place = [f.replace(groups=None, listed_groups=None) for f in place]
+        step = max(1, math.ceil(len(place) / PREDICT_FRAMES))
+        place = place[::step]
     weights = bootstrap_weights(
         [f.sequence for f in scored], rng=derive_rng(seed, BOOTSTRAP), resamples=RESAMPLES
     )
     out = []
+    on_twin: dict[str, Sequence[Partition]] = {}
+    on_place: dict[str, Sequence[Partition]] = {}
     for candidate in candidates:
         if progress is not None:
             progress(candidate.label)
         try:
             detector = _detector(candidate, learn)
             predictions = run_detector(candidate.name, detector, scored)
+            if place is not None:
+                on_place[candidate.label] = run_detector(candidate.name, detector, place)
         except (DetectorError, ValueError) as exc:
             note = " ".join(str(exc).split())[:160]
             out.append(Prediction(candidate.label, None, None, None, len(scored), note))
             continue
+        on_twin[candidate.label] = predictions
         evaluation = evaluate(scored, predictions, thresholds=(THRESHOLD,))
         interval = score_intervals(evaluation, THRESHOLD, weights=weights).f1
         out.append(
@@ -167,6 +281,45 @@ def predict(
                 float(interval.high),
                 len(scored),
                 detector=detector,
+            )
+        )
+    if place is None:
+        return out
+    return _calibrate(out, on_twin, on_place, scored, place)
+
+
+def _calibrate(
+    predictions: list[Prediction],
+    on_twin: Mapping[str, Sequence[Partition]],
+    on_place: Mapping[str, Sequence[Partition]],
+    scored: Sequence[Frame],
+    place: Sequence[Frame],
+) -> list[Prediction]:
+    """``predictions`` (the twin's scores) through `calibrated`, or as they are (their note
+    says why) when no line can be drawn."""
+    twin_agrees = agreements(scored, on_twin)
+    place_agrees = agreements(place, on_place)
+    ran = {p.label: p.f1 for p in predictions if p.f1 is not None}
+    line = None
+    if twin_agrees is not None and place_agrees is not None:
+        line = calibrated(ran, twin_agrees, place_agrees)
+    if line is None:
+        why = "the twin's score: too few detectors agree or differ to calibrate it at the place"
+        return [p if p.f1 is None else dataclasses.replace(p, note=why) for p in predictions]
+    out = []
+    for p in predictions:
+        if p.f1 is None:
+            out.append(p)
+            continue
+        shift = line[p.label] - p.f1
+        out.append(
+            dataclasses.replace(
+                p,
+                f1=line[p.label],
+                low=float(np.clip(p.low + shift, 0.0, 1.0)),
+                high=float(np.clip(p.high + shift, 0.0, 1.0)),
+                twin_f1=p.f1,
+                agreement=(twin_agrees[p.label], place_agrees[p.label]),
             )
         )
     return out
@@ -186,6 +339,8 @@ def mean_prediction(runs: Sequence[Sequence[Prediction]]) -> list[Prediction]:
             out.append(Prediction(first.label, None, None, None, failed.frames, failed.note))
             continue
         each = ", ".join(f"{100 * p.f1:.1f}" for p in row)
+        alone = [p.f1 if p.twin_f1 is None else p.twin_f1 for p in row]
+        agreed = [p.agreement for p in row if p.agreement is not None]
         out.append(
             Prediction(
                 first.label,
@@ -194,6 +349,12 @@ def mean_prediction(runs: Sequence[Sequence[Prediction]]) -> list[Prediction]:
                 max(p.high for p in row),
                 sum(p.frames for p in row),
                 f"each twin: {each}",
+                twin_f1=sum(alone) / len(alone),
+                agreement=(
+                    tuple(float(v) for v in np.mean(agreed, axis=0))
+                    if len(agreed) == len(row)
+                    else None
+                ),
             )
         )
     return out
@@ -215,6 +376,28 @@ def table(predictions: Sequence[Prediction], *, place: str, twins: int = 1) -> s
             "intervals; each twin's F1 in the note):"
         )
     span = "95 % interval" if twins == 1 else "lowest-highest of the intervals"
+    if any(p.agreement is not None for p in rows):
+        head = head.removesuffix(":") + (
+            ", calibrated at the place by each detector's agreement with the detectors' "
+            "consensus there, through the line from agreement to F1 on the twin; its F1 on the "
+            "twin alone and its agreement on the twin and at the place beside it:"
+        )
+        lines = [
+            head,
+            "",
+            f"| detector | predicted F1 | {span} | on the twin | agreement: twin | place | note |",
+            "|:--|--:|--:|--:|--:|--:|:--|",
+        ]
+        for p in rows:
+            if p.f1 is None or p.agreement is None:
+                lines.append(f"| {p.label} | - | - | - | - | - | {p.note} |")
+                continue
+            lines.append(
+                f"| {p.label} | {100 * p.f1:.1f} | {100 * p.low:.1f}-{100 * p.high:.1f} | "
+                f"{100 * p.twin_f1:.1f} | {100 * p.agreement[0]:.1f} | "
+                f"{100 * p.agreement[1]:.1f} | {p.note} |"
+            )
+        return "\n".join(lines) + "\n"
     lines = [head, "", f"| detector | predicted F1 | {span} | note |", "|:--|--:|--:|:--|"]
     for p in rows:
         if p.f1 is None:

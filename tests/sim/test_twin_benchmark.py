@@ -5,8 +5,11 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 
+from reform import Dataset
+from reform.datasets import write_parquet
 from sim.twins import fit_twin, read_twin, write_twin
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
@@ -45,7 +48,8 @@ def test_benchmark_twin_is_deterministic(twin_file, tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--data", "salsa"], "--twin predicts for the twin's place; it takes no --data"),
+        (["--data", "a", "--data", "b"],
+         "--data with --twin: expected the place's one recording, found 2"),  # fmt: skip
         (["--detector", "nobody"], "--detector nobody: expected a catalogued detector"),
     ],
     ids=["data", "unknown-detector"],
@@ -53,6 +57,46 @@ def test_benchmark_twin_is_deterministic(twin_file, tmp_path, capsys):
 def test_benchmark_twin_refuses_in_one_line(twin_file, tmp_path, capsys, extra, message):
     line = cli_error(["benchmark", "--twin", twin_file, "--out", tmp_path / "b", *extra], capsys)
     assert message in line
+
+
+def test_the_places_recording_calibrates_the_predictions_without_its_groups(
+    twin_file, tmp_path, capsys
+):
+    frames = _frames(people=9)
+    rng = np.random.default_rng(0)
+    shuffled = []
+    for f in frames:  # the same frames, each with groups drawn at random
+        ids = rng.permutation(f.ids.tolist()).tolist()
+        shuffled.append(f.replace(groups=(tuple(ids[:4]), tuple(ids[4:]))))
+    runs = {}
+    for name, recording in (
+        ("labelled", frames),
+        ("unlabelled", [f.replace(groups=None) for f in frames]),
+        ("shuffled", shuffled),
+    ):
+        path = write_parquet(Dataset(tuple(recording), name="place"), tmp_path / f"{name}.parquet")
+        argv = ["benchmark", "--twin", twin_file, "--data", path, "--detector", "gcff",
+                "--detector", "proximity", "--detector", "hvff", "--detector", "majority",
+                "--out", tmp_path / name, "-q"]  # fmt: skip
+        status, out, err = run_cli(argv, capsys)
+        assert status == 0, err
+        runs[name] = json.loads((tmp_path / name / "benchmark-twin.json").read_text())
+    predictions = runs["labelled"]["predictions"]
+    for name in ("unlabelled", "shuffled"):  # the recording's groups are never read
+        assert runs[name]["predictions"] == predictions
+    argv = ["benchmark", "--twin", twin_file, "--detector", "gcff", "--detector", "proximity",
+            "--detector", "hvff", "--detector", "majority", "--out", tmp_path / "twin",
+            "-q"]  # fmt: skip
+    assert run_cli(argv, capsys)[0] == 0
+    twin_only = json.loads((tmp_path / "twin" / "benchmark-twin.json").read_text())
+    assert twin_only["place"] is None
+    # the twin's own scores are those it predicts without the recording
+    assert [p["twin_f1"] for p in predictions] == [p["f1"] for p in twin_only["predictions"]]
+    for row in predictions:
+        assert 0.0 <= row["low"] <= row["f1"] <= row["high"] <= 1.0
+        assert 0.0 <= row["agreement_twin"] <= 1.0 and 0.0 <= row["agreement_place"] <= 1.0
+    assert runs["labelled"]["place"].endswith("labelled.parquet")
+    assert "agreement: twin | place" in out and "its recording" in out
 
 
 @pytest.fixture(scope="module")
