@@ -170,7 +170,11 @@ def to_markdown(result: TwinsResult, *, command: str, figure: str | None = None)
             f"and a mean maximum rank violation of {ranks['value']:.1f} points ({ranks['low']:.1f} "
             f"to {ranks['high']:.1f}) against these second halves (each real F1 drawn about "
             "itself with its spread: the standard deviation of a block bootstrap of its second "
-            "half, 95 % ranges over the draws).",
+            "half, 95 % ranges over the draws). It is a floor for a prediction made without the "
+            "scored frames, as the twin's F1 alone is. The calibrated prediction reads the "
+            "second half's frames (never their labels), as a researcher runs the detectors on "
+            "the recording they ask about, so it can follow that half's own difficulty and come "
+            "below it.",
             "",
         ]
     if figure:
