@@ -92,7 +92,7 @@ def run_twin(args: argparse.Namespace) -> int:
         wanted = set(args.detector)
         candidates = [c for c in candidates if c.name in wanted]
     models = [
-        Candidate(f"reform ({Path(m).stem})", "reform", detector=load_model(m))
+        Candidate(f"reform ({Path(m).stem})", "reform", detector=load_model(m), votes=False)
         for m in args.model or ()
     ]
     candidates += models

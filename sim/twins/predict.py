@@ -10,16 +10,16 @@ With the place's recording (its frames, groups removed: ``place``), the twin als
 detector's F1 follows from how well it agrees with the others, and the recording says how well
 it agrees there. Every detector runs on the twin's scored frames and on the recording (at most
 `PREDICT_FRAMES` frames spread over it); on each, the **consensus** is the partition of the
-pairs that more than half of the detectors put together (`consensus`; the majority baseline,
-which puts no one together, has no vote), and each detector's **agreement** is its F1 against
-that consensus. A least-squares line across the detectors, from agreement to F1 on the twin
-(where the truth is known), is applied to each detector's agreement on the recording: the
-predicted F1 (`calibrated`). Where the twin is easier than the place, the detectors agree less
-on the recording than on the twin, and the line carries that into the prediction; a detector
-that parts from the others on the recording (one setting that fits the place badly) is
-predicted lower there. The interval is the twin's, moved with the prediction. Fewer than
-`MIN_CONSENSUS` voting detectors, or agreements on the twin that do not differ, leave the
-twin's own score.
+pairs that more than half of the detectors put together (`consensus`: the catalogue's detectors
+vote, the variants added beside them do not, nor does the majority baseline, which puts no one
+together), and each detector's **agreement** is its F1 against that consensus. A least-squares
+line across the catalogue's detectors, from agreement to F1 on the twin (where the truth is
+known), is applied to each detector's agreement on the recording: the predicted F1
+(`calibrated`). Where the twin is easier than the place, the detectors agree less on the
+recording than on the twin, and the line carries that into the prediction; a detector that parts
+from the others on the recording (one setting that fits the place badly) is predicted lower
+there. The interval is the twin's, moved with the prediction. Fewer than `MIN_CONSENSUS` voting
+detectors, or agreements on the twin that do not differ, leave the twin's own score.
 """
 
 from __future__ import annotations
@@ -72,6 +72,11 @@ class Candidate:
         options: its keyword arguments.
         learns: ``"twin"`` when it is fitted on the twin's training episodes first.
         detector: a ready detector (a model) instead of one made from name and options.
+        votes: whether it votes in the detectors' consensus at a place (`consensus`) and
+            fixes the line from agreement to F1: the catalogue's detectors at their defaults
+            do; a variant added beside them (tuned or trained on the twin, a model file) is
+            predicted through their consensus and line without moving them, so that adding
+            one changes no other detector's prediction.
     """
 
     label: str
@@ -79,6 +84,7 @@ class Candidate:
     options: Mapping[str, Any] = field(default_factory=dict)
     learns: str = ""
     detector: Any = field(default=None, compare=False)
+    votes: bool = True
 
 
 @dataclass(frozen=True)
@@ -141,9 +147,9 @@ def catalogue_candidates(
         if any(o.type == "path" and o.default is None for o in info.options):
             continue  # needs a model file
         out.append(Candidate(name, name, learns="twin" if info.needs == "training" else ""))
-    out.append(Candidate("reform (twin-trained)", "reform", learns="twin"))
+    out.append(Candidate("reform (twin-trained)", "reform", learns="twin", votes=False))
     for label, options in (tuned or {}).items():
-        out.append(Candidate(label, "gcff", dict(options)))
+        out.append(Candidate(label, "gcff", dict(options), votes=False))
     return out
 
 
@@ -192,14 +198,18 @@ def consensus(
 
 
 def agreements(
-    frames: Sequence[Frame], partitions: Mapping[str, Sequence[Partition]]
+    frames: Sequence[Frame],
+    partitions: Mapping[str, Sequence[Partition]],
+    *,
+    voters: Sequence[str] | None = None,
 ) -> dict[str, float] | None:
-    """Each detector's F1 at T = 2/3 against the `consensus` of the detectors that vote (not
-    `NO_VOTE`), on ``frames`` (their groups unread); None with fewer than `MIN_CONSENSUS`
-    voters."""
+    """Each detector's F1 at T = 2/3 against the `consensus` of the detectors that vote
+    (``voters``, default all, never `NO_VOTE`), on ``frames`` (their groups unread); None with
+    fewer than `MIN_CONSENSUS` voters."""
     from reform.metrics import evaluate
 
-    voters = [p for label, p in partitions.items() if label not in NO_VOTE]
+    voting = set(partitions if voters is None else voters) - set(NO_VOTE)
+    voters = [p for label, p in partitions.items() if label in voting]
     if len(voters) < MIN_CONSENSUS or not frames:
         return None
     agreed = [
@@ -215,18 +225,21 @@ def calibrated(
     twin_f1: Mapping[str, float],
     on_twin: Mapping[str, float],
     at_place: Mapping[str, float],
+    *,
+    fitted_on: Sequence[str] | None = None,
 ) -> dict[str, float] | None:
     """Each detector's F1 at the place: the least-squares line from agreement to F1 across the
-    detectors on the twin (``on_twin``, ``twin_f1``), applied to its agreement at the place
-    (``at_place``), clipped to [0, 1]; None when the twin's agreements do not differ."""
-    labels = list(twin_f1)
+    detectors ``fitted_on`` (default all) on the twin (``on_twin``, ``twin_f1``), applied to
+    every detector's agreement at the place (``at_place``), clipped to [0, 1]; None when the
+    twin's agreements of those detectors do not differ."""
+    labels = [label for label in twin_f1 if fitted_on is None or label in fitted_on]
     x = np.array([on_twin[label] for label in labels], dtype=float)
     y = np.array([twin_f1[label] for label in labels], dtype=float)
     if x.size < 2 or np.ptp(x) < 1e-9:
         return None
     slope, intercept = np.polyfit(x, y, 1)
     return {
-        label: float(np.clip(intercept + slope * at_place[label], 0.0, 1.0)) for label in labels
+        label: float(np.clip(intercept + slope * at_place[label], 0.0, 1.0)) for label in twin_f1
     }
 
 
@@ -285,7 +298,8 @@ def predict(
         )
     if place is None:
         return out
-    return _calibrate(out, on_twin, on_place, scored, place)
+    catalogue = [c.label for c in candidates if c.votes]
+    return _calibrate(out, on_twin, on_place, scored, place, catalogue)
 
 
 def _calibrate(
@@ -294,15 +308,17 @@ def _calibrate(
     on_place: Mapping[str, Sequence[Partition]],
     scored: Sequence[Frame],
     place: Sequence[Frame],
+    catalogue: Sequence[str],
 ) -> list[Prediction]:
     """``predictions`` (the twin's scores) through `calibrated`, or as they are (their note
-    says why) when no line can be drawn."""
-    twin_agrees = agreements(scored, on_twin)
-    place_agrees = agreements(place, on_place)
+    says why) when no line can be drawn: the consensus and the line are the ``catalogue``
+    detectors' (`Candidate.votes`)."""
+    twin_agrees = agreements(scored, on_twin, voters=catalogue)
+    place_agrees = agreements(place, on_place, voters=catalogue)
     ran = {p.label: p.f1 for p in predictions if p.f1 is not None}
     line = None
     if twin_agrees is not None and place_agrees is not None:
-        line = calibrated(ran, twin_agrees, place_agrees)
+        line = calibrated(ran, twin_agrees, place_agrees, fitted_on=catalogue)
     if line is None:
         why = "the twin's score: too few detectors agree or differ to calibrate it at the place"
         return [p if p.f1 is None else dataclasses.replace(p, note=why) for p in predictions]

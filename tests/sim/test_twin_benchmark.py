@@ -10,7 +10,8 @@ import pytest
 
 from reform import Dataset
 from reform.datasets import write_parquet
-from sim.twins import fit_twin, read_twin, write_twin
+from sim.twins import fit_twin, read_twin, twin_data, write_twin
+from sim.twins.predict import Candidate, predict
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
@@ -97,6 +98,23 @@ def test_the_places_recording_calibrates_the_predictions_without_its_groups(
         assert 0.0 <= row["agreement_twin"] <= 1.0 and 0.0 <= row["agreement_place"] <= 1.0
     assert runs["labelled"]["place"].endswith("labelled.parquet")
     assert "agreement: twin | place" in out and "its recording" in out
+
+
+def test_a_variant_added_beside_the_catalogue_moves_no_other_prediction(twin_file):
+    twin = read_twin(twin_file)
+    data = list(twin_data(twin, twin_file.parent / "twin-data"))
+    place = [f.replace(groups=None) for f in _frames(people=9)]
+    catalogue = [Candidate(n, n) for n in ("gcff", "proximity", "hvff", "majority")]
+    variant = Candidate("gcff (0.3 m)", "gcff", {"stride": 0.3}, votes=False)
+    alone = predict(data, catalogue, place=place)
+    beside = predict(data, [*catalogue, variant], place=place)
+    assert [(p.label, p.f1, p.agreement) for p in beside[:-1]] == [
+        (p.label, p.f1, p.agreement) for p in alone
+    ]
+    assert beside[-1].label == "gcff (0.3 m)" and beside[-1].agreement is not None
+    # a voter added does move the consensus
+    voting = predict(data, [*catalogue, dataclasses.replace(variant, votes=True)], place=place)
+    assert [p.agreement for p in voting[:-1]] != [p.agreement for p in alone]
 
 
 @pytest.fixture(scope="module")

@@ -62,3 +62,11 @@ def test_the_line_from_agreement_to_f1_on_the_twin_is_applied_at_the_place():
         "b": 0.0,
     }
     assert calibrated(twin_f1, dict.fromkeys(on_twin, 0.6), at_place) is None
+
+
+def test_the_line_is_fitted_on_the_detectors_named_and_applied_to_every_one():
+    on_twin = {"a": 0.9, "b": 0.5, "variant": 0.7}
+    twin_f1 = {"a": 0.9, "b": 0.5, "variant": 0.1}  # the variant is off the catalogue's line
+    at_place = {"a": 0.6, "b": 0.4, "variant": 0.8}
+    out = calibrated(twin_f1, on_twin, at_place, fitted_on=["a", "b"])
+    assert out == pytest.approx({"a": 0.6, "b": 0.4, "variant": 0.8})
