@@ -51,13 +51,15 @@ def test_benchmark_twin_is_deterministic(twin_file, tmp_path, capsys):
     [
         (["--data", "a", "--data", "b"],
          "--data with --twin: expected the place's one recording, found 2"),  # fmt: skip
+        (["--data", "nowhere"], "nowhere: no such file or folder, nor a dataset name"),
         (["--detector", "nobody"], "--detector nobody: expected a catalogued detector"),
     ],
-    ids=["data", "unknown-detector"],
+    ids=["two-recordings", "no-recording", "unknown-detector"],
 )
 def test_benchmark_twin_refuses_in_one_line(twin_file, tmp_path, capsys, extra, message):
     line = cli_error(["benchmark", "--twin", twin_file, "--out", tmp_path / "b", *extra], capsys)
     assert message in line
+    assert not (tmp_path / "b").exists()
 
 
 def test_the_places_recording_calibrates_the_predictions_without_its_groups(
