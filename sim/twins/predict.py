@@ -13,9 +13,12 @@ it agrees there. Every detector runs on the twin's scored frames and on the reco
 pairs that more than half of the detectors put together (`consensus`: the catalogue's detectors
 vote, the variants added beside them do not, nor does the majority baseline, which puts no one
 together), and each detector's **agreement** is its F1 against that consensus. A least-squares
-line across the catalogue's detectors, from agreement to F1 on the twin (where the truth is
-known), is applied to each detector's agreement on the recording: the predicted F1
-(`calibrated`). Where the twin is easier than the place, the detectors agree less on the
+line across the catalogue's detectors that group people, from agreement to F1 on the twin (where
+the truth is known), is applied to each detector's agreement on the recording: the predicted F1
+(`calibrated`). A detector that puts no one together (`NO_VOTE`) scores only on frames that hold
+no group: its prediction is its agreement on the recording (the share of such frames by the
+consensus), not the line's, which is drawn through detectors that group people and says nothing
+that far from them. Where the twin is easier than the place, the detectors agree less on the
 recording than on the twin, and the line carries that into the prediction; a detector that parts
 from the others on the recording (one setting that fits the place badly) is predicted lower
 there. The interval is the twin's, moved with the prediction. Fewer than `MIN_CONSENSUS` voting
@@ -318,7 +321,12 @@ def _calibrate(
     ran = {p.label: p.f1 for p in predictions if p.f1 is not None}
     line = None
     if twin_agrees is not None and place_agrees is not None:
-        line = calibrated(ran, twin_agrees, place_agrees, fitted_on=catalogue)
+        grouping = [label for label in catalogue if label not in NO_VOTE]
+        line = calibrated(ran, twin_agrees, place_agrees, fitted_on=grouping)
+    if line is not None:
+        # A detector that puts no one together scores on the frames that hold no group, and
+        # the consensus is the place's label-free word on which those are: its agreement there.
+        line.update((label, place_agrees[label]) for label in NO_VOTE if label in line)
     if line is None:
         why = "the twin's score: too few detectors agree or differ to calibrate it at the place"
         return [p if p.f1 is None else dataclasses.replace(p, note=why) for p in predictions]

@@ -98,6 +98,10 @@ def test_the_places_recording_calibrates_the_predictions_without_its_groups(
     for row in predictions:
         assert 0.0 <= row["low"] <= row["f1"] <= row["high"] <= 1.0
         assert 0.0 <= row["agreement_twin"] <= 1.0 and 0.0 <= row["agreement_place"] <= 1.0
+    # "everyone alone" scores on the frames without a group: the consensus says which, not the
+    # line through the detectors that group people
+    majority = next(p for p in predictions if p["detector"] == "majority")
+    assert majority["f1"] == majority["agreement_place"]
     assert runs["labelled"]["place"].endswith("labelled.parquet")
     assert "agreement: twin | place" in out and "its recording" in out
 
