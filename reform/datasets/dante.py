@@ -277,9 +277,8 @@ def load_dante(
 def _dataset_name(folder: Path) -> str:
     """The name of the dataset whose files are in ``folder``: the folder's own, or for DANTE's
     ``DS_utils`` its parent's (``datasets/cocktail_party/DS_utils`` is ``cocktail_party``)."""
-    if folder.name == DANTE_FILES_FOLDER and folder.resolve().parent.name:
-        return folder.resolve().parent.name
-    return folder.name
+    parent = folder.resolve().parent.name
+    return parent if folder.name == DANTE_FILES_FOLDER and parent else folder.name
 
 
 @file_errors_as_data_errors

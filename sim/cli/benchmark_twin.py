@@ -46,8 +46,9 @@ def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
 
 
 def _place(args: argparse.Namespace) -> list[Any] | None:
-    """The place's recording (--data), its groups removed as it is read: its frames calibrate
-    the predictions (`sim.twins.predict`); None without --data."""
+    """The place's recording (--data): its frames calibrate the predictions, and
+    `sim.twins.predict` removes their groups before it runs anything on them; None without
+    --data."""
     if not args.data:
         return None
     from reform.datasets import load_dataset, resolve
@@ -58,7 +59,7 @@ def _place(args: argparse.Namespace) -> list[Any] | None:
         metres_per_pixel=args.metres_per_pixel,
         time_unit=args.time_unit,
     )
-    return [f.replace(groups=None, listed_groups=None) for f in dataset]
+    return list(dataset)
 
 
 def run_twin(args: argparse.Namespace) -> int:

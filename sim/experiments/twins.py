@@ -436,11 +436,10 @@ def run_twins(
         say(f"{name}: predicting {len(candidates)} detectors on the twin")
         # The second half's frames calibrate the predictions by the detectors' agreement there:
         # `predict` removes their groups before it runs anything on them.
-        unlabelled = [f.replace(groups=None, listed_groups=None) for f in second]
         for p in predict(
             data,
             candidates,
-            place=unlabelled,
+            place=second,
             seed=seed,
             progress=lambda label, name=name: say(f"{name}: {label}"),
         ):
@@ -456,7 +455,7 @@ def run_twins(
                     "predicted": p.f1,
                     "low": p.low,
                     "high": p.high,
-                    "twin_alone": p.f1 if p.twin_f1 is None else p.twin_f1,
+                    "twin_alone": p.on_twin,
                     "real": score,
                     "real_sd": score_sd,
                     "first_half": _f1(name_of, p.detector, first),

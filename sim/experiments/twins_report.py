@@ -240,7 +240,7 @@ def to_markdown(result: TwinsResult, *, command: str, figure: str | None = None)
         "|:--|--:|--:|--:|--:|--:|--:|--:|",
     ]
     twin = _measure_rows(result.agreement["twin"])
-    alone = _measure_rows(result.agreement.get("twin_alone", result.agreement["twin"]))
+    alone = _measure_rows(result.agreement["twin_alone"])
     without = _measure_rows(result.agreement["twin_without_majority"])
     loo = _measure_rows(result.agreement["twin_loo_calibrated"])
     ceiling = _measure_rows(result.agreement["ceiling"])
@@ -257,7 +257,7 @@ def to_markdown(result: TwinsResult, *, command: str, figure: str | None = None)
     for c in result.cells:
         lines.append(
             f"| {c['dataset']} | {c['detector']} | {_pct(c['predicted'])} | {_pct(c['low'])}-"
-            f"{_pct(c['high'])} | {_pct(c.get('twin_alone', c['predicted']))} | "
+            f"{_pct(c['high'])} | {_pct(c['twin_alone'])} | "
             f"{_pct(c['real'])} | {_pct(c['first_half'])} |"
         )
     lines += ["", *_seed_rows(result)]
@@ -306,7 +306,7 @@ def _per_dataset(result: TwinsResult) -> list[str]:
         p = np.array([c["predicted"] for c in cells])
         r = np.array([c["real"] for c in cells])
         loo = np.array([c["loo_calibrated"] for c in cells])
-        alone = np.array([c.get("twin_alone", c["predicted"]) for c in cells])
+        alone = np.array([c["twin_alone"] for c in cells])
         corr = (
             float(np.corrcoef(p, r)[0, 1]) if p.size > 2 and np.ptp(p) and np.ptp(r) else math.nan
         )

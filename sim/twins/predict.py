@@ -106,8 +106,13 @@ class Prediction:
     frames: int
     note: str = ""
     detector: Any = field(default=None, compare=False, repr=False)  # as run (fitted on the twin)
-    twin_f1: float | None = None  # its F1 on the twin (``f1`` too when no place was given)
+    twin_f1: float | None = None  # its F1 on the twin before a calibration at the place
     agreement: tuple[float, float] | None = None  # with the consensus: on the twin, at the place
+
+    @property
+    def on_twin(self) -> float | None:
+        """Its F1 on the twin: ``f1`` itself unless it was calibrated at the place."""
+        return self.f1 if self.twin_f1 is None else self.twin_f1
 
     def to_json(self) -> dict[str, Any]:
         out = {
@@ -117,7 +122,7 @@ class Prediction:
             "high": self.high,
             "frames": self.frames,
             "note": self.note,
-            "twin_f1": self.f1 if self.twin_f1 is None else self.twin_f1,
+            "twin_f1": self.on_twin,
         }
         if self.agreement is not None:
             out["agreement_twin"], out["agreement_place"] = self.agreement
@@ -179,6 +184,8 @@ def consensus(
     detectors put in one group; everyone else alone."""
     from scipy.sparse.csgraph import connected_components
 
+    from reform.gcff import labels_to_partition
+
     out = []
     voters = len(partitions)
     for k, frame in enumerate(frames):
@@ -193,10 +200,7 @@ def consensus(
         linked = 2 * votes > voters
         np.fill_diagonal(linked, True)
         _, component = connected_components(linked, directed=False)
-        groups: dict[int, list[int]] = {}
-        for j, c in enumerate(component.tolist()):
-            groups.setdefault(c, []).append(ids[j])
-        out.append(tuple(tuple(g) for g in groups.values()))
+        out.append(labels_to_partition(ids, component))
     return out
 
 
@@ -265,9 +269,8 @@ def predict(
     learn, scored = split_episodes(frames)
     scored = tuning_frames(scored, PREDICT_FRAMES)
     if place is not None:
-        place = [f.replace(groups=None, listed_groups=None) for f in place]
         step = max(1, math.ceil(len(place) / PREDICT_FRAMES))
-        place = place[::step]
+        place = [f.replace(groups=None, listed_groups=None) for f in place[::step]]
     weights = bootstrap_weights(
         [f.sequence for f in scored], rng=derive_rng(seed, BOOTSTRAP), resamples=RESAMPLES
     )
@@ -363,7 +366,7 @@ def mean_prediction(runs: Sequence[Sequence[Prediction]]) -> list[Prediction]:
             out.append(Prediction(first.label, None, None, None, failed.frames, failed.note))
             continue
         each = ", ".join(f"{100 * p.f1:.1f}" for p in row)
-        alone = [p.f1 if p.twin_f1 is None else p.twin_f1 for p in row]
+        alone = [p.on_twin for p in row]
         agreed = [p.agreement for p in row if p.agreement is not None]
         out.append(
             Prediction(
@@ -400,35 +403,27 @@ def table(predictions: Sequence[Prediction], *, place: str, twins: int = 1) -> s
             "intervals; each twin's F1 in the note):"
         )
     span = "95 % interval" if twins == 1 else "lowest-highest of the intervals"
+    extra = []  # columns of predictions calibrated at the place
     if any(p.agreement is not None for p in rows):
         head = head.removesuffix(":") + (
             ", calibrated at the place by each detector's agreement with the detectors' "
             "consensus there, through the line from agreement to F1 on the twin; its F1 on the "
             "twin alone and its agreement on the twin and at the place beside it:"
         )
-        lines = [
-            head,
-            "",
-            f"| detector | predicted F1 | {span} | on the twin | agreement: twin | place | note |",
-            "|:--|--:|--:|--:|--:|--:|:--|",
-        ]
-        for p in rows:
-            if p.f1 is None or p.agreement is None:
-                lines.append(f"| {p.label} | - | - | - | - | - | {p.note} |")
-                continue
-            lines.append(
-                f"| {p.label} | {100 * p.f1:.1f} | {100 * p.low:.1f}-{100 * p.high:.1f} | "
-                f"{100 * p.twin_f1:.1f} | {100 * p.agreement[0]:.1f} | "
-                f"{100 * p.agreement[1]:.1f} | {p.note} |"
-            )
-        return "\n".join(lines) + "\n"
-    lines = [head, "", f"| detector | predicted F1 | {span} | note |", "|:--|--:|--:|:--|"]
+        extra = ["on the twin", "agreement: twin", "place"]
+    header = ["detector", "predicted F1", span, *extra, "note"]
+    lines = [
+        head,
+        "",
+        "| " + " | ".join(header) + " |",
+        "|:--|" + "--:|" * (len(header) - 2) + ":--|",
+    ]
     for p in rows:
-        if p.f1 is None:
-            lines.append(f"| {p.label} | - | - | {p.note} |")
+        if p.f1 is None or (extra and p.agreement is None):
+            cells = ["-"] * (2 + len(extra))
         else:
-            lines.append(
-                f"| {p.label} | {100 * p.f1:.1f} | {100 * p.low:.1f}-{100 * p.high:.1f} | "
-                f"{p.note} |"
-            )
+            cells = [f"{100 * p.f1:.1f}", f"{100 * p.low:.1f}-{100 * p.high:.1f}"]
+            if extra:
+                cells += [f"{100 * v:.1f}" for v in (p.on_twin, *p.agreement)]
+        lines.append("| " + " | ".join([p.label, *cells, p.note]) + " |")
     return "\n".join(lines) + "\n"
