@@ -307,12 +307,13 @@ def agreement(
 def _loo_calibrated(cells: Sequence[Mapping[str, Any]], cell: Mapping[str, Any]) -> float:
     """``cell``'s prediction through the recipe's one constant fixed on the other datasets: the
     least-squares line from twin F1 to real F1 over their cells, clipped to [0, 1]."""
+    from sim.twins.predict import line_through
+
     others = [c for c in cells if c["dataset"] != cell["dataset"]]
-    x = np.array([c["predicted"] for c in others])
-    y = np.array([c["real"] for c in others])
-    if x.size < 2 or np.ptp(x) == 0:
+    line = line_through([c["predicted"] for c in others], [c["real"] for c in others])
+    if line is None:
         return float(cell["predicted"])
-    slope, intercept = np.polyfit(x, y, 1)
+    slope, intercept = line
     return float(np.clip(intercept + slope * cell["predicted"], 0.0, 1.0))
 
 

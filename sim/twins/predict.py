@@ -51,6 +51,7 @@ __all__ = [
     "calibrated",
     "catalogue_candidates",
     "consensus",
+    "line_through",
     "mean_prediction",
     "predict",
     "split_episodes",
@@ -228,6 +229,16 @@ def agreements(
     }
 
 
+def line_through(x: Sequence[float], y: Sequence[float]) -> tuple[float, float] | None:
+    """The least-squares line through the points (``x``, ``y``): its slope and intercept; None
+    with fewer than two points or ``x`` that do not differ."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.size < 2 or np.ptp(x) < 1e-9:
+        return None
+    slope, intercept = np.polyfit(x, y, 1)
+    return float(slope), float(intercept)
+
+
 def calibrated(
     twin_f1: Mapping[str, float],
     on_twin: Mapping[str, float],
@@ -240,11 +251,10 @@ def calibrated(
     every detector's agreement at the place (``at_place``), clipped to [0, 1]; None when the
     twin's agreements of those detectors do not differ."""
     labels = [label for label in twin_f1 if fitted_on is None or label in fitted_on]
-    x = np.array([on_twin[label] for label in labels], dtype=float)
-    y = np.array([twin_f1[label] for label in labels], dtype=float)
-    if x.size < 2 or np.ptp(x) < 1e-9:
+    line = line_through([on_twin[label] for label in labels], [twin_f1[label] for label in labels])
+    if line is None:
         return None
-    slope, intercept = np.polyfit(x, y, 1)
+    slope, intercept = line
     return {
         label: float(np.clip(intercept + slope * at_place[label], 0.0, 1.0)) for label in twin_f1
     }
