@@ -89,7 +89,8 @@ class TwinsResult:
         cells: rows ``{"dataset", "detector", "predicted", "low", "high", "twin_alone",
             "real", "real_sd", "first_half"}`` (``twin_alone``: the F1 on the twin before the
             calibration at the place; ``real_sd``: the real F1's sampling spread,
-            `_real_score`).
+            `_real_score`), and where the prediction was calibrated ``"agreement_twin"`` and
+            ``"agreement_place"`` (the detector's F1 against the consensus on each).
         agreement: ``{"twin": {...}, "twin_alone": {...}, "ceiling": {...}, ...}``: each
             measure's value and interval.
         noise_floor: the MAE and MMRV (points) a predictor that knew every cell's expected
@@ -462,6 +463,8 @@ def run_twins(
                     "first_half": _f1(name_of, p.detector, first),
                 }
             )
+            if p.agreement is not None:
+                cells[-1]["agreement_twin"], cells[-1]["agreement_place"] = p.agreement
     for cell in cells:
         cell["loo_calibrated"] = _loo_calibrated(cells, cell)
     result_agreement = {
