@@ -305,17 +305,26 @@ def agreement(
     return out
 
 
-def _loo_calibrated(cells: Sequence[Mapping[str, Any]], cell: Mapping[str, Any]) -> float:
-    """``cell``'s prediction through the recipe's one constant fixed on the other datasets: the
-    least-squares line from twin F1 to real F1 over their cells, clipped to [0, 1]."""
+def _loo_calibrated(cells: Sequence[Mapping[str, Any]]) -> list[float]:
+    """Each cell's prediction through the recipe's one constant fixed on the other datasets:
+    the least-squares line from twin F1 to real F1 over their cells (one line per held-out
+    dataset), clipped to [0, 1]; the prediction itself where the other datasets' predictions
+    do not differ (no line to draw)."""
     from sim.twins.predict import line_through
 
-    others = [c for c in cells if c["dataset"] != cell["dataset"]]
-    line = line_through([c["predicted"] for c in others], [c["real"] for c in others])
-    if line is None:
-        return float(cell["predicted"])
-    slope, intercept = line
-    return float(np.clip(intercept + slope * cell["predicted"], 0.0, 1.0))
+    lines = {}
+    for name in {c["dataset"] for c in cells}:
+        others = [c for c in cells if c["dataset"] != name]
+        lines[name] = line_through([c["predicted"] for c in others], [c["real"] for c in others])
+    out = []
+    for c in cells:
+        line = lines[c["dataset"]]
+        if line is None:
+            out.append(float(c["predicted"]))
+            continue
+        slope, intercept = line
+        out.append(float(np.clip(intercept + slope * c["predicted"], 0.0, 1.0)))
+    return out
 
 
 def _reference_model(name: str, real: Mapping[str, Dataset]) -> Any:
@@ -465,8 +474,8 @@ def run_twins(
             )
             if p.agreement is not None:
                 cells[-1]["agreement_twin"], cells[-1]["agreement_place"] = p.agreement
-    for cell in cells:
-        cell["loo_calibrated"] = _loo_calibrated(cells, cell)
+    for cell, loo in zip(cells, _loo_calibrated(cells), strict=True):
+        cell["loo_calibrated"] = loo
     result_agreement = {
         "twin": agreement(cells, "predicted", seed=seed),
         "twin_alone": agreement(cells, "twin_alone", seed=seed),

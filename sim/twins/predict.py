@@ -217,11 +217,11 @@ def agreements(
     from reform.metrics import evaluate
 
     voting = set(partitions if voters is None else voters) - set(NO_VOTE)
-    voters = [p for label, p in partitions.items() if label in voting]
-    if len(voters) < MIN_CONSENSUS or not frames:
+    ballots = [p for label, p in partitions.items() if label in voting]
+    if len(ballots) < MIN_CONSENSUS or not frames:
         return None
     agreed = [
-        f.replace(groups=g) for f, g in zip(frames, consensus(frames, voters), strict=True)
+        f.replace(groups=g) for f, g in zip(frames, consensus(frames, ballots), strict=True)
     ]
     return {
         label: float(evaluate(agreed, p, thresholds=(THRESHOLD,)).at(THRESHOLD).f1)
@@ -336,13 +336,12 @@ def _calibrate(
     if twin_agrees is not None and place_agrees is not None:
         grouping = [label for label in catalogue if label not in NO_VOTE]
         line = calibrated(ran, twin_agrees, place_agrees, fitted_on=grouping)
-    if line is not None:
-        # A detector that puts no one together scores on the frames that hold no group, and
-        # the consensus is the place's label-free word on which those are: its agreement there.
-        line.update((label, place_agrees[label]) for label in NO_VOTE if label in line)
     if line is None:
         why = "the twin's score: too few detectors agree or differ to calibrate it at the place"
         return [p if p.f1 is None else dataclasses.replace(p, note=why) for p in predictions]
+    # A detector that puts no one together scores on the frames that hold no group, and the
+    # consensus is the place's label-free word on which those are: its agreement there.
+    line.update((label, place_agrees[label]) for label in NO_VOTE if label in line)
     out = []
     for p in predictions:
         if p.f1 is None:
