@@ -45,11 +45,16 @@ def viewer_command(*args: str, bind: str = SERVE_BIND_IP) -> list[str]:
     return [str(rerun_program()), "--bind", bind, *args]
 
 
-def stop_viewer(viewer: subprocess.Popen, *, timeout_s: float = VIEWER_STOP_S) -> int:
-    """Stops a viewer started from `viewer_command` as Ctrl-C does, killing it if it has not
-    exited after ``timeout_s`` seconds; its exit status."""
+def stop_viewer(
+    viewer: subprocess.Popen,
+    *,
+    timeout_s: float = VIEWER_STOP_S,
+    stop_signal: int = signal.SIGINT,
+) -> int:
+    """Stops a viewer started from `viewer_command` with ``stop_signal`` (as Ctrl-C does by
+    default), killing it if it has not exited after ``timeout_s`` seconds; its exit status."""
     if viewer.poll() is None:
-        viewer.send_signal(signal.SIGINT)
+        viewer.send_signal(stop_signal)
         try:
             viewer.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:

@@ -12,6 +12,7 @@ import contextlib
 import errno
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -177,7 +178,9 @@ def _serve_until_interrupted(uri: str) -> None:
     except KeyboardInterrupt:
         print("stopped serving", file=sys.stderr)
     finally:
-        stop_viewer(viewer)
+        # SIGTERM: the web viewer holds nothing to save, and on SIGINT it waits for its
+        # connection to the recording's server, still open here, until it is killed.
+        stop_viewer(viewer, stop_signal=signal.SIGTERM)
 
 
 def _wait_for_web_viewer(viewer: subprocess.Popen) -> None:
