@@ -9,7 +9,7 @@ not SALSA's test part, nor Babble, CoffeeBreak or Synth. Prints, per detector, t
 the best training F1 (ties: the first in grid order), that F1 and the runner-ups, as Markdown.
 
 Run: ``python benchmarks/choose_field_defaults.py [--every 4] [--datasets DIR] [--quick]``
-(a few minutes on two cores; ``--quick`` scores every 40th frame, a smoke run whose choices mean
+(a few minutes on two cores; ``--quick`` scores every 120th frame, a smoke run whose choices mean
 little). The catalogue's defaults (`reform/catalogue.py`) are the choices of a full run.
 """
 
@@ -53,7 +53,7 @@ def _shown(names: tuple[str, ...], values: tuple[Any, ...]) -> str:
 def main() -> int:
     parser = BenchmarkParser(__doc__)
     parser.add_datasets_argument()
-    parser.add_sized("--every", default=4, quick=40, help="score every K-th training frame")
+    parser.add_sized("--every", default=4, quick=120, help="score every K-th training frame")
     args = parser.parse_args()
 
     folder = datasets_folder(args.datasets, "salsa")

@@ -175,7 +175,7 @@ def test_choose_field_defaults_quick_run_prints_a_choice_per_detector(
         pytest.fail(f"{script.name} did not find the datasets the tests found: {run.stderr}")
     assert run.returncode == 0, f"{script.name} --quick failed:\n{run.stdout}\n{run.stderr}"
     assert re.search(
-        r"^SALSA training split .*: \d+ frames, every 40th scored: \d+ frames", run.stdout, re.M
+        r"^SALSA training split .*: \d+ frames, every 120th scored: \d+ frames", run.stdout, re.M
     )
     for name in ("proximity", "dominant-sets", "gtcg", "hvff", "hvff-multiscale"):
         row = rf"^\| {name} \| [a-z_]+=[\d.]+.* \| [\d.]+ \| .* \| \d+ \|$"
