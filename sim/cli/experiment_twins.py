@@ -12,7 +12,14 @@ from pathlib import Path
 
 from sim.cli._common import CliError, check_output
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
-from sim.cli._experiment_twins import BASENAME, MAX_REPEATS, REPEATS, TWINS
+from sim.cli._experiment_twins import (
+    BASENAME,
+    MAX_REPEATS,
+    MAX_SEEDS,
+    PER_PLACE,
+    REPEATS,
+    TWINS,
+)
 
 FIGURE = ".png"
 
@@ -54,6 +61,8 @@ def _command(args: argparse.Namespace) -> str:
         words += ["--seed", str(args.seed)]
     if args.repeats != REPEATS:
         words += ["--repeats", str(args.repeats)]
+    if args.twins_per_place != PER_PLACE:
+        words += ["--twins-per-place", str(args.twins_per_place)]
     words += ["--out", args.out]
     return shlex.join(words)
 
@@ -65,7 +74,13 @@ def run(args: argparse.Namespace) -> int:
     from sim.experiments.twins_report import scatter_figure, to_markdown
 
     if not 1 <= args.repeats <= MAX_REPEATS:
-        raise CliError(f"--repeats: expected 1 to {MAX_REPEATS} seeds, found {args.repeats}")
+        raise CliError(f"--repeats: expected 1 to {MAX_REPEATS}, found {args.repeats}")
+    per_place = args.twins_per_place
+    if not 1 <= per_place or args.repeats * per_place > MAX_SEEDS:
+        raise CliError(
+            f"--twins-per-place: expected 1 to {MAX_SEEDS // args.repeats} with --repeats "
+            f"{args.repeats} (at most {MAX_SEEDS} seeds), found {per_place}"
+        )
     out = report_stem(args.out, BASENAME, suffixes=(*REPORT_SUFFIXES, FIGURE))
     check_report(out, suffixes=(*REPORT_SUFFIXES, FIGURE))
     twins = args.twins if args.twins is not None else out.parent / TWINS
@@ -79,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
                 f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr, flush=True
             )
 
-    seeds = [args.seed + k for k in range(args.repeats)]
+    seeds = [args.seed + k for k in range(args.repeats * per_place)]
     results = []
     for seed in seeds:
         say = progress if len(seeds) == 1 else lambda m, seed=seed: progress(f"seed {seed}: {m}")
@@ -88,7 +103,9 @@ def run(args: argparse.Namespace) -> int:
     result = results[0]
     if len(results) > 1:
         result = dataclasses.replace(
-            result, seeds=across_seeds(results), seconds=time.perf_counter() - started
+            result,
+            seeds=across_seeds(results, per_place=per_place),
+            seconds=time.perf_counter() - started,
         )
     command = _command(args)
     figure = scatter_figure(result, out.with_name(out.name + FIGURE)).name

@@ -157,34 +157,73 @@ def goal_figures(result: TwinsResult) -> dict[str, float]:
     }
 
 
-def across_seeds(results: Sequence[TwinsResult]) -> dict[str, Any]:
-    """The goals' figures of runs that differ only in their master seed (each twin fitted, its
-    data generated and its detectors scored again): each run's (`goal_figures`), their mean,
-    lowest and highest, and those of the **seeds' mean prediction** (each cell's predicted F1
-    averaged over the runs, against the same real F1)."""
-    per_seed = [goal_figures(r) for r in results]
-    spread = {
-        key: {
-            "mean": float(np.mean([f[key] for f in per_seed])),
-            "low": float(np.min([f[key] for f in per_seed])),
-            "high": float(np.max([f[key] for f in per_seed])),
-        }
-        for key in per_seed[0]
-    }
+def _mean_cells(results: Sequence[TwinsResult]) -> list[dict[str, Any]]:
+    """The first run's cells, each with its predicted F1 averaged over ``results`` (the cells
+    every run predicted)."""
     predicted: dict[tuple[str, str], list[float]] = {}
     for r in results:
         for c in r.cells:
             predicted.setdefault((c["dataset"], c["detector"]), []).append(c["predicted"])
-    cells = [
+    return [
         dict(c, predicted=float(np.mean(predicted[c["dataset"], c["detector"]])))
         for c in results[0].cells
         if len(predicted[c["dataset"], c["detector"]]) == len(results)
     ]
-    mean_prediction = agreement(cells, "predicted", seed=results[0].seed)
+
+
+def _spread(figures: Sequence[Mapping[str, float]]) -> dict[str, dict[str, float]]:
+    return {
+        key: {
+            "mean": float(np.mean([f[key] for f in figures])),
+            "low": float(np.min([f[key] for f in figures])),
+            "high": float(np.max([f[key] for f in figures])),
+        }
+        for key in figures[0]
+    }
+
+
+def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[str, Any]:
+    """The goals' figures of runs that differ only in their master seed (each twin fitted, its
+    data generated and its detectors scored again): each run's (`goal_figures`), and those of
+    the **seeds' mean prediction** (each cell's predicted F1 averaged over the runs, against the
+    same real F1).
+
+    With ``per_place`` above 1, a place is predicted by that many twins (consecutive runs, as
+    ``benchmark --twin A --twin B ...`` predicts: the mean of their predictions) and the goals
+    are judged per such **ensemble**: the tuning figures are its twins' mean, the prediction's
+    those of its mean prediction. ``spread`` is the mean, lowest and highest over the ensembles
+    (over the single runs when ``per_place`` is 1; ``single`` keeps theirs).
+
+    Raises:
+        ValueError: a number of runs that is not a multiple of ``per_place``.
+    """
+    if per_place < 1 or len(results) % per_place:
+        raise ValueError(
+            f"per_place: expected a divisor of the {len(results)} runs, found {per_place}"
+        )
+    per_seed = [goal_figures(r) for r in results]
+    ensembles = []
+    for start in range(0, len(results) if per_place > 1 else 0, per_place):
+        block = results[start : start + per_place]
+        figures = _spread(per_seed[start : start + per_place])
+        measures = agreement(_mean_cells(block), "predicted", seed=block[0].seed)
+        ensembles.append(
+            {
+                "seeds": [r.seed for r in block],
+                "tuning_gain": figures["tuning_gain"]["mean"],
+                "tuning_gap": figures["tuning_gap"]["mean"],
+                **{k: measures[k]["value"] for k in ("pearson", "mae", "mmrv")},
+            }
+        )
+    figures_of = [{k: v for k, v in e.items() if k != "seeds"} for e in ensembles]
+    mean_prediction = agreement(_mean_cells(results), "predicted", seed=results[0].seed)
     return {
         "seeds": [r.seed for r in results],
+        "per_place": per_place,
         "per_seed": per_seed,
-        "spread": spread,
+        "single": _spread(per_seed),
+        "ensembles": ensembles,
+        "spread": _spread(figures_of if per_place > 1 else per_seed),
         "mean_prediction": {k: v["value"] for k, v in mean_prediction.items()},
     }
 

@@ -89,7 +89,13 @@ def _goal_rows(result: TwinsResult, s: Mapping[str, Any]) -> tuple[list[str], in
                  s["mmrv"], "{:.1f}", 1),
     }  # fmt: skip
     seeds = len(result.seeds.get("seeds", ()))
+    per_place = result.seeds.get("per_place", 1)
     head = "measured" if not spread else f"mean over {seeds} seeds (lowest to highest)"
+    if spread and per_place > 1:
+        head = (
+            f"mean over {seeds // per_place} repeats, {per_place} twins a place (lowest to "
+            "highest)"
+        )
     lines = [f"| goal | required | {head} | met |", "|:--|:--|--:|:--|"]
     met = 0
     for key, (label, required, value, form, sign) in figures.items():
@@ -111,6 +117,7 @@ def _seed_rows(result: TwinsResult) -> list[str]:
     seeds = result.seeds
     if not seeds.get("per_seed"):
         return []
+    per_place = seeds.get("per_place", 1)
     lines = [
         "## Seeds",
         "",
@@ -119,13 +126,53 @@ def _seed_rows(result: TwinsResult) -> list[str]:
         "scores are the same. The tables above are the first seed's. The last row averages each "
         "cell's predicted F1 over the seeds before comparing it with the real F1.",
         "",
-        "| seed | GCFF: twin vs one setting | twin vs labels | Pearson r | MAE | MMRV |",
+    ]
+    if per_place > 1:
+        lines[-1] = (
+            f"{lines[-1]} The goals are judged on {per_place} twins a place: each place's "
+            f"prediction is the mean of {per_place} twins' (consecutive seeds, as `reform-sim "
+            "benchmark --twin A --twin B --twin C` predicts), and the tuning figures are those "
+            "twins' mean."
+        )
+        lines += [
+            f"| {per_place} twins a place: seeds | GCFF: twin vs one setting | twin vs labels "
+            "| Pearson r | MAE | MMRV |",
+            "|:--|--:|--:|--:|--:|--:|",
+        ]
+        for e in seeds["ensembles"]:
+            lines.append(
+                f"| {', '.join(str(k) for k in e['seeds'])} | {e['tuning_gain']:+.1f} | "
+                f"{-e['tuning_gap']:+.1f} | {e['pearson']:.2f} | {e['mae']:.1f} | "
+                f"{e['mmrv']:.1f} |"
+            )
+        lines.append("")
+    lines += [
+        "| seed (one twin a place) | GCFF: twin vs one setting | twin vs labels | Pearson r "
+        "| MAE | MMRV |",
         "|:--|--:|--:|--:|--:|--:|",
     ]
     for seed, f in zip(seeds["seeds"], seeds["per_seed"], strict=True):
         lines.append(
             f"| {seed} | {f['tuning_gain']:+.1f} | {-f['tuning_gap']:+.1f} | {f['pearson']:.2f} "
             f"| {f['mae']:.1f} | {f['mmrv']:.1f} |"
+        )
+    one = seeds.get("single", {})
+    if per_place > 1 and one:
+        lines.append(
+            "| mean (lowest to highest) | "
+            + " | ".join(
+                f"{form.format(sign * one[k]['mean'])} "
+                f"({form.format(min(sign * one[k]['low'], sign * one[k]['high']))} to "
+                f"{form.format(max(sign * one[k]['low'], sign * one[k]['high']))})"
+                for k, form, sign in (
+                    ("tuning_gain", "{:+.1f}", 1),
+                    ("tuning_gap", "{:+.1f}", -1),
+                    ("pearson", "{:.2f}", 1),
+                    ("mae", "{:.1f}", 1),
+                    ("mmrv", "{:.1f}", 1),
+                )
+            )
+            + " |"
         )
     m = seeds["mean_prediction"]
     lines += [

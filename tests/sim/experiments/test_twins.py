@@ -99,15 +99,38 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     page = to_markdown(dataclasses.replace(result, seeds=seeds), command="x")
     assert "## Seeds" in page and "mean over 2 seeds (lowest to highest)" in page
 
+    # two twins a place, twice: each place predicted by the mean of its two twins' predictions
+    runs = [result, other, dataclasses.replace(result, seed=2), dataclasses.replace(other, seed=3)]
+    pairs = across_seeds(runs, per_place=2)
+    assert [e["seeds"] for e in pairs["ensembles"]] == [[0, 1], [2, 3]]
+    assert pairs["ensembles"][0]["mae"] == agreement(middle, "predicted")["mae"]["value"]
+    gain = [goal_figures(r)["tuning_gain"] for r in (result, other)]
+    assert pairs["ensembles"][1]["tuning_gain"] == pytest.approx(np.mean(gain), nan_ok=True)
+    assert pairs["spread"]["mae"]["mean"] == pytest.approx(pairs["ensembles"][0]["mae"])
+    assert pairs["single"]["mae"] == {"mean": np.mean(mae), "low": min(mae), "high": max(mae)}
+    page = to_markdown(dataclasses.replace(result, seeds=pairs), command="x")
+    assert "mean over 2 repeats, 2 twins a place (lowest to highest)" in page
+    assert "| 0, 1 |" in page and "| 2, 3 |" in page
+    with pytest.raises(ValueError, match="per_place: expected a divisor of the 3 runs, found 2"):
+        across_seeds(runs[:3], per_place=2)
 
-@pytest.mark.parametrize("repeats", ["0", "21"])
-def test_repeats_out_of_range_are_refused_in_one_line(repeats, tmp_path, capsys):
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--repeats", "0"], "--repeats: expected 1 to 20, found 0"),
+        (["--repeats", "21"], "--repeats: expected 1 to 20, found 21"),
+        (["--twins-per-place", "0"], "--twins-per-place: expected 1 to 10 with --repeats 3 (at "
+         "most 30 seeds), found 0"),  # fmt: skip
+        (["--repeats", "4", "--twins-per-place", "8"], "--twins-per-place: expected 1 to 7 with "
+         "--repeats 4 (at most 30 seeds), found 8"),  # fmt: skip
+    ],
+)
+def test_repeats_out_of_range_are_refused_in_one_line(extra, message, tmp_path, capsys):
     from sim.cli import main
 
-    argv = ["experiment", "twins", "--out", str(tmp_path / "out"), "--repeats", repeats]
+    argv = ["experiment", "twins", "--out", str(tmp_path / "out"), *extra]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [
-        f"reform-sim experiment: error: --repeats: expected 1 to 20 seeds, found {repeats}"
-    ]
+    assert err == [f"reform-sim experiment: error: {message}"]
     assert not (tmp_path / "out").exists()
