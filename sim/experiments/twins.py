@@ -158,17 +158,22 @@ def goal_figures(result: TwinsResult) -> dict[str, float]:
 
 
 def _mean_cells(results: Sequence[TwinsResult]) -> list[dict[str, Any]]:
-    """The first run's cells, each with its predicted F1 averaged over ``results`` (the cells
-    every run predicted)."""
-    predicted: dict[tuple[str, str], list[float]] = {}
+    """The first run's cells, each with its predicted and its real F1 averaged over ``results``
+    (the cells every run predicted). A catalogued detector's real F1 is the same in every run;
+    a detector trained or tuned on each run's twin (REFORM trained on it, GCFF tuned on it) is
+    another model in each, and the mean prediction is compared with the mean of their real
+    F1s."""
+    by: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in results:
         for c in r.cells:
-            predicted.setdefault((c["dataset"], c["detector"]), []).append(c["predicted"])
-    return [
-        dict(c, predicted=float(np.mean(predicted[c["dataset"], c["detector"]])))
-        for c in results[0].cells
-        if len(predicted[c["dataset"], c["detector"]]) == len(results)
-    ]
+            by.setdefault((c["dataset"], c["detector"]), []).append(c)
+    out = []
+    for c in results[0].cells:
+        runs = by[c["dataset"], c["detector"]]
+        if len(runs) == len(results):
+            mean = {k: float(np.mean([run[k] for run in runs])) for k in ("predicted", "real")}
+            out.append(dict(c, **mean))
+    return out
 
 
 def _spread(figures: Sequence[Mapping[str, float]]) -> dict[str, dict[str, float]]:
@@ -192,7 +197,8 @@ def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[
     ``benchmark --twin A --twin B ...`` predicts: the mean of their predictions) and the goals
     are judged per such **ensemble**: the tuning figures are its twins' mean, the prediction's
     those of its mean prediction. ``spread`` is the mean, lowest and highest over the ensembles
-    (over the single runs when ``per_place`` is 1; ``single`` keeps theirs).
+    (over the single runs when ``per_place`` is 1; ``single`` keeps theirs); ``cells`` keeps
+    every run's cells (seed -> the cells' detectors, predicted, twin-alone and real F1).
 
     Raises:
         ValueError: a number of runs that is not a multiple of ``per_place``.
@@ -225,7 +231,15 @@ def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[
         "ensembles": ensembles,
         "spread": _spread(figures_of if per_place > 1 else per_seed),
         "mean_prediction": {k: v["value"] for k, v in mean_prediction.items()},
+        "cells": {str(r.seed): [_brief(c) for c in r.cells] for r in results},
     }
+
+
+def _brief(cell: Mapping[str, Any]) -> dict[str, Any]:
+    """A cell as `across_seeds` keeps it for every run: what a re-analysis needs."""
+    keys = ("dataset", "detector", "predicted", "twin_alone", "real", "agreement_twin",
+            "agreement_place")  # fmt: skip
+    return {k: cell[k] for k in keys if k in cell}
 
 
 def _f1(name: str, detector: Any, frames: Sequence[Frame]) -> float:

@@ -96,6 +96,13 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     middle = [dict(c, predicted=(c["predicted"] + d["predicted"]) / 2) for c, d in
               zip(result.cells, cells, strict=True)]  # fmt: skip
     assert seeds["mean_prediction"]["mae"] == agreement(middle, "predicted")["mae"]["value"]
+    assert [c["predicted"] for c in seeds["cells"]["1"]] == [c["predicted"] for c in cells]
+    # a detector trained on each run's twin is another model in each: the real F1s averaged
+    retrained = tuple(dict(c, real=c["real"] / 2) for c in cells)
+    pair = across_seeds([result, dataclasses.replace(other, cells=retrained)])
+    both = [dict(m, real=(c["real"] + d["real"]) / 2) for m, c, d in
+            zip(middle, result.cells, retrained, strict=True)]  # fmt: skip
+    assert pair["mean_prediction"]["mae"] == agreement(both, "predicted")["mae"]["value"]
     page = to_markdown(dataclasses.replace(result, seeds=seeds), command="x")
     assert "## Seeds" in page and "mean over 2 seeds (lowest to highest)" in page
 
