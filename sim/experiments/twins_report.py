@@ -128,8 +128,8 @@ def _seed_rows(result: TwinsResult) -> list[str]:
         "",
     ]
     if per_place > 1:
-        lines[-1] = (
-            f"{lines[-1]} The goals are judged on {per_place} twins a place: each place's "
+        lines[-2] = (
+            f"{lines[-2]} The goals are judged on {per_place} twins a place: each place's "
             f"prediction is the mean of {per_place} twins' (consecutive seeds, as `reform-sim "
             "benchmark --twin A --twin B --twin C` predicts), and the tuning figures are those "
             "twins' mean."

@@ -78,10 +78,7 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     page = to_markdown(result, command="reform-sim experiment twins --out x", figure="t.png")
     for heading in ("## Tuning", "## Prediction", "## Leave one out", "Goals met", "a floor"):
         assert heading in page
-    for table in page.split("\n\n"):  # no table broken by a blank line between its rows
-        lines = table.strip().splitlines()
-        if lines and lines[0].startswith("|"):
-            assert len(lines) > 2 and lines[1].startswith(("|:", "|-")), table  # head, rows
+    _assert_whole_tables(page)
     assert scatter_figure(result, tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
 
     # the same run with another seed (here: every prediction 0.1 higher), and the two together
@@ -118,8 +115,21 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     page = to_markdown(dataclasses.replace(result, seeds=pairs), command="x")
     assert "mean over 2 repeats, 2 twins a place (lowest to highest)" in page
     assert "| 0, 1 |" in page and "| 2, 3 |" in page
+    assert "The goals are judged on 2 twins a place" in page
+    _assert_whole_tables(page)
     with pytest.raises(ValueError, match="per_place: expected a divisor of the 3 runs, found 2"):
         across_seeds(runs[:3], per_place=2)
+
+
+def _assert_whole_tables(page: str) -> None:
+    """Each Markdown table of ``page`` stands apart: a head, its rule and rows, no blank line
+    between its rows and no text run into it."""
+    for block in page.split("\n\n"):
+        lines = block.strip().splitlines()
+        rows = [k for k, line in enumerate(lines) if line.startswith("|")]
+        if rows:
+            assert rows == list(range(len(lines))), block  # no text in a table's block
+            assert len(lines) > 2 and lines[1].startswith(("|:", "|-")), block  # head, rows
 
 
 @pytest.mark.parametrize(
