@@ -56,6 +56,7 @@ __all__ = [
     "goal_figures",
     "mmrv",
     "noise_floor",
+    "place_errors",
     "run_twins",
 ]
 
@@ -157,21 +158,21 @@ def goal_figures(result: TwinsResult) -> dict[str, float]:
     }
 
 
-def _mean_cells(results: Sequence[TwinsResult]) -> list[dict[str, Any]]:
-    """The first run's cells, each with its predicted and its real F1 averaged over ``results``
-    (the cells every run predicted). A catalogued detector's real F1 is the same in every run;
-    a detector trained or tuned on each run's twin (REFORM trained on it, GCFF tuned on it) is
-    another model in each, and the mean prediction is compared with the mean of their real
-    F1s."""
+def _mean_cells(runs: Sequence[Sequence[Mapping[str, Any]]]) -> list[dict[str, Any]]:
+    """The first run's cells, each with its predicted and its real F1 averaged over the
+    ``runs``' cells (the cells every run predicted). A catalogued detector's real F1 is the same
+    in every run; a detector trained or tuned on each run's twin (REFORM trained on it, GCFF
+    tuned on it) is another model in each, and the mean prediction is compared with the mean of
+    their real F1s."""
     by: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
-    for r in results:
-        for c in r.cells:
+    for cells in runs:
+        for c in cells:
             by.setdefault((c["dataset"], c["detector"]), []).append(c)
     out = []
-    for c in results[0].cells:
-        runs = by[c["dataset"], c["detector"]]
-        if len(runs) == len(results):
-            mean = {k: float(np.mean([run[k] for run in runs])) for k in ("predicted", "real")}
+    for c in runs[0]:
+        same = by[c["dataset"], c["detector"]]
+        if len(same) == len(runs):
+            mean = {k: float(np.mean([one[k] for one in same])) for k in ("predicted", "real")}
             out.append(dict(c, **mean))
     return out
 
@@ -212,7 +213,8 @@ def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[
     for start in range(0, len(results) if per_place > 1 else 0, per_place):
         block = results[start : start + per_place]
         figures = _spread(per_seed[start : start + per_place])
-        measures = agreement(_mean_cells(block), "predicted", seed=block[0].seed)
+        cells = _mean_cells([r.cells for r in block])
+        measures = agreement(cells, "predicted", seed=block[0].seed)
         ensembles.append(
             {
                 "seeds": [r.seed for r in block],
@@ -222,7 +224,9 @@ def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[
             }
         )
     figures_of = [{k: v for k, v in e.items() if k != "seeds"} for e in ensembles]
-    mean_prediction = agreement(_mean_cells(results), "predicted", seed=results[0].seed)
+    mean_prediction = agreement(
+        _mean_cells([r.cells for r in results]), "predicted", seed=results[0].seed
+    )
     return {
         "seeds": [r.seed for r in results],
         "per_place": per_place,
@@ -233,6 +237,28 @@ def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[
         "mean_prediction": {k: v["value"] for k, v in mean_prediction.items()},
         "cells": {str(r.seed): [_brief(c) for c in r.cells] for r in results},
     }
+
+
+def place_errors(seeds: Mapping[str, Any]) -> dict[str, dict[str, list[float]]]:
+    """Each dataset's MAE and MMRV (points) of each ensemble's mean prediction, from the cells
+    `across_seeds` keeps for every run: dataset -> ``{"mae": [...], "mmrv": [...]}``, one value
+    per ensemble, in their order (empty without kept cells)."""
+    kept = seeds.get("cells") or {}
+    per_place = int(seeds.get("per_place", 1))
+    runs = [kept[str(seed)] for seed in seeds.get("seeds", ()) if str(seed) in kept]
+    if not runs or len(runs) != len(seeds["seeds"]):
+        return {}
+    out: dict[str, dict[str, list[float]]] = {}
+    for start in range(0, len(runs), per_place):
+        by_dataset: dict[str, list[dict[str, Any]]] = {}
+        for cell in _mean_cells(runs[start : start + per_place]):
+            by_dataset.setdefault(cell["dataset"], []).append(cell)
+        for name, cells in by_dataset.items():
+            figures = _measures(cells, "predicted")
+            entry = out.setdefault(name, {"mae": [], "mmrv": []})
+            entry["mae"].append(figures["mae"])
+            entry["mmrv"].append(figures["mmrv"])
+    return out
 
 
 def _brief(cell: Mapping[str, Any]) -> dict[str, Any]:

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from sim.experiments.twins import GOALS, TwinsResult, goal_figures
+from sim.experiments.twins import GOALS, TwinsResult, goal_figures, place_errors
 
 __all__ = ["scatter_figure", "summary", "to_markdown"]
 
@@ -180,6 +180,22 @@ def _seed_rows(result: TwinsResult) -> list[str]:
         f"{m['mmrv']:.1f} |",
         "",
     ]
+    places = place_errors(seeds)
+    if per_place > 1 and places:
+        lines += [
+            f"Each place's prediction by {per_place} twins (mean over the "
+            f"{len(seeds['seeds']) // per_place} repeats, lowest to highest):",
+            "",
+            "| dataset | MAE | MMRV |",
+            "|:--|--:|--:|",
+        ]
+        for name, figures in places.items():
+            cols = [
+                f"{np.mean(v):.1f} ({min(v):.1f} to {max(v):.1f})"
+                for v in (figures["mae"], figures["mmrv"])
+            ]
+            lines.append(f"| {name} | {cols[0]} | {cols[1]} |")
+        lines.append("")
     return lines
 
 

@@ -14,6 +14,7 @@ from sim.experiments.twins import (
     goal_figures,
     mmrv,
     noise_floor,
+    place_errors,
     run_twins,
 )
 from sim.experiments.twins_report import scatter_figure, to_markdown
@@ -116,6 +117,11 @@ def test_a_smoke_run_writes_every_part_of_the_page(tmp_path):
     assert "mean over 2 repeats, 2 twins a place (lowest to highest)" in page
     assert "| 0, 1 |" in page and "| 2, 3 |" in page
     assert "The goals are judged on 2 twins a place" in page
+    places = place_errors(pairs)  # each dataset's error under each pair's mean prediction
+    assert set(places) == {"one", "two"} and len(places["one"]["mae"]) == 2
+    ones = [c for c in middle if c["dataset"] == "one"]
+    assert places["one"]["mae"][0] == agreement(ones, "predicted")["mae"]["value"]
+    assert "Each place's prediction by 2 twins" in page and "| one |" in page
     _assert_whole_tables(page)
     with pytest.raises(ValueError, match="per_place: expected a divisor of the 3 runs, found 2"):
         across_seeds(runs[:3], per_place=2)
