@@ -177,6 +177,13 @@ def _mean_cells(runs: Sequence[Sequence[Mapping[str, Any]]]) -> list[dict[str, A
     return out
 
 
+def _ensemble_cells(
+    runs: Sequence[Sequence[Mapping[str, Any]]], per_place: int
+) -> list[list[dict[str, Any]]]:
+    """Each ensemble's cells (`_mean_cells` of ``per_place`` consecutive runs), in order."""
+    return [_mean_cells(runs[k : k + per_place]) for k in range(0, len(runs), per_place)]
+
+
 def _spread(figures: Sequence[Mapping[str, float]]) -> dict[str, dict[str, float]]:
     return {
         key: {
@@ -210,19 +217,21 @@ def across_seeds(results: Sequence[TwinsResult], *, per_place: int = 1) -> dict[
         )
     per_seed = [goal_figures(r) for r in results]
     ensembles = []
-    for start in range(0, len(results) if per_place > 1 else 0, per_place):
-        block = results[start : start + per_place]
-        figures = _spread(per_seed[start : start + per_place])
-        cells = _mean_cells([r.cells for r in block])
-        measures = agreement(cells, "predicted", seed=block[0].seed)
-        ensembles.append(
-            {
-                "seeds": [r.seed for r in block],
-                "tuning_gain": figures["tuning_gain"]["mean"],
-                "tuning_gap": figures["tuning_gap"]["mean"],
-                **{k: measures[k]["value"] for k in ("pearson", "mae", "mmrv")},
-            }
-        )
+    if per_place > 1:
+        runs = [r.cells for r in results]
+        for k, cells in enumerate(_ensemble_cells(runs, per_place)):
+            block = slice(k * per_place, (k + 1) * per_place)
+            measures = agreement(cells, "predicted", seed=results[block][0].seed)
+            ensembles.append(
+                {
+                    "seeds": [r.seed for r in results[block]],
+                    **{
+                        key: float(np.mean([f[key] for f in per_seed[block]]))
+                        for key in ("tuning_gain", "tuning_gap")
+                    },
+                    **{key: measures[key]["value"] for key in ("pearson", "mae", "mmrv")},
+                }
+            )
     figures_of = [{k: v for k, v in e.items() if k != "seeds"} for e in ensembles]
     mean_prediction = agreement(
         _mean_cells([r.cells for r in results]), "predicted", seed=results[0].seed
@@ -249,9 +258,9 @@ def place_errors(seeds: Mapping[str, Any]) -> dict[str, dict[str, list[float]]]:
     if not runs or len(runs) != len(seeds["seeds"]):
         return {}
     out: dict[str, dict[str, list[float]]] = {}
-    for start in range(0, len(runs), per_place):
+    for ensemble in _ensemble_cells(runs, per_place):
         by_dataset: dict[str, list[dict[str, Any]]] = {}
-        for cell in _mean_cells(runs[start : start + per_place]):
+        for cell in ensemble:
             by_dataset.setdefault(cell["dataset"], []).append(cell)
         for name, cells in by_dataset.items():
             figures = _measures(cells, "predicted")

@@ -72,6 +72,12 @@ def _measure_rows(agreement: Mapping[str, Any]) -> list[str]:
 AT_LEAST = ("tuning_gain", "pearson")  # goals met at or above their figure; the others at or below
 
 
+def _ranged(spread: Mapping[str, float], form: str, sign: int = 1) -> str:
+    """``mean (lowest to highest)`` of a spread, each value times ``sign``."""
+    low, high = sorted(sign * spread[b] for b in ("low", "high"))
+    return f"{form.format(sign * spread['mean'])} ({form.format(low)} to {form.format(high)})"
+
+
 def _goal_rows(result: TwinsResult, s: Mapping[str, Any]) -> tuple[list[str], int, int]:
     """The goals table (its lines), the goals met and the goals: each figure of this run, or,
     when the run was repeated with other seeds, their mean with the lowest and highest."""
@@ -101,8 +107,7 @@ def _goal_rows(result: TwinsResult, s: Mapping[str, Any]) -> tuple[list[str], in
     for key, (label, required, value, form, sign) in figures.items():
         if key in spread:
             value = spread[key]["mean"]
-            low, high = sorted(sign * spread[key][b] for b in ("low", "high"))
-            text = f"{form.format(sign * value)} ({form.format(low)} to {form.format(high)})"
+            text = _ranged(spread[key], form, sign)
         else:
             text = form.format(sign * value)
         ok = value >= GOALS[key] if key in AT_LEAST else value <= GOALS[key]
@@ -161,9 +166,7 @@ def _seed_rows(result: TwinsResult) -> list[str]:
         lines.append(
             "| mean (lowest to highest) | "
             + " | ".join(
-                f"{form.format(sign * one[k]['mean'])} "
-                f"({form.format(min(sign * one[k]['low'], sign * one[k]['high']))} to "
-                f"{form.format(max(sign * one[k]['low'], sign * one[k]['high']))})"
+                _ranged(one[k], form, sign)
                 for k, form, sign in (
                     ("tuning_gain", "{:+.1f}", 1),
                     ("tuning_gap", "{:+.1f}", -1),
@@ -191,7 +194,7 @@ def _seed_rows(result: TwinsResult) -> list[str]:
         ]
         for name, figures in places.items():
             cols = [
-                f"{np.mean(v):.1f} ({min(v):.1f} to {max(v):.1f})"
+                _ranged({"mean": np.mean(v), "low": min(v), "high": max(v)}, "{:.1f}")
                 for v in (figures["mae"], figures["mmrv"])
             ]
             lines.append(f"| {name} | {cols[0]} | {cols[1]} |")
