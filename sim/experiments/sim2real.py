@@ -56,7 +56,6 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-from scipy.stats import kendalltau
 from tqdm import tqdm
 
 from reform.annotation import AnnotationModel
@@ -444,7 +443,22 @@ class RankAgreement:
 
 def _tau(x: np.ndarray, y: np.ndarray) -> float:
     """Kendall's tau-b; NaN where it is undefined (every detector tied on one side)."""
-    return float(kendalltau(x, y).statistic)
+    return float(_taus(np.asarray(x, dtype=float)[:, None], np.asarray(y, dtype=float)[:, None])[0])
+
+
+def _taus(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Kendall's tau-b of each column of ``x`` (detectors, resamples) with the same column of
+    ``y``, all at once (`scipy.stats.kendalltau` takes one pair of vectors at a time, and a
+    bootstrap asks for thousands): over the pairs of detectors, the sum of the products of the
+    signs of their differences over the square root of the pairs untied in ``x`` times those
+    untied in ``y``; NaN where every detector is tied on one side."""
+    upper = np.triu_indices(x.shape[0], k=1)
+    dx = np.sign(x[:, None, :] - x[None, :, :])[upper]  # (pairs, resamples)
+    dy = np.sign(y[:, None, :] - y[None, :, :])[upper]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        taus = (dx * dy).sum(axis=0) / np.sqrt((dx * dx).sum(axis=0) * (dy * dy).sum(axis=0))
+    taus[~np.isfinite(taus)] = np.nan
+    return taus
 
 
 def _mean_f1(evaluations: Mapping[str, Evaluation], sets: Sequence[str]) -> float:
@@ -478,9 +492,7 @@ def rank_agreement(
     real_points = np.array([_mean_f1(evaluations[n], real) for n in names])
     sim_samples = np.stack([_mean_samples(evaluations[n], simulated, weights) for n in names])
     real_samples = np.stack([_mean_samples(evaluations[n], real, weights) for n in names])
-    taus = np.array(
-        [_tau(sim_samples[:, b], real_samples[:, b]) for b in range(sim_samples.shape[1])]
-    )
+    taus = _taus(sim_samples, real_samples)
     taus = taus[np.isfinite(taus)]  # resamples where tau is undefined say nothing either way
     return RankAgreement(
         benchmark=benchmark,

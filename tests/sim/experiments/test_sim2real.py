@@ -443,3 +443,20 @@ def test_an_undefined_tau_is_said_not_invented() -> None:
     document = rank.to_json()
     assert document["tau"] is None and document["interval"] == [None, None]
     json.dumps(document, allow_nan=False)
+
+
+def test_the_bootstraps_taus_are_scipys_kendall_tau_b_column_by_column() -> None:
+    """`_taus` computes every resample's tau at once: on scores with ties on either side, on
+    both sides of one pair, and on one side throughout, each column is scipy's tau-b (NaN where
+    scipy says NaN)."""
+    from sim.experiments.sim2real import _taus
+
+    rng = np.random.default_rng(5)
+    for detectors in (2, 3, 7):
+        x = rng.integers(0, 4, size=(detectors, 50)) / 4.0  # coarse: many ties
+        y = rng.normal(size=(detectors, 50)).round(1)
+        y[:, :5] = 0.3  # every detector tied in these resamples
+        taus = _taus(x, y)
+        expected = [kendalltau(x[:, b], y[:, b]).statistic for b in range(x.shape[1])]
+        np.testing.assert_allclose(taus, expected, rtol=0, atol=1e-12, equal_nan=True)
+        assert np.isnan(taus[:5]).all() and np.isfinite(taus[5:]).any()
