@@ -4,6 +4,7 @@ The contract every registered detector keeps is tests/reform/test_detector_contr
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import textwrap
 import threading
@@ -190,6 +191,20 @@ def test_entry_points_are_read_on_lookup_and_loaded_when_made(tmp_path, monkeypa
     assert detector_info("ghost").factory == "ghost_module_that_is_not_there:make"
     with pytest.raises(DetectorError, match="^detector 'ghost': cannot import module"):
         make_detector("ghost")
+
+
+def test_a_package_installed_or_removed_in_a_folder_already_searched_is_seen(tmp_path, monkeypatch):
+    # The lookups are kept between calls: a package's metadata appearing in, then leaving, a
+    # folder that was already on the path (as `pip install` and `pip uninstall` do) is seen.
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "lab-late" not in detector_names()
+    dist_info(tmp_path, "latelab", {"lab-late": "labplugin:make"})
+    assert "lab-late" in detector_names()
+    assert detector_info("lab-late").factory == "labplugin:make"
+    shutil.rmtree(tmp_path / "latelab-0.1.dist-info")
+    assert "lab-late" not in detector_names()
+    with pytest.raises(DetectorError, match="^unknown detector 'lab-late'"):
+        detector_info("lab-late")
 
 
 # ------------------------------------------------------------------------------------------------
