@@ -871,19 +871,35 @@ def fetch(
     check_folder_path(folder)
     # From here on the folder changes: no manifest may vouch for it until every file verifies.
     (folder / MANIFEST).unlink(missing_ok=True)
-    for local, file in zip(dataset.local_names, dataset.files, strict=True):
-        target = folder / local
-        if _verified(target, file):
-            continue
-        if target.is_file() or target.is_symlink():
-            target.unlink()  # a damaged or stale copy: never left under its final name
-        url = f"{base}/{dataset.repo}/{file.commit}/{quote(file.path)}"
-        _download(dataset, file, url, target, label=f"{dataset.name} {local}", progress=progress)
+    try:
+        for local, file in zip(dataset.local_names, dataset.files, strict=True):
+            target = folder / local
+            if _verified(target, file):
+                continue
+            if target.is_file() or target.is_symlink():
+                target.unlink()  # a damaged or stale copy: never left under its final name
+            url = f"{base}/{dataset.repo}/{file.commit}/{quote(file.path)}"
+            _download(
+                dataset, file, url, target, label=f"{dataset.name} {local}", progress=progress
+            )
+    except BaseException:
+        _remove_empty_folders(folder)  # what verified stays; no empty shell of the dataset
+        raise
     document = {**_manifest(dataset), "source": base}
     with atomic_open(folder / MANIFEST, "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=1)
         handle.write("\n")
     return folder
+
+
+def _remove_empty_folders(folder: Path) -> None:
+    """Removes ``folder`` and the folders below it that hold nothing, deepest first."""
+    if not folder.is_dir():
+        return
+    below = sorted((p for p in folder.rglob("*") if p.is_dir()), key=lambda p: -len(p.parts))
+    for path in [*below, folder]:
+        with contextlib.suppress(OSError):  # not empty (or not ours to remove): kept
+            path.rmdir()
 
 
 def resolve(

@@ -207,8 +207,8 @@ def _url(base: str, name: str, k: int) -> str:
 
 
 def _assert_nothing_looks_complete(cache: Path, name: str, registry_file: Path) -> None:
-    """No manifest, and every file left in the dataset's folder is a verified file under its
-    final name (no partial download, no temporary file)."""
+    """No manifest, every file left in the dataset's folder is a verified file under its final
+    name (no partial download, no temporary file), and no folder is left empty."""
     folder = cache / name
     assert not (folder / MANIFEST).exists()
     assert not is_fetched(name, cache, registry=registry_file)
@@ -219,6 +219,9 @@ def _assert_nothing_looks_complete(cache: Path, name: str, registry_file: Path) 
         local = path.relative_to(folder).as_posix()
         assert local in expected, f"unexpected file left: {local}"
         assert path.read_bytes() == expected[local][2], f"unverified file left: {local}"
+    folders = [folder, *folder.rglob("*")] if folder.exists() else []
+    empty = [p for p in folders if p.is_dir() and not any(q.is_file() for q in p.rglob("*"))]
+    assert not empty, f"empty folders left: {empty}"  # no empty shell of the dataset
 
 
 def _assert_fetch_fails(
