@@ -89,7 +89,8 @@ def no_process_left_running():
     Ray instance, reusable worker pools), any process the run started that is still running after
     `leftover_processes.GRACE_S` fails the run, each named by its id and command line, and is
     then stopped (Linux: the orphans of stopped parents are counted too, see
-    `leftover_processes`)."""
+    `leftover_processes`). The test process's own resource trackers end with it and are not
+    counted (`leftover_processes.own_trackers`)."""
     watching = leftover_processes.adopt_orphans()
     yield
     if not watching:

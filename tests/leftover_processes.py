@@ -47,24 +47,38 @@ def adopt_orphans() -> bool:
     return libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0
 
 
+_TRACKERS = ("joblib.externals.loky.backend.resource_tracker", "multiprocessing.resource_tracker")
+
+
 def end_helpers() -> None:
     """Stops now the helpers the interpreter stops as it exits, so that what is left after them
-    is what would outlive the run: the local Ray instance, joblib's reusable loky workers, and
-    the resource trackers of loky and multiprocessing (they end when this process closes their
-    pipe)."""
+    is what would outlive the run: the local Ray instance and joblib's reusable loky workers.
+
+    The resource trackers of loky and multiprocessing are left to end with this process
+    (`own_trackers`): stopping one early loses its record, and the clean-ups joblib registers
+    for exit then start a fresh tracker that knows none of the names they release (each a
+    ``KeyError`` traceback at the end of the run, and a tracker started again while the check
+    waits)."""
     if "ray" in sys.modules and sys.modules["ray"].is_initialized():
         sys.modules["ray"].shutdown()
     if "joblib.externals.loky.reusable_executor" in sys.modules:
         executor = sys.modules["joblib.externals.loky.reusable_executor"]._executor
         if executor is not None:
             executor.shutdown(wait=True)
-    for module in (
-        "joblib.externals.loky.backend.resource_tracker",
-        "multiprocessing.resource_tracker",
-    ):
+
+
+def own_trackers() -> set[int]:
+    """The process ids of the resource trackers this process started (loky's and
+    multiprocessing's). Each reads a pipe whose writing end this process holds and ends when
+    that pipe closes, so it ends with this process: it is not left running. (A child that
+    inherited the pipe and outlives this process would keep it alive, and is counted itself;
+    a tracker of another process, orphaned here, is counted.)"""
+    pids = set()
+    for module in _TRACKERS:
         tracker = getattr(sys.modules.get(module), "_resource_tracker", None)
-        if tracker is not None and tracker._pid is not None:
-            tracker._stop()
+        if tracker is not None and getattr(tracker, "_pid", None) is not None:
+            pids.add(int(tracker._pid))
+    return pids
 
 
 def _read(pid: int) -> tuple[int, str, str] | None:
@@ -111,11 +125,15 @@ def descendants(root: int | None = None, *, reap: bool = False) -> list[Process]
 
 
 def left_running(*, grace_s: float = GRACE_S) -> list[Process]:
-    """The descendants of this process still alive after ``grace_s`` seconds of waiting."""
+    """The descendants of this process still alive after ``grace_s`` seconds of waiting, but
+    for its own resource trackers (`own_trackers`), which end with it."""
     deadline = time.monotonic() + grace_s
-    while (alive := descendants(reap=True)) and time.monotonic() < deadline:
+    while True:
+        own = own_trackers()
+        alive = [p for p in descendants(reap=True) if p.pid not in own]
+        if not alive or time.monotonic() >= deadline:
+            return alive
         time.sleep(0.1)
-    return alive
 
 
 def stop(processes: list[Process], *, grace_s: float = GRACE_S) -> None:
