@@ -56,6 +56,26 @@ def test_labels_follow_the_first_row_of_each_component():
     assert labels.tolist() == [0, 1, 0, 1]
 
 
+def test_a_party_is_linked_pair_by_pair_as_a_crowds_tree_links_it():
+    # Up to 64 people the pairs are compared one by one, beyond it a k-d tree finds them: on the
+    # same frames both give the same labels, people exactly at the distance included (quarter
+    # metres on a grid and distances of quarter metres are exact in binary).
+    from reform.proximity import _dense_labels, _tree_labels
+
+    rng = np.random.default_rng(11)
+    for k in range(400):
+        n = int(rng.integers(1, 65))
+        on_grid = k % 2 == 0
+        xy = rng.integers(0, 16, (n, 2)) * 0.25 if on_grid else rng.uniform(0, 8, (n, 2))
+        distance = float(rng.choice([0.25, 0.5, 0.8, 1.0, 1.5]))
+        dense = _dense_labels(xy, distance)
+        assert dense.dtype == np.int64
+        assert dense.tolist() == _tree_labels(xy, distance).tolist(), (xy, distance)
+    crowd = rng.uniform(0, 40, (300, 2))  # beyond 64 people: the tree's answer, the same groups
+    assert proximity_labels(crowd, distance=1.0).tolist() == _tree_labels(crowd, 1.0).tolist()
+    assert proximity_labels(crowd, distance=1.0).tolist() == _dense_labels(crowd, 1.0).tolist()
+
+
 def test_nobody_one_and_two_people():
     nobody = Frame(ids=np.zeros(0, np.int64), position=np.zeros((0, 2)), yaw=np.zeros(0))
     assert Proximity().predict([nobody, frame([[0, 0]], ids=[7])]) == [(), ((7,),)]
