@@ -18,6 +18,12 @@ from sim.ticking import ticking
 
 MARKDOWN = "benchmark-twin.md"
 JSON = "benchmark-twin.json"
+UNCALIBRATED = (
+    "Not calibrated at the place: give its recording too, `--data RECORDING` (its groups are "
+    "never read), and each prediction is calibrated there by how far the detectors agree with "
+    "their consensus on it, which predicts the place more closely than the twin alone (the "
+    "venue twins guide, Predictions)."
+)
 
 
 def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
@@ -127,6 +133,8 @@ def run_twin(args: argparse.Namespace) -> int:
     if args.data:
         where += f", its recording {args.data[0]}"
     text = table(predictions, place=where, twins=len(paths))
+    if place is None:
+        text += f"\n{UNCALIBRATED}\n"
     write_markdown(out / MARKDOWN, text)
     record: dict[str, Any] = {"twin": paths[0] if len(paths) == 1 else paths}
     record["place"] = args.data[0] if args.data else None

@@ -10,6 +10,7 @@ import pytest
 
 from reform import Dataset
 from reform.datasets import write_parquet
+from sim.cli.benchmark_twin import UNCALIBRATED
 from sim.twins import fit_twin, read_twin, twin_data, write_twin
 from sim.twins.predict import Candidate, predict
 from tests.cli_errors import cli_error, run_cli
@@ -90,9 +91,13 @@ def test_the_places_recording_calibrates_the_predictions_without_its_groups(
     argv = ["benchmark", "--twin", twin_file, "--detector", "gcff", "--detector", "proximity",
             "--detector", "hvff", "--detector", "majority", "--out", tmp_path / "twin",
             "-q"]  # fmt: skip
-    assert run_cli(argv, capsys)[0] == 0
+    status, alone, _ = run_cli(argv, capsys)
+    assert status == 0
     twin_only = json.loads((tmp_path / "twin" / "benchmark-twin.json").read_text())
     assert twin_only["place"] is None
+    # without the recording, the table says how to calibrate it; with it, it does not
+    assert alone.endswith(f"\n{UNCALIBRATED}\n") and UNCALIBRATED not in out
+    assert UNCALIBRATED in (tmp_path / "twin" / "benchmark-twin.md").read_text()
     # the twin's own scores are those it predicts without the recording
     assert [p["twin_f1"] for p in predictions] == [p["f1"] for p in twin_only["predictions"]]
     for row in predictions:
