@@ -46,6 +46,7 @@ __all__ = [
 
 TIMEOUT_S = 60.0  # seconds a store may take to answer one request, unless TIMEOUT_VARIABLE says
 TIMEOUT_VARIABLE = "REFORM_SIM_STORE_TIMEOUT"
+CHECK_ATTEMPTS = 2  # tries of the request that proves a store usable, before any work
 _URI = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
 # The package each common scheme needs (fsspec's own registry knows the rest).
 _PACKAGES = {"s3": "s3fs", "s3a": "s3fs", "gs": "gcsfs", "gcs": "gcsfs", "az": "adlfs"}
@@ -353,7 +354,7 @@ def _check(store: Store, scheme: str, package: str | None) -> None:
     endpoint = _endpoint(store.fs)
     where = f" at {endpoint}" if endpoint else ""
     try:
-        store._within("list", "", store.fs.ls, bucket, refresh=True)
+        store._within("list", "", _checking(store.fs, scheme).ls, bucket, refresh=True)
     except StoreError:
         raise
     except FileNotFoundError:
@@ -377,6 +378,23 @@ def _check(store: Store, scheme: str, package: str | None) -> None:
             f"{store.uri}: cannot reach the store{where} ({_first_line(exc)}); check the "
             "endpoint (AWS_ENDPOINT_URL for an S3-compatible server) and the network"
         ) from None
+
+
+def _checking(fs: Any, scheme: str) -> Any:
+    """The filesystem the check lists the bucket with: for S3, ``fs``'s own settings with
+    botocore trying each request twice rather than five times (an endpoint nobody answers on
+    is said in a second or two, not after eight of backing off); the run keeps ``fs``'s
+    patience. Other filesystems are checked as they are."""
+    if scheme not in ("s3", "s3a"):
+        return fs
+    import fsspec
+
+    options = dict(getattr(fs, "storage_options", {}) or {})
+    config = dict(options.get("config_kwargs") or {})
+    config["retries"] = {"max_attempts": CHECK_ATTEMPTS, "mode": "standard"}
+    return fsspec.filesystem(
+        scheme, **{**options, "config_kwargs": config}, skip_instance_cache=True
+    )
 
 
 def _endpoint(fs: Any) -> str | None:
