@@ -29,8 +29,10 @@ demo: $(VENV)/.installed
 	$(BIN)/reform-sim demo $(if $(wildcard $(DATASETS)),--data $(DATASETS))
 
 ## test: install with the test extras, then run the whole test suite
+# TEST_JOBS: pytest-xdist's workers (auto: one a core, at most four; 0: the suite in one process)
+TEST_JOBS ?= auto
 test: $(VENV)/.installed-test
-	REFORM_SIM_DATASETS=$${REFORM_SIM_DATASETS:-$(DATASETS)} $(BIN)/python -m pytest $(PYTEST_ARGS)
+	REFORM_SIM_DATASETS=$${REFORM_SIM_DATASETS:-$(DATASETS)} $(BIN)/python -m pytest -n $(TEST_JOBS) --maxprocesses 4 $(PYTEST_ARGS)
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check reform sim scenarios tests benchmarks
