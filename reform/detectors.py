@@ -432,7 +432,7 @@ def _entry_points() -> dict[str, list[importlib.metadata.EntryPoint]]:
     takes some 20 ms, and a run making detectors by the hundred would spend seconds on it.
     Names with ``:`` could never be looked up and are left out."""
     global _installed
-    key = tuple((folder, _modified(folder)) for folder in sys.path)
+    key = tuple((folder or os.getcwd(), _modified(folder)) for folder in sys.path)
     if _installed is not None and _installed[0] == key:
         return _installed[1]
     found: dict[str, list[importlib.metadata.EntryPoint]] = {}
@@ -443,8 +443,8 @@ def _entry_points() -> dict[str, list[importlib.metadata.EntryPoint]]:
     return found
 
 
-# The last `_entry_points` read: the search path's folders with their modification times, and
-# what was found then.
+# The last `_entry_points` read: the search path's folders (the working folder for "") with
+# their modification times, and what was found then.
 _installed: tuple[tuple[tuple[str, int | None], ...], dict[str, list[Any]]] | None = None
 
 
