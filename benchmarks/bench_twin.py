@@ -1,8 +1,9 @@
 """A venue twin of SALSA fitted and its dataset generated, beside the time to load SALSA.
 
 Issue 28's speed figure: a twin fitted (`sim.twins.fit_twin`: pilot parties, scale, room,
-annotation) and its labelled dataset generated (`sim.twins.generate_twin`, every core given by
-``--jobs``) in under a minute for a dataset the size of SALSA (1,145 frames of 18 people).
+annotation; the pilot parties on ``--jobs`` processes) and its labelled dataset generated
+(`sim.twins.generate_twin`, on as many) in under a minute for a dataset the size of SALSA
+(1,145 frames of 18 people).
 Measured in the same run: loading SALSA (`reform.datasets.load_dataset`, the baseline), fitting
 its twin, generating the twin's dataset into a fresh folder; each a wall-clock median over
 ``--repeats`` runs, with its ratio to the load.
@@ -28,12 +29,12 @@ TARGET_S = 60.0  # seconds: issue 28's bound on fitting and generating together
 def main() -> int:
     parser = BenchmarkParser(__doc__, repeats=3, quick_repeats=1)
     parser.add_argument("--datasets", default=default_datasets(), help="the datasets' folder")
-    parser.add_argument("--jobs", type=int, default=2, help="generation processes")
+    parser.add_argument("--jobs", type=int, default=2, help="processes of the fit and generation")
     args = parser.parse_args()
     root = datasets_folder(Path(args.datasets), "salsa")
     load = timed(lambda: load_dataset(root / "salsa"), args.repeats)
     frames = list(load.result)
-    fit = timed(lambda: fit_twin(frames, name="salsa"), args.repeats)
+    fit = timed(lambda: fit_twin(frames, name="salsa", n_jobs=args.jobs), args.repeats)
     twin = fit.result
     episodes = 1 if args.quick else twin.episodes
 

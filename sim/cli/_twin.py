@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli._common import add_data_arguments, run_with
+from sim.cli._common import add_data_arguments, add_jobs_argument, run_with
 from sim.cli._grammar import add_out, add_seed
 
 DEFAULT_OUT = "twin"
@@ -31,4 +31,5 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="also fit the group structure from the annotated frames (twin.json says so)",
     )
     parser.add_argument("--no-plots", action="store_true", help="write twin.json only")
+    add_jobs_argument(parser, does="processes the pilot parties run on")
     parser.set_defaults(handler=run_with("sim.cli.twin:_run"))

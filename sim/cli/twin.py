@@ -8,7 +8,7 @@ import argparse
 from collections.abc import Sequence
 from pathlib import Path
 
-from sim.cli._common import check_output, load_data
+from sim.cli._common import check_output, job_count, load_data
 from sim.cli._grammar import ticking_bar
 from sim.twins import check_frames_for_twin, fit_twin, twin_sample, write_twin
 from sim.twins.description import Fitted
@@ -25,7 +25,12 @@ def _run(args: argparse.Namespace) -> int:
     name = dataset.name or Path(args.data).name
     with ticking_bar(args, f"fitting a twin of {name}", len(frames)):  # seconds to a minute
         twin = fit_twin(
-            frames, name=name, seed=args.seed, use_labels=args.use_labels, where=args.data
+            frames,
+            name=name,
+            seed=args.seed,
+            use_labels=args.use_labels,
+            where=args.data,
+            n_jobs=job_count(args),
         )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -461,12 +461,14 @@ def run_twins(
             also predicted when ``gcff`` is among them).
         episodes: at most this many episodes of each twin's data (a smoke run); None: the
             twin's own.
-        jobs: processes generating the twins' data (None: every core).
+        jobs: processes fitting the twins (their pilot parties) and generating their data (None:
+            every core).
         progress: called with a line at each step.
     """
     from reform.bootstrap import bootstrap_weights
     from reform.detectors import make_detector
     from reform.splits import time_split
+    from sim.executor import cpu_count
     from sim.experiments.benchmark import bootstrap_blocks
     from sim.twins import fit_twin, twin_data, write_twin
     from sim.twins.predict import catalogue_candidates, predict
@@ -478,7 +480,7 @@ def run_twins(
     twins, frames_of, tuning, cells, own = {}, {}, [], [], {}
     for name, dataset in real.items():
         say(f"{name}: fitting its twin on {len(dataset)} frames, labels removed")
-        twin = fit_twin(list(dataset), name=name, seed=seed)
+        twin = fit_twin(list(dataset), name=name, seed=seed, n_jobs=jobs or cpu_count())
         (root / name).mkdir(parents=True, exist_ok=True)
         write_twin(twin, root / name / "twin.json")
         twins[name] = twin.to_json()

@@ -236,13 +236,26 @@ def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
     return distance if math.isfinite(distance) else math.inf  # a pilot that says nothing: last
 
 
+def _pilot_signature(trial: dict[str, Any], real: PlaceStatistics, seed: int) -> np.ndarray:
+    """The `_signature` of the pilot parties of the crowd options ``trial`` (a unit of work a
+    worker process may run: each pilot is seeded by ``seed`` alone, wherever it runs)."""
+    sim_frames, _ = _simulate(trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
+    return _signature(sim_frames, real, seed=seed)
+
+
 def _fit_spacing_shape(
-    frames: Sequence[Frame], real: PlaceStatistics, options: dict[str, Any], *, seed: int
+    frames: Sequence[Frame],
+    real: PlaceStatistics,
+    options: dict[str, Any],
+    *,
+    seed: int,
+    n_jobs: int = 1,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The crowd options (`SHAPE_CHOICES`, one at a time in that order, each kept where it brings
     the pilot's `spacing_shape` closest to the recording's; `SHAPE_PASSES` passes, so that an
     option chosen early is chosen again beside the later ones) on a room sized once for the
-    recording's crowding."""
+    recording's crowding. ``n_jobs`` > 1: the choices of one option not yet tried run on that
+    many processes at once (the same pilots, the same choices)."""
     target = np.concatenate([spacing_shape(frames), detector_shape(frames)])
     options = dict(options)
     if not np.all(np.isfinite(target[:SHAPE_SIZE])):
@@ -255,21 +268,31 @@ def _fit_spacing_shape(
     options["room_side"] = _room_for(options["people"], side)
     best_shape = None
     seen: dict[tuple, tuple[float, np.ndarray]] = {}  # pilots already run, by their options
+    executor = None
+    if n_jobs > 1:
+        from sim.executor import Executor
+
+        executor = Executor("local", jobs=n_jobs, progress=False)
     for _ in range(SHAPE_PASSES):
         for key, choices in SHAPE_CHOICES.items():
             if key == "max_group_size":
                 choices = tuple(sorted({min(c, options["people"]) for c in choices}))
-            scores = []
+            trials = {}  # the choices' pilots not run yet, by their options
             for value in choices:
                 trial = {**options, key: value, "duration": PILOT_S}
-                known = tuple(sorted(trial.items()))
-                if known not in seen:
-                    sim_frames, _ = _simulate(
-                        trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ
-                    )
-                    signature = _signature(sim_frames, real, seed=seed)
-                    seen[known] = (_shape_distance(target, signature), signature)
-                scores.append(seen[known])
+                trials.setdefault(tuple(sorted(trial.items())), trial)
+            new = [(known, trial) for known, trial in trials.items() if known not in seen]
+            units = [trial for _, trial in new]
+            if executor is not None and len(units) > 1:
+                signatures = executor.map(_pilot_signature, units, shared=(real, seed))
+            else:
+                signatures = [_pilot_signature(trial, real, seed) for trial in units]
+            for (known, _), signature in zip(new, signatures, strict=True):
+                seen[known] = (_shape_distance(target, signature), signature)
+            scores = [
+                seen[tuple(sorted({**options, key: v, "duration": PILOT_S}.items()))]
+                for v in choices
+            ]
             k = min(range(len(choices)), key=lambda j: scores[j][0])
             options[key] = choices[k]
             best_shape = scores[k][1]
@@ -335,6 +358,7 @@ def fit_twin(
     seed: int = 0,
     use_labels: bool = False,
     where: str | None = None,
+    n_jobs: int = 1,
 ) -> Twin:
     """Fits a venue twin to ``frames`` (see the module docstring for the recipe).
 
@@ -345,6 +369,8 @@ def fit_twin(
         seed: master seed of the pilots and of the generated data.
         use_labels: also fit the group structure on the annotated frames.
         where: the file named by errors (default ``name``).
+        n_jobs: processes the pilot parties of the crowd options' choices run on (the twin is
+            the same, byte for byte, whatever the number).
 
     Raises:
         TwinInputError: a recording too small or in the wrong unit (`check_frames_for_twin`).
@@ -376,7 +402,7 @@ def fit_twin(
 
     shape_fit = {}
     if not shape:
-        options, shape_fit = _fit_spacing_shape(frames, real, options, seed=seed)
+        options, shape_fit = _fit_spacing_shape(frames, real, options, seed=seed, n_jobs=n_jobs)
 
     scale = 1.0
     pilot: PlaceStatistics | None = None

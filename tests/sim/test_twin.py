@@ -157,11 +157,13 @@ def test_a_file_that_is_not_json_is_one_line(tmp_path):
 
 
 def test_the_twin_command_writes_the_twin_and_its_plots(place_twin, tmp_path, capsys):
-    # place_twin's recording with its groups removed: the same twin, byte for byte.
+    # place_twin's recording with its groups removed, its pilot parties on two processes (the
+    # fixture's ran in one): the same twin, byte for byte.
     data = tmp_path / "place.parquet"
     frames = tuple(f.replace(groups=None) for f in _frames(scale=1.5))
     write_parquet(Dataset(frames, name="place"), data)
-    status, out, err = run_cli(["twin", "--data", data, "--out", tmp_path / "twin"], capsys)
+    argv = ["twin", "--data", data, "--out", tmp_path / "twin", "--jobs", 2]
+    status, out, err = run_cli(argv, capsys)
     assert status == 0, err
     written = (tmp_path / "twin" / "twin.json").read_bytes()
     assert written == write_twin(place_twin, tmp_path / "fixture.json").read_bytes()
