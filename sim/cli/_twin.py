@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from sim.cli._common import add_data_arguments, add_jobs_argument, run_with
-from sim.cli._grammar import add_out, add_seed
+from sim.cli._grammar import add_out, add_quiet, add_seed
 
 DEFAULT_OUT = "twin"
 
@@ -32,4 +32,5 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--no-plots", action="store_true", help="write twin.json only")
     add_jobs_argument(parser, does="processes the pilot parties run on")
+    add_quiet(parser, old=())
     parser.set_defaults(handler=run_with("sim.cli.twin:_run"))

@@ -162,9 +162,10 @@ def test_the_twin_command_writes_the_twin_and_its_plots(place_twin, tmp_path, ca
     data = tmp_path / "place.parquet"
     frames = tuple(f.replace(groups=None) for f in _frames(scale=1.5))
     write_parquet(Dataset(frames, name="place"), data)
-    argv = ["twin", "--data", data, "--out", tmp_path / "twin", "--jobs", 2]
+    argv = ["twin", "--data", data, "--out", tmp_path / "twin", "--jobs", 2, "--quiet"]
     status, out, err = run_cli(argv, capsys)
     assert status == 0, err
+    assert err == ""  # --quiet, as every command that shows its progress takes it
     written = (tmp_path / "twin" / "twin.json").read_bytes()
     assert written == write_twin(place_twin, tmp_path / "fixture.json").read_bytes()
     assert read_twin(tmp_path / "twin" / "twin.json").options["people"] == 6

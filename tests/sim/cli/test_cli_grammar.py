@@ -46,6 +46,7 @@ LONG = {
     "evaluate",
     "detect",
     "tune",
+    "twin",
 }
 # Commands that record one Rerun recording of the run: the flags of rr.script_add_args.
 RECORDING = {"simulate", "evaluate", "detect", "stress"}
