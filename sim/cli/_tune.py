@@ -40,6 +40,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="the twin's generated dataset (default: twin-data/ beside twin.json; made if absent)",
     )
-    add_jobs_argument(parser, does="processes generating the twin's data")
+    add_jobs_argument(parser, does="processes generating the twin's data and scoring the settings")
     add_quiet(parser)
     parser.set_defaults(handler=run_with("sim.cli.tune:_run"))

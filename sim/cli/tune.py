@@ -8,7 +8,7 @@ import argparse
 import shlex
 from pathlib import Path
 
-from sim.cli._common import check_output
+from sim.cli._common import check_output, job_count
 from sim.cli._grammar import ticking_bar
 
 
@@ -24,9 +24,9 @@ def _run(args: argparse.Namespace) -> int:
     check_output("--out", out)
     folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
     frames = list(twin_data(twin, folder, n_jobs=args.jobs, progress=not args.quiet))
-    # Every setting scored on the twin's frames in one call (gcff's 49: seconds).
+    # Every setting scored on the twin's frames, on --jobs processes (gcff's 49: seconds).
     with ticking_bar(args, f"tuning {name} on the twin", len(frames)):
-        tuned = tune_detector(name, frames)
+        tuned = tune_detector(name, frames, n_jobs=job_count(args))
     if name == REFORM:
         from reform.persistence import save_model
 

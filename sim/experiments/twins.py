@@ -461,8 +461,8 @@ def run_twins(
             also predicted when ``gcff`` is among them).
         episodes: at most this many episodes of each twin's data (a smoke run); None: the
             twin's own.
-        jobs: processes fitting the twins (their pilot parties) and generating their data (None:
-            every core).
+        jobs: processes fitting the twins (their pilot parties), generating their data and
+            searching the detectors' grids (None: every core).
         progress: called with a line at each step.
     """
     from reform.bootstrap import bootstrap_weights
@@ -475,12 +475,13 @@ def run_twins(
     from sim.twins.tune import search_grid, tune_detector, tuning_frames
 
     started = time.perf_counter()
+    workers = jobs or cpu_count()  # fitting the twins and searching the detectors' grids
     say = progress or (lambda _: None)
     root = Path(root)
     twins, frames_of, tuning, cells, own = {}, {}, [], [], {}
     for name, dataset in real.items():
         say(f"{name}: fitting its twin on {len(dataset)} frames, labels removed")
-        twin = fit_twin(list(dataset), name=name, seed=seed, n_jobs=jobs or cpu_count())
+        twin = fit_twin(list(dataset), name=name, seed=seed, n_jobs=workers)
         (root / name).mkdir(parents=True, exist_ok=True)
         write_twin(twin, root / name / "twin.json")
         twins[name] = twin.to_json()
@@ -508,8 +509,10 @@ def run_twins(
                     ("labels", {"trained on": "first half"}, on_labels.model),
                 ]
             else:
-                chosen = tune_detector(detector, data).options
-                labelled = search_grid(detector, tuning_frames(first, 10**9)).options
+                chosen = tune_detector(detector, data, n_jobs=workers).options
+                labelled = search_grid(
+                    detector, tuning_frames(first, 10**9), n_jobs=workers
+                ).options
                 twin_options[detector] = chosen
                 rows = [
                     ("one setting", {}, make_detector(detector)),

@@ -95,13 +95,25 @@ def _grid(name: str) -> list[dict[str, Any]]:
     ]
 
 
-def search_grid(name: str, frames: Sequence[Frame]) -> Tuned:
-    """Every setting of ``name``'s declared grids scored on ``frames``; the best kept (the first
-    in grid order on a tie)."""
+def _setting_f1(options: Mapping[str, Any], name: str, frames: Sequence[Frame]) -> float:
+    """`detector_f1` of ``name`` made with ``options`` (a unit of work for a worker process)."""
     from reform.detectors import make_detector
 
+    return detector_f1(name, make_detector(name, **options), frames)
+
+
+def search_grid(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tuned:
+    """Every setting of ``name``'s declared grids scored on ``frames``; the best kept (the first
+    in grid order on a tie). ``n_jobs`` > 1: the settings are scored on that many processes
+    (the same scores)."""
     grid = _grid(name)
-    scores = [detector_f1(name, make_detector(name, **options), frames) for options in grid]
+    if n_jobs > 1 and len(grid) > 1:
+        from sim.executor import Executor
+
+        executor = Executor("local", jobs=n_jobs, progress=False)
+        scores = executor.map(_setting_f1, grid, shared=(name, list(frames)))
+    else:
+        scores = [_setting_f1(options, name, frames) for options in grid]
     best = int(np.argmax(scores))
     return Tuned(
         detector=name,
@@ -180,8 +192,9 @@ def check_tunable(name: str) -> str:
     return info.name
 
 
-def tune_detector(name: str, frames: Sequence[Frame]) -> Tuned:
-    """``name``'s settings chosen on the twin's ``frames`` (see the module docstring).
+def tune_detector(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tuned:
+    """``name``'s settings chosen on the twin's ``frames`` (see the module docstring); a grid's
+    settings scored on ``n_jobs`` processes.
 
     Raises:
         ValueError: one line for a detector a twin cannot tune: one that reads the settings a
@@ -191,7 +204,7 @@ def tune_detector(name: str, frames: Sequence[Frame]) -> Tuned:
     if name == REFORM:
         return _train_reform(frames)
     limit = int(min(TUNE_FRAMES, max(MIN_TUNE_FRAMES, TUNE_BUDGET // len(_grid(name)))))
-    return search_grid(name, tuning_frames(frames, limit))
+    return search_grid(name, tuning_frames(frames, limit), n_jobs=n_jobs)
 
 
 def _plain(value: Any) -> Any:

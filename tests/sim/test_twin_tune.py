@@ -36,6 +36,17 @@ def test_tune_gcff_writes_the_best_setting_of_its_grid(twin_file, capsys):
     assert f"--detector gcff --settings {path}" in out
 
 
+def test_the_settings_scored_on_two_processes_give_the_same_file(twin_file, tmp_path, capsys):
+    written = []
+    for jobs in (1, 2):
+        out = tmp_path / f"jobs-{jobs}.json"
+        argv = ["tune", "--twin", twin_file, "--detector", "gcff", "--jobs", jobs, "--out", out]
+        status, _, err = run_cli([*argv, "-q"], capsys)
+        assert status == 0, err
+        written.append(out.read_bytes())
+    assert written[0] == written[1]
+
+
 def test_tune_reform_trains_on_the_twin_and_writes_a_model(twin_file, tmp_path, capsys):
     out = tmp_path / "m.skops"
     argv = ["tune", "--twin", twin_file, "--detector", "reform", "--out", out, "--jobs", 1, "-q"]
