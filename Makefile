@@ -16,8 +16,12 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
 	touch $@
 
-# dante: DANTE's tests run on PyTorch (the extra pins its CPU build)
+# dante: DANTE's tests run on PyTorch, the version the extra pins, installed first and alone: pip
+# then takes a CPU build lying in its find-links (hundreds of MB), which the rest accepts; asked
+# for in one call with the rest, it took a CUDA build from the index (gigabytes of downloads)
+TORCH := $(shell sed -n 's/.*"\(torch==[^"]*\)".*/\1/p' pyproject.toml)
 $(VENV)/.installed-test: $(VENV)/.installed
+	$(BIN)/python -m pip install --quiet "$(TORCH)"
 	$(BIN)/python -m pip install --quiet -e ".[test,dante]"
 	touch $@
 
