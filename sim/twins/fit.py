@@ -277,22 +277,17 @@ def _fit_spacing_shape(
         for key, choices in SHAPE_CHOICES.items():
             if key == "max_group_size":
                 choices = tuple(sorted({min(c, options["people"]) for c in choices}))
-            trials = {}  # the choices' pilots not run yet, by their options
-            for value in choices:
-                trial = {**options, key: value, "duration": PILOT_S}
-                trials.setdefault(tuple(sorted(trial.items())), trial)
-            new = [(known, trial) for known, trial in trials.items() if known not in seen]
-            units = [trial for _, trial in new]
+            trials = [{**options, key: value, "duration": PILOT_S} for value in choices]
+            keys = [tuple(sorted(trial.items())) for trial in trials]
+            new = {k: t for k, t in zip(keys, trials, strict=True) if k not in seen}  # to run
+            units = list(new.values())
             if executor is not None and len(units) > 1:
                 signatures = executor.map(_pilot_signature, units, shared=(real, seed))
             else:
                 signatures = [_pilot_signature(trial, real, seed) for trial in units]
-            for (known, _), signature in zip(new, signatures, strict=True):
+            for known, signature in zip(new, signatures, strict=True):
                 seen[known] = (_shape_distance(target, signature), signature)
-            scores = [
-                seen[tuple(sorted({**options, key: v, "duration": PILOT_S}.items()))]
-                for v in choices
-            ]
+            scores = [seen[known] for known in keys]
             k = min(range(len(choices)), key=lambda j: scores[j][0])
             options[key] = choices[k]
             best_shape = scores[k][1]
