@@ -25,20 +25,22 @@ def twin_options(
     (`sim.twins.fit.room_for_every_episode`). For another seed, or more episodes, the same rule
     grows the room until every party of those fits too.
     """
-    from sim.twins.fit import SCENARIO, room_for_every_episode
+    from sim.twins.fit import VENUES, room_for_every_episode
 
     options = dict(twin.options)
     seed = twin.seed if seed is None else seed
     episodes = twin.episodes if episodes is None else episodes
-    if twin.scenario != SCENARIO or (seed == twin.seed and episodes <= twin.episodes):
+    venue = VENUES.get(twin.scenario)
+    if venue is None or (seed == twin.seed and episodes <= twin.episodes):
         return options, ""
-    grown = room_for_every_episode(options, seed=seed, episodes=episodes)
-    if grown["room_side"] == options["room_side"]:
+    grown = room_for_every_episode(options, seed=seed, episodes=episodes, scenario=twin.scenario)
+    room = venue.room
+    if grown[room] == options[room]:
         return options, ""
     return grown, (
-        f"the twin's room grew from {options['room_side']:g} m to {grown['room_side']:g} m so "
-        f"that every party of seed {seed}'s {episodes} episodes fits (the rule that sized it "
-        f"for its own seed, {twin.seed})"
+        f"the twin's room grew from {options[room]:g} m to {grown[room]:g} m so that every "
+        f"party of seed {seed}'s {episodes} episodes fits (the rule that sized it for its own "
+        f"seed, {twin.seed})"
     )
 
 

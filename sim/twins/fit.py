@@ -4,7 +4,14 @@ The recipe (`fit_twin`), each step matching one label-free statistic of the real
 (`sim.twins.statistics.measure_place`) with the same statistic of short simulated parties:
 
 1. **people**: ``mingle``'s ``people`` is the median number of humans per frame, its
-   ``max_group_size`` no more than them;
+   ``max_group_size`` no more than them. A crowd larger than a ``mingle`` party holds (its
+   ``people`` range) is a ``concourse`` (`CROWD`; `venue_for`): as many people in a frame as the
+   recording (walkers go out and come back, so the scene holds more), the share standing still
+   (`sim.twins.statistics.standing_share`) in its corners and everyone else walking through (a
+   queue is not told apart from people standing aside: none), its hall sized as a party's room
+   is, and its largest group searched on the shape of the crowd (`CROWD_CHOICES`), with shorter
+   pilots (`CROWD_PILOT_EPISODES` of `CROWD_PILOT_S`). A crowd larger than the concourse's is
+   refused;
 2. **rate and length**: frames at the recording's rate, episodes as long as its sequences (cut so
    that at least `MIN_EPISODES` episodes make `TARGET_FRAMES` frames or so);
 3. **spacing and scale**: pilot parties are simulated (`PILOT_EPISODES` of `PILOT_S` seconds);
@@ -33,6 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
@@ -50,6 +58,7 @@ from sim.twins.statistics import (
     measure_place,
     nearest_neighbour_distances,
     spacing_shape,
+    standing_share,
 )
 
 __all__ = [
@@ -61,7 +70,8 @@ __all__ = [
     "twin_sample",
 ]
 
-SCENARIO = "mingle"
+SCENARIO = "mingle"  # a party: the scenario of a twin
+CROWD = "concourse"  # ... of a crowd larger than a party holds (`mingle`'s most people)
 MIN_FRAMES = 10  # frames a recording needs to be fitted
 NN_RANGE_M = (0.05, 20.0)  # metres: a median nearest neighbour outside says the unit is wrong
 TARGET_FRAMES = 1200  # frames of a generated twin, about (at least the recording's, at most)
@@ -97,6 +107,59 @@ SHAPE_CHOICES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
         "orientation_noise": (0.1, 0.2, 0.35, 0.5, 0.7, 1.0),  # radians: facing off the centre
     }
 )
+CROWD_CHOICES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
+    {"max_group_size": (3, 5, 8)}  # the concourse's corners hold mingle's parties
+)
+CROWD_PILOT_EPISODES = 1  # a crowd's pilot holds hundreds of people: one episode says enough
+CROWD_PILOT_S = 60.0  # seconds
+MIN_HALL_M = 20.0  # metres (the concourse's smallest hall picked)
+
+
+@dataclass(frozen=True)
+class Venue:
+    """What the fit needs of the scenario a twin enacts.
+
+    Attributes:
+        scenario: the registered scenario.
+        room: its option sizing the floor (a square's side, metres).
+        least_room: the smallest floor's side, metres.
+        choices: the crowd options searched on the shape of the crowd, in order.
+        pilot_episodes: episodes of a pilot.
+        pilot_s: seconds of each.
+    """
+
+    scenario: str
+    room: str
+    least_room: float
+    choices: Mapping[str, tuple[Any, ...]]
+    pilot_episodes: int = PILOT_EPISODES
+    pilot_s: float = PILOT_S
+
+
+VENUES: Mapping[str, Venue] = MappingProxyType(
+    {
+        SCENARIO: Venue(SCENARIO, "room_side", MIN_ROOM_M, SHAPE_CHOICES),
+        CROWD: Venue(
+            CROWD, "hall_side", MIN_HALL_M, CROWD_CHOICES, CROWD_PILOT_EPISODES, CROWD_PILOT_S
+        ),
+    }
+)
+
+
+def people_range(scenario: str) -> tuple[int, int]:
+    """The fewest and most people ``scenario``'s ``people`` option allows (its registry range)."""
+    import scenarios
+
+    declared = next(o for o in scenarios.registry.options(scenario) if o.name == "people")
+    return int(declared.range.low), int(declared.range.high)
+
+
+def venue_for(people: float) -> Venue:
+    """The party (`SCENARIO`) for ``people`` (humans per frame, median) a party holds, else the
+    crowd (`CROWD`)."""
+    return VENUES[SCENARIO if round(people) <= people_range(SCENARIO)[1] else CROWD]
+
+
 SHAPE_STATISTIC = (
     "spacing shape: nearest-neighbour q10, q25, q75, q90, 2nd and 3rd nearest over the median "
     "nearest neighbour, share standing apart, facing away from the nearest (median, q75, rad), "
@@ -132,8 +195,13 @@ def check_frames_for_twin(frames: Sequence[Frame], *, where: str) -> None:
         raise TwinInputError(
             f"{where}: field ids: expected two or more people in some frame, found at most {most}"
         )
-    from sim.twins.statistics import nearest_neighbour_distances
-
+    humans = float(np.median([int(np.sum(~f.is_robot)) for f in frames]))
+    most = people_range(CROWD)[1]
+    if round(humans) > most:
+        raise TwinInputError(
+            f"{where}: field ids: expected at most {most} humans per frame (median; the "
+            f"{CROWD}'s largest crowd), found {humans:g}"
+        )
     nn = float(np.median(nearest_neighbour_distances(frames)))
     low, high = NN_RANGE_M
     if not low <= nn <= high:
@@ -143,71 +211,94 @@ def check_frames_for_twin(frames: Sequence[Frame], *, where: str) -> None:
         )
 
 
-def _room_for(people: int, side: float) -> float:
-    least = max(MIN_ROOM_M, math.sqrt(people / MAX_DENSITY) + 1e-6)
+def _room_for(venue: Venue, people: int, side: float) -> float:
+    least = max(venue.least_room, math.sqrt(people / MAX_DENSITY) + 1e-6)
     return float(min(MAX_ROOM_M, max(least, side)))
 
 
-def _simulate(options: dict[str, Any], *, seed: int, rate: float) -> tuple[list[Frame], dict]:
-    """Pilot episodes of ``options``; a room they do not fit grows (returned options)."""
+def _no_room(venue: Venue) -> tuple[type[Exception], ...]:
+    """What the scenario raises for a crowd its floor does not hold: mingle's
+    `scenarios.mingle.NoFloorError`; the concourse refuses a hall too small for its people with a
+    `ValueError` before drawing anything (and its corners' parties may find no floor)."""
     from scenarios.mingle import NoFloorError
+
+    return (NoFloorError,) if venue.scenario == SCENARIO else (NoFloorError, ValueError)
+
+
+def _simulate(
+    options: dict[str, Any], *, seed: int, rate: float, venue: Venue = VENUES[SCENARIO]
+) -> tuple[list[Frame], dict]:
+    """Pilot episodes of ``options``; a room they do not fit grows (returned options)."""
     from sim.episode import simulate_episode
 
     options = dict(options)
+    room = venue.room
     for _ in range(ROOM_TRIES):
         try:
             frames: list[Frame] = []
-            for k in range(PILOT_EPISODES):
+            for k in range(venue.pilot_episodes):
                 episode = simulate_episode(
-                    SCENARIO, seed=derive_int(seed, k), rate=rate, options=options
+                    venue.scenario, seed=derive_int(seed, k), rate=rate, options=options
                 )
                 frames.extend(episode.dataset)
             return frames, options
-        except NoFloorError:
-            options["room_side"] = _room_for(options["people"], options["room_side"] * ROOM_GROWTH)
+        except _no_room(venue):
+            options[room] = _room_for(venue, options["people"], options[room] * ROOM_GROWTH)
     raise TwinInputError(
-        f"twin: field options.room_side: expected a room the party fits, found none up to "
-        f"{options['room_side']:.3g} m"
+        f"twin: field options.{room}: expected a floor the crowd fits, found none up to "
+        f"{options[room]:.3g} m"
     )
 
 
 def room_for_every_episode(
-    options: Mapping[str, Any], *, seed: int, episodes: int
+    options: Mapping[str, Any], *, seed: int, episodes: int, scenario: str = SCENARIO
 ) -> dict[str, Any]:
-    """``options`` with a room every episode of the twin's data fits (each episode's party is
+    """``options`` with a room every episode of the twin's data fits (each episode's crowd is
     drawn, not simulated; the room grows by `ROOM_GROWTH` until all fit): the episodes
     ``episode_seed(seed, k)`` for k below ``episodes`` (at least `MIN_EPISODES`), as
     `sim.generate` seeds them."""
     import scenarios
-    from scenarios.mingle import NoFloorError
     from sim.generate import episode_seed
 
+    venue = VENUES[scenario]
+    room = venue.room
     options = dict(options)
     for _ in range(ROOM_TRIES):
         try:
             for k in range(max(episodes, MIN_EPISODES)):
-                scenarios.make(SCENARIO, seed=episode_seed(seed, k), **options)
+                scenarios.make(scenario, seed=episode_seed(seed, k), **options)
             return options
-        except NoFloorError:
-            side = _room_for(options["people"], options["room_side"] * ROOM_GROWTH)
-            options["room_side"] = float(f"{side:.6g}")
+        except _no_room(venue):
+            side = _room_for(venue, options["people"], options[room] * ROOM_GROWTH)
+            options[room] = float(f"{side:.6g}")
     raise TwinInputError(
-        f"twin: field options.room_side: expected a room every episode fits, found none up to "
-        f"{options['room_side']:.3g} m"
+        f"twin: field options.{room}: expected a floor every episode fits, found none up to "
+        f"{options[room]:.3g} m"
     )
 
 
 def _sample(
-    options: Mapping[str, Any], annotation: AnnotationModel, *, seed: int, rate: float
+    options: Mapping[str, Any],
+    annotation: AnnotationModel,
+    *,
+    seed: int,
+    rate: float,
+    venue: Venue = VENUES[SCENARIO],
 ) -> list[Frame]:
-    frames, _ = _simulate(dict(options), seed=derive_int(seed, CHECK), rate=rate)
+    frames, _ = _simulate(dict(options), seed=derive_int(seed, CHECK), rate=rate, venue=venue)
     return list(annotation.apply(frames, derive_rng(seed, CHECK)))
 
 
 def twin_sample(twin: Twin) -> list[Frame]:
-    """A few of the twin's frames, as its fit measured them (`PILOT_EPISODES` episodes, seeded
+    """A few of the twin's frames, as its fit measured them (its venue's pilot episodes, seeded
     by the twin's seed): what ``twin.json``'s twin figures and the plots are made of."""
-    return _sample(twin.options, twin.annotation, seed=twin.seed, rate=twin.rate_hz)
+    return _sample(
+        twin.options,
+        twin.annotation,
+        seed=twin.seed,
+        rate=twin.rate_hz,
+        venue=VENUES[twin.scenario],
+    )
 
 
 def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
@@ -236,10 +327,14 @@ def _shape_distance(real: np.ndarray, twin: np.ndarray) -> float:
     return distance if math.isfinite(distance) else math.inf  # a pilot that says nothing: last
 
 
-def _pilot_signature(trial: dict[str, Any], real: PlaceStatistics, seed: int) -> np.ndarray:
+def _pilot_signature(
+    trial: dict[str, Any], real: PlaceStatistics, seed: int, scenario: str = SCENARIO
+) -> np.ndarray:
     """The `_signature` of the pilot parties of the crowd options ``trial`` (a unit of work a
     worker process may run: each pilot is seeded by ``seed`` alone, wherever it runs)."""
-    sim_frames, _ = _simulate(trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
+    sim_frames, _ = _simulate(
+        trial, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ, venue=VENUES[scenario]
+    )
     return _signature(sim_frames, real, seed=seed)
 
 
@@ -250,8 +345,10 @@ def _fit_spacing_shape(
     *,
     seed: int,
     n_jobs: int = 1,
+    venue: Venue = VENUES[SCENARIO],
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The crowd options (`SHAPE_CHOICES`, one at a time in that order, each kept where it brings
+    """The crowd options (the ``venue``'s choices, `SHAPE_CHOICES` for a party, one at a time in
+    that order, each kept where it brings
     the pilot's `spacing_shape` closest to the recording's; `SHAPE_PASSES` passes, so that an
     option chosen early is chosen again beside the later ones) on a room sized once for the
     recording's crowding. ``n_jobs`` > 1: the choices of one option not yet tried run on that
@@ -260,12 +357,12 @@ def _fit_spacing_shape(
     options = dict(options)
     if not np.all(np.isfinite(target[:SHAPE_SIZE])):
         return options, {}
-    run = {**options, "duration": PILOT_S}
-    sim_frames, run = _simulate(run, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ)
+    run = {**options, "duration": venue.pilot_s}
+    sim_frames, run = _simulate(run, seed=derive_int(seed, SHAPE), rate=PILOT_RATE_HZ, venue=venue)
     pilot = measure_place(sim_frames)
     scale = real.nn_median / pilot.nn_median
-    side = run["room_side"] * (real.extent_m / scale) / pilot.extent_m
-    options["room_side"] = _room_for(options["people"], side)
+    side = run[venue.room] * (real.extent_m / scale) / pilot.extent_m
+    options[venue.room] = _room_for(venue, options["people"], side)
     best_shape = None
     seen: dict[tuple, tuple[float, np.ndarray]] = {}  # pilots already run, by their options
     executor = None
@@ -274,17 +371,21 @@ def _fit_spacing_shape(
 
         executor = Executor("local", jobs=n_jobs, progress=False)
     for _ in range(SHAPE_PASSES):
-        for key, choices in SHAPE_CHOICES.items():
+        for key, choices in venue.choices.items():
             if key == "max_group_size":
                 choices = tuple(sorted({min(c, options["people"]) for c in choices}))
-            trials = [{**options, key: value, "duration": PILOT_S} for value in choices]
+            trials = [{**options, key: value, "duration": venue.pilot_s} for value in choices]
             keys = [tuple(sorted(trial.items())) for trial in trials]
             new = {k: t for k, t in zip(keys, trials, strict=True) if k not in seen}  # to run
             units = list(new.values())
             if executor is not None and len(units) > 1:
-                signatures = executor.map(_pilot_signature, units, shared=(real, seed))
+                signatures = executor.map(
+                    _pilot_signature, units, shared=(real, seed, venue.scenario)
+                )
             else:
-                signatures = [_pilot_signature(trial, real, seed) for trial in units]
+                signatures = [
+                    _pilot_signature(trial, real, seed, venue.scenario) for trial in units
+                ]
             for known, signature in zip(new, signatures, strict=True):
                 seen[known] = (_shape_distance(target, signature), signature)
             scores = [seen[known] for known in keys]
@@ -377,8 +478,11 @@ def fit_twin(
     if not use_labels:
         frames = _strip(frames)
     real = measure_place(frames)
+    venue = venue_for(real.people_median)
+    crowd = venue.scenario == CROWD
+    standing = standing_share(frames) if crowd else math.nan
 
-    people = int(_clip(round(real.people_median), 2, 100))
+    people = int(_clip(round(real.people_median), *people_range(venue.scenario)))
     rate = _clip(real.rate_hz if math.isfinite(real.rate_hz) else 1.0, 0.05, 25.0)
     rate = 1.0 / (max(1, round(1.0 / rate / STEP_S)) * STEP_S)  # whole control steps a frame
     target = _clip(real.frames, MIN_TARGET_FRAMES, TARGET_FRAMES)
@@ -389,31 +493,49 @@ def fit_twin(
     options: dict[str, Any] = {
         "people": people,
         "max_group_size": max(2, max_group),
-        "room_side": _room_for(people, math.sqrt(people / 0.4)),
+        venue.room: _room_for(venue, people, math.sqrt(people / 0.4)),
     }
+    if crowd:  # everyone standing is in the corners (a queue is not told apart from them)
+        options["queue_share"] = 0.0
+        options["group_share"] = _group_share(standing, people)
     if shape:
         options["max_group_size"] = int(_clip(shape["max_group_size"], 2, min(12, people)))
-        options["alone_share"] = _clip(shape["alone_share"], 0.0, 1.0)
+        if not crowd:
+            options["alone_share"] = _clip(shape["alone_share"], 0.0, 1.0)
 
     shape_fit = {}
     if not shape:
-        options, shape_fit = _fit_spacing_shape(frames, real, options, seed=seed, n_jobs=n_jobs)
+        options, shape_fit = _fit_spacing_shape(
+            frames, real, options, seed=seed, n_jobs=n_jobs, venue=venue
+        )
 
     scale = 1.0
     pilot: PlaceStatistics | None = None
     for round_ in range(PILOT_ROUNDS):
-        if shape:
+        if shape and not crowd:
             options["radius_base"] = _clip(shape["radius_base"] / scale, 0.3, 2.0)
             options["radius_per_member"] = _clip(shape["radius_per_member"] / scale, 0.0, 0.5)
-        run = {**options, "duration": PILOT_S}
-        sim_frames, run = _simulate(run, seed=derive_int(seed, PILOT, round_), rate=PILOT_RATE_HZ)
-        options["room_side"] = run["room_side"]
+        run = {**options, "duration": venue.pilot_s}
+        sim_frames, run = _simulate(
+            run, seed=derive_int(seed, PILOT, round_), rate=PILOT_RATE_HZ, venue=venue
+        )
+        options[venue.room] = run[venue.room]
         pilot = measure_place(sim_frames)
         scale = real.nn_median / pilot.nn_median
         if round_ < PILOT_ROUNDS - 1:  # the last round's room is the one the scale was fit on
             wanted = real.extent_m / scale  # the box holding everyone, in simulated metres
-            side = options["room_side"] * wanted / pilot.extent_m
-            options["room_side"] = _room_for(people, side)
+            side = options[venue.room] * wanted / pilot.extent_m
+            options[venue.room] = _room_for(venue, people, side)
+            if crowd:  # as many present and standing as in the recording: walkers go out and
+                # come back, and some of the corners' people walk
+                if pilot.people_median > 0:
+                    present = people * real.people_median / pilot.people_median
+                    people = int(_clip(round(present), *people_range(CROWD)))
+                    options["people"] = people
+                stood = standing_share(sim_frames)
+                if math.isfinite(stood) and stood > 0:
+                    wanted_share = options["group_share"] * standing / stood
+                    options["group_share"] = _group_share(wanted_share, people)
     assert pilot is not None
 
     jitter = math.sqrt(max(0.0, real.position_jitter_m**2 - (scale * pilot.position_jitter_m) ** 2))
@@ -433,32 +555,74 @@ def fit_twin(
 
     import scenarios
 
-    options = scenarios.registry.check_options(SCENARIO, options)
-    options = room_for_every_episode(options, seed=seed, episodes=episodes)
-    mine = measure_place(_sample(options, annotation, seed=seed, rate=rate))
+    options = scenarios.registry.check_options(venue.scenario, options)
+    options = room_for_every_episode(
+        options, seed=seed, episodes=episodes, scenario=venue.scenario
+    )
+    sample = _sample(options, annotation, seed=seed, rate=rate, venue=venue)
+    mine = measure_place(sample)
 
     searched = tuple(
         Fitted(
             f"options.{key}", options[key], SHAPE_STATISTIC, shape_fit["real"], shape_fit["twin"]
         )  # fmt: skip
-        for key in SHAPE_CHOICES
+        for key in venue.choices
         if shape_fit
     )
     names = {row.name for row in searched}
-    rows = _fitted(real, mine, options, annotation, rate, episodes, shape)
+    rows = _fitted(real, mine, options, annotation, rate, episodes, shape, venue)
+    statistics = {"real": real.to_json(), "twin": mine.to_json()}
+    if crowd:
+        twin_standing = standing_share(sample)
+        rows += _crowd_rows(real, options, standing, twin_standing)
+        statistics["real"]["standing_share"] = _rounded(standing)
+        statistics["twin"]["standing_share"] = _rounded(twin_standing)
     fitted = tuple(row for row in rows if row.name not in names) + searched
     return Twin(
         name=name,
         mode="labels" if use_labels else "label-free",
-        scenario=SCENARIO,
+        scenario=venue.scenario,
         options=options,
         annotation=annotation,
         rate_hz=rate,
         episodes=episodes,
         seed=seed,
         fitted=fitted,
-        statistics={"real": real.to_json(), "twin": mine.to_json()},
+        statistics=statistics,
     )
+
+
+def _group_share(share: float, people: int) -> float:
+    """``share`` of the ``people`` standing in the concourse's corners, as it allows: none, or
+    two a corner at least."""
+    share = _clip(share if math.isfinite(share) else 0.0, 0.0, 1.0)
+    return float(f"{share:.4g}") if round(share * people) >= 8 else 0.0
+
+
+def _rounded(value: float) -> float | None:
+    return float(f"{value:.6g}") if math.isfinite(value) else None
+
+
+def _crowd_rows(
+    real: PlaceStatistics, options: Mapping[str, Any], standing: float, twin_standing: float
+) -> tuple[Fitted, ...]:
+    """The rows a crowd's twin adds: why it is a concourse, who stands, and the queue."""
+    most = people_range(SCENARIO)[1]
+    return (
+        Fitted(
+            "scenario", CROWD, f"humans per frame, median: more than a {SCENARIO} party holds "
+            f"({most})", real.people_median, float(options["people"]),
+        ),
+        Fitted(
+            "options.group_share", options["group_share"], "share of people standing (slower "
+            "than 0.3 m/s over a second), all of them in the corners",
+            _rounded(standing), _rounded(twin_standing),
+        ),
+        Fitted(
+            "options.queue_share", options["queue_share"], "not fitted: a queue is not told "
+            "apart from people standing aside", None, None,
+        ),
+    )  # fmt: skip
 
 
 def _fitted(
@@ -469,6 +633,7 @@ def _fitted(
     rate: float,
     episodes: int,
     shape: dict[str, float],
+    venue: Venue,
 ) -> tuple[Fitted, ...]:
     r, t = real.to_json(), twin.to_json()
 
@@ -481,7 +646,7 @@ def _fitted(
         row("options.people", options["people"], "humans per frame, median", "people_median"),
         row("options.max_group_size", options["max_group_size"],
             "no more than the people (labels: the largest group)", None),
-        row("options.room_side", options["room_side"],
+        row(f"options.{venue.room}", options[venue.room],
             "side of the box holding everyone, median (crowding)", "extent_m"),
         row("options.duration", options["duration"], "length of a sequence, median, seconds",
             "duration_s"),
@@ -506,7 +671,7 @@ def _fitted(
         row("(check) arrivals", None, "people appearing per minute", "arrivals_per_min"),
     ]  # fmt: skip
     for key in ("alone_share", "radius_base", "radius_per_member"):
-        if key in shape:
+        if key in shape and key in options:
             rows.append(
                 Fitted(
                     f"options.{key}",

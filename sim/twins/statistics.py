@@ -26,6 +26,7 @@ __all__ = [
     "measure_place",
     "nearest_neighbour_distances",
     "spacing_shape",
+    "standing_share",
 ]
 
 # Orientation codings looked for, in directions per turn (the field's: 4, 8, 24).
@@ -41,6 +42,9 @@ VOTE_LINK = 0.5  # median nearest-neighbour distances: votes closer than this ar
 SMALL_CLUMP_PEOPLE = 64  # people: clumps of frames up to this size are found by squaring the links
 SHAPE_SIZE = 16  # entries of `spacing_shape`
 DETECTOR_FRAMES = 150  # frames (evenly spread) the detectors of `detector_shape` run on
+DETECTOR_PERSON_FRAMES = 15_000  # ... and at most this many people in all (fewer frames of crowds)
+STANDING_M_PER_S = 0.3  # metres per second: slower than this over a second is standing
+STANDING_WINDOW_S = (1.0, 3.0)  # seconds: the interval a speed is measured over, at least, at most
 DETECTOR_SHAPE_SIZE = 4  # entries of `detector_shape`
 SHORT_STRIDE_M = 0.4  # metres: the stride of the GCFF `detector_shape` compares with the default
 
@@ -315,6 +319,36 @@ def measure_place(frames: Sequence[Frame]) -> PlaceStatistics:
     )
 
 
+def standing_share(frames: Sequence[Frame]) -> float:
+    """The share of people standing: of every human seen twice in a sequence, `STANDING_WINDOW_S`
+    apart (the first frame a second or more later, three at most), how many moved slower than
+    `STANDING_M_PER_S` (positions in metres; measured over a second or more, so that a tracker's
+    jitter at a high frame rate does not read as walking). NaN when no one is seen twice so.
+
+    Only ids, kinds, positions, times and sequences are read."""
+    shortest, longest = STANDING_WINDOW_S
+    standing = seen = 0
+    for run in _by_sequence(frames):
+        times = np.array([f.time for f in run], dtype=np.float64)
+        later = np.searchsorted(times, times + shortest - 1e-9)
+        for a, k in zip(run, later.tolist(), strict=True):
+            if k >= len(run) or run[k].time - a.time > longest:
+                continue
+            b = run[k]
+            where = {int(i): j for j, i in enumerate(b.ids[~b.is_robot])}
+            humans = a.position[~a.is_robot]
+            after = b.position[~b.is_robot]
+            ids = a.ids[~a.is_robot].tolist()
+            pairs = [(j, where[i]) for j, i in enumerate(ids) if i in where]
+            if not pairs:
+                continue
+            rows, cols = np.array(pairs).T
+            speed = np.hypot(*(after[cols] - humans[rows]).T) / (b.time - a.time)
+            standing += int(np.sum(speed < STANDING_M_PER_S))
+            seen += len(pairs)
+    return standing / seen if seen else math.nan
+
+
 def _quantile(values: np.ndarray, q: float) -> float:
     return float(np.quantile(values, q)) if values.size else math.nan
 
@@ -322,7 +356,8 @@ def _quantile(values: np.ndarray, q: float) -> float:
 def detector_shape(frames: Sequence[Frame]) -> np.ndarray:
     """How fixed detectors group the frames, and how much they agree, without any label:
     (DETECTOR_SHAPE_SIZE,), on at most `DETECTOR_FRAMES` frames of four or more people spread
-    over the recording (positions in metres):
+    over the recording, fewer for crowds (`DETECTOR_PERSON_FRAMES` people in all, the frames'
+    median people counted), positions in metres:
 
     - 0: the share of people GCFF (its catalogue settings) puts in a group of two or more;
     - 1: the mean size of those groups;
@@ -341,8 +376,10 @@ def detector_shape(frames: Sequence[Frame]) -> np.ndarray:
     crowded = [f for f in frames if f.n_people >= 4]
     if not crowded:
         return np.full(DETECTOR_SHAPE_SIZE, math.nan)
-    step = max(1, len(crowded) // DETECTOR_FRAMES)
-    crowded = [f.replace(groups=None) for f in crowded[::step][:DETECTOR_FRAMES]]
+    people = float(np.median([f.n_people for f in crowded]))
+    most = max(1, min(DETECTOR_FRAMES, int(DETECTOR_PERSON_FRAMES // people)))
+    step = max(1, len(crowded) // most)
+    crowded = [f.replace(groups=None) for f in crowded[::step][:most]]
     base = run_detector("gcff", make_detector("gcff"), crowded)
     people = sum(f.n_people for f in crowded)
     grouped = [len(g) for p in base for g in p if len(g) >= 2]
