@@ -95,6 +95,7 @@ _register(
             low=1e-6,
             high=1e4,
             grid=_GCFF_MDL_GRID_M2,
+            lean="low",  # a cheaper group: neighbours are merged less
         ),
         _ORIENTATION,
     ),

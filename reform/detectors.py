@@ -112,6 +112,7 @@ class Detector(Protocol):
 
 
 OPTION_TYPES = ("float", "int", "str", "bool", "path")  # what an Option's value may be
+LEANS = ("", "low", "high")  # the end of an option's grid that groups fewer people together
 NEEDS = ("", "dataset", "training")  # what a detector must be given before it predicts
 
 
@@ -131,6 +132,9 @@ class Option:
         high: the largest value accepted (numbers), or None.
         choices: the values accepted (``str``), or ``()`` for any.
         grid: values a settings search tries (``reform-sim tune``), or ``()`` when it is not tuned.
+        lean: the end of ``grid`` that groups fewer people together (``"low"`` or ``"high"``),
+            or ``""`` when neither does: among the settings a search on a venue twin cannot
+            tell apart, it takes the value nearest that end (`sim.twins.tune`).
     """
 
     name: str
@@ -142,10 +146,15 @@ class Option:
     high: float | None = None
     choices: tuple[str, ...] = ()
     grid: tuple[Any, ...] = ()
+    lean: str = ""
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
             raise ValueError(f"an option's name must be an identifier, got {self.name!r}")
+        if self.lean not in LEANS:
+            raise ValueError(
+                f"option {self.name!r}: lean must be one of {LEANS}, got {self.lean!r}"
+            )
         if self.type not in OPTION_TYPES:
             raise ValueError(
                 f"option {self.name!r}: type must be one of {', '.join(OPTION_TYPES)}, "

@@ -2,7 +2,13 @@
 
 `tune_detector` searches the grid each catalogued option declares
 (`reform.detectors.detector_info(name).options`, each `Option.grid`; the other options at their
-defaults) and keeps the setting with the best F1 at T = 2/3 on the twin's frames. REFORM is
+defaults) and keeps the setting with the best F1 at T = 2/3 on the twin's frames; where options
+declare which end of their grid groups fewer people together (`Option.lean`: GCFF's group cost,
+low), it keeps instead, among the settings within `TIE_F1` of the best, the one nearest that
+end. A twin's groups stand farther from their neighbours than a place's do, so a twin cannot see
+the merges a costlier group makes: on the twins of the four datasets at hand (six seeds each)
+the best setting on the twin fell 3.9 points short of the best on the recording's own labels,
+the setting nearest the lean end within 2 points of it 1.6 (docs/guide/twins.md). REFORM is
 trained on the twin instead: each of the paper's classifiers is trained on half of the twin's
 episodes and scored on the other half, and the best is trained again on every episode.
 
@@ -40,6 +46,7 @@ TUNE_FRAMES = 300  # frames of the twin each grid setting is scored on at most (
 MIN_TUNE_FRAMES = 60  # ... and at least
 TUNE_BUDGET = 12_000  # frames scored in all, over the grid: a larger grid scores fewer frames each
 THRESHOLD = Fraction(2, 3)  # the objective: F1 at T = 2/3, the field's protocol
+TIE_F1 = 0.02  # settings this close to the best F1 on a twin are not told apart (lean, above)
 REFORM = "reform"
 
 
@@ -54,6 +61,7 @@ class Tuned:
         grid: every setting tried, ``{"options": ..., "f1": ...}``.
         frames: twin frames the choice was scored on.
         model: REFORM's fitted estimator, trained on every twin episode (else None).
+        rule: how the setting was chosen among the grid's, in words.
     """
 
     detector: str
@@ -62,6 +70,7 @@ class Tuned:
     grid: tuple[Mapping[str, Any], ...] = ()
     frames: int = 0
     model: Any = field(default=None, compare=False)
+    rule: str = "the best F1"
 
 
 def tuning_frames(frames: Sequence[Frame], limit: int = TUNE_FRAMES) -> list[Frame]:
@@ -102,10 +111,46 @@ def _setting_f1(options: Mapping[str, Any], name: str, frames: Sequence[Frame]) 
     return detector_f1(name, make_detector(name, **options), frames)
 
 
-def search_grid(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tuned:
+def _leaning(name: str, grid: Sequence[Mapping[str, Any]], scores: Sequence[float]) -> int | None:
+    """The index of the setting nearest the lean ends of ``name``'s options (`Option.lean`, in
+    the options' order) among those within `TIE_F1` of the best score (the best of them on a
+    tie, then the first in grid order); None when no option leans."""
+    from reform.detectors import detector_info
+
+    leans = [(o.name, o.lean) for o in detector_info(name).options if o.grid and o.lean]
+    if not leans:
+        return None
+    best = max(scores)
+    near = [k for k, score in enumerate(scores) if score >= best - TIE_F1]
+
+    def order(k: int) -> tuple:
+        ends = tuple(grid[k][o] if lean == "low" else -grid[k][o] for o, lean in leans)
+        return (*ends, -scores[k], k)
+
+    return min(near, key=order)
+
+
+def _lean_rule(name: str) -> str:
+    from reform.detectors import detector_info
+
+    leans = [
+        f"{'lowest' if o.lean == 'low' else 'highest'} {o.name}"
+        for o in detector_info(name).options
+        if o.grid and o.lean
+    ]
+    return (
+        f"among the settings within {100 * TIE_F1:g} points of the best F1, the one with the "
+        f"{', then the '.join(leans)} (the end that groups fewer people together)"
+    )
+
+
+def search_grid(
+    name: str, frames: Sequence[Frame], *, n_jobs: int = 1, lean: bool = False
+) -> Tuned:
     """Every setting of ``name``'s declared grids scored on ``frames``; the best kept (the first
-    in grid order on a tie). ``n_jobs`` > 1: the settings are scored on that many processes
-    (the same scores)."""
+    in grid order on a tie), or with ``lean`` the setting nearest its options' lean ends among
+    those within `TIE_F1` of the best (`_leaning`; the module docstring says why a twin leans).
+    ``n_jobs`` > 1: the settings are scored on that many processes (the same scores)."""
     grid = _grid(name)
     if n_jobs > 1 and len(grid) > 1:
         from sim.executor import Executor
@@ -115,12 +160,17 @@ def search_grid(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tuned
     else:
         scores = [_setting_f1(options, name, frames) for options in grid]
     best = int(np.argmax(scores))
+    leaning = _leaning(name, grid, scores) if lean else None
+    rule = "the best F1"
+    if leaning is not None:
+        best, rule = leaning, _lean_rule(name)
     return Tuned(
         detector=name,
         options=grid[best],
         f1=scores[best],
         grid=tuple({"options": o, "f1": s} for o, s in zip(grid, scores, strict=True)),
         frames=len(frames),
+        rule=rule,
     )
 
 
@@ -204,7 +254,7 @@ def tune_detector(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tun
     if name == REFORM:
         return _train_reform(frames)
     limit = int(min(TUNE_FRAMES, max(MIN_TUNE_FRAMES, TUNE_BUDGET // len(_grid(name)))))
-    return search_grid(name, tuning_frames(frames, limit), n_jobs=n_jobs)
+    return search_grid(name, tuning_frames(frames, limit), n_jobs=n_jobs, lean=True)
 
 
 def _plain(value: Any) -> Any:
@@ -225,7 +275,12 @@ def write_tuned(
         tuned.detector,
         tuned.options,
         chosen_on=dict(chosen_on)
-        | {"frames": tuned.frames, "objective": "F1 at T = 2/3", "f1": _plain(tuned.f1)},
+        | {
+            "frames": tuned.frames,
+            "objective": "F1 at T = 2/3",
+            "rule": tuned.rule,
+            "f1": _plain(tuned.f1),
+        },
         grid=[
             {"options": {k: _plain(v) for k, v in g["options"].items()}, "f1": _plain(g["f1"])}
             for g in tuned.grid

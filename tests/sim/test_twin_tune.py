@@ -7,9 +7,11 @@ import json
 
 import pytest
 
+from reform.detectors import Option, detector_info
 from reform.persistence import load_model
 from reform.settings import read_settings
 from sim.twins import write_twin
+from sim.twins.tune import TIE_F1, _leaning
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
@@ -20,7 +22,9 @@ def twin_file(place_twin, tmp_path_factory):
     return write_twin(twin, tmp_path_factory.mktemp("twin") / "twin.json")
 
 
-def test_tune_gcff_writes_the_best_setting_of_its_grid(twin_file, capsys):
+def test_tune_gcff_writes_the_cheapest_group_among_the_best_settings_of_its_grid(
+    twin_file, capsys
+):
     status, out, err = run_cli(
         ["tune", "--twin", twin_file, "--detector", "gcff", "--jobs", 1, "-q"], capsys
     )
@@ -28,8 +32,12 @@ def test_tune_gcff_writes_the_best_setting_of_its_grid(twin_file, capsys):
     path = twin_file.parent / "tuned-gcff.json"
     data = json.loads(path.read_text())
     assert len(data["grid"]) == 49  # stride x mdl, as the catalogue declares them
-    best = max(data["grid"], key=lambda g: g["f1"])
-    assert data["options"] == best["options"]
+    best = max(g["f1"] for g in data["grid"])
+    near = [g for g in data["grid"] if g["f1"] >= best - TIE_F1]
+    cheapest = min(g["options"]["mdl"] for g in near)
+    chosen = max((g for g in near if g["options"]["mdl"] == cheapest), key=lambda g: g["f1"])
+    assert data["options"] == chosen["options"]
+    assert "lowest mdl" in data["chosen_on"]["rule"]
     settings = read_settings(path)
     assert settings.detector == "gcff" and set(settings.options) == {"stride", "mdl"}
     assert settings.about["chosen_on"]["labels read"] == "none"
@@ -86,3 +94,25 @@ def test_detect_takes_the_settings_file_as_it_is(twin_file, tmp_path, capsys):
     status, _, err = run_cli(argv, capsys)
     assert status == 0, err
     assert json.loads((tmp_path / "groups.json").read_text())
+
+
+@pytest.mark.parametrize(
+    ("scores", "chosen"),
+    [
+        # (stride, mdl) scores: the cheapest group within TIE_F1 of the best, then its best
+        ({(0.7, 3.0): 0.90, (0.6, 1.0): 0.885, (0.5, 1.0): 0.889, (0.4, 0.5): 0.85}, (0.5, 1.0)),
+        ({(0.7, 3.0): 0.90, (0.6, 1.0): 0.87}, (0.7, 3.0)),  # nothing cheaper near the best
+        ({(0.7, 3.0): 0.90, (0.5, 3.0): 0.90}, (0.5, 3.0)),  # a tie: the first in grid order
+    ],
+)
+def test_among_settings_a_twin_cannot_tell_apart_the_cheapest_group_is_kept(scores, chosen):
+    grid = [dict(stride=s, mdl=m) for s, m in sorted(scores)]
+    index = _leaning("gcff", grid, [scores[(g["stride"], g["mdl"])] for g in grid])
+    assert (grid[index]["stride"], grid[index]["mdl"]) == chosen
+
+
+def test_a_detector_whose_options_do_not_lean_keeps_the_best():
+    assert _leaning("proximity", [{"distance": 1.0}, {"distance": 1.5}], [0.8, 0.79]) is None
+    assert [o.lean for o in detector_info("gcff").options if o.grid] == ["", "low"]
+    with pytest.raises(ValueError, match=r"option 'x': lean must be one of"):
+        Option("x", "float", 1.0, "x", lean="sideways")
