@@ -60,6 +60,15 @@ def test_more_people_than_a_party_holds_make_a_concourse_twin(crowd, tmp_path):
     assert again.to_json() == twin.to_json()
 
 
+def test_a_crowd_twin_never_reads_the_groups(crowd, tmp_path):
+    frames, twin = crowd
+    assert any(f.groups for f in frames)  # the recording has groups: the twin must not see them
+    removed = [f.replace(groups=None, listed_groups=None) for f in frames]
+    again = fit_twin(removed, name="hall", n_jobs=2)
+    one, two = write_twin(twin, tmp_path / "1.json"), write_twin(again, tmp_path / "2.json")
+    assert one.read_bytes() == two.read_bytes()
+
+
 def test_a_crowd_twins_room_grows_for_another_seed_by_its_halls_rule(crowd):
     _, twin = crowd
     options, said = twin_options(twin, seed=twin.seed + 1, episodes=twin.episodes)
