@@ -58,7 +58,8 @@ __all__ = [
     "table",
 ]
 
-PREDICT_FRAMES = 200  # twin frames each detector is scored on at most (and place frames)
+PREDICT_FRAMES = 200  # twin frames each detector is scored on at most (and place frames; fewer
+# of a crowd: `sim.twins.tune.crowd_limit`)
 MIN_CONSENSUS = 3  # voting detectors a consensus needs
 NO_VOTE = ("majority",)  # catalogued detectors that put no one together: no vote in a consensus
 RESAMPLES = 1000  # bootstrap resamples of the interval
@@ -274,12 +275,12 @@ def predict(
     from reform.bootstrap import bootstrap_weights, score_intervals
     from reform.detectors import DetectorError, run_detector
     from reform.metrics import evaluate
-    from sim.twins.tune import tuning_frames
+    from sim.twins.tune import crowd_limit, tuning_frames
 
     learn, scored = split_episodes(frames)
-    scored = tuning_frames(scored, PREDICT_FRAMES)
+    scored = tuning_frames(scored, crowd_limit(scored, PREDICT_FRAMES))
     if place is not None:
-        step = max(1, math.ceil(len(place) / PREDICT_FRAMES))
+        step = max(1, math.ceil(len(place) / crowd_limit(place, PREDICT_FRAMES)))
         place = [f.replace(groups=None, listed_groups=None) for f in place[::step]]
     weights = bootstrap_weights(
         [f.sequence for f in scored], rng=derive_rng(seed, BOOTSTRAP), resamples=RESAMPLES

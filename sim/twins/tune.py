@@ -38,6 +38,7 @@ __all__ = [
     "detector_f1",
     "search_grid",
     "tune_detector",
+    "crowd_limit",
     "tuning_frames",
     "write_tuned",
 ]
@@ -45,6 +46,9 @@ __all__ = [
 TUNE_FRAMES = 300  # frames of the twin each grid setting is scored on at most (spread out)
 MIN_TUNE_FRAMES = 60  # ... and at least
 TUNE_BUDGET = 12_000  # frames scored in all, over the grid: a larger grid scores fewer frames each
+CROWD_PERSON_FRAMES = 30_000  # people in all each setting is scored on at most: fewer frames of a
+# crowd (a frame's people the median), never fewer than MIN_TUNE_FRAMES; a party of 100 or fewer
+# keeps its frames
 THRESHOLD = Fraction(2, 3)  # the objective: F1 at T = 2/3, the field's protocol
 TIE_F1 = 0.02  # settings this close to the best F1 on a twin are not told apart (lean, above)
 REFORM = "reform"
@@ -71,6 +75,15 @@ class Tuned:
     frames: int = 0
     model: Any = field(default=None, compare=False)
     rule: str = "the best F1"
+
+
+def crowd_limit(frames: Sequence[Frame], limit: int) -> int:
+    """``limit`` frames, or fewer for a crowd: at most `CROWD_PERSON_FRAMES` people in all (the
+    frames' median people a frame), at least `MIN_TUNE_FRAMES` frames."""
+    people = float(np.median([f.n_people for f in frames])) if frames else 0.0
+    if people * limit <= CROWD_PERSON_FRAMES:
+        return limit
+    return max(MIN_TUNE_FRAMES, int(CROWD_PERSON_FRAMES // people))
 
 
 def tuning_frames(frames: Sequence[Frame], limit: int = TUNE_FRAMES) -> list[Frame]:
@@ -254,6 +267,7 @@ def tune_detector(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tun
     if name == REFORM:
         return _train_reform(frames)
     limit = int(min(TUNE_FRAMES, max(MIN_TUNE_FRAMES, TUNE_BUDGET // len(_grid(name)))))
+    limit = crowd_limit(frames, limit)
     return search_grid(name, tuning_frames(frames, limit), n_jobs=n_jobs, lean=True)
 
 

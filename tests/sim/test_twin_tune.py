@@ -5,13 +5,20 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 
 from reform.detectors import Option, detector_info
 from reform.persistence import load_model
 from reform.settings import read_settings
 from sim.twins import write_twin
-from sim.twins.tune import TIE_F1, _leaning
+from sim.twins.tune import (
+    CROWD_PERSON_FRAMES,
+    MIN_TUNE_FRAMES,
+    TIE_F1,
+    _leaning,
+    crowd_limit,
+)
 from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
@@ -116,3 +123,19 @@ def test_a_detector_whose_options_do_not_lean_keeps_the_best():
     assert [o.lean for o in detector_info("gcff").options if o.grid] == ["", "low"]
     with pytest.raises(ValueError, match=r"option 'x': lean must be one of"):
         Option("x", "float", 1.0, "x", lean="sideways")
+
+
+@pytest.mark.parametrize(("people", "frames"), [(6, 244), (100, 244), (240, 125), (1000, 60)])
+def test_a_crowd_is_scored_on_fewer_frames_a_party_on_all_it_may(people, frames):
+    crowd = [
+        f.replace(
+            ids=np.arange(1, people + 1),
+            position=np.column_stack([np.arange(people), np.zeros(people)]),
+            yaw=np.zeros(people),
+            kinds=None,
+            groups=None,
+        )
+        for f in _frames()
+    ]
+    assert crowd_limit(crowd, 244) == frames  # 30,000 people a setting, at least 60 frames
+    assert CROWD_PERSON_FRAMES == 30_000 and MIN_TUNE_FRAMES == 60
