@@ -11,7 +11,9 @@ DESCRIPTION = """\
 Chooses a detector's settings for the place a venue twin (`reform-sim twin`) describes, on the
 twin's labelled synthetic data (generated first into --twin-data, default twin-data/ beside
 twin.json, and reused): every setting of the grids the detector declares (GCFF: stride x mdl)
-scored by F1 at T = 2/3, the best kept; REFORM is trained on the twin (each of the paper's
+scored by F1 at T = 2/3, the best kept (GCFF: the cheapest group, mdl, among the settings within
+2 points of the best, since a twin cannot see the merges a costlier group makes; the file names
+the rule); REFORM is trained on the twin (each of the paper's
 classifiers trained on half the episodes and scored on the others, the best trained on all).
 Writes a settings file (JSON, reform.settings: the detector, its options, the grid's scores)
 that `detect` and `evaluate` take with --settings FILE.json or, for REFORM, a model file (.skops)

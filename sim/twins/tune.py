@@ -35,10 +35,10 @@ from reform.frame import Frame
 __all__ = [
     "Tuned",
     "check_tunable",
+    "crowd_limit",
     "detector_f1",
     "search_grid",
     "tune_detector",
-    "crowd_limit",
     "tuning_frames",
     "write_tuned",
 ]
