@@ -138,8 +138,8 @@ class ConcourseParams:
 
     def check(self, name: str) -> None:
         """`ValueError` naming the option for impossible values: each out of its range
-        (`scenarios.registry.check_ranges`), shares beyond the whole, or a crowd that cannot
-        fit its hall."""
+        (`scenarios.registry.check_ranges`) or shares beyond the whole; `NoFloorError` for a
+        crowd that cannot fit its hall."""
         check_ranges(name, self)
         if self.group_share + self.queue_share > 1.0 + 1e-9:
             raise ValueError(
@@ -168,7 +168,7 @@ class ConcourseParams:
                 fix = f"people {most} or fewer"
             else:
                 fix = f"a hall_side of at least {need:g} m"
-            raise ValueError(
+            raise NoFloorError(
                 f"{name}: {self.people} people do not fit {given} at a sane density "
                 f"(at most {MAX_GROUP_DENSITY_PER_M2:g} guests per m^2 of the corners' floor, "
                 f"{MAX_WALKER_DENSITY_PER_M2:g} walkers per m^2 of the cross, a queue its "

@@ -161,7 +161,7 @@ UtteranceSeconds = Annotated[float, Range(0.5, 60.0, unit="s")]
 
 
 class NoFloorError(ValueError):
-    """The party's groups and people do not fit the room."""
+    """The scene's people do not fit its floor (a party's room, a concourse's hall)."""
 
 
 @shared_help(circle=CIRCLE_OPTIONS, changes=CHANGE_OPTIONS)

@@ -18,6 +18,11 @@ SIGTERM (``kill PID``, a job scheduler, a container stopping) stops a command th
 raises `Stopped`, a KeyboardInterrupt, in the main thread (:func:`sigterm_stops`), so that the
 workers are terminated with the command rather than left computing without it. A second SIGTERM
 ends the process at once, as SIGTERM does by default (its workers end with it).
+
+Once a command is stopping, an exception in loky's pool-manager thread is not printed
+(:func:`quiet_pool_manager`): terminating joblib's workers races with that thread's own
+bookkeeping (a KeyError from its table of pending work, joblib/loky#663), and the stop is
+already said in one line. Every other thread's exceptions print as before.
 """
 
 from __future__ import annotations
@@ -32,10 +37,11 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import socket
 
-__all__ = ["Stopped", "sigint_to_main_only", "sigterm_stops"]
+__all__ = ["Stopped", "quiet_pool_manager", "sigint_to_main_only", "sigterm_stops"]
 
 _parked: threading.Thread | None = None
 _TRACKER_FILTER = "ignore:resource_tracker:UserWarning"  # loky's tracker's leftover warnings
+POOL_MANAGER_THREAD = "ExecutorManagerThread"  # loky's name for its pool's manager thread
 WAKER_JOIN_S = 5.0  # seconds: at most this long for the wake-up thread to stop at the end (it
 # stops at once unless the machine is too busy to run it)
 
@@ -67,8 +73,24 @@ class Stopped(KeyboardInterrupt):
 _STOPPED: list[int] = []
 
 
+def quiet_pool_manager() -> None:
+    """From now on, this process does not print an exception raised in a thread named
+    `POOL_MANAGER_THREAD` (see the module notes); other threads' print as before."""
+    previous = threading.excepthook
+    if getattr(previous, "quiets_pool_manager", False):
+        return
+
+    def hook(args: threading.ExceptHookArgs) -> None:
+        if args.thread is None or args.thread.name != POOL_MANAGER_THREAD:
+            previous(args)
+
+    hook.quiets_pool_manager = True  # type: ignore[attr-defined]
+    threading.excepthook = hook
+
+
 def _raise_stopped(signum: int, _frame: object) -> None:
     signal.signal(signum, signal.SIG_DFL)  # a second one ends the process at once
+    quiet_pool_manager()
     _STOPPED.append(signum)
     raise Stopped(signum)
 
@@ -189,5 +211,7 @@ def _wake(reader: socket.socket, main: int | None) -> None:
             return
         if not data:
             return
-        if main is not None and any(s in data for s in (signal.SIGINT, signal.SIGTERM)):
-            signal.pthread_kill(main, signal.SIGUSR1)
+        if any(s in data for s in (signal.SIGINT, signal.SIGTERM)):
+            quiet_pool_manager()
+            if main is not None:
+                signal.pthread_kill(main, signal.SIGUSR1)

@@ -49,6 +49,8 @@ import numpy as np
 from reform.annotation import AnnotationModel
 from reform.frame import Frame
 from reform.seeding import derive_int, derive_rng
+from scenarios.concourse import MIN_HALL_M
+from scenarios.mingle import MAX_DENSITY_PER_M2, MIN_ROOM_M, NoFloorError
 from sim.twins.description import Fitted, Twin
 from sim.twins.statistics import (
     SHAPE_SIZE,
@@ -85,9 +87,7 @@ PILOT_RATE_HZ = 0.5
 PILOT_ROUNDS = 3
 AGREEMENT_WEIGHT = 8.0  # of the detectors' agreement in the shape distance
 SHAPE_PASSES = 2  # passes over the crowd options searched one at a time
-MIN_ROOM_M = 4.0  # metres (mingle's smallest room)
-MAX_ROOM_M = 100.0
-MAX_DENSITY = 1.0  # people per m^2 mingle allows
+MAX_ROOM_M = 100.0  # metres: the simulator's largest room (`sim.scene.ROOM_MAX_M`)
 ROOM_GROWTH = 1.1  # a room the party does not fit grows by this factor
 ROOM_TRIES = 12
 MAX_GROUP = 8  # mingle's default largest group
@@ -112,7 +112,6 @@ CROWD_CHOICES: Mapping[str, tuple[Any, ...]] = MappingProxyType(
 )
 CROWD_PILOT_EPISODES = 1  # a crowd's pilot holds hundreds of people: one episode says enough
 CROWD_PILOT_S = 60.0  # seconds
-MIN_HALL_M = 20.0  # metres (the concourse's smallest hall picked)
 
 
 @dataclass(frozen=True)
@@ -212,17 +211,8 @@ def check_frames_for_twin(frames: Sequence[Frame], *, where: str) -> None:
 
 
 def _room_for(venue: Venue, people: int, side: float) -> float:
-    least = max(venue.least_room, math.sqrt(people / MAX_DENSITY) + 1e-6)
+    least = max(venue.least_room, math.sqrt(people / MAX_DENSITY_PER_M2) + 1e-6)
     return float(min(MAX_ROOM_M, max(least, side)))
-
-
-def _no_room(venue: Venue) -> tuple[type[Exception], ...]:
-    """What the scenario raises for a crowd its floor does not hold: mingle's
-    `scenarios.mingle.NoFloorError`; the concourse refuses a hall too small for its people with a
-    `ValueError` before drawing anything (and its corners' parties may find no floor)."""
-    from scenarios.mingle import NoFloorError
-
-    return (NoFloorError,) if venue.scenario == SCENARIO else (NoFloorError, ValueError)
 
 
 def _simulate(
@@ -242,7 +232,7 @@ def _simulate(
                 )
                 frames.extend(episode.dataset)
             return frames, options
-        except _no_room(venue):
+        except NoFloorError:
             options[room] = _room_for(venue, options["people"], options[room] * ROOM_GROWTH)
     raise TwinInputError(
         f"twin: field options.{room}: expected a floor the crowd fits, found none up to "
@@ -268,7 +258,7 @@ def room_for_every_episode(
             for k in range(max(episodes, MIN_EPISODES)):
                 scenarios.make(scenario, seed=episode_seed(seed, k), **options)
             return options
-        except _no_room(venue):
+        except NoFloorError:
             side = _room_for(venue, options["people"], options[room] * ROOM_GROWTH)
             options[room] = float(f"{side:.6g}")
     raise TwinInputError(

@@ -124,13 +124,19 @@ def _setting_f1(options: Mapping[str, Any], name: str, frames: Sequence[Frame]) 
     return detector_f1(name, make_detector(name, **options), frames)
 
 
-def _leaning(name: str, grid: Sequence[Mapping[str, Any]], scores: Sequence[float]) -> int | None:
-    """The index of the setting nearest the lean ends of ``name``'s options (`Option.lean`, in
-    the options' order) among those within `TIE_F1` of the best score (the best of them on a
-    tie, then the first in grid order); None when no option leans."""
+def _leans(name: str) -> list[tuple[str, str]]:
+    """(option, lean) of each of ``name``'s searched options that leans (`Option.lean`), in
+    the options' order."""
     from reform.detectors import detector_info
 
-    leans = [(o.name, o.lean) for o in detector_info(name).options if o.grid and o.lean]
+    return [(o.name, o.lean) for o in detector_info(name).options if o.grid and o.lean]
+
+
+def _leaning(name: str, grid: Sequence[Mapping[str, Any]], scores: Sequence[float]) -> int | None:
+    """The index of the setting nearest the lean ends of ``name``'s options (`_leans`) among
+    those within `TIE_F1` of the best score (the best of them on a tie, then the first in grid
+    order); None when no option leans."""
+    leans = _leans(name)
     if not leans:
         return None
     best = max(scores)
@@ -144,16 +150,10 @@ def _leaning(name: str, grid: Sequence[Mapping[str, Any]], scores: Sequence[floa
 
 
 def _lean_rule(name: str) -> str:
-    from reform.detectors import detector_info
-
-    leans = [
-        f"{'lowest' if o.lean == 'low' else 'highest'} {o.name}"
-        for o in detector_info(name).options
-        if o.grid and o.lean
-    ]
+    ends = [f"{'lowest' if lean == 'low' else 'highest'} {o}" for o, lean in _leans(name)]
     return (
         f"among the settings within {100 * TIE_F1:g} points of the best F1, the one with the "
-        f"{', then the '.join(leans)} (the end that groups fewer people together)"
+        f"{', then the '.join(ends)} (the end that groups fewer people together)"
     )
 
 

@@ -13,8 +13,6 @@ from reform.persistence import load_model
 from reform.settings import read_settings
 from sim.twins import write_twin
 from sim.twins.tune import (
-    CROWD_PERSON_FRAMES,
-    MIN_TUNE_FRAMES,
     TIE_F1,
     _leaning,
     crowd_limit,
@@ -138,4 +136,3 @@ def test_a_crowd_is_scored_on_fewer_frames_a_party_on_all_it_may(people, frames)
         for f in _frames()
     ]
     assert crowd_limit(crowd, 244) == frames  # 30,000 people a setting, at least 60 frames
-    assert CROWD_PERSON_FRAMES == 30_000 and MIN_TUNE_FRAMES == 60

@@ -6,6 +6,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -13,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from sim.cli import _resumes, build_parser
+from sim.cli._interrupt import POOL_MANAGER_THREAD, quiet_pool_manager
 
 ROOT = Path(__file__).resolve().parents[3]
 START = (
@@ -166,3 +168,22 @@ def test_a_waker_scheduled_late_does_not_end_the_process():
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=WAIT_S
     )
     assert (done.returncode, done.stdout, done.stderr) == (0, "stopped True\n", "")
+
+
+def _printed_by_thread(name: str, capsys) -> str:
+    def fail() -> None:
+        raise KeyError(7)
+
+    thread = threading.Thread(target=fail, name=name)
+    thread.start()
+    thread.join()
+    return capsys.readouterr().err
+
+
+def test_once_stopping_the_pool_managers_exception_is_not_printed(monkeypatch, capsys):
+    monkeypatch.setattr(threading, "excepthook", threading.__excepthook__)
+    assert "KeyError: 7" in _printed_by_thread(POOL_MANAGER_THREAD, capsys)  # before a stop
+    quiet_pool_manager()
+    quiet_pool_manager()  # a second stop: one filter
+    assert _printed_by_thread(POOL_MANAGER_THREAD, capsys) == ""
+    assert "KeyError: 7" in _printed_by_thread("reform-sim-other", capsys)
