@@ -46,6 +46,9 @@ from reform.perturb import TrackerNoise
 
 __all__ = [
     "ANNOTATION_RANGES",
+    "MAX_POSITION_NOISE_M",
+    "MAX_SCALE",
+    "MAX_SCALE_SD",
     "ORIENTATIONS",
     "AnnotationModel",
     "draw_annotation",
@@ -54,6 +57,11 @@ __all__ = [
 
 ORIENTATIONS = ("body", "head")  # what a dataset records as a person's orientation
 MIN_SCALE = 0.5  # a scale factor is kept at or above this (a drawn error never flips a scene)
+# The largest settings a model takes: beyond them the recorded positions leave what a frame
+# holds (`reform.Frame`: |x|, |y| <= 1e8), or the model is not an annotation of the scene.
+MAX_SCALE = 1e4  # a length unit of at least 0.1 mm
+MAX_SCALE_SD = 1.0  # a scale error of 100 %
+MAX_POSITION_NOISE_M = 10.0  # metres: jitter larger than any room's people
 
 # The ranges a randomised annotation draws from, one model per episode: each a tuple of
 # choices, or (low, high) for a uniform draw. They span the field's public datasets:
@@ -83,13 +91,15 @@ class AnnotationModel:
         orientation: ``"body"`` or ``"head"``: the orientation recorded as each person's yaw.
         directions: the number of directions orientations are coded in (>= 1), or None for
             continuous orientations.
-        scale_sd: standard deviation of the episode's scale error, a fraction (>= 0).
-        position_noise: tracker jitter on each position coordinate, metres (>= 0).
+        scale_sd: standard deviation of the episode's scale error, a fraction (0 to
+            `MAX_SCALE_SD`).
+        position_noise: tracker jitter on each position coordinate, metres (0 to
+            `MAX_POSITION_NOISE_M`).
         yaw_noise: tracker jitter on each yaw, radians (>= 0).
         dropout: probability that the tracker misses a person in a frame, in [0, 1].
         min_group_seconds: the shortest run, seconds, for which annotators call a group (>= 0).
-        scale: a fixed factor every position is multiplied by (> 0): the dataset's length
-            unit or calibration against the simulated metres (1: none).
+        scale: a fixed factor every position is multiplied by (> 0, at most `MAX_SCALE`): the
+            dataset's length unit or calibration against the simulated metres (1: none).
     """
 
     orientation: str = "body"
@@ -116,11 +126,19 @@ class AnnotationModel:
             object.__setattr__(self, "directions", int(k))
         levels = ("scale_sd", "position_noise", "yaw_noise", "min_group_seconds")
         check_levels(self, "annotation ", levels, probabilities=("dropout",))
+        for name, high in (("scale_sd", MAX_SCALE_SD), ("position_noise", MAX_POSITION_NOISE_M)):
+            if getattr(self, name) > high:
+                raise ValueError(
+                    f"annotation {name} must be at most {high:g}, got {getattr(self, name)!r}"
+                )
         scale = self.scale
         if isinstance(scale, bool) or not isinstance(scale, (int, float, np.number)):
             raise ValueError(f"annotation scale must be a finite number > 0, got {scale!r}")
-        if not math.isfinite(float(scale)) or float(scale) <= 0.0:
-            raise ValueError(f"annotation scale must be a finite number > 0, got {scale!r}")
+        if not math.isfinite(float(scale)) or not 0.0 < float(scale) <= MAX_SCALE:
+            raise ValueError(
+                f"annotation scale must be a finite number > 0 and at most {MAX_SCALE:g}, got "
+                f"{scale!r}"
+            )
         object.__setattr__(self, "scale", float(scale))
 
     @property

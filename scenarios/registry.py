@@ -42,6 +42,7 @@ __all__ = [
     "ScenarioInfo",
     "SceneSeconds",
     "check_options",
+    "check_together",
     "check_ranges",
     "describe",
     "make",
@@ -184,6 +185,7 @@ class ScenarioInfo:
     options: tuple[Option, ...]
     tags: frozenset[str] = frozenset()
     robot: Mapping[str, Any] | None = None
+    params: type | None = None  # the options' dataclass, when they are declared by one
 
     def option(self, name: str) -> Option:
         for option in self.options:
@@ -354,6 +356,18 @@ def check_options(name: str, given: Mapping[str, Any]) -> dict[str, Any]:
     return {o.name: checked.get(o.name, o.default) for o in info.options}
 
 
+def check_together(name: str, values: Mapping[str, Any]) -> None:
+    """`ValueError` for options of scenario ``name``, each in its range (`check_options`), that
+    do not go together (a crowd its floor cannot hold), as its options' dataclass checks them
+    (its ``check(name)``) before anything is drawn; nothing to check for other scenarios. A
+    party that fits on paper may still find no floor once drawn (`scenarios.mingle.NoFloorError`,
+    raised by `make`)."""
+    params = describe(name).params
+    check = getattr(params, "check", None)
+    if params is not None and check is not None:
+        params(**values).check(name)
+
+
 def register(
     name: str,
     *,
@@ -418,6 +432,7 @@ def register(
             robot=None
             if robot is None
             else MappingProxyType(_check_options_of(name, declared, robot)),
+            params=options,
         )
         return checked
 

@@ -170,6 +170,7 @@ def _gcff(args: argparse.Namespace) -> Any:
             )
         return Gcff.from_settings_file(settings, units=args.units or "cm", orientation=orientation)
     from_file = _settings_options(args)
+    _given_once("gcff", from_file, f"--settings {settings}", {**options, **flags})
     if "orientation" in flags or "orientation" in options or "orientation" not in from_file:
         explicit["orientation"] = orientation
     return make_detector("gcff", **{**from_file, **explicit})
@@ -237,9 +238,18 @@ def _reform_arguments(parser: argparse.ArgumentParser) -> None:
 def _reform(args: argparse.Namespace) -> Any:
     from reform.persistence import load_model
 
-    if args.model is None:
-        raise CliError("--detector reform needs --model MODEL (train one with `reform-sim train`)")
-    return load_model(args.model)
+    given = {"model": args.model} if args.model is not None else {}
+    options = _options(args)
+    _given_once("reform", options, "--option", given)
+    from_file = _settings_options(args)
+    _given_once("reform", from_file, f"--settings {args.settings}", {**options, **given})
+    model = {**from_file, **options, **given}.get("model")
+    if model is None:
+        raise CliError(
+            "--detector reform needs --model MODEL, --option model=MODEL or a settings file "
+            "naming its model (train one with `reform-sim train`)"
+        )
+    return load_model(model)
 
 
 def _options(args: argparse.Namespace) -> dict[str, Any]:
@@ -299,13 +309,27 @@ def _settings_options(args: argparse.Namespace) -> dict[str, Any]:
     return dict(settings.options)
 
 
+def _given_once(detector: str, first: dict[str, Any], source: str, then: dict[str, Any]) -> None:
+    """CliError for an option both in ``first`` (given by ``source``: a settings file, or
+    ``--option``) and in ``then`` (given besides): one would be used and the other dropped."""
+    both = sorted(set(first) & set(then))
+    if both:
+        key = both[0]
+        raise CliError(
+            f"--detector {detector}: option {key} is given twice ({first[key]!r} by {source}, "
+            f"{then[key]!r} besides); give it once"
+        )
+
+
 def _build_from_catalogue(args: argparse.Namespace) -> Any:
     """A catalogued (or installed, or plugin) detector from ``--settings FILE.json`` and
     ``--option``, given the dataset or the ``--tune-on`` frames it needs."""
     from reform.detectors import DetectorError, detector_info, prepare_detector
 
     name = args.detector
-    options = {**_settings_options(args), **_options(args)}
+    from_file, given = _settings_options(args), _options(args)
+    _given_once(name, from_file, f"--settings {getattr(args, 'settings', None)}", given)
+    options = {**from_file, **given}
     detector = make_plugin(name, deadline_s=getattr(args, "detector_timeout", None), **options)
     needs = detector_info(name).needs if ":" not in name else ""
     training = None
@@ -510,6 +534,7 @@ def check_detector(args: argparse.Namespace) -> DetectorSpec:
     spec = DETECTORS.get(args.detector)
     if spec is not None:
         _options(args)  # malformed or out-of-range options fail before any data are read
+        _settings_options(args)  # a settings file of another detector is not left unread
         return spec
     _options(args)
     _settings_options(args)

@@ -36,14 +36,11 @@ def _run(args: argparse.Namespace) -> int:
         chosen_on = {"twin": str(args.twin), "twin_data": str(folder), "labels read": "none"}
         write_tuned(out, tuned, chosen_on=chosen_on)
         use = f"--detector {name} --settings {shlex.quote(str(out))}"
-    chosen = ", ".join(f"{k}={v}" for k, v in tuned.options.items()) or (
-        "REFORM "
-        + str(
-            tuned.grid[max(range(len(tuned.grid)), key=lambda k: tuned.grid[k]["f1"])]["options"][
-                "classifier"
-            ]
-        )  # fmt: skip
-    )
+    if name == REFORM:
+        best = max(tuned.grid, key=lambda row: row["f1"])
+        chosen = f"REFORM {best['options']['classifier']}"
+    else:
+        chosen = ", ".join(f"{k}={v}" for k, v in tuned.options.items())
     print(
         f"{name} on the twin of {twin.name}: {chosen} (F1 at T=2/3 on the twin "
         f"{100 * tuned.f1:.1f}, {len(tuned.grid)} settings, {tuned.frames} frames); wrote {out}"

@@ -137,7 +137,10 @@ def read_twin(path: str | os.PathLike[str]) -> Twin:
 
     Raises:
         TwinFormatError: a missing or unreadable file, not JSON, an unknown version or field, a
-            value out of its range: one line naming the file, the field, expected and found.
+            field given twice or left out (a twin lists every value it was fitted with; only
+            an annotation scale of 1 is left out), a value out of its range, options that do
+            not go together (`scenarios.registry.check_together`): one line naming the file,
+            the field, expected and found.
     """
     path = Path(path)
     try:
@@ -149,13 +152,28 @@ def read_twin(path: str | os.PathLike[str]) -> Twin:
     except (OSError, UnicodeDecodeError) as exc:
         raise TwinFormatError(f"{path}: cannot read the twin file: {exc}") from None
     try:
-        data = json.loads(text)
+        data = json.loads(text, object_pairs_hook=_once_each)
     except json.JSONDecodeError as exc:
         raise TwinFormatError(
             f"{path}: expected a twin file (JSON), found text that is not JSON ({exc.msg} at line "
             f"{exc.lineno})"
         ) from None
+    except _Repeated as exc:
+        raise _fail(str(path), str(exc), "the field once", "it twice") from None
     return twin_from_json(data, where=str(path))
+
+
+class _Repeated(ValueError):
+    """A JSON object with a field given twice (its name)."""
+
+
+def _once_each(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object's fields, each given once (JSON would keep the last of two silently)."""
+    out = dict(pairs)
+    if len(out) < len(pairs):
+        seen: set[str] = set()
+        raise _Repeated(next(k for k, _ in pairs if k in seen or seen.add(k)))
+    return out
 
 
 _TOP = (
@@ -172,6 +190,10 @@ _TOP = (
     "fitted",
     "statistics",
 )
+
+
+_OMITTED_AT_DEFAULT = ("scale",)  # annotation settings written only when not at their default
+# (`reform.annotation.AnnotationModel.to_json`)
 
 
 def _fail(where: str, name: str, expected: str, found: Any) -> TwinFormatError:
@@ -224,6 +246,12 @@ def twin_from_json(data: Any, *, where: str = "twin") -> Twin:
         checked = scenarios.registry.check_options(data["scenario"], options)
     except ValueError as exc:
         raise TwinFormatError(f"{where}: field options: {exc}") from None
+    absent = [name for name in checked if name not in options]
+    if absent:  # a twin lists every option it was fitted with: none is left to a default
+        raise _fail(
+            where, f"options.{absent[0]}", f"a value (every option of {data['scenario']})",
+            "nothing",
+        )  # fmt: skip
     annotation = data["annotation"]
     if not isinstance(annotation, dict):
         raise _fail(where, "annotation", "an object of annotation settings", annotation)
@@ -231,6 +259,10 @@ def twin_from_json(data: Any, *, where: str = "twin") -> Twin:
     extra = [k for k in annotation if k not in known]
     if extra:
         raise _fail(where, f"annotation.{extra[0]}", f"one of {known}", extra[0])
+    absent = [k for k in known if k not in annotation and k not in _OMITTED_AT_DEFAULT]
+    if absent:
+        raise _fail(where, f"annotation.{absent[0]}", "a value (every setting but scale)",
+                    "nothing")  # fmt: skip
     try:
         model = AnnotationModel(**annotation)
     except (TypeError, ValueError) as exc:
@@ -238,6 +270,10 @@ def twin_from_json(data: Any, *, where: str = "twin") -> Twin:
     rate = _number(where, "rate_hz", data["rate_hz"], 0.0, MAX_RATE_HZ)
     episodes = _integer(where, "episodes", data["episodes"], 1, MAX_EPISODES)
     seed = _integer(where, "seed", data["seed"], 0, MAX_SEED)
+    try:  # options each in range may not go together (a party too large for its room)
+        scenarios.registry.check_together(data["scenario"], checked)
+    except ValueError as exc:
+        raise TwinFormatError(f"{where}: field options: {exc}") from None
     fitted = data["fitted"]
     if not isinstance(fitted, list):
         raise _fail(where, "fitted", "a list of fitted values", fitted)

@@ -242,17 +242,56 @@ def check_tunable(name: str) -> str:
             f"{name!r}"
         )
     info = detector_info(name)
-    if info.name != REFORM and info.needs == "dataset":
+    if info.name == REFORM:
+        return info.name
+    if info.needs == "dataset":
         raise ValueError(
             f"--detector {name}: it reads the settings its dataset ships, which a twin has none "
-            "of; tune a detector whose options it searches (e.g. gcff)"
+            f"of; {_instead(info)}"
         )
-    if info.name != REFORM and info.needs == "training":
+    if info.needs == "training":
+        raise ValueError(f"--detector {name}: it fits itself on training frames; {_instead(info)}")
+    if any(o.type == "path" and o.default is None for o in info.options):
         raise ValueError(
-            f"--detector {name}: it fits itself on training frames; tune the detector whose "
-            "options it searches instead (gcff for gcff-tuned)"
+            f"--detector {name}: it runs from a model file trained for it, which a twin does not "
+            "make; tune a detector whose options a twin searches "
+            f"({', '.join(tunable_detectors())})"
+        )
+    if not any(o.grid for o in info.options):
+        raise ValueError(
+            f"--detector {name}: it has no setting to choose; tune a detector whose options a "
+            f"twin searches ({', '.join(tunable_detectors())})"
         )
     return info.name
+
+
+def tunable_detectors() -> list[str]:
+    """The catalogued detectors `check_tunable` takes: REFORM, and those with options a twin
+    searches (`reform.detectors.Option.grid`) that need nothing but frames."""
+    from reform.detectors import detector_info, detector_names
+
+    out = []
+    for name in detector_names():
+        info = detector_info(name)
+        if name == REFORM or (
+            info.needs == ""
+            and any(o.grid for o in info.options)
+            and not any(o.type == "path" and o.default is None for o in info.options)
+        ):
+            out.append(name)
+    return out
+
+
+def _instead(info: Any) -> str:
+    """What to tune instead of ``info``'s detector: the tunable one of the same method (the
+    paper both cite), else any tunable one."""
+    from reform.detectors import detector_info
+
+    tunable = tunable_detectors()
+    same = [n for n in tunable if info.citation and detector_info(n).citation == info.citation]
+    if same:
+        return f"tune {same[0]} (the same method) instead"
+    return f"tune a detector whose options a twin searches ({', '.join(tunable)})"
 
 
 def tune_detector(name: str, frames: Sequence[Frame], *, n_jobs: int = 1) -> Tuned:

@@ -127,6 +127,11 @@ def twin_file(fitted, tmp_path_factory) -> Path:
         (lambda d: d["annotation"].update(dropout=2.0), r"field annotation: .*dropout"),
         (lambda d: d["annotation"].update(blur=1), r"field annotation.blur: expected one of"),
         (lambda d: d.update(scenario="moon"), r"field scenario: expected a registered scenario"),
+        (lambda d: d["options"].pop("duration"), r"field options.duration: expected a value"),
+        (lambda d: d.update(annotation={}), r"field annotation.orientation: expected a value"),
+        (lambda d: d["annotation"].update(scale=1e9), r"field annotation: .*scale .*at most 10000"),
+        (lambda d: d["annotation"].update(position_noise=1e9), r"field annotation: .*at most 10,"),
+        (lambda d: d["options"].update(people=100), r"field options: mingle: 100 people do not "),
     ],
     ids=[
         "unknown-field",
@@ -138,6 +143,11 @@ def twin_file(fitted, tmp_path_factory) -> Path:
         "annotation-range",
         "unknown-annotation",
         "unknown-scenario",
+        "option-left-out",
+        "annotation-left-out",
+        "scale-too-large",
+        "jitter-too-large",
+        "options-that-do-not-fit-together",
     ],  # fmt: skip
 )
 def test_a_twin_file_edited_into_nonsense_is_refused(twin_file, tmp_path, edit, message):
@@ -146,6 +156,14 @@ def test_a_twin_file_edited_into_nonsense_is_refused(twin_file, tmp_path, edit, 
     path = tmp_path / "twin.json"
     path.write_text(json.dumps(data))
     with pytest.raises(TwinFormatError, match=str(path).replace(".", r"\.") + ": " + message):
+        read_twin(path)
+
+
+def test_a_field_given_twice_is_refused_not_read_as_the_last(twin_file, tmp_path):
+    text = twin_file.read_text().replace('"people": ', '"people": 3, "people": ', 1)
+    path = tmp_path / "twin.json"
+    path.write_text(text)
+    with pytest.raises(TwinFormatError, match=r"field people: expected the field once, found 'it"):
         read_twin(path)
 
 

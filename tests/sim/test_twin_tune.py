@@ -72,12 +72,18 @@ def test_tune_reform_trains_on_the_twin_and_writes_a_model(twin_file, tmp_path, 
 @pytest.mark.parametrize(
     ("detector", "message"),
     [
-        ("gcff-own", "it reads the settings its dataset ships"),
+        ("gcff-own", "it reads the settings its dataset ships, which a twin has none of; tune"),
         ("nobody", "--detector: expected a catalogued detector"),
+        ("majority", "it has no setting to choose; tune a detector whose options a twin searches"),
+        ("dante", "it runs from a model file trained for it, which a twin does not make"),
+        ("hysteresis", "it fits itself on training frames; tune reform (the same method) instead"),
     ],
 )
 def test_tune_refuses_what_it_cannot_tune_in_one_line(twin_file, capsys, detector, message):
-    assert message in cli_error(["tune", "--twin", twin_file, "--detector", detector], capsys)
+    out = twin_file.parent / f"refused-{detector}.json"
+    argv = ["tune", "--twin", twin_file, "--detector", detector, "--out", out]
+    assert message in cli_error(argv, capsys)
+    assert not out.exists()  # refused before any work
 
 
 def test_detect_takes_the_settings_file_as_it_is(twin_file, tmp_path, capsys):

@@ -74,3 +74,38 @@ def test_an_option_of_a_detector_without_it_is_one_line(toy_dataset, capsys):
     assert cli_error(argv, capsys).endswith(
         "detector 'majority' has no option 'k'; its options: none"
     )
+
+
+def test_an_option_in_the_settings_file_and_on_the_command_line_is_refused(
+    toy_dataset, tmp_path, capsys
+):
+    settings = write_settings(tmp_path / "gcff.json", "gcff", {"stride": 0.55})
+    argv = ["evaluate", "--settings", settings, "--stride", "0.5", "--data", toy_dataset]
+    assert cli_error(argv, capsys).endswith(
+        f"--detector gcff: option stride is given twice (0.55 by --settings {settings}, 0.5 "
+        "besides); give it once"
+    )
+
+
+def test_a_settings_file_beside_a_model_file_is_not_left_unread(toy_dataset, tmp_path, capsys):
+    settings = write_settings(tmp_path / "gcff.json", "gcff", {"stride": 0.55})
+    argv = ["evaluate", "--settings", settings, "--model", "m.skops", "--data", toy_dataset]
+    assert cli_error(argv, capsys).endswith(
+        f"--settings {settings} holds settings of detector 'gcff', not of --detector reform"
+    )
+
+
+def test_reforms_model_comes_as_its_option_or_in_its_settings_file(toy_dataset, tmp_path, capsys):
+    from reform import Reform, save_model
+
+    model = save_model(Reform().fit(toy_frames(0, 20)), tmp_path / "m.skops")
+    settings = write_settings(tmp_path / "reform.json", "reform", {"model": str(model)})
+    for how in (["--settings", settings], ["--detector", "reform", "--option", f"model={model}"]):
+        out = tmp_path / "groups.json"
+        argv = ["detect", *how, "--data", toy_dataset, "--out", out]
+        assert main([str(a) for a in argv]) == 0, capsys.readouterr().err
+        assert json.loads(out.read_text())["detector"] == "reform"
+        out.unlink()
+    capsys.readouterr()
+    argv = ["evaluate", "--settings", settings, "--model", model, "--data", toy_dataset]
+    assert "option model is given twice" in cli_error(argv, capsys)
