@@ -521,9 +521,16 @@ def build_concourse(params: ConcourseParams, *, seed: int, name: str) -> Scenari
     try:
         parties = _corner_parties(params, layout, guests, seed) if guests else []
     except NoFloorError:
+        if params.hall_side == 0.0 and layout.side >= MAX_HALL_M:  # the largest, picked
+            fix = "fewer people, a smaller group_share or a larger max_group_size"
+        elif params.hall_side == 0.0:
+            fix = f"a hall_side larger than the {layout.side:g} m picked"
+        else:
+            fix = "a larger hall_side"
         raise NoFloorError(
-            f"{name}: no floor found for the drawn groups (seed {seed}): {guests} people do not "
-            f"fit {params.corners()} corners of {layout.corner:g} m; give a larger hall_side"
+            f"{name}: no floor found for the drawn groups (seed {seed}): {guests} people in "
+            f"groups of at most {params.max_group_size} do not fit {params.corners()} corners "
+            f"of {layout.corner:g} m ({layout.side:g} m hall); give {fix}"
         ) from None
     for party, rng in parties:
         write_party(builder, party, rng)

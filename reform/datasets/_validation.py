@@ -320,11 +320,13 @@ def median_spacing(frames: Sequence[Frame]) -> float | None:
     return float(np.median(np.concatenate(scales)))
 
 
-def check_assumed_metres(frames: Sequence[Frame], *, path: Path) -> None:
+def check_assumed_metres(
+    frames: Sequence[Frame], *, path: Path, hint: str | None = None
+) -> None:
     """Refuses frames read in metres, the unit assumed rather than given, whose people stand
     farther apart than any dataset of the field (:data:`MAX_SPACING_M`): the file holds another
     unit, and every distance a detector saw would be wrong. A unit given on purpose is not
-    checked."""
+    checked. ``hint``: what to do, for a format whose unit cannot be given."""
     spacing = median_spacing(frames)
     if spacing is None or spacing <= MAX_SPACING_M:
         return
@@ -334,8 +336,9 @@ def check_assumed_metres(frames: Sequence[Frame], *, path: Path) -> None:
         "positions",
         f"metres, people a median of at most {MAX_SPACING_M:g} m from their nearest neighbour",
         f"a median of {spacing:.3g} (centimetres, read as metres?)",
-        hint="give units='cm' (--units cm) if the file holds centimetres, units='m' if it "
-        "holds metres",
+        hint=hint
+        or "give units='cm' (--units cm) if the file holds centimetres, units='m' if it holds "
+        "metres",
     )
 
 

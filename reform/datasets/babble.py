@@ -43,6 +43,7 @@ import numpy as np
 from reform.datasets._validation import (
     WRAPPED_ANGLE_LIMIT_RAD,
     check_angle,
+    check_assumed_metres,
     check_coordinate,
     check_unique_ids,
     make_frame,
@@ -204,6 +205,9 @@ def load_babble(path: str | PathLike[str], *, annotated_only: bool = False) -> D
         "torso_from_head": torso_from_head,
         "members_dropped": members_dropped,
     }
+    check_assumed_metres(
+        frames, path=motion_path, hint="the format holds metres: convert the positions to metres"
+    )
     return Dataset(
         frames=tuple(frames),
         name="babble",

@@ -542,6 +542,7 @@ def load_data(args: argparse.Namespace):
     """Loads the dataset named by :func:`add_data_arguments`: a path, or a dataset's name
     (`reform.datasets.resolve`; an unfetched public dataset's error says how to fetch it)."""
     from reform.datasets import load_dataset, resolve
+    from reform.datasets.summary import repairs_line
 
     data_path(args)
 
@@ -558,6 +559,9 @@ def load_data(args: argparse.Namespace):
         allow_incomplete=args.allow_incomplete,
         time_unit=getattr(args, "time_unit", None),
     )
+    repaired = repairs_line(dataset, str(args.data))
+    if repaired:
+        print(repaired, file=sys.stderr)
     missing = dataset.metadata.get("incomplete")
     if missing:  # read on purpose (--allow-incomplete): say what is left out
         print(

@@ -58,6 +58,7 @@ def _place(args: argparse.Namespace) -> list[Any] | None:
     if not args.data:
         return None
     from reform.datasets import load_dataset, resolve
+    from reform.datasets.summary import repairs_line
 
     dataset = load_dataset(
         resolve(args.data[0]),
@@ -65,6 +66,9 @@ def _place(args: argparse.Namespace) -> list[Any] | None:
         metres_per_pixel=args.metres_per_pixel,
         time_unit=args.time_unit,
     )
+    repaired = repairs_line(dataset, str(args.data[0]))
+    if repaired:
+        print(repaired, file=sys.stderr)
     return list(dataset)
 
 

@@ -25,7 +25,12 @@ from sim.cli._common import (
 from sim.cli._detectors import make_plugin
 from sim.cli._grammar import stage_lines
 from sim.experiments.stress import AXES, DETECTOR_LABELS, GRIDS, run_stress
-from sim.experiments.stress_grid import BASE_PEOPLE, CROWD_MIN_PEOPLE, StressGrid
+from sim.experiments.stress_grid import (
+    BASE_PEOPLE,
+    CROWD_MIN_PEOPLE,
+    MAX_STRESS_EPISODES,
+    StressGrid,
+)
 from sim.experiments.stress_report import write_report
 from sim.recording import target_from_args
 from sim.sizing import check_episodes
@@ -138,8 +143,13 @@ def run(args: argparse.Namespace) -> int:
     if args.episodes is not None:
         if args.episodes < 1:
             raise CliError(f"--episodes must be >= 1, got {args.episodes}")
-        grid = dataclasses.replace(grid, seeds=args.episodes)
         check_episodes(args.episodes, what="the stress test", flag="--episodes")
+        try:
+            grid = dataclasses.replace(grid, seeds=args.episodes)
+        except ValueError:  # past the grid's own bound on its test episodes
+            raise CliError(
+                f"--episodes must be at most {MAX_STRESS_EPISODES:,}, got {args.episodes:,}"
+            ) from None
     if args.seed < 0:
         raise CliError(f"--seed must be >= 0, got {args.seed}")
     axes = None
@@ -148,6 +158,9 @@ def run(args: argparse.Namespace) -> int:
         unknown = [a for a in axes if a not in AXES]
         if unknown or not axes:
             raise CliError(f"--axes must name axes among {','.join(AXES)}, got {args.axes!r}")
+        twice = next((a for k, a in enumerate(axes) if a in axes[:k]), None)
+        if twice is not None:
+            raise CliError(f"--axes names {twice} twice, got {args.axes!r}; name each axis once")
     check_output("--out", args.out, folder=True)
     check_recording(args)
     plugins = {}

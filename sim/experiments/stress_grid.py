@@ -147,6 +147,8 @@ def _ints(name: str, values: Iterable[Any], *, low: int, high: int) -> tuple[int
     return tuple(out)
 
 
+MAX_STRESS_EPISODES = 10**6  # test episodes per point
+
 # StressGrid's fields: name, kind (a tuple of floats or ints, or one float or int), bounds.
 _GRID_FIELDS = (
     ("position_noise_m", "floats", 0.0, 5.0),
@@ -157,7 +159,7 @@ _GRID_FIELDS = (
     ("max_group_size", "ints", 2, 12),
     ("crowd_people", "ints", CROWD_MIN_PEOPLE, CROWD_MAX_PEOPLE),
     ("event_rate_per_min", "floats", 0.0, 20.0),
-    ("seeds", "int", 1, 10**6),
+    ("seeds", "int", 1, MAX_STRESS_EPISODES),
     ("duration_s", "float", 1e-3, 1e6),
     ("rate_hz", "float", 1e-3, 1e3),
     ("train_episodes", "int", 1, 10**6),

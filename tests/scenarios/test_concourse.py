@@ -86,8 +86,20 @@ def test_same_seed_same_episode(episode):
             r"0\.7 \+ 0\.4$",
         ),
         ({"people": 4000}, r"^concourse: option people must be within \[50, 3000\], got 4000$"),
+        (
+            {"people": 3000, "max_group_size": 2, "duration": 5.0},
+            r"^concourse: no floor found for the drawn groups \(seed 0\): 1800 people in groups "
+            r"of at most 2 do not fit 3 corners of 40 m \(100 m hall\); give fewer people, a "
+            r"smaller group_share or a larger max_group_size$",
+        ),
     ],
-    ids=["hall-too-small", "largest-hall-too-small", "shares-beyond-one", "people-out-of-range"],
+    ids=[
+        "hall-too-small",
+        "largest-hall-too-small",
+        "shares-beyond-one",
+        "people-out-of-range",
+        "pairs-past-the-largest-hall",
+    ],
 )
 def test_a_crowd_that_cannot_fit_is_refused_in_one_line(options, match):
     with pytest.raises(ValueError, match=match) as refused:

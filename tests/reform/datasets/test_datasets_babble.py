@@ -231,6 +231,24 @@ def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
     assert_refused(load_babble, folder, message)
 
 
+def test_positions_in_millimetres_are_refused_not_read_as_metres(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    for k in range(1, len(lines)):
+        fields = lines[k].split(",")
+        for block in range(7):
+            for field in (1, 2, 4, 5):  # head x, y; torso x, y
+                at = 10 * block + field
+                fields[at] = f"{1000 * float(fields[at]):.3f}"
+        lines[k] = ",".join(fields)
+    _write(folder, lines, annotations)
+    assert_refused(
+        load_babble,
+        folder,
+        r"Motion-capture-data.csv: field 'positions': expected metres, people a median of at most "
+        r"20 m .*; the format holds metres: convert the positions to metres",
+    )
+
+
 def test_repeated_frame_number(babble_dir, tmp_path):
     folder, lines, annotations = _copy(babble_dir, tmp_path)
     previous = lines[2].split(",")[8]

@@ -70,6 +70,11 @@ def test_evaluate_majority_on_salsa(salsa_dir, tmp_path, capsys):
     assert out_md.read_text() == format_report(result, style="markdown")
     assert "Pairwise accuracy: 83.3 %" in out
     assert not [p for p in tmp_path.rglob("*.tmp")]
+    # SALSA's ground truth leaves people in no group: read as alone, counted, and said
+    assert (
+        f"note: {salsa_dir}: read with repairs (--strict refuses them): "
+        "people_missing_from_groundtruth 129, duplicate_singletons 3; the first: "
+    ) in err
 
 
 def test_evaluate_majority_on_babble(babble_dir, tmp_path, capsys):

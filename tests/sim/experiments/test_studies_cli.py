@@ -23,6 +23,8 @@ BAD_INPUT = [
     ("hri", "--data salsa=/nonexistent/salsa", "SALSA not found at /nonexistent/salsa"),
     ("stress", "--axes weather", "--axes must name axes among"),
     ("stress", "--episodes 0", "--episodes must be >= 1, got 0"),
+    ("stress", "--episodes 2000000", "--episodes must be at most 1,000,000, got 2,000,000"),
+    ("stress", "--axes density,density", "--axes names density twice"),
     ("stress", "--save curves.txt", "--save must be a path ending in .rrd"),
 ]
 
