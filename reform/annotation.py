@@ -96,7 +96,7 @@ class AnnotationModel:
         position_noise: tracker jitter on each position coordinate, metres (0 to
             `MAX_POSITION_NOISE_M`).
         yaw_noise: tracker jitter on each yaw, radians (>= 0).
-        dropout: probability that the tracker misses a person in a frame, in [0, 1].
+        dropout: probability that the tracker misses a person in a frame, in [0, 1).
         min_group_seconds: the shortest run, seconds, for which annotators call a group (>= 0).
         scale: a fixed factor every position is multiplied by (> 0, at most `MAX_SCALE`): the
             dataset's length unit or calibration against the simulated metres (1: none).
@@ -126,6 +126,11 @@ class AnnotationModel:
             object.__setattr__(self, "directions", int(k))
         levels = ("scale_sd", "position_noise", "yaw_noise", "min_group_seconds")
         check_levels(self, "annotation ", levels, probabilities=("dropout",))
+        if self.dropout >= 1.0:
+            raise ValueError(
+                f"annotation dropout must be below 1 (1 drops everyone from every frame), got "
+                f"{self.dropout!r}"
+            )
         for name, high in (("scale_sd", MAX_SCALE_SD), ("position_noise", MAX_POSITION_NOISE_M)):
             if getattr(self, name) > high:
                 raise ValueError(

@@ -907,6 +907,26 @@ def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -
         things="files",
         instead="an empty or new folder, or one made by reform-sim generate",
     )
+    _check_shard_files(out_dir, parameters, episodes)
+
+
+def _check_shard_files(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -> None:
+    """Refuses a dataset folder holding a Parquet file that is none of its shards: every reader
+    refuses a dataset with a file its card does not list, so the run would end with a dataset
+    no command reads."""
+    root = out_dir / folder_layout(out_dir)
+    if not root.is_dir():
+        return
+    scenario = parameters.get("scenario")
+    ours = {root / _relative_shard(str(scenario), k) for k in range(episodes)}
+    for path in sorted(root.rglob("*.parquet")):
+        relative = path.relative_to(out_dir)
+        if path not in ours and not any(part.startswith(".") for part in relative.parts):
+            raise ValueError(
+                f"out_dir {out_dir} holds {relative}, which is none of the shards of this "
+                f"dataset ({episodes} episodes of {scenario}, as "
+                f"{_relative_shard(str(scenario), 0)} ...): remove it or use another folder"
+            )
 
 
 def _check_contents(
@@ -1353,13 +1373,13 @@ def _verified_shards(
     """
     recorded = _recorded_files(folder)
     kept: dict[int, dict[str, Any]] = {}
-    unrecorded = 0
+    unrecorded: list[Path] = []
     for k in episodes:
         path = folder.shard(spec.scenario, k)
         entry = recorded.get(k)
         listed = folder.listed(_summary(spec, k, 0, 0, 0, {}))
         if entry is None or entry.get("path") != listed:
-            unrecorded += 1
+            unrecorded.append(path)
             continue
         found = _file_entry(path)
         damage = _damage(str(path), found, entry)
@@ -1369,8 +1389,10 @@ def _verified_shards(
         kept[k] = found
     if unrecorded:
         print(
-            f"reform-sim generate: {folder.out}: {unrecorded} shard(s) with no checksum recorded "
-            "when written (by an older reform-sim): they cannot be checked and are made again",
+            f"reform-sim generate: {folder.out}: {len(unrecorded)} shard(s) with no checksum "
+            f"record to check them against (the first: {unrecorded[0]}; the card does not list "
+            f"it and its file under {COMMITS_DIR}/ is missing, unreadable or of another shard, "
+            "or an older reform-sim wrote it): they are made again",
             file=sys.stderr,
             flush=True,
         )
@@ -1831,6 +1853,14 @@ def _check_scenario(spec: GenerationSpec) -> tuple[dict[str, Any], Any]:
     scenarios.describe(spec.scenario)  # an unknown name: the registry's one message
     made = prepare(spec.scenario, seed=episode_seed(spec.seed, 0), options=spec.options)
     scene_spec(made.stage, name=made.name)
+    length = made.duration if spec.duration is None else spec.duration
+    if isinstance(spec.annotation, AnnotationModel) and (
+        spec.annotation.min_group_seconds >= length
+    ):
+        raise ValueError(
+            f"annotation min_group_seconds must be shorter than the episodes ({length:g} s), got "
+            f"{spec.annotation.min_group_seconds:g}: no group would ever be called"
+        )
     if spec.view == "robot" and made.stage.robot is None:
         raise ValueError(
             f"view='robot' needs a robot, and scenario {spec.scenario} has none with these "

@@ -231,7 +231,13 @@ def run_with(target: str) -> Callable[[argparse.Namespace], int]:
     return handler
 
 
-def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bool = False) -> None:
+def check_output(
+    option: str,
+    path: str | os.PathLike[str] | None,
+    *,
+    folder: bool = False,
+    suffix: str | None = None,
+) -> None:
     """Raises `CliError` unless ``path`` can be written: a file (or, with ``folder``, a folder
     of outputs), checked before the command's work starts. Nothing is created.
 
@@ -239,6 +245,7 @@ def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bo
         option: the flag that named the path, e.g. ``"--json"``.
         path: the path given; None (the option not given) passes.
         folder: the command writes files into ``path`` rather than ``path`` itself.
+        suffix: the ending the file's name must have (the format written, e.g. ``".parquet"``).
 
     Raises:
         CliError: e.g. ``--json out: expected a file path, found an existing folder``.
@@ -253,6 +260,11 @@ def check_output(option: str, path: str | os.PathLike[str] | None, *, folder: bo
         raise CliError(
             f"{option} {path}: expected a path on this machine (only reform-sim generate --out "
             "writes to object storage); write it here and copy it to the store"
+        )
+    if suffix is not None and Path(path).suffix.lower() != suffix:
+        raise CliError(
+            f"{option} {path}: expected a file name ending in {suffix} (the format written), "
+            f"found {Path(path).suffix or 'no ending'}"
         )
     from reform.atomic import OutputPathError, check_file_path, check_folder_path
 
@@ -627,8 +639,12 @@ def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:
         )
 
 
-def parse_overrides(scenario: str, items: list[str]) -> dict[str, Any]:
-    """``--set`` items (``["people=18", "robot=true"]``) as typed options of ``scenario``."""
+def parse_overrides(
+    scenario: str, items: list[str], *, duration: float | None = None
+) -> dict[str, Any]:
+    """``--set`` items (``["people=18", "robot=true"]``) as typed options of ``scenario``;
+    ``duration``: the command's ``--duration``, refused beside a ``--set duration=`` (one of the
+    two would be dropped)."""
     import scenarios
 
     pairs: dict[str, str] = {}
@@ -639,6 +655,11 @@ def parse_overrides(scenario: str, items: list[str]) -> dict[str, Any]:
             raise CliError(f"--set must be KEY=VALUE, got {item!r}")
         if key in pairs:
             raise CliError(f"--set {key} given twice")
+        if key == "duration" and duration is not None:
+            raise CliError(
+                f"--duration {duration:g} and --set duration={text} both give the episode's "
+                "length; give one"
+            )
         pairs[key] = text
     if not pairs:
         return {}

@@ -53,7 +53,7 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_convert(args: argparse.Namespace) -> int:
-    check_output("--out", args.out)
+    check_output("--out", args.out, suffix=".parquet")
     _, dataset = _load(args)
     write_parquet(dataset, args.out)
     print(f"wrote {args.out}: {len(dataset)} frames", file=sys.stderr)

@@ -89,7 +89,7 @@ def _run(args: argparse.Namespace) -> int:
             options=(
                 args.twin_options
                 if twin is not None
-                else parse_overrides(args.scenario, args.overrides)
+                else parse_overrides(args.scenario, args.overrides, duration=args.duration)
             ),
             view=args.view,
             sensor=sensor_options(args),

@@ -54,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
 
     target = target_from_args(args)
     made = prepare(
-        args.scenario, seed=args.seed, options=parse_overrides(args.scenario, args.overrides)
+        args.scenario,
+        seed=args.seed,
+        options=parse_overrides(args.scenario, args.overrides, duration=args.duration),
     )
     kwargs: dict[str, float] = {}
     if args.rate is not None:

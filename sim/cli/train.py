@@ -11,7 +11,7 @@ from typing import Any
 
 from reform import Reform
 from reform.classifiers import make_classifier
-from reform.features import DEFAULT_FEATURES, check_features
+from reform.features import DEFAULT_FEATURES, FEATURES, check_features
 from reform.persistence import save_model
 from reform.tuning import classifier_params, tune
 from sim.cli._common import (
@@ -60,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
             "--features, --reconstruction, --threshold and --tune"
         )
     args.classifier = args.classifier or "bagged-trees"
+    if args.features is not None and not args.features.strip(", "):
+        raise CliError(f"--features must name features among {', '.join(FEATURES)}, got ''")
     args.features = args.features or ",".join(DEFAULT_FEATURES)
     args.reconstruction = args.reconstruction or "union"
     if args.threshold is not None and not 0.0 < args.threshold < 1.0:

@@ -269,7 +269,14 @@ class SocialEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             raise ValueError(f"sensor must be a sim.Sensor, got {type(self._sensor).__name__}")
         self._detector, self.detector_name = _detector(detector, model)
         self._observe_groups = bool(observe_groups)
-        self._record_dir = None if record_dir is None else Path(record_dir)
+        self._record_dir = None
+        if record_dir is not None:  # a file in its place is refused now, not after an episode
+            from reform.atomic import check_folder_path
+
+            try:
+                self._record_dir = check_folder_path(record_dir)
+            except ValueError as exc:
+                raise ValueError(f"record_dir {exc}") from None
 
         probe = self._draw(self._scenario_options, rng=np.random.default_rng(0))
         if probe.stage.robot is None:

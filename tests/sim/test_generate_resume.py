@@ -132,7 +132,10 @@ def test_a_killed_run_resumed_checks_each_shard_against_its_commit(tmp_path):
     assert resumed.returncode == 0, resumed.stderr[-2000:]
     (line,) = damaged_lines(resumed.stderr)
     assert str(shard_path(out, SCENARIO, 0)) in line
-    assert "1 shard(s) with no checksum recorded" in resumed.stderr
+    assert (
+        f"1 shard(s) with no checksum record to check them against (the first: "
+        f"{shard_path(out, SCENARIO, 1)}; the card does not list it and its file under _commits/"
+    ) in resumed.stderr
     kept = len(written) - 2
     assert f"({KILL_EPISODES - kept} generated, {kept} already there)" in resumed.stdout
     assert verify_folder(out) == []

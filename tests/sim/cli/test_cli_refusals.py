@@ -1,0 +1,85 @@
+"""Inputs that would have run and given something other than what was asked: refused in one
+line before any work (a value given twice, an annotation that erases the scene, an output name
+of another format, a folder holding a file that is none of its dataset's shards)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import pytest
+from cli_errors import cli_error, run_cli
+from toy_scenes import toy_frames
+
+import sim.envs  # noqa: F401  (registers the environments)
+from reform import Dataset, write_parquet
+
+GENERATE = ["generate", "--scenario", "mingle", "--episodes", "1", "--set", "people=6", "-q"]
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            ["--duration", "5", "--set", "duration=10"],
+            "--duration 5 and --set duration=10 both give the episode's length; give one",
+        ),
+        (
+            ["--duration", "5", "--annotation", "dropout=1"],
+            "annotation dropout must be below 1 (1 drops everyone from every frame), got 1.0",
+        ),
+        (
+            ["--duration", "5", "--annotation", "min_group_seconds=100"],
+            "annotation min_group_seconds must be shorter than the episodes (5 s), got 100",
+        ),
+    ],
+    ids=["duration-twice", "everyone-dropped", "no-group-ever-called"],
+)
+def test_generate_refuses_what_would_not_be_what_was_asked(extra, message, tmp_path, capsys):
+    out = tmp_path / "d"
+    assert message in cli_error([*GENERATE, *extra, "--out", out], capsys)
+    assert not out.exists()
+
+
+def test_generate_refuses_a_folder_holding_a_file_that_is_none_of_its_shards(tmp_path, capsys):
+    out = tmp_path / "d"
+    argv = [*GENERATE, "--duration", "5", "--out", out]
+    assert run_cli(argv, capsys)[0] == 0
+    stray = out / "data" / "scenario=mingle" / "extra.parquet"
+    stray.write_bytes((out / "data/scenario=mingle/episode=0/part.parquet").read_bytes())
+    more = [*GENERATE[:4], "2", *GENERATE[5:], "--duration", "5", "--out", out]
+    assert cli_error(more, capsys).endswith(
+        f"out_dir {out} holds data/scenario=mingle/extra.parquet, which is none of the shards "
+        "of this dataset (2 episodes of mingle, as scenario=mingle/episode=0/part.parquet ...): "
+        "remove it or use another folder"
+    )
+    assert not (out / "data/scenario=mingle/episode=1").exists()  # refused before any work
+
+
+@pytest.fixture
+def toy_dataset(tmp_path):
+    path = tmp_path / "toy.parquet"
+    write_parquet(Dataset(frames=tuple(toy_frames(0, 20)), name="toy", source="toy_scenes"), path)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["data", "convert", "--out", "conv.csv"], "--out conv.csv: expected a file name ending "),
+        (["train", "--features", "", "--out", "m.skops"], "--features must name features among"),
+    ],
+    ids=["convert-to-csv", "no-features"],
+)
+def test_outputs_and_features_say_what_they_are(argv, message, toy_dataset, tmp_path, capsys):
+    argv = [a if a not in ("conv.csv", "m.txt", "m.skops") else tmp_path / a for a in argv]
+    err = cli_error([*argv, "--data", toy_dataset], capsys)
+    assert message.replace("conv.csv", str(tmp_path / "conv.csv")).replace(
+        "m.txt", str(tmp_path / "m.txt")
+    ) in err
+    assert not list(tmp_path.glob("conv.csv")) and not list(tmp_path.glob("m.*"))
+
+
+def test_an_environments_record_dir_that_is_a_file_is_refused_when_made(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    with pytest.raises(ValueError, match=rf"^record_dir {afile}: expected a folder path"):
+        gym.make("ReformSim/HRIConversation-v0", record_dir=afile)
