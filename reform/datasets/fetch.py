@@ -515,6 +515,23 @@ def _complete(dataset: PublicDataset, folder: Path) -> bool:
     )
 
 
+def _damaged(dataset: PublicDataset, folder: Path) -> str | None:
+    """What differs in a copy of ``dataset`` fetched into ``folder`` whole (its manifest is
+    there) and changed since: the first file missing or not as fetched; None otherwise."""
+    if not (folder / MANIFEST).is_file():
+        return None
+    for local, file in zip(dataset.local_names, dataset.files, strict=True):
+        path = folder / local
+        if not path.is_file():
+            return f"{path}: expected the fetched file ({file.bytes:,} bytes), found none"
+        size = path.stat().st_size
+        if size != file.bytes:
+            return f"{path}: expected {file.bytes:,} bytes as fetched, found {size:,}"
+        if not _verified(path, file):
+            return f"{path}: expected sha256 {file.sha256} as fetched, found another"
+    return None
+
+
 def is_fetched(
     name: str,
     cache: str | PathLike[str] | None = None,
@@ -549,7 +566,8 @@ def _mirror_base(mirror: str | PathLike[str] | None) -> str:
         )
     folder = Path(text)
     if not folder.is_dir():
-        raise ValueError(f"mirror: expected a folder, got {text!r} (no such folder)")
+        found = "a file" if folder.exists() else "no such folder"
+        raise ValueError(f"mirror: expected a folder, got {text!r} ({found})")
     return folder.resolve().as_uri()
 
 
@@ -942,6 +960,12 @@ def resolve(
     if local is not None and text and path.name == text and (local / text).is_dir():
         return local / text
     if dataset is not None:
+        damage = _damaged(dataset, _folder(dataset, cache))
+        if damage is not None:
+            raise FileNotFoundError(
+                f"dataset {text!r} in the cache has changed since it was fetched: {damage}; "
+                f"fetch it again: `reform-sim datasets fetch {text}`"
+            )
         where = cache_dir() if cache is None else Path(cache)
         looked = f"{DATASETS_VARIABLE} is not set" if local is None else f"no {text}/ in {local}"
         raise FileNotFoundError(

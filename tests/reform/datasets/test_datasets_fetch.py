@@ -305,6 +305,26 @@ def test_a_damaged_cached_file_is_fetched_again(http_mirror, cache, registry_fil
     assert damaged.read_bytes() == data
 
 
+def test_a_fetched_copy_changed_since_is_named_not_called_unfetched(
+    http_mirror, cache, registry_file, tmp_path, monkeypatch
+):
+    base, _ = http_mirror
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("REFORM_SIM_DATASETS", raising=False)
+    folder = fetch("tiny", mirror=base, cache=cache, registry=registry_file)
+    damaged = folder / TINY_LOCAL[0]
+    damaged.write_bytes(b"X" + damaged.read_bytes()[1:])
+    with pytest.raises(FileNotFoundError) as raised:
+        resolve("tiny", registry=registry_file)
+    assert str(raised.value).startswith(
+        f"dataset 'tiny' in the cache has changed since it was fetched: {damaged}: expected "
+        "sha256 "
+    )
+    assert str(raised.value).endswith(
+        "as fetched, found another; fetch it again: `reform-sim datasets fetch tiny`"
+    )
+
+
 def test_a_cached_file_of_the_wrong_size_is_not_fetched(http_mirror, cache, registry_file):
     base, _ = http_mirror
     folder = fetch("tiny", mirror=base, cache=cache, registry=registry_file)
