@@ -696,7 +696,9 @@ def write_episode(
             )
             if writer is None:
                 writer = stack.enter_context(
-                    pq.ParquetWriter(target, table.schema, compression="zstd")
+                    pq.ParquetWriter(
+                        target, table.schema, compression="zstd", write_page_checksum=True
+                    )
                 )
             writer.write_table(table)
             written += len(chunk)

@@ -14,7 +14,8 @@ COLUMN = "x"  # the float column whose value is changed (metres)
 
 def one_float_changed(content: bytes) -> bytes:
     """``content`` (a Parquet shard) with one value of column ``x`` changed in its last bit,
-    written again as the shard was (zstd, the same columns with a dictionary), of the same size:
+    written again as the shard was (zstd, the same columns with a dictionary, each page's CRC
+    made again), of the same size:
     the first row for which the compressed file keeps its length.
 
     Raises:
@@ -39,7 +40,9 @@ def one_float_changed(content: bytes) -> bytes:
             index, table.schema.field(index), pa.array(values, type=pa.float64(), mask=nulls)
         )
         out = io.BytesIO()
-        pq.write_table(changed, out, compression="zstd", use_dictionary=dictionary)
+        pq.write_table(
+            changed, out, compression="zstd", use_dictionary=dictionary, write_page_checksum=True
+        )
         damaged = out.getvalue()
         if len(damaged) == len(content) and damaged != content:
             return damaged

@@ -488,6 +488,7 @@ def _read_file(
             path if source is None else source,
             partitioning=None,
             read_dictionary=as_codes or None,
+            page_checksum_verification=True,  # pages written with a CRC (every file since)
         )
     except Exception as exc:  # pyarrow raises ArrowInvalid, OSError... on corrupt files
         raise DataFormatError(
@@ -548,7 +549,9 @@ def _read_file(
             )
         null[name] = mask
         if type_name == "string":
-            data[name], texts[name] = _codes(column) if coded else _dictionary(column)
+            data[name], texts[name] = (
+                _codes(column, path, name) if coded else _dictionary(column)
+            )
         else:
             filled = column.fill_null(False if type_name == "bool" else 0) if mask.any() else column
             data[name] = filled.to_numpy()
@@ -606,13 +609,25 @@ def _dictionary(column: Any) -> tuple[np.ndarray, list[str]]:
     return encoded.indices.fill_null(len(texts)).to_numpy(), texts
 
 
-def _codes(column: Any) -> tuple[np.ndarray, list[str]]:
+def _codes(column: Any, path: Path, name: str) -> tuple[np.ndarray, list[str]]:
     """`_dictionary` of a string column read as codes (`_as_codes`): its dictionaries made one,
     in order of first appearance (each chunk's own order, as a file's writer made it, and the
     texts of later chunks after those of earlier ones); encoded again by `_dictionary` where a
-    file's dictionary lists one text twice, so that one text always has one code."""
+    file's dictionary lists one text twice, so that one text always has one code. A code
+    outside its dictionary (a damaged file) is a DataFormatError naming its row."""
     encoded = column.combine_chunks()
     texts = encoded.dictionary.to_pylist()
+    codes = encoded.indices.fill_null(0).to_numpy()
+    null = encoded.indices.is_null().to_numpy(zero_copy_only=False)
+    DataFormatError.check_rows(
+        ~null & ((codes < 0) | (codes >= len(texts))),
+        path,
+        lambda row: f"row {row}",
+        name,
+        f"a code of one of its column's {len(texts)} texts (a damaged file?)",
+        codes,
+        lambda value: f"code {int(value)}",
+    )
     if len(set(texts)) < len(texts):
         return _dictionary(column.cast(column.type.value_type))
     return encoded.indices.fill_null(len(texts)).to_numpy(), texts

@@ -298,7 +298,13 @@ def _write_table(
     schema = pa.schema(fields, metadata={METADATA_KEY: header_json.encode()})
     table = pa.Table.from_arrays(arrays, schema=schema)
     with atomic_path(target) as tmp:
-        pq.write_table(table, tmp, compression=compression, use_dictionary=_DICTIONARY_COLUMNS)
+        pq.write_table(
+            table,
+            tmp,
+            compression=compression,
+            use_dictionary=_DICTIONARY_COLUMNS,
+            write_page_checksum=True,  # each page's CRC: a changed byte is found when read
+        )
     return target
 
 

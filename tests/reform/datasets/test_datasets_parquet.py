@@ -398,6 +398,28 @@ def test_newer_format_version(tmp_path):
         read_parquet(_rewrite(tmp_path, change))
 
 
+def test_a_changed_bit_in_the_frames_is_found_never_read(tmp_path):
+    """Every page is written with its CRC: a bit flipped anywhere before the footer (the
+    frames' pages) is refused when read, or changes nothing read (a byte no page holds)."""
+    dataset = _mixed_dataset()
+    data = write_parquet(dataset, tmp_path / "mixed.parquet").read_bytes()
+    footer = int.from_bytes(data[-8:-4], "little") + 8
+    refused = 0
+    for position in range(4, len(data) - footer, 7):
+        changed = bytearray(data)
+        changed[position] ^= 1 << (position % 8)
+        path = tmp_path / "changed.parquet"
+        path.write_bytes(bytes(changed))
+        try:
+            back = read_parquet(path)
+        except DataFormatError as exc:
+            assert str(exc).startswith(f"{path}: ")
+            refused += 1
+            continue
+        _same(back, dataset)
+    assert refused > 0
+
+
 def test_empty_corrupt_and_missing(tmp_path):
     (tmp_path / "empty.parquet").write_bytes(b"")
     with pytest.raises(
