@@ -261,17 +261,17 @@ def check_output(
             f"{option} {path}: expected a path on this machine (only reform-sim generate --out "
             "writes to object storage); write it here and copy it to the store"
         )
-    if suffix is not None and Path(path).suffix.lower() != suffix:
-        raise CliError(
-            f"{option} {path}: expected a file name ending in {suffix} (the format written), "
-            f"found {Path(path).suffix or 'no ending'}"
-        )
     from reform.atomic import OutputPathError, check_file_path, check_folder_path
 
     try:
         (check_folder_path if folder else check_file_path)(path)
     except OutputPathError as exc:
         raise CliError(f"{option} {exc}") from None
+    if suffix is not None and Path(path).suffix.lower() != suffix:
+        raise CliError(
+            f"{option} {path}: expected a file name ending in {suffix} (the format written), "
+            f"found {Path(path).suffix or 'no ending'}"
+        )
 
 
 def check_recording(args: argparse.Namespace) -> None:
