@@ -10,9 +10,11 @@ With the place's recording (its frames, groups removed: ``place``), the twin als
 detector's F1 follows from how well it agrees with the others, and the recording says how well
 it agrees there. Every detector runs on the twin's scored frames and on the recording (at most
 `PREDICT_FRAMES` frames spread over it); on each, the **consensus** is the partition of the
-pairs that more than half of the detectors put together (`consensus`: the catalogue's detectors
-vote, the variants added beside them do not, nor does the majority baseline, which puts no one
-together), and each detector's **agreement** is its F1 against that consensus. A least-squares
+pairs that detectors holding more than half of the votes put together (`consensus`: the
+catalogue's detectors vote, one vote a method, shared by the detectors citing its paper
+(`method_weights`); the variants added beside them do not, nor does the majority baseline,
+which puts no one together), and each detector's **agreement** is its F1 against that
+consensus. A least-squares
 line across the catalogue's detectors that group people, from agreement to F1 on the twin (where
 the truth is known), is applied to each detector's agreement on the recording: the predicted F1
 (`calibrated`). A detector that puts no one together (`NO_VOTE`) scores only on frames that hold
@@ -82,6 +84,8 @@ class Candidate:
             do; a variant added beside them (tuned or trained on the twin, a model file) is
             predicted through their consensus and line without moving them, so that adding
             one changes no other detector's prediction.
+        method: the method it implements (the catalogue's citation of its paper; empty: its
+            own): the detectors of one method share one vote in a consensus (`consensus`).
     """
 
     label: str
@@ -90,6 +94,7 @@ class Candidate:
     learns: str = ""
     detector: Any = field(default=None, compare=False)
     votes: bool = True
+    method: str = ""
 
 
 @dataclass(frozen=True)
@@ -156,11 +161,26 @@ def catalogue_candidates(
             continue
         if any(o.type == "path" and o.default is None for o in info.options):
             continue  # needs a model file
-        out.append(Candidate(name, name, learns="twin" if info.needs == "training" else ""))
+        learns = "twin" if info.needs == "training" else ""
+        out.append(Candidate(name, name, learns=learns, method=_method(name)))
     out.append(Candidate("reform (twin-trained)", "reform", learns="twin", votes=False))
     for label, options in (tuned or {}).items():
         out.append(Candidate(label, "gcff", dict(options), votes=False))
     return out
+
+
+def _method(name: str) -> str:
+    """The method catalogued detector ``name`` implements: its paper's citation, or, for one
+    that filters another (an option ``detector``), the filtered detector's at its default."""
+    from reform.detectors import detector_info, detector_names
+
+    info = detector_info(name)
+    if info.citation:
+        return info.citation
+    base = next((o.default for o in info.options if o.name == "detector"), None)
+    if isinstance(base, str) and base != name and base in detector_names():
+        return _method(base)
+    return ""
 
 
 def _detector(candidate: Candidate, learn: Sequence[Frame]) -> Any:
@@ -179,50 +199,72 @@ def _detector(candidate: Candidate, learn: Sequence[Frame]) -> Any:
 
 
 def consensus(
-    frames: Sequence[Frame], partitions: Sequence[Sequence[Partition]]
+    frames: Sequence[Frame],
+    partitions: Sequence[Sequence[Partition]],
+    weights: Sequence[float] | None = None,
 ) -> list[Partition]:
     """Each frame's consensus of several detectors' ``partitions`` (one sequence per detector,
-    a partition per frame): the people linked, in a chain, by pairs that more than half of the
-    detectors put in one group; everyone else alone."""
+    a partition per frame): the people linked, in a chain, by pairs put in one group by
+    detectors holding more than half of the votes (``weights``, one a detector; default 1
+    each); everyone else alone."""
     from scipy.sparse.csgraph import connected_components
 
     from reform.gcff import labels_to_partition
 
+    weights = np.ones(len(partitions)) if weights is None else np.asarray(weights, dtype=float)
     out = []
-    voters = len(partitions)
+    total = float(weights.sum())
     for k, frame in enumerate(frames):
         ids = frame.ids.tolist()
         index = {person: j for j, person in enumerate(ids)}
-        votes = np.zeros((len(ids), len(ids)), dtype=np.int64)
-        for partition in partitions:
+        votes = np.zeros((len(ids), len(ids)))
+        for partition, weight in zip(partitions, weights, strict=True):
             for group in partition[k]:
                 rows = [index[m] for m in group]
                 if len(rows) > 1:
-                    votes[np.ix_(rows, rows)] += 1
-        linked = 2 * votes > voters
+                    votes[np.ix_(rows, rows)] += weight
+        linked = 2 * votes > total + 1e-9
         np.fill_diagonal(linked, True)
         _, component = connected_components(linked, directed=False)
         out.append(labels_to_partition(ids, component))
     return out
 
 
+def method_weights(methods: Mapping[str, str]) -> dict[str, float]:
+    """Each voter's share of its method's one vote: ``methods`` (label -> the method it
+    implements, empty for its own) -> 1 / the voters of that method. Variants of one method
+    err together; one vote each would let a method with many variants outvote the others."""
+    method = {label: m or label for label, m in methods.items()}
+    sizes: dict[str, int] = {}
+    for m in method.values():
+        sizes[m] = sizes.get(m, 0) + 1
+    return {label: 1.0 / sizes[m] for label, m in method.items()}
+
+
 def agreements(
     frames: Sequence[Frame],
     partitions: Mapping[str, Sequence[Partition]],
     *,
-    voters: Sequence[str] | None = None,
+    voters: Sequence[str] | Mapping[str, str] | None = None,
 ) -> dict[str, float] | None:
     """Each detector's F1 at T = 2/3 against the `consensus` of the detectors that vote
-    (``voters``, default all, never `NO_VOTE`), on ``frames`` (their groups unread); None with
+    (``voters``, default all, never `NO_VOTE`; given as label -> method, the detectors of one
+    method share one vote, `method_weights`), on ``frames`` (their groups unread); None with
     fewer than `MIN_CONSENSUS` voters."""
     from reform.metrics import evaluate
 
+    methods = dict(voters) if isinstance(voters, Mapping) else {}
     voting = set(partitions if voters is None else voters) - set(NO_VOTE)
-    ballots = [p for label, p in partitions.items() if label in voting]
-    if len(ballots) < MIN_CONSENSUS or not frames:
+    labels = [label for label in partitions if label in voting]
+    if len(labels) < MIN_CONSENSUS or not frames:
         return None
+    share = method_weights({label: methods.get(label, "") for label in labels})
+    ballots = [partitions[label] for label in labels]
     agreed = [
-        f.replace(groups=g) for f, g in zip(frames, consensus(frames, ballots), strict=True)
+        f.replace(groups=g)
+        for f, g in zip(
+            frames, consensus(frames, ballots, [share[label] for label in labels]), strict=True
+        )
     ]
     return {
         label: float(evaluate(agreed, p, thresholds=(THRESHOLD,)).at(THRESHOLD).f1)
@@ -315,7 +357,7 @@ def predict(
         )
     if place is None:
         return out
-    catalogue = [c.label for c in candidates if c.votes]
+    catalogue = {c.label: c.method for c in candidates if c.votes}
     return _calibrate(out, on_twin, on_place, scored, place, catalogue)
 
 
@@ -325,11 +367,11 @@ def _calibrate(
     on_place: Mapping[str, Sequence[Partition]],
     scored: Sequence[Frame],
     place: Sequence[Frame],
-    catalogue: Sequence[str],
+    catalogue: Mapping[str, str],
 ) -> list[Prediction]:
     """``predictions`` (the twin's scores) through `calibrated`, or as they are (their note
     says why) when no line can be drawn: the consensus and the line are the ``catalogue``
-    detectors' (`Candidate.votes`)."""
+    detectors' (`Candidate.votes`; label -> the method it implements, one vote a method)."""
     twin_agrees = agreements(scored, on_twin, voters=catalogue)
     place_agrees = agreements(place, on_place, voters=catalogue)
     ran = {p.label: p.f1 for p in predictions if p.f1 is not None}

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from reform.frame import Frame
-from sim.twins.predict import MIN_CONSENSUS, agreements, calibrated, consensus
+from sim.twins.predict import (
+    MIN_CONSENSUS,
+    agreements,
+    calibrated,
+    catalogue_candidates,
+    consensus,
+    method_weights,
+)
 
 
 def _frame(people: int = 4) -> Frame:
@@ -31,6 +38,29 @@ def test_pairs_linked_in_a_chain_make_one_group():
     votes = [[((1, 2), (3, 4))], [((1, 2, 3), (4,))], [((1,), (2, 3), (4,))]]
     # 1-2 and 2-3 carry (two of three each), 1-3 does not: the chain 1-2-3 is one group
     assert consensus([frame], votes) == [((1, 2, 3), (4,))]
+
+
+def test_the_variants_of_one_method_share_its_one_vote():
+    frame = _frame(3)
+    variants = [[((1, 2), (3,))]] * 3  # three variants of one method put 1 and 2 together
+    others = [[((1,), (2,), (3,))]] * 2  # two other methods do not
+    assert consensus([frame], variants + others) == [((1, 2), (3,))]  # three votes of five
+    shares = method_weights({"v1": "V", "v2": "V", "v3": "V", "x": "", "y": ""})
+    assert shares == pytest.approx({"v1": 1 / 3, "v2": 1 / 3, "v3": 1 / 3, "x": 1.0, "y": 1.0})
+    weights = [shares[k] for k in ("v1", "v2", "v3", "x", "y")]
+    assert consensus([frame], variants + others, weights) == [((1,), (2,), (3,))]  # one of three
+    outputs = dict(zip(["v1", "v2", "v3", "x", "y"], variants + others, strict=True))
+    method = {"v1": "V", "v2": "V", "v3": "V", "x": "", "y": ""}
+    assert agreements([frame], outputs)["v1"] == 1.0
+    assert agreements([frame], outputs, voters=method)["v1"] == 0.0
+
+
+def test_a_catalogued_detector_votes_with_the_method_it_implements():
+    method = {c.label: c.method for c in catalogue_candidates() if c.votes}
+    assert method["gcff-tuned"] == method["gcff"] != ""  # GCFF's paper
+    assert method["smoothed"] == method["gcff"]  # it filters GCFF, by default
+    assert len({method[k] for k in ("reform-trained", "reform-relative", "hysteresis")}) == 1
+    assert method["proximity"] == "" and method["hvff"] != method["gcff"]
 
 
 def test_agreement_is_each_detectors_f1_against_the_consensus_and_majority_has_no_vote():
