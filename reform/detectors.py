@@ -271,6 +271,12 @@ class DetectorInfo:
     citation: str = ""
     needs: str = ""
 
+    @property
+    def runs_from_file(self) -> bool:
+        """Whether it is made from a file it was trained into: an option naming a file
+        (``type`` ``"path"``) with no default."""
+        return any(o.type == "path" and o.default is None for o in self.options)
+
     def option(self, name: str) -> Option:
         """The declared option ``name``; DetectorError listing the accepted ones."""
         for option in self.options:

@@ -159,7 +159,7 @@ def catalogue_candidates(
         info = detector_info(name)
         if info.needs == "dataset" or name == "reform":
             continue
-        if any(o.type == "path" and o.default is None for o in info.options):
+        if info.runs_from_file:
             continue  # needs a model file
         learns = "twin" if info.needs == "training" else ""
         out.append(Candidate(name, name, learns=learns, method=_method(name)))

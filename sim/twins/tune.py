@@ -242,44 +242,39 @@ def check_tunable(name: str) -> str:
             f"{name!r}"
         )
     info = detector_info(name)
-    if info.name == REFORM:
+    why = _not_tunable(info)
+    if why is None:
         return info.name
+    if info.needs in ("dataset", "training"):
+        raise ValueError(f"--detector {name}: {why}; {_instead(info)}")
+    raise ValueError(
+        f"--detector {name}: {why}; tune a detector whose options a twin searches "
+        f"({', '.join(tunable_detectors())})"
+    )
+
+
+def _not_tunable(info: Any) -> str | None:
+    """Why a twin cannot tune the catalogued detector ``info``; None when it can (REFORM, and
+    those with options a twin searches, `reform.detectors.Option.grid`, that need nothing but
+    frames)."""
+    if info.name == REFORM:
+        return None
     if info.needs == "dataset":
-        raise ValueError(
-            f"--detector {name}: it reads the settings its dataset ships, which a twin has none "
-            f"of; {_instead(info)}"
-        )
+        return "it reads the settings its dataset ships, which a twin has none of"
     if info.needs == "training":
-        raise ValueError(f"--detector {name}: it fits itself on training frames; {_instead(info)}")
-    if any(o.type == "path" and o.default is None for o in info.options):
-        raise ValueError(
-            f"--detector {name}: it runs from a model file trained for it, which a twin does not "
-            "make; tune a detector whose options a twin searches "
-            f"({', '.join(tunable_detectors())})"
-        )
+        return "it fits itself on training frames"
+    if info.runs_from_file:
+        return "it runs from a model file trained for it, which a twin does not make"
     if not any(o.grid for o in info.options):
-        raise ValueError(
-            f"--detector {name}: it has no setting to choose; tune a detector whose options a "
-            f"twin searches ({', '.join(tunable_detectors())})"
-        )
-    return info.name
+        return "it has no setting to choose"
+    return None
 
 
 def tunable_detectors() -> list[str]:
-    """The catalogued detectors `check_tunable` takes: REFORM, and those with options a twin
-    searches (`reform.detectors.Option.grid`) that need nothing but frames."""
+    """The catalogued detectors `check_tunable` takes (`_not_tunable`)."""
     from reform.detectors import detector_info, detector_names
 
-    out = []
-    for name in detector_names():
-        info = detector_info(name)
-        if name == REFORM or (
-            info.needs == ""
-            and any(o.grid for o in info.options)
-            and not any(o.type == "path" and o.default is None for o in info.options)
-        ):
-            out.append(name)
-    return out
+    return [name for name in detector_names() if _not_tunable(detector_info(name)) is None]
 
 
 def _instead(info: Any) -> str:
