@@ -461,6 +461,19 @@ def _died(
     return WorkerDied(f"a worker process ended {how} while it ran {what}")
 
 
+def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt (Ctrl-C, or a `sim.cli._interrupt.Stopped`) in whose handling
+    ``exc`` was raised, following its context chain; None when there is none."""
+    seen: set[int] = set()
+    link: BaseException | None = exc.__context__
+    while link is not None and id(link) not in seen:
+        if isinstance(link, KeyboardInterrupt):
+            return link
+        seen.add(id(link))
+        link = link.__context__
+    return None
+
+
 class Executor:
     """Runs a function over independent units, on local processes or on a Ray cluster.
 
@@ -706,6 +719,14 @@ class Executor:
                     "to another process; keep such things out of its attributes, or run with "
                     "--jobs 1"
                 ) from exc
+            except Exception as exc:
+                # A stop (Ctrl-C, SIGTERM) that reached joblib while it started or ended its
+                # pool can make the pool's clean-up fail in turn (loky joining a manager thread
+                # the stop kept from starting): the stop is what happened, and it goes on.
+                stop = _interruption(exc)
+                if stop is None:
+                    raise
+                raise stop from None
             finally:
                 deaths.close()
 

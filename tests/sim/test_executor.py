@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import http.server
 import os
+import signal
 import socket
 import sys
 import threading
@@ -256,3 +257,21 @@ def test_jobs_is_for_the_local_backend(command, tmp_path, capsys, shared_dataset
     argv += ["--out", str(tmp_path / "out"), "--backend", "ray", "--jobs", "2"]
     assert main(argv) == 2
     assert "--jobs sets local worker processes (--backend local)" in capsys.readouterr().err
+
+
+def test_a_failure_while_a_stop_is_handled_is_that_stop():
+    from sim.cli._interrupt import Stopped
+    from sim.executor import _interruption
+
+    def cleanup_failing_during(stop: BaseException) -> BaseException:
+        try:
+            try:
+                raise stop
+            except KeyboardInterrupt:
+                raise RuntimeError("cannot join thread before it is started") from None
+        except RuntimeError as exc:
+            return exc
+
+    stop = Stopped(signal.SIGTERM)
+    assert _interruption(cleanup_failing_during(stop)) is stop
+    assert _interruption(RuntimeError("alone")) is None
