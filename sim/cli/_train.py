@@ -33,14 +33,15 @@ epochs (the paper's early stopping). --out names the model file (.safetensors), 
 recording's consecutive frames repeat each other, and K cuts the training time K-fold.
 """
 
-TRAINED = ("reform", "dante")  # the detectors `train` fits
+# The detectors `train` fits, and the ending of the model file each one's writer writes.
+TRAINED = {"reform": ".skops", "dante": ".safetensors"}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_data_arguments(parser)
     parser.add_argument(
         "--detector",
-        choices=TRAINED,
+        choices=tuple(TRAINED),
         default="reform",
         help="what to train: reform (default) or dante (needs reform-sim[dante])",
     )
@@ -103,7 +104,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out",
         required=True,
         metavar="FILE",
-        help="model file to write (.skops for reform, .safetensors for dante)",
+        help="model file to write ("
+        + ", ".join(f"{suffix} for {name}" for name, suffix in TRAINED.items())
+        + ")",
     )
     add_quiet(parser, old=())
     parser.set_defaults(handler=run_loading("sim.cli.train:run", "scikit-learn"))

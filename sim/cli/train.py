@@ -23,6 +23,7 @@ from sim.cli._common import (
     select_frames,
 )
 from sim.cli._grammar import show_progress, stage_lines, ticking_bar
+from sim.cli._train import TRAINED
 from sim.progress import progress_bar
 from sim.ticking import ticking
 
@@ -38,7 +39,7 @@ _REFORM_OPTIONS = (
 
 
 def run(args: argparse.Namespace) -> int:
-    check_output("--out", args.out)
+    check_output("--out", args.out, suffix=TRAINED[args.detector])
     check_frames(args)
     if args.every < 1:
         raise CliError(f"--every keeps every K-th frame: K must be 1 or more, got {args.every}")

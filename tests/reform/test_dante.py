@@ -384,7 +384,8 @@ def test_train_dante_writes_a_model_that_evaluate_uses(tmp_path, capsys):
     ids=["reform-option", "out-of-range", "unknown", "model"],
 )
 def test_train_dante_refuses_bad_options_in_one_line(tmp_path, capsys, extra, message):
-    argv = ["train", "--detector", "dante", "--data", "nowhere", "--out", str(tmp_path / "m")]
+    out = tmp_path / "m.safetensors"
+    argv = ["train", "--detector", "dante", "--data", "nowhere", "--out", str(out)]
     assert main([*argv, *extra]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("reform-sim train: error: ") and "\n" not in err
@@ -447,14 +448,15 @@ def test_without_torch_make_detector_says_how_to_install_it(tmp_path, model_path
 def test_without_torch_train_dante_fails_in_one_line(tmp_path):
     data = tmp_path / "toy.parquet"
     write_parquet(Dataset(frames=tuple(toy_frames(0, 3)), name="toy", source="toy_scenes"), data)
-    argv = ["-m", "sim.cli", "train", "--detector", "dante", "--data", str(data), "--out", "m"]
+    out = "m.safetensors"
+    argv = ["-m", "sim.cli", "train", "--detector", "dante", "--data", str(data), "--out", out]
     done = _without_torch(tmp_path, argv)
     assert done.returncode == 2
     assert done.stderr.strip() == (
         "reform-sim train: error: --detector dante needs PyTorch, which is not installed: "
         'pip install "reform-sim[dante]"'
     )
-    assert not (tmp_path / "m").exists()
+    assert not (tmp_path / out).exists()
 
 
 def test_importing_reform_and_listing_detectors_does_not_import_torch(tmp_path):

@@ -66,15 +66,24 @@ def toy_dataset(tmp_path):
     [
         (["data", "convert", "--out", "conv.csv"], "--out conv.csv: expected a file name ending "),
         (["train", "--features", "", "--out", "m.skops"], "--features must name features among"),
+        (
+            ["train", "--out", "m.txt"],
+            "--out m.txt: expected a file name ending in .skops (the format written), found .txt",
+        ),
+        (
+            ["train", "--detector", "dante", "--out", "m.skops"],
+            "--out m.skops: expected a file name ending in .safetensors (the format written), "
+            "found .skops",
+        ),
     ],
-    ids=["convert-to-csv", "no-features"],
+    ids=["convert-to-csv", "no-features", "reform-model-as-text", "dante-model-as-skops"],
 )
 def test_outputs_and_features_say_what_they_are(argv, message, toy_dataset, tmp_path, capsys):
     argv = [a if a not in ("conv.csv", "m.txt", "m.skops") else tmp_path / a for a in argv]
     err = cli_error([*argv, "--data", toy_dataset], capsys)
-    assert message.replace("conv.csv", str(tmp_path / "conv.csv")).replace(
-        "m.txt", str(tmp_path / "m.txt")
-    ) in err
+    for name in ("conv.csv", "m.txt", "m.skops"):
+        message = message.replace(f"{name}:", f"{tmp_path / name}:")
+    assert message in err
     assert not list(tmp_path.glob("conv.csv")) and not list(tmp_path.glob("m.*"))
 
 

@@ -63,7 +63,7 @@ def test_dante_stops_on_the_validation_frames(toy_dataset, tmp_path, capsys):
     ],
 )
 def test_frame_choices_that_mean_nothing_are_refused(extra, message, toy_dataset, tmp_path, capsys):
-    out = tmp_path / "m.out"
+    out = tmp_path / ("m.safetensors" if "dante" in extra else "m.skops")
     argv = ["train", "--data", toy_dataset, *extra, "--out", out]
     assert cli_error(argv, capsys) == f"reform-sim train: error: {message}"
     assert not out.exists()
