@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from cli_errors import cli_json, run_cli
+from cli_errors import cli_error, cli_json, run_cli
 
 from reform import Dataset, Frame
 from reform.datasets import write_parquet
@@ -150,3 +150,21 @@ def test_unannotated_data_and_missing_paths_are_refused(tmp_path, capsys):
     assert status == 2 and "no annotated frames, nothing to characterise" in err
     status, _, err = run_cli(["characterize", "--data", tmp_path / "nowhere.parquet"], capsys)
     assert status == 2 and "nowhere.parquet" in err
+
+
+def test_a_dataset_given_twice_is_refused_before_any_is_read(
+    salsa_dir, babble_dir, tmp_path, capsys, monkeypatch
+):
+    data = _parquet(tmp_path / "d.parquet", "d", 0.5)
+    monkeypatch.chdir(tmp_path)
+    for first, again, dataset in (
+        ("salsa", "salsa", salsa_dir.resolve()),
+        (data, "./d.parquet", data),
+        ("d.parquet", "d.parquet", data),
+    ):
+        argv = ["characterize", "--data", first, babble_dir, "--data", again]
+        assert cli_error([*argv, "--out", tmp_path / "out"], capsys) == (
+            f"reform-sim characterize: error: --data {again}: dataset {dataset} is given "
+            f"twice (also as --data {first}); give each dataset once"
+        )
+    assert not (tmp_path / "out").exists()
