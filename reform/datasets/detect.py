@@ -10,9 +10,15 @@ from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset
 from reform.path_argument import path_argument
 
-__all__ = ["FORMATS", "FORMAT_ALIASES", "LENGTH_UNITS", "detect_format", "load_dataset"]
+__all__ = [
+    "FORMATS",
+    "FORMAT_ALIASES",
+    "FORMAT_FILES",
+    "LENGTH_UNITS",
+    "detect_format",
+    "load_dataset",
+]
 
-FORMATS = ("salsa", "babble", "gcff", "parquet")
 # Other names of the formats: "dante" is the DANTE text format that SALSA's packaging uses.
 FORMAT_ALIASES = {"dante": "salsa"}
 # Length units a GCFF folder or a DANTE text file may be written in (the other formats are
@@ -24,11 +30,17 @@ _FIXED_UNITS = {"babble": "m", "parquet": "m"}
 # How deep detection looks for shards (DIR/scenario=.../episode=.../part.parquet is 2 levels).
 _PARQUET_DEPTH = 4
 
-_DESCRIPTION = (
-    "salsa, alias dante (a folder with the DANTE text files features.txt and group_names.txt), "
-    "babble (a folder with Motion-capture-data.csv), "
-    "gcff (a folder with features.mat, or a folder of such folders), "
-    f"parquet (a .parquet file or a folder of them, at most {_PARQUET_DEPTH} levels down)"
+# What each format's files are, as detection finds them.
+FORMAT_FILES = {
+    "salsa": "a folder with the DANTE text files features.txt and group_names.txt",
+    "babble": "a folder with Motion-capture-data.csv",
+    "gcff": "a folder with features.mat, or a folder of such folders",
+    "parquet": f"a .parquet file or a folder of them, at most {_PARQUET_DEPTH} levels down",
+}
+FORMATS = tuple(FORMAT_FILES)
+_DESCRIPTION = ", ".join(
+    f"{name}{''.join(f', alias {a}' for a, of in FORMAT_ALIASES.items() if of == name)} ({files})"
+    for name, files in FORMAT_FILES.items()
 )
 
 

@@ -90,6 +90,38 @@ def named_datasets(
     return {name: named.get(name, name) for name in names}
 
 
+def dataset_locations(data: dict[str, str]) -> dict[str, Any]:
+    """Where each dataset of `named_datasets` is (`reform.datasets.resolve`), before any is
+    read: a path given for one that is not there, or that holds a dataset of another format
+    (`reform.datasets.detect_format`; each name here is its format's), is a `CliError` saying
+    what ``--data NAME=PATH`` takes and what it found. A public dataset's name that is not here
+    is `resolve`'s error (how to fetch it); a path detection cannot tell is left to the loader."""
+    from reform.datasets import DataFormatError, detect_format, registry, resolve
+    from reform.datasets.detect import FORMAT_FILES
+
+    locations = {}
+    for name, value in data.items():
+        try:
+            locations[name] = resolve(value)
+        except FileNotFoundError:
+            if value in {dataset.name for dataset in registry()}:
+                raise
+            found = "no such file or folder"
+        else:
+            try:
+                kind = detect_format(locations[name])
+            except DataFormatError:  # none of the formats, or several: the loader says
+                continue
+            if kind == name:
+                continue
+            found = f"a dataset in the {kind} format"
+        raise CliError(
+            f"--data {name}={value}: expected {FORMAT_FILES[name]} (or a dataset's name), "
+            f"found {found}"
+        )
+    return locations
+
+
 def dataset_words(args: argparse.Namespace) -> list[str]:
     """The ``--data`` values given, as command-line words."""
     return [word for value in args.data for word in ("--data", value)]

@@ -10,7 +10,7 @@ import sys
 from typing import Any
 
 from reform import Dataset
-from reform.datasets import load_babble, load_salsa, resolve
+from reform.datasets import load_babble, load_salsa
 from reform.gcff import MDL_GRID_M2, STRIDE_GRID_M
 from sim import sizing
 from sim.cli._common import (
@@ -21,7 +21,13 @@ from sim.cli._common import (
     size_error,
 )
 from sim.cli._experiment_gcff import BASENAME
-from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
+from sim.cli._experiment_io import (
+    dataset_locations,
+    experiment_command,
+    named_datasets,
+    publish,
+    report_target,
+)
 from sim.cli._grammar import ticking_bar
 from sim.experiments.gcff import GCFF_ROWS, gcff_comparison
 from sim.experiments.gcff_report import to_markdown
@@ -98,9 +104,10 @@ def run(args: argparse.Namespace) -> int:
         for name, value in (("stride_grid", args.stride_grid), ("mdl_grid", args.mdl_grid))
         if value is not None
     }
+    where = dataset_locations(data)
     if not args.quiet and sys.stderr.isatty():  # a refusal after it is one line in a pipe
         print("reading SALSA and Babble ...", file=sys.stderr, flush=True)
-    salsa, babble = load_salsa(resolve(data["salsa"])), load_babble(resolve(data["babble"]))
+    salsa, babble = load_salsa(where["salsa"]), load_babble(where["babble"])
     _check_size(args, salsa, babble)
     if args.dry_run:
         return 0

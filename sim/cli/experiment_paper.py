@@ -6,14 +6,20 @@ from __future__ import annotations
 
 import argparse
 
-from reform.datasets import load_babble, load_salsa, resolve
+from reform.datasets import load_babble, load_salsa
 from sim.cli._common import (
     TRAIN_FRACTION,
     CliError,
     check_train_fraction,
     job_count,
 )
-from sim.cli._experiment_io import experiment_command, named_datasets, publish, report_target
+from sim.cli._experiment_io import (
+    dataset_locations,
+    experiment_command,
+    named_datasets,
+    publish,
+    report_target,
+)
 from sim.cli._experiment_paper import BASENAME
 from sim.cli._grammar import stage_lines
 from sim.experiments.paper import paper_experiment
@@ -39,11 +45,12 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--folds must be at least 2, got {args.folds}")
     data = named_datasets(args)
     stem = report_target(args.out, BASENAME)
+    where = dataset_locations(data)
 
     with stage_lines(args, "experiment paper") as progress:
         experiment = paper_experiment(
-            load_salsa(resolve(data["salsa"])),
-            load_babble(resolve(data["babble"])),
+            load_salsa(where["salsa"]),
+            load_babble(where["babble"]),
             train_fraction=args.train_fraction,
             n_folds=args.folds,
             n_jobs=job_count(args),

@@ -92,3 +92,18 @@ def test_an_environments_record_dir_that_is_a_file_is_refused_when_made(tmp_path
     afile.write_text("")
     with pytest.raises(ValueError, match=rf"^record_dir {afile}: expected a folder path"):
         gym.make("ReformSim/HRIConversation-v0", record_dir=afile)
+
+
+@pytest.mark.parametrize("experiment", ["gcff", "paper"])
+def test_an_experiments_data_says_what_it_takes(experiment, toy_dataset, tmp_path, capsys):
+    salsa = "a folder with the DANTE text files features.txt and group_names.txt"
+    for given, found in (
+        (tmp_path / "some" / "file.parquet", "no such file or folder"),
+        (toy_dataset, "a dataset in the parquet format"),
+    ):
+        argv = ["experiment", experiment, "--data", f"salsa={given}", "--out", tmp_path / "out"]
+        assert cli_error(argv, capsys) == (
+            f"reform-sim experiment: error: --data salsa={given}: expected {salsa} (or a "
+            f"dataset's name), found {found}"
+        )
+    assert not (tmp_path / "out").exists()
