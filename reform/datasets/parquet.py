@@ -455,14 +455,16 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
 
     Checks what :func:`read_parquet` checks, without stopping at the first problem: the card
     says the run finished; each shard it lists is there, of its size and sha256; no Parquet
-    file is there that it does not list; every shard reads.
+    file is there that it does not list; every shard reads. Then that the card's counts are
+    its shards' (`_check_counts`).
 
     Args:
         path: the folder, or its URI in a store (``s3://bucket/prefix``,
             `reform.datasets.store`).
 
     Raises:
-        DataFormatError: ``path`` is not a folder with a card (``dataset.json``).
+        DataFormatError: ``path`` is not a folder with a card (``dataset.json``), or a count
+            of its card is not what its shards give.
         reform.datasets.store.StoreError: a store that cannot be used (one line).
     """
     if not is_uri(path):
@@ -485,12 +487,64 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
         problems.append(str(exc))
     keep, found = _check_shards(source, card, files, allow_incomplete=True)
     problems += [str(p) for p in found]
+    counted: dict[str, dict[str, int]] = {}
     for relative in sorted(keep, key=lambda p: _natural_key(Path(p))):
         try:
-            source.read(relative)
+            frames, _ = source.read(relative)
         except DataFormatError as exc:
             problems.append(str(exc))
+            continue
+        counted[relative] = {field: count(frames) for field, count in _COUNTS.items()}
+    if card.get("complete") is True:  # an unfinished run's card is refused as such above
+        _check_counts(source.where(CARD_JSON), card, counted, every=not problems)
     return problems
+
+
+# The counts a card keeps of each shard (and, in its totals, of them all), as its frames give them.
+_COUNTS = {
+    "frames": len,
+    "annotated_frames": lambda frames: sum(frame.groups is not None for frame in frames),
+    "rows": lambda frames: sum(frame.n_people for frame in frames),
+}
+
+
+def _check_counts(
+    card_path: Path | str,
+    card: Mapping[str, Any],
+    counted: Mapping[str, Mapping[str, int]],
+    *,
+    every: bool,
+) -> None:
+    """Refuses a card whose counts are not its shards': each shard's `_COUNTS` that ``counted``
+    holds (shard path -> counts) and, when ``every`` shard was counted, its totals of them and
+    of its shards."""
+    for k, entry in enumerate(card["shards"]):
+        counts = counted.get(entry["path"])
+        for field, value in (counts or {}).items():
+            if field in entry and entry[field] != value:
+                what = field.replace("_", " ")
+                raise DataFormatError(
+                    card_path,
+                    f"shards[{k}]",
+                    field,
+                    f"the {what} shard {entry['path']} holds ({value})",
+                    repr(entry[field]),
+                )
+    totals = card.get("totals")
+    if not every or not isinstance(totals, dict):
+        return
+    given = {"shards": (len(counted), "the number of its shards")} | {
+        field: (
+            sum(counts[field] for counts in counted.values()),
+            f"the {field.replace('_', ' ')} its {len(counted)} shards hold",
+        )
+        for field in _COUNTS
+    }
+    for field, (value, what) in given.items():
+        if field in totals and totals[field] != value:
+            raise DataFormatError(
+                card_path, "totals", field, f"{what} ({value})", repr(totals[field])
+            )
 
 
 def _source(path: str | PathLike[str]) -> Any:

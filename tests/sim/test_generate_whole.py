@@ -8,6 +8,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from cli_errors import cli_error
 
 from reform.datasets import DataFormatError, read_parquet
 from reform.datasets.parquet import verify_folder
@@ -117,3 +118,34 @@ def test_data_verify_and_the_commands_say_what_is_left_out(folder, capsys):
     assert main(["data", "info", "--data", str(folder), "--allow-incomplete"]) == 0
     err = capsys.readouterr().err
     assert "1 shard(s) left out (--allow-incomplete)" in err and shard in err
+
+
+@pytest.mark.parametrize(
+    ("where", "field", "by", "shards_give"),
+    [
+        ("", "episodes", 1, "the number of shards the card lists"),
+        ("totals", "shards", 1, "the number of its shards"),
+        ("totals", "frames", -1, "the frames its 3 shards hold"),
+        ("totals", "rows", 5, "the rows its 3 shards hold"),
+        ("shards[1]", "frames", 2, "the frames shard {path} holds"),
+        ("shards[0]", "annotated_frames", 1, "the annotated frames shard {path} holds"),
+    ],
+    ids=["episodes", "shards", "frames", "rows", "shard-frames", "shard-annotated-frames"],
+)
+def test_data_verify_refuses_a_card_whose_counts_are_not_its_shards(
+    folder, where, field, by, shards_give, capsys
+):
+    card_path = folder / CARD_JSON
+    card = json.loads(card_path.read_text())
+    if where.startswith("shards"):
+        part = card["shards"][int(where[len("shards[") : -1])]
+    else:
+        part = card[where] if where else card
+    true = part[field]  # the generated card's: what its shards give
+    part[field] += by
+    card_path.write_text(json.dumps(card))
+    at = f"{where}: " if where else ""
+    assert cli_error(["data", "verify", "--data", folder], capsys) == (
+        f"reform-sim data: error: {card_path}: {at}field {field!r}: expected "
+        f"{shards_give.format(path=part.get('path'))} ({true}), found {true + by}"
+    )
