@@ -31,7 +31,8 @@ them with the field's protocol: per dataset precision, recall and F1 at T = 2/3 
 the mean over datasets, with the original papers' published figures beside ours where they
 exist. Writes OUT/benchmark.md, OUT/benchmark.json, OUT/benchmark.png and one Rerun recording
 per dataset (OUT/recordings/<dataset>.rrd: its scenes, the ground truth, every detector's
-groups and mistakes).
+groups and mistakes). A dataset with no annotated frames in the part scored is refused before
+any detector runs.
 
 Detectors (--detector, repeatable): any name of the detector catalogue (`reform-sim evaluate
 --help` lists them with their options), run with its declared defaults: gcff (GCFF with one

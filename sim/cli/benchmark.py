@@ -27,6 +27,7 @@ from sim.experiments.benchmark import (
     found_datasets,
     model_spec,
     one_recording_each,
+    read_for_run,
     run_benchmark,
 )
 from sim.experiments.benchmark_report import write_report
@@ -104,6 +105,13 @@ def _run(args: argparse.Namespace) -> int:
             detectors += [model_spec(path) for path in args.model]
     detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
+    try:
+        with ticking_bar(args, "reading datasets", len(datasets), unit="dataset"):
+            run = read_for_run(datasets, detectors)  # one with nothing to score is refused
+    except ValueError as exc:
+        if args.data:
+            raise
+        raise CliError(f"{exc} (a dataset found, not given: --data names those to score)") from exc
 
     bar = progress_bar(
         total=len(datasets) * len(detectors),
@@ -127,6 +135,7 @@ def _run(args: argparse.Namespace) -> int:
             address=args.address,
             progress=progress,
             temporal=args.temporal,
+            run=run,
         )
     command = _command(args)
     out = Path(args.out)

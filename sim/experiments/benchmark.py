@@ -573,6 +573,36 @@ def _load_once(dataset_spec: DatasetSpec, run: str | None) -> Dataset:
     return _LOADED["datasets"][key]
 
 
+def read_for_run(
+    datasets: Sequence[DatasetSpec], detectors: Sequence[DetectorSpec], run: str | None = None
+) -> str:
+    """Reads each of ``datasets`` into this process for run ``run`` (a new run when None), as
+    the run's recordings and its cells here read it (once), and refuses one that a cell would
+    have nothing to score on (no annotated frame in the part of it that a detector of
+    ``detectors`` is scored on): before any cell runs. Returns the run's id, for
+    `run_benchmark`.
+
+    Raises:
+        ValueError: ``"<path>: the dataset has no annotated frames to score"`` (or its time
+            split's test part has none).
+        DataFormatError: a dataset file is malformed.
+    """
+    run = run or f"{os.getpid()}-{time.time_ns()}"
+    for dataset_spec in datasets:
+        dataset = _load_once(dataset_spec, run)
+        for part in dict.fromkeys(scored_part(dataset_spec, d) for d in detectors):
+            if not part.frames(dataset):
+                raise ValueError(_nothing_to_score(part))
+    return run
+
+
+def _nothing_to_score(dataset_spec: DatasetSpec) -> str:
+    part = "the test part of the dataset's time split" if dataset_spec.split == "test" else (
+        "the dataset"
+    )
+    return f"{dataset_spec.path}: {part} has no annotated frames to score"
+
+
 def _at(frame: Frame) -> tuple[str, float]:
     """A frame's place in its dataset: its sequence and time."""
     return frame.sequence, frame.time
@@ -601,8 +631,8 @@ def _score(
         train, _ = time_split(dataset.frames, dataset_spec.train_fraction)
         training = tuple(f for f in train if f.groups is not None)
     frames = dataset_spec.frames(dataset)
-    if not frames:
-        return Cell(label, detector_spec.label, None, skipped="no annotated frames to score")
+    if not frames:  # read_for_run refuses it before any cell: the file changed since
+        raise ValueError(_nothing_to_score(dataset_spec))
     if detector_spec.learns and not training:
         return Cell(label, detector_spec.label, None, skipped="no annotated frames to train on")
     detector, reason = detector_spec.build(dataset, training)
@@ -648,8 +678,9 @@ def run_benchmark(
     progress: Callable[[int, int, Cell], None] | None = None,
     executor: Executor | None = None,
     temporal: bool = False,
+    run: str | None = None,
 ) -> Benchmark:
-    """Runs every detector on every dataset.
+    """Runs every detector on every dataset (each read here first, `read_for_run`).
 
     Args:
         datasets: the datasets, in table order.
@@ -661,9 +692,12 @@ def run_benchmark(
         executor: where the cells run (`sim.executor.Executor`), instead of ``jobs``,
             ``backend`` and ``address``.
         temporal: also score each cell's group events in time (`Cell.temporal`).
+        run: the id `read_for_run` returned for these datasets and detectors (they are read
+            here once), or None to read them now.
 
     Raises:
-        ValueError: no dataset or detector, a repeated label, an unknown backend, jobs < 1.
+        ValueError: no dataset or detector, a repeated label, an unknown backend, jobs < 1, a
+            dataset with nothing to score (`read_for_run`).
         reform.detectors.DetectorError: a detector raised, or returned something that is not a
             partition of a frame's people (naming the detector and the frame).
         DataFormatError: a dataset file is malformed.
@@ -684,9 +718,11 @@ def run_benchmark(
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
-    # Each process reads a dataset once in this run, this one too (for the recordings, say):
-    # what it read is let go when the next run starts here.
-    run = f"{os.getpid()}-{time.time_ns()}"
+    # Each process reads a dataset once in this run, this one first (it refuses a dataset with
+    # nothing to score before any cell, and writes the recordings): what it read is let go
+    # when the next run starts here.
+    if run is None:
+        run = read_for_run(datasets, detectors)
     units = [(d, m, bool(temporal), run) for d in datasets for m in detectors]
     start = time.perf_counter()
     if executor is None:

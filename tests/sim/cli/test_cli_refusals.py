@@ -107,3 +107,27 @@ def test_an_experiments_data_says_what_it_takes(experiment, toy_dataset, tmp_pat
             f"dataset's name), found {found}"
         )
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("annotated", "extra", "part"),
+    [
+        (0, [], "the dataset"),
+        (1, ["--test-split", "raw.parquet"], "the test part of the dataset's time split"),
+    ],
+    ids=["none-annotated", "test-part-not-annotated"],
+)
+def test_benchmark_refuses_a_dataset_with_nothing_to_score(
+    annotated, extra, part, toy_dataset, tmp_path, capsys
+):
+    raw = tmp_path / "raw.parquet"
+    frames = [
+        f if k < annotated else f.replace(groups=None) for k, f in enumerate(toy_frames(0, 20))
+    ]
+    write_parquet(Dataset(frames=tuple(frames), name="raw", source="toy_scenes"), raw)
+    out = tmp_path / "bench"
+    argv = ["benchmark", "--data", toy_dataset, "--data", raw, *extra, "--detector", "majority"]
+    assert cli_error([*argv, "--out", out, "--no-recordings"], capsys) == (
+        f"reform-sim benchmark: error: {raw}: {part} has no annotated frames to score"
+    )
+    assert not out.exists()
