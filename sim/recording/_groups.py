@@ -605,6 +605,16 @@ class _Matches:
     overlap: np.ndarray
 
 
+def _present_truth(columns: FrameColumns) -> list[Frame] | None:
+    """The frames with their ground truth as drawn, over the people present, where an
+    annotation names someone absent (`reform.Frame.listed_groups`: the evaluation scores the
+    group as listed, the drawing can show only who is there); None when none does."""
+    frames = columns.frames
+    if frames is None or all(f.listed_groups is None for f in frames):
+        return None
+    return [f if f.listed_groups is None else f.replace(listed_groups=None) for f in frames]
+
+
 def _matches(evaluation: Evaluation, layout: GroupLayout, truth: GroupLayout) -> _Matches:
     """Which groups matched at T = 2/3, read from the evaluation's records."""
     k = evaluation.thresholds.index(T_TWO_THIRDS)
@@ -727,8 +737,10 @@ def log_groups(
                 )
             evaluation = evaluate(columns.frames, partitions)
         if evaluation is not None:
+            drawn = _present_truth(columns)  # matched against the truth drawn, scored as listed
+            matched = evaluation if drawn is None else evaluate(drawn, partitions)
             true_layout = GroupLayout.truth(columns)
-            matches = _matches(evaluation, layout, true_layout)
+            matches = _matches(matched, layout, true_layout)
     if not is_truth and truth is not None:
         fixed = _inherit_tracks(layout, rows, truth)
     if first_track is None:

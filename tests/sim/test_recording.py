@@ -1499,3 +1499,28 @@ def test_commands_save_a_recording(tmp_path, capsys, command):
         [command, "--detector", "majority", "--data", str(data), *map(str, extra), "--url", "x"]
     )
     assert status == 2 and "--url needs --connect" in capsys.readouterr().err
+
+
+def test_a_truth_naming_someone_absent_is_drawn_and_scored_as_the_evaluation_scores_it(tmp_path):
+    # The annotation lists (1, 9) with 9 not in the frame (a pose the tracker lost): drawn, the
+    # truth is the people present; scored, the evaluation counts the group as listed.
+    frame = Frame(
+        ids=[1, 2, 3, 4],
+        position=[[0, 0], [3, 0], [3.8, 0], [8, 0]],
+        yaw=[0.0, 0.0, math.pi, 0.0],
+        groups=((1,), (2, 3), (4,)),
+        listed_groups=((1, 9), (2, 3)),
+        sequence="s",
+    )
+    prediction = ((1,), (2, 3), (4,))
+    evaluation = evaluate([frame], [prediction])
+    assert evaluation.at("2/3").recall == 0.5
+    path = tmp_path / "absent.rrd"
+    record_evaluation(path, [frame], {"gcff": [prediction]}, {"gcff": evaluation})
+    rec = Recording(path)
+    assert rec.rows["/world/groups/truth/members"][0]["person_id"] == [1, 2, 3, 4]
+    mistakes = "/world/groups/gcff/mistakes"
+    assert rec.rows[f"{mistakes}/missed"][0]["Cylinders3D:labels"] == []  # (2, 3) found, as drawn
+    assert rec.rows[f"{mistakes}/spurious"][0]["Cylinders3D:labels"] == []
+    final = rec.column("/metrics/f1/gcff", "Scalars:scalars")[-1][0]
+    assert final == pytest.approx(evaluation.at("2/3").f1)
