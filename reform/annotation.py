@@ -46,9 +46,11 @@ from reform.perturb import TrackerNoise
 
 __all__ = [
     "ANNOTATION_RANGES",
+    "MAX_DIRECTIONS",
     "MAX_POSITION_NOISE_M",
     "MAX_SCALE",
     "MAX_SCALE_SD",
+    "MAX_YAW_NOISE_RAD",
     "ORIENTATIONS",
     "AnnotationModel",
     "draw_annotation",
@@ -62,6 +64,8 @@ MIN_SCALE = 0.5  # a scale factor is kept at or above this (a drawn error never 
 MAX_SCALE = 1e4  # a length unit of at least 0.1 mm
 MAX_SCALE_SD = 1.0  # a scale error of 100 %
 MAX_POSITION_NOISE_M = 10.0  # metres: jitter larger than any room's people
+MAX_YAW_NOISE_RAD = 2.0 * math.pi  # a full turn: beyond it the recorded yaw is as random
+MAX_DIRECTIONS = 3600  # a tenth of a degree: finer coding is continuous for any detector
 
 # The ranges a randomised annotation draws from, one model per episode: each a tuple of
 # choices, or (low, high) for a uniform draw. They span the field's public datasets:
@@ -89,13 +93,13 @@ class AnnotationModel:
 
     Attributes:
         orientation: ``"body"`` or ``"head"``: the orientation recorded as each person's yaw.
-        directions: the number of directions orientations are coded in (>= 1), or None for
-            continuous orientations.
+        directions: the number of directions orientations are coded in (1 to
+            `MAX_DIRECTIONS`), or None for continuous orientations.
         scale_sd: standard deviation of the episode's scale error, a fraction (0 to
             `MAX_SCALE_SD`).
         position_noise: tracker jitter on each position coordinate, metres (0 to
             `MAX_POSITION_NOISE_M`).
-        yaw_noise: tracker jitter on each yaw, radians (>= 0).
+        yaw_noise: tracker jitter on each yaw, radians (0 to `MAX_YAW_NOISE_RAD`).
         dropout: probability that the tracker misses a person in a frame, in [0, 1).
         min_group_seconds: the shortest run, seconds, for which annotators call a group (>= 0).
         scale: a fixed factor every position is multiplied by (> 0, at most `MAX_SCALE`): the
@@ -123,6 +127,11 @@ class AnnotationModel:
                 raise ValueError(
                     f"annotation directions must be a whole number >= 1 (or continuous), got {k!r}"
                 )
+            if k > MAX_DIRECTIONS:
+                raise ValueError(
+                    f"annotation directions must be at most {MAX_DIRECTIONS} (finer is "
+                    f"continuous: leave it out), got {k!r}"
+                )
             object.__setattr__(self, "directions", int(k))
         levels = ("scale_sd", "position_noise", "yaw_noise", "min_group_seconds")
         check_levels(self, "annotation ", levels, probabilities=("dropout",))
@@ -131,7 +140,11 @@ class AnnotationModel:
                 f"annotation dropout must be below 1 (1 drops everyone from every frame), got "
                 f"{self.dropout!r}"
             )
-        for name, high in (("scale_sd", MAX_SCALE_SD), ("position_noise", MAX_POSITION_NOISE_M)):
+        for name, high in (
+            ("scale_sd", MAX_SCALE_SD),
+            ("position_noise", MAX_POSITION_NOISE_M),
+            ("yaw_noise", MAX_YAW_NOISE_RAD),
+        ):
             if getattr(self, name) > high:
                 raise ValueError(
                     f"annotation {name} must be at most {high:g}, got {getattr(self, name)!r}"

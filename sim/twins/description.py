@@ -229,7 +229,7 @@ def twin_from_json(data: Any, *, where: str = "twin") -> Twin:
         raise _fail(where, missing[0], "the field to be present", "nothing")
     if data["format"] != TWIN_FORMAT:
         raise _fail(where, "format", repr(TWIN_FORMAT), data["format"])
-    if data["version"] != TWIN_VERSION:
+    if type(data["version"]) is not int or data["version"] != TWIN_VERSION:  # not true, 1.0
         raise _fail(where, "version", f"{TWIN_VERSION} (the version this reform-sim reads)",
                     data["version"])  # fmt: skip
     for name in ("name", "scenario"):

@@ -107,6 +107,8 @@ def test_the_annotator_calls_a_group_only_once_it_has_lasted():
         ({"directions": -4}, r"directions must be a whole number >= 1 .*got -4"),
         ({"directions": 2.5}, r"directions must be a whole number >= 1 .*got 2.5"),
         ({"directions": True}, r"directions must be a whole number >= 1 .*got True"),
+        ({"directions": 3601}, r"directions must be at most 3600 \(finer is continuous"),
+        ({"yaw_noise": 7.0}, r"annotation yaw_noise must be at most 6.28319, got 7.0"),
         ({"scale_sd": -0.01}, r"annotation scale_sd must be a finite number >= 0, got -0.01"),
         (
             {"position_noise": math.nan},

@@ -132,6 +132,13 @@ def twin_file(fitted, tmp_path_factory) -> Path:
         (lambda d: d["annotation"].update(scale=1e9), r"field annotation: .*scale .*at most 10000"),
         (lambda d: d["annotation"].update(position_noise=1e9), r"field annotation: .*at most 10,"),
         (lambda d: d["options"].update(people=100), r"field options: mingle: 100 people do not "),
+        (lambda d: d.update(version=True), r"field version: expected 1 .* found True"),
+        (lambda d: d.update(version=1.0), r"field version: expected 1 .* found 1\.0"),
+        (
+            lambda d: d["annotation"].update(directions=10**400),
+            r"field annotation: .*directions must be at most 3600",
+        ),
+        (lambda d: d["annotation"].update(yaw_noise=1e300), r"field annotation: .*at most 6\.28"),
     ],
     ids=[
         "unknown-field",
@@ -148,6 +155,10 @@ def twin_file(fitted, tmp_path_factory) -> Path:
         "scale-too-large",
         "jitter-too-large",
         "options-that-do-not-fit-together",
+        "version-true",
+        "version-not-whole",
+        "directions-too-many",
+        "yaw-jitter-too-large",
     ],  # fmt: skip
 )
 def test_a_twin_file_edited_into_nonsense_is_refused(twin_file, tmp_path, edit, message):
