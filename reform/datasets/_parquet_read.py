@@ -526,6 +526,15 @@ def _read_file(
         )
     if header.get("units", "m") != "m":
         raise DataFormatError(path, None, "units", "'m'", repr(header.get("units")))
+    extra = [name for name in columns if name not in COLUMNS]
+    if extra:  # read, it would be dropped without a word
+        raise DataFormatError(
+            path,
+            None,
+            extra[0],
+            f"only the columns of format version {version} ({', '.join(COLUMNS)})",
+            "a column of another name",
+        )
 
     data: dict[str, np.ndarray] = {}
     null: dict[str, np.ndarray] = {}

@@ -264,6 +264,18 @@ def test_missing_column(tmp_path):
         read_parquet(path)
 
 
+def test_a_column_of_another_name_is_refused_not_dropped(tmp_path):
+    path = _rewrite(
+        tmp_path, lambda t: t.append_column("confidence", pa.array([0.5] * t.num_rows))
+    )
+    with pytest.raises(
+        DataFormatError,
+        match=r"bad.parquet: field 'confidence': expected only the columns of format version 1 "
+        r"\(sequence, frame, .*\), found a column of another name",
+    ):
+        read_parquet(path)
+
+
 def test_wrong_column_type(tmp_path):
     def change(table):
         index = table.schema.get_field_index("x")
