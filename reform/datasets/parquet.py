@@ -26,6 +26,7 @@ pyarrow is imported only inside these functions.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
@@ -487,63 +488,89 @@ def verify_folder(path: str | PathLike[str]) -> list[str]:
         problems.append(str(exc))
     keep, found = _check_shards(source, card, files, allow_incomplete=True)
     problems += [str(p) for p in found]
-    counted: dict[str, dict[str, int]] = {}
+    counted: dict[str, dict[str, Any]] = {}
     for relative in sorted(keep, key=lambda p: _natural_key(Path(p))):
         try:
             frames, _ = source.read(relative)
         except DataFormatError as exc:
             problems.append(str(exc))
             continue
-        counted[relative] = {field: count(frames) for field, count in _COUNTS.items()}
+        counted[relative] = {field: hold(frames) for field, hold in _HELD.items()}
     if card.get("complete") is True:  # an unfinished run's card is refused as such above
         _check_counts(source.where(CARD_JSON), card, counted, every=not problems)
     return problems
 
 
-# The counts a card keeps of each shard (and, in its totals, of them all), as its frames give them.
+def _group_sizes(frames: list[Frame]) -> dict[str, int]:
+    """Size -> groups of that size over the annotated frames, everyone counted (people alone
+    are groups of one), as a card keeps them."""
+    from reform.datasets.summary import summarise
+
+    return summarise(Dataset(frames=tuple(frames), name="shard"))["group_sizes"]
+
+
+# What a card says of each shard (and, in its totals, of them all: the counts and the group
+# sizes summed), as the shard's frames give it.
 _COUNTS = {
     "frames": len,
     "annotated_frames": lambda frames: sum(frame.groups is not None for frame in frames),
     "rows": lambda frames: sum(frame.n_people for frame in frames),
+}
+_HELD = {
+    **_COUNTS,
+    "sequence": lambda frames: ", ".join(dict.fromkeys(frame.sequence for frame in frames)),
+    "group_sizes": _group_sizes,
 }
 
 
 def _check_counts(
     card_path: Path | str,
     card: Mapping[str, Any],
-    counted: Mapping[str, Mapping[str, int]],
+    counted: Mapping[str, Mapping[str, Any]],
     *,
     every: bool,
 ) -> None:
-    """Refuses a card whose counts are not its shards': each shard's `_COUNTS` that ``counted``
-    holds (shard path -> counts) and, when ``every`` shard was counted, its totals of them and
-    of its shards."""
+    """Refuses a card that says of its shards what they do not hold: each shard's `_HELD` that
+    ``counted`` holds (shard path -> values), its episode against its path's
+    (``episode=N``), and, when ``every`` shard was counted, its totals of them."""
     for k, entry in enumerate(card["shards"]):
-        counts = counted.get(entry["path"])
-        for field, value in (counts or {}).items():
+        held = counted.get(entry["path"])
+        if held is None:
+            continue
+        named = re.search(r"(?:^|/)episode=(\d+)/", entry["path"])
+        found = {**held, **({"episode": int(named.group(1))} if named else {})}
+        for field, value in found.items():
             if field in entry and entry[field] != value:
                 what = field.replace("_", " ")
                 raise DataFormatError(
                     card_path,
                     f"shards[{k}]",
                     field,
-                    f"the {what} shard {entry['path']} holds ({value})",
+                    f"the {what} of shard {entry['path']} ({value!r})",
                     repr(entry[field]),
                 )
     totals = card.get("totals")
     if not every or not isinstance(totals, dict):
         return
+    sizes: dict[str, int] = {}
+    for held in counted.values():
+        for size, count in held["group_sizes"].items():
+            sizes[size] = sizes.get(size, 0) + count
     given = {"shards": (len(counted), "the number of its shards")} | {
         field: (
-            sum(counts[field] for counts in counted.values()),
+            sum(held[field] for held in counted.values()),
             f"the {field.replace('_', ' ')} its {len(counted)} shards hold",
         )
         for field in _COUNTS
     }
+    given["group_sizes"] = (
+        dict(sorted(sizes.items(), key=lambda item: int(item[0]))),
+        f"the group sizes its {len(counted)} shards hold",
+    )
     for field, (value, what) in given.items():
         if field in totals and totals[field] != value:
             raise DataFormatError(
-                card_path, "totals", field, f"{what} ({value})", repr(totals[field])
+                card_path, "totals", field, f"{what} ({value!r})", repr(totals[field])
             )
 
 

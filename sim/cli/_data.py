@@ -60,8 +60,8 @@ ACTIONS = (
         "Checks a `reform-sim generate` folder against its card (dataset.json): the run finished, "
         "every shard it lists is there with its size and sha256, no other Parquet file is there, "
         "every shard reads. Prints each problem on a line; exit status 1 when there is one. A "
-        "card whose counts (shards, frames, annotated frames, rows) are not what its shards hold "
-        "is refused in one line (exit status 2).",
+        "card that says of its shards what they do not hold (their counts of frames, annotated "
+        "frames and rows, group sizes, sequence, episode) is refused in one line (exit status 2).",
         _verify_arguments,
         as_written=False,
     ),

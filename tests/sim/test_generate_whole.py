@@ -127,8 +127,8 @@ def test_data_verify_and_the_commands_say_what_is_left_out(folder, capsys):
         ("totals", "shards", 1, "the number of its shards"),
         ("totals", "frames", -1, "the frames its 3 shards hold"),
         ("totals", "rows", 5, "the rows its 3 shards hold"),
-        ("shards[1]", "frames", 2, "the frames shard {path} holds"),
-        ("shards[0]", "annotated_frames", 1, "the annotated frames shard {path} holds"),
+        ("shards[1]", "frames", 2, "the frames of shard {path}"),
+        ("shards[0]", "annotated_frames", 1, "the annotated frames of shard {path}"),
     ],
     ids=["episodes", "shards", "frames", "rows", "shard-frames", "shard-annotated-frames"],
 )
@@ -148,4 +148,32 @@ def test_data_verify_refuses_a_card_whose_counts_are_not_its_shards(
     assert cli_error(["data", "verify", "--data", folder], capsys) == (
         f"reform-sim data: error: {card_path}: {at}field {field!r}: expected "
         f"{shards_give.format(path=part.get('path'))} ({true}), found {true + by}"
+    )
+
+
+def test_data_verify_refuses_a_card_that_says_of_a_shard_what_it_does_not_hold(folder, capsys):
+    """Two shards swapped with their sizes and hashes: each is unaltered, but not the episode
+    the card says; a group size the shards do not hold, in the totals."""
+    card_path = folder / CARD_JSON
+    card = json.loads(card_path.read_text())
+    first, second = card["shards"][0], card["shards"][1]
+    for key in ("bytes", "sha256"):
+        first[key], second[key] = second[key], first[key]
+    a, b = folder / first["path"], folder / second["path"]
+    shard_a, shard_b = a.read_bytes(), b.read_bytes()
+    a.write_bytes(shard_b)
+    b.write_bytes(shard_a)
+    card_path.write_text(json.dumps(card))
+    assert cli_error(["data", "verify", "--data", folder], capsys) == (
+        f"reform-sim data: error: {card_path}: shards[0]: field 'sequence': expected the "
+        f"sequence of shard {first['path']} ({second['sequence']!r}), found {first['sequence']!r}"
+    )
+    a.write_bytes(shard_a)
+    b.write_bytes(shard_b)
+    for key in ("bytes", "sha256"):
+        first[key], second[key] = second[key], first[key]
+    card["totals"]["group_sizes"]["99"] = 1
+    card_path.write_text(json.dumps(card))
+    assert "totals: field 'group_sizes': expected the group sizes its 3 shards hold" in (
+        cli_error(["data", "verify", "--data", folder], capsys)
     )
