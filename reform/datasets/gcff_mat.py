@@ -11,8 +11,8 @@ A GCFF folder holds:
   parameters tuned for the dataset.
 
 The public sets write positions in centimetre-like units, so :func:`load_gcff` assumes
-centimetres unless told otherwise (refusing a folder whose spacing says image pixels) and
-converts to metres. Time stamps are frame numbers or seconds in the public sets, kept as
+centimetres unless told otherwise (refusing a folder whose spacing says image pixels or metres)
+and converts to metres. Time stamps are frame numbers or seconds in the public sets, kept as
 stored; Unix times (in seconds, milliseconds, microseconds or nanoseconds, told apart by their
 magnitude and spacing) are read in their unit and counted in seconds from each sequence's start.
 """
@@ -128,7 +128,9 @@ def load_gcff(
             ``metres_per_pixel``). Positions are converted to metres. None reads centimetres
             and refuses a sequence whose people then stand a median of more than 3 m from their
             nearest neighbour (`reform.datasets._validation.MAX_CENTIMETRE_SPACING_M`): its
-            positions are image pixels. A unit given is not checked.
+            positions are image pixels; or of less than 0.1 m
+            (`reform.datasets._validation.MIN_CENTIMETRE_SPACING_M`): they are metres. A unit
+            given is not checked.
         metres_per_pixel: the scale of ``units="px"``; refused with other units.
         strict: refuse the quirks listed above instead of repairing them.
         time_unit: the unit of ``timestamp``, ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. None
@@ -148,7 +150,8 @@ def load_gcff(
         ValueError: ``units`` or ``time_unit`` is unknown, or ``metres_per_pixel`` is missing
             for pixels, given for another unit, or not a positive finite number.
         DataFormatError: a file is missing, unreadable or malformed, its positions' spacing
-            says pixels (``units`` None), or its time stamps fit no unit (``time_unit`` None).
+            says pixels or metres (``units`` None), or its time stamps fit no unit
+            (``time_unit`` None).
     """
     path = path_argument(path, name="path", function="load_gcff")
     per_metre = units_per_metre("cm" if units is None else units, metres_per_pixel)
