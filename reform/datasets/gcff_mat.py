@@ -587,13 +587,18 @@ def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
     array = np.asarray(value)
     if array.dtype == object or not np.issubdtype(array.dtype, np.number):
         raise DataFormatError(path, None, field, "a numeric vector", f"a {array.dtype} array")
-    if array.ndim > 2 or (array.ndim == 2 and array.size and 1 not in array.shape):
+    if not _is_vector(array):
         raise DataFormatError(path, None, field, "a 1×K vector", f"shape {array.shape}")
     vector = array.astype(np.float64).ravel()
     DataFormatError.check_rows(
         ~np.isfinite(vector), path, lambda k: f"element {k + 1}", field, "a finite number", vector
     )
     return vector
+
+
+def _is_vector(array: np.ndarray) -> bool:
+    """Whether ``array`` is a row (1×K), a column (K×1), 1-D, a scalar, or empty."""
+    return array.ndim <= 1 or (array.ndim == 2 and (array.size == 0 or 1 in array.shape))
 
 
 def _frame_rows(
@@ -707,6 +712,14 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
         if vector.dtype == object or not np.issubdtype(vector.dtype, np.number):
             raise DataFormatError(
                 path, where, f"group {k}", "a numeric vector of IDs", f"a {vector.dtype} array"
+            )
+        if not _is_vector(vector):  # a matrix's rows would be read as one merged group
+            raise DataFormatError(
+                path,
+                where,
+                f"group {k}",
+                "a row or column vector of IDs (shape (1, k), (k, 1) or (k,))",
+                f"shape {vector.shape}",
             )
         values = vector.astype(np.float64).ravel()
         if (

@@ -246,6 +246,40 @@ def test_bad_ground_truth(tmp_path, gt_groups, gt_timestamps, message):
     assert_refused(load_gcff, folder, message)
 
 
+# formats.md: each GTgroups entry is a 1×k cell of row vectors of IDs, one per group. A group
+# stored as a matrix (two groups written as its rows) is refused, not read as one merged group.
+@pytest.mark.parametrize(
+    ("entry", "group", "shape"),
+    [
+        pytest.param(np.array([[1.0, 2.0], [7.0, 3.0]]), 1, "(2, 2)", id="entry-a-matrix"),
+        pytest.param(
+            _cell([np.array([[1.0, 2.0]]), np.array([[7.0, 3.0], [4.0, 5.0]])]),
+            2,
+            "(2, 2)",
+            id="group-a-matrix",
+        ),
+        pytest.param(
+            _cell([np.array([1.0, 2.0]).reshape(1, 1, 2)]), 1, "(1, 1, 2)", id="group-in-3-d"
+        ),
+    ],
+)
+def test_a_group_that_is_not_a_vector_is_refused(tmp_path, entry, group, shape):
+    folder = _write(tmp_path / "gt", gt_groups=[entry], gt_timestamps=[10])
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(folder)
+    assert str(caught.value) == (
+        f"{folder / 'groundtruth.mat'}: GT frame 1 (GTtimestamp 10): field 'group {group}': "
+        f"expected a row or column vector of IDs (shape (1, k), (k, 1) or (k,)), found shape "
+        f"{shape}"
+    )
+
+
+def test_groups_as_rows_or_columns_load_alike(tmp_path):
+    column = _cell([np.array([[1.0], [2.0]]), np.array([[7.0]])])
+    folder = _write(tmp_path / "col", gt_groups=[column], gt_timestamps=[10])
+    assert load_gcff(folder)[0].groups == ((1, 2),)
+
+
 def test_length_mismatch(tmp_path):
     folder = _write(tmp_path / "len", timestamps=[10, 20])
     assert_refused(
