@@ -25,7 +25,7 @@ import zlib
 from collections import Counter
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -48,6 +48,7 @@ from reform.datasets._validation import (
 )
 from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
+from reform.gcff import MDL_LIMIT_M2, STRIDE_LIMIT_M
 from reform.machine import available_memory
 from reform.path_argument import path_argument
 
@@ -189,7 +190,7 @@ def load_gcff(
         settings_path = sequence_folder / SETTINGS_FILE
         if settings_path.exists():
             settings[sequence_folder.name] = _settings(
-                settings_path, units=file_units, per_metre=per_metre
+                settings_path, units=file_units, metres_per_pixel=metres_per_pixel
             )
 
     totals = Counter()
@@ -781,8 +782,10 @@ def _canonical(
     return tuple(groups), None
 
 
-def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
-    out: dict[str, Any] = {"units": units, **read_settings(path, required=())}
+def _settings(path: Path, *, units: str, metres_per_pixel: float | None) -> dict[str, Any]:
+    per_metre = units_per_metre(units, metres_per_pixel)
+    read = read_settings(path, required=(), units=units, metres_per_pixel=metres_per_pixel)
+    out: dict[str, Any] = {"units": units, **read}
     if "stride" in out:
         out["stride_m"] = out["stride"] / per_metre
     if "mdl" in out:
@@ -790,40 +793,63 @@ def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
     return out
 
 
-# What each GCFF parameter must be: (expected text, accepts the value).
+class _Setting(NamedTuple):
+    """What a GCFF parameter must be."""
+
+    power: int  # of length: 1 for a length, 2 for a squared one
+    limit: float  # the largest the detector takes, metres to that power
+    zero: bool  # whether 0 is accepted
+    kind: str  # what it is, with its lower bound
+    meaning: str  # what it does
+
+
+# What each GCFF parameter must be, with the detector's own bounds.
 _SETTINGS_RULES = {
-    "stride": (
-        "a finite length >= 0 (the o-space centre's distance in front of each person)",
-        lambda v: math.isfinite(v) and v >= 0,
+    "stride": _Setting(
+        1,
+        STRIDE_LIMIT_M,
+        True,
+        "a finite length >= 0",
+        "the o-space centre's distance in front of each person",
     ),
-    "mdl": (
-        "a finite squared length > 0 (the cost of opening a group)",
-        lambda v: math.isfinite(v) and v > 0,
+    "mdl": _Setting(
+        2, MDL_LIMIT_M2, False, "a finite squared length > 0", "the cost of opening a group"
     ),
 }
 
 
 @file_errors_as_data_errors
 def read_settings(
-    path: str | PathLike[str], *, required: tuple[str, ...] = ("stride", "mdl")
+    path: str | PathLike[str],
+    *,
+    required: tuple[str, ...] = ("stride", "mdl"),
+    units: str = "cm",
+    metres_per_pixel: float | None = None,
 ) -> dict[str, float]:
     """``stride`` and ``mdl`` of a GCFF ``settings_gc.mat``, as stored (file units).
 
     Args:
         path: the ``.mat`` file.
         required: the variables that must be present; the others are read when present.
+        units: length unit of the file's values, as `load_gcff` takes it (``"cm"``, ``"m"`` or
+            ``"px"`` with ``metres_per_pixel``): the detector's bounds are checked in it.
+        metres_per_pixel: the scale of ``units="px"``.
 
     Returns:
         ``{"stride": ..., "mdl": ...}`` (the ones present), floats in the file's units.
 
     Raises:
+        ValueError: ``units`` is unknown, or ``metres_per_pixel`` does not go with it.
         DataFormatError: the file is missing or unreadable, a required variable is missing, or
-            a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``.
+            a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``, or either is
+            beyond what the detector takes (`reform.gcff.STRIDE_LIMIT_M`,
+            `reform.gcff.MDL_LIMIT_M2`).
     """
     path = path_argument(path, name="path", function="read_settings")
+    per_metre = units_per_metre(units, metres_per_pixel)
     mat = _loadmat(path)
     out: dict[str, float] = {}
-    for name, (expected, accepts) in _SETTINGS_RULES.items():
+    for name, rule in _SETTINGS_RULES.items():
         if name not in mat:
             if name in required:
                 present = sorted(k for k in mat if not k.startswith("__"))
@@ -841,7 +867,20 @@ def read_settings(
                 f"a {array.dtype} array of shape {array.shape}",
             )
         value = float(array.ravel()[0])
-        if not accepts(value):
-            raise DataFormatError(path, None, name, expected, repr(value))
+        scale = per_metre**rule.power
+        if not (
+            math.isfinite(value)
+            and (value >= 0 if rule.zero else value > 0)
+            and value / scale <= rule.limit
+        ):
+            unit = "m" if rule.power == 1 else "m²"
+            raise DataFormatError(
+                path,
+                None,
+                name,
+                f"{rule.kind} and <= {rule.limit * scale:g} file units ({rule.limit:g} {unit}, "
+                f"the most GCFF takes; {rule.meaning})",
+                repr(value),
+            )
         out[name] = value
     return out

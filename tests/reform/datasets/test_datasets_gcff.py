@@ -12,6 +12,7 @@ from dataset_refusals import assert_refused
 from reform import DataFormatError
 from reform.datasets import detect_format, load_dataset, load_gcff
 from reform.datasets.gcff_mat import read_settings
+from reform.gcff import Gcff
 
 
 def _cell(items) -> np.ndarray:
@@ -339,6 +340,57 @@ def test_time_must_increase(tmp_path, timestamps, message):
 def test_bad_folder_settings_are_refused_at_load(tmp_path, settings, message):
     folder = _write(tmp_path / "s", settings=settings)
     assert_refused(load_gcff, folder, message)
+
+
+# The detector takes a stride of at most 1e8 m and an mdl of at most 1e16 m² (beyond, their
+# squares overflow): a settings file beyond is refused as it is read, in its own unit.
+@pytest.mark.parametrize(
+    ("settings", "units", "message"),
+    [
+        pytest.param(
+            {"stride": 1e12, "mdl": 6000.0},
+            "cm",
+            "field 'stride': expected a finite length >= 0 and <= 1e+10 file units (1e+08 m, the "
+            "most GCFF takes; the o-space centre's distance in front of each person), found "
+            "1000000000000.0",
+            id="stride-cm",
+        ),
+        pytest.param(
+            {"stride": 5e8, "mdl": 1.0},
+            "m",
+            "field 'stride': expected a finite length >= 0 and <= 1e+08 file units (1e+08 m, the "
+            "most GCFF takes; the o-space centre's distance in front of each person), found "
+            "500000000.0",
+            id="stride-m",
+        ),
+        pytest.param(
+            {"stride": 70.0, "mdl": 2e20},
+            "cm",
+            "field 'mdl': expected a finite squared length > 0 and <= 1e+20 file units (1e+16 m², "
+            "the most GCFF takes; the cost of opening a group), found 2e+20",
+            id="mdl-cm",
+        ),
+    ],
+)
+def test_settings_beyond_the_detectors_range_are_refused_naming_the_file(
+    tmp_path, settings, units, message
+):
+    folder = _write(tmp_path / "s", settings=settings)
+    expected = f"{folder / 'settings_gc.mat'}: {message}"
+    for read in (
+        lambda: load_gcff(folder, units=units),
+        lambda: read_settings(folder / "settings_gc.mat", units=units),
+        lambda: Gcff.from_settings_file(folder / "settings_gc.mat", units=units),
+    ):
+        with pytest.raises(DataFormatError) as caught:
+            read()
+        assert str(caught.value) == expected
+
+
+def test_settings_within_the_detectors_range_load_in_their_unit(tmp_path):
+    folder = _write(tmp_path / "s", settings={"stride": 5e8, "mdl": 1.0})  # 5,000 km
+    assert load_gcff(folder).metadata["settings_gc"]["stride_m"] == 5e6
+    assert read_settings(folder / "settings_gc.mat") == {"stride": 5e8, "mdl": 1.0}
 
 
 def test_settings_file_that_does_not_exist(tmp_path):
