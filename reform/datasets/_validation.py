@@ -120,6 +120,67 @@ def require_file(path: Path, *, what: str) -> Path:
     return path
 
 
+# How a Git LFS pointer starts: the small text file a clone without Git LFS holds in place of
+# each file the repository keeps in LFS.
+GIT_LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+# Bytes looked at to tell a text file where a binary one is expected. The binary formats read
+# hold bytes no text holds well before: a Parquet file right after its 4-byte 'PAR1', a MATLAB
+# file by byte 128 (version and byte order follow the 116 bytes of a version 5 header's text;
+# version 4 starts with binary integers).
+_TEXT_HEAD_BYTES = 512
+
+
+def check_not_text(
+    path: str | Path, *, expected: str, name: str, content: bytes | None = None
+) -> None:
+    """Refuses a text file where a binary file of the format ``name`` is expected: a Git LFS
+    pointer (the file itself was never fetched) or other text, such as a web page saved in its
+    place. Anything else, and a file that cannot be opened, is left to the format's reader.
+
+    Args:
+        path: the file (or, with ``content``, its name for the message).
+        expected: what the file should be (``"a Parquet file"``).
+        name: the format's name (``"Parquet"``).
+        content: the file's bytes when they are already read (from a store).
+    """
+    if content is None:
+        try:
+            with open(path, "rb") as handle:
+                head = handle.read(_TEXT_HEAD_BYTES)
+        except OSError:
+            return
+    else:
+        head = content[:_TEXT_HEAD_BYTES]
+    if head.startswith(GIT_LFS_POINTER):
+        raise DataFormatError(
+            path,
+            None,
+            None,
+            expected,
+            "a Git LFS pointer, not the file",
+            hint="fetch it with `git lfs pull`",
+        )
+    text = _text(head)
+    if text:
+        raise DataFormatError(
+            path, None, None, expected, f"text starting with {text[:20]!r}, not a {name} file"
+        )
+
+
+def _text(head: bytes) -> str | None:
+    """``head`` decoded, if it is the start of a UTF-8 text with no control character but
+    whitespace (a character cut at its end aside); else None."""
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.reason != "unexpected end of data":
+            return None
+        text = head[: exc.start].decode("utf-8")
+    if any((ord(c) < 32 and c not in "\t\n\r\f") or c == "\x7f" for c in text):
+        return None
+    return text
+
+
 def parse_float(token: str, *, path: Path, where: str, field: str) -> float:
     """A finite float from a text token."""
     try:

@@ -36,6 +36,7 @@ from reform.datasets._validation import (
     Repairs,
     TimeReading,
     check_assumed_centimetres,
+    check_not_text,
     check_time_increases,
     check_time_unit,
     check_unique_ids,
@@ -397,6 +398,7 @@ def _loadmat(path: Path) -> dict[str, Any]:
     kind = file_kind(path)
     if kind != "a file":
         raise DataFormatError(path, None, None, "a MATLAB .mat file", kind)
+    check_not_text(path, expected="a MATLAB .mat file", name="MATLAB")
     check_inflated_size(path)
     found = _read_plain(path)
     if found is not None:

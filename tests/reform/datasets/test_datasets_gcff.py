@@ -158,8 +158,37 @@ def test_empty_and_corrupt_files(tmp_path):
     assert_refused(
         load_gcff, folder, r"features.mat: expected the GCFF features file \(a non-empty file\)"
     )
-    (folder / "features.mat").write_bytes(b"this is not a MATLAB file at all" * 10)
+    (folder / "features.mat").write_bytes(b"\x00\x01 not a MATLAB file at all \xff" * 10)
     assert_refused(load_gcff, folder, r"features.mat: expected a readable MATLAB .mat file")
+
+
+# What a clone without Git LFS holds in place of each file, and what a web server answers for a
+# file it does not have.
+LFS_POINTER = (
+    b"version https://git-lfs.github.com/spec/v1\n"
+    b"oid sha256:31a03829bc785b1fd6540f0174a0beaab29ee17cd7b69dd38473565aab22abe6\nsize 14215\n"
+)
+HTML_PAGE = b"<!DOCTYPE html><html><body>404: Not Found</body></html>\n"
+
+
+@pytest.mark.parametrize("name", ["features.mat", "groundtruth.mat", "settings_gc.mat"])
+@pytest.mark.parametrize(
+    ("content", "found"),
+    [
+        pytest.param(
+            LFS_POINTER, "a Git LFS pointer, not the file; fetch it with `git lfs pull`", id="lfs"
+        ),
+        pytest.param(
+            HTML_PAGE, "text starting with '<!DOCTYPE html><html', not a MATLAB file", id="html"
+        ),
+    ],
+)
+def test_a_text_file_in_place_of_a_mat_file_is_named(tmp_path, name, content, found):
+    folder = _write(tmp_path / "text", settings={"stride": 70.0, "mdl": 10000.0})
+    (folder / name).write_bytes(content)
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(folder)
+    assert str(caught.value) == f"{folder / name}: expected a MATLAB .mat file, found {found}"
 
 
 def test_missing_variable(tmp_path):
