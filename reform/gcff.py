@@ -84,9 +84,11 @@ __all__ = [
     "MAX_REFITS",
     "MAX_VISIBILITY_EXPONENT",
     "MDL_GRID_M2",
+    "MDL_LIMIT_M2",
     "MDL_M2",
     "ORIENTATIONS",
     "STRIDE_GRID_M",
+    "STRIDE_LIMIT_M",
     "STRIDE_M",
     "TRIPLE_BYTES",
     "UNITS",
@@ -110,6 +112,10 @@ CM_PER_M = 100.0  # centimetres per metre: GCFF computes in centimetres
 UNITS = {"m": CM_PER_M, "cm": 1.0}  # centimetres per unit of length
 STRIDE_M = 0.7  # metres; the reference code's stride = 70 (cm)
 MDL_M2 = 1.0  # square metres; the reference code's mdl = 10000 (cm²)
+# The largest stride and mdl GCFF takes: no larger than a position may be (POSITION_LIMIT_M),
+# squared for an mdl, beyond which their squares overflow.
+STRIDE_LIMIT_M = POSITION_LIMIT_M  # metres
+MDL_LIMIT_M2 = POSITION_LIMIT_M**2  # square metres
 VISIBILITY_COSINE = 0.75  # cosine above which one person hides another from the centre
 VISIBILITY_BASE = 100.0  # the penalty is VISIBILITY_BASE ** (cos * r_i / r_j), in cm²
 MAX_VISIBILITY_EXPONENT = 100.0  # cap on cos * r_i / r_j: penalty <= 1e200 cm²
@@ -831,9 +837,7 @@ def gcff_labels(
         ValueError: bad arrays or parameters, or a frame whose costs would take more than
             :data:`MAX_FRAME_BYTES` (checked before they are allocated).
     """
-    if units not in UNITS:
-        raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
-    scale = UNITS[units]
+    scale = _centimetres_per(units)
     position = np.asarray(position, dtype=np.float64)
     yaw = np.asarray(yaw, dtype=np.float64)
     n = position.shape[0] if position.ndim == 2 else -1
@@ -880,6 +884,13 @@ def labels_to_partition(ids: npt.ArrayLike, labels: npt.ArrayLike) -> tuple[Grou
     return tuple(tuple(members) for members in groups.values())
 
 
+def _centimetres_per(units: str) -> float:
+    """Centimetres per one of ``units`` (`UNITS`), or a ValueError naming those accepted."""
+    if units not in UNITS:
+        raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
+    return UNITS[units]
+
+
 def _convert(value: float, factor: float) -> float:
     """``value * factor`` on the decimal the user wrote: 0.7 m -> 70 cm, not 70.00000000000001."""
     if factor == 1.0:
@@ -889,13 +900,12 @@ def _convert(value: float, factor: float) -> float:
 
 def _check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     """A stride (metres, ``allow_zero``) or an mdl (square metres) as a float, or a ValueError:
-    finite, not negative, and no larger than a position may be (`POSITION_LIMIT_M`, squared for
-    an mdl), beyond which its squares overflow."""
+    finite, not negative, and at most :data:`STRIDE_LIMIT_M` (:data:`MDL_LIMIT_M2`)."""
     try:
         number = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
-    high = POSITION_LIMIT_M if allow_zero else POSITION_LIMIT_M**2
+    high = STRIDE_LIMIT_M if allow_zero else MDL_LIMIT_M2
     bad = not np.isfinite(number) or number < 0 or (number == 0 and not allow_zero)
     if bad or number > high:
         expected = "a finite number >= 0" if allow_zero else "a finite number > 0"
@@ -1088,9 +1098,7 @@ class Gcff(Estimator):
         ``Gcff.from_settings(stride=70, mdl=10000, units="cm")`` equals
         ``Gcff(stride=0.7, mdl=1.0)``.
         """
-        if units not in UNITS:
-            raise ValueError(f"units must be one of {sorted(UNITS)}, got {units!r}")
-        metres = UNITS[units] / CM_PER_M  # metres per unit
+        metres = _centimetres_per(units) / CM_PER_M  # metres per unit
         return cls(stride=_convert(stride, metres), mdl=_convert(mdl, metres * metres), **kwargs)
 
     @classmethod
@@ -1105,12 +1113,15 @@ class Gcff(Estimator):
             **kwargs: other parameters (``orientation``).
 
         Raises:
+            ValueError: ``units`` is unknown.
             DataFormatError: the file is missing or unreadable, or ``stride`` / ``mdl`` is
-                missing, not a numeric scalar, or out of range (``stride >= 0``, ``mdl > 0``).
+                missing, not a numeric scalar, or out of range (``stride >= 0``, ``mdl > 0``,
+                at most :data:`STRIDE_LIMIT_M` and :data:`MDL_LIMIT_M2` in ``units``).
         """
         from reform.datasets.gcff_mat import read_settings
 
-        values = read_settings(Path(path))
+        _centimetres_per(units)  # an unknown unit is named before the file is read
+        values = read_settings(Path(path), units=units)
         return cls.from_settings(stride=values["stride"], mdl=values["mdl"], units=units, **kwargs)
 
     def _validate(self) -> None:

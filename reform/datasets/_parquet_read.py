@@ -29,7 +29,13 @@ from typing import Any
 import numpy as np
 
 from reform.datasets import _walk
-from reform.datasets._validation import ID_RULE, check_time_increases, file_kind, make_frame
+from reform.datasets._validation import (
+    ID_RULE,
+    check_not_text,
+    check_time_increases,
+    file_kind,
+    make_frame,
+)
 from reform.datasets._walk import find_files
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
@@ -481,6 +487,7 @@ def _read_file(
     pa, pq = _pyarrow()
     if (len(content) if content is not None else Path(path).stat().st_size) == 0:
         raise DataFormatError(path, None, None, "a Parquet file", "an empty file")
+    check_not_text(path, expected="a Parquet file", name="Parquet", content=content)
     source = None if content is None else pa.BufferReader(content)
     as_codes = _as_codes(pa, _check_rows_fit(path, pq, source))
     try:

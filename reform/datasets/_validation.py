@@ -52,6 +52,19 @@ MAX_SPACING_M = 20.0
 # in the field's GCFF packagings image pixels (sets derived from pose estimation).
 MAX_CENTIMETRE_SPACING_M = 3.0
 
+# The narrowest median spacing a GCFF folder read in centimetres, the unit assumed rather than
+# given, may have, metres. Bodies keep people's centres some 0.3 m apart at the closest. The
+# field's sets have medians of 0.60 m (SALSA's first session) and more: 0.72 m (Synth), 0.73 m
+# (Cocktail Party, on frames of DANTE's copy in metres), 0.79 m and 0.83 m (CoffeeBreak's two
+# sequences), six times this bound or more; no single frame of theirs comes below 0.21 m
+# (Babble's narrowest), so even a sequence of one frame clears it; and the strides shipped
+# beside them (CoffeeBreak 50 and 20 units, Synth 30) put each o-space centre tens of
+# centimetres in front of its people. Read as centimetres, a folder in metres puts its people a
+# hundred times closer (0.006 to 0.01 m for those sets): under this bound for any scene whose
+# people stand a median of 10 m apart or less, three times the widest conversation allows
+# (MAX_CENTIMETRE_SPACING_M).
+MIN_CENTIMETRE_SPACING_M = 0.1
+
 # Longest line a text loader reads, characters: a SALSA line of 18 people is 1.3 kB, so this
 # holds about 14,000 people; a longer line is a corrupt file (a missing newline, binary data),
 # refused before it is split into tokens (a 50 MB line split took 1 GB).
@@ -105,6 +118,67 @@ def require_file(path: Path, *, what: str) -> Path:
     if path.stat().st_size == 0:
         raise DataFormatError(path, None, None, f"{what} (a non-empty file)", "an empty file")
     return path
+
+
+# How a Git LFS pointer starts: the small text file a clone without Git LFS holds in place of
+# each file the repository keeps in LFS.
+GIT_LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+# Bytes looked at to tell a text file where a binary one is expected. The binary formats read
+# hold bytes no text holds well before: a Parquet file right after its 4-byte 'PAR1', a MATLAB
+# file by byte 128 (version and byte order follow the 116 bytes of a version 5 header's text;
+# version 4 starts with binary integers).
+_TEXT_HEAD_BYTES = 512
+
+
+def check_not_text(
+    path: str | Path, *, expected: str, name: str, content: bytes | None = None
+) -> None:
+    """Refuses a text file where a binary file of the format ``name`` is expected: a Git LFS
+    pointer (the file itself was never fetched) or other text, such as a web page saved in its
+    place. Anything else, and a file that cannot be opened, is left to the format's reader.
+
+    Args:
+        path: the file (or, with ``content``, its name for the message).
+        expected: what the file should be (``"a Parquet file"``).
+        name: the format's name (``"Parquet"``).
+        content: the file's bytes when they are already read (from a store).
+    """
+    if content is None:
+        try:
+            with open(path, "rb") as handle:
+                head = handle.read(_TEXT_HEAD_BYTES)
+        except OSError:
+            return
+    else:
+        head = content[:_TEXT_HEAD_BYTES]
+    if head.startswith(GIT_LFS_POINTER):
+        raise DataFormatError(
+            path,
+            None,
+            None,
+            expected,
+            "a Git LFS pointer, not the file",
+            hint="fetch it with `git lfs pull`",
+        )
+    text = _text(head)
+    if text:
+        raise DataFormatError(
+            path, None, None, expected, f"text starting with {text[:20]!r}, not a {name} file"
+        )
+
+
+def _text(head: bytes) -> str | None:
+    """``head`` decoded, if it is the start of a UTF-8 text with no control character but
+    whitespace (a character cut at its end aside); else None."""
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.reason != "unexpected end of data":
+            return None
+        text = head[: exc.start].decode("utf-8")
+    if any((ord(c) < 32 and c not in "\t\n\r\f") or c == "\x7f" for c in text):
+        return None
+    return text
 
 
 def parse_float(token: str, *, path: Path, where: str, field: str) -> float:
@@ -479,18 +553,27 @@ def read_time_unit(
 def check_assumed_centimetres(frames: Sequence[Frame], *, path: Path) -> None:
     """Refuses frames read in centimetres, the unit assumed rather than given, whose people
     stand farther apart than conversation allows (:data:`MAX_CENTIMETRE_SPACING_M`): the file
-    holds image pixels (or another unit), and every distance a detector saw would be wrong. A
-    unit given on purpose is not checked."""
+    holds image pixels (or another unit); or closer than bodies allow
+    (:data:`MIN_CENTIMETRE_SPACING_M`): the file holds metres. Either way every distance a
+    detector saw would be wrong. A unit given on purpose is not checked."""
     spacing = median_spacing(frames)
-    if spacing is None or spacing <= MAX_CENTIMETRE_SPACING_M:
+    if spacing is None or MIN_CENTIMETRE_SPACING_M <= spacing <= MAX_CENTIMETRE_SPACING_M:
         return
+    if spacing > MAX_CENTIMETRE_SPACING_M:
+        side, limit, unit = "at most", MAX_CENTIMETRE_SPACING_M, "image pixels"
+        option = (
+            "units='px' with metres_per_pixel (--units px --metres-per-pixel M) if the file "
+            "holds pixels"
+        )
+    else:
+        side, limit, unit = "at least", MIN_CENTIMETRE_SPACING_M, "metres"
+        option = "units='m' (--units m) if the file holds metres"
     raise DataFormatError(
         path,
         None,
         "positions",
-        f"centimetres, people a median of at most {MAX_CENTIMETRE_SPACING_M * 100:g} units "
-        f"({MAX_CENTIMETRE_SPACING_M:g} m) from their nearest neighbour",
-        f"a median of {spacing * 100:.4g} units ({spacing:.3g} m in centimetres: image pixels?)",
-        hint="give units='px' with metres_per_pixel (--units px --metres-per-pixel M) if the "
-        "file holds pixels, units='cm' (--units cm) if it holds centimetres",
+        f"centimetres, people a median of {side} {limit * 100:g} units ({limit:g} m) from their "
+        "nearest neighbour",
+        f"a median of {spacing * 100:.4g} units ({spacing:.3g} m in centimetres: {unit}?)",
+        hint=f"give {option}, units='cm' (--units cm) if it holds centimetres",
     )

@@ -11,8 +11,8 @@ A GCFF folder holds:
   parameters tuned for the dataset.
 
 The public sets write positions in centimetre-like units, so :func:`load_gcff` assumes
-centimetres unless told otherwise (refusing a folder whose spacing says image pixels) and
-converts to metres. Time stamps are frame numbers or seconds in the public sets, kept as
+centimetres unless told otherwise (refusing a folder whose spacing says image pixels or metres)
+and converts to metres. Time stamps are frame numbers or seconds in the public sets, kept as
 stored; Unix times (in seconds, milliseconds, microseconds or nanoseconds, told apart by their
 magnitude and spacing) are read in their unit and counted in seconds from each sequence's start.
 """
@@ -25,7 +25,7 @@ import zlib
 from collections import Counter
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -36,6 +36,7 @@ from reform.datasets._validation import (
     Repairs,
     TimeReading,
     check_assumed_centimetres,
+    check_not_text,
     check_time_increases,
     check_time_unit,
     check_unique_ids,
@@ -48,6 +49,7 @@ from reform.datasets._validation import (
 )
 from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
+from reform.gcff import MDL_LIMIT_M2, STRIDE_LIMIT_M
 from reform.machine import available_memory
 from reform.path_argument import path_argument
 
@@ -128,7 +130,9 @@ def load_gcff(
             ``metres_per_pixel``). Positions are converted to metres. None reads centimetres
             and refuses a sequence whose people then stand a median of more than 3 m from their
             nearest neighbour (`reform.datasets._validation.MAX_CENTIMETRE_SPACING_M`): its
-            positions are image pixels. A unit given is not checked.
+            positions are image pixels; or of less than 0.1 m
+            (`reform.datasets._validation.MIN_CENTIMETRE_SPACING_M`): they are metres. A unit
+            given is not checked.
         metres_per_pixel: the scale of ``units="px"``; refused with other units.
         strict: refuse the quirks listed above instead of repairing them.
         time_unit: the unit of ``timestamp``, ``"s"``, ``"ms"``, ``"us"`` or ``"ns"``. None
@@ -148,7 +152,8 @@ def load_gcff(
         ValueError: ``units`` or ``time_unit`` is unknown, or ``metres_per_pixel`` is missing
             for pixels, given for another unit, or not a positive finite number.
         DataFormatError: a file is missing, unreadable or malformed, its positions' spacing
-            says pixels (``units`` None), or its time stamps fit no unit (``time_unit`` None).
+            says pixels or metres (``units`` None), or its time stamps fit no unit
+            (``time_unit`` None).
     """
     path = path_argument(path, name="path", function="load_gcff")
     per_metre = units_per_metre("cm" if units is None else units, metres_per_pixel)
@@ -186,7 +191,7 @@ def load_gcff(
         settings_path = sequence_folder / SETTINGS_FILE
         if settings_path.exists():
             settings[sequence_folder.name] = _settings(
-                settings_path, units=file_units, per_metre=per_metre
+                settings_path, units=file_units, metres_per_pixel=metres_per_pixel
             )
 
     totals = Counter()
@@ -393,6 +398,7 @@ def _loadmat(path: Path) -> dict[str, Any]:
     kind = file_kind(path)
     if kind != "a file":
         raise DataFormatError(path, None, None, "a MATLAB .mat file", kind)
+    check_not_text(path, expected="a MATLAB .mat file", name="MATLAB")
     check_inflated_size(path)
     found = _read_plain(path)
     if found is not None:
@@ -584,13 +590,18 @@ def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
     array = np.asarray(value)
     if array.dtype == object or not np.issubdtype(array.dtype, np.number):
         raise DataFormatError(path, None, field, "a numeric vector", f"a {array.dtype} array")
-    if array.ndim > 2 or (array.ndim == 2 and array.size and 1 not in array.shape):
+    if not _is_vector(array):
         raise DataFormatError(path, None, field, "a 1×K vector", f"shape {array.shape}")
     vector = array.astype(np.float64).ravel()
     DataFormatError.check_rows(
         ~np.isfinite(vector), path, lambda k: f"element {k + 1}", field, "a finite number", vector
     )
     return vector
+
+
+def _is_vector(array: np.ndarray) -> bool:
+    """Whether ``array`` is a row (1×K), a column (K×1), 1-D, a scalar, or empty."""
+    return array.ndim <= 1 or (array.ndim == 2 and (array.size == 0 or 1 in array.shape))
 
 
 def _frame_rows(
@@ -705,6 +716,14 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
             raise DataFormatError(
                 path, where, f"group {k}", "a numeric vector of IDs", f"a {vector.dtype} array"
             )
+        if not _is_vector(vector):  # a matrix's rows would be read as one merged group
+            raise DataFormatError(
+                path,
+                where,
+                f"group {k}",
+                "a row or column vector of IDs (shape (1, k), (k, 1) or (k,))",
+                f"shape {vector.shape}",
+            )
         values = vector.astype(np.float64).ravel()
         if (
             not np.all(np.isfinite(values))
@@ -765,8 +784,10 @@ def _canonical(
     return tuple(groups), None
 
 
-def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
-    out: dict[str, Any] = {"units": units, **read_settings(path, required=())}
+def _settings(path: Path, *, units: str, metres_per_pixel: float | None) -> dict[str, Any]:
+    per_metre = units_per_metre(units, metres_per_pixel)
+    read = read_settings(path, required=(), units=units, metres_per_pixel=metres_per_pixel)
+    out: dict[str, Any] = {"units": units, **read}
     if "stride" in out:
         out["stride_m"] = out["stride"] / per_metre
     if "mdl" in out:
@@ -774,40 +795,63 @@ def _settings(path: Path, *, units: str, per_metre: float) -> dict[str, Any]:
     return out
 
 
-# What each GCFF parameter must be: (expected text, accepts the value).
+class _Setting(NamedTuple):
+    """What a GCFF parameter must be."""
+
+    power: int  # of length: 1 for a length, 2 for a squared one
+    limit: float  # the largest the detector takes, metres to that power
+    zero: bool  # whether 0 is accepted
+    kind: str  # what it is, with its lower bound
+    meaning: str  # what it does
+
+
+# What each GCFF parameter must be, with the detector's own bounds.
 _SETTINGS_RULES = {
-    "stride": (
-        "a finite length >= 0 (the o-space centre's distance in front of each person)",
-        lambda v: math.isfinite(v) and v >= 0,
+    "stride": _Setting(
+        1,
+        STRIDE_LIMIT_M,
+        True,
+        "a finite length >= 0",
+        "the o-space centre's distance in front of each person",
     ),
-    "mdl": (
-        "a finite squared length > 0 (the cost of opening a group)",
-        lambda v: math.isfinite(v) and v > 0,
+    "mdl": _Setting(
+        2, MDL_LIMIT_M2, False, "a finite squared length > 0", "the cost of opening a group"
     ),
 }
 
 
 @file_errors_as_data_errors
 def read_settings(
-    path: str | PathLike[str], *, required: tuple[str, ...] = ("stride", "mdl")
+    path: str | PathLike[str],
+    *,
+    required: tuple[str, ...] = ("stride", "mdl"),
+    units: str = "cm",
+    metres_per_pixel: float | None = None,
 ) -> dict[str, float]:
     """``stride`` and ``mdl`` of a GCFF ``settings_gc.mat``, as stored (file units).
 
     Args:
         path: the ``.mat`` file.
         required: the variables that must be present; the others are read when present.
+        units: length unit of the file's values, as `load_gcff` takes it (``"cm"``, ``"m"`` or
+            ``"px"`` with ``metres_per_pixel``): the detector's bounds are checked in it.
+        metres_per_pixel: the scale of ``units="px"``.
 
     Returns:
         ``{"stride": ..., "mdl": ...}`` (the ones present), floats in the file's units.
 
     Raises:
+        ValueError: ``units`` is unknown, or ``metres_per_pixel`` does not go with it.
         DataFormatError: the file is missing or unreadable, a required variable is missing, or
-            a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``.
+            a value is not a numeric scalar, or ``stride < 0``, or ``mdl <= 0``, or either is
+            beyond what the detector takes (`reform.gcff.STRIDE_LIMIT_M`,
+            `reform.gcff.MDL_LIMIT_M2`).
     """
     path = path_argument(path, name="path", function="read_settings")
+    per_metre = units_per_metre(units, metres_per_pixel)
     mat = _loadmat(path)
     out: dict[str, float] = {}
-    for name, (expected, accepts) in _SETTINGS_RULES.items():
+    for name, rule in _SETTINGS_RULES.items():
         if name not in mat:
             if name in required:
                 present = sorted(k for k in mat if not k.startswith("__"))
@@ -825,7 +869,20 @@ def read_settings(
                 f"a {array.dtype} array of shape {array.shape}",
             )
         value = float(array.ravel()[0])
-        if not accepts(value):
-            raise DataFormatError(path, None, name, expected, repr(value))
+        scale = per_metre**rule.power
+        if not (
+            math.isfinite(value)
+            and (value >= 0 if rule.zero else value > 0)
+            and value / scale <= rule.limit
+        ):
+            unit = "m" if rule.power == 1 else "m²"
+            raise DataFormatError(
+                path,
+                None,
+                name,
+                f"{rule.kind} and <= {rule.limit * scale:g} file units ({rule.limit:g} {unit}, "
+                f"the most GCFF takes; {rule.meaning})",
+                repr(value),
+            )
         out[name] = value
     return out

@@ -12,6 +12,7 @@ from dataset_refusals import assert_refused
 from reform import DataFormatError
 from reform.datasets import detect_format, load_dataset, load_gcff
 from reform.datasets.gcff_mat import read_settings
+from reform.gcff import Gcff
 
 
 def _cell(items) -> np.ndarray:
@@ -157,8 +158,37 @@ def test_empty_and_corrupt_files(tmp_path):
     assert_refused(
         load_gcff, folder, r"features.mat: expected the GCFF features file \(a non-empty file\)"
     )
-    (folder / "features.mat").write_bytes(b"this is not a MATLAB file at all" * 10)
+    (folder / "features.mat").write_bytes(b"\x00\x01 not a MATLAB file at all \xff" * 10)
     assert_refused(load_gcff, folder, r"features.mat: expected a readable MATLAB .mat file")
+
+
+# What a clone without Git LFS holds in place of each file, and what a web server answers for a
+# file it does not have.
+LFS_POINTER = (
+    b"version https://git-lfs.github.com/spec/v1\n"
+    b"oid sha256:31a03829bc785b1fd6540f0174a0beaab29ee17cd7b69dd38473565aab22abe6\nsize 14215\n"
+)
+HTML_PAGE = b"<!DOCTYPE html><html><body>404: Not Found</body></html>\n"
+
+
+@pytest.mark.parametrize("name", ["features.mat", "groundtruth.mat", "settings_gc.mat"])
+@pytest.mark.parametrize(
+    ("content", "found"),
+    [
+        pytest.param(
+            LFS_POINTER, "a Git LFS pointer, not the file; fetch it with `git lfs pull`", id="lfs"
+        ),
+        pytest.param(
+            HTML_PAGE, "text starting with '<!DOCTYPE html><html', not a MATLAB file", id="html"
+        ),
+    ],
+)
+def test_a_text_file_in_place_of_a_mat_file_is_named(tmp_path, name, content, found):
+    folder = _write(tmp_path / "text", settings={"stride": 70.0, "mdl": 10000.0})
+    (folder / name).write_bytes(content)
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(folder)
+    assert str(caught.value) == f"{folder / name}: expected a MATLAB .mat file, found {found}"
 
 
 def test_missing_variable(tmp_path):
@@ -246,6 +276,40 @@ def test_bad_ground_truth(tmp_path, gt_groups, gt_timestamps, message):
     assert_refused(load_gcff, folder, message)
 
 
+# formats.md: each GTgroups entry is a 1×k cell of row vectors of IDs, one per group. A group
+# stored as a matrix (two groups written as its rows) is refused, not read as one merged group.
+@pytest.mark.parametrize(
+    ("entry", "group", "shape"),
+    [
+        pytest.param(np.array([[1.0, 2.0], [7.0, 3.0]]), 1, "(2, 2)", id="entry-a-matrix"),
+        pytest.param(
+            _cell([np.array([[1.0, 2.0]]), np.array([[7.0, 3.0], [4.0, 5.0]])]),
+            2,
+            "(2, 2)",
+            id="group-a-matrix",
+        ),
+        pytest.param(
+            _cell([np.array([1.0, 2.0]).reshape(1, 1, 2)]), 1, "(1, 1, 2)", id="group-in-3-d"
+        ),
+    ],
+)
+def test_a_group_that_is_not_a_vector_is_refused(tmp_path, entry, group, shape):
+    folder = _write(tmp_path / "gt", gt_groups=[entry], gt_timestamps=[10])
+    with pytest.raises(DataFormatError) as caught:
+        load_gcff(folder)
+    assert str(caught.value) == (
+        f"{folder / 'groundtruth.mat'}: GT frame 1 (GTtimestamp 10): field 'group {group}': "
+        f"expected a row or column vector of IDs (shape (1, k), (k, 1) or (k,)), found shape "
+        f"{shape}"
+    )
+
+
+def test_groups_as_rows_or_columns_load_alike(tmp_path):
+    column = _cell([np.array([[1.0], [2.0]]), np.array([[7.0]])])
+    folder = _write(tmp_path / "col", gt_groups=[column], gt_timestamps=[10])
+    assert load_gcff(folder)[0].groups == ((1, 2),)
+
+
 def test_length_mismatch(tmp_path):
     folder = _write(tmp_path / "len", timestamps=[10, 20])
     assert_refused(
@@ -305,6 +369,57 @@ def test_time_must_increase(tmp_path, timestamps, message):
 def test_bad_folder_settings_are_refused_at_load(tmp_path, settings, message):
     folder = _write(tmp_path / "s", settings=settings)
     assert_refused(load_gcff, folder, message)
+
+
+# The detector takes a stride of at most 1e8 m and an mdl of at most 1e16 m² (beyond, their
+# squares overflow): a settings file beyond is refused as it is read, in its own unit.
+@pytest.mark.parametrize(
+    ("settings", "units", "message"),
+    [
+        pytest.param(
+            {"stride": 1e12, "mdl": 6000.0},
+            "cm",
+            "field 'stride': expected a finite length >= 0 and <= 1e+10 file units (1e+08 m, the "
+            "most GCFF takes; the o-space centre's distance in front of each person), found "
+            "1000000000000.0",
+            id="stride-cm",
+        ),
+        pytest.param(
+            {"stride": 5e8, "mdl": 1.0},
+            "m",
+            "field 'stride': expected a finite length >= 0 and <= 1e+08 file units (1e+08 m, the "
+            "most GCFF takes; the o-space centre's distance in front of each person), found "
+            "500000000.0",
+            id="stride-m",
+        ),
+        pytest.param(
+            {"stride": 70.0, "mdl": 2e20},
+            "cm",
+            "field 'mdl': expected a finite squared length > 0 and <= 1e+20 file units (1e+16 m², "
+            "the most GCFF takes; the cost of opening a group), found 2e+20",
+            id="mdl-cm",
+        ),
+    ],
+)
+def test_settings_beyond_the_detectors_range_are_refused_naming_the_file(
+    tmp_path, settings, units, message
+):
+    folder = _write(tmp_path / "s", settings=settings)
+    expected = f"{folder / 'settings_gc.mat'}: {message}"
+    for read in (
+        lambda: load_gcff(folder, units=units),
+        lambda: read_settings(folder / "settings_gc.mat", units=units),
+        lambda: Gcff.from_settings_file(folder / "settings_gc.mat", units=units),
+    ):
+        with pytest.raises(DataFormatError) as caught:
+            read()
+        assert str(caught.value) == expected
+
+
+def test_settings_within_the_detectors_range_load_in_their_unit(tmp_path):
+    folder = _write(tmp_path / "s", settings={"stride": 5e8, "mdl": 1.0})  # 5,000 km
+    assert load_gcff(folder).metadata["settings_gc"]["stride_m"] == 5e6
+    assert read_settings(folder / "settings_gc.mat") == {"stride": 5e8, "mdl": 1.0}
 
 
 def test_settings_file_that_does_not_exist(tmp_path):

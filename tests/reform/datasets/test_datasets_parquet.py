@@ -438,7 +438,7 @@ def test_empty_corrupt_and_missing(tmp_path):
         DataFormatError, match=r"empty.parquet: expected a Parquet file, found an empty file"
     ):
         read_parquet(tmp_path / "empty.parquet")
-    (tmp_path / "junk.parquet").write_bytes(b"not parquet" * 20)
+    (tmp_path / "junk.parquet").write_bytes(b"\x00\x01 not parquet \xff" * 20)
     with pytest.raises(DataFormatError, match=r"junk.parquet: expected a readable Parquet file"):
         read_parquet(tmp_path / "junk.parquet")
     with pytest.raises(
@@ -451,6 +451,25 @@ def test_empty_corrupt_and_missing(tmp_path):
         DataFormatError, match=r"folder: expected a folder holding .parquet files, found none"
     ):
         read_parquet(tmp_path / "folder")
+
+
+def test_a_git_lfs_pointer_or_a_page_in_place_of_a_parquet_file_is_named(tmp_path):
+    """What a clone without Git LFS holds in place of a shard, and a page saved as one."""
+    shard = tmp_path / "set" / "episode-0.parquet"
+    shard.parent.mkdir()
+    shard.write_bytes(b"version https://git-lfs.github.com/spec/v1\noid sha256:00\nsize 9\n")
+    lfs = f"{shard}: expected a Parquet file, found a Git LFS pointer, not the file; fetch it "
+    for path in (shard, shard.parent):
+        with pytest.raises(DataFormatError) as caught:
+            read_parquet(path)
+        assert str(caught.value) == lfs + "with `git lfs pull`"
+    shard.write_bytes(b"<html><body>Moved</body></html>\n")
+    with pytest.raises(DataFormatError) as caught:
+        read_parquet(shard)
+    assert str(caught.value) == (
+        f"{shard}: expected a Parquet file, found text starting with '<html><body>Moved</b', "
+        "not a Parquet file"
+    )
 
 
 # --- row order, time order, unfinished folders, codecs ---------------------------------------

@@ -169,23 +169,40 @@ def test_the_cli_offers_the_time_units_of_the_loaders():
     assert _common.TIME_UNITS == tuple(TIME_UNITS)
 
 
-# --- pixels ------------------------------------------------------------------------------------
+# --- pixels and metres ---------------------------------------------------------------------------
 
 # Pose estimation in image pixels: the pair 400 px apart, the third 900 px from the nearest.
 PIXELS = [[1, 400.0, 300.0, np.pi], [2, 800.0, 300.0, 0.0], [3, 1700.0, 400.0, 0.0]]
+# The scene of PEOPLE written in metres: the pair 1 m apart, read as centimetres, 1 cm apart.
+METRES = [[person, x / 100, y / 100, theta] for person, x, y, theta in PEOPLE]
 
 
-def test_a_folder_whose_spacing_says_pixels_is_refused(tmp_path):
-    folder = _gcff(tmp_path / "pose", [1, 2], people=PIXELS)
+@pytest.mark.parametrize(
+    ("people", "message"),
+    [
+        pytest.param(
+            PIXELS,
+            "expected centimetres, people a median of at most 300 units (3 m) from their nearest "
+            "neighbour, found a median of 400 units (4 m in centimetres: image pixels?); give "
+            "units='px' with metres_per_pixel (--units px --metres-per-pixel M) if the file holds "
+            "pixels, units='cm' (--units cm) if it holds centimetres",
+            id="pixels",
+        ),
+        pytest.param(
+            METRES,
+            "expected centimetres, people a median of at least 10 units (0.1 m) from their "
+            "nearest neighbour, found a median of 1 units (0.01 m in centimetres: metres?); give "
+            "units='m' (--units m) if the file holds metres, units='cm' (--units cm) if it holds "
+            "centimetres",
+            id="metres",
+        ),
+    ],
+)
+def test_a_folder_whose_spacing_says_another_unit_is_refused(tmp_path, people, message):
+    folder = _gcff(tmp_path / "set", [1, 2], people=people)
     with pytest.raises(DataFormatError) as caught:
         load_dataset(folder)
-    assert str(caught.value) == (
-        f"{folder / 'features.mat'}: field 'positions': expected centimetres, people a median "
-        "of at most 300 units (3 m) from their nearest neighbour, found a median of 400 units "
-        "(4 m in centimetres: image pixels?); give units='px' with metres_per_pixel (--units px "
-        "--metres-per-pixel M) if the file holds pixels, units='cm' (--units cm) if it holds "
-        "centimetres"
-    )
+    assert str(caught.value) == f"{folder / 'features.mat'}: field 'positions': {message}"
 
 
 def test_a_pixel_folder_loads_with_its_unit(tmp_path):
@@ -197,6 +214,12 @@ def test_a_pixel_folder_loads_with_its_unit(tmp_path):
     assert load_dataset(folder, units="cm").frames[0].position[1].tolist() == [8.0, 3.0]
 
 
+def test_a_metres_folder_loads_with_its_unit(tmp_path):
+    folder = _gcff(tmp_path / "metres", [1, 2], people=METRES)
+    assert load_dataset(folder, units="m").frames[0].position[0].tolist() == [1.0, 0.0]
+    assert load_dataset(folder, units="cm").frames[0].position[0].tolist() == [0.01, 0.0]
+
+
 def test_the_pixel_check_names_the_sequence(tmp_path):
     root = tmp_path / "set"
     _gcff(root / "S1", [1, 2])
@@ -205,12 +228,19 @@ def test_the_pixel_check_names_the_sequence(tmp_path):
         load_gcff(root)
 
 
-def test_the_cli_refuses_pixels_in_one_line(tmp_path, capsys):
-    folder = _gcff(tmp_path / "pose", [1, 2], people=PIXELS)
-    assert main(["data", "info", "--data", str(folder)]) != 0
+@pytest.mark.parametrize(
+    ("people", "option", "unit"),
+    [
+        pytest.param(PIXELS, "--units px --metres-per-pixel M", "cm", id="pixels"),
+        pytest.param(METRES, "--units m", "m", id="metres"),
+    ],
+)
+def test_the_cli_refuses_another_unit_in_one_line(tmp_path, capsys, people, option, unit):
+    folder = _gcff(tmp_path / "set", [1, 2], people=people)
+    assert main(["data", "info", "--data", str(folder)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "--units px --metres-per-pixel M" in err
-    assert main(["data", "info", "--data", str(folder), "--units", "cm"]) == 0
+    assert err.count("\n") == 0 and option in err
+    assert main(["data", "info", "--data", str(folder), "--units", unit]) == 0
 
 
 def test_benchmark_reads_the_datasets_given_in_the_units_given(tmp_path, capsys):
@@ -229,8 +259,9 @@ def test_benchmark_reads_the_datasets_given_in_the_units_given(tmp_path, capsys)
 
 @pytest.mark.parametrize("name", ["coffeebreak", "synth"])
 def test_the_public_gcff_sets_load_as_before(shared_datasets, name):
-    """No unit given: the same frames as centimetres stated (the check passes them: medians of
-    0.80 m and 0.72 m), times the frame numbers as stored, nothing about time reported."""
+    """No unit given: the same frames as centimetres stated (the checks pass them: medians of
+    0.80 m and 0.72 m, between 0.1 m and 3 m), times the frame numbers as stored, nothing about
+    time reported."""
     path = shared_datasets / name
     assumed = load_dataset(path)
     stated = load_gcff(path, units="cm")
