@@ -347,6 +347,7 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
                     )
                 triple_values.append(value)
             row.extend(triple_values)
+            parse_float(block[7], path=path, where=person_where, field=_FIELDS[7])  # read by none
             block_counter = parse_float(block[8], path=path, where=person_where, field="FrameNum")
             if not block_counter.is_integer():
                 raise DataFormatError(

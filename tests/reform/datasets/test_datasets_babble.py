@@ -222,6 +222,30 @@ def test_truncated_line(babble_dir, tmp_path):
             r": field 'TorsoX': expected a position with \|value\| <= 1e\+08 m.*found 1e\+200",
             id="huge-position",
         ),
+        # float() reads digits grouped by '_' ('-1_1.35' is -11.35): Babble writes none.
+        pytest.param(
+            4,
+            14,
+            "-1_1.35",
+            r"line 4 \(frame 3\), participant 2"
+            r": field 'TorsoX': expected a number, found '-1_1.35'$",
+            id="digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            3,
+            8,
+            "283_206",
+            r"line 3 \(frame 2\), participant 1"
+            r": field 'FrameNum': expected a number, found '283_206'$",
+            id="frame-number-grouped-by-underscore",
+        ),
+        pytest.param(
+            4,
+            17,
+            "tall",
+            r"line 4 \(frame 3\), participant 2: field 'Hieght': expected a number, found 'tall'$",
+            id="height-not-a-number",  # Hieght (sic) is read by no detector, but is a number
+        ),
     ],
 )
 def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):

@@ -200,6 +200,35 @@ def test_truncated_feature_line(salsa_dir, tmp_path):
             r"line 3, person 2: field 'y': expected a position .*found -300000000.0",
             id="far-position",
         ),
+        # float() reads digits grouped by '_' ('1_2.5' is 12.5): no file of the field writes them.
+        pytest.param(
+            3,
+            2,
+            "1_2.5",
+            r"features.txt: line 3, person 1: field 'x': expected a number, found '1_2.5'$",
+            id="x-digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            2,
+            0,
+            "3_2",
+            r"features.txt: line 2: field 't': expected a number, found '3_2'$",
+            id="time-digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            1,
+            10,
+            "0_0.5",
+            r"line 1, person 2: field 'head': expected a number, found '0_0.5'$",
+            id="angle-digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            2,
+            3,
+            "-Infinity",
+            r"line 2, person 1: field 'y': expected a finite number, found '-Infinity'$",
+            id="infinity-spelled-out",  # a spelling of infinity is refused as infinite, as before
+        ),
     ],
 )
 def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
