@@ -143,6 +143,59 @@ def test_new_session_on_time_decrease_and_gt_matched_by_string(tmp_path):
     assert [f.annotated for f in dataset] == [False, True, True]
 
 
+def test_a_session_may_start_earlier_than_the_one_before(tmp_path):
+    # Sessions listed out of order (a later recording first) go back past the last one's start.
+    times = ["10.0", "13.0", "16.0", "0.0", "3.0"]
+    folder = _write(tmp_path, [f"{t} {_person(1)}" for t in times], ["13.0 < ID_001 >"])
+    dataset = load_salsa(folder)
+    assert [(f.sequence, f.time) for f in dataset] == [
+        ("session1", 10.0),
+        ("session1", 13.0),
+        ("session1", 16.0),
+        ("session2", 0.0),
+        ("session2", 3.0),
+    ]
+
+
+# Line 2 going back after line 1 alone.
+_AFTER_ONE_LINE = (
+    r"features.txt: line 2: field 't': expected a time later than line 1's t = {} \(a time "
+    r"going back starts a new session only after one of two lines or more; line 1's would hold "
+    r"one\), found '{}'$"
+)
+
+
+@pytest.mark.parametrize(
+    ("order", "message"),
+    [
+        pytest.param(
+            [7, 6, 5, 4, 3, 2, 1, 0],
+            _AFTER_ONE_LINE.format("21.2", "18.2"),
+            id="lines-in-reverse-order",
+        ),
+        pytest.param(
+            [1, 0, 2, 3, 4, 5, 6, 7],
+            _AFTER_ONE_LINE.format("3.2", "0.2"),
+            id="first-two-lines-swapped",
+        ),
+        pytest.param(
+            [0, 1, 2, 3, 5, 4, 6, 7],
+            r"features.txt: line 6: field 't': expected a time later than line 5's t = 15.2, "
+            r"or, starting a new session, one at most half a frame step \(1.5\) after the start "
+            r"of the session before \(line 1's t = 0.2\), found '12.2'$",
+            id="two-lines-swapped",
+        ),
+    ],
+)
+def test_a_time_going_back_that_is_no_restart(salsa_dir, tmp_path, order, message):
+    # SALSA restarts once, after 645 lines (0.2, 3.2, ..., 1932.2, then 0.20002): lines out of
+    # order are no such restart, and were read as sessions of a frame or two.
+    features, groups = _copy_head(salsa_dir, tmp_path, n=8)
+    folder = _write(tmp_path, [features[k] for k in order], [groups[k] for k in order])
+    with pytest.raises(DataFormatError, match=message):
+        load_salsa(folder)
+
+
 @pytest.mark.parametrize(
     ("time", "found"),
     [
