@@ -316,20 +316,22 @@ def _is_person_token(token: str) -> bool:
     return token == _FAKE or _ID_PATTERN.fullmatch(token) is not None
 
 
+def _blocks_fit(tokens: list[str], width: int) -> bool:
+    """Whether a line's token count and the tokens inside its blocks (no ID among them) agree
+    with ``width`` fields per person, whatever the tokens that start the blocks."""
+    if (len(tokens) - 1) % width:
+        return False
+    inside = (i for i in range(1, len(tokens)) if (i - 1) % width)
+    return not any(_ID_PATTERN.fullmatch(tokens[i]) for i in inside)
+
+
 def _widths_of(tokens: list[str], widths: Iterable[int] = FIELDS_PER_PERSON) -> set[int]:
     """The layouts (fields per person) among ``widths`` a line's tokens agree with."""
-    fits = set()
-    for width in widths:
-        if (len(tokens) - 1) % width:
-            continue
-        starts = range(1, len(tokens), width)
-        if not all(_is_person_token(tokens[i]) for i in starts):
-            continue
-        inside = (i for i in range(1, len(tokens)) if (i - 1) % width)
-        if any(_ID_PATTERN.fullmatch(tokens[i]) for i in inside):
-            continue
-        fits.add(width)
-    return fits
+    return {
+        width
+        for width in widths
+        if _blocks_fit(tokens, width) and all(map(_is_person_token, tokens[1::width]))
+    }
 
 
 def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
@@ -347,6 +349,10 @@ def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
                 repr(tokens[1]),
             )
         if not fits:
+            for width in FIELDS_PER_PERSON:
+                if _blocks_fit(tokens, width):  # a layout but for a token starting a block
+                    bad = next(t for t in tokens[1::width] if not _is_person_token(t))
+                    _parse_id(bad, path=path, where=f"line {line_number}")  # refused as an ID
             _check_orientation(path, lines)
             raise DataFormatError(
                 path,

@@ -337,6 +337,43 @@ def test_bad_small_file(tmp_path, features, groups, message):
         load_salsa(folder)
 
 
+@pytest.mark.parametrize("line", [1, 3, 5])
+def test_a_bad_id_token_is_named_on_any_line(salsa_dir, tmp_path, line):
+    # Line 1 is where the layout (5 fields per person here) is told: a bad ID there was called
+    # a truncated line.
+    features, groups = _copy_head(salsa_dir, tmp_path, n=5)
+    assert " ID_007 " in features[line - 1]
+    features[line - 1] = features[line - 1].replace(" ID_007 ", " ID_0O7 ")
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(DataFormatError) as caught:
+        load_salsa(folder)
+    assert str(caught.value) == (
+        f"{folder / 'features.txt'}: line {line}: field 'ID': expected a token ID_<number>, "
+        "found 'ID_0O7'"
+    )
+
+
+@pytest.mark.parametrize(
+    "features",
+    [
+        pytest.param("0.2 ID_001 1.0 2.0 0.5 ID_0O2 3.0 2.0 0.5", id="4-fields"),
+        pytest.param(
+            # 21 tokens, 1 + 4 × 5 or 1 + 5 × 4: the IDs that are right tell the layout
+            "0.2 ID_001 1.0 2.0 0.5 0.6 ID_0O2 3.0 2.0 0.5 0.6 ID_003 1.0 3.0 0.5 0.6 fake fake "
+            "fake fake fake",
+            id="5-fields-as-many-tokens-as-4",
+        ),
+    ],
+)
+def test_a_bad_id_token_on_the_line_telling_the_layout(tmp_path, features):
+    folder = _write(tmp_path, [features], ["0.2 < ID_001 >"])
+    with pytest.raises(
+        DataFormatError,
+        match=r"features.txt: line 1: field 'ID': expected a token ID_<number>, found 'ID_0O2'$",
+    ):
+        load_salsa(folder)
+
+
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
