@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections import defaultdict
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -69,6 +70,15 @@ MIN_CENTIMETRE_SPACING_M = 0.1
 # holds about 14,000 people; a longer line is a corrupt file (a missing newline, binary data),
 # refused before it is split into tokens (a 50 MB line split took 1 GB).
 MAX_LINE_CHARS = 1_000_000
+
+
+# How the field's text files write a number: decimal digits with an optional point and exponent
+# (Python's repr, C's %e and %g: '-1.72', '1.767008e+02', '.5'), or a spelling of NaN or infinity
+# (refused as not finite, or a person dropped where a loader reads NaN as one). float() takes
+# more: digits grouped by '_' ('1_2.5' is 12.5) and non-ASCII digits, which no file writes.
+NUMBER = re.compile(
+    r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?|inf|infinity|nan)", re.IGNORECASE | re.ASCII
+)
 
 
 def read_lines(path: Path) -> Iterator[tuple[int, str]]:
@@ -182,11 +192,12 @@ def _text(head: bytes) -> str | None:
 
 
 def parse_float(token: str, *, path: Path, where: str, field: str) -> float:
-    """A finite float from a text token."""
-    try:
-        value = float(token)
-    except ValueError:
-        raise DataFormatError(path, where, field, "a number", repr(token)) from None
+    """A finite float from a text token written as :data:`NUMBER` says (blanks around it
+    allowed). A spelling of NaN or infinity is refused as not finite."""
+    text = token.strip()
+    if NUMBER.fullmatch(text) is None:
+        raise DataFormatError(path, where, field, "a number", repr(token))
+    value = float(text)
     if not math.isfinite(value):
         raise DataFormatError(path, where, field, "a finite number", repr(token))
     return value

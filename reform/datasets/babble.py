@@ -16,7 +16,10 @@ How the loader handles the recording's quirks (each case is counted in
 
 * **Time.** ``Time`` is a wall clock with 1 s resolution, so a frame's ``time`` is taken from the
   Vicon frame counter instead: ``(FrameNum - FrameNum of frame 1) / 100`` seconds (Vicon runs at
-  100 Hz). Its largest gap to the wall clock is reported (``max_clock_gap_s``; about 1 s).
+  100 Hz). Its largest gap to the wall clock is reported (``max_clock_gap_s``; about 1 s). Each
+  step of the counter agrees with the clock's within :data:`CLOCK_STEP_TOLERANCE_S`: a FrameNum
+  jump, or a ``Time`` going back other than the 12-hour clock's wrap (12:59:59 to 1:00:00), is
+  refused.
 * **Untracked torso.** The participant is absent from that frame (not in ``ids``), except when
   the annotation names them as a group member: then their tracked head stands in for the body
   (position and yaw) in that frame (``torso_from_head``). A member with neither torso nor a
@@ -55,7 +58,14 @@ from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
 from reform.frame import Dataset, Frame, Group
 from reform.path_argument import path_argument
 
-__all__ = ["ANNOTATIONS_FILE", "HEAD_TORSO_MAX_M", "MOTION_FILE", "VICON_RATE_HZ", "load_babble"]
+__all__ = [
+    "ANNOTATIONS_FILE",
+    "CLOCK_STEP_TOLERANCE_S",
+    "HEAD_TORSO_MAX_M",
+    "MOTION_FILE",
+    "VICON_RATE_HZ",
+    "load_babble",
+]
 
 MOTION_FILE = "Motion-capture-data.csv"
 ANNOTATIONS_FILE = "annotated-frames.csv"
@@ -79,6 +89,10 @@ _ANNOTATION = re.compile(r"^\s*(\d+)\s*,\s*\{(.*)\}\s*$")
 _GROUP = re.compile(r"\[([^\[\]]*)\]")
 _CLOCK = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2})$")
 _HALF_DAY_S = 12 * 3600  # the wall clock is 12-hour without AM/PM
+# How far a line's FrameNum step (at VICON_RATE_HZ) and its Time step may differ, seconds. Time's
+# 1 s resolution alone puts them up to 1 s apart; in Babble they differ by at most 0.66 s. A
+# FrameNum jump or a Time going back that is no wrap of the clock differs by more.
+CLOCK_STEP_TOLERANCE_S = 2.0
 
 
 @file_errors_as_data_errors
@@ -301,8 +315,7 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
     ids: list[int] | None = None
     values: list[list[float]] = []
     counters: list[float] = []
-    clocks: list[float] = []
-    day_offset = 0.0
+    clock_texts: list[str] = []
     for line_number, line in enumerate(lines[1:], start=2):
         where = f"line {line_number} (frame {line_number - 1})"
         fields = line.split(",")
@@ -347,6 +360,7 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
                     )
                 triple_values.append(value)
             row.extend(triple_values)
+            parse_float(block[7], path=path, where=person_where, field=_FIELDS[7])  # read by none
             block_counter = parse_float(block[8], path=path, where=person_where, field="FrameNum")
             if not block_counter.is_integer():
                 raise DataFormatError(
@@ -388,16 +402,65 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
                 "time increases",
                 f"{counter:.0f}",
             )
-        clock = _clock_seconds(clock_text, path=path, where=where) + day_offset
-        if clocks and clock < clocks[-1]:
-            day_offset += _HALF_DAY_S
-            clock += _HALF_DAY_S
         values.append(row)
         counters.append(counter)
-        clocks.append(clock)
+        clock_texts.append(clock_text)
     assert ids is not None
     array = np.array(values, dtype=np.float64).reshape(len(values), len(ids), 6)
-    return ids, array, np.array(counters), np.array(clocks)
+    return ids, array, np.array(counters), _wall_clock(path, counters, clock_texts)
+
+
+def _wall_clock(path: Path, counters: list[float], texts: list[str]) -> np.ndarray:
+    """(T,) each line's Time in seconds, counted on across the clock's wraps (a 12-hour clock's
+    12:59:59 to 1:00:00), each step checked against FrameNum's.
+
+    Args:
+        counters: (T,) each line's FrameNum (increasing).
+        texts: (T,) each line's Time, ``H:MM:SS``.
+
+    Raises:
+        DataFormatError: a step of FrameNum and the same step of Time more than
+            :data:`CLOCK_STEP_TOLERANCE_S` apart: a Time going back that is no wrap, or a
+            FrameNum jump Time does not make, naming the line and both steps.
+    """
+    clocks: list[float] = []
+    offset = 0.0
+    for k, text in enumerate(texts):
+        line = k + 2
+        where = f"line {line} (frame {k + 1})"
+        clock = _clock_seconds(text, path=path, where=where) + offset
+        if not clocks:
+            clocks.append(clock)
+            continue
+        back = clock < clocks[-1]
+        while clock < clocks[-1]:  # the clock wrapped: 12 h on (twice for a 24-hour clock)
+            offset += _HALF_DAY_S
+            clock += _HALF_DAY_S
+        frames_s = (counters[k] - counters[k - 1]) / VICON_RATE_HZ
+        clock_s = clock - clocks[-1]
+        if abs(frames_s - clock_s) <= CLOCK_STEP_TOLERANCE_S:
+            clocks.append(clock)
+            continue
+        if back:
+            raise DataFormatError(
+                path,
+                where,
+                "Time",
+                f"a Time from {texts[k - 1]} (line {line - 1}) on, {frames_s:.2f} s later as "
+                f"FrameNum steps (within {CLOCK_STEP_TOLERANCE_S:g} s), or the 12-hour clock's "
+                "wrap from 12:59:59 to 1:00:00",
+                repr(text),
+            )
+        raise DataFormatError(
+            path,
+            where,
+            "FrameNum",
+            f"a step that agrees with Time's within {CLOCK_STEP_TOLERANCE_S:g} s at "
+            f"{VICON_RATE_HZ:g} Hz (Time goes from {texts[k - 1]} on line {line - 1} to "
+            f"{text}: {clock_s:g} s)",
+            f"{counters[k]:.0f} after {counters[k - 1]:.0f} (line {line - 1}): {frames_s:.2f} s",
+        )
+    return np.array(clocks)
 
 
 def _read_annotations(

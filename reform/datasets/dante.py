@@ -14,14 +14,17 @@ A DANTE folder holds two files:
 * ``group_names.txt``: one line per annotated instant, ``<t> < ID_a ID_b > < ID_c > ...``, the
   time string identical to the matching ``features.txt`` line.
 
-The time restarts when a new session begins: every decrease of ``t`` opens a new sequence
-(``session1``, ``session2``, ...); within a session ``t`` increases (a repeated ``t`` is an
-error). Ground-truth lines are matched to feature lines by their exact time string, in file
-order. SALSA's session-2 time strings carry a +2e-5 offset, so when every time of a file lies
-within 1e-4 s of a multiple of 0.1 s, a frame's ``time`` is ``round(float(t), 1)``; otherwise
-(files sampled faster than 10 Hz) it is ``float(t)``. Unix times (Cocktail Party's, in seconds;
-or in milliseconds, microseconds, nanoseconds, told apart by their magnitude and spacing) are
-read in their unit and counted in seconds from each session's first line.
+The time restarts when a new session begins: a decrease of ``t`` back to the start of the
+session before (SALSA's second session starts at 0.20002 after 1932.2, its first at 0.2), or
+earlier, opens a new sequence (``session1``, ``session2``, ...); within a session ``t``
+increases (a repeated ``t`` is an error). A time going back anywhere else, or after a session of
+a single line, is lines out of order and is refused. Ground-truth lines are matched to feature
+lines by their exact time string, in file order. SALSA's session-2 time strings carry a +2e-5
+offset, so when every time of a file lies within 1e-4 s of a multiple of 0.1 s, a frame's
+``time`` is ``round(float(t), 1)``; otherwise (files sampled faster than 10 Hz) it is
+``float(t)``. Unix times (Cocktail Party's, in seconds; or in milliseconds, microseconds,
+nanoseconds, told apart by their magnitude and spacing) are read in their unit and counted in
+seconds from each session's first line.
 
 A file of 3 fields per person (``ID x y``: positions without an orientation) is refused as such.
 """
@@ -75,6 +78,11 @@ _ID_PATTERN = re.compile(r"ID_(\d+)")
 _ID_MAX = 2**63 - 1  # person ids are int64
 _TIME_DECIMALS = 1  # SALSA is sampled every 3 s at t = 0.2 + 3k
 _TIME_GRID_TOLERANCE_S = 1e-4  # SALSA's session-2 offset is 2e-5 s
+# How far after the start of the session before a time going back may land and still start a
+# new session: half a frame step (the median of the file's steps forward). SALSA's session 2
+# starts 2e-5 s after its session 1, whose step is 3 s; two lines swapped go back to a time at
+# least one step after their session's start.
+_RESTART_SLACK = 0.5
 _NAN_TOKENS = frozenset({"nan", "NaN", "NAN", "-nan", "-NaN"})
 
 
@@ -308,20 +316,22 @@ def _is_person_token(token: str) -> bool:
     return token == _FAKE or _ID_PATTERN.fullmatch(token) is not None
 
 
+def _blocks_fit(tokens: list[str], width: int) -> bool:
+    """Whether a line's token count and the tokens inside its blocks (no ID among them) agree
+    with ``width`` fields per person, whatever the tokens that start the blocks."""
+    if (len(tokens) - 1) % width:
+        return False
+    inside = (i for i in range(1, len(tokens)) if (i - 1) % width)
+    return not any(_ID_PATTERN.fullmatch(tokens[i]) for i in inside)
+
+
 def _widths_of(tokens: list[str], widths: Iterable[int] = FIELDS_PER_PERSON) -> set[int]:
     """The layouts (fields per person) among ``widths`` a line's tokens agree with."""
-    fits = set()
-    for width in widths:
-        if (len(tokens) - 1) % width:
-            continue
-        starts = range(1, len(tokens), width)
-        if not all(_is_person_token(tokens[i]) for i in starts):
-            continue
-        inside = (i for i in range(1, len(tokens)) if (i - 1) % width)
-        if any(_ID_PATTERN.fullmatch(tokens[i]) for i in inside):
-            continue
-        fits.add(width)
-    return fits
+    return {
+        width
+        for width in widths
+        if _blocks_fit(tokens, width) and all(map(_is_person_token, tokens[1::width]))
+    }
 
 
 def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
@@ -339,6 +349,10 @@ def _layout(path: Path, lines: list[tuple[int, list[str]]]) -> int:
                 repr(tokens[1]),
             )
         if not fits:
+            for width in FIELDS_PER_PERSON:
+                if _blocks_fit(tokens, width):  # a layout but for a token starting a block
+                    bad = next(t for t in tokens[1::width] if not _is_person_token(t))
+                    _parse_id(bad, path=path, where=f"line {line_number}")  # refused as an ID
             _check_orientation(path, lines)
             raise DataFormatError(
                 path,
@@ -415,14 +429,13 @@ def _read_features(
     stored = [
         parse_float(tokens[0], path=path, where=f"line {n}", field="t") for n, tokens in lines
     ]
-    times, time_report = _seconds(stored, path=path, time_unit=time_unit)
+    sessions = _sessions(stored, lines, path=path)
+    times, time_report = _seconds(stored, sessions, path=path, time_unit=time_unit)
     rounded = all(abs(t - round(t, _TIME_DECIMALS)) <= _TIME_GRID_TOLERANCE_S for t in times)
     angle_fields = ("body", "head") if width == 5 else ("θ",)
     rows: list[_Row] = []
     fake_blocks = 0
-    session = 1
-    previous_time: float | None = None
-    for (line_number, tokens), time_value, stored_value in zip(lines, times, stored, strict=True):
+    for k, ((line_number, tokens), time_value) in enumerate(zip(lines, times, strict=True)):
         where = f"line {line_number}"
         n_blocks, extra = divmod(len(tokens) - 1, width)
         if extra:
@@ -435,9 +448,7 @@ def _read_features(
                 f"{len(tokens)} tokens (truncated line?)",
             )
         time = round(time_value, _TIME_DECIMALS) if rounded else time_value
-        if previous_time is not None and stored_value < previous_time:
-            session += 1  # the time restarts: a new session
-        elif rows:
+        if k and sessions[k] == sessions[k - 1]:
             check_time_increases(
                 time,
                 rows[-1].time,
@@ -447,7 +458,6 @@ def _read_features(
                 previous_where=f"line {rows[-1].line}, t = {rows[-1].time_string}",
                 found=repr(tokens[0]) + (f" (t = {time!r})" if str(time) != tokens[0] else ""),
             )
-        previous_time = stored_value
 
         ids: list[int] = []
         values: list[tuple[float, ...]] = []
@@ -501,7 +511,7 @@ def _read_features(
             _Row(
                 line=line_number,
                 time_string=tokens[0],
-                sequence=f"session{session}",
+                sequence=f"session{sessions[k]}",
                 time=time,
                 ids=np.array(ids, dtype=np.int64),
                 position=array[:, :2] / per_metre,
@@ -512,25 +522,68 @@ def _read_features(
     return rows, fake_blocks, width, rounded, time_report
 
 
-def _seconds(
-    stored: list[float], *, path: Path, time_unit: str | None
-) -> tuple[list[float], dict[str, Any] | None]:
-    """Each line's time in seconds (Unix times from their session's first line; a session
-    begins whenever the stored time goes down) and the report's ``time_unit`` entry (None when
-    the times are kept as stored)."""
-    sessions: list[list[float]] = []
+def _sessions(stored: list[float], lines: list[tuple[int, list[str]]], *, path: Path) -> list[int]:
+    """Each line's session, from 1: a new one begins where the stored time goes back to at most
+    :data:`_RESTART_SLACK` frame steps (the file's median) after the start of the session before,
+    or earlier.
+
+    Raises:
+        DataFormatError: a time going back elsewhere (two lines swapped), or after a session of
+            one line (lines in reverse order), naming the line, the time before and after.
+    """
+    steps = np.diff(np.array(stored))
+    steps = steps[steps > 0]
+    slack = _RESTART_SLACK * float(np.median(steps)) if steps.size else 0.0
+    sessions: list[int] = []
+    number = 1
+    start = 0  # the index in ``lines`` of the session's first line
     for k, value in enumerate(stored):
-        if k == 0 or value < stored[k - 1]:
-            sessions.append([])
-        sessions[-1].append(value)
+        if k and value < stored[k - 1]:
+            (line_number, tokens), (before, before_tokens) = lines[k], lines[k - 1]
+            later = f"a time later than line {before}'s t = {before_tokens[0]}"
+            if k - start < 2:
+                raise DataFormatError(
+                    path,
+                    f"line {line_number}",
+                    "t",
+                    f"{later} (a time going back starts a new session only after one of two "
+                    f"lines or more; line {before}'s would hold one)",
+                    repr(tokens[0]),
+                )
+            if value > stored[start] + slack:
+                first, first_tokens = lines[start]
+                raise DataFormatError(
+                    path,
+                    f"line {line_number}",
+                    "t",
+                    f"{later}, or, starting a new session, one at most half a frame step "
+                    f"({slack:.6g}) after the start of the session before (line {first}'s t = "
+                    f"{first_tokens[0]})",
+                    repr(tokens[0]),
+                )
+            number += 1
+            start = k
+        sessions.append(number)
+    return sessions
+
+
+def _seconds(
+    stored: list[float], sessions: list[int], *, path: Path, time_unit: str | None
+) -> tuple[list[float], dict[str, Any] | None]:
+    """Each line's time in seconds (Unix times from their session's first line; ``sessions``:
+    each line's session, from :func:`_sessions`) and the report's ``time_unit`` entry (None when
+    the times are kept as stored)."""
+    by_session: dict[int, list[float]] = {}
+    for session, value in zip(sessions, stored, strict=True):
+        by_session.setdefault(session, []).append(value)
     reading = read_time_unit(
-        [np.array(s) for s in sessions], path=path, field="t", stated=time_unit
+        [np.array(s) for s in by_session.values()], path=path, field="t", stated=time_unit
     )
     if reading.how == "as stored":
         return stored, None
     seconds: list[float] = []
     origins: dict[str, float | None] = {}
-    for number, values in enumerate(sessions, start=1):
+    for number, values in by_session.items():
         converted, origins[f"session{number}"] = reading.seconds(np.array(values))
         seconds.extend(converted.tolist())
     return seconds, reading.report(origins)

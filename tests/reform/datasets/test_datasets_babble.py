@@ -222,6 +222,30 @@ def test_truncated_line(babble_dir, tmp_path):
             r": field 'TorsoX': expected a position with \|value\| <= 1e\+08 m.*found 1e\+200",
             id="huge-position",
         ),
+        # float() reads digits grouped by '_' ('-1_1.35' is -11.35): Babble writes none.
+        pytest.param(
+            4,
+            14,
+            "-1_1.35",
+            r"line 4 \(frame 3\), participant 2"
+            r": field 'TorsoX': expected a number, found '-1_1.35'$",
+            id="digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            3,
+            8,
+            "283_206",
+            r"line 3 \(frame 2\), participant 1"
+            r": field 'FrameNum': expected a number, found '283_206'$",
+            id="frame-number-grouped-by-underscore",
+        ),
+        pytest.param(
+            4,
+            17,
+            "tall",
+            r"line 4 \(frame 3\), participant 2: field 'Hieght': expected a number, found 'tall'$",
+            id="height-not-a-number",  # Hieght (sic) is read by no detector, but is a number
+        ),
     ],
 )
 def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
@@ -261,6 +285,69 @@ def test_repeated_frame_number(babble_dir, tmp_path):
         r"line 4 \(frame 3\): field 'FrameNum': expected a Vicon frame number above "
         rf"{previous} \(line 3\): time increases, found {previous}",
     )
+
+
+def _set_every_block(lines: list[str], line: int, field: int, value: str) -> None:
+    for block in range(7):
+        _set_field(lines, line, 10 * block + field, value)
+
+
+# Lines 9 and 10 of the real file: FrameNum 283546 and 283602 (0.56 s at 100 Hz), Time 5:48:53
+# and 5:48:54.
+
+
+def test_a_frame_number_jump_that_time_contradicts(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    for line in range(10, len(lines) + 1):  # FrameNum + 1e9 from line 10 on: 1e7 s, says FrameNum
+        _set_every_block(lines, line, 8, str(int(lines[line - 1].split(",")[8]) + 10**9))
+    _write(folder, lines, annotations)
+    assert_refused(
+        load_babble,
+        folder,
+        r"Motion-capture-data.csv: line 10 \(frame 9\): field 'FrameNum': expected a step that "
+        r"agrees with Time's within 2 s at 100 Hz \(Time goes from 5:48:53 on line 9 to 5:48:54: "
+        r"1 s\), found 1000283602 after 283546 \(line 9\): 10000000.56 s$",
+    )
+
+
+def test_a_time_going_back_that_is_no_wrap(babble_dir, tmp_path):
+    folder, lines, annotations = _copy(babble_dir, tmp_path)
+    _set_every_block(lines, 10, 9, "5:48:44")  # 9 s back, not 12 h
+    _write(folder, lines, annotations)
+    assert_refused(
+        load_babble,
+        folder,
+        r"Motion-capture-data.csv: line 10 \(frame 9\): field 'Time': expected a Time from "
+        r"5:48:53 \(line 9\) on, 0.56 s later as FrameNum steps \(within 2 s\), or the 12-hour "
+        r"clock's wrap from 12:59:59 to 1:00:00, found '5:48:44'$",
+    )
+
+
+@pytest.mark.parametrize(
+    ("first", "clock"),
+    [
+        pytest.param("12:59:55", 12, id="12-hour-clock"),  # 12:59:59 -> 1:00:00, as Babble's
+        pytest.param("11:59:55", 0, id="12-hour-clock-from-0"),  # 11:59:59 -> 0:00:00
+        pytest.param("23:59:55", 24, id="24-hour-clock"),  # 23:59:59 -> 0:00:00
+    ],
+)
+def test_the_clock_wrapping_around_loads_as_before(babble_dir, tmp_path, first, clock):
+    folder, lines, annotations = _copy(babble_dir, tmp_path / "as-recorded")
+    before = load_babble(_write(folder, lines, annotations))
+    hours, minutes, seconds = (int(n) for n in first.split(":"))
+    shift = hours * 3600 + minutes * 60 + seconds - (5 * 3600 + 48 * 60 + 49)  # line 2: 5:48:49
+    for line in range(2, len(lines) + 1):
+        h, m, s = (int(n) for n in lines[line - 1].split(",")[9].split(":"))
+        h, rest = divmod(h * 3600 + m * 60 + s + shift, 3600)
+        h %= 24 if clock == 24 else 12
+        h = 12 if clock == 12 and h == 0 else h
+        _set_every_block(lines, line, 9, f"{h}:{rest // 60:02d}:{rest % 60:02d}")
+    stamps = [tuple(int(n) for n in line.split(",")[9].split(":")) for line in lines[1:]]
+    assert stamps != sorted(stamps)  # the clock wraps
+    (tmp_path / "wrapped").mkdir()
+    wrapped = load_babble(_write(tmp_path / "wrapped", lines, annotations))
+    assert wrapped.frames == before.frames
+    assert wrapped.metadata["report"] == before.metadata["report"]
 
 
 def test_identical_duplicate_annotation_is_counted(babble_dir, tmp_path):

@@ -143,6 +143,59 @@ def test_new_session_on_time_decrease_and_gt_matched_by_string(tmp_path):
     assert [f.annotated for f in dataset] == [False, True, True]
 
 
+def test_a_session_may_start_earlier_than_the_one_before(tmp_path):
+    # Sessions listed out of order (a later recording first) go back past the last one's start.
+    times = ["10.0", "13.0", "16.0", "0.0", "3.0"]
+    folder = _write(tmp_path, [f"{t} {_person(1)}" for t in times], ["13.0 < ID_001 >"])
+    dataset = load_salsa(folder)
+    assert [(f.sequence, f.time) for f in dataset] == [
+        ("session1", 10.0),
+        ("session1", 13.0),
+        ("session1", 16.0),
+        ("session2", 0.0),
+        ("session2", 3.0),
+    ]
+
+
+# Line 2 going back after line 1 alone.
+_AFTER_ONE_LINE = (
+    r"features.txt: line 2: field 't': expected a time later than line 1's t = {} \(a time "
+    r"going back starts a new session only after one of two lines or more; line 1's would hold "
+    r"one\), found '{}'$"
+)
+
+
+@pytest.mark.parametrize(
+    ("order", "message"),
+    [
+        pytest.param(
+            [7, 6, 5, 4, 3, 2, 1, 0],
+            _AFTER_ONE_LINE.format("21.2", "18.2"),
+            id="lines-in-reverse-order",
+        ),
+        pytest.param(
+            [1, 0, 2, 3, 4, 5, 6, 7],
+            _AFTER_ONE_LINE.format("3.2", "0.2"),
+            id="first-two-lines-swapped",
+        ),
+        pytest.param(
+            [0, 1, 2, 3, 5, 4, 6, 7],
+            r"features.txt: line 6: field 't': expected a time later than line 5's t = 15.2, "
+            r"or, starting a new session, one at most half a frame step \(1.5\) after the start "
+            r"of the session before \(line 1's t = 0.2\), found '12.2'$",
+            id="two-lines-swapped",
+        ),
+    ],
+)
+def test_a_time_going_back_that_is_no_restart(salsa_dir, tmp_path, order, message):
+    # SALSA restarts once, after 645 lines (0.2, 3.2, ..., 1932.2, then 0.20002): lines out of
+    # order are no such restart, and were read as sessions of a frame or two.
+    features, groups = _copy_head(salsa_dir, tmp_path, n=8)
+    folder = _write(tmp_path, [features[k] for k in order], [groups[k] for k in order])
+    with pytest.raises(DataFormatError, match=message):
+        load_salsa(folder)
+
+
 @pytest.mark.parametrize(
     ("time", "found"),
     [
@@ -200,6 +253,35 @@ def test_truncated_feature_line(salsa_dir, tmp_path):
             r"line 3, person 2: field 'y': expected a position .*found -300000000.0",
             id="far-position",
         ),
+        # float() reads digits grouped by '_' ('1_2.5' is 12.5): no file of the field writes them.
+        pytest.param(
+            3,
+            2,
+            "1_2.5",
+            r"features.txt: line 3, person 1: field 'x': expected a number, found '1_2.5'$",
+            id="x-digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            2,
+            0,
+            "3_2",
+            r"features.txt: line 2: field 't': expected a number, found '3_2'$",
+            id="time-digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            1,
+            10,
+            "0_0.5",
+            r"line 1, person 2: field 'head': expected a number, found '0_0.5'$",
+            id="angle-digits-grouped-by-underscore",
+        ),
+        pytest.param(
+            2,
+            3,
+            "-Infinity",
+            r"line 2, person 1: field 'y': expected a finite number, found '-Infinity'$",
+            id="infinity-spelled-out",  # a spelling of infinity is refused as infinite, as before
+        ),
     ],
 )
 def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
@@ -252,6 +334,43 @@ def test_bad_feature_token(salsa_dir, tmp_path, line, token, value, message):
 def test_bad_small_file(tmp_path, features, groups, message):
     folder = _write(tmp_path, features, groups)
     with pytest.raises(DataFormatError, match=message):
+        load_salsa(folder)
+
+
+@pytest.mark.parametrize("line", [1, 3, 5])
+def test_a_bad_id_token_is_named_on_any_line(salsa_dir, tmp_path, line):
+    # Line 1 is where the layout (5 fields per person here) is told: a bad ID there was called
+    # a truncated line.
+    features, groups = _copy_head(salsa_dir, tmp_path, n=5)
+    assert " ID_007 " in features[line - 1]
+    features[line - 1] = features[line - 1].replace(" ID_007 ", " ID_0O7 ")
+    folder = _write(tmp_path, features, groups)
+    with pytest.raises(DataFormatError) as caught:
+        load_salsa(folder)
+    assert str(caught.value) == (
+        f"{folder / 'features.txt'}: line {line}: field 'ID': expected a token ID_<number>, "
+        "found 'ID_0O7'"
+    )
+
+
+@pytest.mark.parametrize(
+    "features",
+    [
+        pytest.param("0.2 ID_001 1.0 2.0 0.5 ID_0O2 3.0 2.0 0.5", id="4-fields"),
+        pytest.param(
+            # 21 tokens, 1 + 4 × 5 or 1 + 5 × 4: the IDs that are right tell the layout
+            "0.2 ID_001 1.0 2.0 0.5 0.6 ID_0O2 3.0 2.0 0.5 0.6 ID_003 1.0 3.0 0.5 0.6 fake fake "
+            "fake fake fake",
+            id="5-fields-as-many-tokens-as-4",
+        ),
+    ],
+)
+def test_a_bad_id_token_on_the_line_telling_the_layout(tmp_path, features):
+    folder = _write(tmp_path, [features], ["0.2 < ID_001 >"])
+    with pytest.raises(
+        DataFormatError,
+        match=r"features.txt: line 1: field 'ID': expected a token ID_<number>, found 'ID_0O2'$",
+    ):
         load_salsa(folder)
 
 
