@@ -115,10 +115,28 @@ def appender(dest: str, form: Callable[[Any], Any] = lambda v: v) -> Callable[..
     return apply
 
 
+# The largest seed a command takes: seeds are kept as 64-bit integers (a dataset's card, a twin
+# file: sim.twins.description.MAX_SEED), so a larger one would be refused by the next command.
+MAX_SEED = 2**63 - 1
+
+
+def _seed(text: str) -> int:
+    """A ``--seed`` value: a whole number from 0 to `MAX_SEED`."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = None
+    if value is None or not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number from 0 to {MAX_SEED}, found {text!r}"
+        )
+    return value
+
+
 def add_seed(parser: argparse.ArgumentParser, *, help: str = "master seed") -> None:  # noqa: A002
-    """``--seed S``, default 0."""
+    """``--seed S``, default 0 (0 to `MAX_SEED`)."""
     parser.add_argument(
-        "--seed", type=int, default=DEFAULT_SEED, metavar="S", help=f"{help} (default 0)"
+        "--seed", type=_seed, default=DEFAULT_SEED, metavar="S", help=f"{help} (default 0)"
     )
 
 

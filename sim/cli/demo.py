@@ -8,15 +8,13 @@ import argparse
 import sys
 import time
 
-from sim.cli._common import CliError, check_output, default_datasets
+from sim.cli._common import check_output, default_datasets
 from sim.experiments.demo import run_demo
 from sim.experiments.demo_report import write_report
 from sim.recording import rerun_in_this_shell
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.seed < 0:
-        raise CliError(f"--seed must be >= 0, got {args.seed}")
     check_output("--out", args.out, folder=True)
     started = time.perf_counter()
     result = run_demo(

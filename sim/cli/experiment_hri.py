@@ -38,8 +38,6 @@ def run(args: argparse.Namespace) -> int:
     if args.episodes < 1:
         raise CliError(f"--episodes must be >= 1, got {args.episodes}")
     check_episodes(args.episodes, what="the HRI experiment", flag="--episodes")
-    if args.seed < 0:
-        raise CliError(f"--seed must be >= 0, got {args.seed}")
     views = [v.strip() for v in args.views.split(",") if v.strip()]
     unknown = [v for v in views if v not in VIEWS]
     if unknown or not views:

@@ -105,8 +105,6 @@ def _command(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.episodes_scale) and args.episodes_scale > 0):
         raise CliError(f"--episodes-scale must be a finite number > 0, got {args.episodes_scale}")
-    if args.seed < 0:
-        raise CliError(f"--seed must be >= 0, got {args.seed}")
     classifiers = CLASSIFIER_NAMES
     if args.classifiers:
         classifiers = tuple(c.strip() for c in args.classifiers.split(",") if c.strip())

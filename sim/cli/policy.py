@@ -27,8 +27,6 @@ def _evaluate(args: argparse.Namespace) -> int:
         )
     if args.episodes < 1:
         raise CliError(f"--episodes must be a positive number, got {args.episodes}")
-    if args.seed < 0:
-        raise CliError(f"--seed must be >= 0, got {args.seed}")
     check_episodes(args.episodes, what="the policy evaluation", flag="--episodes")
     check_output("--out", args.out)
     kwargs = {}

@@ -150,8 +150,6 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(
                 f"--episodes must be at most {MAX_STRESS_EPISODES:,}, got {args.episodes:,}"
             ) from None
-    if args.seed < 0:
-        raise CliError(f"--seed must be >= 0, got {args.seed}")
     axes = None
     if args.axes is not None:
         axes = [a.strip() for a in args.axes.split(",") if a.strip()]

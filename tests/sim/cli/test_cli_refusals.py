@@ -131,3 +131,29 @@ def test_benchmark_refuses_a_dataset_with_nothing_to_score(
         f"reform-sim benchmark: error: {raw}: {part} has no annotated frames to score"
     )
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["twin", "--data", "synth", "--out", "OUT", "--seed", "99999999999999999999999"],
+        ["generate", "--scenario", "mingle", "--episodes", "1", "--out", "OUT", "--seed", "1.5"],
+        ["stress", "--grid", "small", "--out", "OUT", "--seed", "-1"],
+        ["demo", "--quick", "--out", "OUT", "--seed", "-1"],
+    ],
+    ids=["twin-beyond-64-bits", "generate-not-whole", "stress-negative", "demo-negative"],
+)
+def test_a_seed_no_later_command_would_take_is_refused_as_it_is_read(argv, tmp_path, capsys):
+    from sim.cli._grammar import MAX_SEED
+    from sim.twins.description import MAX_SEED as KEPT
+
+    assert MAX_SEED == KEPT  # a twin file keeps any seed a command takes
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as stopped:  # refused as the command line is read
+        run_cli([str(out) if word == "OUT" else word for word in argv], capsys)
+    assert stopped.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith(f"reform-sim {argv[0]}: error: argument --seed: expected a whole number")
+    assert f"from 0 to {MAX_SEED}, found '{argv[-1]}'" in err
+    assert not out.exists()

@@ -15,7 +15,6 @@ COMMANDS = {
 }
 # (command, its bad options, a part of the one-line error), named command-option.
 BAD_INPUT = [
-    ("demo", "--seed -1", "--seed must be >= 0, got -1"),
     ("demo", "--jobs 0", "--jobs must be >= 1, got 0"),
     ("demo", "--data /nonexistent/datasets", "/nonexistent/datasets is not a folder"),
     ("hri", "--views sonar", "--views must name views among"),
