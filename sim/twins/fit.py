@@ -459,12 +459,20 @@ def fit_twin(
             the same, byte for byte, whatever the number).
 
     Raises:
-        TwinInputError: a recording too small or in the wrong unit (`check_frames_for_twin`).
+        TwinInputError: a recording too small or in the wrong unit (`check_frames_for_twin`);
+            with ``use_labels``, one without a group of two or more in its annotated frames.
     """
     where = where or name
     frames = list(frames)
     check_frames_for_twin(frames, where=where)
     shape = _labelled_shape(frames) if use_labels else {}
+    if use_labels and not shape:  # no group to fit: a label-free twin would pass for one
+        annotated = sum(frame.groups is not None for frame in frames)
+        raise TwinInputError(
+            f"{where}: field groups: expected annotated frames with a group of two or more to "
+            "fit the group structure on (use_labels), found "
+            + (f"none in its {annotated} annotated frames" if annotated else "no annotated frame")
+        )
     if not use_labels:
         frames = _strip(frames)
     real = measure_place(frames)

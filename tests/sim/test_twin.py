@@ -77,6 +77,16 @@ def test_use_labels_is_a_mode_of_its_own(fitted):
     assert twin.options["radius_base"] != fitted.options["radius_base"]  # fitted on the groups
 
 
+def test_use_labels_without_groups_is_refused_not_fitted_label_free():
+    frames = _frames(scale=1.5)
+    with pytest.raises(TwinInputError, match=r"^place: field groups: expected annotated frames "
+                       r"with a group of two or more .* found no annotated frame$"):  # fmt: skip
+        fit_twin([f.replace(groups=None) for f in frames], name="place", use_labels=True)
+    alone = [f.replace(groups=tuple((int(i),) for i in f.ids)) for f in frames]
+    with pytest.raises(TwinInputError, match=rf"found none in its {len(frames)} annotated frames"):
+        fit_twin(alone, name="place", use_labels=True)
+
+
 def test_a_twin_matches_the_recording_it_is_fitted_to(fitted):
     real = measure_place(_frames(scale=1.5))
     assert fitted.options["people"] == 6
