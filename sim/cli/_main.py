@@ -54,6 +54,32 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _given_once(parser: argparse.ArgumentParser, argv: Sequence[str]) -> None:
+    """Refuses an option that takes one value given twice (``--seed 1 --seed 2``): argparse
+    would keep the last without a word. Options that gather their values (``--data A --data
+    B``) and flags are left alone."""
+    options: dict[str, argparse.Action] = {}
+    current, seen = parser, {}
+    for k, word in enumerate(argv):
+        if word == "--":
+            break
+        options.update(current._option_string_actions)
+        if not word.startswith("-"):
+            subcommands = [a for a in current._actions if isinstance(a, argparse._SubParsersAction)]
+            if subcommands and word in subcommands[0].choices:
+                current = subcommands[0].choices[word]
+            continue
+        name, equals, value = word.partition("=")
+        action = options.get(name)
+        if not isinstance(action, argparse._StoreAction):
+            continue
+        given = f"{name} {value if equals else (argv[k + 1] if k + 1 < len(argv) else '')}"
+        if action.dest in seen:
+            raise CliError(f"{name} is given twice ({seen[action.dest]}, then {given.strip()}); "
+                           "give it once")  # fmt: skip
+        seen[action.dest] = given.strip()
+
+
 def _resumes(args: argparse.Namespace) -> bool:
     """Whether running the command again carries on where it was interrupted."""
     if args.command == "experiment":
@@ -82,6 +108,7 @@ def _run(argv: Sequence[str] | None, *, report_interrupt: bool) -> int:
     # the command reports it (sim.recording); a RUST_LOG the user set wins.
     os.environ.setdefault("RUST_LOG", RERUN_LOG)
     try:
+        _given_once(parser, sys.argv[1:] if argv is None else list(argv))
         check_jobs(args)
         with contextlib.ExitStack() as guards:
             guards.enter_context(os_exit_reported(args.command))

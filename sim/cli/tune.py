@@ -21,7 +21,7 @@ def _run(args: argparse.Namespace) -> int:
     name = check_tunable(args.detector)
     suffix = ".skops" if name == REFORM else ".json"
     out = Path(args.out) if args.out else Path(args.twin).parent / f"tuned-{name}{suffix}"
-    check_output("--out", out)
+    check_output("--out", out, suffix=suffix)
     folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
     frames = list(twin_data(twin, folder, n_jobs=args.jobs, progress=not args.quiet))
     # Every setting scored on the twin's frames, on --jobs processes (gcff's 49: seconds).

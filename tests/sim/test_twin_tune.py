@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -142,3 +143,20 @@ def test_a_crowd_is_scored_on_fewer_frames_a_party_on_all_it_may(people, frames)
         for f in _frames()
     ]
     assert crowd_limit(crowd, 244) == frames  # 30,000 people a setting, at least 60 frames
+
+
+@pytest.mark.parametrize(
+    ("detector", "out", "suffix"),
+    [("gcff", "x.skops", ".json"), ("reform", "r.json", ".skops")],
+    ids=["gcff", "reform"],
+)
+def test_tune_refuses_an_out_of_another_format_before_any_work(
+    twin_file, detector, out, suffix, tmp_path, capsys
+):
+    path = tmp_path / out
+    err = cli_error(["tune", "--twin", twin_file, "--detector", detector, "--out", path], capsys)
+    assert err == (
+        f"reform-sim tune: error: --out {path}: expected a file name ending in {suffix} (the "
+        f"format written), found {Path(out).suffix}"
+    )
+    assert not path.exists()

@@ -157,3 +157,27 @@ def test_a_seed_no_later_command_would_take_is_refused_as_it_is_read(argv, tmp_p
     assert err.startswith(f"reform-sim {argv[0]}: error: argument --seed: expected a whole number")
     assert f"from 0 to {MAX_SEED}, found '{argv[-1]}'" in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["generate", "--scenario", "mingle", "--episodes", "1", "--seed", "1", "--seed=2"],
+            "--seed is given twice (--seed 1, then --seed 2); give it once",
+        ),
+        (
+            ["tune", "--twin", "t.json", "--detector", "gcff", "--detector", "reform"],
+            "--detector is given twice (--detector gcff, then --detector reform); give it once",
+        ),
+    ],
+    ids=["seed", "tune-detector"],
+)
+def test_an_option_of_one_value_given_twice_is_refused_not_read_as_the_last(
+    argv, message, tmp_path, capsys
+):
+    out = tmp_path / "out"
+    err = cli_error([*argv, "--out", out], capsys)
+    assert err == f"reform-sim {argv[0]}: error: {message}"
+    assert not out.exists()
+
