@@ -123,6 +123,7 @@ from sim.episode import (
 from sim.executor import BACKENDS, Executor, cpu_count
 from sim.sensor import Sensor
 from sim.ticking import ticking
+from sim.world import steps_per_frame, whole_step_rates
 
 __all__ = [
     "BACKENDS",
@@ -327,6 +328,10 @@ class GenerationSpec:
             raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
         object.__setattr__(self, "sensor", _sensor(self.view, self.sensor))
         rate = _check_positive("rate", self.rate, "Hz")
+        try:  # the world records frames on its control steps only
+            steps_per_frame(rate)
+        except ValueError:
+            raise ValueError(f"rate must be {whole_step_rates()}, got {rate:g}") from None
         object.__setattr__(self, "rate", rate)
         if self.duration is not None:
             duration = _check_positive("duration", self.duration, "seconds")

@@ -20,6 +20,7 @@ from sim.cli._common import (
 )
 from sim.generate import RANDOM_ANNOTATION, generate_dataset
 from sim.sizing import RequestTooLarge
+from sim.world import steps_per_frame, whole_step_rates
 
 
 def _annotation(items: list[str]) -> AnnotationModel | str | None:
@@ -70,8 +71,21 @@ def _twin_arguments(args: argparse.Namespace) -> None:
         print(f"{args.twin}: {grown}", file=sys.stderr)
 
 
+def _check_rate(args: argparse.Namespace) -> None:
+    """``--rate``: frames on the world's control steps (a twin's rate_hz is checked when read)."""
+    if args.rate is None or not args.rate > 0.0:  # not a rate at all: refused as before
+        return
+    try:
+        steps_per_frame(args.rate)
+    except ValueError:
+        raise CliError(
+            f"--rate {args.rate:g}: expected {whole_step_rates()}, found {args.rate:g}"
+        ) from None
+
+
 def _run(args: argparse.Namespace) -> int:
     _twin_arguments(args)
+    _check_rate(args)
     twin = getattr(args, "twin_model", None)
     annotation = _annotation(args.annotation)
     if twin is not None and not twin.annotation.identity:
