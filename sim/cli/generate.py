@@ -83,6 +83,11 @@ def _check_rate(args: argparse.Namespace) -> None:
         ) from None
 
 
+def _set_keys(items: list[str]) -> set[str]:
+    """The option names given by ``--set`` (checked by `parse_overrides`)."""
+    return {item.partition("=")[0].strip() for item in items}
+
+
 def _run(args: argparse.Namespace) -> int:
     _twin_arguments(args)
     _check_rate(args)
@@ -118,7 +123,10 @@ def _run(args: argparse.Namespace) -> int:
             max_memory=limit,
         )
     except RequestTooLarge as exc:  # sized before any work: named by the flags
-        raise size_error(exc, {"out_dir": "--out", "n_jobs": "--jobs"}) from None
+        flags = {"out_dir": "--out", "n_jobs": "--jobs"}
+        if twin is None and "duration" in _set_keys(args.overrides):
+            flags["duration"] = "--set duration"
+        raise size_error(exc, flags) from None
     made = report.generated_annotated_frames
     speed = made / report.seconds if report.seconds > 0 else 0.0
     print(
