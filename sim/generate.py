@@ -123,6 +123,7 @@ from sim.episode import (
 from sim.executor import BACKENDS, Executor, cpu_count
 from sim.sensor import Sensor
 from sim.ticking import ticking
+from sim.world import steps_per_frame, whole_step_rates
 
 __all__ = [
     "BACKENDS",
@@ -327,6 +328,10 @@ class GenerationSpec:
             raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
         object.__setattr__(self, "sensor", _sensor(self.view, self.sensor))
         rate = _check_positive("rate", self.rate, "Hz")
+        try:  # the world records frames on its control steps only
+            steps_per_frame(rate)
+        except ValueError:
+            raise ValueError(f"rate must be {whole_step_rates()}, got {rate:g}") from None
         object.__setattr__(self, "rate", rate)
         if self.duration is not None:
             duration = _check_positive("duration", self.duration, "seconds")
@@ -1916,6 +1921,25 @@ def _check_size(
     return one
 
 
+def _check_size_unplanned(spec: GenerationSpec, **sizes: Any) -> None:
+    """`_check_size` before episode 0 is planned, for a length given as the scenario's option
+    ``duration``: `_check_scenario` plans the whole of it (a day's episode takes a minute),
+    while the size needs only the stage's people and robot, which the length does not change;
+    they are taken from episode 0 made at the scenario's own length. Options this cannot make
+    are left for `_check_scenario` to refuse, in its words; `_check_size` runs again on the
+    planned episode."""
+    length = spec.options.get("duration") if spec.duration is None else None
+    if length is None:  # the scenario's own length, or one applied after planning: quick
+        return
+    try:
+        sized = dataclasses.replace(spec, duration=length)
+        options = {k: v for k, v in spec.options.items() if k != "duration"}
+        stage = prepare(spec.scenario, seed=episode_seed(spec.seed, 0), options=options)
+    except (TypeError, ValueError):
+        return
+    _check_size(sized, stage, **sizes)
+
+
 def _say_estimate(
     spec: GenerationSpec,
     one: sizing.Estimate,
@@ -2087,17 +2111,17 @@ def generate_dataset(
     store = open_store(os.fspath(out_dir)) if is_uri(out_dir) else None
     if store is None:
         out_dir = Path(out_dir)
-    with _collector_spared():
-        resolved, made = _check_scenario(spec)
-    one = _check_size(
-        spec,
-        made,
+    sizes = dict(
         episodes=episodes,
         out_dir=out_dir if store is None else None,
         workers=(n_jobs or cpu_count()) if local else 1,
         save_recordings=save_recordings,
         max_memory=max_memory,
     )
+    with _collector_spared():
+        _check_size_unplanned(spec, **sizes)
+        resolved, made = _check_scenario(spec)
+    one = _check_size(spec, made, **sizes)
     if store is not None:
         todo, done, summaries, workers, check_seconds = _generate_store(
             store,

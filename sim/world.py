@@ -70,6 +70,7 @@ MAX_DT_S = 0.1  # seconds, the largest accepted control step
 PARK_GAP_M = 0.7  # metres between parked (absent) agents outside the room
 PARK_DISTANCE_M = 2.0  # metres from the east wall to the first parking spot
 _RATE_TOLERANCE = 1e-6  # relative tolerance when checking that rates divide each other
+_EXAMPLE_RATES_HZ = (1.0, 2.0, 4.0, 5.0, 10.0)  # Hz, rates a refusal suggests
 
 
 @dataclass(frozen=True)
@@ -121,6 +122,32 @@ def _steps_per(period: float, dt: float, *, name: str, unit_hint: str) -> int:
             f"got {period:g} s ({steps:g} steps)"
         )
     return int(whole)
+
+
+def steps_per_frame(rate: float, dt: float = DEFAULT_DT_S) -> int:
+    """Control steps of ``dt`` between two output frames at ``rate`` Hz.
+
+    Raises:
+        ValueError: a rate that is not positive, or whose period ``1 / rate`` is not a whole
+            number of steps (the world records frames on its steps only).
+    """
+    rate = float(rate)
+    if not (math.isfinite(rate) and rate > 0.0):
+        raise ValueError(f"rate must be positive (Hz), got {rate}")
+    return _steps_per(1.0 / rate, dt, name="1 / rate", unit_hint="(choose a rate dividing 1/dt)")
+
+
+def whole_step_rates(dt: float = DEFAULT_DT_S) -> str:
+    """What `steps_per_frame` accepts, in words, for a message's "expected"."""
+    examples = []
+    for rate in _EXAMPLE_RATES_HZ:
+        try:
+            steps_per_frame(rate, dt)
+        except ValueError:
+            continue
+        examples.append(f"{rate:g}")
+    shown = f" (e.g. {', '.join(examples)})" if examples else ""
+    return f"a rate whose period is a whole number of {dt:g} s control steps{shown}"
 
 
 class World:
@@ -819,12 +846,7 @@ class World:
         self._intent[i] = row
 
     def _output_plan(self, duration: float, rate: float) -> tuple[int, int]:
-        rate = float(rate)
-        if not (math.isfinite(rate) and rate > 0.0):
-            raise ValueError(f"rate must be positive (Hz), got {rate}")
-        every = _steps_per(
-            1.0 / rate, self._dt, name="1 / rate", unit_hint="(choose a rate dividing 1/dt)"
-        )
+        every = steps_per_frame(rate, self._dt)
         duration = float(duration)
         if not (math.isfinite(duration) and duration >= 0.0):
             raise ValueError(f"duration must be >= 0 seconds, got {duration}")

@@ -20,6 +20,7 @@ from sim.cli._common import (
 )
 from sim.generate import RANDOM_ANNOTATION, generate_dataset
 from sim.sizing import RequestTooLarge
+from sim.world import steps_per_frame, whole_step_rates
 
 
 def _annotation(items: list[str]) -> AnnotationModel | str | None:
@@ -70,8 +71,26 @@ def _twin_arguments(args: argparse.Namespace) -> None:
         print(f"{args.twin}: {grown}", file=sys.stderr)
 
 
+def _check_rate(args: argparse.Namespace) -> None:
+    """``--rate``: frames on the world's control steps (a twin's rate_hz is checked when read)."""
+    if args.rate is None or not args.rate > 0.0:  # not a rate at all: refused as before
+        return
+    try:
+        steps_per_frame(args.rate)
+    except ValueError:
+        raise CliError(
+            f"--rate {args.rate:g}: expected {whole_step_rates()}, found {args.rate:g}"
+        ) from None
+
+
+def _set_keys(items: list[str]) -> set[str]:
+    """The option names given by ``--set`` (checked by `parse_overrides`)."""
+    return {item.partition("=")[0].strip() for item in items}
+
+
 def _run(args: argparse.Namespace) -> int:
     _twin_arguments(args)
+    _check_rate(args)
     twin = getattr(args, "twin_model", None)
     annotation = _annotation(args.annotation)
     if twin is not None and not twin.annotation.identity:
@@ -104,7 +123,10 @@ def _run(args: argparse.Namespace) -> int:
             max_memory=limit,
         )
     except RequestTooLarge as exc:  # sized before any work: named by the flags
-        raise size_error(exc, {"out_dir": "--out", "n_jobs": "--jobs"}) from None
+        flags = {"out_dir": "--out", "n_jobs": "--jobs"}
+        if twin is None and "duration" in _set_keys(args.overrides):
+            flags["duration"] = "--set duration"
+        raise size_error(exc, flags) from None
     made = report.generated_annotated_frames
     speed = made / report.seconds if report.seconds > 0 else 0.0
     print(

@@ -269,6 +269,12 @@ def twin_from_json(data: Any, *, where: str = "twin") -> Twin:
     except (TypeError, ValueError) as exc:
         raise TwinFormatError(f"{where}: field annotation: {exc}") from None
     rate = _number(where, "rate_hz", data["rate_hz"], 0.0, MAX_RATE_HZ)
+    from sim.world import steps_per_frame, whole_step_rates
+
+    try:  # generated frames fall on the world's control steps only
+        steps_per_frame(rate)
+    except ValueError:
+        raise _fail(where, "rate_hz", whole_step_rates(), data["rate_hz"]) from None
     episodes = _integer(where, "episodes", data["episodes"], 1, MAX_EPISODES)
     seed = _integer(where, "seed", data["seed"], 0, MAX_SEED)
     try:  # options each in range may not go together (a party too large for its room)

@@ -325,6 +325,7 @@ def test_recordings_hold_each_episode(tmp_path):
         (SCENARIO, {"duration": -5.0}, r"duration must be a positive number \(seconds\)"),
         (SCENARIO, {"duration": 0.2}, r"holds no frame at 2 Hz"),
         (SCENARIO, {"rate": 0.0}, r"rate must be a positive number \(Hz\)"),
+        (SCENARIO, {"rate": 3.0}, r"rate must be a rate whose period is a whole number of 0.01"),
         (SCENARIO, {"episodes": 0}, r"episodes must be an int >= 1, got 0"),
         (SCENARIO, {"episodes": -2}, r"episodes must be an int >= 1, got -2"),
         (SCENARIO, {"seed": -1}, r"seed must be an int >= 0"),

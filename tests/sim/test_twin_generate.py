@@ -73,6 +73,21 @@ def test_generate_refuses_a_nonsense_twin_in_one_line(twin_file, tmp_path, capsy
     assert not (tmp_path / "d").exists()
 
 
+def test_generate_refuses_a_twin_rate_off_the_control_steps_naming_its_field(
+    twin_file, tmp_path, capsys
+):
+    data = json.loads(twin_file.read_text())
+    data["rate_hz"] = 3
+    bad = tmp_path / "twin.json"
+    bad.write_text(json.dumps(data))
+    line = cli_error(["generate", "--twin", bad, "--out", tmp_path / "d"], capsys)
+    assert line.endswith(
+        f"{bad}: field rate_hz: expected a rate whose period is a whole number of 0.01 s control "
+        "steps (e.g. 1, 2, 4, 5, 10), found 3"
+    )
+    assert not (tmp_path / "d").exists()
+
+
 def test_the_annotations_fixed_scale_multiplies_every_position_and_stays_off_old_cards():
     import numpy as np
 

@@ -39,6 +39,27 @@ def test_generate_refuses_what_would_not_be_what_was_asked(extra, message, tmp_p
     assert not out.exists()
 
 
+def test_generate_refuses_a_rate_off_the_control_steps_before_making_the_folder(tmp_path, capsys):
+    out = tmp_path / "d"
+    line = cli_error([*GENERATE, "--duration", "10", "--rate", "3", "--out", out], capsys)
+    assert line.endswith(
+        "--rate 3: expected a rate whose period is a whole number of 0.01 s control steps "
+        "(e.g. 1, 2, 4, 5, 10), found 3"
+    )
+    assert not out.exists()
+
+
+def test_generate_sizes_a_long_set_duration_before_planning_it(tmp_path, capsys):
+    out = tmp_path / "d"
+    argv = ["generate", "--scenario", "mingle", "--episodes", "1", "--set", "people=4", "-q"]
+    argv += ["--set", "duration=86400", "--jobs", "1", "--max-memory", "1M", "--out", out]
+    line = cli_error(argv, capsys)
+    assert "172,800 frames of 4 agents" in line
+    assert "more than the limit --max-memory 1 MiB" in line
+    assert "(fewer --episodes, a shorter --set duration or a lower --rate)" in line
+    assert not out.exists()
+
+
 def test_generate_refuses_a_folder_holding_a_file_that_is_none_of_its_shards(tmp_path, capsys):
     out = tmp_path / "d"
     argv = [*GENERATE, "--duration", "5", "--out", out]
