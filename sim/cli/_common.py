@@ -56,15 +56,18 @@ def read_text(option: str, path: str, *, expected: str) -> str:
         ) from None
 
 
-def refuse_given_twice(option: str, given: Sequence[tuple[str, Any]]) -> None:
-    """Refuses a dataset given twice (it would count twice): ``given`` holds each value as
-    typed with where its dataset is; the second value of one place is named, with the first."""
+def refuse_given_twice(
+    option: str, given: Sequence[tuple[str, Any]], *, kind: str = "dataset"
+) -> None:
+    """Refuses a dataset (or another ``kind`` of input) given twice, as it would count twice:
+    ``given`` holds each value as typed with where it is; the second value of one place is
+    named, with the first."""
     seen: dict[Any, str] = {}
     for value, location in given:
         if location in seen:
             raise CliError(
-                f"{option} {value}: dataset {location} is given twice (also as {option} "
-                f"{seen[location]}); give each dataset once"
+                f"{option} {value}: {kind} {location} is given twice (also as {option} "
+                f"{seen[location]}); give each {kind} once"
             )
         seen[location] = value
 
