@@ -56,6 +56,22 @@ def read_text(option: str, path: str, *, expected: str) -> str:
         ) from None
 
 
+def refuse_given_twice(
+    option: str, given: Sequence[tuple[str, Any]], *, kind: str = "dataset"
+) -> None:
+    """Refuses a dataset (or another ``kind`` of input) given twice, as it would count twice:
+    ``given`` holds each value as typed with where it is; the second value of one place is
+    named, with the first."""
+    seen: dict[Any, str] = {}
+    for value, location in given:
+        if location in seen:
+            raise CliError(
+                f"{option} {value}: {kind} {location} is given twice (also as {option} "
+                f"{seen[location]}); give each {kind} once"
+            )
+        seen[location] = value
+
+
 def default_datasets() -> str | None:
     """The real datasets' folder when none is given: ``$REFORM_SIM_DATASETS`` when set, else
     ``../shared/datasets`` when that folder exists, else None

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_output, refuse_given_twice
 from sim.progress import progress_bar
 from sim.ticking import ticking
 
@@ -48,13 +48,34 @@ def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
                 f"--twin {path}: expected twins of one place, found a twin of {twin.name!r} "
                 f"beside one of {twins[0].name!r} ({paths[0]})"
             )
+    refuse_given_twice("--twin", [(p, Path(p).resolve()) for p in paths], kind="twin file")
+    seeds: dict[int, str] = {}  # a mean over twins is over different seeds
+    for path, twin in zip(paths, twins, strict=True):
+        if twin.seed in seeds:
+            raise CliError(
+                f"--twin {path}: field seed: expected twins fitted with different seeds, found "
+                f"seed {twin.seed} in {path} and in {seeds[twin.seed]}"
+            )
+        seeds[twin.seed] = path
     return paths, twins
 
 
-def _place(args: argparse.Namespace) -> list[Any] | None:
-    """The place's recording (--data): its frames calibrate the predictions, and
-    `sim.twins.predict` removes their groups before it runs anything on them; None without
-    --data."""
+def _check_recording(where: str, frames: int, paths: list[str], twins: list[Any]) -> None:
+    """Refuses a --data recording other than the one the twins were fitted to: its frame count
+    against what each twin recorded of its recording (``statistics.real.frames``, when there)."""
+    for path, twin in zip(paths, twins, strict=True):
+        fitted = twin.statistics.get("real", {}).get("frames")
+        if fitted is not None and fitted != frames:
+            raise CliError(
+                f"--data {where}: field frames: expected {fitted} frames, the recording --twin "
+                f"{path} was fitted to (its statistics.real.frames), found {frames}"
+            )
+
+
+def _place(args: argparse.Namespace, paths: list[str], twins: list[Any]) -> list[Any] | None:
+    """The place's recording (--data), checked to be the twins' (`_check_recording`): its
+    frames calibrate the predictions, and `sim.twins.predict` removes their groups before it
+    runs anything on them; None without --data."""
     if not args.data:
         return None
     from reform.datasets import load_dataset, resolve
@@ -69,7 +90,9 @@ def _place(args: argparse.Namespace) -> list[Any] | None:
     repaired = repairs_line(dataset, str(args.data[0]))
     if repaired:
         print(repaired, file=sys.stderr)
-    return list(dataset)
+    frames = list(dataset)
+    _check_recording(str(args.data[0]), len(frames), paths, twins)
+    return frames
 
 
 def run_twin(args: argparse.Namespace) -> int:
@@ -91,7 +114,7 @@ def run_twin(args: argparse.Namespace) -> int:
 
     paths, twins = _twins(args)
     check_output("--out", args.out, folder=True)
-    place = _place(args)
+    place = _place(args, paths, twins)
     candidates = catalogue_candidates()
     if args.detector:
         unknown = [d for d in args.detector if d not in detector_names()]

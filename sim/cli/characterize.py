@@ -14,7 +14,7 @@ from reform.calibration import MIN_GROUPS, TIGHTNESS_TOLERANCE_M, characterise_d
 from reform.datasets import detect_format, load_dataset, resolve
 from reform.datasets.store import is_uri
 from sim.cli._characterize import BASENAME
-from sim.cli._common import CliError, read_text
+from sim.cli._common import CliError, read_text, refuse_given_twice
 from sim.cli._grammar import report_outputs, write_outputs
 from sim.experiments.characterisation_report import (
     characterisation_summary,
@@ -72,16 +72,14 @@ def run(args: argparse.Namespace) -> int:
             raise CliError("--notes is appended to the Markdown report: give --out DIR too")
         notes = read_text("--notes", args.notes, expected="UTF-8 Markdown text")
 
-    locations: dict[Any, str] = {}  # each dataset once: twice, it would be measured twice
-    for path in args.data:
-        location = resolve(path)
-        location = location if is_uri(location) else Path(location).resolve()
-        if location in locations:
-            raise CliError(
-                f"--data {path}: dataset {location} is given twice (also as --data "
-                f"{locations[location]}); give each dataset once"
-            )
-        locations[location] = path
+    locations = [resolve(path) for path in args.data]
+    refuse_given_twice(
+        "--data",
+        [
+            (p, at if is_uri(at) else Path(at).resolve())
+            for p, at in zip(args.data, locations, strict=True)
+        ],
+    )
     datasets: list[dict[str, Any]] = []
     for path in args.data:
         if not args.quiet:

@@ -10,7 +10,7 @@ import sys
 import time
 from pathlib import Path
 
-from sim.cli._common import CliError, check_output
+from sim.cli._common import CliError, check_output, refuse_given_twice
 from sim.cli._experiment_io import REPORT_SUFFIXES, check_report, report_stem, write_report
 from sim.cli._experiment_twins import (
     BASENAME,
@@ -28,21 +28,35 @@ def _load(entries: list[str]) -> dict:
     """``--data`` values (or every dataset found), each recording once: name -> dataset."""
     from reform.datasets import DataFormatError, load_dataset, resolve
     from sim.experiments.benchmark import found_datasets, one_recording_each
+    from sim.twins import TwinInputError, check_frames_for_twin
 
     named: dict[str, str] = {}
+    given = []
     for value in entries or found_datasets():
         name, sep, path = value.partition("=")
         if sep and (not name or not path):
             raise CliError(f"--data {value}: expected NAME=PATH, got an empty side")
-        named[(name if sep else Path(value).name or value).lower()] = path if sep else value
+        name = (name if sep else Path(value).name or value).lower()
+        given.append((value, name))
+        named[name] = path if sep else value
+    refuse_given_twice("--data", given)
     kept, left_out = one_recording_each(list(named), named=set(named) if entries else ())
     print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
     out = {}
     for name in kept:
         try:
             out[name] = load_dataset(resolve(named[name]))
+            check_frames_for_twin(list(out[name]), where=f"--data {named[name]}")
         except (FileNotFoundError, DataFormatError) as exc:
             raise CliError(f"--data {named[name]}: {exc}") from None
+        except TwinInputError as exc:
+            raise CliError(str(exc)) from None
+        annotated = len(out[name].annotated())
+        if annotated < 2:  # the first half tunes and the second is scored
+            raise CliError(
+                f"--data {named[name]}: field groups: expected two or more annotated frames to "
+                f"score (a first half and a second), found {annotated}"
+            )
     if len(out) < 2:
         raise CliError(
             f"the experiment compares datasets: expected two or more, found {len(out)} "

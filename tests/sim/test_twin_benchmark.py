@@ -178,3 +178,37 @@ def test_several_twins_refuse_in_one_line(
             "--out", tmp_path / "b"]  # fmt: skip
     assert message in cli_error(argv, capsys)
     assert not (tmp_path / "b").exists()
+
+
+def test_the_same_twin_file_twice_is_refused_in_one_line(twin_file, tmp_path, capsys):
+    argv = ["benchmark", "--twin", twin_file, "--twin", twin_file, "--out", tmp_path / "b"]
+    assert cli_error(argv, capsys) == (
+        f"reform-sim benchmark: error: --twin {twin_file}: twin file {twin_file.resolve()} is "
+        f"given twice (also as --twin {twin_file}); give each twin file once"
+    )
+    assert not (tmp_path / "b").exists()
+
+
+def test_two_twins_of_one_seed_are_refused_naming_both(twin_file, tmp_path, capsys):
+    copy = tmp_path / "copy.json"
+    copy.write_bytes(twin_file.read_bytes())
+    argv = ["benchmark", "--twin", twin_file, "--twin", copy, "--out", tmp_path / "b"]
+    assert cli_error(argv, capsys) == (
+        f"reform-sim benchmark: error: --twin {copy}: field seed: expected twins fitted with "
+        f"different seeds, found seed 0 in {copy} and in {twin_file}"
+    )
+    assert not (tmp_path / "b").exists()
+
+
+def test_a_recording_other_than_the_twins_is_refused_by_its_frame_count(
+    twin_file, tmp_path, capsys
+):
+    frames = tuple(_frames(people=9, n_frames=23))
+    other = write_parquet(Dataset(frames, name="other"), tmp_path / "o.parquet")
+    assert read_twin(twin_file).statistics["real"]["frames"] == 24  # fitted to _frames(people=9)
+    argv = ["benchmark", "--twin", twin_file, "--data", other, "--out", tmp_path / "b"]
+    assert cli_error(argv, capsys) == (
+        f"reform-sim benchmark: error: --data {other}: field frames: expected 24 frames, the "
+        f"recording --twin {twin_file} was fitted to (its statistics.real.frames), found 23"
+    )
+    assert not (tmp_path / "b").exists()

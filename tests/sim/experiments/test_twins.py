@@ -157,3 +157,34 @@ def test_repeats_out_of_range_are_refused_in_one_line(extra, message, tmp_path, 
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"reform-sim experiment: error: {message}"]
     assert not (tmp_path / "out").exists()
+
+
+def test_a_dataset_too_small_for_a_twin_is_refused_before_any_twin_is_fitted(tmp_path, capsys):
+    from reform.datasets import write_parquet
+    from tests.cli_errors import cli_error
+
+    good, nine = tmp_path / "good.parquet", tmp_path / "nine.parquet"
+    write_parquet(Dataset(tuple(_frames(n_frames=30)), name="good"), good)
+    write_parquet(Dataset(tuple(_frames(n_frames=9)), name="nine"), nine)
+    out = tmp_path / "out"
+    argv = ["experiment", "twins", "--out", out, "--data", good, "--data", nine,
+            "--repeats", 1, "--twins-per-place", 1]  # fmt: skip
+    line = cli_error(argv, capsys)
+    assert line == (
+        f"reform-sim experiment: error: --data {nine}: field frames: expected at least 10 "
+        "frames to fit a twin, found 9"
+    )
+    assert not out.exists()
+
+
+def test_a_dataset_given_twice_is_refused_naming_it(tmp_path, capsys):
+    from tests.cli_errors import cli_error
+
+    out = tmp_path / "out"
+    line = cli_error(["experiment", "twins", "--out", out, "--data", "salsa", "--data", "salsa"],
+                     capsys)  # fmt: skip
+    assert line == (
+        "reform-sim experiment: error: --data salsa: dataset salsa is given twice (also as "
+        "--data salsa); give each dataset once"
+    )
+    assert not out.exists()
