@@ -60,22 +60,10 @@ def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
     return paths, twins
 
 
-def _check_recording(where: str, frames: int, paths: list[str], twins: list[Any]) -> None:
-    """Refuses a --data recording other than the one the twins were fitted to: its frame count
-    against what each twin recorded of its recording (``statistics.real.frames``, when there)."""
-    for path, twin in zip(paths, twins, strict=True):
-        fitted = twin.statistics.get("real", {}).get("frames")
-        if fitted is not None and fitted != frames:
-            raise CliError(
-                f"--data {where}: field frames: expected {fitted} frames, the recording --twin "
-                f"{path} was fitted to (its statistics.real.frames), found {frames}"
-            )
-
-
-def _place(args: argparse.Namespace, paths: list[str], twins: list[Any]) -> list[Any] | None:
-    """The place's recording (--data), checked to be the twins' (`_check_recording`): its
-    frames calibrate the predictions, and `sim.twins.predict` removes their groups before it
-    runs anything on them; None without --data."""
+def _place(args: argparse.Namespace) -> list[Any] | None:
+    """The place's recording (--data): the one its twins were fitted to, or another of the
+    place; its frames calibrate the predictions, and `sim.twins.predict` removes their groups
+    before it runs anything on them; None without --data."""
     if not args.data:
         return None
     from reform.datasets import load_dataset, resolve
@@ -90,9 +78,7 @@ def _place(args: argparse.Namespace, paths: list[str], twins: list[Any]) -> list
     repaired = repairs_line(dataset, str(args.data[0]))
     if repaired:
         print(repaired, file=sys.stderr)
-    frames = list(dataset)
-    _check_recording(str(args.data[0]), len(frames), paths, twins)
-    return frames
+    return list(dataset)
 
 
 def run_twin(args: argparse.Namespace) -> int:
@@ -114,7 +100,7 @@ def run_twin(args: argparse.Namespace) -> int:
 
     paths, twins = _twins(args)
     check_output("--out", args.out, folder=True)
-    place = _place(args, paths, twins)
+    place = _place(args)
     candidates = catalogue_candidates()
     if args.detector:
         unknown = [d for d in args.detector if d not in detector_names()]

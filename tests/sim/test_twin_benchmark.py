@@ -199,16 +199,3 @@ def test_two_twins_of_one_seed_are_refused_naming_both(twin_file, tmp_path, caps
     )
     assert not (tmp_path / "b").exists()
 
-
-def test_a_recording_other_than_the_twins_is_refused_by_its_frame_count(
-    twin_file, tmp_path, capsys
-):
-    frames = tuple(_frames(people=9, n_frames=23))
-    other = write_parquet(Dataset(frames, name="other"), tmp_path / "o.parquet")
-    assert read_twin(twin_file).statistics["real"]["frames"] == 24  # fitted to _frames(people=9)
-    argv = ["benchmark", "--twin", twin_file, "--data", other, "--out", tmp_path / "b"]
-    assert cli_error(argv, capsys) == (
-        f"reform-sim benchmark: error: --data {other}: field frames: expected 24 frames, the "
-        f"recording --twin {twin_file} was fitted to (its statistics.real.frames), found 23"
-    )
-    assert not (tmp_path / "b").exists()
