@@ -955,8 +955,10 @@ def test_policy_evaluate_command(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert main(["policy", "evaluate", "--env", "CartPole-v1", "--episodes", "1"]) == 2
     assert "got an environment of another task" in capsys.readouterr().err
     argv = ["policy", "evaluate", "--env", "ReformSim/Mingle-v0", "--episodes", "1", "--seed", "-5"]
-    assert main(argv) == 2
-    assert "--seed must be >= 0, got -5" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stopped:  # refused as the command line is read
+        main(argv)
+    assert stopped.value.code == 2
+    assert "argument --seed: expected a whole number from 0 to" in capsys.readouterr().err
 
 
 def test_detectors_truth_gcff_and_a_reform_model_file(tmp_path: Path) -> None:

@@ -165,7 +165,8 @@ def test_scenarios_lists_names_and_typed_options(capsys):
 )
 def test_simulate_bad_input_fails_before_any_work(tmp_path, capsys, extra, match):
     out = tmp_path / "never.parquet"
-    argv = ["simulate", "--scenario", "word-improv", "--seed", "1", "--out", str(out), *extra]
+    scenario = [] if "--scenario" in extra else ["--scenario", "word-improv"]  # one of each
+    argv = ["simulate", *scenario, "--seed", "1", "--out", str(out), *extra]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("reform-sim simulate: error: ")
