@@ -73,11 +73,12 @@ def _given_once(parser: argparse.ArgumentParser, argv: Sequence[str]) -> None:
         action = options.get(name)
         if not isinstance(action, argparse._StoreAction):
             continue
-        given = f"{name} {value if equals else (argv[k + 1] if k + 1 < len(argv) else '')}"
+        given = f"{name} {value}" if equals else " ".join(argv[k : k + 2])
         if action.dest in seen:
-            raise CliError(f"{name} is given twice ({seen[action.dest]}, then {given.strip()}); "
-                           "give it once")  # fmt: skip
-        seen[action.dest] = given.strip()
+            raise CliError(
+                f"{name} is given twice ({seen[action.dest]}, then {given}); give it once"
+            )
+        seen[action.dest] = given
 
 
 def _resumes(args: argparse.Namespace) -> bool:

@@ -81,10 +81,9 @@ def run(args: argparse.Namespace) -> int:
         ],
     )
     datasets: list[dict[str, Any]] = []
-    for path in args.data:
+    for path, location in zip(args.data, locations, strict=True):
         if not args.quiet:
             print(f"characterising {path}", file=sys.stderr)
-        location = resolve(path)
         format = args.format or detect_format(location)
         dataset = load_dataset(location, format=format, units=args.units)
         measured = characterise_dataset(dataset)
