@@ -68,6 +68,8 @@ MAX_FRAME_BYTES = 8 * 2**30  # bytes: the most predicting (or fitting on) one fr
 # Memory per pair, measured with tracemalloc at the peak of predict and training_pairs on frames
 # of 64 to 2,000 people (a frame of n people has n(n-1)/2 pairs):
 PAIR_BYTES = 40  # bytes per pair predicted: indices, features, labels, temporaries
+SMALL_FRAME_PAIR_BYTES = 256  # bytes per pair of a frame of LARGE_FRAME_PEOPLE or fewer: the
+# Relation Matrix, the pair features and the reconstruction's working copies
 TRAINING_PAIR_BYTES = 88  # bytes per pair of training_pairs: features, labels, indices
 CALIBRATIONS = ("sigmoid", "isotonic")  # sklearn.calibration.CalibratedClassifierCV methods
 CALIBRATION_FOLDS = 5  # stretches of time per sequence (reform.time_blocks), one fold each
@@ -209,6 +211,17 @@ class Reform(BaseEstimator):
         check_is_fitted(self, "classifier_")
         self._pair_classifier(now=True)
         return self
+
+    max_frame_bytes = MAX_FRAME_BYTES  # the most it takes on one frame (larger are refused)
+
+    def frame_bytes(self, n_people: int) -> int:
+        """Bytes it takes at its peak to predict one frame of ``n_people``: up to
+        `LARGE_FRAME_PEOPLE`, `SMALL_FRAME_PAIR_BYTES` a pair (the whole Relation Matrix and
+        its reconstruction); beyond, what its guard counts (:func:`frame_bytes`: every pair
+        classified at once; a crowd's sparse pair graph takes less)."""
+        if n_people <= LARGE_FRAME_PEOPLE:
+            return n_people * (n_people - 1) // 2 * SMALL_FRAME_PAIR_BYTES
+        return frame_bytes(n_people)
 
     def predict(self, frames: Iterable[Frame]) -> list[Partition]:
         """Each frame's F-formations as a full partition of its people.

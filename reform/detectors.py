@@ -21,6 +21,12 @@ name is looked up (a package installed meanwhile is seen); nothing of theirs is 
 their detector is made. A factory is called with the options and must return an object with a
 callable ``predict``; an object that already has one is used as it is.
 
+**Memory.** A detector may say what one frame costs it: ``frame_bytes(n_people)``, the bytes it
+takes at its peak to predict a frame of that many people (those whose memory grows with the
+pairs of people say).
+:func:`check_frame_memory` refuses, before any frame is predicted, frames that would take more
+than a limit, naming the largest frame, what it needs and how many people fit.
+
 **Checked runs.** :func:`run_detector` calls ``predict`` and :func:`check_predictions` checks
 what came back; whatever goes wrong inside a detector becomes one :class:`DetectorError` line
 naming the detector and, where it can, the frame.
@@ -57,8 +63,11 @@ __all__ = [
     "IMPORT_TIMEOUT_S",
     "PREDICT_TIMEOUT_S",
     "PREDICT_TIMEOUT_S_PER_PAIR",
+    "FrameTooLarge",
     "Option",
+    "check_frame_memory",
     "check_predictions",
+    "frame_memory",
     "builtin_names",
     "detector_info",
     "detector_names",
@@ -687,6 +696,86 @@ def make_detector(
             "no callable predict(frames)"
         )
     return detector
+
+
+class FrameTooLarge(DetectorError):
+    """A frame that would take a detector more memory than the run may have (one line)."""
+
+
+def frame_memory(detector: Any, n_people: int) -> int | None:
+    """Bytes ``detector`` takes at its peak to predict one frame of ``n_people``, as its
+    ``frame_bytes(n_people)`` says; None for a detector that does not say (or says nonsense)."""
+    method = getattr(detector, "frame_bytes", None)
+    if not callable(method):
+        return None
+    try:
+        needed = method(int(n_people))
+    except _RAISED:  # someone's code: a detector that cannot say is one that does not
+        return None
+    if isinstance(needed, bool) or not isinstance(needed, numbers.Real) or not needed >= 0:
+        return None
+    return math.ceil(needed) if math.isfinite(needed) else None
+
+
+def _size_text(size: float) -> str:
+    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if size >= scale:
+            return f"{size / scale:,.1f} {unit}"
+    return f"{size:,.0f} bytes"
+
+
+def check_frame_memory(
+    name: str,
+    detector: Any,
+    frames: Sequence[Frame],
+    *,
+    limit: int,
+    limit_text: str,
+    source: str = "",
+    hint: str = "",
+) -> None:
+    """Refuses, before any frame is predicted, frames too large for the memory a run may take.
+
+    The largest frame (the most people; the first of them) is sized with :func:`frame_memory`;
+    a detector that does not say what a frame costs is not checked. A detector whose
+    ``max_frame_bytes`` is below ``limit`` is held to that (it refuses larger frames itself).
+
+    Args:
+        name: the detector's name, for the message.
+        detector: the detector that would predict the frames.
+        frames: the frames.
+        limit: bytes one frame may take.
+        limit_text: what sets the limit, as the message names it (``"--max-memory 8 GiB"``).
+        source: where the frames come from (a file, a dataset), for the message.
+        hint: what to do instead, appended to the message.
+
+    Raises:
+        FrameTooLarge: naming the frame, its people, the memory it needs, the limit and the
+            most people a frame may hold within it.
+    """
+    sizes = [len(getattr(frame, "ids", ())) for frame in frames]
+    if not sizes:
+        return
+    largest = max(sizes)
+    cap = getattr(detector, "max_frame_bytes", None)
+    if isinstance(cap, numbers.Real) and not isinstance(cap, bool) and 0 < cap < limit:
+        limit, hint = int(cap), "a frame that large is refused whatever the memory given"
+        limit_text = f"the {_size_text(cap)} {name} takes on one frame at most"
+    needed = frame_memory(detector, largest)
+    if needed is None or needed <= limit:
+        return
+    low, high = 0, largest  # the most people that fit: frame_memory(low) fits, (high) does not
+    while high - low > 1:
+        middle = (low + high) // 2
+        fits = (frame_memory(detector, middle) or 0) <= limit
+        low, high = (middle, high) if fits else (low, middle)
+    index = sizes.index(largest)
+    of = f" of {source}" if source else ""
+    raise FrameTooLarge(
+        f"{name}: {_frame_text(index, frames[index])}{of} holds {largest:,} people, which would "
+        f"take about {_size_text(needed)} to predict, more than {limit_text}: at most "
+        f"{low:,} people a frame fit" + (f"; {hint}" if hint else "")
+    )
 
 
 def _frame_text(index: int, frame: Any) -> str:

@@ -57,6 +57,7 @@ __all__ = [
     "FIELD_OF_VIEW_RAD",
     "RD_MAX_STEPS",
     "RD_TOL",
+    "CELL_BYTES",
     "SIGMA_M",
     "SUPPORT",
     "DominantSets",
@@ -72,6 +73,7 @@ FIELD_OF_VIEW_RAD = 3.84  # radians (about 220°): the whole field of view
 RD_TOL = 1e-9  # largest change of any share over 32 steps at which the dynamics have settled
 RD_MAX_STEPS = 20_000  # steps of the replicator dynamics at most (the GTCG code: 3,000)
 SUPPORT = 1e-5  # a share above SUPPORT * the largest share is in the set (the GTCG code's theta)
+CELL_BYTES = 80  # bytes per (person, person) cell: the affinity and the replicator's working copies
 _BLOCK = 32  # steps between convergence checks (a speed setting; results do not depend on it)
 _PRUNE = 1e-14  # shares below _PRUNE * the largest are dropped for good while iterating
 _DOMINANCE_TOL = 1e-9  # relative slack on (A x)_i >= x'Ax, against rounding
@@ -251,6 +253,11 @@ class DominantSets(Estimator):
         if not isinstance(self.global_context, (bool, np.bool_)):
             raise ValueError(f"global_context must be True or False, got {self.global_context!r}")
         return sigma, view
+
+    def frame_bytes(self, n_people: int) -> int:
+        """Bytes it takes at its peak on one frame of ``n_people``: dense (n, n) affinities
+        and the dynamics' copies of them, `CELL_BYTES` a cell."""
+        return n_people * n_people * CELL_BYTES
 
     def fit(self, frames: Sequence[Frame]) -> DominantSets:
         """Checks the parameters and ``frames``; returns ``self`` (nothing to learn)."""

@@ -79,7 +79,9 @@ from reform.frame import POSITION_LIMIT_M, Frame, Group, check_frames
 
 __all__ = [
     "CM_PER_M",
+    "BASE_FRAME_BYTES",
     "CELL_BYTES",
+    "frame_bytes",
     "MAX_FRAME_BYTES",
     "MAX_REFITS",
     "MAX_VISIBILITY_EXPONENT",
@@ -90,6 +92,7 @@ __all__ = [
     "STRIDE_GRID_M",
     "STRIDE_LIMIT_M",
     "STRIDE_M",
+    "PEAK_DENSITY",
     "TRIPLE_BYTES",
     "UNITS",
     "VISIBILITY_BASE",
@@ -124,6 +127,8 @@ MAX_FRAME_BYTES = 8 * 2**30  # bytes: the most GCFF may take on one frame; a fra
 # take more is refused, naming it, before the arrays are allocated
 # Memory at the peak of one round, measured with tracemalloc on frames of 200 to 1,000 people:
 CELL_BYTES = 32  # bytes per (person, candidate group) cell: the unary costs and the moves
+PEAK_DENSITY = 5.0  # people per square metre: the most a crowd packs (a crush), for frame_bytes
+BASE_FRAME_BYTES = 2**20  # bytes: what a frame costs GCFF whatever its people
 TRIPLE_BYTES = 64  # bytes per (group, person, person) triple of the visibility penalty: every
 # ordered pair of people within a group's neighbourhood, O(K·N²) in a dense crowd
 _WINDOW = 32  # alpha-moves evaluated together (a speed setting; results do not depend on it)
@@ -179,6 +184,17 @@ def _check_memory(n: int, n_groups: int, triples: int = 0) -> None:
             f"GCFF's costs for {what} would take about {needed / 2**30:,.1f} GiB, more than "
             f"reform.gcff.MAX_FRAME_BYTES = {MAX_FRAME_BYTES / 2**30:g} GiB"
         )
+
+
+def frame_bytes(n_people: int, *, mdl: float = MDL_M2) -> int:
+    """Bytes GCFF takes at its peak on one frame of ``n_people`` with ``mdl`` (square metres),
+    as its own guard counts them (`MAX_FRAME_BYTES`): everyone a candidate group, and the
+    visibility triples of people packed at `PEAK_DENSITY` (the triples of a frame denser than
+    that are counted when it is solved, and refused there if too many), and `BASE_FRAME_BYTES`."""
+    near = min(n_people, math.ceil(PEAK_DENSITY * math.pi * float(mdl)) + 1)
+    return (
+        n_people * n_people * CELL_BYTES + n_people * near * near * TRIPLE_BYTES + BASE_FRAME_BYTES
+    )
 
 
 def _renumber(labels: np.ndarray) -> np.ndarray:
@@ -1130,6 +1146,13 @@ class Gcff(Estimator):
         if self.orientation not in ORIENTATIONS:
             raise ValueError(f"orientation must be one of {ORIENTATIONS}, got {self.orientation!r}")
 
+    max_frame_bytes = MAX_FRAME_BYTES  # the most it takes on one frame (larger are refused)
+
+    def frame_bytes(self, n_people: int) -> int:
+        """Bytes it takes at its peak on one frame of ``n_people`` (:func:`frame_bytes`, at the
+        largest mdl it may use)."""
+        return frame_bytes(n_people, mdl=max(self.mdl_grid) if self.tune else self.mdl)
+
     def fit(self, frames: Sequence[Frame]) -> Gcff:
         """Validates the parameters; with ``tune=True``, picks stride and mdl on ``frames``."""
         self._validate()
@@ -1214,6 +1237,15 @@ class GcffBySequence(Estimator):
                 )
             settings[sequence] = (float(entry["stride_m"]), float(entry["mdl_m2"]))
         return cls(settings=settings, **kwargs)
+
+    max_frame_bytes = MAX_FRAME_BYTES  # the most it takes on one frame (larger are refused)
+
+    def frame_bytes(self, n_people: int) -> int:
+        """Bytes it takes at its peak on one frame of ``n_people`` (:func:`frame_bytes`, at the
+        largest mdl of its sequences)."""
+        return frame_bytes(
+            n_people, mdl=max((m for _, m in dict(self.settings).values()), default=MDL_M2)
+        )
 
     def fit(self, frames: Sequence[Frame]) -> GcffBySequence:
         """Nothing to learn: validates the settings."""

@@ -60,7 +60,9 @@ from reform.gcff import labels_to_partition
 __all__ = [
     "APERTURE_DEG",
     "BETA_SHAPE",
+    "BATCH_BYTES",
     "BIN_M",
+    "CELL_BYTES",
     "LENGTH_M",
     "SAMPLES",
     "SIGMA",
@@ -80,6 +82,9 @@ BETA_SHAPE = (0.8, 1.1)  # the distance distribution of the CVIU frustum model
 RANDOM_STATE = 0  # the default seed of the frustum samples
 ZERO_DISJOINT = False  # the authors' code keeps exp(-1 / sigma) between disjoint frustums
 _PAIRS_PER_BATCH = 64  # pairs binned together (a memory setting; results do not depend on it)
+CELL_BYTES = 96  # bytes per (person, person) cell of a frame: divergences, affinities, the
+# window's sum and the dominant sets' copies (`reform.dominant_sets.CELL_BYTES`)
+BATCH_BYTES = 32 * 2**20  # bytes: one batch of pairs binned, whatever the crowd
 
 
 def frustum_samples(
@@ -304,6 +309,12 @@ class Gtcg(Estimator):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
         return values
+
+    def frame_bytes(self, n_people: int) -> int:
+        """Bytes it takes at its peak on one frame of ``n_people``: `CELL_BYTES` a (person,
+        person) cell and one batch of pairs binned (`BATCH_BYTES`). ``predict`` also keeps each
+        frame's (n, n) affinities while it runs, for the multi-frame window."""
+        return n_people * n_people * CELL_BYTES + BATCH_BYTES
 
     def fit(self, frames: Sequence[Frame]) -> Gtcg:
         """Checks the parameters and ``frames``; returns ``self`` (nothing to learn)."""

@@ -38,6 +38,7 @@ __all__ = ["Hysteresis", "SlidingMajority", "make_hysteresis", "make_smoothed"]
 
 MAX_WINDOW_S = 3600.0  # seconds: the longest window either filter accepts
 TIME_SLACK_S = 1e-6  # seconds: times this close to a window's edge count as on it
+PAIR_BYTES = 256  # bytes per pair of a frame a filter holds: its key, vote or state in Python
 
 
 def _check_window(window: Any, *, who: str) -> float:
@@ -84,6 +85,13 @@ class _Filter(Estimator):
     """What both filters share: the wrapped detector learns when the filter is fitted."""
 
     detector: Any
+
+    def frame_bytes(self, n_people: int) -> int | None:
+        """Bytes it takes at its peak on one frame of ``n_people``: the wrapped detector's
+        (None when that does not say) and `PAIR_BYTES` a pair."""
+        method = getattr(self.detector, "frame_bytes", None)
+        inner = method(n_people) if callable(method) else None
+        return None if inner is None else inner + n_people * (n_people - 1) // 2 * PAIR_BYTES
 
     def fit(self, frames: Sequence[Frame]) -> _Filter:
         """Fits the wrapped detector on ``frames`` when it learns; returns ``self``."""

@@ -6,6 +6,7 @@ import argparse
 
 from sim.cli._common import (
     add_backend_arguments,
+    add_max_memory_argument,
     add_unit_arguments,
     run_with,
 )
@@ -117,6 +118,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="also score each detector's group events in time (docs/guide/temporal.md)",
     )
     add_detector_timeout(parser)
+    add_max_memory_argument(
+        parser,
+        holds="a dataset frame whose people would take a detector more (divided among the "
+        "workers) is refused before any cell runs, naming how many people fit",
+    )
     add_recordings(parser, default=True, each="dataset")
     add_backend_arguments(
         parser,

@@ -344,6 +344,18 @@ def max_memory(args: argparse.Namespace) -> int | None:
         raise CliError(f"--max-memory: {exc}") from None
 
 
+def frame_memory_limit(args: argparse.Namespace) -> tuple[int, str]:
+    """The bytes one frame may take a detector (``--max-memory``, else the memory this machine
+    has available now) and how a message names that limit."""
+    from sim.sizing import available_memory, format_size
+
+    limit = max_memory(args)
+    if limit is not None:
+        return limit, f"--max-memory {format_size(limit)}"
+    limit = available_memory()
+    return limit, f"the {format_size(limit)} of memory this machine has available"
+
+
 def size_error(exc: RequestTooLarge, flags: dict[str, str] | None = None) -> CliError:
     """A `sim.sizing.RequestTooLarge` as the command's one line, its parameters spelled as
     flags: ``max_memory`` as ``--max-memory``, the others as ``flags`` says

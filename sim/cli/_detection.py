@@ -9,31 +9,53 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
-from sim.cli._common import add_data_arguments
+from sim.cli._common import add_data_arguments, add_max_memory_argument, frame_memory_limit
 from sim.cli._detectors import DetectorSpec, add_detector_arguments
 from sim.cli._grammar import add_quiet, show_progress, ticking_bar
 
 
 def add_detection_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--detector`` and every detector's options, the dataset (``--data`` ...), ``--quiet``."""
+    """``--detector`` and every detector's options, the dataset (``--data`` ...),
+    ``--max-memory``, ``--quiet``."""
     add_detector_arguments(parser)
     add_data_arguments(parser)
+    add_max_memory_argument(
+        parser,
+        holds="a frame whose people would take the detector more is refused before any frame "
+        "is predicted, naming how many people fit",
+    )
     add_quiet(parser, old=())
 
 
 def detect_frames(
-    args: argparse.Namespace, spec: DetectorSpec, frames: Sequence[Any]
+    args: argparse.Namespace,
+    spec: DetectorSpec,
+    frames: Sequence[Any],
+    memory: tuple[int, str] | None = None,
 ) -> tuple[Any, list[Any]]:
     """The detector ``spec`` builds from the flags, and its partition of every frame, checked
     (`reform.detectors.run_detector`: a detector that raises or returns something that is not
-    a partition of each frame's people is one line naming it and the frame)."""
-    from reform.detectors import run_detector
+    a partition of each frame's people is one line naming it and the frame). Frames too large
+    for ``memory`` (bytes and how to name them; by default `frame_memory_limit`'s) are refused
+    first (`reform.detectors.check_frame_memory`)."""
+    from reform.detectors import check_frame_memory, run_detector
+
+    limit, limit_text = frame_memory_limit(args) if memory is None else memory
 
     started = time.perf_counter()
     # The bar moves while the detector is made (a model file read: seconds of imports) and
     # predicts every frame in one call.
     with ticking_bar(args, f"running {args.detector}", len(frames)):
         detector = spec.build(args)
+        check_frame_memory(
+            args.detector,
+            detector,
+            frames,
+            limit=limit,
+            limit_text=limit_text,
+            source=getattr(args, "data", None) or "",
+            hint="give a larger --max-memory, or fewer people a frame",
+        )
         partitions = run_detector(
             args.detector,
             detector,

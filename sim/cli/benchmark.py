@@ -17,6 +17,7 @@ from sim.cli._common import (
     CliError,
     check_backend,
     check_output,
+    frame_memory_limit,
     job_count,
 )
 from sim.cli._detectors import make_plugin
@@ -51,6 +52,7 @@ def _run(args: argparse.Namespace) -> int:
         return run_twin(args)
     check_backend(args)
     check_output("--out", args.out, folder=True)
+    frame_memory_limit(args)  # a malformed --max-memory is refused before any reading
     names = args.data
     given = [
         flag
@@ -105,9 +107,18 @@ def _run(args: argparse.Namespace) -> int:
             detectors += [model_spec(path) for path in args.model]
     detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
+    jobs = _jobs(args, cells=len(datasets) * len(detectors))
+    limit, limit_text = frame_memory_limit(args)
+    if jobs > 1 and args.backend == "local":  # each worker may hold a frame at once
+        limit, limit_text = limit // jobs, f"{limit_text} shared by {jobs} workers"
     try:
         with ticking_bar(args, "reading datasets", len(datasets), unit="dataset"):
-            run = read_for_run(datasets, detectors)  # one with nothing to score is refused
+            run = read_for_run(  # one with nothing to score, or a frame too large, is refused
+                datasets,
+                detectors,
+                memory=(limit, limit_text),
+                hint="give a larger --max-memory, fewer --jobs, or leave that detector out",
+            )
     except ValueError as exc:
         if args.data:
             raise
@@ -130,7 +141,7 @@ def _run(args: argparse.Namespace) -> int:
         benchmark = run_benchmark(
             datasets,
             detectors,
-            jobs=_jobs(args, cells=len(datasets) * len(detectors)),
+            jobs=jobs,
             backend=args.backend,
             address=args.address,
             progress=progress,

@@ -16,6 +16,7 @@ from sim.cli._common import (
     check_frames,
     check_output,
     check_recording,
+    frame_memory_limit,
     load_data,
     select_frames,
 )
@@ -65,6 +66,7 @@ def _dumps(result: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     spec = check_detector(args)
+    memory = frame_memory_limit(args)  # a malformed --max-memory is refused before any reading
     check_frames(args)
     check_output("--out", args.out)
     check_recording(args)
@@ -77,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     frames = [dataset.frames[i] for i in indices]
     if not frames:
         raise CliError(f"{args.data}: no frames to run the detector on")
-    detector, predictions = detect_frames(args, spec, frames)
+    detector, predictions = detect_frames(args, spec, frames, memory)
     result = detections_json(
         frames,
         predictions,

@@ -10,6 +10,7 @@ from reform.metrics import evaluate
 from sim.cli._common import (
     check_frames,
     check_recording,
+    frame_memory_limit,
     load_data,
     select_frames,
     temporal_tolerance,
@@ -24,13 +25,14 @@ from sim.recording import pandas_withheld
 
 def run(args: argparse.Namespace) -> int:
     spec = check_detector(args)
+    memory = frame_memory_limit(args)  # a malformed --max-memory is refused before any reading
     check_frames(args)
     outputs = report_outputs(args, BASENAME)
     check_recording(args)
     dataset = load_data(args)
     frames = select_frames(args, dataset.frames, doing="evaluate on")
     tolerance = temporal_tolerance(args, frames)
-    detector, predictions = detect_frames(args, spec, frames)
+    detector, predictions = detect_frames(args, spec, frames, memory)
     evaluation = evaluate(frames, predictions)
     result = evaluation.to_json(
         detector=args.detector,

@@ -49,6 +49,7 @@ from reform.datasets import (
 )
 from reform.detectors import (
     DetectorError,
+    check_frame_memory,
     detector_info,
     detector_names,
     make_detector,
@@ -216,17 +217,9 @@ class DetectorSpec:
             return self.registered.needs == "training"
         return detector_info(self.spec).needs == "training"
 
-    def build(self, dataset: Dataset, training: Sequence[Frame] = ()) -> tuple[Any, str | None]:
-        """``(detector, None)``, or ``(None, reason)`` when it does not apply to ``dataset``:
-        made with its declared defaults, specialised to ``dataset`` when it runs on a dataset's
-        own settings, fitted on ``training`` when it :attr:`learns`."""
-        if self.spec.startswith(REFORM_PREFIX):
-            from reform.persistence import load_model  # here: a run without models needs no skops
-
-            return load_model(self.spec[len(REFORM_PREFIX) :]), None
-        if self.spec.startswith(DANTE_PREFIX):
-            return make_detector("dante", model=self.spec[len(DANTE_PREFIX) :]), None
-
+    def _made(self) -> Any:
+        """The detector as `reform.detectors.make_detector` makes it (neither specialised to a
+        dataset nor fitted), found as :attr:`search` and :attr:`registered` say."""
         if self.search is not None and self.search not in sys.path:
             sys.path.append(self.search)  # a worker started before the run knows nothing of it
         if self.registered is not None and self.spec not in detector_names():
@@ -239,7 +232,36 @@ class DetectorSpec:
                 citation=info.citation,
                 needs=info.needs,
             )
-        detector = make_detector(self.spec, deadline_s=self.deadline_s)
+        return make_detector(self.spec, deadline_s=self.deadline_s)
+
+    def sizer(self) -> Any:
+        """A detector of this kind that says what a frame costs it
+        (`reform.detectors.frame_memory`) without reading a model file: REFORM's cost does not
+        depend on its model; None for a DANTE model (not known) and for a detector that cannot
+        be made (its cell says why)."""
+        if self.spec.startswith(REFORM_PREFIX):
+            from reform.detector import Reform
+
+            return Reform()
+        if self.spec.startswith(DANTE_PREFIX):
+            return None
+        try:
+            return self._made()
+        except DetectorError:  # one that cannot be made says so where its cell builds it
+            return None
+
+    def build(self, dataset: Dataset, training: Sequence[Frame] = ()) -> tuple[Any, str | None]:
+        """``(detector, None)``, or ``(None, reason)`` when it does not apply to ``dataset``:
+        made with its declared defaults, specialised to ``dataset`` when it runs on a dataset's
+        own settings, fitted on ``training`` when it :attr:`learns`."""
+        if self.spec.startswith(REFORM_PREFIX):
+            from reform.persistence import load_model  # here: a run without models needs no skops
+
+            return load_model(self.spec[len(REFORM_PREFIX) :]), None
+        if self.spec.startswith(DANTE_PREFIX):
+            return make_detector("dante", model=self.spec[len(DANTE_PREFIX) :]), None
+
+        detector = self._made()
         if ":" in self.spec:
             return detector, None
         try:
@@ -574,31 +596,57 @@ def _load_once(dataset_spec: DatasetSpec, run: str | None) -> Dataset:
 
 
 def read_for_run(
-    datasets: Sequence[DatasetSpec], detectors: Sequence[DetectorSpec], run: str | None = None
+    datasets: Sequence[DatasetSpec],
+    detectors: Sequence[DetectorSpec],
+    run: str | None = None,
+    *,
+    memory: tuple[int, str] | None = None,
+    hint: str = "",
 ) -> str:
     """Reads each of ``datasets`` into this process for run ``run`` (a new run when None), as
     the run's recordings and its cells here read it (once), and refuses one that a cell would
     have nothing to score on (no annotated frame in the part of it that a detector of
-    ``detectors`` is scored on): before any cell runs. Returns the run's id, for
-    `run_benchmark`.
+    ``detectors`` is scored on), or, with ``memory``, a frame a detector would take more memory
+    on: before any cell runs. Returns the run's id, for `run_benchmark`.
+
+    Args:
+        memory: the bytes one frame may take a detector and how a message names them
+            (``(2**30, "--max-memory 1 GiB")``), or None to size nothing.
+        hint: what to do about a frame too large, appended to the message.
 
     Raises:
         ValueError: ``"<path>: the dataset has no annotated frames to score"`` (or its time
             split's test part has none).
+        reform.detectors.FrameTooLarge: a frame too large for ``memory``
+            (`reform.detectors.check_frame_memory`).
         DataFormatError: a dataset file is malformed.
     """
     run = run or f"{os.getpid()}-{time.time_ns()}"
+    sizers = {} if memory is None else {d: d.sizer() for d in detectors}
     for dataset_spec in datasets:
         dataset = _load_once(dataset_spec, run)
         for part in dict.fromkeys(scored_part(dataset_spec, d) for d in detectors):
             if not part.frames(dataset):
                 raise ValueError(_nothing_to_score(part))
+        for detector_spec, sizer in sizers.items():
+            limit, limit_text = memory
+            check_frame_memory(
+                detector_spec.label,
+                sizer,
+                scored_part(dataset_spec, detector_spec).frames(dataset),
+                limit=limit,
+                limit_text=limit_text,
+                source=dataset_spec.label,
+                hint=hint,
+            )
     return run
 
 
 def _nothing_to_score(dataset_spec: DatasetSpec) -> str:
-    part = "the test part of the dataset's time split" if dataset_spec.split == "test" else (
-        "the dataset"
+    part = (
+        "the test part of the dataset's time split"
+        if dataset_spec.split == "test"
+        else ("the dataset")
     )
     return f"{dataset_spec.path}: {part} has no annotated frames to score"
 
