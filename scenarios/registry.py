@@ -24,6 +24,7 @@ import dataclasses
 import functools
 import gc
 import inspect
+import json
 import math
 import re
 import typing
@@ -51,6 +52,7 @@ __all__ = [
     "parse_options",
     "register",
     "shared_help",
+    "without_robot",
 ]
 
 _TYPES = (bool, int, float, str)
@@ -469,6 +471,20 @@ def describe(name: str) -> ScenarioInfo:
     if info is None:
         raise ValueError(f"unknown scenario {name!r}; known scenarios: {', '.join(names())}")
     return info
+
+
+def without_robot(name: str) -> str:
+    """Why a scene of scenario ``name`` has no Directions Robot, and what puts one in it:
+    ``"scenario concourse has no place for the robot"``, or ``"scenario mingle has none with
+    these options (robot=true puts it there)"``."""
+    robot = describe(name).robot
+    if robot is None:
+        return f"scenario {name} has no place for the robot"
+    given = ", ".join(
+        f"{key}={value if isinstance(value, str) else json.dumps(value)}"
+        for key, value in robot.items()
+    )
+    return f"scenario {name} has none with these options ({given} puts it there)"
 
 
 def options(name: str) -> tuple[Option, ...]:

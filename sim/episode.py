@@ -448,8 +448,7 @@ def _setup(
     if view == "robot":
         if plan.scenario.stage.robot is None:
             raise ValueError(
-                f'view="robot" needs a robot, and this {plan.scenario.name} has none '
-                "(see its robot option)"
+                f'view="robot" needs a robot, and {scenarios.without_robot(plan.scenario.name)}'
             )
         sensor = Sensor() if sensor is None else sensor
     _guard(plan, _estimate(plan, view=view, streamed=streamed, recording=False))

@@ -1868,8 +1868,7 @@ def _check_scenario(spec: GenerationSpec) -> tuple[dict[str, Any], Any]:
         )
     if spec.view == "robot" and made.stage.robot is None:
         raise ValueError(
-            f"view='robot' needs a robot, and scenario {spec.scenario} has none with these "
-            "options (see its robot option)"
+            f"view='robot' needs a robot, and {scenarios.without_robot(spec.scenario)}"
         )
     return _json_value("scenario options", dict(made.options)), made
 

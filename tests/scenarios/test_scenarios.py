@@ -505,7 +505,11 @@ def test_impossible_options_fail_before_anything_is_drawn(name, overrides, match
         ({"duration": 0.2}, r"duration 0.2 s holds no frame at 2 Hz: it must be >= 0.5 s"),
         ({"rate": 0.0}, r"rate must be a positive number of frames per second, got 0.0"),
         ({"view": "drone"}, r"view must be one of \('truth', 'robot'\), got 'drone'"),
-        ({"view": "robot"}, r'view="robot" needs a robot, and this mingle has none'),
+        (
+            {"view": "robot"},
+            r'view="robot" needs a robot, and scenario mingle has none with these options '
+            r"\(robot=true puts it there\)$",
+        ),
         ({"seed": None}, r"seed is required to make scenario 'mingle'"),
         ({"seed": -3}, r"seed must be an int >= 0, got -3"),
     ],

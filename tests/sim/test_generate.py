@@ -332,7 +332,17 @@ def test_recordings_hold_each_episode(tmp_path):
         (SCENARIO, {"view": "truth", "sensor": {"dropout": 0.2}}, r"view='robot' only"),
         (SCENARIO, {"sensor": {"dropout": 2.0}}, r"dropout must be in \[0, 1\], got 2.0"),
         (SCENARIO, {"sensor": {"zoom": 2.0}}, r"sensor options must be among"),
-        ("word-improv", {"options": {"robot": "none"}}, r"view='robot' needs a robot"),
+        (
+            "word-improv",
+            {"options": {"robot": "none"}},
+            r"view='robot' needs a robot, and scenario word-improv has none with these options "
+            r"\(robot=watch puts it there\)$",
+        ),
+        (
+            "concourse",
+            {"options": {"people": 50}},
+            r"view='robot' needs a robot, and scenario concourse has no place for the robot$",
+        ),
         (SCENARIO, {"backend": "dask"}, r"backend must be one of \('local', 'ray'\)"),
         (SCENARIO, {"address": "auto"}, r"address is for backend='ray'"),
         (SCENARIO, {"n_jobs": 0}, r"n_jobs must be an int >= 1"),

@@ -160,7 +160,11 @@ def test_scenarios_lists_names_and_typed_options(capsys):
         (["--set", "players=many"], r"option players must be an integer, got 'many'"),
         (["--duration", "-5"], r"duration must be a positive number of seconds, got -5.0"),
         (["--dropout", "0.1"], r"sensor options need --view robot, got --dropout"),
-        (["--view", "robot"], r'view="robot" needs a robot'),
+        (
+            ["--view", "robot"],
+            r'view="robot" needs a robot, and scenario word-improv has none with these options '
+            r"\(robot=watch puts it there\)",
+        ),
     ],
 )
 def test_simulate_bad_input_fails_before_any_work(tmp_path, capsys, extra, match):
