@@ -27,10 +27,12 @@ FIGURE = ".png"
 def _load(entries: list[str]) -> dict:
     """``--data`` values (or every dataset found), each recording once: name -> dataset."""
     from reform.datasets import DataFormatError, load_dataset, resolve
+    from reform.datasets.store import is_uri
     from sim.experiments.benchmark import found_datasets, one_recording_each
     from sim.twins import TwinInputError, check_frames_for_twin
 
     named: dict[str, str] = {}
+    typed: dict[str, str] = {}  # as given on the command line
     given = []
     for value in entries or found_datasets():
         name, sep, path = value.partition("=")
@@ -39,13 +41,27 @@ def _load(entries: list[str]) -> dict:
         name = (name if sep else Path(value).name or value).lower()
         given.append((value, name))
         named[name] = path if sep else value
+        typed[name] = value
     refuse_given_twice("--data", given)
     kept, left_out = one_recording_each(list(named), named=set(named) if entries else ())
     print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
+    where = {}
+    for name in kept:
+        try:
+            where[name] = resolve(named[name])
+        except FileNotFoundError as exc:
+            raise CliError(f"--data {named[name]}: {exc}") from None
+    refuse_given_twice(  # two names for one recording: it would count twice
+        "--data",
+        [
+            (typed[name], at if is_uri(at) else Path(at).resolve())
+            for name, at in where.items()
+        ],
+    )
     out = {}
     for name in kept:
         try:
-            out[name] = load_dataset(resolve(named[name]))
+            out[name] = load_dataset(where[name])
             check_frames_for_twin(list(out[name]), where=f"--data {named[name]}")
         except (FileNotFoundError, DataFormatError) as exc:
             raise CliError(f"--data {named[name]}: {exc}") from None

@@ -188,3 +188,20 @@ def test_a_dataset_given_twice_is_refused_naming_it(tmp_path, capsys):
         "--data salsa); give each dataset once"
     )
     assert not out.exists()
+
+
+def test_one_recording_under_two_names_is_refused_naming_both(tmp_path, shared_datasets, capsys):
+    from tests.cli_errors import cli_error
+
+    out = tmp_path / "out"
+    salsa = shared_datasets / "salsa"
+    line = cli_error(
+        ["experiment", "twins", "--out", out, "--data", f"party={salsa}",
+         "--data", f"again={salsa}/"],
+        capsys,
+    )  # fmt: skip
+    assert line == (
+        f"reform-sim experiment: error: --data again={salsa}/: dataset {salsa.resolve()} is "
+        f"given twice (also as --data party={salsa}); give each dataset once"
+    )
+    assert not out.exists()
