@@ -717,13 +717,6 @@ def frame_memory(detector: Any, n_people: int) -> int | None:
     return math.ceil(needed) if math.isfinite(needed) else None
 
 
-def _size_text(size: float) -> str:
-    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
-        if size >= scale:
-            return f"{size / scale:,.1f} {unit}"
-    return f"{size:,.0f} bytes"
-
-
 def check_frame_memory(
     name: str,
     detector: Any,
@@ -753,14 +746,16 @@ def check_frame_memory(
         FrameTooLarge: naming the frame, its people, the memory it needs, the limit and the
             most people a frame may hold within it.
     """
+    from reform.machine import format_size
+
     sizes = [len(getattr(frame, "ids", ())) for frame in frames]
     if not sizes:
         return
     largest = max(sizes)
     cap = getattr(detector, "max_frame_bytes", None)
     if isinstance(cap, numbers.Real) and not isinstance(cap, bool) and 0 < cap < limit:
-        limit, hint = int(cap), "a frame that large is refused whatever the memory given"
-        limit_text = f"the {_size_text(cap)} {name} takes on one frame at most"
+        limit, hint = int(cap), ""
+        limit_text = f"the {format_size(cap)} {name} allows one frame, whatever the memory given"
     needed = frame_memory(detector, largest)
     if needed is None or needed <= limit:
         return
@@ -773,7 +768,7 @@ def check_frame_memory(
     of = f" of {source}" if source else ""
     raise FrameTooLarge(
         f"{name}: {_frame_text(index, frames[index])}{of} holds {largest:,} people, which would "
-        f"take about {_size_text(needed)} to predict, more than {limit_text}: at most "
+        f"take about {format_size(needed)} to predict, more than {limit_text}: at most "
         f"{low:,} people a frame fit" + (f"; {hint}" if hint else "")
     )
 

@@ -7,7 +7,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["available_memory", "total_memory"]
+__all__ = ["UNITS", "available_memory", "format_size", "total_memory"]
+
+UNITS = ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB")  # binary units of sizes, in order
 
 _MEMINFO = Path("/proc/meminfo")
 
@@ -49,3 +51,15 @@ def total_memory() -> int:
     if "MemTotal" in info:
         return info["MemTotal"] + info.get("SwapTotal", 0)
     return _sysconf("SC_PHYS_PAGES")
+
+
+def format_size(size: float) -> str:
+    """``3.6 GiB``: a size in bytes, in the largest binary unit below it."""
+    size = float(size)
+    for unit in UNITS:
+        if abs(size) < 1024.0 or unit == UNITS[-1]:
+            break
+        size /= 1024.0
+    if unit == "B" or 999.5 <= abs(size) < 1024.0:  # 1010 KiB, not 1.01e+03 KiB
+        return f"{size:.0f} {unit}"
+    return f"{size:.3g} {unit}"

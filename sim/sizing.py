@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NoReturn
 
-from reform.machine import available_memory, total_memory
+from reform.machine import available_memory, format_size, total_memory
 
 __all__ = [
     "MAX_RUN_SECONDS",
@@ -122,7 +122,6 @@ MAX_RUN_SECONDS = 7 * 24 * 3600.0  # seconds: a run estimated to take longer her
 # a mistake (a generated dataset grows across runs: a larger --episodes extends it)
 VIEWS = ("truth", "robot")
 
-_UNITS = ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB")
 _SIZE = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)\s*([kmgtpe]?)(i?b?)\s*", re.IGNORECASE)
 
 
@@ -147,18 +146,6 @@ def parse_size(text: str) -> int:
     if size < 1:
         raise ValueError(f"expected a size of at least 1 byte, got {text!r}")
     return size
-
-
-def format_size(size: float) -> str:
-    """``3.6 GiB``: a size in bytes, in the largest binary unit below it."""
-    size = float(size)
-    for unit in _UNITS:
-        if abs(size) < 1024.0 or unit == _UNITS[-1]:
-            break
-        size /= 1024.0
-    if unit == "B" or 999.5 <= abs(size) < 1024.0:  # 1010 KiB, not 1.01e+03 KiB
-        return f"{size:.0f} {unit}"
-    return f"{size:.3g} {unit}"
 
 
 def format_duration(seconds: float) -> str:

@@ -100,10 +100,11 @@ def test_a_frame_too_large_is_refused_with_the_people_that_fit():
     fits = limit and int(np.sqrt(limit / frame_memory(detector, 1)))
     assert frame_memory(detector, fits) <= limit < frame_memory(detector, fits + 1)
     assert fits == 100
+    assert frame_memory(detector, 150) == 150 * 150 * 80  # 1.72 MiB
     assert str(refused.value) == (
         "dominant-sets: frame 1 (t=1 s) of lab.parquet holds 150 people, which would take about "
-        f"{frame_memory(detector, 150) / MIB:.1f} MiB to predict, more than the limit given: at "
-        "most 100 people a frame fit; ask for less"
+        "1.72 MiB to predict, more than the limit given: at most 100 people a frame fit; ask for "
+        "less"
     )
     # the largest frame fits: nothing to say
     check_frame_memory("d", detector, frames, limit=frame_memory(detector, 150), limit_text="x")
@@ -113,7 +114,9 @@ def test_a_detector_that_caps_its_frames_is_held_to_its_cap():
     detector = make_detector("gcff")
     frames = [crowd(50, seed=1, per_person_m2=4.0)]
     with pytest.raises(
-        FrameTooLarge, match="more than the 39.1 KiB gcff takes on one frame at most"
+        FrameTooLarge,
+        match=r"more than the 39.1 KiB gcff allows one frame, whatever the memory given: at most "
+        r"\d+ people a frame fit$",
     ):
         detector.max_frame_bytes = 40_000  # an instance's own, below the limit given
         check_frame_memory(
@@ -153,7 +156,7 @@ def test_evaluate_and_detect_refuse_a_frame_too_large_before_predicting(oversize
     )
     assert line == (
         f"reform-sim {command}: error: oversized: frame 1 (t=1 s) of {oversized} holds 60 "
-        "people, which would take about 1,048,576.0 GiB to predict, more than --max-memory "
+        "people, which would take about 1 PiB to predict, more than --max-memory "
         "64 GiB: at most 49 people a frame fit; give a larger --max-memory, or fewer people a "
         "frame"
     )
