@@ -12,8 +12,12 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
+# The motion kernel (numba) is compiled into its cache as the last step of the install, once,
+# rather than by the first simulation (about 13 s), and by each process that starts before the
+# cache is written (the test suite's workers, a generate run's).
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -c "from sim.episode import simulate_episode; simulate_episode('mingle', seed=0, duration=1.0)"
 	touch $@
 
 # dante: DANTE's tests run on PyTorch, the version the extra pins, installed first and alone: pip
