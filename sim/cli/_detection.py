@@ -9,7 +9,7 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
-from sim.cli._common import add_data_arguments, add_max_memory_argument, frame_memory_limit
+from sim.cli._common import add_data_arguments, add_max_memory_argument
 from sim.cli._detectors import DetectorSpec, add_detector_arguments
 from sim.cli._grammar import add_quiet, show_progress, ticking_bar
 
@@ -31,16 +31,17 @@ def detect_frames(
     args: argparse.Namespace,
     spec: DetectorSpec,
     frames: Sequence[Any],
-    memory: tuple[int, str] | None = None,
+    memory: tuple[int, str],
 ) -> tuple[Any, list[Any]]:
     """The detector ``spec`` builds from the flags, and its partition of every frame, checked
     (`reform.detectors.run_detector`: a detector that raises or returns something that is not
     a partition of each frame's people is one line naming it and the frame). Frames too large
-    for ``memory`` (bytes and how to name them; by default `frame_memory_limit`'s) are refused
-    first (`reform.detectors.check_frame_memory`)."""
+    for ``memory`` (the bytes one frame may take and how to name them,
+    `sim.cli._common.frame_memory_limit`) are refused first
+    (`reform.detectors.check_frame_memory`)."""
     from reform.detectors import check_frame_memory, run_detector
 
-    limit, limit_text = frame_memory_limit(args) if memory is None else memory
+    limit, limit_text = memory
 
     started = time.perf_counter()
     # The bar moves while the detector is made (a model file read: seconds of imports) and

@@ -52,7 +52,7 @@ def _run(args: argparse.Namespace) -> int:
         return run_twin(args)
     check_backend(args)
     check_output("--out", args.out, folder=True)
-    frame_memory_limit(args)  # a malformed --max-memory is refused before any reading
+    limit, limit_text = frame_memory_limit(args)  # a malformed size refused before any reading
     names = args.data
     given = [
         flag
@@ -108,7 +108,6 @@ def _run(args: argparse.Namespace) -> int:
     detectors = [dataclasses.replace(d, deadline_s=args.detector_timeout) for d in detectors]
     _check_detectors(detectors)
     jobs = _jobs(args, cells=len(datasets) * len(detectors))
-    limit, limit_text = frame_memory_limit(args)
     if jobs > 1 and args.backend == "local":  # each worker may hold a frame at once
         limit, limit_text = limit // jobs, f"{limit_text} shared by {jobs} workers"
     try:
