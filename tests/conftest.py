@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import leftover_processes
@@ -80,6 +82,27 @@ def gcff_reference_dir(shared_datasets: Path) -> Path:
             pytest.fail(message)
         pytest.skip(message)
     return path
+
+
+@pytest.fixture(scope="session")
+def made_once(tmp_path_factory, worker_id) -> Callable[[str, Callable[[Path], object]], Path]:
+    """``made_once(name, write)``: the file ``name`` that ``write(path)`` writes, written once
+    for the whole run and read by every pytest-xdist worker (the first to ask writes it while the
+    others wait for it; `pytest-xdist`'s way for a costly session fixture). For what costs a
+    worker tens of seconds to make again (a twin's fit), not for what a test changes."""
+    root = tmp_path_factory.getbasetemp()
+    if worker_id != "master":  # every worker's base folder is beside the others'
+        root = root.parent
+
+    def made(name: str, write: Callable[[Path], object]) -> Path:
+        path = root / name
+        with open(root / f"{name}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not path.is_file():
+                write(path)
+        return path
+
+    return made
 
 
 @pytest.fixture(scope="session", autouse=True)

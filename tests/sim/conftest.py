@@ -31,11 +31,17 @@ def no_work(monkeypatch):
 
 
 @pytest.fixture(scope="session")
-def place_twin():
+def place_twin(made_once):
     """The label-free twin of ``tests.sim.test_twin._frames(scale=1.5)`` (six people in two
-    clusters), named ``"place"``, seed 0: fitted once for every test that reads it (a fit runs
-    its pilot parties: about 12 s). A `sim.twins.Twin` is frozen; tests change copies of it."""
-    from sim.twins import fit_twin
+    clusters), named ``"place"``, seed 0: fitted once for every test that reads it, in every
+    worker (a fit runs its pilot parties: about 12 s), read from its file. A `sim.twins.Twin` is
+    frozen; tests change copies of it."""
+    from sim.twins import fit_twin, read_twin, write_twin
     from tests.sim.test_twin import _frames
 
-    return fit_twin(_frames(scale=1.5), name="place")
+    return read_twin(
+        made_once(
+            "place-twin.json",
+            lambda path: write_twin(fit_twin(_frames(scale=1.5), name="place"), path),
+        )
+    )

@@ -17,9 +17,20 @@ from tests.cli_errors import cli_error, run_cli
 from tests.sim.test_twin import _frames
 
 
+def _fitted(made_once, seed: int):
+    """The twin of ``_frames(people=9)`` with ``seed``, fitted once for every worker."""
+    return read_twin(
+        made_once(
+            f"nine-people-twin-{seed}.json",
+            lambda path: write_twin(fit_twin(_frames(people=9), name="place", seed=seed), path),
+        )
+    )
+
+
 @pytest.fixture(scope="module")
-def twin_file(tmp_path_factory):
-    twin = dataclasses.replace(fit_twin(_frames(people=9), name="place"), episodes=3)
+def twin_file(tmp_path_factory, made_once):
+    # in a folder of this module's own: benchmark --twin generates its data beside it
+    twin = dataclasses.replace(_fitted(made_once, 0), episodes=3)
     return write_twin(twin, tmp_path_factory.mktemp("twin") / "twin.json")
 
 
@@ -129,9 +140,9 @@ def test_a_variant_added_beside_the_catalogue_moves_no_other_prediction(twin_fil
 
 
 @pytest.fixture(scope="module")
-def second_twin(tmp_path_factory, twin_file):
+def second_twin(tmp_path_factory, twin_file, made_once):
     """A twin of the same place fitted with another seed, and one of another place."""
-    again = dataclasses.replace(fit_twin(_frames(people=9), name="place", seed=1), episodes=3)
+    again = dataclasses.replace(_fitted(made_once, 1), episodes=3)
     other = dataclasses.replace(read_twin(twin_file), name="elsewhere")
     return (
         write_twin(again, tmp_path_factory.mktemp("again") / "twin.json"),

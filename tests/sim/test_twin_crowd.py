@@ -16,14 +16,18 @@ CROWD_PEOPLE = 150  # more than a mingle party holds
 
 
 @pytest.fixture(scope="module")
-def crowd():
-    """A concourse of 150 recorded at 1 Hz for 60 s (with its groups), and its label-free twin."""
+def crowd(made_once):
+    """A concourse of 150 recorded at 1 Hz for 60 s (with its groups), and its label-free twin
+    (fitted once for every worker)."""
     frames = list(
         simulate_episode(
             CROWD, seed=5, rate=1.0, options={"people": CROWD_PEOPLE, "duration": 60.0}
         ).dataset
     )
-    return frames, fit_twin(frames, name="hall", n_jobs=2)
+    fitted = made_once(
+        "hall-twin.json", lambda path: write_twin(fit_twin(frames, name="hall", n_jobs=2), path)
+    )
+    return frames, read_twin(fitted)
 
 
 def _walkers(*, rate: float, speed: float, jitter: float = 0.0, n_frames: int = 40) -> list:
