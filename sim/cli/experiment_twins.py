@@ -32,7 +32,6 @@ def _load(entries: list[str]) -> dict:
     from sim.twins import TwinInputError, check_frames_for_twin
 
     named: dict[str, str] = {}
-    typed: dict[str, str] = {}  # as given on the command line
     given = []
     for value in entries or found_datasets():
         name, sep, path = value.partition("=")
@@ -41,8 +40,8 @@ def _load(entries: list[str]) -> dict:
         name = (name if sep else Path(value).name or value).lower()
         given.append((value, name))
         named[name] = path if sep else value
-        typed[name] = value
     refuse_given_twice("--data", given)
+    typed = {name: value for value, name in given}  # as given on the command line
     kept, left_out = one_recording_each(list(named), named=set(named) if entries else ())
     print(*left_out, sep="\n", file=sys.stderr, end="\n" if left_out else "")
     where = {}

@@ -622,6 +622,7 @@ def read_for_run(
         DataFormatError: a dataset file is malformed.
     """
     run = run or f"{os.getpid()}-{time.time_ns()}"
+    limit, limit_text = memory or (0, "")
     sizers = {} if memory is None else {d: d.sizer() for d in detectors}
     for dataset_spec in datasets:
         dataset = _load_once(dataset_spec, run)
@@ -629,7 +630,6 @@ def read_for_run(
             if not part.frames(dataset):
                 raise ValueError(_nothing_to_score(part))
         for detector_spec, sizer in sizers.items():
-            limit, limit_text = memory
             check_frame_memory(
                 detector_spec.label,
                 sizer,

@@ -97,9 +97,7 @@ def test_a_frame_too_large_is_refused_with_the_people_that_fit():
             source="lab.parquet",
             hint="ask for less",
         )
-    fits = limit and int(np.sqrt(limit / frame_memory(detector, 1)))
-    assert frame_memory(detector, fits) <= limit < frame_memory(detector, fits + 1)
-    assert fits == 100
+    assert frame_memory(detector, 100) <= limit < frame_memory(detector, 101)  # 100 fit
     assert frame_memory(detector, 150) == 150 * 150 * 80  # 1.72 MiB
     assert str(refused.value) == (
         "dominant-sets: frame 1 (t=1 s) of lab.parquet holds 150 people, which would take about "
