@@ -131,6 +131,7 @@ __all__ = [
     "CARD_MARKDOWN",
     "DATA_DIR",
     "VIEWS",
+    "FolderRefused",
     "GenerationReport",
     "GenerationSpec",
     "ShardSummary",
@@ -215,8 +216,9 @@ def folder_layout(out_dir: str | os.PathLike[str]) -> str:
     old = next(folder.glob("scenario=*"), None)
     if old is not None:
         if (folder / DATA_DIR).exists():
-            raise ValueError(
-                f"out_dir {folder} holds shards in two layouts ({old.name}/ and {DATA_DIR}/): "
+            raise FolderRefused(
+                folder,
+                f"holds shards in two layouts ({old.name}/ and {DATA_DIR}/): "
                 f"expected one; move {old.name}/ and its kin under {DATA_DIR}/ or use another "
                 "folder"
             )
@@ -228,6 +230,29 @@ def folder_layout(out_dir: str | os.PathLike[str]) -> str:
     if card is not None and str(card.get("layout", "")).startswith("scenario="):
         return ""
     return DATA_DIR
+
+
+class FolderRefused(ValueError):
+    """A dataset folder refused before any work: another dataset, foreign files, shards in
+    two layouts, another run writing it.
+
+    ``str`` names the folder as the library's parameter (``out_dir /data/x holds ...``);
+    :meth:`message` names it as the caller does, a command's flag (``--out /data/x holds
+    ...``).
+
+    Attributes:
+        folder: the folder (a path or a store's URI), as given.
+    """
+
+    def __init__(self, folder: str | os.PathLike[str], detail: str) -> None:
+        self.folder = str(folder)
+        self._detail = detail
+        super().__init__(self.message())
+
+    def message(self, name: str = "out_dir") -> str:
+        """The message, the folder named ``name`` (``"--out"``)."""
+        gap = "" if self._detail.startswith(":") else " "
+        return f"{name} {self.folder}{gap}{self._detail}"
 
 
 @dataclass(frozen=True)
@@ -900,7 +925,7 @@ def _is_ours(name: str) -> bool:
 def _check_folder(out_dir: Path, parameters: Mapping[str, Any], episodes: int) -> None:
     """Refuses a folder that holds anything but a dataset with these parameters."""
     if out_dir.exists() and not out_dir.is_dir():
-        raise ValueError(f"out_dir must be a folder, got a file: {out_dir}")
+        raise FolderRefused(out_dir, "is a file: expected a folder")
     if not out_dir.exists():
         return
     _check_contents(
@@ -927,8 +952,9 @@ def _check_shard_files(out_dir: Path, parameters: Mapping[str, Any], episodes: i
     for path in sorted(root.rglob("*.parquet")):
         relative = path.relative_to(out_dir)
         if path not in ours and not any(part.startswith(".") for part in relative.parts):
-            raise ValueError(
-                f"out_dir {out_dir} holds {relative}, which is none of the shards of this "
+            raise FolderRefused(
+                out_dir,
+                f"holds {relative}, which is none of the shards of this "
                 f"dataset ({episodes} episodes of {scenario}, as "
                 f"{_relative_shard(str(scenario), 0)} ...): remove it or use another folder"
             )
@@ -951,16 +977,18 @@ def _check_contents(
         foreign = sorted(n for n in names if not n.startswith("."))
         if foreign:
             shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
-            raise ValueError(
-                f"out_dir {out} holds {things} but no dataset card ({CARD_JSON}): expected "
+            raise FolderRefused(
+                out,
+                f"holds {things} but no dataset card ({CARD_JSON}): expected "
                 f"{instead}, found {shown}"
             )
         return
     _check_card(out, card, parameters, episodes)
     extra = sorted(n for n in names if not _is_ours(n) and n not in also_ours)
     if extra:
-        raise ValueError(
-            f"out_dir {out} holds {things} that are not part of a generated dataset: "
+        raise FolderRefused(
+            out,
+            f"holds {things} that are not part of a generated dataset: "
             f"{', '.join(extra[:5])}"
         )
 
@@ -980,15 +1008,17 @@ def _check_card(
             f"asked for {json.dumps(parameters.get(k))}"
             for k in differing
         )
-        raise ValueError(
-            f"out_dir {out} holds another dataset (its {CARD_JSON} differs in "
+        raise FolderRefused(
+            out,
+            f"holds another dataset (its {CARD_JSON} differs in "
             f"{', '.join(differing)}): {details}. Use another folder, or the same parameters "
             "to resume it"
         )
     held = int(card.get("episodes", 0))
     if episodes < held:
-        raise ValueError(
-            f"episodes: out_dir {out} holds a dataset of {held} episodes, asked for "
+        raise FolderRefused(
+            out,
+            f"holds a dataset of {held} episodes, asked for "
             f"{episodes}; ask for at least {held} (more extends it) or use another folder"
         )
 
@@ -1056,8 +1086,9 @@ def _store_lock(store: Store) -> Iterator[None]:
         holder = _lock_holder(store) or {}
         pid = holder.get("pid")
         if not (_holder_state(holder) == "stale" and tag and store.replace(LOCK_FILE, mine, tag)):
-            raise ValueError(
-                f"out_dir {store.uri} is being written by another reform-sim generate run "
+            raise FolderRefused(
+                store.uri,
+                f"is being written by another reform-sim generate run "
                 f"(host {holder.get('host', '?')}, process {pid or '?'}, since "
                 f"{holder.get('started', '?')}); wait for it to finish or use another prefix; "
                 f"if that run is gone, delete {store.url(LOCK_FILE)}"
@@ -1218,8 +1249,9 @@ def _folder_lock(out_dir: Path) -> Iterator[None]:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             handle.close()
-            raise ValueError(
-                f"out_dir {out_dir} is being written by another reform-sim generate run; wait "
+            raise FolderRefused(
+                out_dir,
+                "is being written by another reform-sim generate run; wait "
                 "for it to finish or use another folder"
             ) from None
         with contextlib.suppress(FileNotFoundError):
@@ -1457,8 +1489,9 @@ def _existing_shards(
     if problems:
         shown = "; ".join(str(p) for p in problems[:SHOWN_PROBLEMS])
         more = len(problems) - SHOWN_PROBLEMS
-        raise ValueError(
-            f"out_dir {folder.out}: {len(problems)} of the {len(problems) + len(shards)} shards "
+        raise FolderRefused(
+            folder.out,
+            f": {len(problems)} of the {len(problems) + len(shards)} shards "
             f"already there {'is' if len(problems) == 1 else 'are'} not the episode "
             f"{'its place says' if len(problems) == 1 else 'their places say'}: {shown}"
             + (f"; and {more} more" if more > 0 else "")

@@ -290,6 +290,12 @@ def check_output(
         )
 
 
+def twin_data_name(args: argparse.Namespace) -> str:
+    """How a message names the twin's generated dataset: ``--twin-data`` when given, else the
+    folder beside the twin file that stands for it."""
+    return "--twin-data" if args.twin_data else "the twin's data folder"
+
+
 def check_recording(args: argparse.Namespace) -> None:
     """Checks the Rerun recording flags (``--save PATH.rrd``, ``--url`` with ``--connect``) up
     front, as :func:`check_output` does the other outputs."""

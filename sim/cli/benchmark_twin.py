@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.cli._common import CliError, check_output, refuse_given_twice
+from sim.cli._common import CliError, check_output, refuse_given_twice, twin_data_name
 from sim.progress import progress_bar
 from sim.ticking import ticking
 
@@ -88,6 +88,7 @@ def run_twin(args: argparse.Namespace) -> int:
     from reform.detectors import detector_names
     from reform.persistence import load_model
     from sim.experiments.report_files import write_json, write_markdown
+    from sim.generate import FolderRefused
     from sim.twins import twin_data
     from sim.twins.data import DATA_FOLDER
     from sim.twins.predict import (
@@ -120,7 +121,10 @@ def run_twin(args: argparse.Namespace) -> int:
     runs = []
     for path, twin in zip(paths, twins, strict=True):
         folder = Path(args.twin_data) if args.twin_data else Path(path).parent / DATA_FOLDER
-        frames = list(twin_data(twin, folder, n_jobs=args.jobs or 1, progress=not args.quiet))
+        try:
+            frames = list(twin_data(twin, folder, n_jobs=args.jobs or 1, progress=not args.quiet))
+        except FolderRefused as exc:  # named as the command names it
+            raise CliError(exc.message(twin_data_name(args))) from None
         desc = "benchmark --twin" if len(paths) == 1 else f"benchmark --twin {path}"
         bar = progress_bar(
             total=len(candidates), desc=desc, unit="detector", file=sys.stderr, disable=args.quiet

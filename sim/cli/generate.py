@@ -18,7 +18,7 @@ from sim.cli._common import (
     sensor_options,
     size_error,
 )
-from sim.generate import RANDOM_ANNOTATION, generate_dataset
+from sim.generate import RANDOM_ANNOTATION, FolderRefused, generate_dataset
 from sim.sizing import RequestTooLarge
 from sim.world import steps_per_frame, whole_step_rates
 
@@ -122,6 +122,8 @@ def _run(args: argparse.Namespace) -> int:
             progress=not args.quiet,
             max_memory=limit,
         )
+    except FolderRefused as exc:  # named as the command names it
+        raise CliError(exc.message("--out")) from None
     except RequestTooLarge as exc:  # sized before any work: named by the flags
         flags = {"out_dir": "--out", "n_jobs": "--jobs"}
         if twin is None and "duration" in _set_keys(args.overrides):

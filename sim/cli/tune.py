@@ -8,11 +8,12 @@ import argparse
 import shlex
 from pathlib import Path
 
-from sim.cli._common import check_output, job_count
+from sim.cli._common import CliError, check_output, job_count, twin_data_name
 from sim.cli._grammar import ticking_bar
 
 
 def _run(args: argparse.Namespace) -> int:
+    from sim.generate import FolderRefused
     from sim.twins import read_twin, twin_data
     from sim.twins.data import DATA_FOLDER
     from sim.twins.tune import REFORM, check_tunable, tune_detector, write_tuned
@@ -23,7 +24,10 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path(args.twin).parent / f"tuned-{name}{suffix}"
     check_output("--out", out, suffix=suffix)
     folder = Path(args.twin_data) if args.twin_data else Path(args.twin).parent / DATA_FOLDER
-    frames = list(twin_data(twin, folder, n_jobs=args.jobs, progress=not args.quiet))
+    try:
+        frames = list(twin_data(twin, folder, n_jobs=args.jobs, progress=not args.quiet))
+    except FolderRefused as exc:  # named as the command names it
+        raise CliError(exc.message(twin_data_name(args))) from None
     # Every setting scored on the twin's frames, on --jobs processes (gcff's 49: seconds).
     with ticking_bar(args, f"tuning {name} on the twin", len(frames)):
         tuned = tune_detector(name, frames, n_jobs=job_count(args))

@@ -372,7 +372,7 @@ def test_a_folder_holding_another_dataset_is_refused_before_any_work(reference, 
         generate(foreign)
     assert sorted(p.name for p in foreign.iterdir()) == ["notes.txt"]
     (tmp_path / "file").write_text("")
-    with pytest.raises(ValueError, match=r"out_dir must be a folder"):
+    with pytest.raises(ValueError, match=r"out_dir .*file is a file: expected a folder"):
         generate(tmp_path / "file")
     broken = tmp_path / "broken"
     broken.mkdir()

@@ -261,7 +261,7 @@ def test_a_bad_store_is_refused_in_one_line_before_any_work(server, capsys, monk
     uri = f"s3://{BUCKET}/other"
     generate(uri, episodes=1, seed=SEED + 1)
     err = _one_line(capsys, [*out, uri])
-    assert f"out_dir {uri} holds another dataset" in err and "seed" in err
+    assert f"--out {uri} holds another dataset" in err and "seed" in err
     open_store(f"s3://{BUCKET}/foreign").write("notes.txt", b"mine")
     err = _one_line(capsys, [*out, f"s3://{BUCKET}/foreign"])
     assert "holds objects but no dataset card" in err and "notes.txt" in err

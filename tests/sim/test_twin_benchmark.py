@@ -210,3 +210,17 @@ def test_two_twins_of_one_seed_are_refused_naming_both(twin_file, tmp_path, caps
     )
     assert not (tmp_path / "b").exists()
 
+
+
+def test_a_twin_data_folder_holding_something_else_is_named_by_its_flag(
+    twin_file, tmp_path, capsys
+):
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    argv = ["benchmark", "--twin", twin_file, "--twin-data", foreign, "--out", tmp_path / "b"]
+    err = cli_error(argv, capsys)
+    assert err.startswith(
+        f"reform-sim benchmark: error: --twin-data {foreign} holds files but no dataset card"
+    )
+    assert [p.name for p in foreign.iterdir()] == ["notes.txt"]

@@ -160,3 +160,18 @@ def test_tune_refuses_an_out_of_another_format_before_any_work(
         f"format written), found {Path(out).suffix}"
     )
     assert not path.exists()
+
+
+def test_a_twin_data_folder_holding_something_else_is_named_by_its_flag(
+    twin_file, tmp_path, capsys
+):
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    out = tmp_path / "tuned.json"
+    argv = ["tune", "--twin", twin_file, "--detector", "gcff", "--twin-data", foreign]
+    err = cli_error([*argv, "--out", out], capsys)
+    assert err.startswith(
+        f"reform-sim tune: error: --twin-data {foreign} holds files but no dataset card"
+    )
+    assert [p.name for p in foreign.iterdir()] == ["notes.txt"] and not out.exists()

@@ -68,7 +68,7 @@ def test_generate_refuses_a_folder_holding_a_file_that_is_none_of_its_shards(tmp
     stray.write_bytes((out / "data/scenario=mingle/episode=0/part.parquet").read_bytes())
     more = [*GENERATE[:4], "2", *GENERATE[5:], "--duration", "5", "--out", out]
     assert cli_error(more, capsys).endswith(
-        f"out_dir {out} holds data/scenario=mingle/extra.parquet, which is none of the shards "
+        f"--out {out} holds data/scenario=mingle/extra.parquet, which is none of the shards "
         "of this dataset (2 episodes of mingle, as scenario=mingle/episode=0/part.parquet ...): "
         "remove it or use another folder"
     )
