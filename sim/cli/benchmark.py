@@ -46,9 +46,10 @@ def _jobs(args: argparse.Namespace, *, cells: int) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    if args.twin is not None:
-        from sim.cli.benchmark_twin import run_twin
+    from sim.cli.benchmark_twin import refuse_unread, run_twin
 
+    refuse_unread(args)
+    if args.twin is not None:
         return run_twin(args)
     check_backend(args)
     check_output("--out", args.out, folder=True)

@@ -26,6 +26,36 @@ UNCALIBRATED = (
 )
 
 
+# What the benchmark of labelled datasets reads and a twin's does not: (flag, attribute, value
+# when not given).
+NOT_READ_WITH_TWIN = (
+    ("--test-split", "test_split", None),
+    ("--frames", "frames", None),
+    ("--train-fraction", "train_fraction", None),
+    ("--temporal", "temporal", False),
+    ("--detector-timeout", "detector_timeout", None),
+    ("--max-memory", "max_memory", None),
+    ("--backend", "backend", "local"),
+    ("--address", "address", None),
+)
+
+
+def refuse_unread(args: argparse.Namespace) -> None:
+    """`CliError` for a flag ``benchmark`` would not read: one of `NOT_READ_WITH_TWIN` with
+    --twin, or --twin-data without it (rather than a run that silently leaves it out)."""
+    if args.twin is None:
+        if args.twin_data is not None:
+            raise CliError("--twin-data is the generated data of a --twin; give --twin TWIN.json")
+        return
+    for flag, name, unset in NOT_READ_WITH_TWIN:
+        if getattr(args, name) != unset:
+            raise CliError(
+                f"{flag}: not read with --twin (it sets how labelled datasets are scored; a "
+                "twin's benchmark predicts each detector's F1 on the twin's own data); leave it "
+                "out, or leave out --twin"
+            )
+
+
 def _twins(args: argparse.Namespace) -> tuple[list[str], list[Any]]:
     """The --twin files and their twins, read and checked: one place, --twin-data with one
     twin only, at most one --data (the place's recording)."""

@@ -65,8 +65,11 @@ def test_benchmark_twin_is_deterministic(twin_file, tmp_path, capsys):
          "--data with --twin: expected the place's one recording, found 2"),  # fmt: skip
         (["--data", "nowhere"], "nowhere: no such file or folder, nor a dataset name"),
         (["--detector", "nobody"], "--detector nobody: expected a catalogued detector"),
+        (["--temporal"], "--temporal: not read with --twin (it sets how labelled datasets"),
+        (["--max-memory", "1G"], "--max-memory: not read with --twin"),
+        (["--frames", "test"], "--frames: not read with --twin"),
     ],
-    ids=["two-recordings", "no-recording", "unknown-detector"],
+    ids=["two-recordings", "no-recording", "unknown-detector", "temporal", "memory", "frames"],
 )
 def test_benchmark_twin_refuses_in_one_line(twin_file, tmp_path, capsys, extra, message):
     line = cli_error(["benchmark", "--twin", twin_file, "--out", tmp_path / "b", *extra], capsys)
@@ -224,3 +227,11 @@ def test_a_twin_data_folder_holding_something_else_is_named_by_its_flag(
         f"reform-sim benchmark: error: --twin-data {foreign} holds files but no dataset card"
     )
     assert [p.name for p in foreign.iterdir()] == ["notes.txt"]
+
+
+def test_twin_data_without_a_twin_is_refused_in_one_line(tmp_path, capsys):
+    argv = ["benchmark", "--twin-data", tmp_path / "d", "--out", tmp_path / "b"]
+    assert cli_error(argv, capsys).endswith(
+        "--twin-data is the generated data of a --twin; give --twin TWIN.json"
+    )
+    assert not (tmp_path / "b").exists()
