@@ -201,6 +201,15 @@ def load_gcff(
     if len(reports) > 1:
         report_out["by_sequence"] = reports
     report_out.update(repairs.report())
+    dropped = repairs.counts.get("people_dropped_nan", 0)
+    if units is None and dropped:
+        report_out["units_caution"] = (
+            f"positions read in centimetres, the unit assumed when none is given, though "
+            f"{dropped} poses are NaN, the mark of a set derived from pose estimation, whose "
+            "positions are image pixels: give units='px' with metres_per_pixel (--units px "
+            "--metres-per-pixel M) if they are pixels, units='cm' (--units cm) to say they "
+            "are centimetres"
+        )
     time_text = "timestamp as stored in features.mat"
     readings = {reading for reading, _ in times.values()}
     if readings != {TimeReading("s", "as stored", False)}:

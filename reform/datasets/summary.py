@@ -16,16 +16,19 @@ def repairs_line(dataset: Dataset, label: str) -> str | None:
     """One line saying what the loader repaired in ``dataset`` (``label``: how the user named
     it), the first repair of the first kind quoted; None when it repaired nothing. A repair is
     what the field's files need read (a NaN pose dropped, ground truth naming someone absent):
-    counted in the loader's report, and said, never silent."""
+    counted in the loader's report, and said, never silent; with the loader's caution about
+    the unit it assumed, when its repairs cast doubt on it (a GCFF folder's NaN poses)."""
     report = dataset.metadata.get("report")
     repairs = report.get("repairs") if isinstance(report, dict) else None
     if not repairs:
         return None
     counts = ", ".join(f"{kind} {count}" for kind, count in repairs.items())
     first = report.get("first_repair", {}).get(next(iter(repairs)), "")
+    caution = report.get("units_caution")
     return (
         f"note: {label}: read with repairs (--strict refuses them): {counts}"
         + (f"; the first: {first}" if first else "")
+        + (f"; {caution}" if caution else "")
     )
 
 

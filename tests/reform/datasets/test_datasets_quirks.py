@@ -14,6 +14,7 @@ import scipy.io
 
 from reform import DataFormatError, Frame
 from reform.datasets import detect_format, load_dante, load_dataset, load_gcff
+from reform.datasets.summary import repairs_line
 from reform.metrics import evaluate
 
 
@@ -150,6 +151,25 @@ def test_a_nan_pose_is_dropped_from_its_frame(tmp_path):
         r"that person is dropped from the frame\), found NaN; refused by --strict",
     ):
         load_gcff(tmp_path / "set", strict=True)
+
+
+def test_nan_poses_in_assumed_centimetres_are_said_to_mark_image_pixels(tmp_path):
+    # NaN poses are the mark of sets derived from pose estimation, whose positions are pixels:
+    # read in the centimetres assumed, the note says so and how to give the unit.
+    folder = _gcff(tmp_path / "set", [[*PEOPLE, [4, np.nan, 0.0, 0.0]]], [[[1, 2]]])
+    assumed = load_gcff(folder)
+    line = repairs_line(assumed, "set")
+    assert line.endswith(
+        "positions read in centimetres, the unit assumed when none is given, though 1 poses are "
+        "NaN, the mark of a set derived from pose estimation, whose positions are image pixels: "
+        "give units='px' with metres_per_pixel (--units px --metres-per-pixel M) if they are "
+        "pixels, units='cm' (--units cm) to say they are centimetres"
+    )
+    stated = load_gcff(folder, units="cm")
+    assert "units_caution" not in stated.metadata["report"]
+    assert "pixels" not in repairs_line(stated, "set")
+    clean = load_gcff(_gcff(tmp_path / "clean", [PEOPLE], [[[1, 2]]]))
+    assert "units_caution" not in clean.metadata["report"]
 
 
 def test_a_nan_id_is_malformed(tmp_path):
