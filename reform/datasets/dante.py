@@ -134,8 +134,9 @@ def load_dante(
     Feature lines without a ground-truth line become frames with ``groups=None``.
 
     Args:
-        path: a folder holding ``features.txt`` and ``group_names.txt``, or the path of the
-            features file itself.
+        path: a folder holding ``features.txt`` and ``group_names.txt`` (or a dataset's folder
+            of DANTE's repository, holding them in ``DS_utils/``), or the path of the features
+            file itself.
         groups_path: the ground-truth file when ``path`` is a features file (default: the
             ``group_names.txt`` beside it).
         strict: refuse the quirks above instead of repairing them.
@@ -167,6 +168,8 @@ def load_dante(
     if groups_path is not None:
         groups_path = path_argument(groups_path, name="groups_path", function=function)
     if path.is_dir():
+        if not (path / FEATURES_FILE).exists() and (path / DANTE_FILES_FOLDER).is_dir():
+            path = path / DANTE_FILES_FOLDER  # a dataset's folder in DANTE's repository layout
         features_path = path / FEATURES_FILE
         groups_file = path / GROUPS_FILE if groups_path is None else groups_path
     else:

@@ -32,7 +32,8 @@ _PARQUET_DEPTH = 4
 
 # What each format's files are, as detection finds them.
 FORMAT_FILES = {
-    "salsa": "a folder with the DANTE text files features.txt and group_names.txt",
+    "salsa": "a folder with the DANTE text files features.txt and group_names.txt (or with "
+    "them in DS_utils/, as DANTE's repository keeps them)",
     "babble": "a folder with Motion-capture-data.csv",
     "gcff": "a folder with features.mat, or a folder of such folders",
     "parquet": f"a .parquet file or a folder of them, at most {_PARQUET_DEPTH} levels down",
@@ -52,9 +53,15 @@ def _holds_parquet(folder: Path) -> bool:
 
 def _folder_formats(folder: Path) -> dict[str, str]:
     """Every format whose files ``folder`` holds: ``format -> the files that show it``."""
+    from reform.datasets.dante import DANTE_FILES_FOLDER
+
     found = {}
-    if (folder / "features.txt").is_file() and (folder / "group_names.txt").is_file():
-        found["salsa"] = "features.txt, group_names.txt"
+    for prefix in ("", f"{DANTE_FILES_FOLDER}/"):  # DANTE's repository: <dataset>/DS_utils/
+        if (folder / f"{prefix}features.txt").is_file() and (
+            folder / f"{prefix}group_names.txt"
+        ).is_file():
+            found["salsa"] = f"{prefix}features.txt, {prefix}group_names.txt"
+            break
     if (folder / "Motion-capture-data.csv").is_file():
         found["babble"] = "Motion-capture-data.csv"
     if (folder / "features.mat").is_file():

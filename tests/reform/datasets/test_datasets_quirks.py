@@ -279,6 +279,11 @@ def test_dantes_own_layout_is_named_after_the_dataset_not_ds_utils(tmp_path):
     assert load_dante(folder / "features.txt").name == "cocktail_party"
     assert load_dataset(folder).name == "cocktail_party"
     assert load_dante(_dante(tmp_path / "utils", *lines)).name == "utils"
+    # The dataset's own folder, as a clone of the repository has it, is found and read too.
+    dataset = tmp_path / "cocktail_party"
+    assert detect_format(dataset) == "salsa"
+    assert load_dataset(dataset).name == "cocktail_party"
+    assert load_dante(dataset).frames == load_dante(folder).frames
 
 
 def _dante_in_cm(folder: Path) -> Path:
