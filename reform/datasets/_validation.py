@@ -35,6 +35,7 @@ UNWRAPPED_ANGLE_LIMIT_RAD = 100.0
 # participant numbers cannot be negative, the public GCFF sets number people from 1, and
 # generated datasets from 0 (the robot). A negative id is refused with this reason.
 ID_RULE = "person ids are never negative"
+ID_MAX = 2**63 - 1  # person ids are int64
 
 # Units of the files' positions per metre (positions are divided by it); "px" has its own scale.
 UNITS_PER_M = {"cm": 100.0, "m": 1.0}
@@ -201,6 +202,24 @@ def parse_float(token: str, *, path: Path, where: str, field: str) -> float:
     if not math.isfinite(value):
         raise DataFormatError(path, where, field, "a finite number", repr(token))
     return value
+
+
+def parse_whole(
+    token: str, *, path: Path, where: str, field: str, what: str, limit: int = ID_MAX
+) -> int:
+    """A whole number >= 0 from a text token of ASCII digits (blanks around it allowed), at most
+    ``limit`` (by default `ID_MAX`: an id fits an int64); ``what`` it is, for the message
+    (``"a participant number"``). Its digits are counted before they are read: Python reads
+    no more than 4,300 of them."""
+    text = token.strip()
+    if not (text.isascii() and text.isdigit()):
+        raise DataFormatError(path, where, field, what, repr(token))
+    digits = text.lstrip("0") or "0"
+    if len(digits) > len(str(limit)) or int(digits) > limit:
+        raise DataFormatError(
+            path, where, field, f"{what} <= {limit}", f"{text} ({len(digits):,} digits)"
+        )
+    return int(digits)
 
 
 def check_finite(value: float, *, path: Path, where: str, field: str) -> float:

@@ -51,6 +51,7 @@ from reform.datasets._validation import (
     check_unique_ids,
     make_frame,
     parse_float,
+    parse_whole,
     read_lines,
     require_file,
 )
@@ -337,12 +338,13 @@ def _read_motion(path: Path) -> tuple[list[int], np.ndarray, np.ndarray, np.ndar
         counter = clock_text = first = None
         for b in range(n_blocks):
             block = fields[b * _BLOCK : (b + 1) * _BLOCK]
-            name = block[0].strip()
-            if not name.isdigit():
-                raise DataFormatError(
-                    path, where, f"Name (block {b + 1})", "a participant number", repr(name)
-                )
-            person = int(name)
+            person = parse_whole(
+                block[0],
+                path=path,
+                where=where,
+                field=f"Name (block {b + 1})",
+                what="a participant number",
+            )
             row_ids.append(person)
             person_where = f"{where}, participant {person}"
             triple_values = []
@@ -475,7 +477,9 @@ def _read_annotations(
         match = _ANNOTATION.match(line)
         if match is None:
             raise DataFormatError(path, where, None, "N,{[id id ...] ...}", repr(line.rstrip("\n")))
-        number = int(match.group(1))
+        number = parse_whole(
+            match.group(1), path=path, where=where, field="frame", what="a frame number"
+        )
         where = f"line {line_number} (frame {number})"
         if not 1 <= number <= n_frames:
             raise DataFormatError(
@@ -493,11 +497,9 @@ def _read_annotations(
         for g, text in enumerate(_GROUP.findall(body), start=1):
             members = []
             for token in text.replace(",", " ").split():
-                if not token.isdigit():
-                    raise DataFormatError(
-                        path, where, f"group {g}", "participant numbers", repr(token)
-                    )
-                person = int(token)
+                person = parse_whole(
+                    token, path=path, where=where, field=f"group {g}", what="a participant number"
+                )
                 if person not in known:
                     raise DataFormatError(
                         path,

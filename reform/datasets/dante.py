@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from reform.datasets._validation import (
+    ID_MAX,
     UNWRAPPED_ANGLE_LIMIT_RAD,
     Repairs,
     check_angle,
@@ -75,7 +76,6 @@ FIELDS_PER_PERSON = {5: "ID x y body head", 4: "ID x y θ"}
 _FAKE = "fake"
 _POSITION_ONLY = 3  # fields per person of a file of positions without orientation: ID x y
 _ID_PATTERN = re.compile(r"ID_(\d+)")
-_ID_MAX = 2**63 - 1  # person ids are int64
 _TIME_DECIMALS = 1  # SALSA is sampled every 3 s at t = 0.2 + 3k
 _TIME_GRID_TOLERANCE_S = 1e-4  # SALSA's session-2 offset is 2e-5 s
 # How far after the start of the session before a time going back may land and still start a
@@ -308,9 +308,9 @@ def _parse_id(token: str, *, path: Path, where: str) -> int:
     if match is None:
         raise DataFormatError(path, where, "ID", "a token ID_<number>", repr(token))
     digits = match.group(1).lstrip("0") or "0"
-    if len(digits) > len(str(_ID_MAX)) or int(digits) > _ID_MAX:
+    if len(digits) > len(str(ID_MAX)) or int(digits) > ID_MAX:
         raise DataFormatError(
-            path, where, "ID", f"a token ID_<number> with a number <= {_ID_MAX}", repr(token)
+            path, where, "ID", f"a token ID_<number> with a number <= {ID_MAX}", repr(token)
         )
     return int(digits)
 

@@ -246,6 +246,14 @@ def test_truncated_line(babble_dir, tmp_path):
             r"line 4 \(frame 3\), participant 2: field 'Hieght': expected a number, found 'tall'$",
             id="height-not-a-number",  # Hieght (sic) is read by no detector, but is a number
         ),
+        pytest.param(
+            2,
+            10,
+            "9" * 23,
+            r"line 2 \(frame 1\): field 'Name \(block 2\)': expected a participant number <= "
+            r"9223372036854775807, found 9{23} \(23 digits\)$",
+            id="participant-beyond-int64",  # was an OverflowError
+        ),
     ],
 )
 def test_bad_motion_field(babble_dir, tmp_path, line, field, value, message):
@@ -379,6 +387,18 @@ def test_identical_duplicate_annotation_is_counted(babble_dir, tmp_path):
             ["16,{[1 2 3"],
             r"annotated-frames.csv: line 1: expected N,\{\[id id",
             id="malformed-line",
+        ),
+        pytest.param(
+            ["1" * 5000 + ",{[1 2]}"],
+            r"annotated-frames.csv: line 1: field 'frame': expected a frame number <= "
+            r"9223372036854775807, found 1{100}… \([\d,]+ characters\)$",
+            id="frame-of-5000-digits",  # Python reads at most 4,300 digits
+        ),
+        pytest.param(
+            ["16,{[1 " + "2" * 5000 + "]}"],
+            r"line 1 \(frame 16\): field 'group 1': expected a participant number <= "
+            r"9223372036854775807, found 2{100}… \([\d,]+ characters\)$",
+            id="member-of-5000-digits",
         ),
     ],
 )
