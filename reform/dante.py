@@ -44,6 +44,7 @@ from sklearn.base import BaseEstimator
 import reform
 from reform.atomic import atomic_open
 from reform.frame import Frame, Group
+from reform.json_values import JsonError, parse_json
 from reform.path_argument import path_argument
 
 __all__ = [
@@ -798,8 +799,8 @@ def _metadata(path: Path, data: bytes) -> dict[str, Any]:
             f"in a file of {len(data):,})"
         )
     try:
-        header = json.loads(data[8 : 8 + length].decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
+        header = parse_json(data[8 : 8 + length])
+    except JsonError:
         raise ValueError(
             f"{path}: not a DANTE model file (not a safetensors file: its header is not JSON)"
         ) from None
@@ -807,8 +808,8 @@ def _metadata(path: Path, data: bytes) -> dict[str, Any]:
     if not isinstance(text, str):
         raise ValueError(f"{path}: a safetensors file, but not a DANTE model written by reform-sim")
     try:
-        metadata = json.loads(text)
-    except ValueError:
+        metadata = parse_json(text)
+    except JsonError:
         raise ValueError(f"{path}: the DANTE model's metadata is not JSON") from None
     if not isinstance(metadata, dict) or metadata.get("format") != FORMAT:
         raise ValueError(f"{path}: a safetensors file, but not a DANTE model written by reform-sim")

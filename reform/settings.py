@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from reform.detectors import DetectorError, detector_info
+from reform.json_values import JsonError, parse_json
 
 __all__ = ["SETTINGS_FORMAT", "SETTINGS_VERSION", "Settings", "read_settings", "write_settings"]
 
@@ -71,11 +72,9 @@ def read_settings(path: str | os.PathLike[str]) -> Settings:
             path, "expected a JSON settings file, found bytes that are not UTF-8"
         ) from None
     try:
-        document = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise _refuse(
-            path, f"expected a JSON settings file, found invalid JSON at line {exc.lineno}"
-        ) from None
+        document = parse_json(text)
+    except JsonError as exc:
+        raise _refuse(path, f"expected a JSON settings file, found {exc}") from None
     if not isinstance(document, dict):
         raise _refuse(path, f"expected a JSON object, found {type(document).__name__}")
     missing = [key for key in _REQUIRED if key not in document]

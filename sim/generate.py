@@ -109,6 +109,7 @@ from reform.datasets.store_dataset import COMMITS_DIR, StoreFolder, commit_name
 from reform.events import EVENT_KINDS
 from reform.frame import Dataset, Frame
 from reform.frame_block import FrameBlock
+from reform.json_values import JsonError, parse_json
 from reform.seeding import ANNOTATION, ANNOTATION_DRAW, derive_int, derive_rng
 from scenarios import Scenario
 from sim import sizing
@@ -895,12 +896,14 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
     if not path.is_file():
         return None
     try:
-        card = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: expected a reform-sim dataset card (JSON), got {exc}") from exc
-    except RecursionError:
+        card = parse_json(path.read_bytes())
+    except OSError as exc:
         raise ValueError(
-            f"{path}: expected a reform-sim dataset card (JSON), got JSON nested too deep to read"
+            f"{path}: expected a readable reform-sim dataset card, found {exc.strerror or exc}"
+        ) from None
+    except JsonError as exc:
+        raise ValueError(
+            f"{path}: expected a reform-sim dataset card (JSON), found {exc}"
         ) from None
     return _checked_card(card, path)
 
@@ -1033,11 +1036,10 @@ def _store_card(store: Store) -> dict[str, Any] | None:
     if text is None:
         return None
     try:
-        card = json.loads(text)
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        card = parse_json(text)
+    except JsonError as exc:
         raise ValueError(
-            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card (JSON), got "
-            f"{type(exc).__name__}"
+            f"{store.url(CARD_JSON)}: expected a reform-sim dataset card (JSON), found {exc}"
         ) from None
     return _checked_card(card, store.url(CARD_JSON))
 
@@ -1114,8 +1116,8 @@ def _lock_holder(store: Store) -> dict[str, Any] | None:
     if text is None:
         return None
     try:
-        holder = json.loads(text or b"{}")
-    except (UnicodeDecodeError, json.JSONDecodeError):
+        holder = parse_json(text or b"{}")
+    except JsonError:
         return {}
     return holder if isinstance(holder, dict) else {}
 
@@ -1373,8 +1375,8 @@ def _recorded_files(folder: _Folder) -> dict[int, Mapping[str, Any]]:
     found = [e for e in (card or {}).get("shards", []) if isinstance(e, dict)]
     for path in sorted(commits.glob("episode=*.json")) if commits.is_dir() else []:
         try:
-            entry = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+            entry = parse_json(path.read_bytes())
+        except (OSError, JsonError):
             continue  # an unreadable commit records nothing: its shard is made again
         found.append(entry if isinstance(entry, dict) else {})
     for entry in found:

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 import math
 import re
 from collections.abc import Mapping
@@ -39,6 +38,7 @@ from reform.datasets._validation import (
 from reform.datasets._walk import find_files
 from reform.datasets.errors import DataFormatError
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
+from reform.json_values import JsonError, parse_json
 from reform.machine import available_memory
 
 FORMAT_VERSION = 1
@@ -265,11 +265,9 @@ def _json_object(
     """``text`` as a JSON object; one `DataFormatError` naming ``path`` for anything else
     (malformed, nested too deep to read, not an object)."""
     try:
-        value = json.loads(text)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DataFormatError(path, None, field, expected, f"{type(exc).__name__}: {exc}") from exc
-    except RecursionError:
-        raise DataFormatError(path, None, field, expected, "JSON nested too deep to read") from None
+        value = parse_json(text)
+    except JsonError as exc:
+        raise DataFormatError(path, None, field, expected, str(exc)) from None
     if not isinstance(value, dict):
         raise DataFormatError(path, None, field, expected, f"a JSON {type(value).__name__}")
     return value

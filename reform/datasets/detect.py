@@ -32,8 +32,7 @@ _PARQUET_DEPTH = 4
 
 # What each format's files are, as detection finds them.
 FORMAT_FILES = {
-    "salsa": "a folder with the DANTE text files features.txt and group_names.txt (or with "
-    "them in DS_utils/, as DANTE's repository keeps them)",
+    "salsa": "a folder with the DANTE text files features.txt and group_names.txt",
     "babble": "a folder with Motion-capture-data.csv",
     "gcff": "a folder with features.mat, or a folder of such folders",
     "parquet": f"a .parquet file or a folder of them, at most {_PARQUET_DEPTH} levels down",

@@ -42,6 +42,7 @@ from urllib.parse import quote, unquote, urlsplit
 
 from reform.atomic import atomic_open, check_folder_path, file_kind, temporary_folder
 from reform.datasets.errors import DataFormatError
+from reform.json_values import JsonError, parse_json
 from reform.path_argument import path_argument
 
 __all__ = [
@@ -355,13 +356,9 @@ def _read_registry(path: str | PathLike[str] | None) -> tuple[PublicDataset, ...
             source, None, None, "a readable registry file", exc.strerror or str(exc)
         ) from None
     try:
-        document = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise DataFormatError(
-            source, f"line {exc.lineno}, column {exc.colno}", None, "JSON", exc.msg
-        ) from None
-    except RecursionError:
-        raise DataFormatError(source, None, None, "JSON", "nesting too deep to read") from None
+        document = parse_json(text)
+    except JsonError as exc:
+        raise DataFormatError(source, None, None, "a registry file (JSON)", str(exc)) from None
     if not isinstance(document, dict) or not isinstance(document.get("datasets"), list):
         raise DataFormatError(
             source, None, "datasets", "an object with a list of datasets", _kind(document)

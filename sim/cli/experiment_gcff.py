@@ -5,13 +5,13 @@ Its arguments are `sim.cli._experiment_gcff`."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import Any
 
 from reform import Dataset
 from reform.datasets import load_babble, load_salsa
 from reform.gcff import MDL_GRID_M2, STRIDE_GRID_M
+from reform.json_values import JsonError, parse_json
 from sim import sizing
 from sim.cli._common import (
     CliError,
@@ -48,11 +48,9 @@ def _command(args: argparse.Namespace) -> str:
 def _read_results(path: str) -> list[dict[str, Any]]:
     text = read_text("--with-results", path, expected="JSON text")
     try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise CliError(f"--with-results {path}: not JSON ({exc})") from None
-    except RecursionError:
-        raise CliError(f"--with-results {path}: JSON nested too deep to read") from None
+        data = parse_json(text)
+    except JsonError as exc:
+        raise CliError(f"--with-results {path}: expected JSON results, found {exc}") from None
     if isinstance(data, dict) and "results" in data:
         data = data["results"]
     results = data if isinstance(data, list) else [data]

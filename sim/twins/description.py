@@ -20,6 +20,7 @@ from typing import Any
 
 from reform.annotation import AnnotationModel
 from reform.atomic import atomic_open
+from reform.json_values import JsonError, parse_json
 
 __all__ = [
     "MODES",
@@ -152,12 +153,9 @@ def read_twin(path: str | os.PathLike[str]) -> Twin:
     except (OSError, UnicodeDecodeError) as exc:
         raise TwinFormatError(f"{path}: cannot read the twin file: {exc}") from None
     try:
-        data = json.loads(text, object_pairs_hook=_once_each)
-    except json.JSONDecodeError as exc:
-        raise TwinFormatError(
-            f"{path}: expected a twin file (JSON), found text that is not JSON ({exc.msg} at line "
-            f"{exc.lineno})"
-        ) from None
+        data = parse_json(text, object_pairs_hook=_once_each)
+    except JsonError as exc:
+        raise TwinFormatError(f"{path}: expected a twin file (JSON), found {exc}") from None
     except _Repeated as exc:
         raise _fail(str(path), str(exc), "the field once", "it twice") from None
     return twin_from_json(data, where=str(path))

@@ -39,7 +39,12 @@ GOOD = {
 @pytest.mark.parametrize(
     ("document", "message"),
     [
-        ("{not json", "expected a JSON settings file, found invalid JSON at line 1"),
+        ("{not json", "expected a JSON settings file, found text that is not JSON (Expecting"),
+        ("[" * 100_000 + "]" * 100_000, "expected a JSON settings file, found JSON nested too"),
+        (
+            '{"version": ' + "1" * 5000 + "}",
+            "expected a JSON settings file, found a number of more digits than can be read",
+        ),
         ([1, 2], "expected a JSON object, found list"),
         ({**GOOD, "version": 7}, "field 'version': expected 1, found 7"),
         ({**GOOD, "format": "x"}, "field 'format': expected 'reform-sim detector settings'"),
@@ -54,6 +59,8 @@ GOOD = {
     ],
     ids=[
         "not-json",
+        "nested-too-deep",  # was a RecursionError traceback
+        "number-of-5000-digits",  # was a message naming no file
         "not-object",
         "version",
         "format",

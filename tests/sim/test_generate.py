@@ -379,6 +379,13 @@ def test_a_folder_holding_another_dataset_is_refused_before_any_work(reference, 
     (broken / CARD_JSON).write_text("[1, 2]")
     with pytest.raises(ValueError, match=r"expected a reform-sim dataset card"):
         generate(broken)
+    (broken / CARD_JSON).write_text('{"card_version": ' + "1" * 5000 + "}")
+    with pytest.raises(
+        ValueError,
+        match=r"dataset.json: expected a reform-sim dataset card \(JSON\), found a number of "
+        r"more digits than can be read \(4,300\)$",
+    ):
+        generate(broken)
 
 
 def test_a_folder_being_written_by_another_run_is_refused(tmp_path):

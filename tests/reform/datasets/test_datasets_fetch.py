@@ -776,7 +776,14 @@ def test_a_malformed_registry_is_one_clear_error(edit, message, tmp_path):
 def test_a_registry_that_is_not_json(tmp_path):
     path = tmp_path / "registry.json"
     path.write_text('{"datasets": [')
-    with pytest.raises(DataFormatError, match=r"registry.json: line 1, column 15: expected JSON"):
+    with pytest.raises(
+        DataFormatError,
+        match=r"registry.json: expected a registry file \(JSON\), found text that is not JSON "
+        r"\(Expecting value at line 1, column 15\)$",
+    ):
+        registry(path)
+    path.write_text("[" * 100_000 + "]" * 100_000)  # deeper than Python's recursion goes
+    with pytest.raises(DataFormatError, match=r"found JSON nested too deep to read$"):
         registry(path)
 
 
