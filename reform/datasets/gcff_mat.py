@@ -595,9 +595,15 @@ def _cells(value: Any, *, path: Path, field: str) -> list[Any]:
     return list(array.ravel())
 
 
+def _real(dtype: np.dtype) -> bool:
+    """Whether a MATLAB array of ``dtype`` holds real numbers: not cells, text, logicals or
+    complex numbers (whose imaginary part a cast to float would drop without a word)."""
+    return np.issubdtype(dtype, np.number) and not np.issubdtype(dtype, np.complexfloating)
+
+
 def _vector(value: Any, *, path: Path, field: str) -> np.ndarray:
     array = np.asarray(value)
-    if array.dtype == object or not np.issubdtype(array.dtype, np.number):
+    if not _real(array.dtype):
         raise DataFormatError(path, None, field, "a numeric vector", f"a {array.dtype} array")
     if not _is_vector(array):
         raise DataFormatError(path, None, field, "a 1×K vector", f"shape {array.shape}")
@@ -620,7 +626,7 @@ def _frame_rows(
     or θ is NaN (a pose not found) are dropped, counted in ``repairs``."""
     where = f"frame {frame}"
     array = np.asarray(cell)
-    if array.dtype == object or not (array.size == 0 or np.issubdtype(array.dtype, np.number)):
+    if not (array.size == 0 and array.dtype != object or _real(array.dtype)):
         raise DataFormatError(
             path, where, "features", "an N×4 numeric matrix [ID, x, y, θ]", f"a {array.dtype} array"
         )
@@ -721,7 +727,7 @@ def _groups(cell: Any, *, path: Path, where: str) -> list[list[int]]:
         vector = np.asarray(members)
         if vector.size == 0:
             continue
-        if vector.dtype == object or not np.issubdtype(vector.dtype, np.number):
+        if not _real(vector.dtype):
             raise DataFormatError(
                 path, where, f"group {k}", "a numeric vector of IDs", f"a {vector.dtype} array"
             )
@@ -869,7 +875,7 @@ def read_settings(
                 )
             continue
         array = np.asarray(mat[name])
-        if array.dtype == object or not np.issubdtype(array.dtype, np.number) or array.size != 1:
+        if not _real(array.dtype) or array.size != 1:
             raise DataFormatError(
                 path,
                 None,

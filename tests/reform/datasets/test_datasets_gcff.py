@@ -317,6 +317,32 @@ def test_length_mismatch(tmp_path):
     )
 
 
+def test_complex_numbers_are_refused_not_cast_to_their_real_part(tmp_path):
+    # A cast to float would drop the imaginary part with no more than a warning.
+    complex_features = [FEATURES[0] + 1j, *FEATURES[1:]]
+    assert_refused(
+        load_gcff,
+        _write(tmp_path / "features", features=complex_features),
+        r"features.mat: frame 1: field 'features': expected an N×4 numeric matrix \[ID, x, y, "
+        r"θ\], found a complex128 array$",
+    )
+    features_vars = {
+        "features": _cell(FEATURES),
+        "timestamp": np.array([TIMESTAMPS], dtype=np.float64) + 7j,
+    }
+    assert_refused(
+        load_gcff,
+        _write(tmp_path / "timestamp", features_vars=features_vars),
+        r"features.mat: field 'timestamp': expected a numeric vector, found a complex128 array$",
+    )
+    gt_groups = [_cell([np.array([[1.0, 2.0]]) + 0j]), _gt([1]), _cell([])]
+    assert_refused(
+        load_gcff,
+        _write(tmp_path / "groups", gt_groups=gt_groups, gt_timestamps=TIMESTAMPS),
+        r"field 'group 1': expected a numeric vector of IDs, found a complex128 array$",
+    )
+
+
 def test_features_not_a_cell(tmp_path):
     features_vars = {"features": np.zeros((3, 4)), "timestamp": np.array([[1.0]])}
     folder = _write(tmp_path / "nocell", features_vars=features_vars)
