@@ -251,14 +251,52 @@ def sequence_folders(folder: Path) -> list[Path]:
 _OTHER_DATASET_FILES = ("features.txt", "Motion-capture-data.csv", "dataset.json")
 
 
+# The files of a GCFF sequence folder besides features.mat ("settings.mat": an older method's).
+_SEQUENCE_FILES = (GROUNDTRUTH_FILE, SETTINGS_FILE, "settings.mat")
+
+
+def _broken_sequence(child: Path) -> str | None:
+    """What keeps a subfolder that is a GCFF sequence by its other files (its ground truth,
+    its settings) from being read as one: its ``features.mat`` missing, or not a file (a
+    folder, a link that leads nowhere), with any near name it holds instead; None when it
+    is no sequence, or a whole one."""
+    try:
+        names = sorted(entry.name for entry in child.iterdir())
+    except OSError as exc:
+        return f"a folder that cannot be listed ({exc.strerror or exc})"
+    near = [n for n in names if n != FEATURES_FILE and n.lower().startswith(FEATURES_FILE)]
+    if not (set(names) & set(_SEQUENCE_FILES) or near or FEATURES_FILE in names):
+        return None
+    features = child / FEATURES_FILE
+    if FEATURES_FILE in names:
+        if features.is_file():
+            return None
+        kind = "a folder" if features.is_dir() else "a link that leads to no file"
+        return f"{FEATURES_FILE} that is {kind}"
+    held = ", ".join(n for n in names if n in _SEQUENCE_FILES or n in near)
+    return f"{held} but no {FEATURES_FILE}"
+
+
 def _check_only_sequences(folder: Path, sequences: list[Path]) -> None:
     """Refuses a folder of GCFF sequences whose other subfolders hold datasets too (a folder of
     datasets, such as the one all the public sets are fetched into): reading the GCFF ones as
-    one dataset would leave the others out without a word."""
+    one dataset would leave the others out without a word. So is one whose other subfolder is
+    a sequence that cannot be read (`_broken_sequence`): it would be left out the same way."""
     others = []
     for child in sorted(folder.iterdir()):
         if child in sequences or child.name.startswith((".", "_")) or not child.is_dir():
             continue
+        broken = _broken_sequence(child)
+        if broken is not None:
+            raise DataFormatError(
+                child,
+                None,
+                None,
+                f"a GCFF sequence folder like {', '.join(s.name for s in sequences)}, with its "
+                f"{FEATURES_FILE}",
+                broken,
+                hint="put its features file back, or move the folder out, to read the others",
+            )
         try:
             holds = any((child / name).is_file() for name in _OTHER_DATASET_FILES) or bool(
                 sequence_folders(child)

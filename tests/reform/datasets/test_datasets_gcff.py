@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -493,6 +494,42 @@ def test_negative_ids_are_refused(tmp_path, features, members, file, message):
     with pytest.raises(DataFormatError) as caught:
         load_gcff(folder)
     assert str(caught.value) == f"{folder / file}: {message}"
+
+
+@pytest.mark.parametrize(
+    ("damage", "found"),
+    [
+        (lambda seq: (seq / "features.mat").unlink(), "groundtruth.mat but no features.mat"),
+        (
+            lambda seq: (seq / "features.mat").rename(seq / "Features.mat"),
+            "Features.mat, groundtruth.mat but no features.mat",
+        ),
+        (
+            lambda seq: (seq / "features.mat").rename(seq / "features.mat.gz"),
+            "features.mat.gz, groundtruth.mat but no features.mat",
+        ),
+        (
+            lambda seq: ((seq / "features.mat").unlink(), (seq / "features.mat").mkdir()),
+            "features.mat that is a folder",
+        ),
+        (
+            lambda seq: ((seq / "features.mat").unlink(), (seq / "features.mat").symlink_to("x")),
+            "features.mat that is a link that leads to no file",
+        ),
+    ],
+    ids=["missing", "renamed", "compressed", "a-folder", "dangling-link"],
+)
+def test_a_sequence_that_cannot_be_read_is_refused_not_left_out(tmp_path, damage, found):
+    folder = tmp_path / "set"
+    _write(folder / "Seq1")
+    _write(folder / "Seq2")
+    damage(folder / "Seq2")
+    assert_refused(
+        load_gcff,
+        folder,
+        rf"set/Seq2: expected a GCFF sequence folder like Seq1, with its features.mat, found "
+        rf"{re.escape(found)}; put its features file back, or move the folder out",
+    )
 
 
 def test_a_folder_of_datasets_is_not_read_as_its_gcff_ones(tmp_path, shared_datasets):
