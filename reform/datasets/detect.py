@@ -80,6 +80,22 @@ def _folder_formats(folder: Path) -> dict[str, str]:
     return found
 
 
+def _someone_seen(dataset: Dataset, path: Path) -> Dataset:
+    """``dataset``, a recording of the field's, unless nobody is in any of its frames (every
+    pose untracked, NaN or padding): nothing a detector could be scored on, the mark of a
+    damaged file rather than of a scene."""
+    if dataset.frames and not any(frame.n_people for frame in dataset.frames):
+        raise DataFormatError(
+            path,
+            None,
+            "people",
+            "someone in at least one frame",
+            f"nobody in any of its {len(dataset.frames):,} frames (every pose untracked, NaN or "
+            "padding)",
+        )
+    return dataset
+
+
 @file_errors_as_data_errors
 def detect_format(path: str | PathLike[str]) -> str:
     """The format of a dataset path: one of :data:`FORMATS`.
@@ -215,26 +231,32 @@ def load_dataset(
     if format == "salsa":
         from reform.datasets.dante import load_dante
 
-        return load_dante(
+        return _someone_seen(
+            load_dante(
+                path,
+                strict=strict,
+                units=units,
+                metres_per_pixel=metres_per_pixel,
+                time_unit=time_unit,
+            ),
             path,
-            strict=strict,
-            units=units,
-            metres_per_pixel=metres_per_pixel,
-            time_unit=time_unit,
         )
     if format == "babble":
         from reform.datasets.babble import load_babble
 
-        return load_babble(path)
+        return _someone_seen(load_babble(path), path)
     if format == "gcff":
         from reform.datasets.gcff_mat import load_gcff
 
-        return load_gcff(
+        return _someone_seen(
+            load_gcff(
+                path,
+                units=units,
+                metres_per_pixel=metres_per_pixel,
+                strict=strict,
+                time_unit=time_unit,
+            ),
             path,
-            units=units,
-            metres_per_pixel=metres_per_pixel,
-            strict=strict,
-            time_unit=time_unit,
         )
     from reform.datasets.parquet import read_parquet
 

@@ -434,3 +434,23 @@ def test_a_file_that_is_not_a_regular_file_is_named_for_what_it_is(tmp_path, kin
         match=rf"features.txt: expected a DANTE features file \(a file\), found {found}",
     ):
         load_dataset(folder, format="dante")
+
+
+def test_a_recording_with_nobody_in_any_frame_is_refused(tmp_path):
+    # Every pose NaN (or every slot padding): a damaged file, nothing a detector could be scored
+    # on, rather than a scene; one person in one frame is a recording.
+    nobody = [[1, np.nan, 0.0, 0.0], [2, np.nan, 0.0, 0.0]]
+    gcff = _gcff(tmp_path / "gcff", [nobody, nobody], [[[1, 2]], [[1, 2]]])
+    message = (
+        r"field 'people': expected someone in at least one frame, found nobody in any of its 2 "
+        r"frames \(every pose untracked, NaN or padding\)$"
+    )
+    with pytest.raises(DataFormatError, match=r"gcff: " + message):
+        load_dataset(gcff, units="cm")
+    fake = "0.2 fake fake fake fake fake fake fake fake"
+    groups = ["0.2 < ID_001 >", "3.2 < ID_001 >"]
+    dante = _dante(tmp_path / "dante", [fake, fake.replace("0.2", "3.2", 1)], groups)
+    with pytest.raises(DataFormatError, match=r"dante: " + message):
+        load_dataset(dante)
+    someone = _gcff(tmp_path / "someone", [nobody, [PEOPLE[0]]], [[[1, 2]], [[1]]])
+    assert [f.n_people for f in load_dataset(someone, units="cm").frames] == [0, 1]
