@@ -240,6 +240,7 @@ def load_dante(
 
     per_sequence = Counter(f.sequence for f in frames)
     annotated = Counter(f.sequence for f in frames if f.groups is not None)
+    cut_short = _groundtruth_cut_short(rows, groups_of_row, groups_file, features_path)
     counts = repairs.counts
     report = {
         "fields_per_person": width,
@@ -256,6 +257,8 @@ def load_dante(
         "time": "round(float(t), 1)" if rounded else "float(t)",
         **repairs.report(),
     }
+    if cut_short is not None:
+        report["groundtruth_caution"] = cut_short
     if time_report is not None:
         report["time"] = f"float(t) in {time_report['read']}" + (
             ", rounded to 0.1 s" if rounded else ""
@@ -282,6 +285,39 @@ def load_dante(
         source=str(path),
         units="m",
         metadata=metadata,
+    )
+
+
+def _groundtruth_cut_short(
+    rows: list[Any], groups_of_row: dict[int, Any], groups_file: Path, features_path: Path
+) -> str | None:
+    """What a group file that stops before the features leaves without ground truth: the
+    feature lines of a session past its last annotated one, when more of them than the
+    session's usual step between annotated lines (SALSA leaves one, its last), and every line
+    of a session with none while another has some; None when the ends agree."""
+    if not groups_of_row:
+        return None
+    by_session: dict[str, list[int]] = {}
+    for index, row in enumerate(rows):
+        by_session.setdefault(row.sequence, []).append(index)
+    left = []
+    for session, indices in by_session.items():
+        annotated = [i for i in indices if i in groups_of_row]
+        if not annotated:
+            left.append((session, len(indices), f"all of {session}"))
+            continue
+        step = int(np.median(np.diff(annotated))) if len(annotated) > 1 else 1
+        trailing = indices[-1] - annotated[-1]
+        if trailing > max(step, 1):
+            first = rows[annotated[-1] + 1].line
+            left.append((session, trailing, f"{session} from line {first} on"))
+    if not left:
+        return None
+    lines = sum(n for _, n, _ in left)
+    return (
+        f"{groups_file.name} gives no ground truth to {lines:,} lines at the end of "
+        f"{features_path.name} ({', '.join(where for _, _, where in left)}): read as frames "
+        "without groups; is it cut short?"
     )
 
 

@@ -12,24 +12,34 @@ from reform.frame import Dataset
 __all__ = ["repairs_line", "summarise"]
 
 
+# What a loader's report may say beside its repairs, when what it read casts doubt on the file:
+# the unit it assumed, ground truth that stops before the features.
+CAUTIONS = ("units_caution", "groundtruth_caution")
+
+
 def repairs_line(dataset: Dataset, label: str) -> str | None:
     """One line saying what the loader repaired in ``dataset`` (``label``: how the user named
-    it), the first repair of the first kind quoted; None when it repaired nothing. A repair is
-    what the field's files need read (a NaN pose dropped, ground truth naming someone absent):
-    counted in the loader's report, and said, never silent; with the loader's caution about
-    the unit it assumed, when its repairs cast doubt on it (a GCFF folder's NaN poses)."""
+    it), the first repair of the first kind quoted, and its cautions (`CAUTIONS`); None when
+    it repaired nothing and has no caution. A repair is what the field's files need read (a
+    NaN pose dropped, ground truth naming someone absent): counted in the loader's report, and
+    said, never silent; a caution is what casts doubt on the file (the unit assumed for a
+    GCFF folder with NaN poses, ground truth that stops before the features)."""
     report = dataset.metadata.get("report")
-    repairs = report.get("repairs") if isinstance(report, dict) else None
-    if not repairs:
+    if not isinstance(report, dict):
         return None
-    counts = ", ".join(f"{kind} {count}" for kind, count in repairs.items())
-    first = report.get("first_repair", {}).get(next(iter(repairs)), "")
-    caution = report.get("units_caution")
-    return (
-        f"note: {label}: read with repairs (--strict refuses them): {counts}"
-        + (f"; the first: {first}" if first else "")
-        + (f"; {caution}" if caution else "")
-    )
+    repairs = report.get("repairs")
+    cautions = [report[key] for key in CAUTIONS if isinstance(report.get(key), str)]
+    if not repairs and not cautions:
+        return None
+    parts = []
+    if repairs:
+        counts = ", ".join(f"{kind} {count}" for kind, count in repairs.items())
+        first = report.get("first_repair", {}).get(next(iter(repairs)), "")
+        parts.append(
+            f"read with repairs (--strict refuses them): {counts}"
+            + (f"; the first: {first}" if first else "")
+        )
+    return f"note: {label}: " + "; ".join(parts + cautions)
 
 
 def summarise(dataset: Dataset) -> dict[str, Any]:

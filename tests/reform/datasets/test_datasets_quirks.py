@@ -454,3 +454,21 @@ def test_a_recording_with_nobody_in_any_frame_is_refused(tmp_path):
         load_dataset(dante)
     someone = _gcff(tmp_path / "someone", [nobody, [PEOPLE[0]]], [[[1, 2]], [[1]]])
     assert [f.n_people for f in load_dataset(someone, units="cm").frames] == [0, 1]
+
+
+def test_ground_truth_that_stops_before_the_features_is_said(tmp_path):
+    people = "ID_001 1.0 1.0 0.0 ID_002 1.6 1.0 3.1"
+    features = [f"{0.2 + 3 * k:.1f} {people}" for k in range(8)]
+    group = "< ID_001 ID_002 >"
+
+    def note(annotated: list[int]) -> str | None:
+        folder = tmp_path / "-".join(map(str, annotated))
+        _dante(folder, features, [f"{0.2 + 3 * k:.1f} {group}" for k in annotated])
+        return repairs_line(load_dante(folder), "set")
+
+    assert note([0, 1]) == (
+        "note: set: group_names.txt gives no ground truth to 6 lines at the end of features.txt "
+        "(session1 from line 3 on): read as frames without groups; is it cut short?"
+    )
+    assert note(list(range(7))) is None  # the last line alone without ground truth, as SALSA's
+    assert note([0, 2, 4, 6]) is None  # every other line annotated, to the end
