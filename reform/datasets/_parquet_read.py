@@ -36,7 +36,7 @@ from reform.datasets._validation import (
     make_frame,
 )
 from reform.datasets._walk import find_files
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, damaged_found, os_error_found
 from reform.frame import KINDS, POSITION_LIMIT_M, Dataset, Frame, Group
 from reform.json_values import JsonError, parse_json
 from reform.machine import available_memory
@@ -151,7 +151,7 @@ class _LocalFolder:
         try:
             return shard.stat().st_size if shard.is_file() else file_kind(shard)
         except OSError as exc:
-            return f"{type(exc).__name__}: {exc}"
+            return os_error_found(exc)
 
     def sha256(self, relative: str) -> str:
         return _sha256(self.folder / relative)
@@ -248,14 +248,14 @@ def _read_card(folder: Path) -> dict[str, Any] | None:
         return None
     try:
         text = card_path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+    except OSError as exc:
         raise DataFormatError(
-            card_path,
-            None,
-            None,
-            "a reform-sim dataset card (JSON)",
-            f"{type(exc).__name__}: {exc}",
-        ) from exc
+            card_path, None, None, "a reform-sim dataset card (JSON)", os_error_found(exc)
+        ) from None
+    except UnicodeDecodeError:
+        raise DataFormatError(
+            card_path, None, None, "a reform-sim dataset card (JSON)", "bytes that are not UTF-8"
+        ) from None
     return _json_object(text, card_path, field=None, expected="a reform-sim dataset card (JSON)")
 
 
@@ -496,9 +496,12 @@ def _read_file(
             page_checksum_verification=True,  # pages written with a CRC (every file since)
         )
     except Exception as exc:  # pyarrow raises ArrowInvalid, OSError... on corrupt files
-        raise DataFormatError(
-            path, None, None, "a readable Parquet file", f"{type(exc).__name__}: {exc}"
-        ) from exc
+        found = (
+            os_error_found(exc)
+            if isinstance(exc, OSError) and exc.errno
+            else damaged_found("Parquet file", str(exc))
+        )
+        raise DataFormatError(path, None, None, "a readable Parquet file", found) from exc
     try:
         columns = table.column_names
     except UnicodeDecodeError as exc:  # a column name's bytes are not UTF-8

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from reform.atomic import file_kind
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, os_error_found
 from reform.features import frame_scale
 from reform.frame import POSITION_LIMIT_M, Frame
 
@@ -108,7 +108,7 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
                 yield number, line.rstrip("\n")
     except OSError as exc:
         raise DataFormatError(
-            path, None, None, "a readable text file", f"{type(exc).__name__}: {exc.strerror}"
+            path, None, None, "a readable text file", os_error_found(exc)
         ) from None
 
 
@@ -139,6 +139,16 @@ GIT_LFS_POINTER = b"version https://git-lfs.github.com/spec/"
 # file by byte 128 (version and byte order follow the 116 bytes of a version 5 header's text;
 # version 4 starts with binary integers).
 _TEXT_HEAD_BYTES = 512
+# The first bytes of a compressed file, by compression: a file compressed whole in place of
+# the format's own (the format's reader says only that it cannot parse it).
+_COMPRESSED = (
+    (b"\x1f\x8b", "gzip"),
+    (b"PK\x03\x04", "zip"),
+    (b"BZh", "bzip2"),
+    (b"\xfd7zXZ\x00", "xz"),
+    (b"\x28\xb5\x2f\xfd", "zstd"),
+)
+_MAT_HEADER_BYTES = 128  # a MATLAB 5 file's header: text, then version and endianness
 
 
 def check_not_text(
@@ -162,6 +172,25 @@ def check_not_text(
             return
     else:
         head = content[:_TEXT_HEAD_BYTES]
+    for magic, compression in _COMPRESSED:
+        if head.startswith(magic):
+            raise DataFormatError(
+                path,
+                None,
+                None,
+                expected,
+                f"a {compression}-compressed file",
+                hint="decompress it first",
+            )
+    if name == "MATLAB" and head.startswith(b"MATLAB") and len(head) < _MAT_HEADER_BYTES:
+        raise DataFormatError(
+            path,
+            None,
+            None,
+            expected,
+            f"a MATLAB file cut short inside its {_MAT_HEADER_BYTES}-byte header ({len(head)} "
+            "bytes in all)",
+        )
     if head.startswith(GIT_LFS_POINTER):
         raise DataFormatError(
             path,

@@ -11,7 +11,7 @@ import os
 from collections import deque
 from pathlib import Path
 
-from reform.datasets.errors import DataFormatError
+from reform.datasets.errors import DataFormatError, os_error_found
 
 __all__ = ["MAX_ENTRIES", "find_files"]
 
@@ -61,7 +61,7 @@ def find_files(
                 children = sorted(entries, key=lambda e: e.name)
         except OSError as exc:
             error = DataFormatError(
-                current, None, None, "a readable folder", f"{type(exc).__name__}: {exc.strerror}"
+                current, None, None, "a readable folder", os_error_found(exc)
             )
             if current == folder:
                 raise error from None

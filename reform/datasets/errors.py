@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import functools
 from collections.abc import Callable
 from pathlib import Path
@@ -22,6 +23,32 @@ def shorten(text: str, limit: int = FOUND_LIMIT) -> str:
     if len(text) <= limit:
         return text
     return f"{text[: limit - 20]}… ({len(text):,} characters)"
+
+
+# What an OSError found, in words, by its errno (the kinds a file system raises on a path).
+_OS_ERRORS = {
+    errno.EACCES: "no permission to read it",
+    errno.EPERM: "no permission to read it",
+    errno.ENOENT: "no such file or folder",
+    errno.EISDIR: "a folder, not a file",
+    errno.ENOTDIR: "a path through something that is not a folder",
+    errno.ELOOP: "a link that leads to itself (a loop)",
+    errno.ENAMETOOLONG: "a name too long for the file system",
+}
+
+
+def os_error_found(exc: OSError) -> str:
+    """What an `OSError` on a path found, as a message's "found" says it: ``no permission to
+    read it``, ``a link that leads to itself (a loop)``, or the system's own words."""
+    return _OS_ERRORS.get(exc.errno) or str(exc.strerror or exc)
+
+
+def damaged_found(kind: str, detail: str) -> str:
+    """A file its reader could not parse, as a message's "found" says it: ``a damaged or
+    cut-short Parquet file (the reader's words)``; the reader's words on one line, without
+    the exception's name."""
+    words = " ".join(str(detail).split())
+    return f"a damaged or cut-short {kind} ({words})" if words else f"a damaged {kind}"
 
 
 def _float_repr(value: Any) -> str:
@@ -115,7 +142,7 @@ def file_errors_as_data_errors(function: F) -> F:
                 None,
                 None,
                 "a readable dataset file or folder",
-                f"{type(exc).__name__}: {exc.strerror or exc}",
+                os_error_found(exc),
             ) from None
 
     return wrapped  # type: ignore[return-value]

@@ -47,7 +47,12 @@ from reform.datasets._validation import (
     require_file,
     units_per_metre,
 )
-from reform.datasets.errors import DataFormatError, file_errors_as_data_errors
+from reform.datasets.errors import (
+    DataFormatError,
+    damaged_found,
+    file_errors_as_data_errors,
+    os_error_found,
+)
 from reform.frame import POSITION_LIMIT_M, Dataset, Frame, Group, wrap_angle
 from reform.gcff import MDL_LIMIT_M2, STRIDE_LIMIT_M
 from reform.machine import available_memory
@@ -242,7 +247,7 @@ def sequence_folders(folder: Path) -> list[Path]:
         children = sorted(folder.iterdir())
     except OSError as exc:
         raise DataFormatError(
-            folder, None, None, "a readable folder", f"{type(exc).__name__}: {exc.strerror}"
+            folder, None, None, "a readable folder", os_error_found(exc)
         ) from None
     return [child for child in children if child.is_dir() and (child / FEATURES_FILE).is_file()]
 
@@ -461,7 +466,12 @@ def _loadmat(path: Path) -> dict[str, Any]:
                 path, None, None, "a MATLAB file of version 7.2 or older", exc.message
             ) from None
         # scipy raises ValueError, TypeError, OSError, MemoryError... on corrupt files
-        found = exc.message if exc.kind == "crash" else f"{exc.kind}: {exc.message}"
+        if exc.kind == "crash":
+            found = exc.message
+        elif exc.kind == "PermissionError":
+            found = "no permission to read it"
+        else:
+            found = damaged_found("MATLAB file", exc.message)
         raise DataFormatError(path, None, None, "a readable MATLAB .mat file", found) from None
 
 
@@ -543,9 +553,8 @@ def check_inflated_size(path: str | PathLike[str], *, limit: int | None = None) 
                         path, where, None, expected, f"{total:,} bytes (a compressed bomb?)"
                     )
     except OSError as exc:
-        raise DataFormatError(
-            path, None, None, "a readable MATLAB .mat file", f"{type(exc).__name__}: {exc}"
-        ) from None
+        found = os_error_found(exc) if exc.errno else damaged_found("MATLAB file", str(exc))
+        raise DataFormatError(path, None, None, "a readable MATLAB .mat file", found) from None
     return total
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 import re
 from pathlib import Path
 
@@ -181,6 +182,16 @@ HTML_PAGE = b"<!DOCTYPE html><html><body>404: Not Found</body></html>\n"
         ),
         pytest.param(
             HTML_PAGE, "text starting with '<!DOCTYPE html><html', not a MATLAB file", id="html"
+        ),
+        pytest.param(
+            gzip.compress(b"MATLAB 5.0 MAT-file" + bytes(200)),
+            "a gzip-compressed file; decompress it first",
+            id="gzip",
+        ),
+        pytest.param(
+            b"MATLAB 5.0 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024",
+            "a MATLAB file cut short inside its 128-byte header (76 bytes in all)",
+            id="cut-in-its-header",  # its header is text: before, 'text starting with ...'
         ),
     ],
 )

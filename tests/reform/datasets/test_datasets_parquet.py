@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 import hashlib
 import json
 import re
@@ -470,6 +471,27 @@ def test_a_git_lfs_pointer_or_a_page_in_place_of_a_parquet_file_is_named(tmp_pat
         f"{shard}: expected a Parquet file, found text starting with '<html><body>Moved</b', "
         "not a Parquet file"
     )
+
+
+def test_a_compressed_or_damaged_parquet_file_is_said_in_words(tmp_path, salsa_dataset):
+    good = tmp_path / "good.parquet"
+    write_parquet(salsa_dataset, good)
+    packed = tmp_path / "packed.parquet"
+    packed.write_bytes(gzip.compress(good.read_bytes()))
+    with pytest.raises(DataFormatError) as caught:
+        read_parquet(packed)
+    assert str(caught.value) == (
+        f"{packed}: expected a Parquet file, found a gzip-compressed file; decompress it first"
+    )
+    cut = tmp_path / "cut.parquet"
+    cut.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    with pytest.raises(DataFormatError) as caught:
+        read_parquet(cut)
+    message = str(caught.value)
+    assert message.startswith(
+        f"{cut}: expected a readable Parquet file, found a damaged or cut-short Parquet file ("
+    )
+    assert "ArrowInvalid" not in message and "OSError" not in message
 
 
 # --- row order, time order, unfinished folders, codecs ---------------------------------------
