@@ -140,9 +140,38 @@ def detect_format(path: str | PathLike[str]) -> str:
             return "babble"
         if path.name == "features.mat":
             return "gcff"
+    if path.is_dir():
+        odd = _known_names_unreadable(path)
+        if odd:
+            raise DataFormatError(
+                path,
+                None,
+                None,
+                f"a dataset in one of the formats: {_DESCRIPTION}",
+                f"none of them: {odd}",
+            )
     raise DataFormatError(
         path, None, None, f"a dataset in one of the formats: {_DESCRIPTION}", "none of them"
     )
+
+
+# The files by which detection knows a format, for saying what stands in their place.
+_KNOWN_FILES = ("features.txt", "group_names.txt", "Motion-capture-data.csv", "features.mat")
+
+
+def _known_names_unreadable(folder: Path) -> str:
+    """The format files ``folder`` names but holds no file as (a folder, a link loop, a FIFO),
+    each with what it is: ``features.mat is a folder``; empty when there are none."""
+    from reform.atomic import file_kind
+
+    odd = []
+    for name in _KNOWN_FILES:
+        entry = folder / name
+        if entry.is_symlink() or entry.exists():
+            kind = file_kind(entry)
+            if kind != "a file":
+                odd.append(f"{name} is {kind}")
+    return ", ".join(odd)
 
 
 @file_errors_as_data_errors

@@ -971,6 +971,12 @@ def resolve(
             f"{text}/, or fetch it once online: `reform-sim datasets fetch {text}` "
             "(--mirror URL fetches from a copy)"
         )
+    if path.is_symlink():  # a link that leads nowhere: said, not taken for a name
+        from reform.atomic import file_kind
+
+        raise FileNotFoundError(
+            f"{text}: expected a dataset file or folder, found {file_kind(path)}"
+        )
     raise FileNotFoundError(
         f"{text}: no such file or folder, nor a dataset name; the public datasets are: "
         + ", ".join(entries)

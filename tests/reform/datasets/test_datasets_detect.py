@@ -14,7 +14,7 @@ from dataset_refusals import assert_refused_by_each
 
 from reform import DataFormatError, Dataset, Frame
 from reform.datasets import _walk as walk
-from reform.datasets import detect_format, load_dataset, write_parquet
+from reform.datasets import detect_format, load_dataset, resolve, write_parquet
 
 
 def _salsa_and_babble(salsa_dir: Path, babble_dir: Path, folder: Path) -> Path:
@@ -173,3 +173,23 @@ def test_a_generated_folder_may_hold_more_entries_than_the_bound(tmp_path, monke
     (folder / "dataset.json").unlink()  # without the card: the bound holds
     with pytest.raises(DataFormatError, match=rf"found more than {entries - 2} entries"):
         load_dataset(folder, format="parquet")
+
+
+def test_a_format_file_that_is_no_file_is_named_not_just_none_of_the_formats(tmp_path):
+    folder = tmp_path / "set"
+    folder.mkdir()
+    (folder / "features.mat").mkdir()
+    (folder / "Motion-capture-data.csv").symlink_to("Motion-capture-data.csv")  # a loop
+    with pytest.raises(DataFormatError) as caught:
+        detect_format(folder)
+    assert str(caught.value).endswith(
+        "found none of them: Motion-capture-data.csv is a symbolic link loop, features.mat is a "
+        "folder"
+    )
+    # Given as the dataset itself, a link that leads nowhere is said so, not taken for a name.
+    with pytest.raises(FileNotFoundError) as caught:
+        resolve(folder / "Motion-capture-data.csv")
+    assert str(caught.value) == (
+        f"{folder / 'Motion-capture-data.csv'}: expected a dataset file or folder, found a "
+        "symbolic link loop"
+    )
