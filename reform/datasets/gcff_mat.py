@@ -249,7 +249,16 @@ def sequence_folders(folder: Path) -> list[Path]:
         raise DataFormatError(
             folder, None, None, "a readable folder", os_error_found(exc)
         ) from None
-    return [child for child in children if child.is_dir() and (child / FEATURES_FILE).is_file()]
+    found = []
+    for child in children:
+        try:
+            if child.is_dir() and (child / FEATURES_FILE).is_file():
+                found.append(child)
+        except OSError as exc:  # a subfolder that cannot be looked into: named, not its file
+            raise DataFormatError(
+                child, None, None, "a readable folder", os_error_found(exc)
+            ) from None
+    return found
 
 
 # Files that show a folder holds a dataset of another format (or of this one, deeper).
