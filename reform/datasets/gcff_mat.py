@@ -706,7 +706,7 @@ def _frame_rows(
         return f"{where}, row {row + 1}"
 
     DataFormatError.check_rows(
-        ~np.isfinite(array[:, 0]), path, at_row, "ID", "a finite number", array[:, 0], repr
+        ~np.isfinite(array[:, 0]), path, at_row, "ID", "a finite number", array[:, 0]
     )
     unposed = np.isnan(array[:, 1:]).any(axis=1)
     if unposed.any():
