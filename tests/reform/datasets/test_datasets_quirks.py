@@ -174,7 +174,9 @@ def test_nan_poses_in_assumed_centimetres_are_said_to_mark_image_pixels(tmp_path
 
 def test_a_nan_id_is_malformed(tmp_path):
     folder = _gcff(tmp_path / "set", [[*PEOPLE, [np.nan, 1.0, 1.0, 0.0]]], [[[1, 2]]])
-    with pytest.raises(DataFormatError, match=r"frame 1, row 4: field 'ID': expected a finite"):
+    with pytest.raises(
+        DataFormatError, match=r"frame 1, row 4: field 'ID': expected a finite number, found nan$"
+    ):
         load_gcff(folder)
 
 
