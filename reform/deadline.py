@@ -50,8 +50,12 @@ __all__ = [
     "within",
 ]
 
-DURATION_FORM = "a duration above zero (seconds, or with a unit: 90s, 2m, 500ms)"
-_DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s|m|min)?\s*$")
+MAX_DEADLINE_S = 30 * 86400.0  # seconds: the longest deadline (past it, a system timer overflows)
+DURATION_FORM = (
+    "a duration above zero and at most 30 days (seconds, or with a unit: 90s, 2m, 500ms)"
+)
+# ASCII digits only: ``\d`` would take other scripts' digits ('٣') for 3.
+_DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?|\.[0-9]+)\s*(ms|s|m|min)?\s*$")
 _UNIT_S = {None: 1.0, "s": 1.0, "ms": 1e-3, "m": 60.0, "min": 60.0}
 _STACK_DEPTH = 64  # Python frames kept of a call stopped at its deadline, innermost first
 # Seconds past its deadline a call may go on holding the interpreter before hard_stops ends the
@@ -63,10 +67,10 @@ T = TypeVar("T")
 
 def duration(text: str) -> float | None:
     """``text`` as seconds (``"30"``, ``"1.5"``, ``"90s"``, ``"2m"``, ``"500ms"``, spaces
-    allowed), or None when it is not a duration above zero."""
+    allowed), or None when it is not a duration above zero and at most `MAX_DEADLINE_S`."""
     match = _DURATION.match(text) if isinstance(text, str) else None
     seconds = float(match.group(1)) * _UNIT_S[match.group(2)] if match else 0.0
-    return seconds if seconds > 0.0 else None
+    return seconds if 0.0 < seconds <= MAX_DEADLINE_S else None
 
 
 class DeadlineExpired(BaseException):
@@ -109,8 +113,10 @@ def within(
         ValueError: ``seconds`` not above zero.
         Whatever ``call`` raises.
     """
-    if not seconds > 0.0:
-        raise ValueError(f"seconds must be above zero, got {seconds!r}")
+    if not 0.0 < seconds <= MAX_DEADLINE_S:
+        raise ValueError(
+            f"seconds must be above zero and at most {MAX_DEADLINE_S:g} (30 days), got {seconds!r}"
+        )
     main = threading.current_thread() is threading.main_thread()
     if not main or not hasattr(signal, "setitimer"):
         return in_thread(seconds, call, *args, **kwargs)

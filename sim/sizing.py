@@ -122,7 +122,9 @@ MAX_RUN_SECONDS = 7 * 24 * 3600.0  # seconds: a run estimated to take longer her
 # a mistake (a generated dataset grows across runs: a larger --episodes extends it)
 VIEWS = ("truth", "robot")
 
-_SIZE = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)\s*([kmgtpe]?)(i?b?)\s*", re.IGNORECASE)
+# ASCII digits only: ``\d`` would take other scripts' digits ('٣') for 3.
+_SIZE = re.compile(r"\s*([0-9]+(?:\.[0-9]*)?|\.[0-9]+)\s*([kmgtpe]?)(i?b?)\s*", re.IGNORECASE)
+MAX_SIZE = 8 * 1024**6  # bytes (8E, 8 EiB): the largest size parse_size gives
 
 
 # --------------------------------------------------------------------------------------------
@@ -136,16 +138,21 @@ def parse_size(text: str) -> int:
     trailing ``B`` or ``iB``; a bare number is bytes.
 
     Raises:
-        ValueError: anything else, or a size of 0.
+        ValueError: anything else (digits of other scripts too), a size of 0, or one past
+            `MAX_SIZE`.
     """
-    match = _SIZE.fullmatch(str(text))
+    text = str(text)
+    shown = repr(text) if len(text) <= 40 else f"{text[:20]!r}… ({len(text):,} characters)"
+    match = _SIZE.fullmatch(text)
     if match is None or (match.group(3) and not match.group(2) and match.group(3).lower() != "b"):
-        raise ValueError(f"expected a size such as 8G, 512M or 1.5GiB, got {text!r}")
+        raise ValueError(f"expected a size such as 8G, 512M or 1.5GiB, got {shown}")
     power = " KMGTPE".index(match.group(2).upper() or " ")
-    size = int(float(match.group(1)) * 1024**power)
+    size = float(match.group(1)) * 1024**power  # inf past a float's range
+    if not size <= MAX_SIZE:
+        raise ValueError(f"expected a size of at most 8E (8 EiB), got {shown}")
     if size < 1:
-        raise ValueError(f"expected a size of at least 1 byte, got {text!r}")
-    return size
+        raise ValueError(f"expected a size of at least 1 byte, got {shown}")
+    return int(size)
 
 
 def format_duration(seconds: float) -> str:

@@ -392,7 +392,8 @@ def detector_timeout(text: str) -> float:
 
     seconds = duration(text)
     if seconds is None:
-        raise argparse.ArgumentTypeError(f"expected {DURATION_FORM}, got {text!r}")
+        shown = repr(text) if len(text) <= 40 else f"{text[:20]!r}… ({len(text):,} characters)"
+        raise argparse.ArgumentTypeError(f"expected {DURATION_FORM}, got {shown}")
     return seconds
 
 

@@ -97,7 +97,7 @@ def test_a_store_that_never_answers_ends_the_command_within_its_deadline(argv, s
     )
 
 
-@pytest.mark.parametrize("value", ["0", "-2", "0s", "soon", "2 hours"])
+@pytest.mark.parametrize("value", ["0", "-2", "0s", "soon", "2 hours", "1" + "0" * 30, "\u0663"])
 def test_a_deadline_that_is_not_a_duration_above_zero_is_one_line_before_any_work(
     value, silent_store, tmp_path
 ):
@@ -107,8 +107,8 @@ def test_a_deadline_that_is_not_a_duration_above_zero_is_one_line_before_any_wor
     assert done.returncode == 2
     (line,) = done.stderr.splitlines()
     assert line.endswith(
-        f"{TIMEOUT_VARIABLE} must be a duration above zero (seconds, or with a unit: 90s, 2m, "
-        f"500ms), got {value!r}"
+        f"{TIMEOUT_VARIABLE} must be a duration above zero and at most 30 days (seconds, or with "
+        f"a unit: 90s, 2m, 500ms), got {value!r}"
     )
 
 

@@ -179,7 +179,7 @@ def test_predict_past_its_deadline_ends_stress_in_one_line(lab, capsys, monkeypa
 
 
 @pytest.mark.parametrize("command", ["detect", "evaluate", "benchmark", "stress"])
-@pytest.mark.parametrize("value", ["0", "-2", "0s", "soon", "2 hours"])
+@pytest.mark.parametrize("value", ["0", "-2", "0s", "soon", "2 hours", "1" + "0" * 30, "\u0663"])
 def test_a_deadline_that_is_not_a_duration_above_zero_is_one_line_before_any_work(
     command, value, capsys, tmp_path
 ):
@@ -191,7 +191,7 @@ def test_a_deadline_that_is_not_a_duration_above_zero_is_one_line_before_any_wor
     assert line.count("\n") == 1
     assert line.startswith(
         f"reform-sim {command}: error: argument --detector-timeout: expected a duration above "
-        f"zero (seconds, or with a unit: 90s, 2m, 500ms), got {value!r}"
+        f"zero and at most 30 days (seconds, or with a unit: 90s, 2m, 500ms), got {value!r}"
     )
 
 
