@@ -910,13 +910,35 @@ def read_card(out_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
 
 def _checked_card(card: Any, where: object) -> dict[str, Any]:
     """``card`` (parsed JSON) when it is a reform-sim dataset card, else a ValueError naming
-    ``where``."""
+    ``where`` and the field: its parameters an object, its version one this version reads,
+    its episodes a count, ``complete`` true or false. A run resuming it rewrites it, so a field
+    it would rewrite is checked here rather than silently mended."""
     if not isinstance(card, dict) or not isinstance(card.get("parameters"), dict):
         raise ValueError(
             f"{where}: expected a reform-sim dataset card with a 'parameters' object, "
             f"got {type(card).__name__}"
         )
+    version = card.get("card_version", CARD_VERSION)
+    episodes = card.get("episodes", 0)
+    complete = card.get("complete", False)
+    checks = (
+        (
+            "card_version",
+            version,
+            _is_int(version) and 1 <= version <= CARD_VERSION,
+            f"an integer from 1 to {CARD_VERSION}",
+        ),
+        ("episodes", episodes, _is_int(episodes) and episodes >= 0, "a count of episodes"),
+        ("complete", complete, isinstance(complete, bool), "true or false"),
+    )
+    for name, value, ok, expected in checks:
+        if not ok:
+            raise ValueError(f"{where}: field {name!r}: expected {expected}, found {value!r}")
     return card
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def _is_ours(name: str) -> bool:

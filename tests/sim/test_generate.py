@@ -379,6 +379,21 @@ def test_a_folder_holding_another_dataset_is_refused_before_any_work(reference, 
     (broken / CARD_JSON).write_text("[1, 2]")
     with pytest.raises(ValueError, match=r"expected a reform-sim dataset card"):
         generate(broken)
+    # A field the resume would rewrite is refused, not mended: (field, value written, found).
+    made = tmp_path / "made"
+    generate(made, episodes=1, duration=5.0)
+    card = json.loads((made / CARD_JSON).read_text())
+    for field, value, found in (
+        ("card_version", 99, "99"),
+        ("episodes", -1, "-1"),
+        ("episodes", float("nan"), "nan"),
+        ("complete", "yes", "'yes'"),
+    ):
+        (made / CARD_JSON).write_text(json.dumps({**card, field: value}))
+        with pytest.raises(ValueError) as caught:
+            generate(made, episodes=1, duration=5.0)
+        assert str(caught.value).startswith(f"{made / CARD_JSON}: field {field!r}: expected ")
+        assert str(caught.value).endswith(f", found {found}")
     (broken / CARD_JSON).write_text('{"card_version": ' + "1" * 5000 + "}")
     with pytest.raises(
         ValueError,
