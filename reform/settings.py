@@ -101,7 +101,12 @@ def read_settings(path: str | os.PathLike[str]) -> Settings:
     checked = {}
     for key, value in options.items():
         try:
-            checked[key] = info.option(key).check(name, value)
+            option = info.option(key)
+            if value is None:  # a settings file states values: null would reach the factory
+                raise DetectorError(
+                    f"detector {name!r}: option {key} expects {option.expects()}, got null"
+                )
+            checked[key] = option.check(name, value)
         except DetectorError as exc:
             raise _refuse(path, f"field 'options.{key}': {exc}") from None
     about = {k: v for k, v in document.items() if k not in _REQUIRED}

@@ -56,6 +56,11 @@ GOOD = {
             "stride expects a float in m from 0.01 to 10, got a int (99)",
         ),
         ({**GOOD, "options": {"size": 3}}, "field 'options.size': detector 'gcff' has no option"),
+        (
+            {**GOOD, "options": {"stride": None}},
+            "field 'options.stride': detector 'gcff': option stride expects a float in m from "
+            "0.01 to 10, got null",
+        ),
     ],
     ids=[
         "not-json",
@@ -68,6 +73,7 @@ GOOD = {
         "detector",
         "range",
         "unknown",
+        "null",  # was refused by the detector at its first frame, naming no file
     ],
 )
 def test_a_bad_settings_file_is_one_line(tmp_path, document, message):
