@@ -273,6 +273,23 @@ def twin_from_json(data: Any, *, where: str = "twin") -> Twin:
         steps_per_frame(rate)
     except ValueError:
         raise _fail(where, "rate_hz", whole_step_rates(), data["rate_hz"]) from None
+    length = checked.get("duration")  # seconds of each episode, as generate reads them
+    if isinstance(length, (int, float)):
+        if length * rate < 1.0 - 1e-9:
+            raise _fail(
+                where,
+                "rate_hz",
+                f"a rate at which an episode of options.duration {length:g} s holds a frame "
+                f"(at least {1.0 / length:g} Hz)",
+                data["rate_hz"],
+            )
+        if model.min_group_seconds >= length:
+            raise _fail(
+                where,
+                "annotation.min_group_seconds",
+                f"less than an episode (options.duration {length:g} s)",
+                annotation["min_group_seconds"],
+            )
     episodes = _integer(where, "episodes", data["episodes"], 1, MAX_EPISODES)
     seed = _integer(where, "seed", data["seed"], 0, MAX_SEED)
     try:  # options each in range may not go together (a party too large for its room)

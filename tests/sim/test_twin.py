@@ -150,6 +150,16 @@ def twin_file(fitted, tmp_path_factory) -> Path:
             r"field annotation: .*directions must be at most 3600",
         ),
         (lambda d: d["annotation"].update(yaw_noise=1e300), r"field annotation: .*at most 6\.28"),
+        (
+            lambda d: d.update(rate_hz=1e-300),
+            r"field rate_hz: expected a rate at which an episode of options.duration [\d.]+ s "
+            r"holds a frame \(at least [\d.e-]+ Hz\), found 1e-300$",
+        ),
+        (
+            lambda d: d["annotation"].update(min_group_seconds=1e308),
+            r"field annotation.min_group_seconds: expected less than an episode "
+            r"\(options.duration [\d.]+ s\), found 1e\+308$",
+        ),
     ],
     ids=[
         "unknown-field",
@@ -171,6 +181,8 @@ def twin_file(fitted, tmp_path_factory) -> Path:
         "version-not-whole",
         "directions-too-many",
         "yaw-jitter-too-large",
+        "rate-too-low-for-a-frame",  # was generate's line, naming no twin file
+        "min-group-longer-than-an-episode",
     ],  # fmt: skip
 )
 def test_a_twin_file_edited_into_nonsense_is_refused(twin_file, tmp_path, edit, message):
