@@ -199,6 +199,8 @@ class Option:
             "bool": _parse_bool,
         }
         try:
+            if self.type in ("float", "int") and not text.isascii():  # int('٣') would be 3
+                raise ValueError
             value = parsers[self.type](text)
         except ValueError:
             raise DetectorError(

@@ -155,10 +155,10 @@ class Option:
                 if low not in _TRUE + _FALSE:
                     raise ValueError
                 value: Any = low in _TRUE
-            elif kind is int:
-                value = int(text)
-            elif kind is float:
-                value = float(text)
+            elif kind in (int, float):  # in ASCII: int('٣') would be 3
+                if not text.isascii():
+                    raise ValueError
+                value = kind(text)
             else:
                 value = text
         except ValueError:

@@ -6,6 +6,7 @@ import argparse
 
 from sim.cli._common import FORMATS
 from sim.cli._grammar import add_quiet, add_report_out, run_loading
+from sim.cli._numbers import ascii_float, ascii_int
 
 DESCRIPTION = """\
 Measures the ground-truth F-formations of one or more datasets (real or synthetic): Tightness
@@ -59,14 +60,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--min-groups",
-        type=int,
+        type=ascii_int,
         default=None,
         metavar="N",
         help="fewest F-formations of a size for it to be tested and checked (default 5)",
     )
     parser.add_argument(
         "--tolerance",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="M",
         help="calibration tolerance on mean Tightness by size, metres (default 0.1)",

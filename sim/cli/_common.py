@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from sim.cli._command import Command
+from sim.cli._numbers import ascii_float, ascii_int
 
 if TYPE_CHECKING:
     from sim.sizing import RequestTooLarge
@@ -409,7 +410,7 @@ def add_jobs_argument(parser: argparse.ArgumentParser, *, does: str = "worker pr
     every command (None until :func:`job_count` reads it); ``does``: what they do, for the help."""
     parser.add_argument(
         "--jobs",
-        type=int,
+        type=ascii_int,
         default=None,
         metavar="N",
         help=f"{does} (default: {DEFAULT_JOBS}); results do not depend on it",
@@ -508,7 +509,9 @@ def add_train_fraction_argument(
 ) -> None:
     """``--train-fraction F``: the training share of `reform.time_split`, checked by
     :func:`check_train_fraction` (``default`` None: tell "not given" from the default)."""
-    parser.add_argument("--train-fraction", type=float, default=default, metavar="F", help=help)
+    parser.add_argument(
+        "--train-fraction", type=ascii_float, default=default, metavar="F", help=help
+    )
 
 
 def check_train_fraction(args: argparse.Namespace) -> None:
@@ -661,7 +664,7 @@ def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:
     sensor = parser.add_argument_group("sensor (with --view robot)")
     for name, (flag, metavar, text) in _SENSOR_NUMBERS.items():
         sensor.add_argument(
-            flag, dest=f"sensor_{name}", type=float, default=None, metavar=metavar, help=text
+            flag, dest=f"sensor_{name}", type=ascii_float, default=None, metavar=metavar, help=text
         )
     for name, (flag, text) in _SENSOR_SWITCHES.items():
         sensor.add_argument(
@@ -754,7 +757,7 @@ def add_unit_arguments(parser: argparse.ArgumentParser, *, whose: str = "the fil
     )
     parser.add_argument(
         "--metres-per-pixel",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="M",
         help="with --units px: the scale of the pixel positions, metres per pixel",

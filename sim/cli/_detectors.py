@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from sim.cli._common import CliError, load_data
+from sim.cli._numbers import ascii_float
 
 __all__ = [
     "DETECTORS",
@@ -108,14 +109,14 @@ def _gcff_arguments(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--stride",
-        type=float,
+        type=ascii_float,
         metavar="S",
         help="gcff: distance of the o-space centre in front of each person, in METRES "
         "(default 0.7 m = 70 cm; the same as --option stride=S)",
     )
     group.add_argument(
         "--mdl",
-        type=float,
+        type=ascii_float,
         metavar="M",
         help="gcff: cost of opening one more group, in SQUARE METRES (default 3.0 m², the "
         "REFORM paper's 'MDL 30000' cm²; the reference code's 10000 cm² is 1.0 m²; the same as "

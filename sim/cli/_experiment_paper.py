@@ -7,6 +7,7 @@ import argparse
 from sim.cli._common import add_jobs_argument
 from sim.cli._experiment_io import add_salsa_split_arguments
 from sim.cli._grammar import add_quiet, run_loading
+from sim.cli._numbers import ascii_int
 
 DESCRIPTION = """\
 Trains REFORM with the paper's three classifiers on the SALSA training split (reform.time_split:
@@ -23,7 +24,7 @@ BASENAME = "paper-experiment"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_salsa_split_arguments(parser, basename=BASENAME, use="for training (0.6)")
-    parser.add_argument("--folds", type=int, default=5, metavar="K", help="CV folds (5)")
+    parser.add_argument("--folds", type=ascii_int, default=5, metavar="K", help="CV folds (5)")
     add_jobs_argument(parser, does="processes fitting the cross-validation folds")
     parser.add_argument(
         "--no-diagnostics", action="store_true", help="skip the diagnostic reruns (faster)"

@@ -8,6 +8,7 @@ import argparse
 from sim.cli._common import add_backend_arguments
 from sim.cli._experiment_io import add_out_argument
 from sim.cli._grammar import add_quiet, add_seed, run_loading
+from sim.cli._numbers import ascii_float
 
 DESCRIPTION = """\
 Trains REFORM only on generated data: every candidate (recipes of synthetic data x the paper's
@@ -49,7 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser)
     parser.add_argument(
         "--episodes-scale",
-        type=float,
+        type=ascii_float,
         default=1.0,
         metavar="X",
         help="multiply every source's episodes by X (at least 1 each; 1 = the documented run)",

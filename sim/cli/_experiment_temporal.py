@@ -8,6 +8,7 @@ import argparse
 from sim.cli._common import add_jobs_argument
 from sim.cli._experiment_io import add_out_argument
 from sim.cli._grammar import add_quiet, add_seed, run_loading
+from sim.cli._numbers import ascii_float, ascii_int
 from sim.experiments.temporal import DURATION_S, EPISODES, RATE_HZ
 
 DESCRIPTION = """\
@@ -42,17 +43,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "or learns on training frames)",
     )
     parser.add_argument(
-        "--episodes", type=int, default=EPISODES, metavar="N", help=f"party episodes ({EPISODES})"
+        "--episodes",
+        type=ascii_int,
+        default=EPISODES,
+        metavar="N",
+        help=f"party episodes ({EPISODES})",
     )
     parser.add_argument(
         "--duration",
-        type=float,
+        type=ascii_float,
         default=DURATION_S,
         metavar="S",
         help=f"seconds per party episode ({DURATION_S:g})",
     )
     parser.add_argument(
-        "--rate", type=float, default=RATE_HZ, metavar="HZ", help=f"frames per second ({RATE_HZ:g})"
+        "--rate",
+        type=ascii_float,
+        default=RATE_HZ,
+        metavar="HZ",
+        help=f"frames per second ({RATE_HZ:g})",
     )
     add_jobs_argument(parser)
     add_out_argument(parser, basename=BASENAME)

@@ -7,6 +7,7 @@ import argparse
 from sim.cli._common import run_with
 from sim.cli._experiment_io import add_out_argument
 from sim.cli._grammar import add_quiet, add_seed
+from sim.cli._numbers import ascii_int
 
 DESCRIPTION = """\
 For every real dataset found: fits its label-free venue twin (`reform-sim twin`), generates the
@@ -51,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser)
     parser.add_argument(
         "--repeats",
-        type=int,
+        type=ascii_int,
         default=REPEATS,
         metavar="N",
         help=f"run the whole experiment N times (1-{MAX_REPEATS}; default {REPEATS}), with "
@@ -59,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--twins-per-place",
-        type=int,
+        type=ascii_int,
         default=PER_PLACE,
         metavar="K",
         help=f"twins fitted to each place with consecutive seeds, their predictions averaged "

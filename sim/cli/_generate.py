@@ -11,7 +11,15 @@ from sim.cli._common import (
     add_sensor_arguments,
     add_view_argument,
 )
-from sim.cli._grammar import add_quiet, add_recordings, add_seed, rename, run_loading, setter
+from sim.cli._grammar import (
+    add_quiet,
+    add_recordings,
+    add_seed,
+    rename,
+    run_loading,
+    setter,
+)
+from sim.cli._numbers import ascii_float, ascii_int
 
 DESCRIPTION = """\
 Simulates EPISODES episodes of a scenario and writes them as hive-partitioned Parquet
@@ -36,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "and episodes (--episodes overrides its own)",
     )
     parser.add_argument(
-        "--episodes", type=int, metavar="N", help="episodes (required unless --twin is given)"
+        "--episodes", type=ascii_int, metavar="N", help="episodes (required unless --twin is given)"
     )
     add_seed(parser)
     parser.add_argument(
@@ -48,10 +56,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_overrides_argument(parser)
     parser.add_argument(
-        "--duration", type=float, default=None, metavar="SECONDS", help="episode length"
+        "--duration", type=ascii_float, default=None, metavar="SECONDS", help="episode length"
     )
     parser.add_argument(
-        "--rate", type=float, default=None, metavar="HZ", help="output (annotation) rate (2 Hz)"
+        "--rate",
+        type=ascii_float,
+        default=None,
+        metavar="HZ",
+        help="output (annotation) rate (2 Hz)",
     )
     add_view_argument(parser)
     add_sensor_arguments(parser)

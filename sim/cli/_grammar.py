@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.cli._common import TRAIN_FRACTION, check_output, run_with, warn_deprecated
+from sim.cli._numbers import ascii_float, ascii_int
 from sim.progress import elapsed_line, progress_bar
 from sim.ticking import ticking
 
@@ -123,7 +124,7 @@ MAX_SEED = 2**63 - 1
 def _seed(text: str) -> int:
     """A ``--seed`` value: a whole number from 0 to `MAX_SEED`."""
     try:
-        value = int(text)
+        value = ascii_int(text)
     except ValueError:
         value = None
     if value is None or not 0 <= value <= MAX_SEED:
@@ -150,10 +151,10 @@ def add_episodes(
 ) -> None:
     """``--episodes N`` (``old``: its former spelling, e.g. ``--seeds``)."""
     parser.add_argument(
-        "--episodes", type=int, default=default, required=required, metavar="N", help=help
+        "--episodes", type=ascii_int, default=default, required=required, metavar="N", help=help
     )
     if old is not None:
-        rename(parser, old, "--episodes", setter("episodes"), metavar="N", type=int)
+        rename(parser, old, "--episodes", setter("episodes"), metavar="N", type=ascii_int)
 
 
 def add_quiet(parser: argparse.ArgumentParser, *, old: Sequence[str] = ("--no-progress",)) -> None:
@@ -378,7 +379,7 @@ def add_frames(
     )
     parser.add_argument(
         "--train-fraction",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="F",
         help="with --frames train|test: each sequence's share of annotated frames, by time, in "
@@ -412,7 +413,7 @@ def add_temporal_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--tolerance",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="S",
         help="with --temporal: seconds between a true event and the detected event matching "

@@ -11,6 +11,7 @@ from sim.cli._common import (
     add_view_argument,
 )
 from sim.cli._grammar import add_quiet, add_seed, run_loading
+from sim.cli._numbers import ascii_float
 from sim.recording import add_recording_arguments
 
 DESCRIPTION = """\
@@ -34,19 +35,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="FILE.parquet", help="output file")
     parser.add_argument(
         "--duration",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="SECONDS",
         help="seconds to simulate (default: the scenario's natural length)",
     )
     parser.add_argument(
-        "--rate", type=float, default=None, metavar="HZ", help="frames per second (default 2)"
+        "--rate", type=ascii_float, default=None, metavar="HZ", help="frames per second (default 2)"
     )
     add_view_argument(parser)
     add_overrides_argument(parser)
     parser.add_argument(
         "--dt",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="SECONDS",
         help="control step of the world (default 0.01; up to 0.1, faster and rougher)",

@@ -10,6 +10,7 @@ from reform.features import DEFAULT_FEATURES, FEATURES
 from reform.reconstruction import RECONSTRUCTIONS
 from sim.cli._common import add_data_arguments, add_jobs_argument
 from sim.cli._grammar import add_frames, add_quiet, run_loading
+from sim.cli._numbers import ascii_float, ascii_int
 
 DESCRIPTION = """\
 Deconstructs the annotated frames of a dataset into pairs (Distance, Effort Angle), fits one of
@@ -61,14 +62,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_frames(parser, scored="to train on")
     parser.add_argument(
         "--every",
-        type=int,
+        type=ascii_int,
         default=1,
         metavar="K",
         help="train on every K-th of those frames, in time order per sequence (default: 1, all)",
     )
     parser.add_argument(
         "--validation",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="F",
         help="dante: the last F of each sequence's training frames stop training early "
@@ -95,7 +96,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--threshold",
-        type=float,
+        type=ascii_float,
         default=None,
         metavar="P",
         help="together when the classifier's probability is at least P (default: its decision)",

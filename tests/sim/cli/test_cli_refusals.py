@@ -11,6 +11,7 @@ from toy_scenes import toy_frames
 
 import sim.envs  # noqa: F401  (registers the environments)
 from reform import Dataset, write_parquet
+from sim.cli import main
 
 GENERATE = ["generate", "--scenario", "mingle", "--episodes", "1", "--set", "people=6", "-q"]
 
@@ -202,3 +203,29 @@ def test_an_option_of_one_value_given_twice_is_refused_not_read_as_the_last(
     assert err == f"reform-sim {argv[0]}: error: {message}"
     assert not out.exists()
 
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["generate", "--scenario", "mingle", "--episodes=\u0663"], "argument --episodes: invalid "
+         "int value: '\u0663'"),
+        (["generate", "--scenario", "mingle", "--episodes", "1", "--set", "people=\u0663"],
+         "mingle: option people must be an integer, got '\u0663'"),
+        (["evaluate", "--detector", "gcff", "--stride", "\u0663", "--data", "x"], "argument "
+         "--stride: invalid float value: '\u0663'"),
+        (["generate", "--scenario", "mingle", "--episodes", "1", "--seed", "\u0663"], "argument "
+         "--seed: expected a whole number from 0"),
+    ],
+    ids=["episodes", "scenario-option", "detector-option", "seed"],
+)  # fmt: skip
+def test_digits_of_other_scripts_are_refused_not_read_as_ascii(argv, message, tmp_path, capsys):
+    # int('\u0663') is 3: a count typed in another script is refused, not read as one
+    try:
+        status = main([*argv, "--out", str(tmp_path / "out")])
+    except SystemExit as stop:  # argparse's own refusal
+        status = stop.code
+    err = capsys.readouterr().err.strip()
+    assert status == 2 and len(err.splitlines()) == 1, err
+    assert message in err
+    assert not (tmp_path / "out").exists()
