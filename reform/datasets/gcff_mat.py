@@ -270,17 +270,17 @@ _SEQUENCE_FILES = (GROUNDTRUTH_FILE, SETTINGS_FILE, "settings.mat")
 
 
 def _broken_sequence(child: Path) -> str | None:
-    """What keeps a subfolder that is a GCFF sequence by its other files (its ground truth,
-    its settings) from being read as one: its ``features.mat`` missing, or not a file (a
-    folder, a link that leads nowhere), with any near name it holds instead; None when it
-    is no sequence, or a whole one."""
+    """What keeps a subfolder that is a GCFF sequence by its ground truth (or a near name of
+    its features file) from being read as one: its ``features.mat`` missing, or not a file (a
+    folder, a link that leads nowhere), with what it holds instead; None when it is no
+    sequence, or a whole one."""
     try:
         names = sorted(entry.name for entry in child.iterdir())
     except OSError as exc:
-        return f"a folder that cannot be listed ({exc.strerror or exc})"
+        return f"a folder that cannot be listed: {os_error_found(exc)}"
     near = [n for n in names if n != FEATURES_FILE and n.lower().startswith(FEATURES_FILE)]
-    if not (set(names) & set(_SEQUENCE_FILES) or near or FEATURES_FILE in names):
-        return None
+    if not (GROUNDTRUTH_FILE in names or near or FEATURES_FILE in names):
+        return None  # settings alone make no sequence (the public Poster folder ships only those)
     features = child / FEATURES_FILE
     if FEATURES_FILE in names:
         if features.is_file():
@@ -297,20 +297,14 @@ def _check_only_sequences(folder: Path, sequences: list[Path]) -> None:
     one dataset would leave the others out without a word. So is one whose other subfolder is
     a sequence that cannot be read (`_broken_sequence`): it would be left out the same way."""
     others = []
+    broken: list[tuple[Path, str]] = []
     for child in sorted(folder.iterdir()):
         if child in sequences or child.name.startswith((".", "_")) or not child.is_dir():
             continue
-        broken = _broken_sequence(child)
-        if broken is not None:
-            raise DataFormatError(
-                child,
-                None,
-                None,
-                f"a GCFF sequence folder like {', '.join(s.name for s in sequences)}, with its "
-                f"{FEATURES_FILE}",
-                broken,
-                hint="put its features file back, or move the folder out, to read the others",
-            )
+        what = _broken_sequence(child)
+        if what is not None:
+            broken.append((child, what))
+            continue
         try:
             holds = any((child / name).is_file() for name in _OTHER_DATASET_FILES) or bool(
                 sequence_folders(child)
@@ -328,6 +322,17 @@ def _check_only_sequences(folder: Path, sequences: list[Path]) -> None:
             f"a folder of datasets: GCFF sequences {[s.name for s in sequences]} beside "
             f"other datasets {others}",
             hint="name one dataset's folder",
+        )
+    if broken:
+        child, what = broken[0]
+        raise DataFormatError(
+            child,
+            None,
+            None,
+            f"a GCFF sequence folder like {', '.join(s.name for s in sequences)}, with its "
+            f"{FEATURES_FILE}",
+            what,
+            hint="put its features file back, or move the folder out, to read the others",
         )
 
 

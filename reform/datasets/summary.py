@@ -9,7 +9,7 @@ import numpy as np
 
 from reform.frame import Dataset
 
-__all__ = ["repairs_line", "summarise"]
+__all__ = ["CAUTIONS", "repairs_line", "summarise"]
 
 
 # What a loader's report may say beside its repairs, when what it read casts doubt on the file:

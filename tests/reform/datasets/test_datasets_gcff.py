@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gzip
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -541,6 +542,21 @@ def test_a_sequence_that_cannot_be_read_is_refused_not_left_out(tmp_path, damage
         rf"set/Seq2: expected a GCFF sequence folder like Seq1, with its features.mat, found "
         rf"{re.escape(found)}; put its features file back, or move the folder out",
     )
+
+
+def test_a_folder_of_settings_alone_is_no_sequence_and_a_folder_of_datasets_says_so(tmp_path):
+    folder = tmp_path / "octave"  # as the public repository lays its sets out
+    _write(folder / "Synth")
+    (folder / "Poster").mkdir()  # its settings only: the data are not public
+    scipy.io.savemat(folder / "Poster" / "settings_gc.mat", {"stride": 70.0, "mdl": 10000.0})
+    assert [f.sequence for f in load_gcff(folder).frames][:1] == ["Synth"]
+    _write(folder / "CoffeeBreak" / "Seq1")
+    (folder / "Half").mkdir()
+    (folder / "Half" / "groundtruth.mat").write_bytes(b"")  # a sequence without its features
+    # Both are wrong: the folder of datasets is what the user meant to name, and is said first.
+    assert_refused(load_gcff, folder, r"found a folder of datasets: .*\['CoffeeBreak'\]")
+    shutil.rmtree(folder / "CoffeeBreak")
+    assert_refused(load_gcff, folder, r"Half: expected a GCFF sequence folder like Synth")
 
 
 def test_a_folder_of_datasets_is_not_read_as_its_gcff_ones(tmp_path, shared_datasets):
