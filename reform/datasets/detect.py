@@ -257,36 +257,32 @@ def load_dataset(
             path, None, None, f"an existing {format} file or folder", "no such file or folder"
         )
 
+    if format == "parquet":
+        from reform.datasets.parquet import read_parquet
+
+        return read_parquet(path, allow_incomplete=allow_incomplete)
     if format == "salsa":
         from reform.datasets.dante import load_dante
 
-        return _someone_seen(
-            load_dante(
-                path,
-                strict=strict,
-                units=units,
-                metres_per_pixel=metres_per_pixel,
-                time_unit=time_unit,
-            ),
+        dataset = load_dante(
             path,
+            strict=strict,
+            units=units,
+            metres_per_pixel=metres_per_pixel,
+            time_unit=time_unit,
         )
-    if format == "babble":
+    elif format == "babble":
         from reform.datasets.babble import load_babble
 
-        return _someone_seen(load_babble(path), path)
-    if format == "gcff":
+        dataset = load_babble(path)
+    else:
         from reform.datasets.gcff_mat import load_gcff
 
-        return _someone_seen(
-            load_gcff(
-                path,
-                units=units,
-                metres_per_pixel=metres_per_pixel,
-                strict=strict,
-                time_unit=time_unit,
-            ),
+        dataset = load_gcff(
             path,
+            units=units,
+            metres_per_pixel=metres_per_pixel,
+            strict=strict,
+            time_unit=time_unit,
         )
-    from reform.datasets.parquet import read_parquet
-
-    return read_parquet(path, allow_incomplete=allow_incomplete)
+    return _someone_seen(dataset, path)  # a recording of the field's

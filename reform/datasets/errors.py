@@ -32,14 +32,14 @@ _OS_ERRORS = {
     errno.ENOENT: "no such file or folder",
     errno.EISDIR: "a folder, not a file",
     errno.ENOTDIR: "a path through something that is not a folder",
-    errno.ELOOP: "a link that leads to itself (a loop)",
+    errno.ELOOP: "a symbolic link loop",  # as reform.atomic.file_kind says it
     errno.ENAMETOOLONG: "a name too long for the file system",
 }
 
 
 def os_error_found(exc: OSError) -> str:
     """What an `OSError` on a path found, as a message's "found" says it: ``no permission to
-    read it``, ``a link that leads to itself (a loop)``, or the system's own words."""
+    read it``, ``a symbolic link loop``, or the system's own words."""
     return _OS_ERRORS.get(exc.errno) or str(exc.strerror or exc)
 
 

@@ -389,12 +389,12 @@ def detector_name(text: str) -> str:
 def detector_timeout(text: str) -> float:
     """``--detector-timeout``'s type: a duration above zero, as seconds
     (`reform.deadline.duration`); refused in one line before any work."""
+    from reform.datasets.errors import shorten
     from reform.deadline import DURATION_FORM, duration
 
     seconds = duration(text)
     if seconds is None:
-        shown = repr(text) if len(text) <= 40 else f"{text[:20]!r}… ({len(text):,} characters)"
-        raise argparse.ArgumentTypeError(f"expected {DURATION_FORM}, got {shown}")
+        raise argparse.ArgumentTypeError(f"expected {DURATION_FORM}, got {shorten(repr(text))}")
     return seconds
 
 
